@@ -1,0 +1,565 @@
+//! The runtime side of the generated bindings: resource wrappers that say what may be bound,
+//! pipelines built from the static interface tables in [`crate::shaders`], and the checks that
+//! turn a wrong resource into a [`BindingError`] naming the stage and binding instead of a wgpu
+//! validation panic.
+//!
+//! ```no_run
+//! # fn demo(device: &wgpu::Device, params: &wgpu::Buffer, src: &wgpu::TextureView, dst: &wgpu::TextureView) -> Result<(), fieldkit::Error> {
+//! use fieldkit::shaders::distance::jfa_step::{JumpParams, jump};
+//! let pipeline = jump::Pipeline::new(device)?;
+//! let bound = pipeline.bind(device, &jump::Resources {
+//!     params: params.into(),
+//!     src: src.into(),
+//!     dst: dst.into(),
+//! })?;
+//! # Ok(()) }
+//! ```
+
+use std::marker::PhantomData;
+
+use crate::error::{BindingError, Error};
+
+/// One `@group/@binding` of an entry point, as the shader declares and uses it.
+#[derive(Debug, Clone, Copy)]
+pub struct Slot {
+    pub group: u32,
+    pub binding: u32,
+    pub name: &'static str,
+    /// WGSL spelling of the bound type.
+    pub wgsl: &'static str,
+    /// Stages that really use it.
+    pub visibility: wgpu::ShaderStages,
+    pub ty: wgpu::BindingType,
+}
+
+/// Scalar class of a fragment output: which colour target formats it can write.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ScalarClass {
+    Float,
+    Uint,
+    Sint,
+}
+
+#[derive(Debug, Clone, Copy)]
+pub struct TargetKind {
+    pub location: u32,
+    pub scalar: ScalarClass,
+}
+
+#[derive(Debug, Clone, Copy)]
+pub enum EntryKind {
+    Compute {
+        workgroup_size: [u32; 3],
+    },
+    Render {
+        /// The vertex entry point paired with the fragment entry point.
+        vertex: &'static str,
+        vertex_buffers: &'static [Option<wgpu::VertexBufferLayout<'static>>],
+        targets: &'static [TargetKind],
+    },
+}
+
+/// Everything the shader says about one pipeline's interface (generated).
+#[derive(Debug)]
+pub struct EntryInfo {
+    /// `room::stage`.
+    pub stage: &'static str,
+    pub path: &'static str,
+    /// Compute entry point, or the fragment entry point of a render pipeline.
+    pub entry_point: &'static str,
+    pub source: &'static str,
+    pub kind: EntryKind,
+    pub slots: &'static [Slot],
+    pub overrides: &'static [&'static str],
+}
+
+impl EntryInfo {
+    /// Groups used, ascending.
+    pub fn groups(&self) -> Vec<u32> {
+        let mut g: Vec<u32> = self.slots.iter().map(|s| s.group).collect();
+        g.sort_unstable();
+        g.dedup();
+        g
+    }
+
+    /// `@workgroup_size`, for compute entries.
+    pub fn workgroup_size(&self) -> Option<[u32; 3]> {
+        match self.kind {
+            EntryKind::Compute { workgroup_size } => Some(workgroup_size),
+            _ => None,
+        }
+    }
+
+    fn layouts(&self, device: &wgpu::Device) -> Vec<(u32, wgpu::BindGroupLayout)> {
+        self.groups()
+            .into_iter()
+            .map(|g| {
+                let entries: Vec<_> = self
+                    .slots
+                    .iter()
+                    .filter(|s| s.group == g)
+                    .map(|s| wgpu::BindGroupLayoutEntry { binding: s.binding, visibility: s.visibility, ty: s.ty, count: None })
+                    .collect();
+                let label = format!("{}::{} group {g}", self.stage, self.entry_point);
+                (g, device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(&label), entries: &entries }))
+            })
+            .collect()
+    }
+
+    fn pipeline_layout(&self, device: &wgpu::Device, layouts: &[(u32, wgpu::BindGroupLayout)]) -> wgpu::PipelineLayout {
+        // Groups must be contiguous from 0 in a pipeline layout; fill gaps with empty layouts.
+        let max = layouts.iter().map(|(g, _)| *g + 1).max().unwrap_or(0);
+        let empty = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: None, entries: &[] });
+        let ordered: Vec<Option<&wgpu::BindGroupLayout>> =
+            (0..max).map(|g| Some(layouts.iter().find(|(i, _)| *i == g).map(|(_, l)| l).unwrap_or(&empty))).collect();
+        device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(self.stage),
+            bind_group_layouts: &ordered,
+            immediate_size: 0,
+        })
+    }
+
+    fn check_overrides(&self, overrides: &[(&str, f64)]) -> Result<(), Error> {
+        for (name, value) in overrides {
+            if !self.overrides.contains(name) {
+                return Err(Error::Invalid {
+                    stage: self.stage,
+                    what: format!("override `{name}`: the shader declares no such override (it has {:?})", self.overrides),
+                });
+            }
+            if !value.is_finite() {
+                return Err(Error::Invalid { stage: self.stage, what: format!("override `{name}` is {value}") });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A generated entry point: its interface table and its parameter struct.
+pub trait Entry: 'static {
+    type Resources<'a>;
+    const INFO: &'static EntryInfo;
+    /// The resources in slot order.
+    fn resources<'a>(r: &Self::Resources<'a>) -> Vec<Resource<'a>>;
+}
+
+/// A resource handed to a slot, before it is checked against the slot.
+pub enum Resource<'a> {
+    Buffer(wgpu::BufferBinding<'a>),
+    Texture(&'a wgpu::TextureView),
+    StorageTexture(&'a wgpu::TextureView),
+    Sampler(&'a wgpu::Sampler),
+}
+
+pub trait IntoResource<'a> {
+    fn resource(&self) -> Resource<'a>;
+}
+
+macro_rules! buffer_wrapper {
+    ($(#[$doc:meta])* $name:ident) => {
+        $(#[$doc])*
+        pub struct $name<'a, T: ?Sized> {
+            pub binding: wgpu::BufferBinding<'a>,
+            _t: PhantomData<fn() -> Box<T>>,
+        }
+        impl<'a, T: ?Sized> $name<'a, T> {
+            /// A range of a buffer.
+            pub fn range(buffer: &'a wgpu::Buffer, offset: u64, size: Option<std::num::NonZeroU64>) -> Self {
+                Self { binding: wgpu::BufferBinding { buffer, offset, size }, _t: PhantomData }
+            }
+        }
+        impl<'a, T: ?Sized> From<&'a wgpu::Buffer> for $name<'a, T> {
+            fn from(buffer: &'a wgpu::Buffer) -> Self {
+                Self::range(buffer, 0, None)
+            }
+        }
+        impl<'a, T: ?Sized> IntoResource<'a> for $name<'a, T> {
+            fn resource(&self) -> Resource<'a> {
+                Resource::Buffer(self.binding.clone())
+            }
+        }
+    };
+}
+
+buffer_wrapper!(
+    /// A uniform buffer holding a `T` (the generated struct for the WGSL type).
+    Uniform
+);
+buffer_wrapper!(
+    /// A read-only storage buffer holding a `T`.
+    StorageRead
+);
+buffer_wrapper!(
+    /// A read-write storage buffer holding a `T`.
+    StorageReadWrite
+);
+
+macro_rules! view_wrapper {
+    ($(#[$doc:meta])* $name:ident, $variant:ident, $inner:ty) => {
+        $(#[$doc])*
+        #[derive(Clone, Copy)]
+        pub struct $name<'a>(pub &'a $inner);
+        impl<'a> From<&'a $inner> for $name<'a> {
+            fn from(v: &'a $inner) -> Self {
+                Self(v)
+            }
+        }
+        impl<'a> IntoResource<'a> for $name<'a> {
+            fn resource(&self) -> Resource<'a> {
+                Resource::$variant(self.0)
+            }
+        }
+    };
+}
+
+view_wrapper!(
+    /// A texture read by `textureLoad`/`textureSample` (`texture_2d<f32>` and friends).
+    Texture, Texture, wgpu::TextureView
+);
+view_wrapper!(
+    /// A storage texture (`texture_storage_*`).
+    StorageTexture, StorageTexture, wgpu::TextureView
+);
+view_wrapper!(
+    /// A sampler.
+    Sampler, Sampler, wgpu::Sampler
+);
+
+fn view_dimension_of(t: &wgpu::Texture) -> wgpu::TextureViewDimension {
+    match t.dimension() {
+        wgpu::TextureDimension::D1 => wgpu::TextureViewDimension::D1,
+        wgpu::TextureDimension::D2 if t.depth_or_array_layers() > 1 => wgpu::TextureViewDimension::D2Array,
+        wgpu::TextureDimension::D2 => wgpu::TextureViewDimension::D2,
+        wgpu::TextureDimension::D3 => wgpu::TextureViewDimension::D3,
+    }
+}
+
+/// Check one resource against its slot. `Err(problem)` says what is wrong, in words.
+fn check(slot: &Slot, res: &Resource<'_>, device: &wgpu::Device) -> Result<(), String> {
+    use wgpu::BindingType as B;
+    match (&slot.ty, res) {
+        (B::Buffer { ty, min_binding_size, .. }, Resource::Buffer(b)) => {
+            let (usage, align, what) = match ty {
+                wgpu::BufferBindingType::Uniform => {
+                    (wgpu::BufferUsages::UNIFORM, device.limits().min_uniform_buffer_offset_alignment, "UNIFORM")
+                }
+                _ => (wgpu::BufferUsages::STORAGE, device.limits().min_storage_buffer_offset_alignment, "STORAGE"),
+            };
+            if !b.buffer.usage().contains(usage) {
+                return Err(format!("buffer lacks {what} usage (has {:?})", b.buffer.usage()));
+            }
+            if b.offset % align as u64 != 0 {
+                return Err(format!("offset {} is not a multiple of {align}", b.offset));
+            }
+            let size = b.size.map(|s| s.get()).unwrap_or(b.buffer.size().saturating_sub(b.offset));
+            if let Some(min) = min_binding_size {
+                if size < min.get() {
+                    return Err(format!("{size} bytes bound, the shader's `{}` needs at least {}", slot.wgsl, min.get()));
+                }
+            }
+            Ok(())
+        }
+        (B::Texture { sample_type, view_dimension, multisampled }, Resource::Texture(v)) => {
+            let t = v.texture();
+            if !t.usage().contains(wgpu::TextureUsages::TEXTURE_BINDING) {
+                return Err(format!("texture lacks TEXTURE_BINDING usage (has {:?})", t.usage()));
+            }
+            if view_dimension_of(t) != *view_dimension {
+                return Err(format!("{:?} texture bound, the shader reads `{}`", view_dimension_of(t), slot.wgsl));
+            }
+            if (t.sample_count() > 1) != *multisampled {
+                return Err(format!("sample count {} does not suit `{}`", t.sample_count(), slot.wgsl));
+            }
+            let features = device.features();
+            let have = t.format().sample_type(None, Some(features));
+            let ok = match (sample_type, have) {
+                (wgpu::TextureSampleType::Float { filterable: true }, Some(wgpu::TextureSampleType::Float { filterable })) => filterable,
+                (wgpu::TextureSampleType::Float { filterable: false }, Some(wgpu::TextureSampleType::Float { .. })) => true,
+                (want, Some(h)) => *want == h,
+                (_, None) => false,
+            };
+            if !ok {
+                return Err(format!(
+                    "texture format {:?} cannot be read as `{}` (needs {:?})",
+                    t.format(),
+                    slot.wgsl,
+                    sample_type
+                ));
+            }
+            Ok(())
+        }
+        (B::StorageTexture { format, view_dimension, .. }, Resource::StorageTexture(v)) => {
+            let t = v.texture();
+            if !t.usage().contains(wgpu::TextureUsages::STORAGE_BINDING) {
+                return Err(format!("texture lacks STORAGE_BINDING usage (has {:?})", t.usage()));
+            }
+            if t.format() != *format {
+                return Err(format!("texture format {:?} bound, the shader's `{}` needs {:?}", t.format(), slot.wgsl, format));
+            }
+            if view_dimension_of(t) != *view_dimension {
+                return Err(format!("{:?} texture bound, the shader writes `{}`", view_dimension_of(t), slot.wgsl));
+            }
+            Ok(())
+        }
+        (B::Sampler(_), Resource::Sampler(_)) => Ok(()),
+        _ => Err(format!("wrong kind of resource for `{}`", slot.wgsl)),
+    }
+}
+
+fn bind_groups<E: Entry>(
+    device: &wgpu::Device,
+    layouts: &[(u32, wgpu::BindGroupLayout)],
+    resources: &E::Resources<'_>,
+) -> Result<Vec<(u32, wgpu::BindGroup)>, Error> {
+    let info = E::INFO;
+    let res = E::resources(resources);
+    for (slot, r) in info.slots.iter().zip(&res) {
+        check(slot, r, device).map_err(|problem| {
+            Error::Binding(BindingError {
+                stage: info.stage,
+                entry_point: info.entry_point,
+                binding: slot.name,
+                group: slot.group,
+                index: slot.binding,
+                problem,
+            })
+        })?;
+    }
+    let groups = layouts
+        .iter()
+        .map(|(g, layout)| {
+            let entries: Vec<wgpu::BindGroupEntry> = info
+                .slots
+                .iter()
+                .zip(&res)
+                .filter(|(s, _)| s.group == *g)
+                .map(|(s, r)| wgpu::BindGroupEntry {
+                    binding: s.binding,
+                    resource: match r {
+                        Resource::Buffer(b) => wgpu::BindingResource::Buffer(b.clone()),
+                        Resource::Texture(v) | Resource::StorageTexture(v) => wgpu::BindingResource::TextureView(v),
+                        Resource::Sampler(s) => wgpu::BindingResource::Sampler(s),
+                    },
+                })
+                .collect();
+            let label = format!("{}::{} group {g}", info.stage, info.entry_point);
+            (*g, device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(&label), layout, entries: &entries }))
+        })
+        .collect();
+    Ok(groups)
+}
+
+/// Bind groups for one dispatch or draw, made by [`ComputePipeline::bind`] / [`RenderPipeline::bind`].
+pub struct Bound<E> {
+    groups: Vec<(u32, wgpu::BindGroup)>,
+    _e: PhantomData<E>,
+}
+
+impl<E: Entry> Bound<E> {
+    pub fn set_compute(&self, pass: &mut wgpu::ComputePass<'_>) {
+        for (g, group) in &self.groups {
+            pass.set_bind_group(*g, group, &[]);
+        }
+    }
+    pub fn set_render(&self, pass: &mut wgpu::RenderPass<'_>) {
+        for (g, group) in &self.groups {
+            pass.set_bind_group(*g, group, &[]);
+        }
+    }
+}
+
+fn module(device: &wgpu::Device, info: &EntryInfo) -> wgpu::ShaderModule {
+    device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(info.path),
+        source: wgpu::ShaderSource::Wgsl(info.source.into()),
+    })
+}
+
+/// A compute pipeline for a generated entry point `E`.
+pub struct ComputePipeline<E> {
+    pub pipeline: wgpu::ComputePipeline,
+    layouts: Vec<(u32, wgpu::BindGroupLayout)>,
+    _e: PhantomData<E>,
+}
+
+impl<E: Entry> ComputePipeline<E> {
+    /// Create the pipeline; wgpu validation errors come back as [`Error::Wgpu`].
+    pub fn new(device: &wgpu::Device) -> Result<Self, Error> {
+        Self::with_overrides(device, &[])
+    }
+
+    /// Create the pipeline with values for the shader's `override` constants.
+    pub fn with_overrides(device: &wgpu::Device, overrides: &[(&str, f64)]) -> Result<Self, Error> {
+        let info = E::INFO;
+        info.check_overrides(overrides)?;
+        crate::gpu::scoped(device, info.stage, || {
+            let layouts = info.layouts(device);
+            let layout = info.pipeline_layout(device, &layouts);
+            let module = module(device, info);
+            let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(info.stage),
+                layout: Some(&layout),
+                module: &module,
+                entry_point: Some(info.entry_point),
+                compilation_options: wgpu::PipelineCompilationOptions { constants: overrides, ..Default::default() },
+                cache: None,
+            });
+            Self { pipeline, layouts, _e: PhantomData }
+        })
+    }
+
+    /// Check every resource against the shader's slots and make the bind groups.
+    pub fn bind(&self, device: &wgpu::Device, resources: &E::Resources<'_>) -> Result<Bound<E>, Error> {
+        let info = E::INFO;
+        let groups = crate::gpu::scoped(device, info.stage, || bind_groups::<E>(device, &self.layouts, resources))??;
+        Ok(Bound { groups, _e: PhantomData })
+    }
+
+    /// Record one dispatch of `groups` workgroups into `pass`.
+    pub fn dispatch(&self, pass: &mut wgpu::ComputePass<'_>, bound: &Bound<E>, groups: [u32; 3]) {
+        pass.set_pipeline(&self.pipeline);
+        bound.set_compute(pass);
+        pass.dispatch_workgroups(groups[0], groups[1], groups[2]);
+    }
+
+    /// Workgroups needed to cover `extent` invocations on each axis.
+    pub fn groups_for(extent: [u32; 3]) -> [u32; 3] {
+        let ws = E::INFO.workgroup_size().unwrap_or([1, 1, 1]);
+        [extent[0].div_ceil(ws[0]), extent[1].div_ceil(ws[1]), extent[2].div_ceil(ws[2])]
+    }
+}
+
+/// How a render pipeline draws: the parts the shader cannot say.
+#[derive(Debug, Clone, Default)]
+pub struct RenderTargets<'a> {
+    /// One per fragment output, in location order.
+    pub color: &'a [Option<wgpu::ColorTargetState>],
+    pub depth_stencil: Option<wgpu::DepthStencilState>,
+    pub primitive: wgpu::PrimitiveState,
+    pub multisample: wgpu::MultisampleState,
+}
+
+/// A render pipeline for a generated vertex + fragment entry pair `E`.
+pub struct RenderPipeline<E> {
+    pub pipeline: wgpu::RenderPipeline,
+    layouts: Vec<(u32, wgpu::BindGroupLayout)>,
+    _e: PhantomData<E>,
+}
+
+impl<E: Entry> RenderPipeline<E> {
+    /// Create the pipeline; colour targets are checked against the fragment outputs first.
+    pub fn new(device: &wgpu::Device, targets: &RenderTargets<'_>) -> Result<Self, Error> {
+        let info = E::INFO;
+        let EntryKind::Render { vertex, vertex_buffers, targets: outputs } = info.kind else {
+            return Err(Error::Invalid { stage: info.stage, what: "not a render entry point".into() });
+        };
+        if targets.color.len() != outputs.len() {
+            return Err(Error::Invalid {
+                stage: info.stage,
+                what: format!("{} colour targets given, the fragment shader writes {}", targets.color.len(), outputs.len()),
+            });
+        }
+        for (t, o) in targets.color.iter().zip(outputs) {
+            let Some(t) = t else { continue };
+            let class = match t.format.sample_type(None, None) {
+                Some(wgpu::TextureSampleType::Uint) => ScalarClass::Uint,
+                Some(wgpu::TextureSampleType::Sint) => ScalarClass::Sint,
+                _ => ScalarClass::Float,
+            };
+            if class != o.scalar {
+                return Err(Error::Invalid {
+                    stage: info.stage,
+                    what: format!("target @location({}) has format {:?}, the shader writes {:?} values", o.location, t.format, o.scalar),
+                });
+            }
+        }
+        crate::gpu::scoped(device, info.stage, || {
+            let layouts = info.layouts(device);
+            let layout = info.pipeline_layout(device, &layouts);
+            let module = module(device, info);
+            let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(info.stage),
+                layout: Some(&layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some(vertex),
+                    compilation_options: Default::default(),
+                    buffers: vertex_buffers,
+                },
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some(info.entry_point),
+                    compilation_options: Default::default(),
+                    targets: targets.color,
+                }),
+                primitive: targets.primitive,
+                depth_stencil: targets.depth_stencil.clone(),
+                multisample: targets.multisample,
+                multiview_mask: None,
+                cache: None,
+            });
+            Self { pipeline, layouts, _e: PhantomData }
+        })
+    }
+
+    pub fn bind(&self, device: &wgpu::Device, resources: &E::Resources<'_>) -> Result<Bound<E>, Error> {
+        let info = E::INFO;
+        let groups = crate::gpu::scoped(device, info.stage, || bind_groups::<E>(device, &self.layouts, resources))??;
+        Ok(Bound { groups, _e: PhantomData })
+    }
+}
+
+/// Create the pipeline for any entry point from its table alone (used to prove every generated
+/// pipeline is accepted by wgpu, on the noop backend in tests).
+pub fn create_any(device: &wgpu::Device, info: &'static EntryInfo) -> Result<(), Error> {
+    crate::gpu::scoped(device, info.stage, || {
+        let layouts = info.layouts(device);
+        let layout = info.pipeline_layout(device, &layouts);
+        let module = module(device, info);
+        match info.kind {
+            EntryKind::Compute { .. } => {
+                let _ = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some(info.stage),
+                    layout: Some(&layout),
+                    module: &module,
+                    entry_point: Some(info.entry_point),
+                    compilation_options: Default::default(),
+                    cache: None,
+                });
+            }
+            EntryKind::Render { vertex, vertex_buffers, targets } => {
+                let color: Vec<_> = targets
+                    .iter()
+                    .map(|t| {
+                        Some(wgpu::ColorTargetState::from(match t.scalar {
+                            ScalarClass::Float => wgpu::TextureFormat::Rgba8Unorm,
+                            ScalarClass::Uint => wgpu::TextureFormat::R32Uint,
+                            ScalarClass::Sint => wgpu::TextureFormat::R32Sint,
+                        }))
+                    })
+                    .collect();
+                let _ = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some(info.stage),
+                    layout: Some(&layout),
+                    vertex: wgpu::VertexState {
+                        module: &module,
+                        entry_point: Some(vertex),
+                        compilation_options: Default::default(),
+                        buffers: vertex_buffers,
+                    },
+                    fragment: Some(wgpu::FragmentState {
+                        module: &module,
+                        entry_point: Some(info.entry_point),
+                        compilation_options: Default::default(),
+                        targets: &color,
+                    }),
+                    primitive: Default::default(),
+                    depth_stencil: None,
+                    multisample: Default::default(),
+                    multiview_mask: None,
+                    cache: None,
+                });
+            }
+        }
+    })
+}

@@ -1,0 +1,21 @@
+//! fieldkit: GPU shader stages for fields — distance fields, metaball SDFs, voxel grids, volume
+//! raymarching, ocean surfaces and mesh voxelization — on wgpu and naga.
+//!
+//! Every stage is a WGSL file under `shaders/`, validated by naga at build time; its typed host
+//! bindings are generated into [`shaders`]. Technique modules (like [`distance`]) compose stages
+//! into passes recorded into your own `wgpu::CommandEncoder`.
+
+pub mod bind;
+pub mod distance;
+pub mod error;
+pub mod gallery;
+pub mod gpu;
+pub mod harness;
+
+pub use error::{BindingError, Error};
+
+/// Generated bindings, one module per stage (`shaders::<room>::<stage>`). See [`bind`].
+#[allow(clippy::all, missing_docs)]
+pub mod shaders {
+    include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
+}

@@ -1,0 +1,294 @@
+//! The shader toolchain: find stages, link their WESL imports, validate with naga, reflect, and
+//! generate host code. Shared by `build.rs` (through `#[path]`) and `xtask`, so codegen, `lint`
+//! and `reflect` always see the same thing.
+#![allow(dead_code)]
+
+pub mod codegen;
+pub mod lint;
+pub mod reflect;
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use codespan_reporting::diagnostic::{Diagnostic, Label};
+use codespan_reporting::files::SimpleFiles;
+use codespan_reporting::term;
+
+/// Folder under `shaders/` that holds importable helpers rather than stages.
+pub const SHARED_DIR: &str = "shared";
+
+/// One shader stage file: everything under `shaders/` except `shaders/shared/`.
+#[derive(Debug, Clone)]
+pub struct StageFile {
+    /// Technique folder ("distance").
+    pub room: String,
+    /// File stem ("jfa_step"): the stage's name.
+    pub name: String,
+    /// Path relative to the crate root, with forward slashes ("shaders/distance/jfa_step.wgsl").
+    pub rel_path: String,
+    pub abs_path: PathBuf,
+}
+
+impl StageFile {
+    /// `room::name`, as used in messages and generated module paths.
+    pub fn id(&self) -> String {
+        format!("{}::{}", self.room, self.name)
+    }
+}
+
+/// A stage that linked and validated.
+pub struct Stage {
+    pub file: StageFile,
+    /// Linked WGSL, as given to naga and to wgpu.
+    pub source: String,
+    pub module: naga::Module,
+    pub info: naga::valid::ModuleInfo,
+    /// Original source of the stage file itself (for header comments and lints).
+    pub original: String,
+}
+
+/// Every shader file that is a stage, sorted by path for deterministic output.
+pub fn discover(shader_root: &Path) -> std::io::Result<Vec<StageFile>> {
+    let mut out = Vec::new();
+    let mut rooms: Vec<_> = std::fs::read_dir(shader_root)?.collect::<Result<_, _>>()?;
+    rooms.sort_by_key(|e| e.file_name());
+    for room in rooms {
+        if !room.file_type()?.is_dir() || room.file_name() == SHARED_DIR {
+            continue;
+        }
+        let room_name = room.file_name().to_string_lossy().into_owned();
+        let mut files: Vec<_> = std::fs::read_dir(room.path())?.collect::<Result<_, _>>()?;
+        files.sort_by_key(|e| e.file_name());
+        for f in files {
+            let p = f.path();
+            let ext = p.extension().and_then(|e| e.to_str()).unwrap_or("");
+            if ext != "wgsl" && ext != "wesl" {
+                continue;
+            }
+            let name = p.file_stem().unwrap().to_string_lossy().into_owned();
+            out.push(StageFile {
+                rel_path: format!("shaders/{room_name}/{}", f.file_name().to_string_lossy()),
+                room: room_name.clone(),
+                name,
+                abs_path: p,
+            });
+        }
+    }
+    Ok(out)
+}
+
+/// All files under the shader root (stages and helpers), for rebuild tracking.
+pub fn all_shader_files(shader_root: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    let mut stack = vec![shader_root.to_path_buf()];
+    while let Some(dir) = stack.pop() {
+        if let Ok(rd) = std::fs::read_dir(&dir) {
+            for e in rd.flatten() {
+                let p = e.path();
+                if p.is_dir() {
+                    stack.push(p);
+                } else {
+                    out.push(p);
+                }
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+/// Where a declaration of the linked output came from.
+struct DeclOrigin {
+    /// Byte range of the declaration in the linked text.
+    linked: std::ops::Range<usize>,
+    /// Original file (relative path) and the declaration's byte range in it.
+    file: Option<(String, std::ops::Range<usize>)>,
+}
+
+/// Linked text plus the map back to original files.
+struct Linked {
+    text: String,
+    origins: Vec<DeclOrigin>,
+}
+
+/// Link one stage's imports with WESL and print the result declaration by declaration, keeping
+/// for each its source file and span so naga's errors can be reported against the original file.
+fn link(shader_root: &Path, stage: &StageFile) -> Result<Linked, String> {
+    let root: wesl::ModulePath = format!("package::{}::{}", stage.room, stage.name)
+        .parse()
+        .map_err(|e| format!("{}: bad module path: {e:?}", stage.rel_path))?;
+    let mut compiler = wesl::Wesl::new(shader_root);
+    compiler.use_sourcemap(true);
+    // Keep every entry point of the stage file (stripping only removes unused helpers).
+    compiler.keep_all_entrypoints();
+    let result = compiler
+        .compile(&root)
+        .map_err(|e| format!("error: WESL could not link {}\n{e}", stage.rel_path))?;
+    let sourcemap = result.sourcemap.as_ref();
+
+    let mut text = String::new();
+    for directive in &result.syntax.global_directives {
+        writeln!(text, "{directive}").unwrap();
+    }
+    let mut origins = Vec::new();
+    for decl in &result.syntax.global_declarations {
+        if !text.is_empty() {
+            text.push('\n');
+        }
+        let start = text.len();
+        write!(text, "{}", &**decl).unwrap();
+        let end = text.len();
+        text.push('\n');
+        let span = decl.span().range();
+        // Declarations from imported modules carry mangled names the sourcemap knows;
+        // the root module's own declarations are not mangled.
+        use wesl::SourceMap as _;
+        use wgsl_parse::SyntaxNode as _;
+        let module = decl
+            .ident()
+            .and_then(|id| sourcemap.and_then(|m| m.get_decl(&id.name()).map(|(p, _)| p.clone())));
+        let file = match module {
+            Some(path) => module_file(shader_root, &path),
+            None => Some(stage.rel_path.clone()),
+        };
+        origins.push(DeclOrigin { linked: start..end, file: file.map(|f| (f, span)) });
+    }
+    Ok(Linked { text, origins })
+}
+
+/// `package::shared::grid` → "shaders/shared/grid.wesl" (or .wgsl), whichever exists.
+fn module_file(shader_root: &Path, path: &wesl::ModulePath) -> Option<String> {
+    let comps: Vec<String> = path.components.iter().map(|c| c.to_string()).collect();
+    let rel = comps.join("/");
+    for ext in ["wesl", "wgsl"] {
+        let p = shader_root.join(format!("{rel}.{ext}"));
+        if p.exists() {
+            return Some(format!("shaders/{rel}.{ext}"));
+        }
+    }
+    None
+}
+
+/// A span in the linked text, mapped back to a file: exact where the erroneous text appears in
+/// the original declaration, else the declaration's start.
+struct Mapped {
+    file: String,
+    range: std::ops::Range<usize>,
+}
+
+fn map_span(linked: &Linked, crate_root: &Path, span: std::ops::Range<usize>) -> Option<Mapped> {
+    let origin = linked
+        .origins
+        .iter()
+        .find(|o| o.linked.start <= span.start && span.start <= o.linked.end)?;
+    let (file, decl_range) = origin.file.clone()?;
+    let original = std::fs::read_to_string(crate_root.join(&file)).ok()?;
+    let decl_text = original.get(decl_range.clone())?;
+    let needle = linked.text.get(span.clone()).unwrap_or("");
+    // The printer normalises whitespace, so search with whitespace removed on both sides.
+    let squash = |s: &str| -> (String, Vec<usize>) {
+        let mut out = String::new();
+        let mut idx = Vec::new();
+        for (i, c) in s.char_indices() {
+            if !c.is_whitespace() {
+                out.push(c);
+                idx.push(i);
+            }
+        }
+        (out, idx)
+    };
+    let (hay, hay_idx) = squash(decl_text);
+    let (pat, _) = squash(needle);
+    // Several occurrences: pick the one whose relative position in the declaration is closest.
+    let rel = span.start - origin.linked.start;
+    let mut best: Option<(usize, usize)> = None;
+    if !pat.is_empty() {
+        for (pos, _) in hay.match_indices(&pat) {
+            let start = hay_idx[pos];
+            let end = hay_idx[pos + pat.len() - 1] + 1;
+            let score = start.abs_diff(rel);
+            if best.is_none_or(|(s, _)| score < s.abs_diff(rel)) {
+                best = Some((start, end));
+            }
+        }
+    }
+    let (s, e) = best.unwrap_or((0, decl_text.find('\n').unwrap_or(decl_text.len())));
+    Some(Mapped { file, range: decl_range.start + s..decl_range.start + e })
+}
+
+/// Render a naga error against the original files, in naga's own annotated style.
+fn render(
+    crate_root: &Path,
+    linked: &Linked,
+    stage: &StageFile,
+    message: &str,
+    labels: &[(std::ops::Range<usize>, String)],
+    notes: Vec<String>,
+) -> String {
+    let mut files = SimpleFiles::new();
+    let mut ids = std::collections::BTreeMap::new();
+    let mut diag_labels = Vec::new();
+    for (range, text) in labels {
+        let Some(m) = map_span(linked, crate_root, range.clone()) else { continue };
+        let id = *ids.entry(m.file.clone()).or_insert_with(|| {
+            let src = std::fs::read_to_string(crate_root.join(&m.file)).unwrap_or_default();
+            files.add(m.file.clone(), src)
+        });
+        let label = if diag_labels.is_empty() { Label::primary(id, m.range) } else { Label::secondary(id, m.range) };
+        diag_labels.push(label.with_message(text.clone()));
+    }
+    let mut notes = notes;
+    if diag_labels.is_empty() {
+        // No span could be mapped: show the place in the linked text instead of nothing.
+        let id = files.add(format!("{} (linked)", stage.rel_path), linked.text.clone());
+        for (range, text) in labels {
+            diag_labels.push(Label::primary(id, range.clone()).with_message(text.clone()));
+        }
+        notes.push(format!("in stage {}", stage.id()));
+    }
+    let diagnostic = Diagnostic::error().with_message(message).with_labels(diag_labels).with_notes(notes);
+    let mut writer = term::termcolor::NoColor::new(Vec::new());
+    let config = term::Config::default();
+    if term::emit_to_write_style(&mut writer, &config, &files, &diagnostic).is_err() {
+        return format!("error: {message} ({})", stage.rel_path);
+    }
+    String::from_utf8_lossy(&writer.into_inner()).into_owned()
+}
+
+/// Link, parse and validate one stage. Errors are rendered against the original file.
+pub fn build_stage(crate_root: &Path, stage: &StageFile) -> Result<Stage, String> {
+    let shader_root = crate_root.join("shaders");
+    let linked = link(&shader_root, stage)?;
+    let original = std::fs::read_to_string(&stage.abs_path).map_err(|e| format!("{}: {e}", stage.rel_path))?;
+    let module = naga::front::wgsl::parse_str(&linked.text).map_err(|e| {
+        let labels: Vec<_> = e.labels().map(|(s, l)| (s.to_range().unwrap_or(0..0), l.to_string())).collect();
+        render(crate_root, &linked, stage, e.message(), &labels, vec![])
+    })?;
+    let mut validator =
+        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::default());
+    let info = validator.validate(&module).map_err(|e| {
+        let labels: Vec<_> = e.spans().map(|(s, l)| (s.to_range().unwrap_or(0..0), l.clone())).collect();
+        let mut notes = Vec::new();
+        let mut source: Option<&dyn std::error::Error> = std::error::Error::source(e.as_inner());
+        while let Some(s) = source {
+            notes.push(s.to_string());
+            source = s.source();
+        }
+        render(crate_root, &linked, stage, &e.as_inner().to_string(), &labels, notes)
+    })?;
+    Ok(Stage { file: stage.clone(), source: linked.text, module, info, original })
+}
+
+/// Build every stage; on failure return *all* errors, one rendered message per broken stage.
+pub fn build_all(crate_root: &Path) -> Result<Vec<Stage>, Vec<String>> {
+    let files = discover(&crate_root.join("shaders")).map_err(|e| vec![format!("cannot read shaders/: {e}")])?;
+    let mut stages = Vec::new();
+    let mut errors = Vec::new();
+    for f in &files {
+        match build_stage(crate_root, f) {
+            Ok(s) => stages.push(s),
+            Err(e) => errors.push(e),
+        }
+    }
+    if errors.is_empty() { Ok(stages) } else { Err(errors) }
+}

@@ -1,0 +1,539 @@
+//! Reflection of one linked stage, read from naga's IR and validation info. Codegen, `xtask reflect`
+//! and the lints all work from this one description.
+
+use naga::valid::GlobalUse;
+use naga::{AddressSpace, ImageClass, ImageDimension, ScalarKind, ShaderStage, TypeInner};
+use serde::Serialize;
+
+use super::Stage;
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Reflection {
+    pub stage: String,
+    pub path: String,
+    pub entry_points: Vec<EntryPoint>,
+    pub bindings: Vec<Binding>,
+    pub structs: Vec<StructInfo>,
+    pub overrides: Vec<Override>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Binding {
+    pub group: u32,
+    pub binding: u32,
+    pub name: String,
+    pub kind: BindingKind,
+    /// WGSL spelling of the bound type.
+    pub ty: String,
+    /// Source line of the declaration in the linked text (for lints).
+    #[serde(skip)]
+    pub linked_offset: usize,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum BindingKind {
+    Uniform { min_size: u32, rust: String },
+    Storage { read_only: bool, min_size: u32, rust: String },
+    Texture { dim: String, sample: SampleKind, multisampled: bool },
+    StorageTexture { dim: String, format: String, access: String },
+    Sampler { comparison: bool, filtering: bool },
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SampleKind {
+    Float { filterable: bool },
+    Uint,
+    Sint,
+    Depth,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct BindingUse {
+    pub group: u32,
+    pub binding: u32,
+    pub name: String,
+    /// "read", "write" or "read_write", from what the entry point really does.
+    pub access: String,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct EntryPoint {
+    pub name: String,
+    pub stage: String,
+    pub workgroup_size: [u32; 3],
+    pub uses: Vec<BindingUse>,
+    pub vertex_inputs: Vec<VertexInput>,
+    pub fragment_outputs: Vec<FragmentOutput>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct VertexInput {
+    pub location: u32,
+    pub name: String,
+    pub ty: String,
+    /// `wgpu::VertexFormat` variant name.
+    pub format: String,
+    pub rust: String,
+    pub size: u32,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct FragmentOutput {
+    pub location: u32,
+    pub ty: String,
+    /// "float", "uint" or "sint": the texture formats it may be written to.
+    pub scalar: String,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct StructInfo {
+    pub name: String,
+    pub size: u32,
+    pub align: u32,
+    pub members: Vec<Member>,
+    /// Used as (part of) a uniform or storage binding: gets a host type.
+    pub host_shareable: bool,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Member {
+    pub name: String,
+    pub offset: u32,
+    pub size: u32,
+    pub ty: String,
+    pub rust: String,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Override {
+    pub name: String,
+    pub id: Option<u16>,
+    pub ty: String,
+    pub has_default: bool,
+}
+
+fn scalar_name(s: naga::Scalar) -> String {
+    match (s.kind, s.width) {
+        (ScalarKind::Float, 4) => "f32".into(),
+        (ScalarKind::Float, 2) => "f16".into(),
+        (ScalarKind::Float, 8) => "f64".into(),
+        (ScalarKind::Uint, 4) => "u32".into(),
+        (ScalarKind::Sint, 4) => "i32".into(),
+        (ScalarKind::Bool, _) => "bool".into(),
+        (k, w) => format!("{k:?}{}", w * 8).to_lowercase(),
+    }
+}
+
+fn dim_name(dim: ImageDimension, arrayed: bool) -> String {
+    let d = match dim {
+        ImageDimension::D1 => "1d",
+        ImageDimension::D2 => "2d",
+        ImageDimension::D3 => "3d",
+        ImageDimension::Cube => "cube",
+    };
+    if arrayed { format!("{d}_array") } else { d.into() }
+}
+
+/// WGSL spelling of a type.
+pub fn wgsl_type(module: &naga::Module, ty: naga::Handle<naga::Type>) -> String {
+    let t = &module.types[ty];
+    if let Some(name) = &t.name {
+        return name.clone();
+    }
+    match &t.inner {
+        TypeInner::Scalar(s) => scalar_name(*s),
+        TypeInner::Vector { size, scalar } => format!("vec{}<{}>", *size as u8, scalar_name(*scalar)),
+        TypeInner::Matrix { columns, rows, scalar } => {
+            format!("mat{}x{}<{}>", *columns as u8, *rows as u8, scalar_name(*scalar))
+        }
+        TypeInner::Atomic(s) => format!("atomic<{}>", scalar_name(*s)),
+        TypeInner::Array { base, size, .. } => match size {
+            naga::ArraySize::Constant(n) => format!("array<{}, {n}>", wgsl_type(module, *base)),
+            _ => format!("array<{}>", wgsl_type(module, *base)),
+        },
+        TypeInner::Image { dim, arrayed, class } => match class {
+            ImageClass::Sampled { kind, multi } => format!(
+                "texture_{}{}<{}>",
+                if *multi { "multisampled_" } else { "" },
+                dim_name(*dim, *arrayed),
+                scalar_name(naga::Scalar { kind: *kind, width: 4 })
+            ),
+            ImageClass::Depth { multi } => {
+                format!("texture_depth_{}{}", if *multi { "multisampled_" } else { "" }, dim_name(*dim, *arrayed))
+            }
+            ImageClass::Storage { format, access } => {
+                format!("texture_storage_{}<{}, {}>", dim_name(*dim, *arrayed), storage_format_wgsl(*format), access_name(*access))
+            }
+            ImageClass::External => "texture_external".into(),
+        },
+        TypeInner::Sampler { comparison } => if *comparison { "sampler_comparison" } else { "sampler" }.into(),
+        other => format!("{other:?}"),
+    }
+}
+
+/// Rust host type for a host-shareable WGSL type (glam for vectors and matrices; encase lays them out).
+pub fn rust_type(module: &naga::Module, ty: naga::Handle<naga::Type>) -> Option<String> {
+    let t = &module.types[ty];
+    Some(match &t.inner {
+        TypeInner::Struct { .. } => t.name.clone()?,
+        TypeInner::Scalar(s) | TypeInner::Atomic(s) => match (s.kind, s.width) {
+            (ScalarKind::Float, 4) => "f32".into(),
+            (ScalarKind::Uint, 4) => "u32".into(),
+            (ScalarKind::Sint, 4) => "i32".into(),
+            _ => return None,
+        },
+        TypeInner::Vector { size, scalar } => {
+            let prefix = match (scalar.kind, scalar.width) {
+                (ScalarKind::Float, 4) => "",
+                (ScalarKind::Uint, 4) => "U",
+                (ScalarKind::Sint, 4) => "I",
+                _ => return None,
+            };
+            format!("glam::{prefix}Vec{}", *size as u8)
+        }
+        TypeInner::Matrix { columns, rows, scalar } if columns == rows && scalar.kind == ScalarKind::Float => {
+            format!("glam::Mat{}", *columns as u8)
+        }
+        TypeInner::Array { base, size, .. } => {
+            let inner = rust_type(module, *base)?;
+            match size {
+                naga::ArraySize::Constant(n) => format!("[{inner}; {n}]"),
+                _ => format!("Vec<{inner}>"),
+            }
+        }
+        _ => return None,
+    })
+}
+
+fn access_name(a: naga::StorageAccess) -> &'static str {
+    let r = a.contains(naga::StorageAccess::LOAD);
+    let w = a.contains(naga::StorageAccess::STORE);
+    match (r, w) {
+        (true, true) => "read_write",
+        (true, false) => "read",
+        _ => "write",
+    }
+}
+
+/// WGSL texel-format spelling ("r32uint").
+pub fn storage_format_wgsl(f: naga::StorageFormat) -> String {
+    // naga's Debug names match wgpu's TextureFormat variants; WGSL is their lowercase.
+    format!("{f:?}").to_lowercase()
+}
+
+fn vertex_format(module: &naga::Module, ty: naga::Handle<naga::Type>) -> Option<(String, String, u32)> {
+    let (n, scalar) = match module.types[ty].inner {
+        TypeInner::Scalar(s) => (1u8, s),
+        TypeInner::Vector { size, scalar } => (size as u8, scalar),
+        _ => return None,
+    };
+    let base = match (scalar.kind, scalar.width) {
+        (ScalarKind::Float, 4) => "Float32",
+        (ScalarKind::Uint, 4) => "Uint32",
+        (ScalarKind::Sint, 4) => "Sint32",
+        _ => return None,
+    };
+    let format = if n == 1 { base.to_string() } else { format!("{base}x{n}") };
+    let rust = rust_type(module, ty)?;
+    Some((format, rust, 4 * n as u32))
+}
+
+fn scalar_class(module: &naga::Module, ty: naga::Handle<naga::Type>) -> String {
+    let s = match module.types[ty].inner {
+        TypeInner::Scalar(s) | TypeInner::Vector { scalar: s, .. } => s,
+        _ => return "float".into(),
+    };
+    match s.kind {
+        ScalarKind::Uint => "uint",
+        ScalarKind::Sint => "sint",
+        _ => "float",
+    }
+    .into()
+}
+
+/// Collect `(location, name, type)` of a function's inputs, flattening struct arguments.
+fn located_args(module: &naga::Module, func: &naga::Function) -> Vec<(u32, String, naga::Handle<naga::Type>)> {
+    let mut out = Vec::new();
+    for arg in &func.arguments {
+        match &arg.binding {
+            Some(naga::Binding::Location { location, .. }) => {
+                out.push((*location, arg.name.clone().unwrap_or_default(), arg.ty))
+            }
+            Some(_) => {}
+            None => {
+                if let TypeInner::Struct { members, .. } = &module.types[arg.ty].inner {
+                    for m in members {
+                        if let Some(naga::Binding::Location { location, .. }) = m.binding {
+                            out.push((location, m.name.clone().unwrap_or_default(), m.ty));
+                        }
+                    }
+                }
+            }
+        }
+    }
+    out.sort_by_key(|a| a.0);
+    out
+}
+
+fn fragment_outputs(module: &naga::Module, func: &naga::Function) -> Vec<FragmentOutput> {
+    let Some(result) = &func.result else { return vec![] };
+    let mut out = Vec::new();
+    match &result.binding {
+        Some(naga::Binding::Location { location, .. }) => out.push(FragmentOutput {
+            location: *location,
+            ty: wgsl_type(module, result.ty),
+            scalar: scalar_class(module, result.ty),
+        }),
+        Some(_) => {}
+        None => {
+            if let TypeInner::Struct { members, .. } = &module.types[result.ty].inner {
+                for m in members {
+                    if let Some(naga::Binding::Location { location, .. }) = m.binding {
+                        out.push(FragmentOutput {
+                            location,
+                            ty: wgsl_type(module, m.ty),
+                            scalar: scalar_class(module, m.ty),
+                        });
+                    }
+                }
+            }
+        }
+    }
+    out.sort_by_key(|o| o.location);
+    out
+}
+
+/// Mark every struct reachable from a host-shareable binding.
+fn mark_shareable(module: &naga::Module, ty: naga::Handle<naga::Type>, out: &mut Vec<naga::Handle<naga::Type>>) {
+    match &module.types[ty].inner {
+        TypeInner::Struct { members, .. } => {
+            if !out.contains(&ty) {
+                out.push(ty);
+            }
+            for m in members {
+                mark_shareable(module, m.ty, out);
+            }
+        }
+        TypeInner::Array { base, .. } => mark_shareable(module, *base, out),
+        _ => {}
+    }
+}
+
+pub fn reflect(stage: &Stage) -> Reflection {
+    let module = &stage.module;
+    let mut layouter = naga::proc::Layouter::default();
+    layouter.update(module.to_ctx()).expect("validated module has a layout");
+
+    // Which sampled textures are ever sampled through a sampler (they must be filterable).
+    let mut sampled_images = Vec::new();
+    let mut sampled_samplers = Vec::new();
+    for (i, _) in module.entry_points.iter().enumerate() {
+        for key in &stage.info.get_entry_point(i).sampling_set {
+            sampled_images.push(key.image);
+            sampled_samplers.push(key.sampler);
+        }
+    }
+
+    let mut bindings = Vec::new();
+    let mut shareable = Vec::new();
+    let mut handles = Vec::new();
+    for (handle, var) in module.global_variables.iter() {
+        let Some(rb) = &var.binding else { continue };
+        let ty_inner = &module.types[var.ty].inner;
+        let kind = match (var.space, ty_inner) {
+            (AddressSpace::Uniform, _) => {
+                mark_shareable(module, var.ty, &mut shareable);
+                BindingKind::Uniform {
+                    min_size: layouter[var.ty].size,
+                    rust: rust_type(module, var.ty).unwrap_or_default(),
+                }
+            }
+            (AddressSpace::Storage { access }, _) => {
+                mark_shareable(module, var.ty, &mut shareable);
+                BindingKind::Storage {
+                    read_only: !access.contains(naga::StorageAccess::STORE),
+                    min_size: layouter[var.ty].size,
+                    rust: rust_type(module, var.ty).unwrap_or_default(),
+                }
+            }
+            (_, TypeInner::Image { dim, arrayed, class }) => match class {
+                ImageClass::Sampled { kind, multi } => BindingKind::Texture {
+                    dim: dim_name(*dim, *arrayed),
+                    sample: match kind {
+                        ScalarKind::Uint => SampleKind::Uint,
+                        ScalarKind::Sint => SampleKind::Sint,
+                        _ => SampleKind::Float { filterable: sampled_images.contains(&handle) },
+                    },
+                    multisampled: *multi,
+                },
+                ImageClass::Depth { multi } => BindingKind::Texture {
+                    dim: dim_name(*dim, *arrayed),
+                    sample: SampleKind::Depth,
+                    multisampled: *multi,
+                },
+                ImageClass::Storage { format, access } => BindingKind::StorageTexture {
+                    dim: dim_name(*dim, *arrayed),
+                    format: format!("{format:?}"),
+                    access: access_name(*access).into(),
+                },
+                ImageClass::External => continue,
+            },
+            (_, TypeInner::Sampler { comparison }) => BindingKind::Sampler {
+                comparison: *comparison,
+                filtering: !*comparison && sampled_samplers.contains(&handle),
+            },
+            _ => continue,
+        };
+        let linked_offset = module.global_variables.get_span(handle).to_range().map(|r| r.start).unwrap_or(0);
+        bindings.push(Binding {
+            group: rb.group,
+            binding: rb.binding,
+            name: var.name.clone().unwrap_or_default(),
+            kind,
+            ty: wgsl_type(module, var.ty),
+            linked_offset,
+        });
+        handles.push(handle);
+    }
+
+    let mut entry_points = Vec::new();
+    for (i, ep) in module.entry_points.iter().enumerate() {
+        let fi = stage.info.get_entry_point(i);
+        let mut uses = Vec::new();
+        for (b, &h) in bindings.iter().zip(&handles) {
+            let u = fi[h];
+            if u.is_empty() {
+                continue;
+            }
+            let r = u.intersects(GlobalUse::READ | GlobalUse::QUERY);
+            let w = u.contains(GlobalUse::WRITE);
+            let access = match (r, w) {
+                (_, true) if u.contains(GlobalUse::READ) => "read_write",
+                (_, true) => "write",
+                _ => "read",
+            };
+            uses.push(BindingUse { group: b.group, binding: b.binding, name: b.name.clone(), access: access.into() });
+        }
+        let stage_name = match ep.stage {
+            ShaderStage::Compute => "compute",
+            ShaderStage::Vertex => "vertex",
+            ShaderStage::Fragment => "fragment",
+            _ => "other",
+        };
+        let vertex_inputs = if ep.stage == ShaderStage::Vertex {
+            located_args(module, &ep.function)
+                .into_iter()
+                .filter_map(|(location, name, ty)| {
+                    let (format, rust, size) = vertex_format(module, ty)?;
+                    Some(VertexInput { location, name, ty: wgsl_type(module, ty), format, rust, size })
+                })
+                .collect()
+        } else {
+            vec![]
+        };
+        let fragment_outputs =
+            if ep.stage == ShaderStage::Fragment { fragment_outputs(module, &ep.function) } else { vec![] };
+        entry_points.push(EntryPoint {
+            name: ep.name.clone(),
+            stage: stage_name.into(),
+            workgroup_size: ep.workgroup_size,
+            uses,
+            vertex_inputs,
+            fragment_outputs,
+        });
+    }
+
+    let mut structs = Vec::new();
+    for (handle, ty) in module.types.iter() {
+        let TypeInner::Struct { members, span } = &ty.inner else { continue };
+        let Some(name) = &ty.name else { continue };
+        // Entry-point interface structs (locations/builtins) are not memory layouts.
+        if members.iter().any(|m| m.binding.is_some()) {
+            continue;
+        }
+        structs.push(StructInfo {
+            name: name.clone(),
+            size: *span,
+            align: layouter[handle].alignment.round_up(1),
+            members: members
+                .iter()
+                .map(|m| Member {
+                    name: m.name.clone().unwrap_or_default(),
+                    offset: m.offset,
+                    size: layouter[m.ty].size,
+                    ty: wgsl_type(module, m.ty),
+                    rust: rust_type(module, m.ty).unwrap_or_default(),
+                })
+                .collect(),
+            host_shareable: shareable.contains(&handle),
+        });
+    }
+
+    let overrides = module
+        .overrides
+        .iter()
+        .map(|(_, o)| Override {
+            name: o.name.clone().unwrap_or_default(),
+            id: o.id,
+            ty: wgsl_type(module, o.ty),
+            has_default: o.init.is_some(),
+        })
+        .collect();
+
+    bindings.sort_by_key(|b| (b.group, b.binding));
+    Reflection {
+        stage: stage.file.id(),
+        path: stage.file.rel_path.clone(),
+        entry_points,
+        bindings,
+        structs,
+        overrides,
+    }
+}
+
+impl Reflection {
+    /// The human-readable tables `xtask reflect` prints.
+    pub fn to_table(&self) -> String {
+        use std::fmt::Write;
+        let mut s = String::new();
+        writeln!(s, "stage {}  ({})", self.stage, self.path).unwrap();
+        for ep in &self.entry_points {
+            write!(s, "  entry {} [{}]", ep.name, ep.stage).unwrap();
+            if ep.stage == "compute" {
+                let [x, y, z] = ep.workgroup_size;
+                write!(s, " workgroup_size({x}, {y}, {z})").unwrap();
+            }
+            writeln!(s).unwrap();
+            writeln!(s, "    {:<5} {:<7} {:<12} {:<15} {:<45} {:<10}", "group", "binding", "name", "kind", "type", "access").unwrap();
+            for u in &ep.uses {
+                let b = self.bindings.iter().find(|b| b.group == u.group && b.binding == u.binding).unwrap();
+                let kind = match &b.kind {
+                    BindingKind::Uniform { .. } => "uniform",
+                    BindingKind::Storage { .. } => "storage",
+                    BindingKind::Texture { .. } => "texture",
+                    BindingKind::StorageTexture { .. } => "storage_texture",
+                    BindingKind::Sampler { .. } => "sampler",
+                };
+                writeln!(s, "    {:<5} {:<7} {:<12} {:<15} {:<45} {:<10}", b.group, b.binding, b.name, kind, b.ty, u.access).unwrap();
+            }
+            for v in &ep.vertex_inputs {
+                writeln!(s, "    vertex input @location({}) {}: {} ({})", v.location, v.name, v.ty, v.format).unwrap();
+            }
+            for o in &ep.fragment_outputs {
+                writeln!(s, "    fragment output @location({}): {} ({})", o.location, o.ty, o.scalar).unwrap();
+            }
+        }
+        for st in self.structs.iter().filter(|s| s.host_shareable) {
+            writeln!(s, "  struct {} size {} align {}", st.name, st.size, st.align).unwrap();
+            for m in &st.members {
+                writeln!(s, "    {:>4}  {:<16} {} (size {})", m.offset, m.name, m.ty, m.size).unwrap();
+            }
+        }
+        for o in &self.overrides {
+            writeln!(s, "  override {}: {}{}", o.name, o.ty, if o.has_default { " (has default)" } else { "" }).unwrap();
+        }
+        s
+    }
+}
