@@ -123,7 +123,7 @@ fn link(shader_root: &Path, stage: &StageFile) -> Result<Linked, String> {
     compiler.keep_all_entrypoints();
     let result = compiler
         .compile(&root)
-        .map_err(|e| format!("error: WESL could not link {}\n{e}", stage.rel_path))?;
+        .map_err(|e| format!("error: WESL could not link {}\n{}", stage.rel_path, strip_ansi(&e.to_string())))?;
     let sourcemap = result.sourcemap.as_ref();
 
     let mut text = String::new();
@@ -154,6 +154,25 @@ fn link(shader_root: &Path, stage: &StageFile) -> Result<Linked, String> {
         origins.push(DeclOrigin { linked: start..end, file: file.map(|f| (f, span)) });
     }
     Ok(Linked { text, origins })
+}
+
+/// Remove terminal colour codes (wesl colours its messages; cargo warnings and logs should not).
+fn strip_ansi(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    let mut chars = s.chars();
+    while let Some(c) = chars.next() {
+        if c == '\u{1b}' {
+            // CSI: ESC [ params letter
+            for d in chars.by_ref() {
+                if d.is_ascii_alphabetic() {
+                    break;
+                }
+            }
+        } else {
+            out.push(c);
+        }
+    }
+    out
 }
 
 /// `package::shared::grid` → "shaders/shared/grid.wesl" (or .wgsl), whichever exists.
@@ -291,4 +310,42 @@ pub fn build_all(crate_root: &Path) -> Result<Vec<Stage>, Vec<String>> {
         }
     }
     if errors.is_empty() { Ok(stages) } else { Err(errors) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A throwaway crate root with a shared helper and the given stage files.
+    fn tree(stages: &[(&str, &str)]) -> PathBuf {
+        let n = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap().as_nanos();
+        let root = std::env::temp_dir().join(format!("fieldkit-toolchain-{}-{n}", std::process::id()));
+        std::fs::create_dir_all(root.join("shaders/shared")).unwrap();
+        std::fs::create_dir_all(root.join("shaders/room")).unwrap();
+        std::fs::write(root.join("shaders/shared/util.wesl"), "// Helpers.\n\nfn twice(x: u32) -> u32 {\n    return x * 2u;\n}\n\nfn broken_helper() -> f32 {\n    return 1u;\n}\n").unwrap();
+        for (name, src) in stages {
+            std::fs::write(root.join(format!("shaders/room/{name}.wgsl")), src).unwrap();
+        }
+        root
+    }
+
+    #[test]
+    fn every_broken_stage_is_reported_at_its_original_line_and_column() {
+        let root = tree(&[
+            // Type error in the stage itself, on line 6, after an import that shifts linked text.
+            ("a_type", "// Stage with a type error.\nimport package::shared::util::twice;\n@group(0) @binding(0) var<storage, read_write> out: array<u32>;\n@compute @workgroup_size(1)\nfn main() {\n    out[0] = twice(1.5);\n}\n"),
+            // Parse error on line 3.
+            ("b_parse", "// Stage with a syntax error.\n@compute @workgroup_size(1)\nfn main() { let x = ; }\n"),
+            ("c_fine", "// A valid stage.\n@compute @workgroup_size(1)\nfn main() {}\n"),
+            // Error inside an imported helper: reported in the helper's file.
+            ("d_helper", "// Uses a broken helper.\nimport package::shared::util::broken_helper;\n@compute @workgroup_size(1)\nfn main() { _ = broken_helper(); }\n"),
+        ]);
+        let errors = build_all(&root).err().expect("broken stages fail");
+        assert_eq!(errors.len(), 3, "{errors:#?}");
+        assert!(errors[0].contains("shaders/room/a_type.wgsl:6:"), "{}", errors[0]);
+        assert!(errors[1].contains("shaders/room/b_parse.wgsl:3:"), "{}", errors[1]);
+        assert!(errors[2].contains("shaders/shared/util.wesl:7:1") && errors[2].contains("8 │     return 1u;"), "{}", errors[2]);
+        eprintln!("{}", errors.join("\n"));
+        std::fs::remove_dir_all(root).ok();
+    }
 }
