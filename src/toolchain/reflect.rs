@@ -506,7 +506,7 @@ impl Reflection {
                 write!(s, " workgroup_size({x}, {y}, {z})").unwrap();
             }
             writeln!(s).unwrap();
-            writeln!(s, "    {:<5} {:<7} {:<12} {:<15} {:<45} {:<10}", "group", "binding", "name", "kind", "type", "access").unwrap();
+            writeln!(s, "    {:<5} {:<7} {:<16} {:<15} {:<40} {}", "group", "binding", "name", "kind", "type", "access").unwrap();
             for u in &ep.uses {
                 let b = self.bindings.iter().find(|b| b.group == u.group && b.binding == u.binding).unwrap();
                 let kind = match &b.kind {
@@ -516,7 +516,7 @@ impl Reflection {
                     BindingKind::StorageTexture { .. } => "storage_texture",
                     BindingKind::Sampler { .. } => "sampler",
                 };
-                writeln!(s, "    {:<5} {:<7} {:<12} {:<15} {:<45} {:<10}", b.group, b.binding, b.name, kind, b.ty, u.access).unwrap();
+                writeln!(s, "    {:<5} {:<7} {:<16} {:<15} {:<40} {}", b.group, b.binding, b.name, kind, b.ty, u.access).unwrap();
             }
             for v in &ep.vertex_inputs {
                 writeln!(s, "    vertex input @location({}) {}: {} ({})", v.location, v.name, v.ty, v.format).unwrap();
