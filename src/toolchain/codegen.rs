@@ -343,3 +343,61 @@ pub fn format(code: &str) -> String {
         Err(_) => format!("{HEADER}{code}"),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::toolchain::lint::test_util::stage;
+
+    const RENDER: &str = "// Test render stage.
+struct Camera { view_proj: mat4x4<f32>, eye: vec3<f32>, exposure: f32 }
+struct VsOut { @builtin(position) clip: vec4<f32>, @location(0) normal: vec3<f32> }
+struct FsOut { @location(0) colour: vec4<f32>, @location(1) id: u32 }
+@group(0) @binding(0) var<uniform> camera: Camera;
+@group(0) @binding(1) var tint: texture_2d<f32>;
+@group(0) @binding(2) var tint_sampler: sampler;
+@vertex fn vs(@location(0) position: vec3<f32>, @location(1) normal: vec3<f32>, @location(2) instance_offset: vec4<f32>) -> VsOut {
+    var o: VsOut;
+    o.clip = camera.view_proj * vec4<f32>(position + instance_offset.xyz, 1.0);
+    o.normal = normal;
+    return o;
+}
+@fragment fn fs(in: VsOut) -> FsOut {
+    var o: FsOut;
+    o.colour = textureSample(tint, tint_sampler, in.normal.xy) * camera.exposure;
+    o.id = 1u;
+    return o;
+}
+";
+
+    #[test]
+    fn render_stage_generates_vertex_structs_layouts_and_targets() {
+        let code = format(&stage_module(&stage(RENDER)));
+        // Per-vertex inputs in buffer 0, `instance_*` inputs in a per-instance buffer 1.
+        assert!(code.contains("pub struct Vertex {"), "{code}");
+        assert!(code.contains("pub position: glam::Vec3"));
+        assert!(code.contains("pub struct Instance {"));
+        assert!(code.contains("pub instance_offset: glam::Vec4"));
+        assert!(code.contains("array_stride: 24"));
+        assert!(code.contains("step_mode: wgpu::VertexStepMode::Instance"));
+        assert!(code.contains("format: wgpu::VertexFormat::Float32x3"));
+        assert!(code.contains("offset: 12"));
+        // Visibility from real use: the camera is read by both stages, the texture by the fragment only.
+        let flat: String = code.split_whitespace().collect();
+        assert!(flat.contains("visibility:wgpu::ShaderStages::FRAGMENT.union(wgpu::ShaderStages::VERTEX)"), "{code}");
+        assert!(code.contains("filterable: true"), "sampled through a sampler: filterable");
+        assert!(code.contains("SamplerBindingType::Filtering"));
+        // Fragment targets: a float and a uint output.
+        assert!(code.contains("scalar: crate::bind::ScalarClass::Float"));
+        assert!(code.contains("scalar: crate::bind::ScalarClass::Uint"));
+        // vec3 followed by f32 packs into its padding: offsets 64 and 76, size 80.
+        assert!(code.contains(".offset(1) == 64") && code.contains(".offset(2) == 76") && code.contains("min_size().get() == 80"), "{code}");
+    }
+
+    #[test]
+    fn generated_code_is_deterministic() {
+        let a = stage_module(&stage(RENDER));
+        let b = stage_module(&stage(RENDER));
+        assert_eq!(a, b);
+    }
+}
