@@ -394,16 +394,7 @@ impl<E: Entry> ComputePipeline<E> {
         info.check_overrides(overrides)?;
         crate::gpu::scoped(device, info.stage, || {
             let layouts = info.layouts(device);
-            let layout = info.pipeline_layout(device, &layouts);
-            let module = module(device, info);
-            let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(info.stage),
-                layout: Some(&layout),
-                module: &module,
-                entry_point: Some(info.entry_point),
-                compilation_options: wgpu::PipelineCompilationOptions { constants: overrides, ..Default::default() },
-                cache: None,
-            });
+            let pipeline = build_compute(device, info, &layouts, overrides);
             Self { pipeline, layouts, _e: PhantomData }
         })
     }
@@ -450,7 +441,7 @@ impl<E: Entry> RenderPipeline<E> {
     /// Create the pipeline; colour targets are checked against the fragment outputs first.
     pub fn new(device: &wgpu::Device, targets: &RenderTargets<'_>) -> Result<Self, Error> {
         let info = E::INFO;
-        let EntryKind::Render { vertex, vertex_buffers, targets: outputs } = info.kind else {
+        let EntryKind::Render { targets: outputs, .. } = info.kind else {
             return Err(Error::Invalid { stage: info.stage, what: "not a render entry point".into() });
         };
         if targets.color.len() != outputs.len() {
@@ -475,29 +466,7 @@ impl<E: Entry> RenderPipeline<E> {
         }
         crate::gpu::scoped(device, info.stage, || {
             let layouts = info.layouts(device);
-            let layout = info.pipeline_layout(device, &layouts);
-            let module = module(device, info);
-            let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(info.stage),
-                layout: Some(&layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some(vertex),
-                    compilation_options: Default::default(),
-                    buffers: vertex_buffers,
-                },
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some(info.entry_point),
-                    compilation_options: Default::default(),
-                    targets: targets.color,
-                }),
-                primitive: targets.primitive,
-                depth_stencil: targets.depth_stencil.clone(),
-                multisample: targets.multisample,
-                multiview_mask: None,
-                cache: None,
-            });
+            let pipeline = build_render(device, info, &layouts, targets);
             Self { pipeline, layouts, _e: PhantomData }
         })
     }
@@ -509,25 +478,52 @@ impl<E: Entry> RenderPipeline<E> {
     }
 }
 
+fn build_compute(device: &wgpu::Device, info: &EntryInfo, layouts: &[(u32, wgpu::BindGroupLayout)], overrides: &[(&str, f64)]) -> wgpu::ComputePipeline {
+    let layout = info.pipeline_layout(device, layouts);
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(info.stage),
+        layout: Some(&layout),
+        module: &module(device, info),
+        entry_point: Some(info.entry_point),
+        compilation_options: wgpu::PipelineCompilationOptions { constants: overrides, ..Default::default() },
+        cache: None,
+    })
+}
+
+/// Build a render pipeline; `info.kind` must be `Render` (checked by the callers).
+fn build_render(device: &wgpu::Device, info: &EntryInfo, layouts: &[(u32, wgpu::BindGroupLayout)], targets: &RenderTargets<'_>) -> wgpu::RenderPipeline {
+    let EntryKind::Render { vertex, vertex_buffers, .. } = info.kind else { unreachable!("callers pass render entries") };
+    let layout = info.pipeline_layout(device, layouts);
+    let module = module(device, info);
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(info.stage),
+        layout: Some(&layout),
+        vertex: wgpu::VertexState { module: &module, entry_point: Some(vertex), compilation_options: Default::default(), buffers: vertex_buffers },
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some(info.entry_point),
+            compilation_options: Default::default(),
+            targets: targets.color,
+        }),
+        primitive: targets.primitive,
+        depth_stencil: targets.depth_stencil.clone(),
+        multisample: targets.multisample,
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
 /// Create the pipeline for any entry point from its table alone (used to prove every generated
-/// pipeline is accepted by wgpu, on the noop backend in tests).
+/// pipeline is accepted by wgpu, on the noop backend in tests). Colour targets get a format of
+/// each output's scalar class.
 pub fn create_any(device: &wgpu::Device, info: &'static EntryInfo) -> Result<(), Error> {
     crate::gpu::scoped(device, info.stage, || {
         let layouts = info.layouts(device);
-        let layout = info.pipeline_layout(device, &layouts);
-        let module = module(device, info);
         match info.kind {
             EntryKind::Compute { .. } => {
-                let _ = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some(info.stage),
-                    layout: Some(&layout),
-                    module: &module,
-                    entry_point: Some(info.entry_point),
-                    compilation_options: Default::default(),
-                    cache: None,
-                });
+                let _ = build_compute(device, info, &layouts, &[]);
             }
-            EntryKind::Render { vertex, vertex_buffers, targets } => {
+            EntryKind::Render { targets, .. } => {
                 let color: Vec<_> = targets
                     .iter()
                     .map(|t| {
@@ -538,27 +534,7 @@ pub fn create_any(device: &wgpu::Device, info: &'static EntryInfo) -> Result<(),
                         }))
                     })
                     .collect();
-                let _ = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some(info.stage),
-                    layout: Some(&layout),
-                    vertex: wgpu::VertexState {
-                        module: &module,
-                        entry_point: Some(vertex),
-                        compilation_options: Default::default(),
-                        buffers: vertex_buffers,
-                    },
-                    fragment: Some(wgpu::FragmentState {
-                        module: &module,
-                        entry_point: Some(info.entry_point),
-                        compilation_options: Default::default(),
-                        targets: &color,
-                    }),
-                    primitive: Default::default(),
-                    depth_stencil: None,
-                    multisample: Default::default(),
-                    multiview_mask: None,
-                    cache: None,
-                });
+                let _ = build_render(device, info, &layouts, &RenderTargets { color: &color, ..Default::default() });
             }
         }
     })
