@@ -86,12 +86,7 @@ pub fn visualize_distance(ctx: &Context, distance: &wgpu::Texture, spacing: f32,
         usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
         view_formats: &[],
     });
-    let params = {
-        use wgpu::util::DeviceExt;
-        let mut b = encase::UniformBuffer::new(Vec::new());
-        b.write(&visualize::ViewParams { spacing, range }).expect("encodes");
-        device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("view params"), contents: &b.into_inner(), usage: wgpu::BufferUsages::UNIFORM })
-    };
+    let params = crate::gpu::uniform_buffer(device, "view params", &visualize::ViewParams { spacing, range });
     let dv = distance.create_view(&Default::default());
     let bound = pipeline.bind(device, &visualize::fs_main::Resources { params: (&params).into(), distance: (&dv).into() })?;
     let tv = target.create_view(&Default::default());

@@ -152,16 +152,7 @@ fn texture(device: &wgpu::Device, label: &str, w: u32, h: u32, format: wgpu::Tex
     })
 }
 
-fn uniform<T: encase::ShaderType + encase::internal::WriteInto>(device: &wgpu::Device, label: &str, value: &T) -> wgpu::Buffer {
-    use wgpu::util::DeviceExt;
-    let mut bytes = encase::UniformBuffer::new(Vec::new());
-    bytes.write(value).expect("a generated uniform struct always encodes");
-    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some(label),
-        contents: &bytes.into_inner(),
-        usage: wgpu::BufferUsages::UNIFORM,
-    })
-}
+use crate::gpu::uniform_buffer as uniform;
 
 fn view(t: &wgpu::Texture) -> wgpu::TextureView {
     t.create_view(&Default::default())

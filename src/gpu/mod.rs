@@ -153,3 +153,12 @@ pub fn scoped<T>(device: &wgpu::Device, stage: &'static str, f: impl FnOnce() ->
         None => Ok(out),
     }
 }
+
+/// A uniform buffer holding `value`, laid out by encase as the shader's struct (use the
+/// generated `fieldkit::shaders::…` type).
+pub fn uniform_buffer<T: encase::ShaderType + encase::internal::WriteInto>(device: &wgpu::Device, label: &str, value: &T) -> wgpu::Buffer {
+    use wgpu::util::DeviceExt;
+    let mut bytes = encase::UniformBuffer::new(Vec::new());
+    bytes.write(value).expect("a generated uniform struct always encodes");
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents: &bytes.into_inner(), usage: wgpu::BufferUsages::UNIFORM })
+}
