@@ -144,6 +144,104 @@ pub fn jfa_2d(seeds: &[bool], width: usize, height: usize, steps: &[u32]) -> Vec
     cur
 }
 
+/// Exact squared Euclidean distance from every voxel centre to the nearest seed voxel centre
+/// (`seeds[(z * height + y) * width + x]`), or [`NONE`]: the same 1D transform along x, y, z.
+pub fn edt_3d_squared(seeds: &[bool], size: [usize; 3]) -> Vec<u64> {
+    let [w, h, d] = size;
+    assert_eq!(seeds.len(), w * h * d, "seed mask size");
+    let mut g: Vec<f64> = seeds.iter().map(|&s| if s { 0.0 } else { f64::INFINITY }).collect();
+    let mut line = Vec::new();
+    let mut out = Vec::new();
+    // One axis at a time: gather each line, transform it, scatter it back.
+    for (axis, (n, stride, lines)) in [(w, 1, h * d), (h, w, w * d), (d, w * h, w * h)].into_iter().enumerate() {
+        line.resize(n, 0.0);
+        out.resize(n, 0.0);
+        for l in 0..lines {
+            // Lines are numbered over the other two axes, x first.
+            let base = match axis {
+                0 => l * w,
+                1 => (l / w) * w * h + l % w,
+                _ => l,
+            };
+            for i in 0..n {
+                line[i] = g[base + i * stride];
+            }
+            edt_1d(&line, &mut out);
+            for i in 0..n {
+                g[base + i * stride] = out[i];
+            }
+        }
+    }
+    g.into_iter().map(|v| if v.is_finite() { v as u64 } else { NONE }).collect()
+}
+
+/// Pack a 3D seed as the shaders do (11/11/10 bits, each coordinate + 1).
+pub fn pack_seed3(x: usize, y: usize, z: usize) -> u32 {
+    ((x + 1) | ((y + 1) << 11) | ((z + 1) << 22)) as u32
+}
+
+/// Unpack a 3D seed; `None` for no seed.
+pub fn unpack_seed3(s: u32) -> Option<[i64; 3]> {
+    (s != 0).then(|| [(s & 0x7ff) as i64 - 1, ((s >> 11) & 0x7ff) as i64 - 1, (s >> 22) as i64 - 1])
+}
+
+/// Squared distance from voxel `i` of a `size` grid to packed seed `s`.
+pub fn seed_d2_3(s: u32, i: usize, size: [usize; 3]) -> Option<u64> {
+    let [sx, sy, sz] = unpack_seed3(s)?;
+    let (x, y, z) = ((i % size[0]) as i64, ((i / size[0]) % size[1]) as i64, (i / (size[0] * size[1])) as i64);
+    Some(((sx - x).pow(2) + (sy - y).pow(2) + (sz - z).pow(2)) as u64)
+}
+
+/// The 3D JFA the shaders run (`jfa3_step.wgsl`, entry `jump`), on the CPU: 26 neighbours,
+/// out-of-range skipped, ties to the smaller packed seed. Returns packed seeds.
+pub fn jfa_3d(seeds: &[bool], size: [usize; 3], steps: &[u32]) -> Vec<u32> {
+    let [w, h, d] = size;
+    let mut cur: Vec<u32> = (0..w * h * d)
+        .map(|i| if seeds[i] { pack_seed3(i % w, (i / w) % h, i / (w * h)) } else { 0 })
+        .collect();
+    let mut next = cur.clone();
+    for &step in steps {
+        let step = step as i64;
+        for i in 0..cur.len() {
+            let p = [(i % w) as i64, ((i / w) % h) as i64, (i / (w * h)) as i64];
+            let mut best = cur[i];
+            let mut best_d = seed_d2_3(best, i, size).unwrap_or(u64::MAX);
+            for dz in -1..=1i64 {
+                for dy in -1..=1i64 {
+                    for dx in -1..=1i64 {
+                        let q = [p[0] + dx * step, p[1] + dy * step, p[2] + dz * step];
+                        if (dx, dy, dz) == (0, 0, 0) || q.iter().zip(size).any(|(&c, n)| c < 0 || c >= n as i64) {
+                            continue;
+                        }
+                        let s = cur[((q[2] * h as i64 + q[1]) * w as i64 + q[0]) as usize];
+                        let Some(dd) = seed_d2_3(s, i, size) else { continue };
+                        if dd < best_d || (dd == best_d && s < best) {
+                            best = s;
+                            best_d = dd;
+                        }
+                    }
+                }
+            }
+            next[i] = best;
+        }
+        std::mem::swap(&mut cur, &mut next);
+    }
+    cur
+}
+
+/// Brute force in 3D, for checking the reference itself.
+pub fn brute_3d_squared(seeds: &[bool], size: [usize; 3]) -> Vec<u64> {
+    let [w, h, _] = size;
+    let coord = |i: usize| [(i % w) as i64, ((i / w) % h) as i64, (i / (w * h)) as i64];
+    let pts: Vec<[i64; 3]> = (0..seeds.len()).filter(|&i| seeds[i]).map(coord).collect();
+    (0..seeds.len())
+        .map(|i| {
+            let p = coord(i);
+            pts.iter().map(|s| ((s[0] - p[0]).pow(2) + (s[1] - p[1]).pow(2) + (s[2] - p[2]).pow(2)) as u64).min().unwrap_or(NONE)
+        })
+        .collect()
+}
+
 /// Brute force, for checking the reference itself on small grids.
 pub fn brute_2d_squared(seeds: &[bool], width: usize, height: usize) -> Vec<u64> {
     let pts: Vec<(i64, i64)> =
@@ -176,6 +274,14 @@ mod tests {
         for (w, h, density, seed) in [(17, 9, 0.05, 1), (31, 40, 0.01, 2), (8, 8, 0.5, 3), (1, 13, 0.2, 4), (23, 1, 0.1, 5)] {
             let m = lcg_mask(w * h, density, seed);
             assert_eq!(edt_2d_squared(&m, w, h), brute_2d_squared(&m, w, h), "{w}x{h} density {density}");
+        }
+    }
+
+    #[test]
+    fn edt_3d_matches_brute_force() {
+        for (size, density, seed) in [([9, 7, 5], 0.03, 1), ([16, 3, 11], 0.01, 2), ([6, 6, 6], 0.4, 3), ([1, 1, 9], 0.2, 4), ([1, 8, 6], 0.1, 6), ([12, 10, 1], 0.05, 5)] {
+            let m = lcg_mask(size.iter().product(), density, seed);
+            assert_eq!(edt_3d_squared(&m, size), brute_3d_squared(&m, size), "{size:?} density {density}");
         }
     }
 

@@ -18,6 +18,7 @@
 //! ```
 
 pub mod cpu;
+pub mod volume;
 
 use crate::bind::{ComputePipeline, Entry};
 use crate::error::Error;
@@ -65,10 +66,12 @@ pub enum Variant {
     JfaPlus2,
     /// One pass of step 1 first, then JFA.
     OnePlusJfa,
+    /// Step 1, JFA, then steps 2 and 1.
+    OnePlusJfaPlus2,
 }
 
 impl Variant {
-    pub const ALL: [Variant; 4] = [Variant::Jfa, Variant::JfaPlus1, Variant::JfaPlus2, Variant::OnePlusJfa];
+    pub const ALL: [Variant; 5] = [Variant::Jfa, Variant::JfaPlus1, Variant::JfaPlus2, Variant::OnePlusJfa, Variant::OnePlusJfaPlus2];
 
     pub fn name(self) -> &'static str {
         match self {
@@ -76,6 +79,7 @@ impl Variant {
             Variant::JfaPlus1 => "JFA+1",
             Variant::JfaPlus2 => "JFA+2",
             Variant::OnePlusJfa => "1+JFA",
+            Variant::OnePlusJfaPlus2 => "1+JFA+2",
         }
     }
 
@@ -94,6 +98,7 @@ impl Variant {
             Variant::JfaPlus1 => [jfa, vec![1]].concat(),
             Variant::JfaPlus2 => [jfa, vec![2, 1]].concat(),
             Variant::OnePlusJfa => [vec![1], jfa].concat(),
+            Variant::OnePlusJfaPlus2 => [vec![1], jfa, vec![2, 1]].concat(),
         }
     }
 }

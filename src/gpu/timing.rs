@@ -63,3 +63,48 @@ impl Timer {
         Ok(last.saturating_sub(first) as f64 * self.period_ns as f64 / 1e6)
     }
 }
+
+/// Named GPU time per pass: hand [`Profiler::next`] to each compute pass as it is recorded; passes
+/// past the capacity go untimed. Used by `cargo xtask bench`.
+pub struct Profiler {
+    timer: Timer,
+    capacity: u32,
+    names: Vec<String>,
+}
+
+impl Profiler {
+    /// `None` when the adapter has no timestamp queries.
+    pub fn new(ctx: &Context, capacity: u32) -> Option<Self> {
+        Some(Self { timer: Timer::new(ctx, capacity)?, capacity, names: Vec::new() })
+    }
+
+    /// Timestamp writes for the next pass, recorded under `name`.
+    pub fn next(&mut self, name: impl Into<String>) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
+        let i = self.names.len() as u32;
+        if i >= self.capacity {
+            return None;
+        }
+        self.names.push(name.into());
+        Some(self.timer.compute_pass_writes(i))
+    }
+
+    /// Resolve the passes recorded so far; call once, after the last pass, before submitting.
+    pub fn resolve(&self, encoder: &mut wgpu::CommandEncoder) {
+        let used = self.names.len() as u32 * 2;
+        if used > 0 {
+            encoder.resolve_query_set(&self.timer.set, 0..used, &self.timer.resolve, 0);
+        }
+    }
+
+    /// After the submission finished: (name, milliseconds) per pass, and the total from the first
+    /// pass's start to the last one's end (gaps between passes included). Clears the names.
+    pub fn read(&mut self, ctx: &Context) -> Result<(Vec<(String, f64)>, f64), Error> {
+        let bytes = super::read_buffer(ctx, &self.timer.resolve)?;
+        let ticks: &[u64] = bytemuck::cast_slice(&bytes);
+        let ms = |a: u64, b: u64| b.saturating_sub(a) as f64 * self.timer.period_ns as f64 / 1e6;
+        let names = std::mem::take(&mut self.names);
+        let passes = names.into_iter().enumerate().map(|(i, n)| (n, ms(ticks[2 * i], ticks[2 * i + 1]))).collect::<Vec<_>>();
+        let total = if passes.is_empty() { 0.0 } else { ms(ticks[0], ticks[2 * passes.len() - 1]) };
+        Ok((passes, total))
+    }
+}

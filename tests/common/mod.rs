@@ -31,3 +31,31 @@ pub fn run_jfa(ctx: &Context, jfa: &Jfa2d, mask: &[bool], w: usize, h: usize, op
 pub fn variant_options(variant: Variant) -> Options {
     Options { variant, ..Options::default() }
 }
+
+/// Deterministic pseudo-random 3D mask, x fastest.
+pub fn random_mask_3d(size: [usize; 3], density: f64, seed: u64) -> Vec<bool> {
+    random_mask(size[0] * size[1], size[2], density, seed)
+}
+
+pub fn mask_3d(size: [usize; 3], pts: &[[usize; 3]]) -> Vec<bool> {
+    let mut m = vec![false; size.iter().product()];
+    for p in pts {
+        m[(p[2] * size[1] + p[1]) * size[0] + p[0]] = true;
+    }
+    m
+}
+
+pub fn size_u32(size: [usize; 3]) -> [u32; 3] {
+    size.map(|s| s as u32)
+}
+
+/// Run a 3D distance computation on a mask; returns (nearest, nearest outside, distance).
+pub fn run_3d(ctx: &Context, d3: &fieldkit::distance::volume::Distance3d, mask: &[bool], size: [usize; 3], options: &fieldkit::distance::volume::Options3d) -> (Vec<u32>, Option<Vec<u32>>, Vec<f32>) {
+    use fieldkit::gpu::read_buffer;
+    let volume = fieldkit::distance::volume::upload_volume(ctx, &to_bytes(mask), size_u32(size)).expect("upload");
+    let mut enc = ctx.encoder("test");
+    let field = d3.encode(&ctx.device, &mut enc, &volume, options).expect("encode");
+    ctx.submit_and_wait("test", enc).expect("run");
+    let words = |b: &wgpu::Buffer| bytemuck::cast_slice::<u8, u32>(&read_buffer(ctx, b).unwrap()).to_vec();
+    (words(&field.nearest), field.nearest_outside.as_ref().map(words), read_texture(ctx, &field.distance).unwrap())
+}

@@ -8,8 +8,14 @@ use crate::toolchain::{Stage, lint, reflect::reflect};
 /// Translate a stage to each backend language; `Err` names the language and why.
 pub fn translate_all(stage: &Stage) -> Vec<(&'static str, Result<usize, String>)> {
     use naga::back::{glsl, hlsl, msl, spv};
-    let (module, info) = (&stage.module, &stage.info);
     let mut out = Vec::new();
+    // Backends take a module with its overrides already resolved, as wgpu does at pipeline
+    // creation; the shader's defaults stand in for the values a pipeline would give.
+    let (module, info) = match naga::back::pipeline_constants::process_overrides(&stage.module, &stage.info, None, &Default::default()) {
+        Ok(m) => m,
+        Err(e) => return vec![("overrides", Err(e.to_string()))],
+    };
+    let (module, info) = (&*module, &*info);
     out.push(("SPIR-V", spv::write_vec(module, info, &spv::Options::default(), None).map(|w| w.len() * 4).map_err(|e| e.to_string())));
     out.push((
         "MSL",

@@ -1,0 +1,129 @@
+// Exact EDT, first pass: per row, the nearest marked voxel along x (seeding and the 1D transform
+// in one pass; the column passes in `edt_columns` finish the transform).
+//
+// One workgroup per row walks it in chunks of 256: an inclusive max-scan finds the nearest marked
+// voxel to the left, a second sweep from the right with a min-scan finds the one to the right.
+// Every global read and write is a contiguous run of the row, so the pass is coalesced although
+// the row is the direction a thread-per-line scheme would stride across. `rows` reads a 3D volume
+// and packs 11/11/10 bits; `rows_2d` reads a 2D mask and packs 16/16.
+
+import package::shared::seed::{NO_SEED, pack_seed2, pack_seed3};
+
+struct RowParams {
+    size: vec3<u32>,
+    // A voxel is marked where its red channel is ≥ threshold.
+    threshold: f32,
+    // 1: seeds are the unmarked voxels.
+    invert: u32,
+}
+
+@group(0) @binding(0) var<uniform> params: RowParams;
+@group(0) @binding(1) var volume: texture_3d<f32>;
+@group(0) @binding(2) var mask_2d: texture_2d<f32>;
+@group(0) @binding(3) var<storage, read_write> nearest: array<u32>;
+
+const CHUNK: u32 = 256u;
+// "Nothing to the right yet" for the min-scan.
+const NONE_RIGHT: u32 = 0xffffffffu;
+
+var<workgroup> scan: array<u32, 256>;
+
+fn is_seed(value: f32) -> bool {
+    return (value >= params.threshold) != (params.invert != 0u);
+}
+
+// Inclusive scan of `scan` with max (left) or min (right), Hillis & Steele; all threads call it.
+fn scan_chunk(lane: u32, use_max: bool) {
+    for (var offset = 1u; offset < CHUNK; offset <<= 1u) {
+        var other = scan[lane];
+        if use_max && lane >= offset {
+            other = scan[lane - offset];
+        }
+        if !use_max && lane + offset < CHUNK {
+            other = scan[lane + offset];
+        }
+        workgroupBarrier();
+        scan[lane] = select(min(scan[lane], other), max(scan[lane], other), use_max);
+        workgroupBarrier();
+    }
+}
+
+// Sweep one row whose marks the caller loads; returns nothing, writes `nearest[row_start + x]`
+// as the nearest marked x + 1 (0: none) after the left sweep, then the final packed seed.
+fn left_sweep(lane: u32, chunk: u32, marked: bool, row_start: u32, carry: ptr<function, u32>) {
+    let x = chunk * CHUNK + lane;
+    scan[lane] = select(0u, x + 1u, marked && x < params.size.x);
+    workgroupBarrier();
+    scan_chunk(lane, true);
+    let left = max(scan[lane], *carry);
+    if x < params.size.x {
+        nearest[row_start + x] = left;
+    }
+    *carry = max(*carry, scan[CHUNK - 1u]);
+    workgroupBarrier();
+}
+
+// Returns the nearest marked x (left or right, left on a tie) + 1, or 0.
+fn right_sweep(lane: u32, chunk: u32, marked: bool, row_start: u32, carry: ptr<function, u32>) -> u32 {
+    let x = chunk * CHUNK + lane;
+    scan[lane] = select(NONE_RIGHT, x, marked && x < params.size.x);
+    workgroupBarrier();
+    scan_chunk(lane, false);
+    let right = min(scan[lane], *carry);
+    *carry = min(*carry, scan[0]);
+    workgroupBarrier();
+    if x >= params.size.x {
+        return 0u;
+    }
+    // Only this thread wrote this element in the left sweep.
+    let left = nearest[row_start + x];
+    if right == NONE_RIGHT || (left != 0u && x - (left - 1u) <= right - x) {
+        return left;
+    }
+    return right + 1u;
+}
+
+@compute @workgroup_size(256)
+fn rows(@builtin(local_invocation_id) lid: vec3<u32>, @builtin(workgroup_id) wg: vec3<u32>) {
+    let y = wg.x;
+    let z = wg.y;
+    let row_start = (z * params.size.y + y) * params.size.x;
+    let chunks = (params.size.x + CHUNK - 1u) / CHUNK;
+    var carry = 0u;
+    for (var c = 0u; c < chunks; c++) {
+        let x = c * CHUNK + lid.x;
+        let marked = x < params.size.x && is_seed(textureLoad(volume, vec3<u32>(x, y, z), 0).r);
+        left_sweep(lid.x, c, marked, row_start, &carry);
+    }
+    carry = NONE_RIGHT;
+    for (var c = chunks; c > 0u; c--) {
+        let x = (c - 1u) * CHUNK + lid.x;
+        let marked = x < params.size.x && is_seed(textureLoad(volume, vec3<u32>(x, y, z), 0).r);
+        let near = right_sweep(lid.x, c - 1u, marked, row_start, &carry);
+        if x < params.size.x {
+            nearest[row_start + x] = select(NO_SEED, pack_seed3(vec3<u32>(near - 1u, y, z)), near != 0u);
+        }
+    }
+}
+
+@compute @workgroup_size(256)
+fn rows_2d(@builtin(local_invocation_id) lid: vec3<u32>, @builtin(workgroup_id) wg: vec3<u32>) {
+    let y = wg.x;
+    let row_start = y * params.size.x;
+    let chunks = (params.size.x + CHUNK - 1u) / CHUNK;
+    var carry = 0u;
+    for (var c = 0u; c < chunks; c++) {
+        let x = c * CHUNK + lid.x;
+        let marked = x < params.size.x && is_seed(textureLoad(mask_2d, vec2<u32>(x, y), 0).r);
+        left_sweep(lid.x, c, marked, row_start, &carry);
+    }
+    carry = NONE_RIGHT;
+    for (var c = chunks; c > 0u; c--) {
+        let x = (c - 1u) * CHUNK + lid.x;
+        let marked = x < params.size.x && is_seed(textureLoad(mask_2d, vec2<u32>(x, y), 0).r);
+        let near = right_sweep(lid.x, c - 1u, marked, row_start, &carry);
+        if x < params.size.x {
+            nearest[row_start + x] = select(NO_SEED, pack_seed2(vec2<u32>(near - 1u, y)), near != 0u);
+        }
+    }
+}
