@@ -175,6 +175,24 @@ pub fn edt_3d_squared(seeds: &[bool], size: [usize; 3]) -> Vec<u64> {
     g.into_iter().map(|v| if v.is_finite() { v as u64 } else { NONE }).collect()
 }
 
+/// Signed 3D distance as the GPU resolves it (see [`signed_2d`]).
+pub fn signed_3d(mask: &[bool], size: [usize; 3]) -> Vec<f64> {
+    let to_inside = edt_3d_squared(mask, size);
+    let outside: Vec<bool> = mask.iter().map(|m| !m).collect();
+    let to_outside = edt_3d_squared(&outside, size);
+    (0..mask.len())
+        .map(|i| {
+            if mask[i] {
+                if to_outside[i] == NONE { -(f32::MAX as f64) } else { -((to_outside[i] as f64).sqrt() - 0.5) }
+            } else if to_inside[i] == NONE {
+                f32::MAX as f64
+            } else {
+                (to_inside[i] as f64).sqrt() - 0.5
+            }
+        })
+        .collect()
+}
+
 /// Pack a 3D seed as the shaders do (11/11/10 bits, each coordinate + 1).
 pub fn pack_seed3(x: usize, y: usize, z: usize) -> u32 {
     ((x + 1) | ((y + 1) << 11) | ((z + 1) << 22)) as u32

@@ -22,7 +22,7 @@ pub mod volume;
 
 use crate::bind::{ComputePipeline, Entry};
 use crate::error::Error;
-use crate::gpu::Context;
+use crate::gpu::{Context, Profiler};
 use crate::shaders::distance::{jfa_resolve, jfa_seed, jfa_step};
 
 const STAGE: &str = "distance::jfa";
@@ -241,12 +241,16 @@ impl Jfa2d {
 
     /// Seed stage alone: a new `R32Uint` texture of packed seeds.
     pub fn encode_seed(&self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, seeds: &wgpu::Texture, invert: bool) -> Result<wgpu::Texture, Error> {
+        self.seed_timed(device, encoder, seeds, invert, None)
+    }
+
+    fn seed_timed(&self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, seeds: &wgpu::Texture, invert: bool, timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>) -> Result<wgpu::Texture, Error> {
         let (w, h) = check_seed_texture(device, seeds)?;
         let out = texture(device, "jfa nearest", w, h, wgpu::TextureFormat::R32Uint);
         let params = uniform(device, "jfa seed params", &jfa_seed::SeedParams { size: glam::uvec2(w, h), invert: invert as u32 });
         let (sv, ov) = (view(seeds), view(&out));
         let bound = self.seed.bind(device, &jfa_seed::seed::Resources { params: (&params).into(), seeds: (&sv).into(), nearest: (&ov).into() })?;
-        dispatch(encoder, &self.seed, &bound, w, h, None);
+        dispatch(encoder, &self.seed, &bound, w, h, timestamp_writes);
         Ok(out)
     }
 
@@ -270,10 +274,14 @@ impl Jfa2d {
     /// Run the passes of `steps` over `nearest`, ping-ponging with a second texture; returns the
     /// texture holding the result.
     pub fn encode_flood(&self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, nearest: wgpu::Texture, steps: &[u32]) -> Result<wgpu::Texture, Error> {
+        self.flood_timed(device, encoder, nearest, steps, &mut None)
+    }
+
+    fn flood_timed(&self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, nearest: wgpu::Texture, steps: &[u32], prof: &mut Option<&mut Profiler>) -> Result<wgpu::Texture, Error> {
         let other = texture(device, "jfa ping-pong", nearest.width(), nearest.height(), wgpu::TextureFormat::R32Uint);
         let (mut a, mut b) = (nearest, other);
         for &step in steps {
-            self.encode_jump(device, encoder, &a, &b, step, None)?;
+            self.encode_jump(device, encoder, &a, &b, step, prof.as_mut().and_then(|p| p.next(format!("jump {step}"))))?;
             std::mem::swap(&mut a, &mut b);
         }
         Ok(a)
@@ -281,6 +289,10 @@ impl Jfa2d {
 
     /// Resolve stage alone: distance from nearest-seed texture(s).
     pub fn encode_resolve(&self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, nearest: &wgpu::Texture, nearest_outside: Option<&wgpu::Texture>, texel_size: f32) -> Result<wgpu::Texture, Error> {
+        self.resolve_timed(device, encoder, nearest, nearest_outside, texel_size, None)
+    }
+
+    fn resolve_timed(&self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, nearest: &wgpu::Texture, nearest_outside: Option<&wgpu::Texture>, texel_size: f32, timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>) -> Result<wgpu::Texture, Error> {
         if !(texel_size.is_finite() && texel_size > 0.0) {
             return Err(Error::Invalid { stage: jfa_resolve::STAGE, what: format!("texel_size must be finite and positive, got {texel_size}") });
         }
@@ -292,12 +304,12 @@ impl Jfa2d {
         match nearest_outside {
             None => {
                 let bound = self.resolve_unsigned.bind(device, &jfa_resolve::resolve_unsigned::Resources { params: (&params).into(), nearest: (&nv).into(), distance: (&dv).into() })?;
-                dispatch(encoder, &self.resolve_unsigned, &bound, w, h, None);
+                dispatch(encoder, &self.resolve_unsigned, &bound, w, h, timestamp_writes);
             }
             Some(o) => {
                 let ov = view(o);
                 let bound = self.resolve_signed.bind(device, &jfa_resolve::resolve_signed::Resources { params: (&params).into(), nearest: (&nv).into(), nearest_outside: (&ov).into(), distance: (&dv).into() })?;
-                dispatch(encoder, &self.resolve_signed, &bound, w, h, None);
+                dispatch(encoder, &self.resolve_signed, &bound, w, h, timestamp_writes);
             }
         }
         Ok(out)
@@ -305,20 +317,26 @@ impl Jfa2d {
 
     /// The whole chain: seed → JFA passes → resolve, recorded into `encoder`.
     pub fn encode(&self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, seeds: &wgpu::Texture, options: &Options) -> Result<Field2d, Error> {
+        self.encode_profiled(device, encoder, seeds, options, None)
+    }
+
+    /// [`Self::encode`] with each pass timed by `profiler`.
+    pub fn encode_profiled(&self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, seeds: &wgpu::Texture, options: &Options, mut profiler: Option<&mut Profiler>) -> Result<Field2d, Error> {
+        let prof = &mut profiler;
         let (w, h) = check_seed_texture(device, seeds)?;
         if !(options.texel_size.is_finite() && options.texel_size > 0.0) {
             return Err(Error::Invalid { stage: STAGE, what: format!("texel_size must be finite and positive, got {}", options.texel_size) });
         }
         let steps = options.variant.steps(w.max(h));
-        let inside = self.encode_seed(device, encoder, seeds, false)?;
-        let nearest = self.encode_flood(device, encoder, inside, &steps)?;
+        let inside = self.seed_timed(device, encoder, seeds, false, prof.as_mut().and_then(|p| p.next("seed")))?;
+        let nearest = self.flood_timed(device, encoder, inside, &steps, prof)?;
         let nearest_outside = if options.signed {
-            let outside = self.encode_seed(device, encoder, seeds, true)?;
-            Some(self.encode_flood(device, encoder, outside, &steps)?)
+            let outside = self.seed_timed(device, encoder, seeds, true, prof.as_mut().and_then(|p| p.next("seed")))?;
+            Some(self.flood_timed(device, encoder, outside, &steps, prof)?)
         } else {
             None
         };
-        let distance = self.encode_resolve(device, encoder, &nearest, nearest_outside.as_ref(), options.texel_size)?;
+        let distance = self.resolve_timed(device, encoder, &nearest, nearest_outside.as_ref(), options.texel_size, prof.as_mut().and_then(|p| p.next("resolve")))?;
         Ok(Field2d { width: w, height: h, nearest, nearest_outside, distance })
     }
 }

@@ -178,13 +178,17 @@ impl Options3d {
     }
 }
 
-/// Sub-voxel seeds on the GPU: `count` points (`vec4<f32>`, xyz in voxel coordinates).
+/// Sub-voxel seeds on the GPU: `count` points (`vec4<f32>`, xyz in voxel coordinates) and,
+/// optionally, each point's home voxel (`u32`, packed as [`pack_seed3`]).
+#[derive(Debug)]
 pub struct PointSeeds {
     pub buffer: wgpu::Buffer,
+    pub homes: Option<wgpu::Buffer>,
     pub count: u32,
 }
 
 /// A 3D distance field on the GPU.
+#[derive(Debug)]
 pub struct Field3d {
     pub size: [u32; 3],
     /// Nearest seed per voxel: packed ([`unpack_seed3`]), or a key into `points` ([`key_index`]).
@@ -198,6 +202,7 @@ pub struct Field3d {
 }
 
 /// A 2D field from the exact transform (nearest seeds in a buffer, packed 16/16 bits).
+#[derive(Debug)]
 pub struct FieldBuf2d {
     pub width: u32,
     pub height: u32,
@@ -226,7 +231,7 @@ pub struct Distance3d {
 }
 
 /// Optional per-pass timing, threaded through the encode functions.
-type Prof<'a, 'b> = &'a mut Option<&'b mut Profiler>;
+pub type Prof<'a, 'b> = &'a mut Option<&'b mut Profiler>;
 
 fn pass<E: Entry>(
     encoder: &mut wgpu::CommandEncoder,
@@ -344,9 +349,24 @@ pub fn upload_volume(ctx: &Context, data: &[u8], size: [u32; 3]) -> Result<wgpu:
     })
 }
 
-/// Upload sub-voxel seeds given in world coordinates. Every point must be finite and inside the
-/// grid's box; at most [`MAX_POINTS`].
+/// Upload sub-voxel seeds given in world coordinates; each seeds the voxel it lies in. Every
+/// point must be finite and inside the grid's box; at most [`MAX_POINTS`]. Where several points
+/// share a voxel only the one nearest its centre is kept: give homes
+/// ([`upload_points_with_homes`]) when points come one per voxel, as from surface extraction.
 pub fn upload_points(ctx: &Context, grid: &Grid3, points: &[Vec3]) -> Result<PointSeeds, Error> {
+    upload_points_inner(ctx, grid, points, None)
+}
+
+/// Upload sub-voxel seeds with the voxel each one seeds (typically the voxel that produced it,
+/// holding the closest surface point to its centre). Homes must lie inside the grid.
+pub fn upload_points_with_homes(ctx: &Context, grid: &Grid3, points: &[Vec3], homes: &[[u32; 3]]) -> Result<PointSeeds, Error> {
+    if homes.len() != points.len() {
+        return Err(Error::Invalid { stage: STAGE, what: format!("{} homes for {} points", homes.len(), points.len()) });
+    }
+    upload_points_inner(ctx, grid, points, Some(homes))
+}
+
+fn upload_points_inner(ctx: &Context, grid: &Grid3, points: &[Vec3], homes: Option<&[[u32; 3]]>) -> Result<PointSeeds, Error> {
     check_size_3d(&ctx.device, grid.size)?;
     if !(grid.voxel_size.is_finite() && grid.voxel_size > 0.0) || !grid.origin.is_finite() {
         return Err(Error::Invalid { stage: STAGE, what: format!("grid voxel_size {} / origin {} must be finite (size positive)", grid.voxel_size, grid.origin) });
@@ -366,13 +386,26 @@ pub fn upload_points(ctx: &Context, grid: &Grid3, points: &[Vec3]) -> Result<Poi
         }
         data.push([v.x, v.y, v.z, 0.0]);
     }
+    let packed_homes = match homes {
+        None => None,
+        Some(h) => {
+            let mut packed = Vec::with_capacity(h.len());
+            for (i, v) in h.iter().enumerate() {
+                if (0..3).any(|a| v[a] >= grid.size[a]) {
+                    return Err(Error::Invalid { stage: STAGE, what: format!("home voxel {v:?} of point {i} lies outside the grid {:?}", grid.size) });
+                }
+                packed.push(pack_seed3(v[0], v[1], v[2]));
+            }
+            Some(packed)
+        }
+    };
     use wgpu::util::DeviceExt;
-    let buffer = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("seed points"),
-        contents: bytemuck::cast_slice(&data),
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-    });
-    Ok(PointSeeds { buffer, count: points.len() as u32 })
+    let storage = |label: &str, contents: &[u8]| {
+        ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents, usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC })
+    };
+    let buffer = storage("seed points", bytemuck::cast_slice(&data));
+    let homes = packed_homes.map(|h| storage("seed point homes", bytemuck::cast_slice(&h)));
+    Ok(PointSeeds { buffer, homes, count: points.len() as u32 })
 }
 
 impl Distance3d {
@@ -448,8 +481,22 @@ impl Distance3d {
         let prof = &mut None;
         let seeds = field_buffer(device, "nearest seed", size);
         encoder.clear_buffer(&seeds, 0, None);
-        let params = uniform(device, "seed points params", &jfa3_seed_points::PointParams { size: size.into(), count: points.count });
-        let bound = self.seed_points.bind(device, &jfa3_seed_points::seed_points::Resources { params: (&params).into(), points: (&points.buffer).into(), nearest: (&seeds).into() })?;
+        if let Some(h) = &points.homes
+            && h.size() < points.count as u64 * 4
+        {
+            return Err(Error::Invalid { stage: STAGE, what: format!("homes buffer has {} bytes for {} points", h.size(), points.count) });
+        }
+        let params = uniform(device, "seed points params", &jfa3_seed_points::PointParams { size: size.into(), count: points.count, use_homes: points.homes.is_some() as u32 });
+        // Without homes the slot still needs a buffer; the shader does not read it.
+        let no_homes;
+        let homes = match &points.homes {
+            Some(h) => h,
+            None => {
+                no_homes = device.create_buffer(&wgpu::BufferDescriptor { label: Some("no homes"), size: 4, usage: wgpu::BufferUsages::STORAGE, mapped_at_creation: false });
+                &no_homes
+            }
+        };
+        let bound = self.seed_points.bind(device, &jfa3_seed_points::seed_points::Resources { params: (&params).into(), points: (&points.buffer).into(), nearest: (&seeds).into(), homes: homes.into() })?;
         pass(encoder, &self.seed_points, &bound, [points.count.div_ceil(64), 1, 1], "seed points", prof);
         let steps = options.steps(variant, size.into_iter().max().unwrap());
         let nearest = self.encode_flood_inner(device, encoder, seeds, size, &steps, Some(&points.buffer), prof)?;
@@ -524,20 +571,42 @@ impl Distance3d {
     /// of packed nearest seeds.
     pub fn encode_exact(&self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, volume: &wgpu::Texture, inside: Inside, invert: bool, prof: Prof) -> Result<wgpu::Buffer, Error> {
         let size = check_volume(device, volume)?;
+        let nearest = self.encode_rows(device, encoder, volume, inside, invert, prof)?;
+        let stack = field_buffer(device, "edt envelope stack", size);
+        for axis in [1u32, 2] {
+            if size[axis as usize] > 1 {
+                self.encode_column_pass(device, encoder, &nearest, &stack, size, axis, prof)?;
+            }
+        }
+        Ok(nearest)
+    }
+
+    /// First exact pass alone: per row, the nearest marked voxel along x (a new buffer).
+    pub fn encode_rows(&self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, volume: &wgpu::Texture, inside: Inside, invert: bool, prof: Prof) -> Result<wgpu::Buffer, Error> {
+        let size = check_volume(device, volume)?;
         let nearest = field_buffer(device, "nearest seed", size);
         let params = uniform(device, "edt rows params", &edt_rows::RowParams { size: size.into(), threshold: inside.threshold(), invert: invert as u32 });
         let vv = view(volume);
         let bound = self.rows.bind(device, &edt_rows::rows::Resources { params: (&params).into(), volume: (&vv).into(), nearest: (&nearest).into() })?;
         pass(encoder, &self.rows, &bound, [size[1], size[2], 1], "rows (x)", prof);
-        let stack = field_buffer(device, "edt envelope stack", size);
-        for axis in [1u32, 2] {
-            if size[axis as usize] == 1 {
-                continue;
-            }
-            let others = if axis == 1 { size[2] } else { size[1] };
-            self.encode_columns(device, encoder, &self.columns, &nearest, &stack, size, axis, others, prof)?;
-        }
         Ok(nearest)
+    }
+
+    /// One exact column pass alone (`axis` 1 = y, 2 = z), in place on `nearest`; `stack` is
+    /// scratch of the same size.
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode_column_pass(&self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, nearest: &wgpu::Buffer, stack: &wgpu::Buffer, size: [u32; 3], axis: u32, prof: Prof) -> Result<(), Error> {
+        check_size_3d(device, size)?;
+        if !(axis == 1 || axis == 2) {
+            return Err(Error::Invalid { stage: edt_columns::STAGE, what: format!("axis must be 1 (y) or 2 (z), got {axis}") });
+        }
+        for (what, b) in [("nearest", nearest), ("stack", stack)] {
+            if b.size() != voxels(size) * 4 {
+                return Err(Error::Invalid { stage: edt_columns::STAGE, what: format!("{what} buffer has {} bytes, {size:?} needs {}", b.size(), voxels(size) * 4) });
+            }
+        }
+        let others = if axis == 1 { size[2] } else { size[1] };
+        self.encode_columns(device, encoder, &self.columns, nearest, stack, size, axis, others, prof)
     }
 
     #[allow(clippy::too_many_arguments)]

@@ -3,6 +3,7 @@
 #[path = "../../src/toolchain/mod.rs"]
 mod toolchain;
 
+mod bench;
 mod lint;
 
 use std::path::{Path, PathBuf};
@@ -34,6 +35,35 @@ enum Command {
         #[arg(long, default_value = "gallery")]
         out: PathBuf,
     },
+    /// Time against accuracy for a technique, charted (release build; GPU timestamp queries).
+    Bench {
+        technique: Technique,
+        /// Small sizes for software adapters (3D 32³, 64³; 2D 256², 512²) instead of the full sweep.
+        #[arg(long)]
+        quick: bool,
+        /// Timed runs per point; the median is reported.
+        #[arg(long, default_value_t = 20)]
+        reps: usize,
+        /// Untimed runs first.
+        #[arg(long, default_value_t = 3)]
+        warmup: usize,
+        /// Fraction of cells that are seeds.
+        #[arg(long, default_value_t = 0.01)]
+        density: f64,
+        /// Narrow band (voxels) of the banded JFA entry.
+        #[arg(long, default_value_t = 8.0)]
+        band: f32,
+        /// Peer command, run on the same mask (e.g. `python3 .gpu/peers/edt_cupyx.py`).
+        #[arg(long)]
+        peer: Option<String>,
+        #[arg(long, default_value = "bench")]
+        out: PathBuf,
+    },
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum Technique {
+    Distance,
 }
 
 fn crate_root() -> PathBuf {
@@ -46,6 +76,37 @@ fn main() -> ExitCode {
         Command::Lint => lint::run(&crate_root()),
         Command::Reflect { stage, json } => reflect(&crate_root(), stage.as_deref(), json),
         Command::Gallery { out } => gallery(&out),
+        Command::Bench { technique, quick, reps, warmup, density, band, peer, out } => {
+            if cfg!(debug_assertions) && std::env::var_os("FIELDKIT_BENCH_NO_REEXEC").is_none() {
+                return rerun_release();
+            }
+            if reps == 0 || !(density > 0.0 && density < 1.0) || !(band.is_finite() && band > 0.0) {
+                eprintln!("bench: --reps must be ≥ 1, --density in (0, 1), --band finite and positive");
+                return ExitCode::FAILURE;
+            }
+            let args = bench::Args { quick, reps, warmup, density, out, peer, band };
+            match technique {
+                Technique::Distance => bench::run_distance(&args),
+            }
+        }
+    }
+}
+
+/// Benchmarks time release code: a debug xtask runs itself again through `cargo run --release`.
+fn rerun_release() -> ExitCode {
+    eprintln!("bench: running again as a release build");
+    let status = std::process::Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
+        .args(["run", "--release", "--package", "xtask", "--"])
+        .args(std::env::args_os().skip(1))
+        .current_dir(crate_root())
+        .status();
+    match status {
+        Ok(s) if s.success() => ExitCode::SUCCESS,
+        Ok(_) => ExitCode::FAILURE,
+        Err(e) => {
+            eprintln!("bench: could not run cargo: {e}");
+            ExitCode::FAILURE
+        }
     }
 }
 

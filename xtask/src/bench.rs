@@ -1,0 +1,412 @@
+//! `cargo xtask bench distance`: GPU time against accuracy for every distance method, variant
+//! and size, with the peer (cupyx's PBA+) timed on the same mask where it is installed.
+//!
+//! GPU time comes from timestamp queries around every pass: a run's time is from the start of its
+//! first pass to the end of its last; the figure reported is the median of `--reps` runs after
+//! `--warmup` runs. Errors are counted against the exact transform (itself checked against the
+//! peer's distances, or the CPU reference in `--quick` mode).
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use fieldkit::distance::volume::{Distance3d, Method, Options3d, upload_volume};
+use fieldkit::distance::{Jfa2d, Options, Variant, cpu, upload_mask};
+use fieldkit::gpu::{Context, Profiler, read_buffer, read_texture};
+
+pub struct Args {
+    pub quick: bool,
+    pub reps: usize,
+    pub warmup: usize,
+    pub density: f64,
+    pub out: PathBuf,
+    /// Command line of the peer script, e.g. `python3 .gpu/peers/edt_cupyx.py`.
+    pub peer: Option<String>,
+    /// Narrow band (voxels) for the banded JFA entry.
+    pub band: f32,
+}
+
+/// Memory bandwidth the pass figures are compared with (H100 SXM HBM3, rounded down).
+const PEAK_BYTES_PER_S: f64 = 3.0e12;
+
+/// One method at one size.
+struct Row {
+    dims: u32,
+    size: String,
+    voxels: u64,
+    method: String,
+    median_ms: f64,
+    min_ms: f64,
+    max_ms: f64,
+    wrong: u64,
+    max_err: f64,
+    mean_err: f64,
+    peer_ms: Option<f64>,
+    passes: Vec<(String, f64, f64)>,
+}
+
+/// Deterministic mask: voxel i is a seed when splitmix64(i ^ salt) falls below the density.
+fn random_mask(n: usize, density: f64, salt: u64) -> Vec<u8> {
+    let cut = (density * u64::MAX as f64) as u64;
+    (0..n as u64)
+        .map(|i| {
+            let mut z = (i ^ salt).wrapping_add(0x9e3779b97f4a7c15);
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58476d1ce4e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d049bb133111eb);
+            z ^= z >> 31;
+            u8::from(z < cut)
+        })
+        .collect()
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(|a, b| a.total_cmp(b));
+    v[v.len() / 2]
+}
+
+/// Bytes a pass must move at least (reads + writes of the fields it touches, per cell), used for
+/// the bandwidth figure. Neighbour reads of JFA that hit the cache are not counted.
+fn pass_bytes(name: &str, cells: u64) -> f64 {
+    let per = if name.starts_with("rows") {
+        // Mask read in both sweeps, left result written and re-read, final seed written.
+        1.0 * 2.0 + 4.0 * 3.0
+    } else if name.starts_with("columns") {
+        // Field read, envelope written and read back, answer written.
+        16.0
+    } else if name.starts_with("jump") {
+        8.0
+    } else if name.starts_with("seed") {
+        5.0
+    } else {
+        // resolve: nearest read, distance written.
+        8.0
+    };
+    per * cells as f64
+}
+
+/// Time `reps` runs of `record` (after `warmup`), each recording its passes into a fresh encoder.
+fn time_runs(ctx: &Context, warmup: usize, reps: usize, mut record: impl FnMut(&mut wgpu::CommandEncoder, &mut Profiler)) -> Result<(f64, f64, f64, Vec<(String, f64)>), String> {
+    let mut prof = Profiler::new(ctx, 64).ok_or("the adapter has no timestamp queries; the benchmark needs them")?;
+    let mut totals = Vec::new();
+    let mut per_pass: Vec<(String, Vec<f64>)> = Vec::new();
+    for run in 0..warmup + reps {
+        let mut enc = ctx.encoder("bench");
+        record(&mut enc, &mut prof);
+        prof.resolve(&mut enc);
+        ctx.submit_and_wait("bench", enc).map_err(|e| e.to_string())?;
+        let (passes, total) = prof.read(ctx).map_err(|e| e.to_string())?;
+        if run < warmup {
+            continue;
+        }
+        totals.push(total);
+        if per_pass.is_empty() {
+            per_pass = passes.iter().map(|(n, _)| (n.clone(), Vec::new())).collect();
+        }
+        for (slot, (_, ms)) in per_pass.iter_mut().zip(&passes) {
+            slot.1.push(*ms);
+        }
+    }
+    let min = totals.iter().cloned().fold(f64::INFINITY, f64::min);
+    let max = totals.iter().cloned().fold(0.0, f64::max);
+    let med = median(&mut totals);
+    Ok((med, min, max, per_pass.into_iter().map(|(n, mut v)| (n, median(&mut v))).collect()))
+}
+
+/// Squared distance per cell from packed seeds (3D 11/11/10 or 2D 16/16); u64::MAX for none.
+fn d2_of(nearest: &[u32], size: [usize; 3], dims: u32) -> Vec<u64> {
+    let (w, h) = (size[0], size[1]);
+    nearest
+        .iter()
+        .enumerate()
+        .map(|(i, &s)| {
+            if s == 0 {
+                return u64::MAX;
+            }
+            let (x, y, z) = ((i % w) as i64, ((i / w) % h) as i64, (i / (w * h)) as i64);
+            let (sx, sy, sz) = if dims == 3 {
+                ((s & 0x7ff) as i64 - 1, ((s >> 11) & 0x7ff) as i64 - 1, (s >> 22) as i64 - 1)
+            } else {
+                ((s & 0xffff) as i64 - 1, (s >> 16) as i64 - 1, 0)
+            };
+            ((sx - x).pow(2) + (sy - y).pow(2) + (sz - z).pow(2)) as u64
+        })
+        .collect()
+}
+
+/// (wrong cells, max error, mean error) in voxels; with a band, distances are clamped to it first.
+fn errors(got: &[u64], exact: &[u64], band: Option<f64>) -> (u64, f64, f64) {
+    let clamp = |d2: u64| {
+        let d = if d2 == u64::MAX { f64::INFINITY } else { (d2 as f64).sqrt() };
+        band.map_or(d, |b| d.min(b))
+    };
+    let (mut wrong, mut max, mut sum) = (0u64, 0f64, 0f64);
+    for (&g, &e) in got.iter().zip(exact) {
+        let err = clamp(g) - clamp(e);
+        if err != 0.0 {
+            wrong += 1;
+            let err = if err.is_finite() { err.abs() } else { f64::MAX };
+            max = max.max(err);
+            sum += err;
+        }
+    }
+    (wrong, max, sum / got.len() as f64)
+}
+
+struct Peer {
+    ms: f64,
+    /// Squared distances recovered from the peer's float32 distances (exact below 2^24).
+    d2: Vec<u64>,
+    json: String,
+}
+
+fn run_peer(cmd: &str, mask: &[u8], shape: &[usize], tag: &str) -> Result<Peer, String> {
+    let dir = std::env::temp_dir();
+    let mask_path = dir.join(format!("fieldkit_mask_{tag}.u8"));
+    let dist_path = dir.join(format!("fieldkit_dist_{tag}.f32"));
+    std::fs::write(&mask_path, mask).map_err(|e| e.to_string())?;
+    let mut parts = cmd.split_whitespace();
+    let program = parts.next().ok_or("empty --peer")?;
+    let out = std::process::Command::new(program)
+        .args(parts)
+        .arg("--mask")
+        .arg(&mask_path)
+        .arg("--shape")
+        .args(shape.iter().map(|s| s.to_string()))
+        .arg("--write-dist")
+        .arg(&dist_path)
+        .output()
+        .map_err(|e| format!("could not start the peer `{cmd}`: {e}"))?;
+    if !out.status.success() {
+        return Err(format!("peer failed: {}", String::from_utf8_lossy(&out.stderr)));
+    }
+    let json = String::from_utf8_lossy(&out.stdout).lines().last().unwrap_or_default().to_string();
+    let v: serde_json::Value = serde_json::from_str(&json).map_err(|e| format!("peer printed `{json}`: {e}"))?;
+    let ms = v["ms_median"].as_f64().ok_or("peer JSON has no ms_median")?;
+    let bytes = std::fs::read(&dist_path).map_err(|e| e.to_string())?;
+    let d2 = bytemuck::cast_slice::<u8, f32>(&bytes).iter().map(|&d| ((d as f64) * (d as f64)).round() as u64).collect();
+    let _ = std::fs::remove_file(&dist_path);
+    let _ = std::fs::remove_file(&mask_path);
+    Ok(Peer { ms, d2, json })
+}
+
+fn words(ctx: &Context, b: &wgpu::Buffer) -> Result<Vec<u32>, String> {
+    Ok(bytemuck::cast_slice::<u8, u32>(&read_buffer(ctx, b).map_err(|e| e.to_string())?).to_vec())
+}
+
+pub fn run_distance(args: &Args) -> ExitCode {
+    match distance(args) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("bench distance: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn distance(args: &Args) -> Result<(), String> {
+    let ctx = Context::new().map_err(|e| e.to_string())?;
+    let info = ctx.adapter.get_info();
+    let adapter = format!("{} ({:?}, {})", info.name, info.backend, info.driver_info);
+    println!("adapter: {adapter}");
+    let d3 = Distance3d::new(&ctx.device).map_err(|e| e.to_string())?;
+    let jfa2 = Jfa2d::new(&ctx.device).map_err(|e| e.to_string())?;
+    let sizes3: &[usize] = if args.quick { &[32, 64] } else { &[128, 256, 512] };
+    let sizes2: &[usize] = if args.quick { &[256, 512] } else { &[2048, 4096, 8192] };
+    let banded = format!("JFA+2 band {}", args.band);
+    let methods3: Vec<(String, Options3d)> = std::iter::once(("exact".to_string(), Options3d::default()))
+        .chain(Variant::ALL.into_iter().map(|v| (v.name().to_string(), Options3d { method: Method::Jfa(v), ..Options3d::default() })))
+        .chain(std::iter::once((banded.clone(), Options3d { method: Method::Jfa(Variant::JfaPlus2), band: Some(args.band), ..Options3d::default() })))
+        .collect();
+    let total = (sizes3.len() * methods3.len() + sizes2.len() * (1 + Variant::ALL.len())) as u64;
+    let bar = indicatif::ProgressBar::new(total);
+    bar.set_style(indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} {elapsed} {msg}").unwrap());
+    let mut rows: Vec<Row> = Vec::new();
+
+    for &n in sizes3 {
+        let size = [n, n, n];
+        let cells = (n * n * n) as u64;
+        let mask = random_mask(n * n * n, args.density, n as u64);
+        let volume = upload_volume(&ctx, &mask, [n as u32; 3]).map_err(|e| e.to_string())?;
+        let peer = match &args.peer {
+            Some(cmd) => {
+                bar.set_message(format!("{n}³ peer"));
+                Some(run_peer(cmd, &mask, &[n, n, n], &format!("{n}c"))?)
+            }
+            None => None,
+        };
+        let mut exact_d2: Vec<u64> = Vec::new();
+        for (name, opts) in &methods3 {
+            bar.set_message(format!("{n}³ {name}"));
+            let (med, min, max, passes) = time_runs(&ctx, args.warmup, args.reps, |enc, prof| {
+                d3.encode_profiled(&ctx.device, enc, &volume, opts, Some(prof)).expect("encode");
+            })?;
+            let mut enc = ctx.encoder("bench readback");
+            let field = d3.encode(&ctx.device, &mut enc, &volume, opts).map_err(|e| e.to_string())?;
+            ctx.submit_and_wait("bench", enc).map_err(|e| e.to_string())?;
+            let d2 = d2_of(&words(&ctx, &field.nearest)?, size, 3);
+            let (wrong, max_err, mean_err, peer_ms) = if opts.method == Method::Exact {
+                // The reference: the peer's distances, or the CPU transform in quick mode.
+                let reference = match &peer {
+                    Some(p) => p.d2.clone(),
+                    None => cpu::edt_3d_squared(&mask.iter().map(|&m| m != 0).collect::<Vec<_>>(), size),
+                };
+                let (w, mx, mean) = errors(&d2, &reference, None);
+                exact_d2 = d2;
+                (w, mx, mean, peer.as_ref().map(|p| p.ms))
+            } else {
+                let (w, mx, mean) = errors(&d2, &exact_d2, opts.band.map(|b| b as f64));
+                (w, mx, mean, None)
+            };
+            rows.push(Row {
+                dims: 3,
+                size: format!("{n}³"),
+                voxels: cells,
+                method: name.clone(),
+                median_ms: med,
+                min_ms: min,
+                max_ms: max,
+                wrong,
+                max_err,
+                mean_err,
+                peer_ms,
+                passes: passes.into_iter().map(|(p, ms)| { let b = pass_bytes(&p, cells); (p, ms, b) }).collect(),
+            });
+            bar.inc(1);
+        }
+        if let Some(p) = &peer {
+            bar.println(format!("peer {n}³: {}", p.json));
+        }
+    }
+
+    for &n in sizes2 {
+        let size = [n, n, 1];
+        let cells = (n * n) as u64;
+        let mask = random_mask(n * n, args.density, 1000 + n as u64);
+        let tex = upload_mask(&ctx, &mask, n as u32, n as u32).map_err(|e| e.to_string())?;
+        let peer = match &args.peer {
+            Some(cmd) => {
+                bar.set_message(format!("{n}² peer"));
+                Some(run_peer(cmd, &mask, &[n, n], &format!("{n}s"))?)
+            }
+            None => None,
+        };
+        // Exact.
+        bar.set_message(format!("{n}² exact"));
+        let opts = Options3d::default();
+        let (med, min, max, passes) = time_runs(&ctx, args.warmup, args.reps, |enc, prof| {
+            d3.encode_exact_2d(&ctx.device, enc, &tex, &opts, Some(prof)).expect("encode");
+        })?;
+        let mut enc = ctx.encoder("bench readback");
+        let field = d3.encode_exact_2d(&ctx.device, &mut enc, &tex, &opts, None).map_err(|e| e.to_string())?;
+        ctx.submit_and_wait("bench", enc).map_err(|e| e.to_string())?;
+        let exact_d2 = d2_of(&words(&ctx, &field.nearest)?, size, 2);
+        let reference = match &peer {
+            Some(p) => p.d2.clone(),
+            None => cpu::edt_2d_squared(&mask.iter().map(|&m| m != 0).collect::<Vec<_>>(), n, n),
+        };
+        let (wrong, max_err, mean_err) = errors(&exact_d2, &reference, None);
+        let pass_rows = |passes: Vec<(String, f64)>| passes.into_iter().map(|(p, ms)| { let b = pass_bytes(&p, cells); (p, ms, b) }).collect();
+        rows.push(Row { dims: 2, size: format!("{n}²"), voxels: cells, method: "exact".into(), median_ms: med, min_ms: min, max_ms: max, wrong, max_err, mean_err, peer_ms: peer.as_ref().map(|p| p.ms), passes: pass_rows(passes) });
+        bar.inc(1);
+        for v in Variant::ALL {
+            bar.set_message(format!("{n}² {}", v.name()));
+            let opts = Options { variant: v, ..Options::default() };
+            let (med, min, max, passes) = time_runs(&ctx, args.warmup, args.reps, |enc, prof| {
+                jfa2.encode_profiled(&ctx.device, enc, &tex, &opts, Some(prof)).expect("encode");
+            })?;
+            let mut enc = ctx.encoder("bench readback");
+            let field = jfa2.encode(&ctx.device, &mut enc, &tex, &opts).map_err(|e| e.to_string())?;
+            ctx.submit_and_wait("bench", enc).map_err(|e| e.to_string())?;
+            let nearest: Vec<u32> = read_texture(&ctx, &field.nearest).map_err(|e| e.to_string())?;
+            let (wrong, max_err, mean_err) = errors(&d2_of(&nearest, size, 2), &exact_d2, None);
+            rows.push(Row { dims: 2, size: format!("{n}²"), voxels: cells, method: v.name().into(), median_ms: med, min_ms: min, max_ms: max, wrong, max_err, mean_err, peer_ms: None, passes: pass_rows(passes) });
+            bar.inc(1);
+        }
+        if let Some(p) = &peer {
+            bar.println(format!("peer {n}²: {}", p.json));
+        }
+    }
+    bar.finish_with_message("done");
+
+    std::fs::create_dir_all(&args.out).map_err(|e| e.to_string())?;
+    write_csv(&args.out, &adapter, &rows).map_err(|e| e.to_string())?;
+    chart(&args.out.join("distance.png"), &adapter, &rows, (1000, 640))?;
+    print_table(&rows);
+    println!("wrote {}", args.out.display());
+    Ok(())
+}
+
+fn write_csv(dir: &Path, adapter: &str, rows: &[Row]) -> std::io::Result<()> {
+    let mut f = std::fs::File::create(dir.join("distance.csv"))?;
+    writeln!(f, "adapter,dims,size,cells,method,median_ms,min_ms,max_ms,wrong,wrong_fraction,max_err_voxels,mean_err_voxels,peer_ms,ratio_to_peer")?;
+    for r in rows {
+        let peer = r.peer_ms.map_or(String::new(), |p| format!("{p:.4}"));
+        let ratio = r.peer_ms.map_or(String::new(), |p| format!("{:.3}", r.median_ms / p));
+        writeln!(f, "\"{adapter}\",{},{},{},{},{:.4},{:.4},{:.4},{},{:.3e},{:.4},{:.3e},{peer},{ratio}", r.dims, r.size, r.voxels, r.method, r.median_ms, r.min_ms, r.max_ms, r.wrong, r.wrong as f64 / r.voxels as f64, r.max_err, r.mean_err)?;
+    }
+    let mut f = std::fs::File::create(dir.join("distance_passes.csv"))?;
+    writeln!(f, "adapter,size,method,pass,median_ms,bytes,gb_per_s,fraction_of_3tb_s")?;
+    for r in rows {
+        for (p, ms, bytes) in &r.passes {
+            let bw = bytes / (ms / 1e3);
+            writeln!(f, "\"{adapter}\",{},{},{p},{ms:.4},{bytes:.0},{:.1},{:.3}", r.size, r.method, bw / 1e9, bw / PEAK_BYTES_PER_S)?;
+        }
+    }
+    Ok(())
+}
+
+fn print_table(rows: &[Row]) {
+    println!("| size | method | ms (median) | peer ms | ratio | wrong | max err |");
+    println!("|---|---|---|---|---|---|---|");
+    for r in rows {
+        let peer = r.peer_ms.map_or("".into(), |p| format!("{p:.3}"));
+        let ratio = r.peer_ms.map_or("".into(), |p| format!("{:.2}", r.median_ms / p));
+        println!("| {} | {} | {:.3} | {peer} | {ratio} | {} | {:.3} |", r.size, r.method, r.median_ms, r.wrong, r.max_err);
+    }
+}
+
+/// GPU time against max error, log-log, a point per method and size; zero error is drawn on the
+/// floor line. The peer is drawn as a hollow point at zero error.
+fn chart(path: &Path, adapter: &str, rows: &[Row], (w, h): (u32, u32)) -> Result<(), String> {
+    use plotters::prelude::*;
+    let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular());
+    let floor = 1e-3;
+    let y_of = |e: f64| if e <= 0.0 { floor } else { e.max(floor) };
+    let times: Vec<f64> = rows.iter().flat_map(|r| std::iter::once(r.median_ms).chain(r.peer_ms)).collect();
+    let (tmin, tmax) = times.iter().fold((f64::INFINITY, 0f64), |(a, b), &t| (a.min(t), b.max(t)));
+    let emax = rows.iter().map(|r| y_of(r.max_err)).fold(1.0, f64::max);
+    let root = BitMapBackend::new(path, (w, h)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| e.to_string())?;
+    let mut c = ChartBuilder::on(&root)
+        .caption(format!("distance: GPU time vs max error ({adapter})"), ("sans-serif", 16))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d((tmin / 1.5..tmax * 1.5).log_scale(), (floor / 2.0..emax * 2.0).log_scale())
+        .map_err(|e| e.to_string())?;
+    c.configure_mesh()
+        .x_desc("GPU time, ms (median, log)")
+        .y_desc("max error, voxels (log; 0 drawn at 1e-3)")
+        .label_style(("sans-serif", 12))
+        .draw()
+        .map_err(|e| e.to_string())?;
+    let mut sizes: Vec<&str> = rows.iter().map(|r| r.size.as_str()).collect();
+    sizes.dedup();
+    for (i, size) in sizes.iter().enumerate() {
+        let color = Palette99::pick(i).to_rgba();
+        let pts: Vec<&Row> = rows.iter().filter(|r| r.size == *size).collect();
+        c.draw_series(pts.iter().map(|r| Circle::new((r.median_ms, y_of(r.max_err)), 4, color.filled())))
+            .map_err(|e| e.to_string())?
+            .label(size.to_string())
+            .legend(move |(x, y)| Circle::new((x, y), 4, color.filled()));
+        c.draw_series(pts.iter().map(|r| Text::new(r.method.clone(), (r.median_ms, y_of(r.max_err)), ("sans-serif", 10).into_font().color(&color))))
+            .map_err(|e| e.to_string())?;
+        c.draw_series(pts.iter().filter_map(|r| r.peer_ms).map(|p| Circle::new((p, floor), 6, color.stroke_width(2))))
+            .map_err(|e| e.to_string())?;
+        c.draw_series(pts.iter().filter_map(|r| r.peer_ms).map(|p| Text::new("peer".to_string(), (p, floor * 1.3), ("sans-serif", 10).into_font().color(&color))))
+            .map_err(|e| e.to_string())?;
+    }
+    c.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).label_font(("sans-serif", 12)).draw().map_err(|e| e.to_string())?;
+    root.present().map_err(|e| e.to_string())?;
+    Ok(())
+}
