@@ -1,11 +1,13 @@
 // Exact EDT, first pass: per row, the nearest marked voxel along x (seeding and the 1D transform
 // in one pass; the column passes in `edt_columns` finish the transform).
 //
-// One workgroup per row walks it in chunks of 256: an inclusive max-scan finds the nearest marked
-// voxel to the left, a second sweep from the right with a min-scan finds the one to the right.
-// Every global read and write is a contiguous run of the row, so the pass is coalesced although
-// the row is the direction a thread-per-line scheme would stride across. `rows` reads a 3D volume
-// and packs 11/11/10 bits; `rows_2d` reads a 2D mask and packs 16/16.
+// One workgroup per row; every global read and write is a contiguous run of the row, so the pass
+// is coalesced although the row is the direction a thread-per-line scheme would stride across.
+// `rows` (3D, rows ≤ 2046) holds the whole row in workgroup memory: each thread sweeps a short
+// segment, a scan over the 256 segments carries the nearest marks across them, and the volume is
+// read once and the field written once (5 bytes per voxel). `rows_2d` (rows to 16384) walks the
+// row in chunks of 256 with a max-scan from the left and a min-scan from the right, and packs
+// 16/16 bits.
 
 import package::shared::seed::{NO_SEED, pack_seed2, pack_seed3};
 
@@ -26,7 +28,16 @@ const CHUNK: u32 = 256u;
 // "Nothing to the right yet" for the min-scan.
 const NONE_RIGHT: u32 = 0xffffffffu;
 
+// `rows` holds a whole row: the 3D packing's 2046 fits.
+const MAX_ROW: u32 = 2048u;
+
 var<workgroup> scan: array<u32, 256>;
+// `rows`: the row's marks, then its packed nearest seeds.
+var<workgroup> row_cells: array<u32, MAX_ROW>;
+// `rows`: per segment, the last mark + 1 (0: none) and the first mark (NONE_RIGHT: none),
+// scanned into prefix maxima and suffix minima.
+var<workgroup> seg_last: array<u32, 256>;
+var<workgroup> seg_first: array<u32, 256>;
 
 fn is_seed(value: f32) -> bool {
     return (value >= params.threshold) != (params.invert != 0u);
@@ -76,7 +87,11 @@ fn right_sweep(lane: u32, chunk: u32, marked: bool, row_start: u32, carry: ptr<f
         return 0u;
     }
     // Only this thread wrote this element in the left sweep.
-    let left = nearest[row_start + x];
+    return nearer(x, nearest[row_start + x], right);
+}
+
+// Nearer of the marks left (x + 1, 0: none) and right (x, NONE_RIGHT: none) of x, as x + 1.
+fn nearer(x: u32, left: u32, right: u32) -> u32 {
     if right == NONE_RIGHT || (left != 0u && x - (left - 1u) <= right - x) {
         return left;
     }
@@ -87,22 +102,63 @@ fn right_sweep(lane: u32, chunk: u32, marked: bool, row_start: u32, carry: ptr<f
 fn rows(@builtin(local_invocation_id) lid: vec3<u32>, @builtin(workgroup_id) wg: vec3<u32>) {
     let y = wg.x;
     let z = wg.y;
-    let row_start = (z * params.size.y + y) * params.size.x;
-    let chunks = (params.size.x + CHUNK - 1u) / CHUNK;
-    var carry = 0u;
-    for (var c = 0u; c < chunks; c++) {
-        let x = c * CHUNK + lid.x;
-        let marked = x < params.size.x && is_seed(textureLoad(volume, vec3<u32>(x, y, z), 0).r);
-        left_sweep(lid.x, c, marked, row_start, &carry);
+    let w = params.size.x;
+    let t = lid.x;
+    for (var x = t; x < w; x += CHUNK) {
+        row_cells[x] = u32(is_seed(textureLoad(volume, vec3<u32>(x, y, z), 0).r));
     }
-    carry = NONE_RIGHT;
-    for (var c = chunks; c > 0u; c--) {
-        let x = (c - 1u) * CHUNK + lid.x;
-        let marked = x < params.size.x && is_seed(textureLoad(volume, vec3<u32>(x, y, z), 0).r);
-        let near = right_sweep(lid.x, c - 1u, marked, row_start, &carry);
-        if x < params.size.x {
-            nearest[row_start + x] = select(NO_SEED, pack_seed3(vec3<u32>(near - 1u, y, z)), near != 0u);
+    workgroupBarrier();
+    // Thread t owns the contiguous segment [s0, s1).
+    let k = (w + CHUNK - 1u) / CHUNK;
+    let s0 = min(w, t * k);
+    let s1 = min(w, s0 + k);
+    var last = 0u;
+    var first = NONE_RIGHT;
+    for (var x = s0; x < s1; x++) {
+        if row_cells[x] != 0u {
+            last = x + 1u;
+            first = min(first, x);
         }
+    }
+    seg_last[t] = last;
+    seg_first[t] = first;
+    workgroupBarrier();
+    for (var offset = 1u; offset < CHUNK; offset <<= 1u) {
+        // Indices are clamped so no read leaves the arrays; select then drops those values.
+        let l = select(0u, seg_last[max(t, offset) - offset], t >= offset);
+        let r = select(NONE_RIGHT, seg_first[min(t + offset, CHUNK - 1u)], t + offset < CHUNK);
+        workgroupBarrier();
+        seg_last[t] = max(seg_last[t], l);
+        seg_first[t] = min(seg_first[t], r);
+        workgroupBarrier();
+    }
+    // Sweep the own segment both ways; only this thread touches its cells from here.
+    var lefts: array<u32, 8>;
+    var left = select(0u, seg_last[max(t, 1u) - 1u], t > 0u);
+    for (var j = 0u; j < 8u; j++) {
+        let x = s0 + j;
+        if x < s1 {
+            if row_cells[x] != 0u {
+                left = x + 1u;
+            }
+            lefts[j] = left;
+        }
+    }
+    var right = select(NONE_RIGHT, seg_first[min(t + 1u, CHUNK - 1u)], t + 1u < CHUNK);
+    for (var j = 8u; j > 0u; j--) {
+        let x = s0 + j - 1u;
+        if x < s1 {
+            if row_cells[x] != 0u {
+                right = x;
+            }
+            let near = nearer(x, lefts[j - 1u], right);
+            row_cells[x] = select(NO_SEED, pack_seed3(vec3<u32>(near - 1u, y, z)), near != 0u);
+        }
+    }
+    workgroupBarrier();
+    let row_start = (z * params.size.y + y) * w;
+    for (var x = t; x < w; x += CHUNK) {
+        nearest[row_start + x] = row_cells[x];
     }
 }
 

@@ -37,6 +37,11 @@ const STAGE: &str = "distance::volume";
 pub const MAX_SIDE_3D: [u32; 3] = [2046, 2046, 1022];
 /// Largest side of a 2D exact transform: keeps the integer separators inside i32.
 pub const MAX_SIDE_2D_EXACT: u32 = 16384;
+/// Bands per column in the exact column passes (`edt_columns.wgsl`): 3D grids have many short
+/// columns, 2D grids few long ones that need more threads each.
+const BANDS_3D: u32 = 8;
+const BANDS_2D: u32 = 32;
+
 /// Most sub-voxel seeds one table may hold (24-bit index in the key).
 pub const MAX_POINTS: u32 = 0xfffffe;
 
@@ -417,8 +422,8 @@ impl Distance3d {
             jump_points: ComputePipeline::new(device)?,
             rows: ComputePipeline::new(device)?,
             rows_2d: ComputePipeline::new(device)?,
-            columns: ComputePipeline::new(device)?,
-            columns_2d: ComputePipeline::with_overrides(device, &[("PACK_2D", 1.0)])?,
+            columns: ComputePipeline::with_overrides(device, &[("BANDS", BANDS_3D as f64)])?,
+            columns_2d: ComputePipeline::with_overrides(device, &[("PACK_2D", 1.0), ("BANDS", BANDS_2D as f64)])?,
             resolve_unsigned: ComputePipeline::new(device)?,
             resolve_signed: ComputePipeline::new(device)?,
             resolve_points: ComputePipeline::new(device)?,
@@ -606,15 +611,15 @@ impl Distance3d {
             }
         }
         let others = if axis == 1 { size[2] } else { size[1] };
-        self.encode_columns(device, encoder, &self.columns, nearest, stack, size, axis, others, prof)
+        self.encode_columns(device, encoder, &self.columns, BANDS_3D, nearest, stack, size, axis, others, prof)
     }
 
     #[allow(clippy::too_many_arguments)]
-    fn encode_columns(&self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, pipeline: &ComputePipeline<edt_columns::columns::Entry>, nearest: &wgpu::Buffer, stack: &wgpu::Buffer, size: [u32; 3], axis: u32, others: u32, prof: Prof) -> Result<(), Error> {
+    fn encode_columns(&self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, pipeline: &ComputePipeline<edt_columns::columns::Entry>, bands: u32, nearest: &wgpu::Buffer, stack: &wgpu::Buffer, size: [u32; 3], axis: u32, others: u32, prof: Prof) -> Result<(), Error> {
         let params = uniform(device, "edt columns params", &edt_columns::ColumnParams { size: size.into(), axis });
         let bound = pipeline.bind(device, &edt_columns::columns::Resources { params: (&params).into(), nearest: nearest.into(), stack: stack.into() })?;
         let name = if axis == 1 { "columns (y)" } else { "columns (z)" };
-        pass(encoder, pipeline, &bound, [size[0].div_ceil(32), others, 1], name, prof);
+        pass(encoder, pipeline, &bound, [size[0].div_ceil(256 / bands), others, 1], name, prof);
         Ok(())
     }
 
@@ -639,7 +644,7 @@ impl Distance3d {
             let bound = self.rows_2d.bind(device, &edt_rows::rows_2d::Resources { params: (&params).into(), mask_2d: (&mv).into(), nearest: (&nearest).into() })?;
             pass(encoder, &self.rows_2d, &bound, [h, 1, 1], "rows (x)", prof);
             if h > 1 {
-                self.encode_columns(device, encoder, &self.columns_2d, &nearest, &stack, size, 1, 1, prof)?;
+                self.encode_columns(device, encoder, &self.columns_2d, BANDS_2D, &nearest, &stack, size, 1, 1, prof)?;
             }
             Ok(nearest)
         };

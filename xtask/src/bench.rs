@@ -365,48 +365,77 @@ fn print_table(rows: &[Row]) {
     }
 }
 
-/// GPU time against max error, log-log, a point per method and size; zero error is drawn on the
-/// floor line. The peer is drawn as a hollow point at zero error.
+/// GPU time against max error, log-log, a point per method and size, 3D and 2D side by side.
+/// Zero error cannot sit on a log axis: those points are drawn in a band at the bottom
+/// (below 5e-3, staggered per method so their labels can be read). The peer is a hollow point.
 fn chart(path: &Path, adapter: &str, rows: &[Row], (w, h): (u32, u32)) -> Result<(), String> {
     use plotters::prelude::*;
     let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular());
-    let floor = 1e-3;
-    let y_of = |e: f64| if e <= 0.0 { floor } else { e.max(floor) };
-    let times: Vec<f64> = rows.iter().flat_map(|r| std::iter::once(r.median_ms).chain(r.peer_ms)).collect();
-    let (tmin, tmax) = times.iter().fold((f64::INFINITY, 0f64), |(a, b), &t| (a.min(t), b.max(t)));
-    let emax = rows.iter().map(|r| y_of(r.max_err)).fold(1.0, f64::max);
     let root = BitMapBackend::new(path, (w, h)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| e.to_string())?;
-    let mut c = ChartBuilder::on(&root)
-        .caption(format!("distance: GPU time vs max error ({adapter})"), ("sans-serif", 16))
-        .margin(12)
-        .x_label_area_size(40)
-        .y_label_area_size(60)
-        .build_cartesian_2d((tmin / 1.5..tmax * 1.5).log_scale(), (floor / 2.0..emax * 2.0).log_scale())
-        .map_err(|e| e.to_string())?;
-    c.configure_mesh()
-        .x_desc("GPU time, ms (median, log)")
-        .y_desc("max error, voxels (log; 0 drawn at 1e-3)")
-        .label_style(("sans-serif", 12))
-        .draw()
-        .map_err(|e| e.to_string())?;
-    let mut sizes: Vec<&str> = rows.iter().map(|r| r.size.as_str()).collect();
-    sizes.dedup();
-    for (i, size) in sizes.iter().enumerate() {
-        let color = Palette99::pick(i).to_rgba();
-        let pts: Vec<&Row> = rows.iter().filter(|r| r.size == *size).collect();
-        c.draw_series(pts.iter().map(|r| Circle::new((r.median_ms, y_of(r.max_err)), 4, color.filled())))
-            .map_err(|e| e.to_string())?
-            .label(size.to_string())
-            .legend(move |(x, y)| Circle::new((x, y), 4, color.filled()));
-        c.draw_series(pts.iter().map(|r| Text::new(r.method.clone(), (r.median_ms, y_of(r.max_err)), ("sans-serif", 10).into_font().color(&color))))
+    let root = root.titled(&format!("distance: GPU time vs max error, {adapter}"), ("sans-serif", 15)).map_err(|e| e.to_string())?;
+    let panels = root.split_evenly((1, 2));
+    let floor = 1e-3;
+    let mut methods: Vec<&str> = Vec::new();
+    for r in rows {
+        if !methods.contains(&r.method.as_str()) {
+            methods.push(&r.method);
+        }
+    }
+    let y_of = |r: &Row| {
+        if r.max_err > 0.0 { r.max_err.max(5e-3) } else { floor * 1.18f64.powi(methods.iter().position(|m| *m == r.method).unwrap_or(0) as i32) }
+    };
+    for (panel, dims) in panels.iter().zip([3u32, 2]) {
+        let sel: Vec<&Row> = rows.iter().filter(|r| r.dims == dims).collect();
+        if sel.is_empty() {
+            continue;
+        }
+        let times: Vec<f64> = sel.iter().flat_map(|r| std::iter::once(r.median_ms).chain(r.peer_ms)).collect();
+        let (tmin, tmax) = times.iter().fold((f64::INFINITY, 0f64), |(a, b), &t| (a.min(t), b.max(t)));
+        let emax = sel.iter().map(|r| y_of(r)).fold(1.0, f64::max);
+        let mut c = ChartBuilder::on(panel)
+            .caption(if dims == 3 { "3D" } else { "2D" }, ("sans-serif", 14))
+            .margin(10)
+            .x_label_area_size(36)
+            .y_label_area_size(56)
+            .build_cartesian_2d((tmin / 1.6..tmax * 2.2).log_scale(), (floor / 1.5..emax * 2.0).log_scale())
             .map_err(|e| e.to_string())?;
-        c.draw_series(pts.iter().filter_map(|r| r.peer_ms).map(|p| Circle::new((p, floor), 6, color.stroke_width(2))))
+        c.configure_mesh()
+            .x_desc("GPU time, ms (median, log)")
+            .y_desc("max error, voxels (log; bottom band = 0)")
+            .x_labels(6)
+            .y_labels(5)
+            .x_label_formatter(&|v| format!("{v:.3}"))
+            .y_label_formatter(&|v| format!("{v:.0e}"))
+            .label_style(("sans-serif", 11))
+            .draw()
             .map_err(|e| e.to_string())?;
-        c.draw_series(pts.iter().filter_map(|r| r.peer_ms).map(|p| Text::new("peer".to_string(), (p, floor * 1.3), ("sans-serif", 10).into_font().color(&color))))
+        c.draw_series(std::iter::once(PathElement::new(vec![(tmin / 1.6, 4.2e-3), (tmax * 2.2, 4.2e-3)], BLACK.mix(0.3))))
+            .map_err(|e| e.to_string())?;
+        let mut sizes: Vec<&str> = sel.iter().map(|r| r.size.as_str()).collect();
+        sizes.dedup();
+        for (i, size) in sizes.iter().enumerate() {
+            let color = Palette99::pick(i + if dims == 2 { 4 } else { 0 }).to_rgba();
+            let pts: Vec<&Row> = sel.iter().copied().filter(|r| r.size == *size).collect();
+            c.draw_series(pts.iter().map(|r| Circle::new((r.median_ms, y_of(r)), 4, color.filled())))
+                .map_err(|e| e.to_string())?
+                .label(size.to_string())
+                .legend(move |(x, y)| Circle::new((x, y), 4, color.filled()));
+            c.draw_series(pts.iter().map(|r| Text::new(format!(" {}", r.method), (r.median_ms, y_of(r)), ("sans-serif", 10).into_font().color(&color))))
+                .map_err(|e| e.to_string())?;
+            let peer: Vec<f64> = pts.iter().filter_map(|r| r.peer_ms).collect();
+            c.draw_series(peer.iter().map(|&p| Circle::new((p, floor), 6, color.stroke_width(2)))).map_err(|e| e.to_string())?;
+            c.draw_series(peer.iter().map(|&p| Text::new(" peer (PBA+)".to_string(), (p, floor / 1.2), ("sans-serif", 10).into_font().color(&color))))
+                .map_err(|e| e.to_string())?;
+        }
+        c.configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 11))
+            .draw()
             .map_err(|e| e.to_string())?;
     }
-    c.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).label_font(("sans-serif", 12)).draw().map_err(|e| e.to_string())?;
     root.present().map_err(|e| e.to_string())?;
     Ok(())
 }
