@@ -98,20 +98,47 @@ impl EntryInfo {
                     .slots
                     .iter()
                     .filter(|s| s.group == g)
-                    .map(|s| wgpu::BindGroupLayoutEntry { binding: s.binding, visibility: s.visibility, ty: s.ty, count: None })
+                    .map(|s| wgpu::BindGroupLayoutEntry {
+                        binding: s.binding,
+                        visibility: s.visibility,
+                        ty: s.ty,
+                        count: None,
+                    })
                     .collect();
                 let label = format!("{}::{} group {g}", self.stage, self.entry_point);
-                (g, device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(&label), entries: &entries }))
+                (
+                    g,
+                    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                        label: Some(&label),
+                        entries: &entries,
+                    }),
+                )
             })
             .collect()
     }
 
-    fn pipeline_layout(&self, device: &wgpu::Device, layouts: &[(u32, wgpu::BindGroupLayout)]) -> wgpu::PipelineLayout {
+    fn pipeline_layout(
+        &self,
+        device: &wgpu::Device,
+        layouts: &[(u32, wgpu::BindGroupLayout)],
+    ) -> wgpu::PipelineLayout {
         // Groups must be contiguous from 0 in a pipeline layout; fill gaps with empty layouts.
         let max = layouts.iter().map(|(g, _)| *g + 1).max().unwrap_or(0);
-        let empty = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: None, entries: &[] });
-        let ordered: Vec<Option<&wgpu::BindGroupLayout>> =
-            (0..max).map(|g| Some(layouts.iter().find(|(i, _)| *i == g).map(|(_, l)| l).unwrap_or(&empty))).collect();
+        let empty = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: None,
+            entries: &[],
+        });
+        let ordered: Vec<Option<&wgpu::BindGroupLayout>> = (0..max)
+            .map(|g| {
+                Some(
+                    layouts
+                        .iter()
+                        .find(|(i, _)| *i == g)
+                        .map(|(_, l)| l)
+                        .unwrap_or(&empty),
+                )
+            })
+            .collect();
         device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some(self.stage),
             bind_group_layouts: &ordered,
@@ -124,11 +151,17 @@ impl EntryInfo {
             if !self.overrides.contains(name) {
                 return Err(Error::Invalid {
                     stage: self.stage,
-                    what: format!("override `{name}`: the shader declares no such override (it has {:?})", self.overrides),
+                    what: format!(
+                        "override `{name}`: the shader declares no such override (it has {:?})",
+                        self.overrides
+                    ),
                 });
             }
             if !value.is_finite() {
-                return Err(Error::Invalid { stage: self.stage, what: format!("override `{name}` is {value}") });
+                return Err(Error::Invalid {
+                    stage: self.stage,
+                    what: format!("override `{name}` is {value}"),
+                });
             }
         }
         Ok(())
@@ -228,7 +261,9 @@ view_wrapper!(
 fn view_dimension_of(t: &wgpu::Texture) -> wgpu::TextureViewDimension {
     match t.dimension() {
         wgpu::TextureDimension::D1 => wgpu::TextureViewDimension::D1,
-        wgpu::TextureDimension::D2 if t.depth_or_array_layers() > 1 => wgpu::TextureViewDimension::D2Array,
+        wgpu::TextureDimension::D2 if t.depth_or_array_layers() > 1 => {
+            wgpu::TextureViewDimension::D2Array
+        }
         wgpu::TextureDimension::D2 => wgpu::TextureViewDimension::D2,
         wgpu::TextureDimension::D3 => wgpu::TextureViewDimension::D3,
     }
@@ -238,43 +273,90 @@ fn view_dimension_of(t: &wgpu::Texture) -> wgpu::TextureViewDimension {
 fn check(slot: &Slot, res: &Resource<'_>, device: &wgpu::Device) -> Result<(), String> {
     use wgpu::BindingType as B;
     match (&slot.ty, res) {
-        (B::Buffer { ty, min_binding_size, .. }, Resource::Buffer(b)) => {
+        (
+            B::Buffer {
+                ty,
+                min_binding_size,
+                ..
+            },
+            Resource::Buffer(b),
+        ) => {
             let (usage, align, what) = match ty {
-                wgpu::BufferBindingType::Uniform => {
-                    (wgpu::BufferUsages::UNIFORM, device.limits().min_uniform_buffer_offset_alignment, "UNIFORM")
-                }
-                _ => (wgpu::BufferUsages::STORAGE, device.limits().min_storage_buffer_offset_alignment, "STORAGE"),
+                wgpu::BufferBindingType::Uniform => (
+                    wgpu::BufferUsages::UNIFORM,
+                    device.limits().min_uniform_buffer_offset_alignment,
+                    "UNIFORM",
+                ),
+                _ => (
+                    wgpu::BufferUsages::STORAGE,
+                    device.limits().min_storage_buffer_offset_alignment,
+                    "STORAGE",
+                ),
             };
             if !b.buffer.usage().contains(usage) {
-                return Err(format!("buffer lacks {what} usage (has {:?})", b.buffer.usage()));
+                return Err(format!(
+                    "buffer lacks {what} usage (has {:?})",
+                    b.buffer.usage()
+                ));
             }
             if b.offset % align as u64 != 0 {
                 return Err(format!("offset {} is not a multiple of {align}", b.offset));
             }
-            let size = b.size.map(|s| s.get()).unwrap_or(b.buffer.size().saturating_sub(b.offset));
+            let size = b
+                .size
+                .map(|s| s.get())
+                .unwrap_or(b.buffer.size().saturating_sub(b.offset));
             if let Some(min) = min_binding_size {
                 if size < min.get() {
-                    return Err(format!("{size} bytes bound, the shader's `{}` needs at least {}", slot.wgsl, min.get()));
+                    return Err(format!(
+                        "{size} bytes bound, the shader's `{}` needs at least {}",
+                        slot.wgsl,
+                        min.get()
+                    ));
                 }
             }
             Ok(())
         }
-        (B::Texture { sample_type, view_dimension, multisampled }, Resource::Texture(v)) => {
+        (
+            B::Texture {
+                sample_type,
+                view_dimension,
+                multisampled,
+            },
+            Resource::Texture(v),
+        ) => {
             let t = v.texture();
             if !t.usage().contains(wgpu::TextureUsages::TEXTURE_BINDING) {
-                return Err(format!("texture lacks TEXTURE_BINDING usage (has {:?})", t.usage()));
+                return Err(format!(
+                    "texture lacks TEXTURE_BINDING usage (has {:?})",
+                    t.usage()
+                ));
             }
             if view_dimension_of(t) != *view_dimension {
-                return Err(format!("{:?} texture bound, the shader reads `{}`", view_dimension_of(t), slot.wgsl));
+                return Err(format!(
+                    "{:?} texture bound, the shader reads `{}`",
+                    view_dimension_of(t),
+                    slot.wgsl
+                ));
             }
             if (t.sample_count() > 1) != *multisampled {
-                return Err(format!("sample count {} does not suit `{}`", t.sample_count(), slot.wgsl));
+                return Err(format!(
+                    "sample count {} does not suit `{}`",
+                    t.sample_count(),
+                    slot.wgsl
+                ));
             }
             let features = device.features();
             let have = t.format().sample_type(None, Some(features));
             let ok = match (sample_type, have) {
-                (wgpu::TextureSampleType::Float { filterable: true }, Some(wgpu::TextureSampleType::Float { filterable })) => filterable,
-                (wgpu::TextureSampleType::Float { filterable: false }, Some(wgpu::TextureSampleType::Float { .. })) => true,
+                (
+                    wgpu::TextureSampleType::Float { filterable: true },
+                    Some(wgpu::TextureSampleType::Float { filterable }),
+                ) => filterable,
+                (
+                    wgpu::TextureSampleType::Float { filterable: false },
+                    Some(wgpu::TextureSampleType::Float { .. }),
+                ) => true,
                 (want, Some(h)) => *want == h,
                 (_, None) => false,
             };
@@ -288,16 +370,35 @@ fn check(slot: &Slot, res: &Resource<'_>, device: &wgpu::Device) -> Result<(), S
             }
             Ok(())
         }
-        (B::StorageTexture { format, view_dimension, .. }, Resource::StorageTexture(v)) => {
+        (
+            B::StorageTexture {
+                format,
+                view_dimension,
+                ..
+            },
+            Resource::StorageTexture(v),
+        ) => {
             let t = v.texture();
             if !t.usage().contains(wgpu::TextureUsages::STORAGE_BINDING) {
-                return Err(format!("texture lacks STORAGE_BINDING usage (has {:?})", t.usage()));
+                return Err(format!(
+                    "texture lacks STORAGE_BINDING usage (has {:?})",
+                    t.usage()
+                ));
             }
             if t.format() != *format {
-                return Err(format!("texture format {:?} bound, the shader's `{}` needs {:?}", t.format(), slot.wgsl, format));
+                return Err(format!(
+                    "texture format {:?} bound, the shader's `{}` needs {:?}",
+                    t.format(),
+                    slot.wgsl,
+                    format
+                ));
             }
             if view_dimension_of(t) != *view_dimension {
-                return Err(format!("{:?} texture bound, the shader writes `{}`", view_dimension_of(t), slot.wgsl));
+                return Err(format!(
+                    "{:?} texture bound, the shader writes `{}`",
+                    view_dimension_of(t),
+                    slot.wgsl
+                ));
             }
             Ok(())
         }
@@ -337,13 +438,22 @@ fn bind_groups<E: Entry>(
                     binding: s.binding,
                     resource: match r {
                         Resource::Buffer(b) => wgpu::BindingResource::Buffer(b.clone()),
-                        Resource::Texture(v) | Resource::StorageTexture(v) => wgpu::BindingResource::TextureView(v),
+                        Resource::Texture(v) | Resource::StorageTexture(v) => {
+                            wgpu::BindingResource::TextureView(v)
+                        }
                         Resource::Sampler(s) => wgpu::BindingResource::Sampler(s),
                     },
                 })
                 .collect();
             let label = format!("{}::{} group {g}", info.stage, info.entry_point);
-            (*g, device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(&label), layout, entries: &entries }))
+            (
+                *g,
+                device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some(&label),
+                    layout,
+                    entries: &entries,
+                }),
+            )
         })
         .collect();
     Ok(groups)
@@ -395,15 +505,28 @@ impl<E: Entry> ComputePipeline<E> {
         crate::gpu::scoped(device, info.stage, || {
             let layouts = info.layouts(device);
             let pipeline = build_compute(device, info, &layouts, overrides);
-            Self { pipeline, layouts, _e: PhantomData }
+            Self {
+                pipeline,
+                layouts,
+                _e: PhantomData,
+            }
         })
     }
 
     /// Check every resource against the shader's slots and make the bind groups.
-    pub fn bind(&self, device: &wgpu::Device, resources: &E::Resources<'_>) -> Result<Bound<E>, Error> {
+    pub fn bind(
+        &self,
+        device: &wgpu::Device,
+        resources: &E::Resources<'_>,
+    ) -> Result<Bound<E>, Error> {
         let info = E::INFO;
-        let groups = crate::gpu::scoped(device, info.stage, || bind_groups::<E>(device, &self.layouts, resources))??;
-        Ok(Bound { groups, _e: PhantomData })
+        let groups = crate::gpu::scoped(device, info.stage, || {
+            bind_groups::<E>(device, &self.layouts, resources)
+        })??;
+        Ok(Bound {
+            groups,
+            _e: PhantomData,
+        })
     }
 
     /// Record one dispatch of `groups` workgroups into `pass`.
@@ -416,7 +539,11 @@ impl<E: Entry> ComputePipeline<E> {
     /// Workgroups needed to cover `extent` invocations on each axis.
     pub fn groups_for(extent: [u32; 3]) -> [u32; 3] {
         let ws = E::INFO.workgroup_size().unwrap_or([1, 1, 1]);
-        [extent[0].div_ceil(ws[0]), extent[1].div_ceil(ws[1]), extent[2].div_ceil(ws[2])]
+        [
+            extent[0].div_ceil(ws[0]),
+            extent[1].div_ceil(ws[1]),
+            extent[2].div_ceil(ws[2]),
+        ]
     }
 }
 
@@ -441,13 +568,23 @@ impl<E: Entry> RenderPipeline<E> {
     /// Create the pipeline; colour targets are checked against the fragment outputs first.
     pub fn new(device: &wgpu::Device, targets: &RenderTargets<'_>) -> Result<Self, Error> {
         let info = E::INFO;
-        let EntryKind::Render { targets: outputs, .. } = info.kind else {
-            return Err(Error::Invalid { stage: info.stage, what: "not a render entry point".into() });
+        let EntryKind::Render {
+            targets: outputs, ..
+        } = info.kind
+        else {
+            return Err(Error::Invalid {
+                stage: info.stage,
+                what: "not a render entry point".into(),
+            });
         };
         if targets.color.len() != outputs.len() {
             return Err(Error::Invalid {
                 stage: info.stage,
-                what: format!("{} colour targets given, the fragment shader writes {}", targets.color.len(), outputs.len()),
+                what: format!(
+                    "{} colour targets given, the fragment shader writes {}",
+                    targets.color.len(),
+                    outputs.len()
+                ),
             });
         }
         for (t, o) in targets.color.iter().zip(outputs) {
@@ -460,45 +597,86 @@ impl<E: Entry> RenderPipeline<E> {
             if class != o.scalar {
                 return Err(Error::Invalid {
                     stage: info.stage,
-                    what: format!("target @location({}) has format {:?}, the shader writes {:?} values", o.location, t.format, o.scalar),
+                    what: format!(
+                        "target @location({}) has format {:?}, the shader writes {:?} values",
+                        o.location, t.format, o.scalar
+                    ),
                 });
             }
         }
         crate::gpu::scoped(device, info.stage, || {
             let layouts = info.layouts(device);
             let pipeline = build_render(device, info, &layouts, targets);
-            Self { pipeline, layouts, _e: PhantomData }
+            Self {
+                pipeline,
+                layouts,
+                _e: PhantomData,
+            }
         })
     }
 
-    pub fn bind(&self, device: &wgpu::Device, resources: &E::Resources<'_>) -> Result<Bound<E>, Error> {
+    pub fn bind(
+        &self,
+        device: &wgpu::Device,
+        resources: &E::Resources<'_>,
+    ) -> Result<Bound<E>, Error> {
         let info = E::INFO;
-        let groups = crate::gpu::scoped(device, info.stage, || bind_groups::<E>(device, &self.layouts, resources))??;
-        Ok(Bound { groups, _e: PhantomData })
+        let groups = crate::gpu::scoped(device, info.stage, || {
+            bind_groups::<E>(device, &self.layouts, resources)
+        })??;
+        Ok(Bound {
+            groups,
+            _e: PhantomData,
+        })
     }
 }
 
-fn build_compute(device: &wgpu::Device, info: &EntryInfo, layouts: &[(u32, wgpu::BindGroupLayout)], overrides: &[(&str, f64)]) -> wgpu::ComputePipeline {
+fn build_compute(
+    device: &wgpu::Device,
+    info: &EntryInfo,
+    layouts: &[(u32, wgpu::BindGroupLayout)],
+    overrides: &[(&str, f64)],
+) -> wgpu::ComputePipeline {
     let layout = info.pipeline_layout(device, layouts);
     device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some(info.stage),
         layout: Some(&layout),
         module: &module(device, info),
         entry_point: Some(info.entry_point),
-        compilation_options: wgpu::PipelineCompilationOptions { constants: overrides, ..Default::default() },
+        compilation_options: wgpu::PipelineCompilationOptions {
+            constants: overrides,
+            ..Default::default()
+        },
         cache: None,
     })
 }
 
 /// Build a render pipeline; `info.kind` must be `Render` (checked by the callers).
-fn build_render(device: &wgpu::Device, info: &EntryInfo, layouts: &[(u32, wgpu::BindGroupLayout)], targets: &RenderTargets<'_>) -> wgpu::RenderPipeline {
-    let EntryKind::Render { vertex, vertex_buffers, .. } = info.kind else { unreachable!("callers pass render entries") };
+fn build_render(
+    device: &wgpu::Device,
+    info: &EntryInfo,
+    layouts: &[(u32, wgpu::BindGroupLayout)],
+    targets: &RenderTargets<'_>,
+) -> wgpu::RenderPipeline {
+    let EntryKind::Render {
+        vertex,
+        vertex_buffers,
+        ..
+    } = info.kind
+    else {
+        unreachable!("callers pass render entries")
+    };
     let layout = info.pipeline_layout(device, layouts);
     let module = module(device, info);
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some(info.stage),
         layout: Some(&layout),
-        vertex: wgpu::VertexState { module: &module, entry_point: Some(vertex), compilation_options: Default::default(), buffers: vertex_buffers },
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some(vertex),
+            compilation_options: Default::default(),
+            buffers: vertex_buffers,
+        },
         fragment: Some(wgpu::FragmentState {
             module: &module,
             entry_point: Some(info.entry_point),
@@ -534,7 +712,15 @@ pub fn create_any(device: &wgpu::Device, info: &'static EntryInfo) -> Result<(),
                         }))
                     })
                     .collect();
-                let _ = build_render(device, info, &layouts, &RenderTargets { color: &color, ..Default::default() });
+                let _ = build_render(
+                    device,
+                    info,
+                    &layouts,
+                    &RenderTargets {
+                        color: &color,
+                        ..Default::default()
+                    },
+                );
             }
         }
     })

@@ -2,7 +2,9 @@
 
 /// A resource that does not fit the slot the shader declares.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("stage {stage}, entry point `{entry_point}`, binding `{binding}` (@group({group}) @binding({index})): {problem}")]
+#[error(
+    "stage {stage}, entry point `{entry_point}`, binding `{binding}` (@group({group}) @binding({index})): {problem}"
+)]
 pub struct BindingError {
     pub stage: &'static str,
     pub entry_point: &'static str,
@@ -27,7 +29,10 @@ pub enum Error {
     Binding(#[from] BindingError),
     /// A wgpu validation or out-of-memory error, captured by an error scope.
     #[error("stage {stage}: wgpu reported: {message}")]
-    Wgpu { stage: &'static str, message: String },
+    Wgpu {
+        stage: &'static str,
+        message: String,
+    },
     /// The device was lost while a stage ran.
     #[error("device lost while running {stage}")]
     DeviceLost { stage: &'static str },
@@ -36,10 +41,21 @@ pub enum Error {
     Invalid { stage: &'static str, what: String },
     /// A size is zero or past what the device (or the encoding) supports.
     #[error("stage {stage}: {what} is {got}, must be between 1 and {max}")]
-    Size { stage: &'static str, what: &'static str, got: u64, max: u64 },
+    Size {
+        stage: &'static str,
+        what: &'static str,
+        got: u64,
+        max: u64,
+    },
     /// A texture of a format the stage does not read.
-    #[error("stage {stage}: texture format {format:?} is not supported here (use one of {supported})")]
-    Format { stage: &'static str, format: wgpu::TextureFormat, supported: &'static str },
+    #[error(
+        "stage {stage}: texture format {format:?} is not supported here (use one of {supported})"
+    )]
+    Format {
+        stage: &'static str,
+        format: wgpu::TextureFormat,
+        supported: &'static str,
+    },
     /// Mapping a buffer for readback failed.
     #[error("readback failed: {0}")]
     Readback(String),

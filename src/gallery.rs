@@ -10,13 +10,48 @@ use crate::shaders::distance::visualize;
 
 /// 5×7 glyphs for the letters of "FIELDKIT", one row per byte, high bit left.
 const GLYPHS: &[(char, [u8; 7])] = &[
-    ('F', [0b11111, 0b10000, 0b10000, 0b11110, 0b10000, 0b10000, 0b10000]),
-    ('I', [0b11111, 0b00100, 0b00100, 0b00100, 0b00100, 0b00100, 0b11111]),
-    ('E', [0b11111, 0b10000, 0b10000, 0b11110, 0b10000, 0b10000, 0b11111]),
-    ('L', [0b10000, 0b10000, 0b10000, 0b10000, 0b10000, 0b10000, 0b11111]),
-    ('D', [0b11110, 0b10001, 0b10001, 0b10001, 0b10001, 0b10001, 0b11110]),
-    ('K', [0b10001, 0b10010, 0b10100, 0b11000, 0b10100, 0b10010, 0b10001]),
-    ('T', [0b11111, 0b00100, 0b00100, 0b00100, 0b00100, 0b00100, 0b00100]),
+    (
+        'F',
+        [
+            0b11111, 0b10000, 0b10000, 0b11110, 0b10000, 0b10000, 0b10000,
+        ],
+    ),
+    (
+        'I',
+        [
+            0b11111, 0b00100, 0b00100, 0b00100, 0b00100, 0b00100, 0b11111,
+        ],
+    ),
+    (
+        'E',
+        [
+            0b11111, 0b10000, 0b10000, 0b11110, 0b10000, 0b10000, 0b11111,
+        ],
+    ),
+    (
+        'L',
+        [
+            0b10000, 0b10000, 0b10000, 0b10000, 0b10000, 0b10000, 0b11111,
+        ],
+    ),
+    (
+        'D',
+        [
+            0b11110, 0b10001, 0b10001, 0b10001, 0b10001, 0b10001, 0b11110,
+        ],
+    ),
+    (
+        'K',
+        [
+            0b10001, 0b10010, 0b10100, 0b11000, 0b10100, 0b10010, 0b10001,
+        ],
+    ),
+    (
+        'T',
+        [
+            0b11111, 0b00100, 0b00100, 0b00100, 0b00100, 0b00100, 0b00100,
+        ],
+    ),
 ];
 
 /// A recognisable mask: a circle, a ring, a rotated box, a triangle and the word FIELDKIT.
@@ -42,11 +77,18 @@ pub fn shapes_mask(width: u32, height: u32) -> Vec<u8> {
     }
     // The word, scaled to fill the lower half.
     let text = "FIELDKIT";
-    let scale = ((0.9 * w) / (text.len() as f32 * 6.0)).min(0.4 * h / 7.0).floor().max(1.0) as u32;
+    let scale = ((0.9 * w) / (text.len() as f32 * 6.0))
+        .min(0.4 * h / 7.0)
+        .floor()
+        .max(1.0) as u32;
     let x0 = (width - text.len() as u32 * 6 * scale) / 2;
     let y0 = (0.55 * h) as u32;
     for (i, ch) in text.chars().enumerate() {
-        let glyph = GLYPHS.iter().find(|g| g.0 == ch).map(|g| g.1).unwrap_or([0; 7]);
+        let glyph = GLYPHS
+            .iter()
+            .find(|g| g.0 == ch)
+            .map(|g| g.1)
+            .unwrap_or([0; 7]);
         for (row, bits) in glyph.iter().enumerate() {
             for col in 0..5 {
                 if bits & (1 << (4 - col)) == 0 {
@@ -68,14 +110,27 @@ pub fn shapes_mask(width: u32, height: u32) -> Vec<u8> {
 }
 
 /// Colour-map a distance texture (`R32Float`) with iso-lines into RGBA8 pixels.
-pub fn visualize_distance(ctx: &Context, distance: &wgpu::Texture, spacing: f32, range: f32) -> Result<Vec<u8>, Error> {
+pub fn visualize_distance(
+    ctx: &Context,
+    distance: &wgpu::Texture,
+    spacing: f32,
+    range: f32,
+) -> Result<Vec<u8>, Error> {
     if !(spacing.is_finite() && spacing > 0.0 && range.is_finite() && range > 0.0) {
-        return Err(Error::Invalid { stage: visualize::STAGE, what: format!("spacing {spacing} and range {range} must be finite and positive") });
+        return Err(Error::Invalid {
+            stage: visualize::STAGE,
+            what: format!("spacing {spacing} and range {range} must be finite and positive"),
+        });
     }
     let device = &ctx.device;
     let format = wgpu::TextureFormat::Rgba8Unorm;
-    let pipeline: RenderPipeline<visualize::fs_main::Entry> =
-        RenderPipeline::new(device, &RenderTargets { color: &[Some(format.into())], ..Default::default() })?;
+    let pipeline: RenderPipeline<visualize::fs_main::Entry> = RenderPipeline::new(
+        device,
+        &RenderTargets {
+            color: &[Some(format.into())],
+            ..Default::default()
+        },
+    )?;
     let target = device.create_texture(&wgpu::TextureDescriptor {
         label: Some("gallery target"),
         size: distance.size(),
@@ -86,9 +141,19 @@ pub fn visualize_distance(ctx: &Context, distance: &wgpu::Texture, spacing: f32,
         usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
         view_formats: &[],
     });
-    let params = crate::gpu::uniform_buffer(device, "view params", &visualize::ViewParams { spacing, range });
+    let params = crate::gpu::uniform_buffer(
+        device,
+        "view params",
+        &visualize::ViewParams { spacing, range },
+    );
     let dv = distance.create_view(&Default::default());
-    let bound = pipeline.bind(device, &visualize::fs_main::Resources { params: (&params).into(), distance: (&dv).into() })?;
+    let bound = pipeline.bind(
+        device,
+        &visualize::fs_main::Resources {
+            params: (&params).into(),
+            distance: (&dv).into(),
+        },
+    )?;
     let tv = target.create_view(&Default::default());
     let mut enc = ctx.encoder("visualize");
     {
@@ -98,7 +163,10 @@ pub fn visualize_distance(ctx: &Context, distance: &wgpu::Texture, spacing: f32,
                 view: &tv,
                 depth_slice: None,
                 resolve_target: None,
-                ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                    store: wgpu::StoreOp::Store,
+                },
             })],
             ..Default::default()
         });
@@ -112,13 +180,29 @@ pub fn visualize_distance(ctx: &Context, distance: &wgpu::Texture, spacing: f32,
 }
 
 /// Render every scene into `out_dir`; returns the files written.
-pub fn run(ctx: &Context, out_dir: &Path, mut progress: impl FnMut(&str)) -> Result<Vec<PathBuf>, Error> {
-    std::fs::create_dir_all(out_dir).map_err(|e| Error::Invalid { stage: "gallery", what: format!("{}: {e}", out_dir.display()) })?;
+pub fn run(
+    ctx: &Context,
+    out_dir: &Path,
+    mut progress: impl FnMut(&str),
+) -> Result<Vec<PathBuf>, Error> {
+    std::fs::create_dir_all(out_dir).map_err(|e| Error::Invalid {
+        stage: "gallery",
+        what: format!("{}: {e}", out_dir.display()),
+    })?;
     let mut written = Vec::new();
-    let save = |name: &str, rgba: &[u8], w: u32, h: u32, written: &mut Vec<PathBuf>| -> Result<(), Error> {
+    let save = |name: &str,
+                rgba: &[u8],
+                w: u32,
+                h: u32,
+                written: &mut Vec<PathBuf>|
+     -> Result<(), Error> {
         let path = out_dir.join(name);
-        image::save_buffer(&path, rgba, w, h, image::ExtendedColorType::Rgba8)
-            .map_err(|e| Error::Invalid { stage: "gallery", what: format!("{}: {e}", path.display()) })?;
+        image::save_buffer(&path, rgba, w, h, image::ExtendedColorType::Rgba8).map_err(|e| {
+            Error::Invalid {
+                stage: "gallery",
+                what: format!("{}: {e}", path.display()),
+            }
+        })?;
         written.push(path);
         Ok(())
     };
@@ -129,7 +213,16 @@ pub fn run(ctx: &Context, out_dir: &Path, mut progress: impl FnMut(&str)) -> Res
     let seeds = crate::distance::upload_mask(ctx, &mask, w, h)?;
     let jfa = Jfa2d::new(&ctx.device)?;
     let mut enc = ctx.encoder("gallery distance");
-    let field = jfa.encode(&ctx.device, &mut enc, &seeds, &Options { variant: Variant::JfaPlus2, signed: true, texel_size: 1.0 })?;
+    let field = jfa.encode(
+        &ctx.device,
+        &mut enc,
+        &seeds,
+        &Options {
+            variant: Variant::JfaPlus2,
+            signed: true,
+            texel_size: 1.0,
+        },
+    )?;
     ctx.submit_and_wait("gallery distance", enc)?;
     let rgba = visualize_distance(ctx, &field.distance, 8.0, 60.0)?;
     save("distance_2d_signed.png", &rgba, w, h, &mut written)?;

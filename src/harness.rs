@@ -50,7 +50,12 @@ impl Summary {
         writeln!(s, "distinct: {}", sorted.len()).unwrap();
         writeln!(s, "min: {}", sorted.first().copied().unwrap_or(0)).unwrap();
         writeln!(s, "max: {}", sorted.last().copied().unwrap_or(0)).unwrap();
-        writeln!(s, "hash: {:016x}", fnv1a(values.iter().flat_map(|v| v.to_le_bytes()))).unwrap();
+        writeln!(
+            s,
+            "hash: {:016x}",
+            fnv1a(values.iter().flat_map(|v| v.to_le_bytes()))
+        )
+        .unwrap();
         Self(s)
     }
 
@@ -58,7 +63,11 @@ impl Summary {
     /// not finite. Floats are summarised, not hashed: adapters round `sqrt` differently in the
     /// last bit, which a hash would turn into a different snapshot.
     pub fn floats(shape: &[usize], values: &[f32], decimals: usize) -> Self {
-        let finite: Vec<f64> = values.iter().filter(|v| v.is_finite()).map(|&v| v as f64).collect();
+        let finite: Vec<f64> = values
+            .iter()
+            .filter(|v| v.is_finite())
+            .map(|&v| v as f64)
+            .collect();
         let n = finite.len().max(1) as f64;
         let min = finite.iter().copied().fold(f64::INFINITY, f64::min);
         let max = finite.iter().copied().fold(f64::NEG_INFINITY, f64::max);
@@ -108,7 +117,14 @@ pub struct ImageDiff {
 /// Compare RGBA8 pixels with `<dir>/<name>.png`. With `FIELDKIT_BLESS=1`, or when the reference
 /// does not exist yet and `FIELDKIT_BLESS` is unset outside CI, the reference is (re)written.
 /// On failure `<name>.actual.png` and `<name>.diff.png` are written beside it (git-ignored).
-pub fn compare_image(dir: &Path, name: &str, rgba: &[u8], width: u32, height: u32, tol: Tolerance) -> Result<ImageDiff, String> {
+pub fn compare_image(
+    dir: &Path,
+    name: &str,
+    rgba: &[u8],
+    width: u32,
+    height: u32,
+    tol: Tolerance,
+) -> Result<ImageDiff, String> {
     assert!(
         tol.mean <= Tolerance::MAX_MEAN && tol.outlier_fraction <= Tolerance::MAX_OUTLIERS,
         "tolerance {tol:?} is looser than the cap ({} mean, {} outliers)",
@@ -120,8 +136,18 @@ pub fn compare_image(dir: &Path, name: &str, rgba: &[u8], width: u32, height: u3
     let in_ci = std::env::var("CI").is_ok();
     if bless || (!reference.exists() && !in_ci) {
         std::fs::create_dir_all(dir).map_err(|e| e.to_string())?;
-        image::save_buffer(&reference, rgba, width, height, image::ExtendedColorType::Rgba8).map_err(|e| e.to_string())?;
-        return Ok(ImageDiff { mean: 0.0, outlier_fraction: 0.0 });
+        image::save_buffer(
+            &reference,
+            rgba,
+            width,
+            height,
+            image::ExtendedColorType::Rgba8,
+        )
+        .map_err(|e| e.to_string())?;
+        return Ok(ImageDiff {
+            mean: 0.0,
+            outlier_fraction: 0.0,
+        });
     }
     let expected = image::open(&reference)
         .map_err(|e| format!("cannot read reference {}: {e}", reference.display()))?
@@ -129,8 +155,17 @@ pub fn compare_image(dir: &Path, name: &str, rgba: &[u8], width: u32, height: u3
     let actual_path: PathBuf = dir.join(format!("{name}.actual.png"));
     let diff_path: PathBuf = dir.join(format!("{name}.diff.png"));
     if expected.dimensions() != (width, height) {
-        let _ = image::save_buffer(&actual_path, rgba, width, height, image::ExtendedColorType::Rgba8);
-        return Err(format!("{name}: size {width}x{height}, reference is {:?}", expected.dimensions()));
+        let _ = image::save_buffer(
+            &actual_path,
+            rgba,
+            width,
+            height,
+            image::ExtendedColorType::Rgba8,
+        );
+        return Err(format!(
+            "{name}: size {width}x{height}, reference is {:?}",
+            expected.dimensions()
+        ));
     }
     let mut total = 0u64;
     let mut outliers = 0usize;
@@ -152,8 +187,20 @@ pub fn compare_image(dir: &Path, name: &str, rgba: &[u8], width: u32, height: u3
         outlier_fraction: outliers as f32 / (width * height).max(1) as f32,
     };
     if result.mean > tol.mean || result.outlier_fraction > tol.outlier_fraction {
-        let _ = image::save_buffer(&actual_path, rgba, width, height, image::ExtendedColorType::Rgba8);
-        let _ = image::save_buffer(&diff_path, &diff, width, height, image::ExtendedColorType::Rgba8);
+        let _ = image::save_buffer(
+            &actual_path,
+            rgba,
+            width,
+            height,
+            image::ExtendedColorType::Rgba8,
+        );
+        let _ = image::save_buffer(
+            &diff_path,
+            &diff,
+            width,
+            height,
+            image::ExtendedColorType::Rgba8,
+        );
         return Err(format!(
             "{name}: mean difference {:.3} (allowed {}), outliers {:.4} (allowed {}); wrote {} and {}",
             result.mean,

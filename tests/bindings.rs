@@ -16,15 +16,24 @@ fn every_generated_pipeline_is_created_on_the_noop_backend() {
     let ctx = noop();
     assert!(!fieldkit::shaders::ALL.is_empty());
     for info in fieldkit::shaders::ALL {
-        fieldkit::bind::create_any(&ctx.device, info).unwrap_or_else(|e| panic!("{}::{}: {e}", info.stage, info.entry_point));
+        fieldkit::bind::create_any(&ctx.device, info)
+            .unwrap_or_else(|e| panic!("{}::{}: {e}", info.stage, info.entry_point));
     }
     assert!(ctx.take_uncaptured().is_empty());
 }
 
-fn texture(ctx: &Context, format: wgpu::TextureFormat, usage: wgpu::TextureUsages) -> wgpu::Texture {
+fn texture(
+    ctx: &Context,
+    format: wgpu::TextureFormat,
+    usage: wgpu::TextureUsages,
+) -> wgpu::Texture {
     ctx.device.create_texture(&wgpu::TextureDescriptor {
         label: None,
-        size: wgpu::Extent3d { width: 8, height: 8, depth_or_array_layers: 1 },
+        size: wgpu::Extent3d {
+            width: 8,
+            height: 8,
+            depth_or_array_layers: 1,
+        },
         mip_level_count: 1,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
@@ -35,16 +44,38 @@ fn texture(ctx: &Context, format: wgpu::TextureFormat, usage: wgpu::TextureUsage
 }
 
 fn buffer(ctx: &Context, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
-    ctx.device.create_buffer(&wgpu::BufferDescriptor { label: None, size, usage, mapped_at_creation: false })
+    ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: None,
+        size,
+        usage,
+        mapped_at_creation: false,
+    })
 }
 
-const TEX: wgpu::TextureUsages = wgpu::TextureUsages::TEXTURE_BINDING.union(wgpu::TextureUsages::STORAGE_BINDING);
+const TEX: wgpu::TextureUsages =
+    wgpu::TextureUsages::TEXTURE_BINDING.union(wgpu::TextureUsages::STORAGE_BINDING);
 
 /// Bind `jump` with one resource swapped for a bad one; return the error.
-fn bind_jump(ctx: &Context, params: &wgpu::Buffer, src: &wgpu::Texture, dst: &wgpu::Texture) -> Result<(), Error> {
+fn bind_jump(
+    ctx: &Context,
+    params: &wgpu::Buffer,
+    src: &wgpu::Texture,
+    dst: &wgpu::Texture,
+) -> Result<(), Error> {
     let p: jfa_step::jump::Pipeline = ComputePipeline::new(&ctx.device)?;
-    let (sv, dv) = (src.create_view(&Default::default()), dst.create_view(&Default::default()));
-    p.bind(&ctx.device, &jfa_step::jump::Resources { params: params.into(), src: (&sv).into(), dst: (&dv).into() }).map(|_| ())
+    let (sv, dv) = (
+        src.create_view(&Default::default()),
+        dst.create_view(&Default::default()),
+    );
+    p.bind(
+        &ctx.device,
+        &jfa_step::jump::Resources {
+            params: params.into(),
+            src: (&sv).into(),
+            dst: (&dv).into(),
+        },
+    )
+    .map(|_| ())
 }
 
 fn binding_error(r: Result<(), Error>) -> fieldkit::BindingError {
@@ -69,9 +100,19 @@ fn wrong_storage_format_names_stage_and_binding() {
     let src = texture(&ctx, wgpu::TextureFormat::R32Uint, TEX);
     let dst = texture(&ctx, wgpu::TextureFormat::Rgba8Unorm, TEX);
     let e = binding_error(bind_jump(&ctx, &params, &src, &dst));
-    assert_eq!((e.stage, e.entry_point, e.binding, e.group, e.index), ("distance::jfa_step", "jump", "dst", 0, 2));
-    assert!(e.problem.contains("Rgba8Unorm") && e.problem.contains("R32Uint"), "{}", e.problem);
-    assert!(ctx.take_uncaptured().is_empty(), "the check runs before wgpu sees the bind group");
+    assert_eq!(
+        (e.stage, e.entry_point, e.binding, e.group, e.index),
+        ("distance::jfa_step", "jump", "dst", 0, 2)
+    );
+    assert!(
+        e.problem.contains("Rgba8Unorm") && e.problem.contains("R32Uint"),
+        "{}",
+        e.problem
+    );
+    assert!(
+        ctx.take_uncaptured().is_empty(),
+        "the check runs before wgpu sees the bind group"
+    );
 }
 
 #[test]
@@ -81,7 +122,10 @@ fn wrong_sample_type_names_binding() {
     // A float texture where the shader reads texture_2d<u32>.
     let src = texture(&ctx, wgpu::TextureFormat::R32Float, TEX);
     let dst = texture(&ctx, wgpu::TextureFormat::R32Uint, TEX);
-    assert_eq!(binding_error(bind_jump(&ctx, &params, &src, &dst)).binding, "src");
+    assert_eq!(
+        binding_error(bind_jump(&ctx, &params, &src, &dst)).binding,
+        "src"
+    );
 }
 
 #[test]
@@ -93,17 +137,33 @@ fn missing_usage_and_small_uniform_are_typed_errors() {
     assert_eq!(e.binding, "params");
     assert!(e.problem.contains("at least 16"), "{}", e.problem);
     let not_uniform = buffer(&ctx, 16, wgpu::BufferUsages::STORAGE);
-    assert_eq!(binding_error(bind_jump(&ctx, &not_uniform, &t(), &t())).binding, "params");
+    assert_eq!(
+        binding_error(bind_jump(&ctx, &not_uniform, &t(), &t())).binding,
+        "params"
+    );
     let params = buffer(&ctx, 16, wgpu::BufferUsages::UNIFORM);
-    let sampled_only = texture(&ctx, wgpu::TextureFormat::R32Uint, wgpu::TextureUsages::TEXTURE_BINDING);
-    assert_eq!(binding_error(bind_jump(&ctx, &params, &t(), &sampled_only)).binding, "dst");
+    let sampled_only = texture(
+        &ctx,
+        wgpu::TextureFormat::R32Uint,
+        wgpu::TextureUsages::TEXTURE_BINDING,
+    );
+    assert_eq!(
+        binding_error(bind_jump(&ctx, &params, &t(), &sampled_only)).binding,
+        "dst"
+    );
 }
 
 #[test]
 fn unknown_override_is_an_error() {
     let ctx = noop();
     let r = jfa_seed::seed::Pipeline::with_overrides(&ctx.device, &[("no_such_constant", 1.0)]);
-    assert!(matches!(r, Err(Error::Invalid { stage: "distance::jfa_seed", .. })));
+    assert!(matches!(
+        r,
+        Err(Error::Invalid {
+            stage: "distance::jfa_seed",
+            ..
+        })
+    ));
 }
 
 /// Host code written against a different shader interface fails to compile.

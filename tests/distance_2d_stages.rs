@@ -22,10 +22,16 @@ fn seed_stage() {
     let m = mask();
     let seeds = upload_mask(&ctx, &to_bytes(&m), W as u32, H as u32).unwrap();
     let mut enc = ctx.encoder("seed");
-    let out = jfa.encode_seed(&ctx.device, &mut enc, &seeds, false).unwrap();
+    let out = jfa
+        .encode_seed(&ctx.device, &mut enc, &seeds, false)
+        .unwrap();
     ctx.submit_and_wait("seed", enc).unwrap();
     let nearest: Vec<u32> = read_texture(&ctx, &out).unwrap();
-    assert_eq!(nearest, cpu::jfa_2d(&m, W, H, &[]), "seed stage = CPU model with no passes");
+    assert_eq!(
+        nearest,
+        cpu::jfa_2d(&m, W, H, &[]),
+        "seed stage = CPU model with no passes"
+    );
     insta::assert_snapshot!(Summary::ints(&[H, W], &nearest).to_string());
 }
 
@@ -36,9 +42,14 @@ fn one_jump_pass() {
     let m = mask();
     let seeds = upload_mask(&ctx, &to_bytes(&m), W as u32, H as u32).unwrap();
     let mut enc = ctx.encoder("jump");
-    let a = jfa.encode_seed(&ctx.device, &mut enc, &seeds, false).unwrap();
-    let b = jfa.encode_seed(&ctx.device, &mut enc, &seeds, false).unwrap();
-    jfa.encode_jump(&ctx.device, &mut enc, &a, &b, 4, None).unwrap();
+    let a = jfa
+        .encode_seed(&ctx.device, &mut enc, &seeds, false)
+        .unwrap();
+    let b = jfa
+        .encode_seed(&ctx.device, &mut enc, &seeds, false)
+        .unwrap();
+    jfa.encode_jump(&ctx.device, &mut enc, &a, &b, 4, None)
+        .unwrap();
     ctx.submit_and_wait("jump", enc).unwrap();
     let nearest: Vec<u32> = read_texture(&ctx, &b).unwrap();
     assert_eq!(nearest, cpu::jfa_2d(&m, W, H, &[4]));
@@ -54,7 +65,11 @@ fn resolve_stage() {
     let nearest = cpu::jfa_2d(&m, W, H, &Variant::JfaPlus2.steps(W as u32));
     let tex = ctx.device.create_texture(&wgpu::TextureDescriptor {
         label: None,
-        size: wgpu::Extent3d { width: W as u32, height: H as u32, depth_or_array_layers: 1 },
+        size: wgpu::Extent3d {
+            width: W as u32,
+            height: H as u32,
+            depth_or_array_layers: 1,
+        },
         mip_level_count: 1,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
@@ -62,25 +77,60 @@ fn resolve_stage() {
         usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
     });
-    ctx.queue.write_texture(tex.as_image_copy(), bytemuck::cast_slice(&nearest), wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(4 * W as u32), rows_per_image: None }, tex.size());
+    ctx.queue.write_texture(
+        tex.as_image_copy(),
+        bytemuck::cast_slice(&nearest),
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(4 * W as u32),
+            rows_per_image: None,
+        },
+        tex.size(),
+    );
     let mut enc = ctx.encoder("resolve");
-    let out = jfa.encode_resolve(&ctx.device, &mut enc, &tex, None, 1.0).unwrap();
+    let out = jfa
+        .encode_resolve(&ctx.device, &mut enc, &tex, None, 1.0)
+        .unwrap();
     ctx.submit_and_wait("resolve", enc).unwrap();
     let d: Vec<f32> = read_texture(&ctx, &out).unwrap();
     // Squared distances are integers: rounding d² recovers them exactly despite sqrt's last bit.
     let d2: Vec<u32> = d.iter().map(|v| (v * v).round() as u32).collect();
-    let exact: Vec<u32> = cpu::edt_2d_squared(&m, W, H).iter().map(|&v| v as u32).collect();
+    let exact: Vec<u32> = cpu::edt_2d_squared(&m, W, H)
+        .iter()
+        .map(|&v| v as u32)
+        .collect();
     assert_eq!(d2, exact);
-    insta::assert_snapshot!(Summary::floats(&[H, W], &d, 3).and("d² rounded", Summary::ints(&[H, W], &d2)).to_string());
+    insta::assert_snapshot!(
+        Summary::floats(&[H, W], &d, 3)
+            .and("d² rounded", Summary::ints(&[H, W], &d2))
+            .to_string()
+    );
 }
 
 #[test]
 fn whole_chain_signed() {
     let ctx = context();
     let jfa = Jfa2d::new(&ctx.device).unwrap();
-    let m: Vec<bool> = fieldkit::gallery::shapes_mask(W as u32 * 2, H as u32 * 2).iter().map(|&v| v != 0).collect();
-    let (nearest, d) = run_jfa(&ctx, &jfa, &m, W * 2, H * 2, Options { signed: true, ..Options::default() });
-    insta::assert_snapshot!(Summary::floats(&[H * 2, W * 2], &d, 3).and("nearest inside", Summary::ints(&[H * 2, W * 2], &nearest)).to_string());
+    let m: Vec<bool> = fieldkit::gallery::shapes_mask(W as u32 * 2, H as u32 * 2)
+        .iter()
+        .map(|&v| v != 0)
+        .collect();
+    let (nearest, d) = run_jfa(
+        &ctx,
+        &jfa,
+        &m,
+        W * 2,
+        H * 2,
+        Options {
+            signed: true,
+            ..Options::default()
+        },
+    );
+    insta::assert_snapshot!(
+        Summary::floats(&[H * 2, W * 2], &d, 3)
+            .and("nearest inside", Summary::ints(&[H * 2, W * 2], &nearest))
+            .to_string()
+    );
 }
 
 #[test]
@@ -90,12 +140,26 @@ fn visualized_field_matches_reference_image() {
     let (w, h) = (160u32, 90u32);
     let seeds = upload_mask(&ctx, &fieldkit::gallery::shapes_mask(w, h), w, h).unwrap();
     let mut enc = ctx.encoder("chain");
-    let field = jfa.encode(&ctx.device, &mut enc, &seeds, &Options { signed: true, ..Options::default() }).unwrap();
+    let field = jfa
+        .encode(
+            &ctx.device,
+            &mut enc,
+            &seeds,
+            &Options {
+                signed: true,
+                ..Options::default()
+            },
+        )
+        .unwrap();
     ctx.submit_and_wait("chain", enc).unwrap();
     let rgba = fieldkit::gallery::visualize_distance(&ctx, &field.distance, 4.0, 20.0).unwrap();
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/snapshots");
     // Set on llvmpipe (lavapipe, LLVM 15): the field is exact, so only the colour map's float
     // rounding can differ between adapters; a broken stage moves whole bands (mean >> 1).
-    let tol = Tolerance { mean: 1.0, outlier_fraction: 0.01, pixel: 8 };
+    let tol = Tolerance {
+        mean: 1.0,
+        outlier_fraction: 0.01,
+        pixel: 8,
+    };
     compare_image(&dir, "distance_2d_visualize", &rgba, w, h, tol).unwrap();
 }

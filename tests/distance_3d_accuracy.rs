@@ -23,21 +23,99 @@ const JFA_TRAP: [[usize; 3]; 3] = [[2, 10, 1], [0, 9, 10], [8, 10, 11]];
 
 fn cases() -> Vec<Case> {
     let mut v = Vec::new();
-    for (i, (density, size)) in [(1e-4, [64, 64, 64]), (1e-3, [48, 48, 48]), (1e-2, [32, 32, 32]), (0.1, [24, 24, 24])].into_iter().enumerate() {
-        let name = ["random 1e-4 (64³)", "random 1e-3 (48³)", "random 1e-2 (32³)", "random 0.1 (24³)"][i];
-        v.push(Case { name, size, mask: random_mask_3d(size, density, 100 + i as u64), jfa: true });
+    for (i, (density, size)) in [
+        (1e-4, [64, 64, 64]),
+        (1e-3, [48, 48, 48]),
+        (1e-2, [32, 32, 32]),
+        (0.1, [24, 24, 24]),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let name = [
+            "random 1e-4 (64³)",
+            "random 1e-3 (48³)",
+            "random 1e-2 (32³)",
+            "random 0.1 (24³)",
+        ][i];
+        v.push(Case {
+            name,
+            size,
+            mask: random_mask_3d(size, density, 100 + i as u64),
+            jfa: true,
+        });
     }
-    v.push(Case { name: "single seed", size: [33, 20, 17], mask: mask_3d([33, 20, 17], &[[5, 13, 9]]), jfa: true });
+    v.push(Case {
+        name: "single seed",
+        size: [33, 20, 17],
+        mask: mask_3d([33, 20, 17], &[[5, 13, 9]]),
+        jfa: true,
+    });
     let s = [30, 22, 18];
-    v.push(Case { name: "faces, edges, corners", size: s, mask: mask_3d(s, &[[0, 0, 0], [29, 21, 17], [15, 0, 0], [0, 21, 9], [29, 11, 8], [10, 5, 17]]), jfa: true });
-    v.push(Case { name: "no seeds", size: [9, 7, 5], mask: vec![false; 9 * 7 * 5], jfa: true });
-    v.push(Case { name: "full grid", size: [10, 6, 4], mask: vec![true; 10 * 6 * 4], jfa: true });
-    v.push(Case { name: "anisotropic 61×7×29", size: [61, 7, 29], mask: random_mask_3d([61, 7, 29], 0.005, 7), jfa: true });
-    v.push(Case { name: "line along x", size: [50, 1, 1], mask: mask_3d([50, 1, 1], &[[3, 0, 0], [40, 0, 0]]), jfa: true });
-    v.push(Case { name: "line along y", size: [1, 40, 1], mask: mask_3d([1, 40, 1], &[[0, 21, 0]]), jfa: true });
-    v.push(Case { name: "line along z", size: [1, 1, 45], mask: mask_3d([1, 1, 45], &[[0, 0, 0], [0, 0, 44]]), jfa: true });
-    v.push(Case { name: "JFA trap 12³", size: [12, 12, 12], mask: mask_3d([12, 12, 12], &JFA_TRAP), jfa: true });
-    v.push(Case { name: "non-pow2 96×200×37", size: [96, 200, 37], mask: random_mask_3d([96, 200, 37], 2e-3, 8), jfa: false });
+    v.push(Case {
+        name: "faces, edges, corners",
+        size: s,
+        mask: mask_3d(
+            s,
+            &[
+                [0, 0, 0],
+                [29, 21, 17],
+                [15, 0, 0],
+                [0, 21, 9],
+                [29, 11, 8],
+                [10, 5, 17],
+            ],
+        ),
+        jfa: true,
+    });
+    v.push(Case {
+        name: "no seeds",
+        size: [9, 7, 5],
+        mask: vec![false; 9 * 7 * 5],
+        jfa: true,
+    });
+    v.push(Case {
+        name: "full grid",
+        size: [10, 6, 4],
+        mask: vec![true; 10 * 6 * 4],
+        jfa: true,
+    });
+    v.push(Case {
+        name: "anisotropic 61×7×29",
+        size: [61, 7, 29],
+        mask: random_mask_3d([61, 7, 29], 0.005, 7),
+        jfa: true,
+    });
+    v.push(Case {
+        name: "line along x",
+        size: [50, 1, 1],
+        mask: mask_3d([50, 1, 1], &[[3, 0, 0], [40, 0, 0]]),
+        jfa: true,
+    });
+    v.push(Case {
+        name: "line along y",
+        size: [1, 40, 1],
+        mask: mask_3d([1, 40, 1], &[[0, 21, 0]]),
+        jfa: true,
+    });
+    v.push(Case {
+        name: "line along z",
+        size: [1, 1, 45],
+        mask: mask_3d([1, 1, 45], &[[0, 0, 0], [0, 0, 44]]),
+        jfa: true,
+    });
+    v.push(Case {
+        name: "JFA trap 12³",
+        size: [12, 12, 12],
+        mask: mask_3d([12, 12, 12], &JFA_TRAP),
+        jfa: true,
+    });
+    v.push(Case {
+        name: "non-pow2 96×200×37",
+        size: [96, 200, 37],
+        mask: random_mask_3d([96, 200, 37], 2e-3, 8),
+        jfa: false,
+    });
     v
 }
 
@@ -53,16 +131,33 @@ struct Errors {
 /// and its squared distance is compared with the exact one.
 fn score(case: &Case, nearest: &[u32], dist: &[f32], exact: &[u64]) -> Errors {
     let [w, h, _] = case.size;
-    let mut e = Errors { voxels: nearest.len(), ..Default::default() };
+    let mut e = Errors {
+        voxels: nearest.len(),
+        ..Default::default()
+    };
     for i in 0..nearest.len() {
         let Some([sx, sy, sz]) = unpack_seed3(nearest[i]) else {
-            assert_eq!(exact[i], cpu::NONE, "{}: voxel {i} has no seed but one exists", case.name);
+            assert_eq!(
+                exact[i],
+                cpu::NONE,
+                "{}: voxel {i} has no seed but one exists",
+                case.name
+            );
             assert_eq!(dist[i], FAR);
             continue;
         };
-        assert!(case.mask[(sz as usize * h + sy as usize) * w + sx as usize], "{}: voxel {i} names ({sx},{sy},{sz}), not a seed", case.name);
+        assert!(
+            case.mask[(sz as usize * h + sy as usize) * w + sx as usize],
+            "{}: voxel {i} names ({sx},{sy},{sz}), not a seed",
+            case.name
+        );
         let d2 = cpu::seed_d2_3(nearest[i], i, case.size).unwrap();
-        assert!(((dist[i] as f64) - (d2 as f64).sqrt()).abs() <= 1e-6 * (1.0 + (d2 as f64).sqrt()), "{}: distance {} for d²={d2}", case.name, dist[i]);
+        assert!(
+            ((dist[i] as f64) - (d2 as f64).sqrt()).abs() <= 1e-6 * (1.0 + (d2 as f64).sqrt()),
+            "{}: distance {} for d²={d2}",
+            case.name,
+            dist[i]
+        );
         if d2 != exact[i] {
             e.wrong += 1;
             let err = (d2 as f64).sqrt() - (exact[i] as f64).sqrt();
@@ -74,14 +169,19 @@ fn score(case: &Case, nearest: &[u32], dist: &[f32], exact: &[u64]) -> Errors {
 }
 
 fn methods() -> Vec<Method> {
-    std::iter::once(Method::Exact).chain(Variant::ALL.into_iter().map(Method::Jfa)).collect()
+    std::iter::once(Method::Exact)
+        .chain(Variant::ALL.into_iter().map(Method::Jfa))
+        .collect()
 }
 
 #[test]
 fn exact_and_jfa_against_the_cpu_transform() {
     let ctx = context();
     let d3 = Distance3d::new(&ctx.device).unwrap();
-    let mut totals: Vec<(Method, Errors)> = methods().into_iter().map(|m| (m, Errors::default())).collect();
+    let mut totals: Vec<(Method, Errors)> = methods()
+        .into_iter()
+        .map(|m| (m, Errors::default()))
+        .collect();
     let mut trap_wrong = 0;
     for case in cases() {
         let exact = cpu::edt_3d_squared(&case.mask, case.size);
@@ -89,20 +189,43 @@ fn exact_and_jfa_against_the_cpu_transform() {
             if !case.jfa && *method != Method::Exact {
                 continue;
             }
-            let (nearest, _, dist) = run_3d(&ctx, &d3, &case.mask, case.size, &Options3d { method: *method, ..Options3d::default() });
+            let (nearest, _, dist) = run_3d(
+                &ctx,
+                &d3,
+                &case.mask,
+                case.size,
+                &Options3d {
+                    method: *method,
+                    ..Options3d::default()
+                },
+            );
             let e = score(&case, &nearest, &dist, &exact);
             if let Method::Jfa(v) = method
                 && e.voxels <= 20_000
             {
                 // The shader and its CPU model take the same decisions, tie-breaks included.
-                let model = cpu::jfa_3d(&case.mask, case.size, &v.steps(*case.size.iter().max().unwrap() as u32));
-                assert_eq!(nearest, model, "{}: {} differs from cpu::jfa_3d", case.name, v.name());
+                let model = cpu::jfa_3d(
+                    &case.mask,
+                    case.size,
+                    &v.steps(*case.size.iter().max().unwrap() as u32),
+                );
+                assert_eq!(
+                    nearest,
+                    model,
+                    "{}: {} differs from cpu::jfa_3d",
+                    case.name,
+                    v.name()
+                );
             }
             if case.name.starts_with("JFA trap") && *method == Method::Jfa(Variant::Jfa) {
                 trap_wrong = e.wrong;
             }
             if *method == Method::Exact {
-                assert_eq!(e.wrong, 0, "{}: the exact transform has {} wrong voxels", case.name, e.wrong);
+                assert_eq!(
+                    e.wrong, 0,
+                    "{}: the exact transform has {} wrong voxels",
+                    case.name, e.wrong
+                );
             }
             total.voxels += e.voxels;
             total.wrong += e.wrong;
@@ -113,10 +236,29 @@ fn exact_and_jfa_against_the_cpu_transform() {
     println!("| method | voxels | wrong | fraction | max err (voxels) | mean err |");
     println!("|---|---|---|---|---|---|");
     for (m, e) in &totals {
-        println!("| {} | {} | {} | {:.2e} | {:.3} | {:.2e} |", m.name(), e.voxels, e.wrong, e.wrong as f64 / e.voxels as f64, e.max, e.sum / e.voxels as f64);
+        println!(
+            "| {} | {} | {} | {:.2e} | {:.3} | {:.2e} |",
+            m.name(),
+            e.voxels,
+            e.wrong,
+            e.wrong as f64 / e.voxels as f64,
+            e.max,
+            e.sum / e.voxels as f64
+        );
     }
     let get = |m: Method| totals.iter().find(|t| t.0 == m).unwrap().1;
-    assert!(trap_wrong > 0, "plain JFA is expected to pick a wrong seed in the trap configuration");
-    assert_eq!(get(Method::Jfa(Variant::JfaPlus2)).wrong, 0, "JFA+2 must have no wrong voxels on these cases");
-    assert_eq!(get(Method::Jfa(Variant::OnePlusJfaPlus2)).wrong, 0, "1+JFA+2 must have no wrong voxels on these cases");
+    assert!(
+        trap_wrong > 0,
+        "plain JFA is expected to pick a wrong seed in the trap configuration"
+    );
+    assert_eq!(
+        get(Method::Jfa(Variant::JfaPlus2)).wrong,
+        0,
+        "JFA+2 must have no wrong voxels on these cases"
+    );
+    assert_eq!(
+        get(Method::Jfa(Variant::OnePlusJfaPlus2)).wrong,
+        0,
+        "1+JFA+2 must have no wrong voxels on these cases"
+    );
 }

@@ -3,18 +3,31 @@
 
 use fieldkit::Error;
 use fieldkit::distance::Variant;
-use fieldkit::distance::volume::{Distance3d, Grid3, Inside, MAX_SIDE_3D, Method, Options3d, check_size_2d_exact, check_size_3d, upload_points, upload_points_with_homes, upload_volume};
+use fieldkit::distance::volume::{
+    Distance3d, Grid3, Inside, MAX_SIDE_3D, Method, Options3d, check_size_2d_exact, check_size_3d,
+    upload_points, upload_points_with_homes, upload_volume,
+};
 use fieldkit::harness::context;
 use glam::Vec3;
 
 #[test]
 fn zero_sized_grids() {
     let ctx = context();
-    for (size, what) in [([0, 4, 4], "width"), ([4, 0, 4], "height"), ([4, 4, 0], "depth")] {
+    for (size, what) in [
+        ([0, 4, 4], "width"),
+        ([4, 0, 4], "height"),
+        ([4, 4, 0], "depth"),
+    ] {
         let e = upload_volume(&ctx, &[], size).unwrap_err();
-        assert!(matches!(e, Error::Size { what: w, got: 0, .. } if w == what), "{size:?}: {e}");
+        assert!(
+            matches!(e, Error::Size { what: w, got: 0, .. } if w == what),
+            "{size:?}: {e}"
+        );
     }
-    assert!(matches!(check_size_2d_exact(&ctx.device, 0, 9), Err(Error::Size { what: "width", .. })));
+    assert!(matches!(
+        check_size_2d_exact(&ctx.device, 0, 9),
+        Err(Error::Size { what: "width", .. })
+    ));
 }
 
 #[test]
@@ -27,10 +40,23 @@ fn past_the_packing_range() {
         size[axis] = MAX_SIDE_3D[axis] + 1;
         let e = check_size_3d(&ctx.device, size).unwrap_err();
         let max = MAX_SIDE_3D[axis].min(tex) as u64;
-        assert!(matches!(e, Error::Size { what: w, max: m, .. } if w == what && m == max), "{size:?}: {e}");
+        assert!(
+            matches!(e, Error::Size { what: w, max: m, .. } if w == what && m == max),
+            "{size:?}: {e}"
+        );
     }
     let e = check_size_2d_exact(&ctx.device, 16385, 4).unwrap_err();
-    assert!(matches!(e, Error::Size { what: "width", got: 16385, .. }), "{e}");
+    assert!(
+        matches!(
+            e,
+            Error::Size {
+                what: "width",
+                got: 16385,
+                ..
+            }
+        ),
+        "{e}"
+    );
 }
 
 #[test]
@@ -38,27 +64,73 @@ fn past_the_device_buffer_limit() {
     let ctx = context();
     // Within the packing, but 2046 × 2046 × 1022 × 4 bytes ≈ 17 GB exceeds every device's
     // storage binding limit: refused before anything is allocated.
-    let e = check_size_3d(&ctx.device, [2046.min(ctx.device.limits().max_texture_dimension_3d), 2046.min(ctx.device.limits().max_texture_dimension_3d), 1022]).unwrap_err();
-    assert!(matches!(e, Error::Size { what: "field buffer (bytes)", .. }), "{e}");
+    let e = check_size_3d(
+        &ctx.device,
+        [
+            2046.min(ctx.device.limits().max_texture_dimension_3d),
+            2046.min(ctx.device.limits().max_texture_dimension_3d),
+            1022,
+        ],
+    )
+    .unwrap_err();
+    assert!(
+        matches!(
+            e,
+            Error::Size {
+                what: "field buffer (bytes)",
+                ..
+            }
+        ),
+        "{e}"
+    );
 }
 
 #[test]
 fn bad_seed_points() {
     let ctx = context();
-    let grid = Grid3 { size: [8, 8, 8], voxel_size: 0.5, origin: Vec3::new(1.0, 2.0, 3.0) };
+    let grid = Grid3 {
+        size: [8, 8, 8],
+        voxel_size: 0.5,
+        origin: Vec3::new(1.0, 2.0, 3.0),
+    };
     let inside = grid.origin + Vec3::splat(2.0);
     let e = upload_points(&ctx, &grid, &[inside, Vec3::new(f32::NAN, 0.0, 0.0)]).unwrap_err();
-    assert!(matches!(&e, Error::Invalid { what, .. } if what.contains("point 1") && what.contains("not finite")), "{e}");
+    assert!(
+        matches!(&e, Error::Invalid { what, .. } if what.contains("point 1") && what.contains("not finite")),
+        "{e}"
+    );
     // The box spans origin .. origin + 4 in each axis.
     let e = upload_points(&ctx, &grid, &[grid.origin + Vec3::new(4.1, 1.0, 1.0)]).unwrap_err();
-    assert!(matches!(&e, Error::Invalid { what, .. } if what.contains("outside the volume")), "{e}");
-    assert!(matches!(upload_points(&ctx, &grid, &[]), Err(Error::Size { what: "number of seed points", got: 0, .. })));
+    assert!(
+        matches!(&e, Error::Invalid { what, .. } if what.contains("outside the volume")),
+        "{e}"
+    );
+    assert!(matches!(
+        upload_points(&ctx, &grid, &[]),
+        Err(Error::Size {
+            what: "number of seed points",
+            got: 0,
+            ..
+        })
+    ));
     let e = upload_points_with_homes(&ctx, &grid, &[inside], &[[8, 0, 0]]).unwrap_err();
-    assert!(matches!(&e, Error::Invalid { what, .. } if what.contains("home voxel")), "{e}");
+    assert!(
+        matches!(&e, Error::Invalid { what, .. } if what.contains("home voxel")),
+        "{e}"
+    );
     let e = upload_points_with_homes(&ctx, &grid, &[inside], &[]).unwrap_err();
-    assert!(matches!(&e, Error::Invalid { what, .. } if what.contains("0 homes for 1 points")), "{e}");
-    let bad_grid = Grid3 { voxel_size: f32::NAN, ..grid };
-    assert!(matches!(upload_points(&ctx, &bad_grid, &[inside]), Err(Error::Invalid { .. })));
+    assert!(
+        matches!(&e, Error::Invalid { what, .. } if what.contains("0 homes for 1 points")),
+        "{e}"
+    );
+    let bad_grid = Grid3 {
+        voxel_size: f32::NAN,
+        ..grid
+    };
+    assert!(matches!(
+        upload_points(&ctx, &bad_grid, &[inside]),
+        Err(Error::Invalid { .. })
+    ));
 }
 
 #[test]
@@ -68,19 +140,44 @@ fn bad_options_and_textures() {
     let volume = upload_volume(&ctx, &[255; 64], [4, 4, 4]).unwrap();
     let mut enc = ctx.encoder("bad");
     let bad = [
-        Options3d { voxel_size: f32::NAN, ..Options3d::default() },
-        Options3d { voxel_size: -1.0, ..Options3d::default() },
-        Options3d { band: Some(0.0), ..Options3d::default() },
-        Options3d { band: Some(f32::INFINITY), ..Options3d::default() },
-        Options3d { inside: Inside::Threshold(f32::NAN), ..Options3d::default() },
+        Options3d {
+            voxel_size: f32::NAN,
+            ..Options3d::default()
+        },
+        Options3d {
+            voxel_size: -1.0,
+            ..Options3d::default()
+        },
+        Options3d {
+            band: Some(0.0),
+            ..Options3d::default()
+        },
+        Options3d {
+            band: Some(f32::INFINITY),
+            ..Options3d::default()
+        },
+        Options3d {
+            inside: Inside::Threshold(f32::NAN),
+            ..Options3d::default()
+        },
     ];
     for o in bad {
-        assert!(matches!(d3.encode(&ctx.device, &mut enc, &volume, &o), Err(Error::Invalid { .. })), "{o:?}");
+        assert!(
+            matches!(
+                d3.encode(&ctx.device, &mut enc, &volume, &o),
+                Err(Error::Invalid { .. })
+            ),
+            "{o:?}"
+        );
     }
     // A 3D texture of a format the stages do not read.
     let rgba = ctx.device.create_texture(&wgpu::TextureDescriptor {
         label: None,
-        size: wgpu::Extent3d { width: 4, height: 4, depth_or_array_layers: 4 },
+        size: wgpu::Extent3d {
+            width: 4,
+            height: 4,
+            depth_or_array_layers: 4,
+        },
         mip_level_count: 1,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D3,
@@ -88,23 +185,84 @@ fn bad_options_and_textures() {
         usage: wgpu::TextureUsages::TEXTURE_BINDING,
         view_formats: &[],
     });
-    let e = d3.encode(&ctx.device, &mut enc, &rgba, &Options3d::default()).unwrap_err();
-    assert!(matches!(e, Error::Format { format: wgpu::TextureFormat::Rgba8Unorm, .. }), "{e}");
+    let e = d3
+        .encode(&ctx.device, &mut enc, &rgba, &Options3d::default())
+        .unwrap_err();
+    assert!(
+        matches!(
+            e,
+            Error::Format {
+                format: wgpu::TextureFormat::Rgba8Unorm,
+                ..
+            }
+        ),
+        "{e}"
+    );
     // A 2D texture where a volume is expected.
     let flat = fieldkit::distance::upload_mask(&ctx, &[255; 16], 4, 4).unwrap();
-    assert!(matches!(d3.encode(&ctx.device, &mut enc, &flat, &Options3d::default()), Err(Error::Invalid { .. })));
+    assert!(matches!(
+        d3.encode(&ctx.device, &mut enc, &flat, &Options3d::default()),
+        Err(Error::Invalid { .. })
+    ));
     // Sub-voxel seeds with the exact method, and an inside volume of another size.
     let grid = Grid3::new([4, 4, 4]);
     let pts = upload_points(&ctx, &grid, &[Vec3::splat(1.5)]).unwrap();
-    let e = d3.encode_points(&ctx.device, &mut enc, &pts, [4, 4, 4], None, &Options3d::default()).unwrap_err();
-    assert!(matches!(&e, Error::Invalid { what, .. } if what.contains("JFA")), "{e}");
+    let e = d3
+        .encode_points(
+            &ctx.device,
+            &mut enc,
+            &pts,
+            [4, 4, 4],
+            None,
+            &Options3d::default(),
+        )
+        .unwrap_err();
+    assert!(
+        matches!(&e, Error::Invalid { what, .. } if what.contains("JFA")),
+        "{e}"
+    );
     let other = upload_volume(&ctx, &[0; 27], [3, 3, 3]).unwrap();
-    let jfa = Options3d { method: Method::Jfa(Variant::JfaPlus2), ..Options3d::default() };
-    assert!(matches!(d3.encode_points(&ctx.device, &mut enc, &pts, [4, 4, 4], Some(&other), &jfa), Err(Error::Invalid { .. })));
+    let jfa = Options3d {
+        method: Method::Jfa(Variant::JfaPlus2),
+        ..Options3d::default()
+    };
+    assert!(matches!(
+        d3.encode_points(&ctx.device, &mut enc, &pts, [4, 4, 4], Some(&other), &jfa),
+        Err(Error::Invalid { .. })
+    ));
     // Column pass on an axis that does not exist.
-    let buf = |n| ctx.device.create_buffer(&wgpu::BufferDescriptor { label: None, size: n, usage: wgpu::BufferUsages::STORAGE, mapped_at_creation: false });
-    assert!(matches!(d3.encode_column_pass(&ctx.device, &mut enc, &buf(256), &buf(256), [4, 4, 4], 0, &mut None), Err(Error::Invalid { .. })));
-    assert!(matches!(d3.encode_column_pass(&ctx.device, &mut enc, &buf(256), &buf(128), [4, 4, 4], 1, &mut None), Err(Error::Invalid { .. })));
+    let buf = |n| {
+        ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: None,
+            size: n,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        })
+    };
+    assert!(matches!(
+        d3.encode_column_pass(
+            &ctx.device,
+            &mut enc,
+            &buf(256),
+            &buf(256),
+            [4, 4, 4],
+            0,
+            &mut None
+        ),
+        Err(Error::Invalid { .. })
+    ));
+    assert!(matches!(
+        d3.encode_column_pass(
+            &ctx.device,
+            &mut enc,
+            &buf(256),
+            &buf(128),
+            [4, 4, 4],
+            1,
+            &mut None
+        ),
+        Err(Error::Invalid { .. })
+    ));
     // Nothing bad reached wgpu: the encoder still submits cleanly.
     ctx.submit_and_wait("bad", enc).unwrap();
     assert!(ctx.take_uncaptured().is_empty());

@@ -4,7 +4,10 @@
 mod common;
 
 use common::*;
-use fieldkit::distance::volume::{Distance3d, Grid3, Inside, Method, Options3d, upload_points, upload_points_with_homes, upload_volume};
+use fieldkit::distance::volume::{
+    Distance3d, Grid3, Inside, Method, Options3d, upload_points, upload_points_with_homes,
+    upload_volume,
+};
 use fieldkit::distance::{Variant, cpu, upload_mask};
 use fieldkit::gpu::{read_buffer, read_texture};
 use fieldkit::harness::context;
@@ -29,10 +32,26 @@ fn signed_matches_cpu_for_exact_and_jfa_plus_2() {
     let m = shape_mask(size);
     let reference = cpu::signed_3d(&m, size);
     for method in [Method::Exact, Method::Jfa(Variant::JfaPlus2)] {
-        let (_, outside, d) = run_3d(&ctx, &d3, &m, size, &Options3d { method, signed: true, ..Options3d::default() });
+        let (_, outside, d) = run_3d(
+            &ctx,
+            &d3,
+            &m,
+            size,
+            &Options3d {
+                method,
+                signed: true,
+                ..Options3d::default()
+            },
+        );
         assert!(outside.is_some());
         for i in 0..d.len() {
-            assert!((d[i] as f64 - reference[i]).abs() <= 1e-5 * (1.0 + reference[i].abs()), "{}: voxel {i}: {} vs {}", method.name(), d[i], reference[i]);
+            assert!(
+                (d[i] as f64 - reference[i]).abs() <= 1e-5 * (1.0 + reference[i].abs()),
+                "{}: voxel {i}: {} vs {}",
+                method.name(),
+                d[i],
+                reference[i]
+            );
             assert_eq!(d[i] < 0.0, m[i], "sign at voxel {i}");
         }
     }
@@ -46,37 +65,96 @@ fn world_units_band_and_threshold() {
     let m = random_mask_3d(size, 0.004, 31);
     let exact = cpu::edt_3d_squared(&m, size);
     // Voxel size scales every distance.
-    let (_, _, d) = run_3d(&ctx, &d3, &m, size, &Options3d { voxel_size: 0.25, ..Options3d::default() });
+    let (_, _, d) = run_3d(
+        &ctx,
+        &d3,
+        &m,
+        size,
+        &Options3d {
+            voxel_size: 0.25,
+            ..Options3d::default()
+        },
+    );
     for i in 0..d.len() {
         let want = (exact[i] as f64).sqrt() * 0.25;
-        assert!((d[i] as f64 - want).abs() <= 1e-6 * (1.0 + want), "voxel {i}: {} vs {want}", d[i]);
+        assert!(
+            (d[i] as f64 - want).abs() <= 1e-6 * (1.0 + want),
+            "voxel {i}: {} vs {want}",
+            d[i]
+        );
     }
     // Narrow band of 3 voxels: JFA+2 starting at step 4 is exact inside the band, clamped beyond.
     for method in [Method::Exact, Method::Jfa(Variant::JfaPlus2)] {
-        let (_, _, d) = run_3d(&ctx, &d3, &m, size, &Options3d { method, band: Some(3.0), ..Options3d::default() });
+        let (_, _, d) = run_3d(
+            &ctx,
+            &d3,
+            &m,
+            size,
+            &Options3d {
+                method,
+                band: Some(3.0),
+                ..Options3d::default()
+            },
+        );
         for i in 0..d.len() {
             let want = (exact[i] as f64).sqrt().min(3.0);
-            assert!((d[i] as f64 - want).abs() <= 1e-6 * (1.0 + want), "{} voxel {i}: {} vs {want}", method.name(), d[i]);
+            assert!(
+                (d[i] as f64 - want).abs() <= 1e-6 * (1.0 + want),
+                "{} voxel {i}: {} vs {want}",
+                method.name(),
+                d[i]
+            );
         }
     }
-    assert_eq!(Options3d { band: Some(3.0), ..Options3d::default() }.steps(Variant::JfaPlus2, 20), vec![4, 2, 1, 2, 1]);
-    assert_eq!(Options3d { band: Some(3.0), ..Options3d::default() }.steps(Variant::OnePlusJfa, 64), vec![1, 4, 2, 1]);
+    assert_eq!(
+        Options3d {
+            band: Some(3.0),
+            ..Options3d::default()
+        }
+        .steps(Variant::JfaPlus2, 20),
+        vec![4, 2, 1, 2, 1]
+    );
+    assert_eq!(
+        Options3d {
+            band: Some(3.0),
+            ..Options3d::default()
+        }
+        .steps(Variant::OnePlusJfa, 64),
+        vec![1, 4, 2, 1]
+    );
     // A density volume: marked where the value ≥ the threshold, not merely non-zero.
     let density: Vec<u8> = (0..m.len()).map(|i| if m[i] { 200 } else { 100 }).collect();
     let volume = upload_volume(&ctx, &density, size_u32(size)).unwrap();
     let mut enc = ctx.encoder("density");
-    let field = d3.encode(&ctx.device, &mut enc, &volume, &Options3d { inside: Inside::Threshold(0.5), ..Options3d::default() }).unwrap();
+    let field = d3
+        .encode(
+            &ctx.device,
+            &mut enc,
+            &volume,
+            &Options3d {
+                inside: Inside::Threshold(0.5),
+                ..Options3d::default()
+            },
+        )
+        .unwrap();
     ctx.submit_and_wait("density", enc).unwrap();
     let d: Vec<f32> = read_texture(&ctx, &field.distance).unwrap();
     for i in 0..d.len() {
-        assert!((d[i] as f64 - (exact[i] as f64).sqrt()).abs() <= 1e-5 * (1.0 + d[i] as f64), "threshold voxel {i}");
+        assert!(
+            (d[i] as f64 - (exact[i] as f64).sqrt()).abs() <= 1e-5 * (1.0 + d[i] as f64),
+            "threshold voxel {i}"
+        );
     }
 }
 
 /// Surface samples for an analytic SDF: for every voxel within one voxel of the surface, the
 /// closest surface point (as a mesher or the metaball stage would emit them).
 /// Returns (voxel, point) pairs.
-fn surface_points(size: [usize; 3], sdf: &dyn Fn(Vec3) -> f32, closest: &dyn Fn(Vec3) -> Vec3) -> Vec<([u32; 3], Vec3)> {
+fn surface_points(
+    size: [usize; 3],
+    sdf: &dyn Fn(Vec3) -> f32,
+    closest: &dyn Fn(Vec3) -> Vec3,
+) -> Vec<([u32; 3], Vec3)> {
     let [w, h, d] = size;
     (0..w * h * d)
         .map(|i| [(i % w) as u32, ((i / w) % h) as u32, (i / (w * h)) as u32])
@@ -87,21 +165,65 @@ fn surface_points(size: [usize; 3], sdf: &dyn Fn(Vec3) -> f32, closest: &dyn Fn(
 
 /// Runs sub-voxel seeds through JFA+2 with the sign from the analytic inside test; returns
 /// (max, RMS) error in voxels over all voxels.
-fn analytic_error(size: [usize; 3], sdf: &dyn Fn(Vec3) -> f32, closest: &dyn Fn(Vec3) -> Vec3, voxel_size: f32, with_homes: bool) -> (f64, f64) {
+fn analytic_error(
+    size: [usize; 3],
+    sdf: &dyn Fn(Vec3) -> f32,
+    closest: &dyn Fn(Vec3) -> Vec3,
+    voxel_size: f32,
+    with_homes: bool,
+) -> (f64, f64) {
     let ctx = context();
     let d3 = Distance3d::new(&ctx.device).unwrap();
     // Grid placed in the world away from the origin, to exercise the world → voxel mapping.
-    let grid = Grid3 { size: size_u32(size), voxel_size, origin: Vec3::new(-3.0, 10.0, 0.5) };
+    let grid = Grid3 {
+        size: size_u32(size),
+        voxel_size,
+        origin: Vec3::new(-3.0, 10.0, 0.5),
+    };
     let pts = surface_points(size, sdf, closest);
-    let world: Vec<Vec3> = pts.iter().map(|&(_, p)| grid.origin + (p + 0.5) * voxel_size).collect();
+    let world: Vec<Vec3> = pts
+        .iter()
+        .map(|&(_, p)| grid.origin + (p + 0.5) * voxel_size)
+        .collect();
     let homes: Vec<[u32; 3]> = pts.iter().map(|&(v, _)| v).collect();
-    let seeds = if with_homes { upload_points_with_homes(&ctx, &grid, &world, &homes) } else { upload_points(&ctx, &grid, &world) }.unwrap();
+    let seeds = if with_homes {
+        upload_points_with_homes(&ctx, &grid, &world, &homes)
+    } else {
+        upload_points(&ctx, &grid, &world)
+    }
+    .unwrap();
     let [w, h, d] = size;
-    let inside: Vec<u8> = (0..w * h * d).map(|i| if sdf(Vec3::new((i % w) as f32, ((i / w) % h) as f32, (i / (w * h)) as f32)) < 0.0 { 255 } else { 0 }).collect();
+    let inside: Vec<u8> = (0..w * h * d)
+        .map(|i| {
+            if sdf(Vec3::new(
+                (i % w) as f32,
+                ((i / w) % h) as f32,
+                (i / (w * h)) as f32,
+            )) < 0.0
+            {
+                255
+            } else {
+                0
+            }
+        })
+        .collect();
     let volume = upload_volume(&ctx, &inside, grid.size).unwrap();
     let mut enc = ctx.encoder("points");
-    let options = Options3d { method: Method::Jfa(Variant::JfaPlus2), voxel_size, ..Options3d::default() };
-    let field = d3.encode_points(&ctx.device, &mut enc, &seeds, grid.size, Some(&volume), &options).unwrap();
+    let options = Options3d {
+        method: Method::Jfa(Variant::JfaPlus2),
+        voxel_size,
+        ..Options3d::default()
+    };
+    let field = d3
+        .encode_points(
+            &ctx.device,
+            &mut enc,
+            &seeds,
+            grid.size,
+            Some(&volume),
+            &options,
+        )
+        .unwrap();
     ctx.submit_and_wait("points", enc).unwrap();
     let got: Vec<f32> = read_texture(&ctx, &field.distance).unwrap();
     let (mut max, mut sum2) = (0f64, 0f64);
@@ -127,11 +249,19 @@ fn sub_voxel_seeds_on_a_sphere() {
     let closest = move |p: Vec3| c + (p - c).normalize() * r;
     let (max, rms) = analytic_error([40, 36, 32], &sdf, &closest, 0.5, true);
     let (max_c, rms_c) = analytic_error([40, 36, 32], &sdf, &closest, 0.5, false);
-    println!("sphere: homes max {max:.4} rms {rms:.4}; containing voxel max {max_c:.4} rms {rms_c:.4} (voxels)");
+    println!(
+        "sphere: homes max {max:.4} rms {rms:.4}; containing voxel max {max_c:.4} rms {rms_c:.4} (voxels)"
+    );
     // Bounds from llvmpipe's measurement with a margin (see the note on issue 3).
-    assert!(max < MAX_WITH_HOMES && rms < RMS_WITH_HOMES, "sphere: max {max} rms {rms}");
+    assert!(
+        max < MAX_WITH_HOMES && rms < RMS_WITH_HOMES,
+        "sphere: max {max} rms {rms}"
+    );
     // Without homes, points that share a voxel are dropped: worse, and this shows by how much.
-    assert!(max_c > max && max_c < 0.4 && rms_c < 0.05, "sphere without homes: max {max_c} rms {rms_c}");
+    assert!(
+        max_c > max && max_c < 0.4 && rms_c < 0.05,
+        "sphere without homes: max {max_c} rms {rms_c}"
+    );
 }
 
 #[test]
@@ -145,29 +275,62 @@ fn sub_voxel_seeds_on_a_torus() {
     let closest = move |p: Vec3| ring(p) + (p - ring(p)).normalize() * small;
     let (max, rms) = analytic_error([44, 42, 20], &sdf, &closest, 1.0, true);
     println!("torus: max {max:.4} rms {rms:.4} voxels");
-    assert!(max < MAX_WITH_HOMES && rms < RMS_WITH_HOMES, "torus: max {max} rms {rms}");
+    assert!(
+        max < MAX_WITH_HOMES && rms < RMS_WITH_HOMES,
+        "torus: max {max} rms {rms}"
+    );
 }
 
 #[test]
 fn exact_2d_matches_cpu() {
     let ctx = context();
     let d3 = Distance3d::new(&ctx.device).unwrap();
-    for (w, h, density, seed) in [(97usize, 61usize, 0.01, 1u64), (300, 2, 0.02, 2), (1, 80, 0.05, 3), (513, 40, 0.001, 4)] {
+    for (w, h, density, seed) in [
+        (97usize, 61usize, 0.01, 1u64),
+        (300, 2, 0.02, 2),
+        (1, 80, 0.05, 3),
+        (513, 40, 0.001, 4),
+    ] {
         let m = random_mask(w, h, density, seed);
         let exact = cpu::edt_2d_squared(&m, w, h);
         let signed = cpu::signed_2d(&m, w, h);
         let tex = upload_mask(&ctx, &to_bytes(&m), w as u32, h as u32).unwrap();
         for is_signed in [false, true] {
             let mut enc = ctx.encoder("exact 2d");
-            let field = d3.encode_exact_2d(&ctx.device, &mut enc, &tex, &Options3d { signed: is_signed, ..Options3d::default() }, None).unwrap();
+            let field = d3
+                .encode_exact_2d(
+                    &ctx.device,
+                    &mut enc,
+                    &tex,
+                    &Options3d {
+                        signed: is_signed,
+                        ..Options3d::default()
+                    },
+                    None,
+                )
+                .unwrap();
             ctx.submit_and_wait("exact 2d", enc).unwrap();
-            let nearest: Vec<u32> = bytemuck::cast_slice(&read_buffer(&ctx, &field.nearest).unwrap()).to_vec();
+            let nearest: Vec<u32> =
+                bytemuck::cast_slice(&read_buffer(&ctx, &field.nearest).unwrap()).to_vec();
             let d: Vec<f32> = read_texture(&ctx, &field.distance).unwrap();
             for i in 0..m.len() {
-                let want = if is_signed { signed[i] } else if exact[i] == cpu::NONE { f32::MAX as f64 } else { (exact[i] as f64).sqrt() };
-                assert!((d[i] as f64 - want).abs() <= 1e-5 * (1.0 + want.abs()), "{w}x{h} signed={is_signed} texel {i}: {} vs {want}", d[i]);
+                let want = if is_signed {
+                    signed[i]
+                } else if exact[i] == cpu::NONE {
+                    f32::MAX as f64
+                } else {
+                    (exact[i] as f64).sqrt()
+                };
+                assert!(
+                    (d[i] as f64 - want).abs() <= 1e-5 * (1.0 + want.abs()),
+                    "{w}x{h} signed={is_signed} texel {i}: {} vs {want}",
+                    d[i]
+                );
                 if !is_signed {
-                    let got = fieldkit::distance::unpack_seed(nearest[i]).map(|(sx, sy)| ((sx as i64 - (i % w) as i64).pow(2) + (sy as i64 - (i / w) as i64).pow(2)) as u64);
+                    let got = fieldkit::distance::unpack_seed(nearest[i]).map(|(sx, sy)| {
+                        ((sx as i64 - (i % w) as i64).pow(2) + (sy as i64 - (i / w) as i64).pow(2))
+                            as u64
+                    });
                     assert_eq!(got.unwrap_or(cpu::NONE), exact[i], "{w}x{h} texel {i}");
                 }
             }

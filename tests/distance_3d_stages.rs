@@ -5,7 +5,9 @@ mod common;
 
 use common::*;
 use fieldkit::distance::cpu;
-use fieldkit::distance::volume::{Distance3d, Grid3, Inside, Options3d, key_index, upload_points, upload_volume};
+use fieldkit::distance::volume::{
+    Distance3d, Grid3, Inside, Options3d, key_index, upload_points, upload_volume,
+};
 use fieldkit::gpu::{Context, read_buffer, read_texture};
 use fieldkit::harness::{Summary, context};
 use glam::Vec3;
@@ -22,7 +24,9 @@ fn words(ctx: &Context, b: &wgpu::Buffer) -> Vec<u32> {
 }
 
 fn d2s(nearest: &[u32]) -> Vec<u32> {
-    (0..nearest.len()).map(|i| cpu::seed_d2_3(nearest[i], i, SIZE).map_or(u32::MAX, |d| d as u32)).collect()
+    (0..nearest.len())
+        .map(|i| cpu::seed_d2_3(nearest[i], i, SIZE).map_or(u32::MAX, |d| d as u32))
+        .collect()
 }
 
 fn setup() -> (Context, Distance3d, Vec<bool>, wgpu::Texture) {
@@ -37,10 +41,23 @@ fn setup() -> (Context, Distance3d, Vec<bool>, wgpu::Texture) {
 fn seed_stage() {
     let (ctx, d3, m, volume) = setup();
     let mut enc = ctx.encoder("seed");
-    let out = d3.encode_seed(&ctx.device, &mut enc, &volume, Inside::Mask, false, &mut None).unwrap();
+    let out = d3
+        .encode_seed(
+            &ctx.device,
+            &mut enc,
+            &volume,
+            Inside::Mask,
+            false,
+            &mut None,
+        )
+        .unwrap();
     ctx.submit_and_wait("seed", enc).unwrap();
     let nearest = words(&ctx, &out);
-    assert_eq!(nearest, cpu::jfa_3d(&m, SIZE, &[]), "seed stage = CPU model with no passes");
+    assert_eq!(
+        nearest,
+        cpu::jfa_3d(&m, SIZE, &[]),
+        "seed stage = CPU model with no passes"
+    );
     insta::assert_snapshot!(Summary::ints(&SHAPE, &nearest).to_string());
 }
 
@@ -48,8 +65,26 @@ fn seed_stage() {
 fn one_jump_pass() {
     let (ctx, d3, m, volume) = setup();
     let mut enc = ctx.encoder("jump");
-    let seeds = d3.encode_seed(&ctx.device, &mut enc, &volume, Inside::Mask, false, &mut None).unwrap();
-    let out = d3.encode_flood(&ctx.device, &mut enc, seeds, size_u32(SIZE), &[4], &mut None).unwrap();
+    let seeds = d3
+        .encode_seed(
+            &ctx.device,
+            &mut enc,
+            &volume,
+            Inside::Mask,
+            false,
+            &mut None,
+        )
+        .unwrap();
+    let out = d3
+        .encode_flood(
+            &ctx.device,
+            &mut enc,
+            seeds,
+            size_u32(SIZE),
+            &[4],
+            &mut None,
+        )
+        .unwrap();
     ctx.submit_and_wait("jump", enc).unwrap();
     let nearest = words(&ctx, &out);
     assert_eq!(nearest, cpu::jfa_3d(&m, SIZE, &[4]));
@@ -61,19 +96,44 @@ fn exact_rows_then_columns() {
     let (ctx, d3, m, volume) = setup();
     let [w, h, d] = SIZE;
     let mut enc = ctx.encoder("rows");
-    let nearest = d3.encode_rows(&ctx.device, &mut enc, &volume, Inside::Mask, false, &mut None).unwrap();
+    let nearest = d3
+        .encode_rows(
+            &ctx.device,
+            &mut enc,
+            &volume,
+            Inside::Mask,
+            false,
+            &mut None,
+        )
+        .unwrap();
     ctx.submit_and_wait("rows", enc).unwrap();
     let rows = words(&ctx, &nearest);
     // CPU model of the row pass: nearest marked x in the row, the left one on a tie.
     for i in 0..rows.len() {
         let (x, row) = (i % w, i - i % w);
-        let best = (0..w).filter(|&s| m[row + s]).min_by_key(|&s| (s.abs_diff(x), s));
+        let best = (0..w)
+            .filter(|&s| m[row + s])
+            .min_by_key(|&s| (s.abs_diff(x), s));
         let want = best.map_or(0, |s| cpu::pack_seed3(s, (i / w) % h, i / (w * h)));
         assert_eq!(rows[i], want, "row pass, voxel {i}");
     }
-    let stack = ctx.device.create_buffer(&wgpu::BufferDescriptor { label: None, size: nearest.size(), usage: wgpu::BufferUsages::STORAGE, mapped_at_creation: false });
+    let stack = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: None,
+        size: nearest.size(),
+        usage: wgpu::BufferUsages::STORAGE,
+        mapped_at_creation: false,
+    });
     let mut enc = ctx.encoder("columns y");
-    d3.encode_column_pass(&ctx.device, &mut enc, &nearest, &stack, size_u32(SIZE), 1, &mut None).unwrap();
+    d3.encode_column_pass(
+        &ctx.device,
+        &mut enc,
+        &nearest,
+        &stack,
+        size_u32(SIZE),
+        1,
+        &mut None,
+    )
+    .unwrap();
     ctx.submit_and_wait("columns y", enc).unwrap();
     let after_y = words(&ctx, &nearest);
     // After the y pass each voxel holds its nearest seed within its own z slice.
@@ -81,43 +141,110 @@ fn exact_rows_then_columns() {
         let slice = &m[z * w * h..(z + 1) * w * h];
         let exact = cpu::edt_2d_squared(slice, w, h);
         for j in 0..w * h {
-            let got = cpu::seed_d2_3(after_y[z * w * h + j], z * w * h + j, SIZE).unwrap_or(cpu::NONE);
+            let got =
+                cpu::seed_d2_3(after_y[z * w * h + j], z * w * h + j, SIZE).unwrap_or(cpu::NONE);
             assert_eq!(got, exact[j], "y pass, slice {z}, texel {j}");
         }
     }
     let mut enc = ctx.encoder("columns z");
-    d3.encode_column_pass(&ctx.device, &mut enc, &nearest, &stack, size_u32(SIZE), 2, &mut None).unwrap();
+    d3.encode_column_pass(
+        &ctx.device,
+        &mut enc,
+        &nearest,
+        &stack,
+        size_u32(SIZE),
+        2,
+        &mut None,
+    )
+    .unwrap();
     ctx.submit_and_wait("columns z", enc).unwrap();
     let after_z = words(&ctx, &nearest);
-    let exact: Vec<u32> = cpu::edt_3d_squared(&m, SIZE).iter().map(|&v| v as u32).collect();
+    let exact: Vec<u32> = cpu::edt_3d_squared(&m, SIZE)
+        .iter()
+        .map(|&v| v as u32)
+        .collect();
     assert_eq!(d2s(&after_z), exact);
-    insta::assert_snapshot!(Summary::ints(&SHAPE, &rows)
-        .and("after y", Summary::ints(&SHAPE, &after_y))
-        .and("after z", Summary::ints(&SHAPE, &after_z))
-        .to_string());
+    insta::assert_snapshot!(
+        Summary::ints(&SHAPE, &rows)
+            .and("after y", Summary::ints(&SHAPE, &after_y))
+            .and("after z", Summary::ints(&SHAPE, &after_z))
+            .to_string()
+    );
 }
 
 #[test]
 fn resolve_stage() {
     let (ctx, d3, m, volume) = setup();
     let mut enc = ctx.encoder("resolve");
-    let inside = d3.encode_exact(&ctx.device, &mut enc, &volume, Inside::Mask, false, &mut None).unwrap();
-    let outside = d3.encode_exact(&ctx.device, &mut enc, &volume, Inside::Mask, true, &mut None).unwrap();
-    let opts = Options3d { voxel_size: 0.5, ..Options3d::default() };
-    let unsigned = d3.encode_resolve(&ctx.device, &mut enc, size_u32(SIZE), &inside, None, &opts, &mut None).unwrap();
-    let signed = d3.encode_resolve(&ctx.device, &mut enc, size_u32(SIZE), &inside, Some(&outside), &opts, &mut None).unwrap();
+    let inside = d3
+        .encode_exact(
+            &ctx.device,
+            &mut enc,
+            &volume,
+            Inside::Mask,
+            false,
+            &mut None,
+        )
+        .unwrap();
+    let outside = d3
+        .encode_exact(
+            &ctx.device,
+            &mut enc,
+            &volume,
+            Inside::Mask,
+            true,
+            &mut None,
+        )
+        .unwrap();
+    let opts = Options3d {
+        voxel_size: 0.5,
+        ..Options3d::default()
+    };
+    let unsigned = d3
+        .encode_resolve(
+            &ctx.device,
+            &mut enc,
+            size_u32(SIZE),
+            &inside,
+            None,
+            &opts,
+            &mut None,
+        )
+        .unwrap();
+    let signed = d3
+        .encode_resolve(
+            &ctx.device,
+            &mut enc,
+            size_u32(SIZE),
+            &inside,
+            Some(&outside),
+            &opts,
+            &mut None,
+        )
+        .unwrap();
     ctx.submit_and_wait("resolve", enc).unwrap();
     let u: Vec<f32> = read_texture(&ctx, &unsigned).unwrap();
     let s: Vec<f32> = read_texture(&ctx, &signed).unwrap();
     let reference = cpu::signed_3d(&m, SIZE);
     for i in 0..u.len() {
-        assert!((s[i] as f64 - 0.5 * reference[i]).abs() < 1e-5, "signed voxel {i}");
+        assert!(
+            (s[i] as f64 - 0.5 * reference[i]).abs() < 1e-5,
+            "signed voxel {i}"
+        );
     }
     // Squared distances are integers: rounding (2d)² recovers them exactly despite sqrt's last bit.
     let d2: Vec<u32> = u.iter().map(|v| (4.0 * v * v).round() as u32).collect();
-    let exact: Vec<u32> = cpu::edt_3d_squared(&m, SIZE).iter().map(|&v| v as u32).collect();
+    let exact: Vec<u32> = cpu::edt_3d_squared(&m, SIZE)
+        .iter()
+        .map(|&v| v as u32)
+        .collect();
     assert_eq!(d2, exact);
-    insta::assert_snapshot!(Summary::floats(&SHAPE, &u, 3).and("signed", Summary::floats(&SHAPE, &s, 3)).and("d² rounded", Summary::ints(&SHAPE, &d2)).to_string());
+    insta::assert_snapshot!(
+        Summary::floats(&SHAPE, &u, 3)
+            .and("signed", Summary::floats(&SHAPE, &s, 3))
+            .and("d² rounded", Summary::ints(&SHAPE, &d2))
+            .to_string()
+    );
 }
 
 #[test]
@@ -126,11 +253,21 @@ fn seed_points_stage() {
     let d3 = Distance3d::new(&ctx.device).unwrap();
     let grid = Grid3::new(size_u32(SIZE));
     // Two points share voxel (3, 4, 5): the one nearer its centre (index 1) must win.
-    let pts = [Vec3::new(3.8, 4.9, 5.7), Vec3::new(3.6, 4.6, 5.6), Vec3::new(12.5, 0.6, 8.9), Vec3::new(19.9, 12.9, 0.1)];
+    let pts = [
+        Vec3::new(3.8, 4.9, 5.7),
+        Vec3::new(3.6, 4.6, 5.6),
+        Vec3::new(12.5, 0.6, 8.9),
+        Vec3::new(19.9, 12.9, 0.1),
+    ];
     let seeds = upload_points(&ctx, &grid, &pts).unwrap();
     let mut enc = ctx.encoder("points");
-    let opts = Options3d { method: fieldkit::distance::volume::Method::Jfa(fieldkit::distance::Variant::JfaPlus2), ..Options3d::default() };
-    let field = d3.encode_points(&ctx.device, &mut enc, &seeds, size_u32(SIZE), None, &opts).unwrap();
+    let opts = Options3d {
+        method: fieldkit::distance::volume::Method::Jfa(fieldkit::distance::Variant::JfaPlus2),
+        ..Options3d::default()
+    };
+    let field = d3
+        .encode_points(&ctx.device, &mut enc, &seeds, size_u32(SIZE), None, &opts)
+        .unwrap();
     ctx.submit_and_wait("points", enc).unwrap();
     let nearest = words(&ctx, &field.nearest);
     let dist: Vec<f32> = read_texture(&ctx, &field.distance).unwrap();
@@ -144,7 +281,14 @@ fn seed_points_stage() {
         let k = key_index(nearest[i]).unwrap() as usize;
         assert_ne!(k, 0);
         let p = Vec3::new((i % w) as f32, ((i / w) % h) as f32, (i / (w * h)) as f32);
-        assert!((dist[i] - grid.to_voxel(pts[k]).distance(p)).abs() < 1e-4, "voxel {i}");
+        assert!(
+            (dist[i] - grid.to_voxel(pts[k]).distance(p)).abs() < 1e-4,
+            "voxel {i}"
+        );
     }
-    insta::assert_snapshot!(Summary::ints(&SHAPE, &nearest).and("distance", Summary::floats(&SHAPE, &dist, 3)).to_string());
+    insta::assert_snapshot!(
+        Summary::ints(&SHAPE, &nearest)
+            .and("distance", Summary::floats(&SHAPE, &dist, 3))
+            .to_string()
+    );
 }

@@ -3,8 +3,8 @@
 //
 // Parallelism and coalescing: a workgroup of 256 threads takes 256 / BANDS neighbouring columns
 // (consecutive x, so a warp's reads and writes are contiguous runs) and splits every column into
-// BANDS bands, one thread each, as the Parallel Banding Algorithm does (Cao et al. 2010). Short
-// grids of many columns (3D) use 8 bands; 2D fields, with few long columns, use 32. A band builds the envelope of
+// BANDS bands, one thread each, as the Parallel Banding Algorithm does (Cao et al. 2010). The host
+// picks BANDS so that there are enough threads: 1 for 512³, up to 32 for 2D fields. A band builds the envelope of
 // its own sites over the whole column, kept as a stack in `stack` at the band's own positions.
 // After a barrier each thread answers the positions of its band: the nearest site is on some
 // band's envelope, so it evaluates its own band's envelope and those of the other bands that are
@@ -15,9 +15,11 @@
 // A site's cost at a query position is the full squared distance from that voxel to the site's
 // seed, because the seed of a site at position i of a column lies in the plane through i.
 //
-// Latency, not bandwidth, bounds a sequential walk: the build reads its band eight elements at a
-// time (independent loads in flight together) and keeps the top two stack entries in registers;
-// the query keeps each band's current and next site in registers so it loads only on advance.
+// Latency, not bandwidth, bounds a sequential walk: the build keeps four loads of its band in
+// flight and the top two stack entries in registers;
+// the query keeps its own band's current and next site in registers so it loads only on
+// advance, and looks other bands up by binary search, keeping no per-band state (private arrays
+// live in local memory, and zero-initialising them cost as much traffic as the field itself).
 
 import package::shared::seed::{NO_SEED, dist2, dist2_3, unpack_seed2, unpack_seed3};
 
@@ -36,8 +38,6 @@ override PACK_2D: bool = false;
 // Bands per column; 256 / BANDS columns per workgroup. At most MAX_BANDS, a power of two.
 override BANDS: u32 = 8u;
 
-const MAX_BANDS: u32 = 32u;
-const PREFETCH: u32 = 8u;
 // "Nothing found yet": above any squared distance in range.
 const FAR_D2: i32 = 0x7fffffff;
 
@@ -81,6 +81,22 @@ fn start_of(a: u32, b: u32, x: u32, other: u32) -> i32 {
     return 1 + floor_div(pb * pb - pa * pa + gb - ga, 2 * (pb - pa));
 }
 
+// Nearest site of one band's envelope to `p`: the first k whose successor is not strictly
+// nearer (costs along an envelope fall strictly to the minimum, then never fall again).
+fn nearest_on(at: u32, size: u32, stride: u32, p: vec3<i32>) -> u32 {
+    var lo = 0u;
+    var hi = size - 1u;
+    while lo < hi {
+        let mid = (lo + hi) / 2u;
+        if cost(stack[at + (mid + 1u) * stride], p) >= cost(stack[at + mid * stride], p) {
+            hi = mid;
+        } else {
+            lo = mid + 1u;
+        }
+    }
+    return stack[at + lo * stride];
+}
+
 @compute @workgroup_size(32, 8)
 fn columns(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
     let columns_per_group = 256u / BANDS;
@@ -104,42 +120,56 @@ fn columns(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: 
     var s_below = NO_SEED;
     if valid {
         let at = base + lo * stride;
-        for (var i0 = lo; i0 < hi; i0 += PREFETCH) {
-            var chunk: array<u32, PREFETCH>;
-            for (var j = 0u; j < PREFETCH; j++) {
-                if i0 + j < hi {
-                    chunk[j] = nearest[base + (i0 + j) * stride];
+        // Four loads in flight: the next elements are requested before this one is processed,
+        // rotating through registers (an unrolled chunk would multiply the loop body and the
+        // registers it holds, and cut how many threads fit on a core).
+        var q0 = NO_SEED;
+        var q1 = NO_SEED;
+        var q2 = NO_SEED;
+        var q3 = NO_SEED;
+        if lo < hi {
+            q0 = nearest[base + lo * stride];
+        }
+        if lo + 1u < hi {
+            q1 = nearest[base + (lo + 1u) * stride];
+        }
+        if lo + 2u < hi {
+            q2 = nearest[base + (lo + 2u) * stride];
+        }
+        for (var i = lo; i < hi; i++) {
+            if i + 3u < hi {
+                q3 = nearest[base + (i + 3u) * stride];
+            }
+            let s = q0;
+            q0 = q1;
+            q1 = q2;
+            q2 = q3;
+            if s == NO_SEED {
+                continue;
+            }
+            loop {
+                if top < 0 {
+                    break;
+                }
+                var t = 0;
+                if top > 0 {
+                    t = start_of(s_below, s_top, x, other);
+                }
+                let pt = voxel(x, other, u32(t));
+                if cost(s_top, pt) <= cost(s, pt) {
+                    break;
+                }
+                top -= 1;
+                s_top = s_below;
+                if top > 0 {
+                    s_below = stack[at + u32(top - 1) * stride];
                 }
             }
-            for (var j = 0u; j < PREFETCH; j++) {
-                let s = chunk[j];
-                if s == NO_SEED {
-                    continue;
-                }
-                loop {
-                    if top < 0 {
-                        break;
-                    }
-                    var t = 0;
-                    if top > 0 {
-                        t = start_of(s_below, s_top, x, other);
-                    }
-                    let pt = voxel(x, other, u32(t));
-                    if cost(s_top, pt) <= cost(s, pt) {
-                        break;
-                    }
-                    top -= 1;
-                    s_top = s_below;
-                    if top > 0 {
-                        s_below = stack[at + u32(top - 1) * stride];
-                    }
-                }
-                if top < 0 || start_of(s_top, s, x, other) < i32(n) {
-                    top += 1;
-                    s_below = s_top;
-                    s_top = s;
-                    stack[at + u32(top) * stride] = s;
-                }
+            if top < 0 || start_of(s_top, s, x, other) < i32(n) {
+                top += 1;
+                s_below = s_top;
+                s_top = s;
+                stack[at + u32(top) * stride] = s;
             }
         }
     }
@@ -151,8 +181,6 @@ fn columns(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: 
     }
 
     // Query: positions of this band against every band's envelope, nearest bands first.
-    var cursor: array<u32, MAX_BANDS>;
-    var current: array<u32, MAX_BANDS>;
     var own_k = 0u;
     let own_size = u32(top + 1);
     let own_at = base + lo * stride;
@@ -179,49 +207,44 @@ fn columns(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: 
             best = own_s;
             best_d = d;
         }
-        for (var j = 1u; j < 2u * BANDS - 1u; j++) {
-            // j = 1, 2, 3, 4 … → band + 1, band - 1, band + 2, band - 2 …
-            let off = (j + 1u) / 2u;
-            if (j & 1u) == 0u && off > band {
-                continue;
-            }
-            let c = select(band - off, band + off, (j & 1u) == 1u);
-            if c >= BANDS {
-                continue;
-            }
-            let c_lo = c * band_len;
-            let c_hi = min(n, c_lo + band_len) - 1u;
-            let gap = i32(select(select(0u, i - c_hi, i > c_hi), c_lo - i, i < c_lo));
-            // A skipped band keeps its cursor: the first minimiser only moves forward with i.
-            if gap * gap >= best_d {
-                continue;
-            }
-            let size = band_size[c * columns_per_group + lane];
-            if size == 0u {
-                continue;
-            }
-            let at = base + c_lo * stride;
-            var k = cursor[c];
-            var s = current[c];
-            if s == NO_SEED {
-                s = stack[at];
-            }
-            var d = cost(s, p);
-            while k + 1u < size {
-                let s_next = stack[at + (k + 1u) * stride];
-                let d_next = cost(s_next, p);
-                if d_next >= d {
-                    break;
+        // Other bands outward, both sides at once; a band whose nearest position is already as
+        // far as the best found cannot win, and the ones beyond it are farther still.
+        for (var off = 1u; off < BANDS; off++) {
+            var open = false;
+            if band + off < BANDS {
+                let c = band + off;
+                let c_lo = c * band_len;
+                if c_lo < n && i32((c_lo - i) * (c_lo - i)) < best_d {
+                    open = true;
+                    let size = band_size[c * columns_per_group + lane];
+                    if size > 0u {
+                        let s = nearest_on(base + c_lo * stride, size, stride, p);
+                        let d = cost(s, p);
+                        if d < best_d {
+                            best = s;
+                            best_d = d;
+                        }
+                    }
                 }
-                k += 1u;
-                s = s_next;
-                d = d_next;
             }
-            cursor[c] = k;
-            current[c] = s;
-            if d < best_d {
-                best = s;
-                best_d = d;
+            if off <= band {
+                let c = band - off;
+                let c_hi = (c + 1u) * band_len - 1u;
+                if i32((i - c_hi) * (i - c_hi)) < best_d {
+                    open = true;
+                    let size = band_size[c * columns_per_group + lane];
+                    if size > 0u {
+                        let s = nearest_on(base + c * band_len * stride, size, stride, p);
+                        let d = cost(s, p);
+                        if d < best_d {
+                            best = s;
+                            best_d = d;
+                        }
+                    }
+                }
+            }
+            if !open {
+                break;
             }
         }
         nearest[base + i * stride] = best;

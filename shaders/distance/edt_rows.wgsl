@@ -132,28 +132,26 @@ fn rows(@builtin(local_invocation_id) lid: vec3<u32>, @builtin(workgroup_id) wg:
         seg_first[t] = min(seg_first[t], r);
         workgroupBarrier();
     }
-    // Sweep the own segment both ways; only this thread touches its cells from here.
-    var lefts: array<u32, 8>;
-    var left = select(0u, seg_last[max(t, 1u) - 1u], t > 0u);
-    for (var j = 0u; j < 8u; j++) {
-        let x = s0 + j;
-        if x < s1 {
-            if row_cells[x] != 0u {
-                left = x + 1u;
-            }
-            lefts[j] = left;
-        }
-    }
+    // Sweep the own segment both ways; only this thread touches its cells from here. The right
+    // sweep leaves the nearest mark to the right + 1 in the low bits and the mark in bit 31, so
+    // nothing is kept in a private array (those live in slow local memory).
     var right = select(NONE_RIGHT, seg_first[min(t + 1u, CHUNK - 1u)], t + 1u < CHUNK);
-    for (var j = 8u; j > 0u; j--) {
-        let x = s0 + j - 1u;
-        if x < s1 {
-            if row_cells[x] != 0u {
-                right = x;
-            }
-            let near = nearer(x, lefts[j - 1u], right);
-            row_cells[x] = select(NO_SEED, pack_seed3(vec3<u32>(near - 1u, y, z)), near != 0u);
+    for (var x = s1; x > s0; x--) {
+        let marked = row_cells[x - 1u] != 0u;
+        if marked {
+            right = x - 1u;
         }
+        row_cells[x - 1u] = select(0u, right + 1u, right != NONE_RIGHT) | (u32(marked) << 31u);
+    }
+    var left = select(0u, seg_last[max(t, 1u) - 1u], t > 0u);
+    for (var x = s0; x < s1; x++) {
+        let cell = row_cells[x];
+        if (cell >> 31u) != 0u {
+            left = x + 1u;
+        }
+        let r = cell & 0x7fffffffu;
+        let near = nearer(x, left, select(NONE_RIGHT, r - 1u, r != 0u));
+        row_cells[x] = select(NO_SEED, pack_seed3(vec3<u32>(near - 1u, y, z)), near != 0u);
     }
     workgroupBarrier();
     let row_start = (z * params.size.y + y) * w;

@@ -23,7 +23,8 @@ fn edt_1d(f: &[f64], out: &mut [f64]) {
     for &q in &roots[1..] {
         loop {
             let p = *v.last().unwrap();
-            let s = ((f[q] + (q * q) as f64) - (f[p] + (p * p) as f64)) / (2.0 * (q as f64 - p as f64));
+            let s =
+                ((f[q] + (q * q) as f64) - (f[p] + (p * p) as f64)) / (2.0 * (q as f64 - p as f64));
             if s <= z[v.len() - 1] {
                 v.pop();
                 z.pop();
@@ -62,7 +63,11 @@ pub fn edt_2d_squared(seeds: &[bool], width: usize, height: usize) -> Vec<u64> {
     let mut col_out = vec![0f64; height];
     for x in 0..width {
         for y in 0..height {
-            col[y] = if seeds[y * width + x] { 0.0 } else { f64::INFINITY };
+            col[y] = if seeds[y * width + x] {
+                0.0
+            } else {
+                f64::INFINITY
+            };
         }
         edt_1d(&col, &mut col_out);
         for y in 0..height {
@@ -92,7 +97,11 @@ pub fn signed_2d(mask: &[bool], width: usize, height: usize) -> Vec<f64> {
     (0..mask.len())
         .map(|i| {
             if mask[i] {
-                if to_outside[i] == NONE { -(f32::MAX as f64) } else { -((to_outside[i] as f64).sqrt() - 0.5) }
+                if to_outside[i] == NONE {
+                    -(f32::MAX as f64)
+                } else {
+                    -((to_outside[i] as f64).sqrt() - 0.5)
+                }
             } else if to_inside[i] == NONE {
                 f32::MAX as f64
             } else {
@@ -110,8 +119,15 @@ pub fn jfa_2d(seeds: &[bool], width: usize, height: usize, steps: &[u32]) -> Vec
         let (sx, sy) = ((s & 0xffff) as i64 - 1, (s >> 16) as i64 - 1);
         ((sx - x) * (sx - x) + (sy - y) * (sy - y)) as u64
     };
-    let mut cur: Vec<u32> =
-        (0..width * height).map(|i| if seeds[i] { pack(i % width, i / width) } else { 0 }).collect();
+    let mut cur: Vec<u32> = (0..width * height)
+        .map(|i| {
+            if seeds[i] {
+                pack(i % width, i / width)
+            } else {
+                0
+            }
+        })
+        .collect();
     let mut next = cur.clone();
     for &step in steps {
         let step = step as i64;
@@ -122,7 +138,12 @@ pub fn jfa_2d(seeds: &[bool], width: usize, height: usize, steps: &[u32]) -> Vec
                 for dy in -1..=1 {
                     for dx in -1..=1 {
                         let (qx, qy) = (x + dx * step, y + dy * step);
-                        if (dx == 0 && dy == 0) || qx < 0 || qy < 0 || qx >= width as i64 || qy >= height as i64 {
+                        if (dx == 0 && dy == 0)
+                            || qx < 0
+                            || qy < 0
+                            || qx >= width as i64
+                            || qy >= height as i64
+                        {
                             continue;
                         }
                         let s = cur[(qy * width as i64 + qx) as usize];
@@ -149,11 +170,17 @@ pub fn jfa_2d(seeds: &[bool], width: usize, height: usize, steps: &[u32]) -> Vec
 pub fn edt_3d_squared(seeds: &[bool], size: [usize; 3]) -> Vec<u64> {
     let [w, h, d] = size;
     assert_eq!(seeds.len(), w * h * d, "seed mask size");
-    let mut g: Vec<f64> = seeds.iter().map(|&s| if s { 0.0 } else { f64::INFINITY }).collect();
+    let mut g: Vec<f64> = seeds
+        .iter()
+        .map(|&s| if s { 0.0 } else { f64::INFINITY })
+        .collect();
     let mut line = Vec::new();
     let mut out = Vec::new();
     // One axis at a time: gather each line, transform it, scatter it back.
-    for (axis, (n, stride, lines)) in [(w, 1, h * d), (h, w, w * d), (d, w * h, w * h)].into_iter().enumerate() {
+    for (axis, (n, stride, lines)) in [(w, 1, h * d), (h, w, w * d), (d, w * h, w * h)]
+        .into_iter()
+        .enumerate()
+    {
         line.resize(n, 0.0);
         out.resize(n, 0.0);
         for l in 0..lines {
@@ -172,7 +199,9 @@ pub fn edt_3d_squared(seeds: &[bool], size: [usize; 3]) -> Vec<u64> {
             }
         }
     }
-    g.into_iter().map(|v| if v.is_finite() { v as u64 } else { NONE }).collect()
+    g.into_iter()
+        .map(|v| if v.is_finite() { v as u64 } else { NONE })
+        .collect()
 }
 
 /// Signed 3D distance as the GPU resolves it (see [`signed_2d`]).
@@ -183,7 +212,11 @@ pub fn signed_3d(mask: &[bool], size: [usize; 3]) -> Vec<f64> {
     (0..mask.len())
         .map(|i| {
             if mask[i] {
-                if to_outside[i] == NONE { -(f32::MAX as f64) } else { -((to_outside[i] as f64).sqrt() - 0.5) }
+                if to_outside[i] == NONE {
+                    -(f32::MAX as f64)
+                } else {
+                    -((to_outside[i] as f64).sqrt() - 0.5)
+                }
             } else if to_inside[i] == NONE {
                 f32::MAX as f64
             } else {
@@ -200,13 +233,23 @@ pub fn pack_seed3(x: usize, y: usize, z: usize) -> u32 {
 
 /// Unpack a 3D seed; `None` for no seed.
 pub fn unpack_seed3(s: u32) -> Option<[i64; 3]> {
-    (s != 0).then(|| [(s & 0x7ff) as i64 - 1, ((s >> 11) & 0x7ff) as i64 - 1, (s >> 22) as i64 - 1])
+    (s != 0).then(|| {
+        [
+            (s & 0x7ff) as i64 - 1,
+            ((s >> 11) & 0x7ff) as i64 - 1,
+            (s >> 22) as i64 - 1,
+        ]
+    })
 }
 
 /// Squared distance from voxel `i` of a `size` grid to packed seed `s`.
 pub fn seed_d2_3(s: u32, i: usize, size: [usize; 3]) -> Option<u64> {
     let [sx, sy, sz] = unpack_seed3(s)?;
-    let (x, y, z) = ((i % size[0]) as i64, ((i / size[0]) % size[1]) as i64, (i / (size[0] * size[1])) as i64);
+    let (x, y, z) = (
+        (i % size[0]) as i64,
+        ((i / size[0]) % size[1]) as i64,
+        (i / (size[0] * size[1])) as i64,
+    );
     Some(((sx - x).pow(2) + (sy - y).pow(2) + (sz - z).pow(2)) as u64)
 }
 
@@ -215,7 +258,13 @@ pub fn seed_d2_3(s: u32, i: usize, size: [usize; 3]) -> Option<u64> {
 pub fn jfa_3d(seeds: &[bool], size: [usize; 3], steps: &[u32]) -> Vec<u32> {
     let [w, h, d] = size;
     let mut cur: Vec<u32> = (0..w * h * d)
-        .map(|i| if seeds[i] { pack_seed3(i % w, (i / w) % h, i / (w * h)) } else { 0 })
+        .map(|i| {
+            if seeds[i] {
+                pack_seed3(i % w, (i / w) % h, i / (w * h))
+            } else {
+                0
+            }
+        })
         .collect();
     let mut next = cur.clone();
     for &step in steps {
@@ -228,11 +277,15 @@ pub fn jfa_3d(seeds: &[bool], size: [usize; 3], steps: &[u32]) -> Vec<u32> {
                 for dy in -1..=1i64 {
                     for dx in -1..=1i64 {
                         let q = [p[0] + dx * step, p[1] + dy * step, p[2] + dz * step];
-                        if (dx, dy, dz) == (0, 0, 0) || q.iter().zip(size).any(|(&c, n)| c < 0 || c >= n as i64) {
+                        if (dx, dy, dz) == (0, 0, 0)
+                            || q.iter().zip(size).any(|(&c, n)| c < 0 || c >= n as i64)
+                        {
                             continue;
                         }
                         let s = cur[((q[2] * h as i64 + q[1]) * w as i64 + q[0]) as usize];
-                        let Some(dd) = seed_d2_3(s, i, size) else { continue };
+                        let Some(dd) = seed_d2_3(s, i, size) else {
+                            continue;
+                        };
                         if dd < best_d || (dd == best_d && s < best) {
                             best = s;
                             best_d = dd;
@@ -255,19 +308,29 @@ pub fn brute_3d_squared(seeds: &[bool], size: [usize; 3]) -> Vec<u64> {
     (0..seeds.len())
         .map(|i| {
             let p = coord(i);
-            pts.iter().map(|s| ((s[0] - p[0]).pow(2) + (s[1] - p[1]).pow(2) + (s[2] - p[2]).pow(2)) as u64).min().unwrap_or(NONE)
+            pts.iter()
+                .map(|s| {
+                    ((s[0] - p[0]).pow(2) + (s[1] - p[1]).pow(2) + (s[2] - p[2]).pow(2)) as u64
+                })
+                .min()
+                .unwrap_or(NONE)
         })
         .collect()
 }
 
 /// Brute force, for checking the reference itself on small grids.
 pub fn brute_2d_squared(seeds: &[bool], width: usize, height: usize) -> Vec<u64> {
-    let pts: Vec<(i64, i64)> =
-        (0..seeds.len()).filter(|&i| seeds[i]).map(|i| ((i % width) as i64, (i / width) as i64)).collect();
+    let pts: Vec<(i64, i64)> = (0..seeds.len())
+        .filter(|&i| seeds[i])
+        .map(|i| ((i % width) as i64, (i / width) as i64))
+        .collect();
     (0..width * height)
         .map(|i| {
             let (x, y) = ((i % width) as i64, (i / width) as i64);
-            pts.iter().map(|&(sx, sy)| ((sx - x).pow(2) + (sy - y).pow(2)) as u64).min().unwrap_or(NONE)
+            pts.iter()
+                .map(|&(sx, sy)| ((sx - x).pow(2) + (sy - y).pow(2)) as u64)
+                .min()
+                .unwrap_or(NONE)
         })
         .collect()
 }
@@ -281,7 +344,9 @@ mod tests {
         let mut s = seed;
         (0..n)
             .map(|_| {
-                s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                s = s
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
                 ((s >> 11) as f64 / (1u64 << 53) as f64) < density
             })
             .collect()
@@ -289,23 +354,48 @@ mod tests {
 
     #[test]
     fn edt_matches_brute_force() {
-        for (w, h, density, seed) in [(17, 9, 0.05, 1), (31, 40, 0.01, 2), (8, 8, 0.5, 3), (1, 13, 0.2, 4), (23, 1, 0.1, 5)] {
+        for (w, h, density, seed) in [
+            (17, 9, 0.05, 1),
+            (31, 40, 0.01, 2),
+            (8, 8, 0.5, 3),
+            (1, 13, 0.2, 4),
+            (23, 1, 0.1, 5),
+        ] {
             let m = lcg_mask(w * h, density, seed);
-            assert_eq!(edt_2d_squared(&m, w, h), brute_2d_squared(&m, w, h), "{w}x{h} density {density}");
+            assert_eq!(
+                edt_2d_squared(&m, w, h),
+                brute_2d_squared(&m, w, h),
+                "{w}x{h} density {density}"
+            );
         }
     }
 
     #[test]
     fn edt_3d_matches_brute_force() {
-        for (size, density, seed) in [([9, 7, 5], 0.03, 1), ([16, 3, 11], 0.01, 2), ([6, 6, 6], 0.4, 3), ([1, 1, 9], 0.2, 4), ([1, 8, 6], 0.1, 6), ([12, 10, 1], 0.05, 5)] {
+        for (size, density, seed) in [
+            ([9, 7, 5], 0.03, 1),
+            ([16, 3, 11], 0.01, 2),
+            ([6, 6, 6], 0.4, 3),
+            ([1, 1, 9], 0.2, 4),
+            ([1, 8, 6], 0.1, 6),
+            ([12, 10, 1], 0.05, 5),
+        ] {
             let m = lcg_mask(size.iter().product(), density, seed);
-            assert_eq!(edt_3d_squared(&m, size), brute_3d_squared(&m, size), "{size:?} density {density}");
+            assert_eq!(
+                edt_3d_squared(&m, size),
+                brute_3d_squared(&m, size),
+                "{size:?} density {density}"
+            );
         }
     }
 
     #[test]
     fn no_seeds_is_none_everywhere() {
-        assert!(edt_2d_squared(&[false; 12], 4, 3).iter().all(|&d| d == NONE));
+        assert!(
+            edt_2d_squared(&[false; 12], 4, 3)
+                .iter()
+                .all(|&d| d == NONE)
+        );
     }
 
     #[test]

@@ -29,7 +29,9 @@ use super::Variant;
 use crate::bind::{ComputePipeline, Entry};
 use crate::error::Error;
 use crate::gpu::{Context, Profiler, uniform_buffer as uniform};
-use crate::shaders::distance::{edt_columns, edt_rows, field_resolve, jfa3_seed, jfa3_seed_points, jfa3_step};
+use crate::shaders::distance::{
+    edt_columns, edt_rows, field_resolve, jfa3_seed, jfa3_seed_points, jfa3_step,
+};
 
 const STAGE: &str = "distance::volume";
 
@@ -37,17 +39,29 @@ const STAGE: &str = "distance::volume";
 pub const MAX_SIDE_3D: [u32; 3] = [2046, 2046, 1022];
 /// Largest side of a 2D exact transform: keeps the integer separators inside i32.
 pub const MAX_SIDE_2D_EXACT: u32 = 16384;
-/// Bands per column in the exact column passes (`edt_columns.wgsl`): 3D grids have many short
-/// columns, 2D grids few long ones that need more threads each.
-const BANDS_3D: u32 = 8;
-const BANDS_2D: u32 = 32;
+/// Bands per column in the exact column passes (`edt_columns.wgsl`) are picked so that columns ×
+/// bands reaches about this many threads (a full H100 holds 270k): grids with many columns walk
+/// them whole, grids with few split them into up to 32 bands.
+const TARGET_THREADS: u32 = 1 << 18;
+const BAND_CHOICES: [u32; 6] = [1, 2, 4, 8, 16, 32];
+
+fn bands_for(columns: u32) -> usize {
+    let want = TARGET_THREADS
+        .div_ceil(columns.max(1))
+        .next_power_of_two()
+        .min(32);
+    BAND_CHOICES.iter().position(|&b| b == want).unwrap()
+}
 
 /// Most sub-voxel seeds one table may hold (24-bit index in the key).
 pub const MAX_POINTS: u32 = 0xfffffe;
 
 /// Volume texture formats the seed and exact stages read (red channel).
-pub const VOLUME_FORMATS: &[wgpu::TextureFormat] =
-    &[wgpu::TextureFormat::R8Unorm, wgpu::TextureFormat::R16Float, wgpu::TextureFormat::R32Float];
+pub const VOLUME_FORMATS: &[wgpu::TextureFormat] = &[
+    wgpu::TextureFormat::R8Unorm,
+    wgpu::TextureFormat::R16Float,
+    wgpu::TextureFormat::R32Float,
+];
 
 /// Pack a 3D seed as the shaders do.
 pub fn pack_seed3(x: u32, y: u32, z: u32) -> u32 {
@@ -76,7 +90,11 @@ pub struct Grid3 {
 
 impl Grid3 {
     pub fn new(size: [u32; 3]) -> Self {
-        Self { size, voxel_size: 1.0, origin: Vec3::ZERO }
+        Self {
+            size,
+            voxel_size: 1.0,
+            origin: Vec3::ZERO,
+        }
     }
 
     /// World position → voxel coordinates (voxel centres at integers).
@@ -142,24 +160,42 @@ pub struct Options3d {
 
 impl Default for Options3d {
     fn default() -> Self {
-        Self { method: Method::Exact, signed: false, inside: Inside::Mask, voxel_size: 1.0, band: None }
+        Self {
+            method: Method::Exact,
+            signed: false,
+            inside: Inside::Mask,
+            voxel_size: 1.0,
+            band: None,
+        }
     }
 }
 
 impl Options3d {
     fn check(&self) -> Result<(), Error> {
         if !(self.voxel_size.is_finite() && self.voxel_size > 0.0) {
-            return Err(Error::Invalid { stage: STAGE, what: format!("voxel_size must be finite and positive, got {}", self.voxel_size) });
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: format!(
+                    "voxel_size must be finite and positive, got {}",
+                    self.voxel_size
+                ),
+            });
         }
         if let Some(b) = self.band
             && !(b.is_finite() && b > 0.0)
         {
-            return Err(Error::Invalid { stage: STAGE, what: format!("band must be finite and positive, got {b}") });
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: format!("band must be finite and positive, got {b}"),
+            });
         }
         if let Inside::Threshold(t) = self.inside
             && !t.is_finite()
         {
-            return Err(Error::Invalid { stage: STAGE, what: format!("threshold must be finite, got {t}") });
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: format!("threshold must be finite, got {t}"),
+            });
         }
         Ok(())
     }
@@ -176,7 +212,10 @@ impl Options3d {
         }
         let skip = (full / first).trailing_zeros() as usize;
         // Drop the long steps at the start of the JFA run (after a leading step-1 pass, if any).
-        let lead = usize::from(matches!(variant, Variant::OnePlusJfa | Variant::OnePlusJfaPlus2));
+        let lead = usize::from(matches!(
+            variant,
+            Variant::OnePlusJfa | Variant::OnePlusJfaPlus2
+        ));
         let mut s = steps;
         s.drain(lead..lead + skip);
         s
@@ -225,8 +264,8 @@ pub struct Distance3d {
     jump_points: ComputePipeline<jfa3_step::jump_points::Entry>,
     rows: ComputePipeline<edt_rows::rows::Entry>,
     rows_2d: ComputePipeline<edt_rows::rows_2d::Entry>,
-    columns: ComputePipeline<edt_columns::columns::Entry>,
-    columns_2d: ComputePipeline<edt_columns::columns::Entry>,
+    /// Column pass per band count (3D packing, then 2D), made on first use.
+    columns: [std::sync::OnceLock<ComputePipeline<edt_columns::columns::Entry>>; 12],
     resolve_unsigned: ComputePipeline<field_resolve::resolve_unsigned::Entry>,
     resolve_signed: ComputePipeline<field_resolve::resolve_signed::Entry>,
     resolve_points: ComputePipeline<field_resolve::resolve_points::Entry>,
@@ -247,7 +286,10 @@ fn pass<E: Entry>(
     prof: Prof,
 ) {
     let timestamp_writes = prof.as_mut().and_then(|p| p.next(name));
-    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(E::INFO.stage), timestamp_writes });
+    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+        label: Some(E::INFO.stage),
+        timestamp_writes,
+    });
     pipeline.dispatch(&mut pass, bound, groups);
 }
 
@@ -259,20 +301,32 @@ fn field_buffer(device: &wgpu::Device, label: &str, size: [u32; 3]) -> wgpu::Buf
     device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
         size: voxels(size) * 4,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+        usage: wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_SRC
+            | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     })
 }
 
-fn distance_texture(device: &wgpu::Device, size: [u32; 3], dimension: wgpu::TextureDimension) -> wgpu::Texture {
+fn distance_texture(
+    device: &wgpu::Device,
+    size: [u32; 3],
+    dimension: wgpu::TextureDimension,
+) -> wgpu::Texture {
     device.create_texture(&wgpu::TextureDescriptor {
         label: Some("distance"),
-        size: wgpu::Extent3d { width: size[0], height: size[1], depth_or_array_layers: size[2] },
+        size: wgpu::Extent3d {
+            width: size[0],
+            height: size[1],
+            depth_or_array_layers: size[2],
+        },
         mip_level_count: 1,
         sample_count: 1,
         dimension,
         format: wgpu::TextureFormat::R32Float,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::STORAGE_BINDING
+            | wgpu::TextureUsages::COPY_SRC,
         view_formats: &[],
     })
 }
@@ -288,16 +342,28 @@ pub fn check_size_3d(device: &wgpu::Device, size: [u32; 3]) -> Result<(), Error>
     for (i, what) in ["width", "height", "depth"].into_iter().enumerate() {
         let max = MAX_SIDE_3D[i].min(tex) as u64;
         if size[i] == 0 || size[i] as u64 > max {
-            return Err(Error::Size { stage: STAGE, what, got: size[i] as u64, max });
+            return Err(Error::Size {
+                stage: STAGE,
+                what,
+                got: size[i] as u64,
+                max,
+            });
         }
     }
     check_bytes(&limits, voxels(size) * 4)
 }
 
 fn check_bytes(limits: &wgpu::Limits, bytes: u64) -> Result<(), Error> {
-    let max = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
+    let max = limits
+        .max_storage_buffer_binding_size
+        .min(limits.max_buffer_size);
     if bytes > max {
-        return Err(Error::Size { stage: STAGE, what: "field buffer (bytes)", got: bytes, max });
+        return Err(Error::Size {
+            stage: STAGE,
+            what: "field buffer (bytes)",
+            got: bytes,
+            max,
+        });
     }
     Ok(())
 }
@@ -308,7 +374,12 @@ pub fn check_size_2d_exact(device: &wgpu::Device, w: u32, h: u32) -> Result<(), 
     let max = MAX_SIDE_2D_EXACT.min(limits.max_texture_dimension_2d) as u64;
     for (what, got) in [("width", w), ("height", h)] {
         if got == 0 || got as u64 > max {
-            return Err(Error::Size { stage: STAGE, what, got: got as u64, max });
+            return Err(Error::Size {
+                stage: STAGE,
+                what,
+                got: got as u64,
+                max,
+            });
         }
     }
     check_bytes(&limits, w as u64 * h as u64 * 4)
@@ -316,12 +387,26 @@ pub fn check_size_2d_exact(device: &wgpu::Device, w: u32, h: u32) -> Result<(), 
 
 fn check_volume(device: &wgpu::Device, volume: &wgpu::Texture) -> Result<[u32; 3], Error> {
     if volume.dimension() != wgpu::TextureDimension::D3 {
-        return Err(Error::Invalid { stage: STAGE, what: format!("the volume must be a 3D texture, got {:?}", volume.dimension()) });
+        return Err(Error::Invalid {
+            stage: STAGE,
+            what: format!(
+                "the volume must be a 3D texture, got {:?}",
+                volume.dimension()
+            ),
+        });
     }
     if !VOLUME_FORMATS.contains(&volume.format()) {
-        return Err(Error::Format { stage: STAGE, format: volume.format(), supported: "R8Unorm, R16Float, R32Float" });
+        return Err(Error::Format {
+            stage: STAGE,
+            format: volume.format(),
+            supported: "R8Unorm, R16Float, R32Float",
+        });
     }
-    let size = [volume.width(), volume.height(), volume.depth_or_array_layers()];
+    let size = [
+        volume.width(),
+        volume.height(),
+        volume.depth_or_array_layers(),
+    ];
     check_size_3d(device, size)?;
     Ok(size)
 }
@@ -331,23 +416,40 @@ fn check_volume(device: &wgpu::Device, volume: &wgpu::Texture) -> Result<[u32; 3
 pub fn upload_volume(ctx: &Context, data: &[u8], size: [u32; 3]) -> Result<wgpu::Texture, Error> {
     check_size_3d(&ctx.device, size)?;
     if data.len() as u64 != voxels(size) {
-        return Err(Error::Invalid { stage: STAGE, what: format!("volume has {} bytes, {size:?} needs {}", data.len(), voxels(size)) });
+        return Err(Error::Invalid {
+            stage: STAGE,
+            what: format!(
+                "volume has {} bytes, {size:?} needs {}",
+                data.len(),
+                voxels(size)
+            ),
+        });
     }
     crate::gpu::scoped(&ctx.device, STAGE, || {
         let t = ctx.device.create_texture(&wgpu::TextureDescriptor {
             label: Some("volume"),
-            size: wgpu::Extent3d { width: size[0], height: size[1], depth_or_array_layers: size[2] },
+            size: wgpu::Extent3d {
+                width: size[0],
+                height: size[1],
+                depth_or_array_layers: size[2],
+            },
             mip_level_count: 1,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D3,
             format: wgpu::TextureFormat::R8Unorm,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::COPY_SRC,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_DST
+                | wgpu::TextureUsages::COPY_SRC,
             view_formats: &[],
         });
         ctx.queue.write_texture(
             t.as_image_copy(),
             data,
-            wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(size[0]), rows_per_image: Some(size[1]) },
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(size[0]),
+                rows_per_image: Some(size[1]),
+            },
             t.size(),
         );
         t
@@ -364,30 +466,66 @@ pub fn upload_points(ctx: &Context, grid: &Grid3, points: &[Vec3]) -> Result<Poi
 
 /// Upload sub-voxel seeds with the voxel each one seeds (typically the voxel that produced it,
 /// holding the closest surface point to its centre). Homes must lie inside the grid.
-pub fn upload_points_with_homes(ctx: &Context, grid: &Grid3, points: &[Vec3], homes: &[[u32; 3]]) -> Result<PointSeeds, Error> {
+pub fn upload_points_with_homes(
+    ctx: &Context,
+    grid: &Grid3,
+    points: &[Vec3],
+    homes: &[[u32; 3]],
+) -> Result<PointSeeds, Error> {
     if homes.len() != points.len() {
-        return Err(Error::Invalid { stage: STAGE, what: format!("{} homes for {} points", homes.len(), points.len()) });
+        return Err(Error::Invalid {
+            stage: STAGE,
+            what: format!("{} homes for {} points", homes.len(), points.len()),
+        });
     }
     upload_points_inner(ctx, grid, points, Some(homes))
 }
 
-fn upload_points_inner(ctx: &Context, grid: &Grid3, points: &[Vec3], homes: Option<&[[u32; 3]]>) -> Result<PointSeeds, Error> {
+fn upload_points_inner(
+    ctx: &Context,
+    grid: &Grid3,
+    points: &[Vec3],
+    homes: Option<&[[u32; 3]]>,
+) -> Result<PointSeeds, Error> {
     check_size_3d(&ctx.device, grid.size)?;
     if !(grid.voxel_size.is_finite() && grid.voxel_size > 0.0) || !grid.origin.is_finite() {
-        return Err(Error::Invalid { stage: STAGE, what: format!("grid voxel_size {} / origin {} must be finite (size positive)", grid.voxel_size, grid.origin) });
+        return Err(Error::Invalid {
+            stage: STAGE,
+            what: format!(
+                "grid voxel_size {} / origin {} must be finite (size positive)",
+                grid.voxel_size, grid.origin
+            ),
+        });
     }
     if points.is_empty() || points.len() as u64 > MAX_POINTS as u64 {
-        return Err(Error::Size { stage: STAGE, what: "number of seed points", got: points.len() as u64, max: MAX_POINTS as u64 });
+        return Err(Error::Size {
+            stage: STAGE,
+            what: "number of seed points",
+            got: points.len() as u64,
+            max: MAX_POINTS as u64,
+        });
     }
-    let hi = Vec3::new(grid.size[0] as f32, grid.size[1] as f32, grid.size[2] as f32) - 0.5;
+    let hi = Vec3::new(
+        grid.size[0] as f32,
+        grid.size[1] as f32,
+        grid.size[2] as f32,
+    ) - 0.5;
     let mut data = Vec::with_capacity(points.len());
     for (i, &p) in points.iter().enumerate() {
         let v = grid.to_voxel(p);
         if !p.is_finite() {
-            return Err(Error::Invalid { stage: STAGE, what: format!("seed point {i} is not finite: {p}") });
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: format!("seed point {i} is not finite: {p}"),
+            });
         }
         if v.cmplt(Vec3::splat(-0.5)).any() || v.cmpgt(hi).any() {
-            return Err(Error::Invalid { stage: STAGE, what: format!("seed point {i} at {p} lies outside the volume (voxel coordinates {v})") });
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: format!(
+                    "seed point {i} at {p} lies outside the volume (voxel coordinates {v})"
+                ),
+            });
         }
         data.push([v.x, v.y, v.z, 0.0]);
     }
@@ -397,7 +535,13 @@ fn upload_points_inner(ctx: &Context, grid: &Grid3, points: &[Vec3], homes: Opti
             let mut packed = Vec::with_capacity(h.len());
             for (i, v) in h.iter().enumerate() {
                 if (0..3).any(|a| v[a] >= grid.size[a]) {
-                    return Err(Error::Invalid { stage: STAGE, what: format!("home voxel {v:?} of point {i} lies outside the grid {:?}", grid.size) });
+                    return Err(Error::Invalid {
+                        stage: STAGE,
+                        what: format!(
+                            "home voxel {v:?} of point {i} lies outside the grid {:?}",
+                            grid.size
+                        ),
+                    });
                 }
                 packed.push(pack_seed3(v[0], v[1], v[2]));
             }
@@ -406,11 +550,20 @@ fn upload_points_inner(ctx: &Context, grid: &Grid3, points: &[Vec3], homes: Opti
     };
     use wgpu::util::DeviceExt;
     let storage = |label: &str, contents: &[u8]| {
-        ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents, usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC })
+        ctx.device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            })
     };
     let buffer = storage("seed points", bytemuck::cast_slice(&data));
     let homes = packed_homes.map(|h| storage("seed point homes", bytemuck::cast_slice(&h)));
-    Ok(PointSeeds { buffer, homes, count: points.len() as u32 })
+    Ok(PointSeeds {
+        buffer,
+        homes,
+        count: points.len() as u32,
+    })
 }
 
 impl Distance3d {
@@ -422,8 +575,7 @@ impl Distance3d {
             jump_points: ComputePipeline::new(device)?,
             rows: ComputePipeline::new(device)?,
             rows_2d: ComputePipeline::new(device)?,
-            columns: ComputePipeline::with_overrides(device, &[("BANDS", BANDS_3D as f64)])?,
-            columns_2d: ComputePipeline::with_overrides(device, &[("PACK_2D", 1.0), ("BANDS", BANDS_2D as f64)])?,
+            columns: Default::default(),
             resolve_unsigned: ComputePipeline::new(device)?,
             resolve_signed: ComputePipeline::new(device)?,
             resolve_points: ComputePipeline::new(device)?,
@@ -434,28 +586,71 @@ impl Distance3d {
     }
 
     /// Distance field of the marked voxels of `volume` (a mask or a density, see [`Inside`]).
-    pub fn encode(&self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, volume: &wgpu::Texture, options: &Options3d) -> Result<Field3d, Error> {
+    pub fn encode(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        volume: &wgpu::Texture,
+        options: &Options3d,
+    ) -> Result<Field3d, Error> {
         self.encode_profiled(device, encoder, volume, options, None)
     }
 
     /// [`Self::encode`] with each pass timed by `profiler`.
-    pub fn encode_profiled(&self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, volume: &wgpu::Texture, options: &Options3d, mut profiler: Option<&mut Profiler>) -> Result<Field3d, Error> {
+    pub fn encode_profiled(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        volume: &wgpu::Texture,
+        options: &Options3d,
+        mut profiler: Option<&mut Profiler>,
+    ) -> Result<Field3d, Error> {
         options.check()?;
         let size = check_volume(device, volume)?;
         let prof = &mut profiler;
-        let flood = |encoder: &mut wgpu::CommandEncoder, invert: bool, prof: Prof| -> Result<wgpu::Buffer, Error> {
+        let flood = |encoder: &mut wgpu::CommandEncoder,
+                     invert: bool,
+                     prof: Prof|
+         -> Result<wgpu::Buffer, Error> {
             match options.method {
-                Method::Exact => self.encode_exact(device, encoder, volume, options.inside, invert, prof),
+                Method::Exact => {
+                    self.encode_exact(device, encoder, volume, options.inside, invert, prof)
+                }
                 Method::Jfa(variant) => {
-                    let seeds = self.encode_seed(device, encoder, volume, options.inside, invert, prof)?;
-                    self.encode_flood(device, encoder, seeds, size, &options.steps(variant, size.into_iter().max().unwrap()), prof)
+                    let seeds =
+                        self.encode_seed(device, encoder, volume, options.inside, invert, prof)?;
+                    self.encode_flood(
+                        device,
+                        encoder,
+                        seeds,
+                        size,
+                        &options.steps(variant, size.into_iter().max().unwrap()),
+                        prof,
+                    )
                 }
             }
         };
         let nearest = flood(encoder, false, prof)?;
-        let nearest_outside = if options.signed { Some(flood(encoder, true, prof)?) } else { None };
-        let distance = self.encode_resolve(device, encoder, size, &nearest, nearest_outside.as_ref(), options, prof)?;
-        Ok(Field3d { size, nearest, nearest_outside, distance })
+        let nearest_outside = if options.signed {
+            Some(flood(encoder, true, prof)?)
+        } else {
+            None
+        };
+        let distance = self.encode_resolve(
+            device,
+            encoder,
+            size,
+            &nearest,
+            nearest_outside.as_ref(),
+            options,
+            prof,
+        )?;
+        Ok(Field3d {
+            size,
+            nearest,
+            nearest_outside,
+            distance,
+        })
     }
 
     /// Distance field of sub-voxel seeds (JFA; the exact transform takes integer seeds only).
@@ -472,15 +667,30 @@ impl Distance3d {
         options.check()?;
         check_size_3d(device, size)?;
         let Method::Jfa(variant) = options.method else {
-            return Err(Error::Invalid { stage: STAGE, what: "sub-voxel seeds need a JFA method; the exact transform takes integer seeds".into() });
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: "sub-voxel seeds need a JFA method; the exact transform takes integer seeds"
+                    .into(),
+            });
         };
-        if points.count == 0 || points.count > MAX_POINTS || (points.buffer.size() as u64) < points.count as u64 * 16 {
-            return Err(Error::Size { stage: STAGE, what: "number of seed points (table size)", got: points.count as u64, max: (points.buffer.size() / 16).min(MAX_POINTS as u64) });
+        if points.count == 0
+            || points.count > MAX_POINTS
+            || (points.buffer.size() as u64) < points.count as u64 * 16
+        {
+            return Err(Error::Size {
+                stage: STAGE,
+                what: "number of seed points (table size)",
+                got: points.count as u64,
+                max: (points.buffer.size() / 16).min(MAX_POINTS as u64),
+            });
         }
         if let Some(v) = inside {
             let vs = check_volume(device, v)?;
             if vs != size {
-                return Err(Error::Invalid { stage: STAGE, what: format!("inside volume is {vs:?}, the field {size:?}") });
+                return Err(Error::Invalid {
+                    stage: STAGE,
+                    what: format!("inside volume is {vs:?}, the field {size:?}"),
+                });
             }
         }
         let prof = &mut None;
@@ -489,82 +699,251 @@ impl Distance3d {
         if let Some(h) = &points.homes
             && h.size() < points.count as u64 * 4
         {
-            return Err(Error::Invalid { stage: STAGE, what: format!("homes buffer has {} bytes for {} points", h.size(), points.count) });
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: format!(
+                    "homes buffer has {} bytes for {} points",
+                    h.size(),
+                    points.count
+                ),
+            });
         }
-        let params = uniform(device, "seed points params", &jfa3_seed_points::PointParams { size: size.into(), count: points.count, use_homes: points.homes.is_some() as u32 });
+        let params = uniform(
+            device,
+            "seed points params",
+            &jfa3_seed_points::PointParams {
+                size: size.into(),
+                count: points.count,
+                use_homes: points.homes.is_some() as u32,
+            },
+        );
         // Without homes the slot still needs a buffer; the shader does not read it.
         let no_homes;
         let homes = match &points.homes {
             Some(h) => h,
             None => {
-                no_homes = device.create_buffer(&wgpu::BufferDescriptor { label: Some("no homes"), size: 4, usage: wgpu::BufferUsages::STORAGE, mapped_at_creation: false });
+                no_homes = device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("no homes"),
+                    size: 4,
+                    usage: wgpu::BufferUsages::STORAGE,
+                    mapped_at_creation: false,
+                });
                 &no_homes
             }
         };
-        let bound = self.seed_points.bind(device, &jfa3_seed_points::seed_points::Resources { params: (&params).into(), points: (&points.buffer).into(), nearest: (&seeds).into(), homes: homes.into() })?;
-        pass(encoder, &self.seed_points, &bound, [points.count.div_ceil(64), 1, 1], "seed points", prof);
+        let bound = self.seed_points.bind(
+            device,
+            &jfa3_seed_points::seed_points::Resources {
+                params: (&params).into(),
+                points: (&points.buffer).into(),
+                nearest: (&seeds).into(),
+                homes: homes.into(),
+            },
+        )?;
+        pass(
+            encoder,
+            &self.seed_points,
+            &bound,
+            [points.count.div_ceil(64), 1, 1],
+            "seed points",
+            prof,
+        );
         let steps = options.steps(variant, size.into_iter().max().unwrap());
-        let nearest = self.encode_flood_inner(device, encoder, seeds, size, &steps, Some(&points.buffer), prof)?;
+        let nearest = self.encode_flood_inner(
+            device,
+            encoder,
+            seeds,
+            size,
+            &steps,
+            Some(&points.buffer),
+            prof,
+        )?;
         let params = self.resolve_params(device, size, options);
         let distance = distance_texture(device, size, wgpu::TextureDimension::D3);
         let dv = view(&distance);
         let groups = ComputePipeline::<field_resolve::resolve_points::Entry>::groups_for(size);
         match inside {
             None => {
-                let bound = self.resolve_points.bind(device, &field_resolve::resolve_points::Resources { params: (&params).into(), nearest: (&nearest).into(), points: (&points.buffer).into(), distance: (&dv).into() })?;
-                pass(encoder, &self.resolve_points, &bound, groups, "resolve", prof);
+                let bound = self.resolve_points.bind(
+                    device,
+                    &field_resolve::resolve_points::Resources {
+                        params: (&params).into(),
+                        nearest: (&nearest).into(),
+                        points: (&points.buffer).into(),
+                        distance: (&dv).into(),
+                    },
+                )?;
+                pass(
+                    encoder,
+                    &self.resolve_points,
+                    &bound,
+                    groups,
+                    "resolve",
+                    prof,
+                );
             }
             Some(v) => {
                 let vv = view(v);
                 let bound = self.resolve_points_signed.bind(
                     device,
-                    &field_resolve::resolve_points_signed::Resources { params: (&params).into(), nearest: (&nearest).into(), points: (&points.buffer).into(), volume: (&vv).into(), distance: (&dv).into() },
+                    &field_resolve::resolve_points_signed::Resources {
+                        params: (&params).into(),
+                        nearest: (&nearest).into(),
+                        points: (&points.buffer).into(),
+                        volume: (&vv).into(),
+                        distance: (&dv).into(),
+                    },
                 )?;
-                pass(encoder, &self.resolve_points_signed, &bound, groups, "resolve", prof);
+                pass(
+                    encoder,
+                    &self.resolve_points_signed,
+                    &bound,
+                    groups,
+                    "resolve",
+                    prof,
+                );
             }
         }
-        Ok(Field3d { size, nearest, nearest_outside: None, distance })
+        Ok(Field3d {
+            size,
+            nearest,
+            nearest_outside: None,
+            distance,
+        })
     }
 
     /// Seed stage alone: a new buffer of packed seeds from the marked (or, inverted, unmarked)
     /// voxels.
-    pub fn encode_seed(&self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, volume: &wgpu::Texture, inside: Inside, invert: bool, prof: Prof) -> Result<wgpu::Buffer, Error> {
+    pub fn encode_seed(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        volume: &wgpu::Texture,
+        inside: Inside,
+        invert: bool,
+        prof: Prof,
+    ) -> Result<wgpu::Buffer, Error> {
         let size = check_volume(device, volume)?;
         let out = field_buffer(device, "nearest seed", size);
-        let params = uniform(device, "seed params", &jfa3_seed::SeedParams { size: size.into(), threshold: inside.threshold(), invert: invert as u32 });
+        let params = uniform(
+            device,
+            "seed params",
+            &jfa3_seed::SeedParams {
+                size: size.into(),
+                threshold: inside.threshold(),
+                invert: invert as u32,
+            },
+        );
         let vv = view(volume);
-        let bound = self.seed.bind(device, &jfa3_seed::seed::Resources { params: (&params).into(), volume: (&vv).into(), nearest: (&out).into() })?;
-        pass(encoder, &self.seed, &bound, ComputePipeline::<jfa3_seed::seed::Entry>::groups_for(size), "seed", prof);
+        let bound = self.seed.bind(
+            device,
+            &jfa3_seed::seed::Resources {
+                params: (&params).into(),
+                volume: (&vv).into(),
+                nearest: (&out).into(),
+            },
+        )?;
+        pass(
+            encoder,
+            &self.seed,
+            &bound,
+            ComputePipeline::<jfa3_seed::seed::Entry>::groups_for(size),
+            "seed",
+            prof,
+        );
         Ok(out)
     }
 
     /// JFA passes of `steps` over packed seeds in `nearest` (ping-ponging with a second buffer);
     /// returns the buffer holding the result.
-    pub fn encode_flood(&self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, nearest: wgpu::Buffer, size: [u32; 3], steps: &[u32], prof: Prof) -> Result<wgpu::Buffer, Error> {
+    pub fn encode_flood(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        nearest: wgpu::Buffer,
+        size: [u32; 3],
+        steps: &[u32],
+        prof: Prof,
+    ) -> Result<wgpu::Buffer, Error> {
         self.encode_flood_inner(device, encoder, nearest, size, steps, None, prof)
     }
 
-    fn encode_flood_inner(&self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, nearest: wgpu::Buffer, size: [u32; 3], steps: &[u32], points: Option<&wgpu::Buffer>, prof: Prof) -> Result<wgpu::Buffer, Error> {
+    fn encode_flood_inner(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        nearest: wgpu::Buffer,
+        size: [u32; 3],
+        steps: &[u32],
+        points: Option<&wgpu::Buffer>,
+        prof: Prof,
+    ) -> Result<wgpu::Buffer, Error> {
         check_size_3d(device, size)?;
         if nearest.size() != voxels(size) * 4 {
-            return Err(Error::Invalid { stage: jfa3_step::STAGE, what: format!("field buffer has {} bytes, {size:?} needs {}", nearest.size(), voxels(size) * 4) });
+            return Err(Error::Invalid {
+                stage: jfa3_step::STAGE,
+                what: format!(
+                    "field buffer has {} bytes, {size:?} needs {}",
+                    nearest.size(),
+                    voxels(size) * 4
+                ),
+            });
         }
         if steps.contains(&0) {
-            return Err(Error::Invalid { stage: jfa3_step::STAGE, what: "step 0".into() });
+            return Err(Error::Invalid {
+                stage: jfa3_step::STAGE,
+                what: "step 0".into(),
+            });
         }
         let other = field_buffer(device, "jfa ping-pong", size);
         let (mut a, mut b) = (nearest, other);
         let groups = ComputePipeline::<jfa3_step::jump::Entry>::groups_for(size);
         for &step in steps {
-            let params = uniform(device, "jfa jump params", &jfa3_step::JumpParams { size: size.into(), step });
+            let params = uniform(
+                device,
+                "jfa jump params",
+                &jfa3_step::JumpParams {
+                    size: size.into(),
+                    step,
+                },
+            );
             match points {
                 None => {
-                    let bound = self.jump.bind(device, &jfa3_step::jump::Resources { params: (&params).into(), src: (&a).into(), dst: (&b).into() })?;
-                    pass(encoder, &self.jump, &bound, groups, &format!("jump {step}"), prof);
+                    let bound = self.jump.bind(
+                        device,
+                        &jfa3_step::jump::Resources {
+                            params: (&params).into(),
+                            src: (&a).into(),
+                            dst: (&b).into(),
+                        },
+                    )?;
+                    pass(
+                        encoder,
+                        &self.jump,
+                        &bound,
+                        groups,
+                        &format!("jump {step}"),
+                        prof,
+                    );
                 }
                 Some(pts) => {
-                    let bound = self.jump_points.bind(device, &jfa3_step::jump_points::Resources { params: (&params).into(), src: (&a).into(), dst: (&b).into(), points: pts.into() })?;
-                    pass(encoder, &self.jump_points, &bound, groups, &format!("jump {step}"), prof);
+                    let bound = self.jump_points.bind(
+                        device,
+                        &jfa3_step::jump_points::Resources {
+                            params: (&params).into(),
+                            src: (&a).into(),
+                            dst: (&b).into(),
+                            points: pts.into(),
+                        },
+                    )?;
+                    pass(
+                        encoder,
+                        &self.jump_points,
+                        &bound,
+                        groups,
+                        &format!("jump {step}"),
+                        prof,
+                    );
                 }
             }
             std::mem::swap(&mut a, &mut b);
@@ -574,7 +953,15 @@ impl Distance3d {
 
     /// The exact transform (rows, then columns along y and z) of the marked voxels: a new buffer
     /// of packed nearest seeds.
-    pub fn encode_exact(&self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, volume: &wgpu::Texture, inside: Inside, invert: bool, prof: Prof) -> Result<wgpu::Buffer, Error> {
+    pub fn encode_exact(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        volume: &wgpu::Texture,
+        inside: Inside,
+        invert: bool,
+        prof: Prof,
+    ) -> Result<wgpu::Buffer, Error> {
         let size = check_volume(device, volume)?;
         let nearest = self.encode_rows(device, encoder, volume, inside, invert, prof)?;
         let stack = field_buffer(device, "edt envelope stack", size);
@@ -587,50 +974,166 @@ impl Distance3d {
     }
 
     /// First exact pass alone: per row, the nearest marked voxel along x (a new buffer).
-    pub fn encode_rows(&self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, volume: &wgpu::Texture, inside: Inside, invert: bool, prof: Prof) -> Result<wgpu::Buffer, Error> {
+    pub fn encode_rows(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        volume: &wgpu::Texture,
+        inside: Inside,
+        invert: bool,
+        prof: Prof,
+    ) -> Result<wgpu::Buffer, Error> {
         let size = check_volume(device, volume)?;
         let nearest = field_buffer(device, "nearest seed", size);
-        let params = uniform(device, "edt rows params", &edt_rows::RowParams { size: size.into(), threshold: inside.threshold(), invert: invert as u32 });
+        let params = uniform(
+            device,
+            "edt rows params",
+            &edt_rows::RowParams {
+                size: size.into(),
+                threshold: inside.threshold(),
+                invert: invert as u32,
+            },
+        );
         let vv = view(volume);
-        let bound = self.rows.bind(device, &edt_rows::rows::Resources { params: (&params).into(), volume: (&vv).into(), nearest: (&nearest).into() })?;
-        pass(encoder, &self.rows, &bound, [size[1], size[2], 1], "rows (x)", prof);
+        let bound = self.rows.bind(
+            device,
+            &edt_rows::rows::Resources {
+                params: (&params).into(),
+                volume: (&vv).into(),
+                nearest: (&nearest).into(),
+            },
+        )?;
+        pass(
+            encoder,
+            &self.rows,
+            &bound,
+            [size[1], size[2], 1],
+            "rows (x)",
+            prof,
+        );
         Ok(nearest)
     }
 
     /// One exact column pass alone (`axis` 1 = y, 2 = z), in place on `nearest`; `stack` is
     /// scratch of the same size.
     #[allow(clippy::too_many_arguments)]
-    pub fn encode_column_pass(&self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, nearest: &wgpu::Buffer, stack: &wgpu::Buffer, size: [u32; 3], axis: u32, prof: Prof) -> Result<(), Error> {
+    pub fn encode_column_pass(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        nearest: &wgpu::Buffer,
+        stack: &wgpu::Buffer,
+        size: [u32; 3],
+        axis: u32,
+        prof: Prof,
+    ) -> Result<(), Error> {
         check_size_3d(device, size)?;
         if !(axis == 1 || axis == 2) {
-            return Err(Error::Invalid { stage: edt_columns::STAGE, what: format!("axis must be 1 (y) or 2 (z), got {axis}") });
+            return Err(Error::Invalid {
+                stage: edt_columns::STAGE,
+                what: format!("axis must be 1 (y) or 2 (z), got {axis}"),
+            });
         }
         for (what, b) in [("nearest", nearest), ("stack", stack)] {
             if b.size() != voxels(size) * 4 {
-                return Err(Error::Invalid { stage: edt_columns::STAGE, what: format!("{what} buffer has {} bytes, {size:?} needs {}", b.size(), voxels(size) * 4) });
+                return Err(Error::Invalid {
+                    stage: edt_columns::STAGE,
+                    what: format!(
+                        "{what} buffer has {} bytes, {size:?} needs {}",
+                        b.size(),
+                        voxels(size) * 4
+                    ),
+                });
             }
         }
         let others = if axis == 1 { size[2] } else { size[1] };
-        self.encode_columns(device, encoder, &self.columns, BANDS_3D, nearest, stack, size, axis, others, prof)
+        self.encode_columns(
+            device, encoder, false, nearest, stack, size, axis, others, prof,
+        )
     }
 
     #[allow(clippy::too_many_arguments)]
-    fn encode_columns(&self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, pipeline: &ComputePipeline<edt_columns::columns::Entry>, bands: u32, nearest: &wgpu::Buffer, stack: &wgpu::Buffer, size: [u32; 3], axis: u32, others: u32, prof: Prof) -> Result<(), Error> {
-        let params = uniform(device, "edt columns params", &edt_columns::ColumnParams { size: size.into(), axis });
-        let bound = pipeline.bind(device, &edt_columns::columns::Resources { params: (&params).into(), nearest: nearest.into(), stack: stack.into() })?;
-        let name = if axis == 1 { "columns (y)" } else { "columns (z)" };
-        pass(encoder, pipeline, &bound, [size[0].div_ceil(256 / bands), others, 1], name, prof);
+    fn encode_columns(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        pack_2d: bool,
+        nearest: &wgpu::Buffer,
+        stack: &wgpu::Buffer,
+        size: [u32; 3],
+        axis: u32,
+        others: u32,
+        prof: Prof,
+    ) -> Result<(), Error> {
+        let choice = bands_for(size[0] * others);
+        let bands = BAND_CHOICES[choice];
+        let slot = &self.columns[choice + if pack_2d { 6 } else { 0 }];
+        if slot.get().is_none() {
+            let p = ComputePipeline::with_overrides(
+                device,
+                &[("PACK_2D", pack_2d as u32 as f64), ("BANDS", bands as f64)],
+            )?;
+            let _ = slot.set(p);
+        }
+        let pipeline = slot.get().expect("set above");
+        let params = uniform(
+            device,
+            "edt columns params",
+            &edt_columns::ColumnParams {
+                size: size.into(),
+                axis,
+            },
+        );
+        let bound = pipeline.bind(
+            device,
+            &edt_columns::columns::Resources {
+                params: (&params).into(),
+                nearest: nearest.into(),
+                stack: stack.into(),
+            },
+        )?;
+        let name = if axis == 1 {
+            "columns (y)"
+        } else {
+            "columns (z)"
+        };
+        pass(
+            encoder,
+            pipeline,
+            &bound,
+            [size[0].div_ceil(256 / bands), others, 1],
+            name,
+            prof,
+        );
         Ok(())
     }
 
     /// The exact transform of a 2D mask (`R8Unorm`, `R16Float` or `R32Float` 2D texture).
-    pub fn encode_exact_2d(&self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, mask: &wgpu::Texture, options: &Options3d, mut profiler: Option<&mut Profiler>) -> Result<FieldBuf2d, Error> {
+    pub fn encode_exact_2d(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        mask: &wgpu::Texture,
+        options: &Options3d,
+        mut profiler: Option<&mut Profiler>,
+    ) -> Result<FieldBuf2d, Error> {
         options.check()?;
         if mask.dimension() != wgpu::TextureDimension::D2 || mask.depth_or_array_layers() != 1 {
-            return Err(Error::Invalid { stage: STAGE, what: format!("the mask must be a single 2D texture, got {:?} × {} layers", mask.dimension(), mask.depth_or_array_layers()) });
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: format!(
+                    "the mask must be a single 2D texture, got {:?} × {} layers",
+                    mask.dimension(),
+                    mask.depth_or_array_layers()
+                ),
+            });
         }
         if !VOLUME_FORMATS.contains(&mask.format()) {
-            return Err(Error::Format { stage: STAGE, format: mask.format(), supported: "R8Unorm, R16Float, R32Float" });
+            return Err(Error::Format {
+                stage: STAGE,
+                format: mask.format(),
+                supported: "R8Unorm, R16Float, R32Float",
+            });
         }
         let (w, h) = (mask.width(), mask.height());
         check_size_2d_exact(device, w, h)?;
@@ -638,43 +1141,123 @@ impl Distance3d {
         let prof = &mut profiler;
         let mv = view(mask);
         let stack = field_buffer(device, "edt envelope stack", size);
-        let flood = |encoder: &mut wgpu::CommandEncoder, invert: bool, prof: Prof| -> Result<wgpu::Buffer, Error> {
+        let flood = |encoder: &mut wgpu::CommandEncoder,
+                     invert: bool,
+                     prof: Prof|
+         -> Result<wgpu::Buffer, Error> {
             let nearest = field_buffer(device, "nearest seed", size);
-            let params = uniform(device, "edt rows params", &edt_rows::RowParams { size: size.into(), threshold: options.inside.threshold(), invert: invert as u32 });
-            let bound = self.rows_2d.bind(device, &edt_rows::rows_2d::Resources { params: (&params).into(), mask_2d: (&mv).into(), nearest: (&nearest).into() })?;
+            let params = uniform(
+                device,
+                "edt rows params",
+                &edt_rows::RowParams {
+                    size: size.into(),
+                    threshold: options.inside.threshold(),
+                    invert: invert as u32,
+                },
+            );
+            let bound = self.rows_2d.bind(
+                device,
+                &edt_rows::rows_2d::Resources {
+                    params: (&params).into(),
+                    mask_2d: (&mv).into(),
+                    nearest: (&nearest).into(),
+                },
+            )?;
             pass(encoder, &self.rows_2d, &bound, [h, 1, 1], "rows (x)", prof);
             if h > 1 {
-                self.encode_columns(device, encoder, &self.columns_2d, BANDS_2D, &nearest, &stack, size, 1, 1, prof)?;
+                self.encode_columns(device, encoder, true, &nearest, &stack, size, 1, 1, prof)?;
             }
             Ok(nearest)
         };
         let nearest = flood(encoder, false, prof)?;
-        let nearest_outside = if options.signed { Some(flood(encoder, true, prof)?) } else { None };
+        let nearest_outside = if options.signed {
+            Some(flood(encoder, true, prof)?)
+        } else {
+            None
+        };
         let params = self.resolve_params(device, size, options);
         let distance = distance_texture(device, size, wgpu::TextureDimension::D2);
         let dv = view(&distance);
         let groups = ComputePipeline::<field_resolve::resolve_unsigned_2d::Entry>::groups_for(size);
         match &nearest_outside {
             None => {
-                let bound = self.resolve_unsigned_2d.bind(device, &field_resolve::resolve_unsigned_2d::Resources { params: (&params).into(), nearest: (&nearest).into(), distance_2d: (&dv).into() })?;
-                pass(encoder, &self.resolve_unsigned_2d, &bound, groups, "resolve", prof);
+                let bound = self.resolve_unsigned_2d.bind(
+                    device,
+                    &field_resolve::resolve_unsigned_2d::Resources {
+                        params: (&params).into(),
+                        nearest: (&nearest).into(),
+                        distance_2d: (&dv).into(),
+                    },
+                )?;
+                pass(
+                    encoder,
+                    &self.resolve_unsigned_2d,
+                    &bound,
+                    groups,
+                    "resolve",
+                    prof,
+                );
             }
             Some(o) => {
-                let bound = self.resolve_signed_2d.bind(device, &field_resolve::resolve_signed_2d::Resources { params: (&params).into(), nearest: (&nearest).into(), nearest_outside: o.into(), distance_2d: (&dv).into() })?;
-                pass(encoder, &self.resolve_signed_2d, &bound, groups, "resolve", prof);
+                let bound = self.resolve_signed_2d.bind(
+                    device,
+                    &field_resolve::resolve_signed_2d::Resources {
+                        params: (&params).into(),
+                        nearest: (&nearest).into(),
+                        nearest_outside: o.into(),
+                        distance_2d: (&dv).into(),
+                    },
+                )?;
+                pass(
+                    encoder,
+                    &self.resolve_signed_2d,
+                    &bound,
+                    groups,
+                    "resolve",
+                    prof,
+                );
             }
         }
-        Ok(FieldBuf2d { width: w, height: h, nearest, nearest_outside, distance })
+        Ok(FieldBuf2d {
+            width: w,
+            height: h,
+            nearest,
+            nearest_outside,
+            distance,
+        })
     }
 
-    fn resolve_params(&self, device: &wgpu::Device, size: [u32; 3], options: &Options3d) -> wgpu::Buffer {
+    fn resolve_params(
+        &self,
+        device: &wgpu::Device,
+        size: [u32; 3],
+        options: &Options3d,
+    ) -> wgpu::Buffer {
         let band = options.band.map_or(f32::MAX, |b| b * options.voxel_size);
-        uniform(device, "resolve params", &field_resolve::ResolveParams { size: size.into(), voxel_size: options.voxel_size, band, threshold: options.inside.threshold() })
+        uniform(
+            device,
+            "resolve params",
+            &field_resolve::ResolveParams {
+                size: size.into(),
+                voxel_size: options.voxel_size,
+                band,
+                threshold: options.inside.threshold(),
+            },
+        )
     }
 
     /// Resolve stage alone: packed nearest seeds (and, for signed, the outside field) to distance.
     #[allow(clippy::too_many_arguments)]
-    pub fn encode_resolve(&self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, size: [u32; 3], nearest: &wgpu::Buffer, nearest_outside: Option<&wgpu::Buffer>, options: &Options3d, prof: Prof) -> Result<wgpu::Texture, Error> {
+    pub fn encode_resolve(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        size: [u32; 3],
+        nearest: &wgpu::Buffer,
+        nearest_outside: Option<&wgpu::Buffer>,
+        options: &Options3d,
+        prof: Prof,
+    ) -> Result<wgpu::Texture, Error> {
         options.check()?;
         check_size_3d(device, size)?;
         let params = self.resolve_params(device, size, options);
@@ -683,12 +1266,41 @@ impl Distance3d {
         let groups = ComputePipeline::<field_resolve::resolve_unsigned::Entry>::groups_for(size);
         match nearest_outside {
             None => {
-                let bound = self.resolve_unsigned.bind(device, &field_resolve::resolve_unsigned::Resources { params: (&params).into(), nearest: nearest.into(), distance: (&dv).into() })?;
-                pass(encoder, &self.resolve_unsigned, &bound, groups, "resolve", prof);
+                let bound = self.resolve_unsigned.bind(
+                    device,
+                    &field_resolve::resolve_unsigned::Resources {
+                        params: (&params).into(),
+                        nearest: nearest.into(),
+                        distance: (&dv).into(),
+                    },
+                )?;
+                pass(
+                    encoder,
+                    &self.resolve_unsigned,
+                    &bound,
+                    groups,
+                    "resolve",
+                    prof,
+                );
             }
             Some(o) => {
-                let bound = self.resolve_signed.bind(device, &field_resolve::resolve_signed::Resources { params: (&params).into(), nearest: nearest.into(), nearest_outside: o.into(), distance: (&dv).into() })?;
-                pass(encoder, &self.resolve_signed, &bound, groups, "resolve", prof);
+                let bound = self.resolve_signed.bind(
+                    device,
+                    &field_resolve::resolve_signed::Resources {
+                        params: (&params).into(),
+                        nearest: nearest.into(),
+                        nearest_outside: o.into(),
+                        distance: (&dv).into(),
+                    },
+                )?;
+                pass(
+                    encoder,
+                    &self.resolve_signed,
+                    &bound,
+                    groups,
+                    "resolve",
+                    prof,
+                );
             }
         }
         Ok(distance)

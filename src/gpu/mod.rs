@@ -27,7 +27,9 @@ pub struct Context {
 
 impl std::fmt::Debug for Context {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Context").field("adapter", &self.adapter.get_info()).finish()
+        f.debug_struct("Context")
+            .field("adapter", &self.adapter.get_info())
+            .finish()
     }
 }
 
@@ -48,7 +50,10 @@ impl Context {
         let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
             backends: wgpu::Backends::NOOP,
             backend_options: wgpu::BackendOptions {
-                noop: wgpu::NoopBackendOptions { enable: true, ..Default::default() },
+                noop: wgpu::NoopBackendOptions {
+                    enable: true,
+                    ..Default::default()
+                },
                 ..Default::default()
             },
             ..wgpu::InstanceDescriptor::new_without_display_handle()
@@ -65,7 +70,11 @@ impl Context {
         Self::from_instance(instance, backends, name).await
     }
 
-    async fn from_instance(instance: wgpu::Instance, backends: wgpu::Backends, name: Option<&str>) -> Result<Self, Error> {
+    async fn from_instance(
+        instance: wgpu::Instance,
+        backends: wgpu::Backends,
+        name: Option<&str>,
+    ) -> Result<Self, Error> {
         let adapters = instance.enumerate_adapters(backends).await;
         let names: Vec<String> = adapters.iter().map(|a| describe(&a.get_info())).collect();
         let adapter = match name {
@@ -91,7 +100,8 @@ impl Context {
             }
         };
         let info = adapter.get_info();
-        let wanted = wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
+        let wanted =
+            wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
         let (device, queue) = adapter
             .request_device(&wgpu::DeviceDescriptor {
                 label: Some("fieldkit"),
@@ -100,13 +110,22 @@ impl Context {
                 ..Default::default()
             })
             .await
-            .map_err(|e| Error::Device { adapter: describe(&info), detail: e.to_string() })?;
+            .map_err(|e| Error::Device {
+                adapter: describe(&info),
+                detail: e.to_string(),
+            })?;
         let uncaptured = Arc::new(Mutex::new(Vec::new()));
         let sink = uncaptured.clone();
         device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
             sink.lock().unwrap().push(e.to_string());
         }));
-        Ok(Self { instance, adapter, device, queue, uncaptured })
+        Ok(Self {
+            instance,
+            adapter,
+            device,
+            queue,
+            uncaptured,
+        })
     }
 
     /// "name (backend, type)".
@@ -124,10 +143,17 @@ impl Context {
     }
 
     /// Submit, wait, and turn a device loss or an uncaptured error into a typed error.
-    pub fn submit_and_wait(&self, stage: &'static str, encoder: wgpu::CommandEncoder) -> Result<(), Error> {
+    pub fn submit_and_wait(
+        &self,
+        stage: &'static str,
+        encoder: wgpu::CommandEncoder,
+    ) -> Result<(), Error> {
         let index = self.queue.submit([encoder.finish()]);
         self.device
-            .poll(wgpu::PollType::Wait { submission_index: Some(index), timeout: None })
+            .poll(wgpu::PollType::Wait {
+                submission_index: Some(index),
+                timeout: None,
+            })
             .map_err(|_| Error::DeviceLost { stage })?;
         if let Some(message) = self.take_uncaptured().into_iter().next() {
             return Err(Error::Wgpu { stage, message });
@@ -136,29 +162,47 @@ impl Context {
     }
 
     pub fn encoder(&self, label: &str) -> wgpu::CommandEncoder {
-        self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) })
+        self.device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) })
     }
 }
 
 /// Run `f` inside validation and out-of-memory error scopes; any error wgpu reports becomes
 /// [`Error::Wgpu`] naming `stage`.
-pub fn scoped<T>(device: &wgpu::Device, stage: &'static str, f: impl FnOnce() -> T) -> Result<T, Error> {
+pub fn scoped<T>(
+    device: &wgpu::Device,
+    stage: &'static str,
+    f: impl FnOnce() -> T,
+) -> Result<T, Error> {
     let oom = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
     let validation = device.push_error_scope(wgpu::ErrorFilter::Validation);
     let out = f();
     let v = pollster::block_on(validation.pop());
     let o = pollster::block_on(oom.pop());
     match v.or(o) {
-        Some(e) => Err(Error::Wgpu { stage, message: e.to_string() }),
+        Some(e) => Err(Error::Wgpu {
+            stage,
+            message: e.to_string(),
+        }),
         None => Ok(out),
     }
 }
 
 /// A uniform buffer holding `value`, laid out by encase as the shader's struct (use the
 /// generated `fieldkit::shaders::…` type).
-pub fn uniform_buffer<T: encase::ShaderType + encase::internal::WriteInto>(device: &wgpu::Device, label: &str, value: &T) -> wgpu::Buffer {
+pub fn uniform_buffer<T: encase::ShaderType + encase::internal::WriteInto>(
+    device: &wgpu::Device,
+    label: &str,
+    value: &T,
+) -> wgpu::Buffer {
     use wgpu::util::DeviceExt;
     let mut bytes = encase::UniformBuffer::new(Vec::new());
-    bytes.write(value).expect("a generated uniform struct always encodes");
-    device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents: &bytes.into_inner(), usage: wgpu::BufferUsages::UNIFORM })
+    bytes
+        .write(value)
+        .expect("a generated uniform struct always encodes");
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents: &bytes.into_inner(),
+        usage: wgpu::BufferUsages::UNIFORM,
+    })
 }

@@ -14,7 +14,10 @@ fn map_and_read(ctx: &Context, staging: &wgpu::Buffer) -> Result<Vec<u8>, Error>
     rx.recv()
         .map_err(|e| Error::Readback(e.to_string()))?
         .map_err(|e| Error::Readback(e.to_string()))?;
-    let data = staging.get_mapped_range(..).map_err(|e| Error::Readback(format!("{e:?}")))?.to_vec();
+    let data = staging
+        .get_mapped_range(..)
+        .map_err(|e| Error::Readback(format!("{e:?}")))?
+        .to_vec();
     staging.unmap();
     Ok(data)
 }
@@ -22,7 +25,10 @@ fn map_and_read(ctx: &Context, staging: &wgpu::Buffer) -> Result<Vec<u8>, Error>
 /// Read a whole buffer (it needs `COPY_SRC` usage).
 pub fn read_buffer(ctx: &Context, buffer: &wgpu::Buffer) -> Result<Vec<u8>, Error> {
     if !buffer.usage().contains(wgpu::BufferUsages::COPY_SRC) {
-        return Err(Error::Readback(format!("buffer lacks COPY_SRC usage ({:?})", buffer.usage())));
+        return Err(Error::Readback(format!(
+            "buffer lacks COPY_SRC usage ({:?})",
+            buffer.usage()
+        )));
     }
     let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("fieldkit readback"),
@@ -38,9 +44,14 @@ pub fn read_buffer(ctx: &Context, buffer: &wgpu::Buffer) -> Result<Vec<u8>, Erro
 
 /// Read mip 0 of a 2D or 3D texture into texels of type `T` (e.g. `u32` for `R32Uint`,
 /// `f32` for `R32Float`, `[u8; 4]` for `Rgba8Unorm`), rows tightly packed, x fastest, then y, then z.
-pub fn read_texture<T: bytemuck::Pod>(ctx: &Context, texture: &wgpu::Texture) -> Result<Vec<T>, Error> {
+pub fn read_texture<T: bytemuck::Pod>(
+    ctx: &Context,
+    texture: &wgpu::Texture,
+) -> Result<Vec<T>, Error> {
     let format = texture.format();
-    let texel = format.block_copy_size(None).ok_or_else(|| Error::Readback(format!("{format:?} cannot be copied")))?;
+    let texel = format
+        .block_copy_size(None)
+        .ok_or_else(|| Error::Readback(format!("{format:?} cannot be copied")))?;
     if texel as usize != std::mem::size_of::<T>() {
         return Err(Error::Readback(format!(
             "{format:?} has {texel}-byte texels, asked for {}-byte values",
@@ -48,11 +59,15 @@ pub fn read_texture<T: bytemuck::Pod>(ctx: &Context, texture: &wgpu::Texture) ->
         )));
     }
     if !texture.usage().contains(wgpu::TextureUsages::COPY_SRC) {
-        return Err(Error::Readback(format!("texture lacks COPY_SRC usage ({:?})", texture.usage())));
+        return Err(Error::Readback(format!(
+            "texture lacks COPY_SRC usage ({:?})",
+            texture.usage()
+        )));
     }
     let size = texture.size();
     let row = size.width * texel;
-    let padded = row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+    let padded =
+        row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
     let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("fieldkit texture readback"),
         size: padded as u64 * size.height as u64 * size.depth_or_array_layers as u64,
@@ -74,7 +89,8 @@ pub fn read_texture<T: bytemuck::Pod>(ctx: &Context, texture: &wgpu::Texture) ->
     );
     ctx.submit_and_wait("texture readback", enc)?;
     let bytes = map_and_read(ctx, &staging)?;
-    let mut out = Vec::with_capacity((size.width * size.height * size.depth_or_array_layers) as usize);
+    let mut out =
+        Vec::with_capacity((size.width * size.height * size.depth_or_array_layers) as usize);
     for chunk in bytes.chunks(padded as usize) {
         out.extend_from_slice(bytemuck::cast_slice::<u8, T>(&chunk[..row as usize]));
     }

@@ -15,7 +15,12 @@ pub struct Timer {
 impl Timer {
     /// `None` when the adapter has no timestamp queries.
     pub fn new(ctx: &Context, passes: u32) -> Option<Self> {
-        if !ctx.device.features().contains(wgpu::Features::TIMESTAMP_QUERY) || passes == 0 {
+        if !ctx
+            .device
+            .features()
+            .contains(wgpu::Features::TIMESTAMP_QUERY)
+            || passes == 0
+        {
             return None;
         }
         let count = passes * 2;
@@ -30,7 +35,12 @@ impl Timer {
             usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
-        Some(Self { set, resolve, count, period_ns: ctx.queue.get_timestamp_period() })
+        Some(Self {
+            set,
+            resolve,
+            count,
+            period_ns: ctx.queue.get_timestamp_period(),
+        })
     }
 
     /// Timestamp writes for pass `i` (start and end).
@@ -75,11 +85,18 @@ pub struct Profiler {
 impl Profiler {
     /// `None` when the adapter has no timestamp queries.
     pub fn new(ctx: &Context, capacity: u32) -> Option<Self> {
-        Some(Self { timer: Timer::new(ctx, capacity)?, capacity, names: Vec::new() })
+        Some(Self {
+            timer: Timer::new(ctx, capacity)?,
+            capacity,
+            names: Vec::new(),
+        })
     }
 
     /// Timestamp writes for the next pass, recorded under `name`.
-    pub fn next(&mut self, name: impl Into<String>) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
+    pub fn next(
+        &mut self,
+        name: impl Into<String>,
+    ) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
         let i = self.names.len() as u32;
         if i >= self.capacity {
             return None;
@@ -103,8 +120,16 @@ impl Profiler {
         let ticks: &[u64] = bytemuck::cast_slice(&bytes);
         let ms = |a: u64, b: u64| b.saturating_sub(a) as f64 * self.timer.period_ns as f64 / 1e6;
         let names = std::mem::take(&mut self.names);
-        let passes = names.into_iter().enumerate().map(|(i, n)| (n, ms(ticks[2 * i], ticks[2 * i + 1]))).collect::<Vec<_>>();
-        let total = if passes.is_empty() { 0.0 } else { ms(ticks[0], ticks[2 * passes.len() - 1]) };
+        let passes = names
+            .into_iter()
+            .enumerate()
+            .map(|(i, n)| (n, ms(ticks[2 * i], ticks[2 * i + 1])))
+            .collect::<Vec<_>>();
+        let total = if passes.is_empty() {
+            0.0
+        } else {
+            ms(ticks[0], ticks[2 * passes.len() - 1])
+        };
         Ok((passes, total))
     }
 }

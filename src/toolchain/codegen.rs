@@ -15,7 +15,9 @@ fn pascal(s: &str) -> String {
         .filter(|p| !p.is_empty())
         .map(|p| {
             let mut c = p.chars();
-            c.next().map(|f| f.to_ascii_uppercase().to_string() + c.as_str()).unwrap_or_default()
+            c.next()
+                .map(|f| f.to_ascii_uppercase().to_string() + c.as_str())
+                .unwrap_or_default()
         })
         .collect()
 }
@@ -36,12 +38,22 @@ fn wgpu_binding_type(kind: &BindingKind) -> String {
         BindingKind::Uniform { min_size, .. } => format!(
             "wgpu::BindingType::Buffer {{ ty: wgpu::BufferBindingType::Uniform, has_dynamic_offset: false, min_binding_size: core::num::NonZeroU64::new({min_size}) }}"
         ),
-        BindingKind::Storage { read_only, min_size, .. } => format!(
+        BindingKind::Storage {
+            read_only,
+            min_size,
+            ..
+        } => format!(
             "wgpu::BindingType::Buffer {{ ty: wgpu::BufferBindingType::Storage {{ read_only: {read_only} }}, has_dynamic_offset: false, min_binding_size: core::num::NonZeroU64::new({min_size}) }}"
         ),
-        BindingKind::Texture { dim, sample, multisampled } => {
+        BindingKind::Texture {
+            dim,
+            sample,
+            multisampled,
+        } => {
             let st = match sample {
-                SampleKind::Float { filterable } => format!("wgpu::TextureSampleType::Float {{ filterable: {filterable} }}"),
+                SampleKind::Float { filterable } => {
+                    format!("wgpu::TextureSampleType::Float {{ filterable: {filterable} }}")
+                }
                 SampleKind::Uint => "wgpu::TextureSampleType::Uint".into(),
                 SampleKind::Sint => "wgpu::TextureSampleType::Sint".into(),
                 SampleKind::Depth => "wgpu::TextureSampleType::Depth".into(),
@@ -51,7 +63,11 @@ fn wgpu_binding_type(kind: &BindingKind) -> String {
                 view_dim(dim)
             )
         }
-        BindingKind::StorageTexture { dim, format, access } => {
+        BindingKind::StorageTexture {
+            dim,
+            format,
+            access,
+        } => {
             let access = match access.as_str() {
                 "read" => "ReadOnly",
                 "read_write" => "ReadWrite",
@@ -62,7 +78,10 @@ fn wgpu_binding_type(kind: &BindingKind) -> String {
                 view_dim(dim)
             )
         }
-        BindingKind::Sampler { comparison, filtering } => {
+        BindingKind::Sampler {
+            comparison,
+            filtering,
+        } => {
             let t = if *comparison {
                 "Comparison"
             } else if *filtering {
@@ -78,8 +97,16 @@ fn wgpu_binding_type(kind: &BindingKind) -> String {
 fn resource_field_type(kind: &BindingKind) -> String {
     match kind {
         BindingKind::Uniform { rust, .. } => format!("crate::bind::Uniform<'a, {rust}>"),
-        BindingKind::Storage { rust, read_only: true, .. } => format!("crate::bind::StorageRead<'a, {rust}>"),
-        BindingKind::Storage { rust, read_only: false, .. } => format!("crate::bind::StorageReadWrite<'a, {rust}>"),
+        BindingKind::Storage {
+            rust,
+            read_only: true,
+            ..
+        } => format!("crate::bind::StorageRead<'a, {rust}>"),
+        BindingKind::Storage {
+            rust,
+            read_only: false,
+            ..
+        } => format!("crate::bind::StorageReadWrite<'a, {rust}>"),
         BindingKind::Texture { .. } => "crate::bind::Texture<'a>".into(),
         BindingKind::StorageTexture { .. } => "crate::bind::StorageTexture<'a>".into(),
         BindingKind::Sampler { .. } => "crate::bind::Sampler<'a>".into(),
@@ -109,14 +136,22 @@ struct PipelineDesc<'r> {
 
 fn pipelines(r: &Reflection) -> Vec<PipelineDesc<'_>> {
     let mut out = Vec::new();
-    let vertex: Vec<_> = r.entry_points.iter().filter(|e| e.stage == "vertex").collect();
+    let vertex: Vec<_> = r
+        .entry_points
+        .iter()
+        .filter(|e| e.stage == "vertex")
+        .collect();
     for ep in &r.entry_points {
         match ep.stage.as_str() {
-            "compute" => out.push(PipelineDesc { module: ep.name.clone(), entries: vec![ep] }),
+            "compute" => out.push(PipelineDesc {
+                module: ep.name.clone(),
+                entries: vec![ep],
+            }),
             // A fragment entry pairs with the file's vertex entry (the lints require exactly one).
-            "fragment" if vertex.len() == 1 => {
-                out.push(PipelineDesc { module: ep.name.clone(), entries: vec![vertex[0], ep] })
-            }
+            "fragment" if vertex.len() == 1 => out.push(PipelineDesc {
+                module: ep.name.clone(),
+                entries: vec![vertex[0], ep],
+            }),
             _ => {}
         }
     }
@@ -125,9 +160,21 @@ fn pipelines(r: &Reflection) -> Vec<PipelineDesc<'_>> {
 
 fn gen_structs(r: &Reflection, s: &mut String) {
     for st in r.structs.iter().filter(|s| s.host_shareable) {
-        let runtime = st.members.last().is_some_and(|m| m.rust.starts_with("Vec<"));
-        let derives = if runtime { "Debug, Clone, PartialEq, encase::ShaderType" } else { "Debug, Clone, Copy, PartialEq, Default, encase::ShaderType" };
-        writeln!(s, "/// WGSL `struct {}`: {} bytes, align {}.", st.name, st.size, st.align).unwrap();
+        let runtime = st
+            .members
+            .last()
+            .is_some_and(|m| m.rust.starts_with("Vec<"));
+        let derives = if runtime {
+            "Debug, Clone, PartialEq, encase::ShaderType"
+        } else {
+            "Debug, Clone, Copy, PartialEq, Default, encase::ShaderType"
+        };
+        writeln!(
+            s,
+            "/// WGSL `struct {}`: {} bytes, align {}.",
+            st.name, st.size, st.align
+        )
+        .unwrap();
         writeln!(s, "#[derive({derives})]\npub struct {} {{", st.name).unwrap();
         for m in &st.members {
             writeln!(s, "/// offset {}, `{}`", m.offset, m.ty).unwrap();
@@ -161,9 +208,23 @@ fn gen_structs(r: &Reflection, s: &mut String) {
 
 fn gen_pipeline(r: &Reflection, p: &PipelineDesc, s: &mut String) {
     let compute = p.entries[0].stage == "compute";
-    writeln!(s, "/// Entry point{} {}.", if compute { "" } else { "s" },
-        p.entries.iter().map(|e| format!("`{}` ({})", e.name, e.stage)).collect::<Vec<_>>().join(" + ")).unwrap();
-    writeln!(s, "pub mod {} {{\n#[allow(unused_imports)]\nuse super::*;", p.module).unwrap();
+    writeln!(
+        s,
+        "/// Entry point{} {}.",
+        if compute { "" } else { "s" },
+        p.entries
+            .iter()
+            .map(|e| format!("`{}` ({})", e.name, e.stage))
+            .collect::<Vec<_>>()
+            .join(" + ")
+    )
+    .unwrap();
+    writeln!(
+        s,
+        "pub mod {} {{\n#[allow(unused_imports)]\nuse super::*;",
+        p.module
+    )
+    .unwrap();
 
     // Bindings used by any of the entries, with visibility from real use.
     let mut used: Vec<(&super::reflect::Binding, Vec<&str>)> = Vec::new();
@@ -171,7 +232,11 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, s: &mut String) {
         let stages: Vec<&str> = p
             .entries
             .iter()
-            .filter(|e| e.uses.iter().any(|u| u.group == b.group && u.binding == b.binding))
+            .filter(|e| {
+                e.uses
+                    .iter()
+                    .any(|u| u.group == b.group && u.binding == b.binding)
+            })
             .map(|e| e.stage.as_str())
             .collect();
         if !stages.is_empty() {
@@ -181,13 +246,21 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, s: &mut String) {
 
     if compute {
         let [x, y, z] = p.entries[0].workgroup_size;
-        writeln!(s, "/// `@workgroup_size` of `{}`.\npub const WORKGROUP_SIZE: [u32; 3] = [{x}, {y}, {z}];", p.entries[0].name).unwrap();
+        writeln!(
+            s,
+            "/// `@workgroup_size` of `{}`.\npub const WORKGROUP_SIZE: [u32; 3] = [{x}, {y}, {z}];",
+            p.entries[0].name
+        )
+        .unwrap();
     }
 
     // Vertex inputs: per-vertex inputs in buffer 0; `instance_*` inputs in buffer 1 (per instance).
     let mut buffers: Vec<(&str, &str, Vec<&super::reflect::VertexInput>)> = Vec::new();
     if let Some(vs) = p.entries.iter().find(|e| e.stage == "vertex") {
-        let (inst, vert): (Vec<_>, Vec<_>) = vs.vertex_inputs.iter().partition(|v| v.name.starts_with("instance_"));
+        let (inst, vert): (Vec<_>, Vec<_>) = vs
+            .vertex_inputs
+            .iter()
+            .partition(|v| v.name.starts_with("instance_"));
         if !vert.is_empty() {
             buffers.push(("Vertex", "Vertex", vert));
         }
@@ -196,10 +269,20 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, s: &mut String) {
         }
     }
     for (name, _, inputs) in &buffers {
-        writeln!(s, "/// One {} of the vertex stage's input, laid out as the shader reads it.", name.to_lowercase()).unwrap();
+        writeln!(
+            s,
+            "/// One {} of the vertex stage's input, laid out as the shader reads it.",
+            name.to_lowercase()
+        )
+        .unwrap();
         writeln!(s, "#[repr(C)]\n#[derive(Debug, Clone, Copy, PartialEq, Default, bytemuck::Pod, bytemuck::Zeroable)]\npub struct {name} {{").unwrap();
         for v in inputs {
-            writeln!(s, "/// `@location({})` `{}`\npub {}: {},", v.location, v.ty, v.name, v.rust).unwrap();
+            writeln!(
+                s,
+                "/// `@location({})` `{}`\npub {}: {},",
+                v.location, v.ty, v.name, v.rust
+            )
+            .unwrap();
         }
         writeln!(s, "}}").unwrap();
     }
@@ -214,27 +297,48 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, s: &mut String) {
             ));
             offset += v.size;
         }
-        writeln!(s, "const _: () = assert!(core::mem::size_of::<{name}>() == {offset});").unwrap();
+        writeln!(
+            s,
+            "const _: () = assert!(core::mem::size_of::<{name}>() == {offset});"
+        )
+        .unwrap();
         vb_consts.push(format!(
             "Some(wgpu::VertexBufferLayout {{ array_stride: {offset}, step_mode: wgpu::VertexStepMode::{step}, attributes: &[{}] }})",
             attrs.join(", ")
         ));
     }
 
-    writeln!(s, "/// Every resource the entry point binds, typed by what may be bound there.").unwrap();
+    writeln!(
+        s,
+        "/// Every resource the entry point binds, typed by what may be bound there."
+    )
+    .unwrap();
     writeln!(s, "pub struct Resources<'a> {{").unwrap();
     for (b, _) in &used {
         let space = match &b.kind {
             BindingKind::Uniform { .. } => "<uniform>",
-            BindingKind::Storage { read_only: true, .. } => "<storage, read>",
-            BindingKind::Storage { read_only: false, .. } => "<storage, read_write>",
+            BindingKind::Storage {
+                read_only: true, ..
+            } => "<storage, read>",
+            BindingKind::Storage {
+                read_only: false, ..
+            } => "<storage, read_write>",
             _ => "",
         };
-        writeln!(s, "/// `@group({}) @binding({}) var{space} {}: {}`", b.group, b.binding, b.name, b.ty).unwrap();
+        writeln!(
+            s,
+            "/// `@group({}) @binding({}) var{space} {}: {}`",
+            b.group, b.binding, b.name, b.ty
+        )
+        .unwrap();
         writeln!(s, "pub {}: {},", b.name, resource_field_type(&b.kind)).unwrap();
     }
     if used.is_empty() {
-        writeln!(s, "#[doc(hidden)]\npub _marker: core::marker::PhantomData<&'a ()>,").unwrap();
+        writeln!(
+            s,
+            "#[doc(hidden)]\npub _marker: core::marker::PhantomData<&'a ()>,"
+        )
+        .unwrap();
     }
     writeln!(s, "}}").unwrap();
 
@@ -268,7 +372,11 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, s: &mut String) {
             targets.join(", ")
         )
     };
-    let overrides: Vec<String> = r.overrides.iter().map(|o| format!("\"{}\"", o.name)).collect();
+    let overrides: Vec<String> = r
+        .overrides
+        .iter()
+        .map(|o| format!("\"{}\"", o.name))
+        .collect();
     let main_entry = p.entries.last().unwrap();
     writeln!(
         s,
@@ -278,16 +386,31 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, s: &mut String) {
         overrides.join(", ")
     )
     .unwrap();
-    writeln!(s, "/// Marker type for this entry point.\npub struct Entry;").unwrap();
+    writeln!(
+        s,
+        "/// Marker type for this entry point.\npub struct Entry;"
+    )
+    .unwrap();
     writeln!(s, "impl crate::bind::Entry for Entry {{").unwrap();
     writeln!(s, "type Resources<'a> = Resources<'a>;").unwrap();
     writeln!(s, "const INFO: &'static crate::bind::EntryInfo = &INFO;").unwrap();
-    let items: Vec<String> = used.iter().map(|(b, _)| format!("crate::bind::IntoResource::resource(&r.{})", b.name)).collect();
+    let items: Vec<String> = used
+        .iter()
+        .map(|(b, _)| format!("crate::bind::IntoResource::resource(&r.{})", b.name))
+        .collect();
     let rname = if used.is_empty() { "_r" } else { "r" };
     writeln!(s, "fn resources<'a>({rname}: &Self::Resources<'a>) -> Vec<crate::bind::Resource<'a>> {{ vec![{}] }}", items.join(", ")).unwrap();
     writeln!(s, "}}").unwrap();
-    let ptype = if compute { "ComputePipeline" } else { "RenderPipeline" };
-    writeln!(s, "/// The pipeline for this entry point.\npub type Pipeline = crate::bind::{ptype}<Entry>;").unwrap();
+    let ptype = if compute {
+        "ComputePipeline"
+    } else {
+        "RenderPipeline"
+    };
+    writeln!(
+        s,
+        "/// The pipeline for this entry point.\npub type Pipeline = crate::bind::{ptype}<Entry>;"
+    )
+    .unwrap();
     writeln!(s, "}}").unwrap();
 }
 
@@ -296,12 +419,27 @@ pub fn stage_module(stage: &Stage) -> String {
     let r = reflect(stage);
     let mut s = String::new();
     writeln!(s, "/// Stage `{}` from `{}`.", r.stage, r.path).unwrap();
-    if let Some(h) = stage.original.lines().next().and_then(|l| l.strip_prefix("//")) {
+    if let Some(h) = stage
+        .original
+        .lines()
+        .next()
+        .and_then(|l| l.strip_prefix("//"))
+    {
         writeln!(s, "///\n/// {}", h.trim()).unwrap();
     }
     writeln!(s, "pub mod {} {{", stage.file.name).unwrap();
-    writeln!(s, "/// Stage name, `room::stage`.\npub const STAGE: &str = \"{}\";", r.stage).unwrap();
-    writeln!(s, "/// Shader file, relative to the crate root.\npub const PATH: &str = \"{}\";", r.path).unwrap();
+    writeln!(
+        s,
+        "/// Stage name, `room::stage`.\npub const STAGE: &str = \"{}\";",
+        r.stage
+    )
+    .unwrap();
+    writeln!(
+        s,
+        "/// Shader file, relative to the crate root.\npub const PATH: &str = \"{}\";",
+        r.path
+    )
+    .unwrap();
     writeln!(s, "/// The linked WGSL (imports resolved), as validated by naga at build time.\npub const SOURCE: &str = {:?};", stage.source).unwrap();
     if !r.overrides.is_empty() {
         writeln!(s, "/// Pipeline-overridable constants (`override` declarations).\npub const OVERRIDES: &[&str] = &[{}];",
@@ -384,14 +522,27 @@ struct FsOut { @location(0) colour: vec4<f32>, @location(1) id: u32 }
         assert!(code.contains("offset: 12"));
         // Visibility from real use: the camera is read by both stages, the texture by the fragment only.
         let flat: String = code.split_whitespace().collect();
-        assert!(flat.contains("visibility:wgpu::ShaderStages::FRAGMENT.union(wgpu::ShaderStages::VERTEX)"), "{code}");
-        assert!(code.contains("filterable: true"), "sampled through a sampler: filterable");
+        assert!(
+            flat.contains(
+                "visibility:wgpu::ShaderStages::FRAGMENT.union(wgpu::ShaderStages::VERTEX)"
+            ),
+            "{code}"
+        );
+        assert!(
+            code.contains("filterable: true"),
+            "sampled through a sampler: filterable"
+        );
         assert!(code.contains("SamplerBindingType::Filtering"));
         // Fragment targets: a float and a uint output.
         assert!(code.contains("scalar: crate::bind::ScalarClass::Float"));
         assert!(code.contains("scalar: crate::bind::ScalarClass::Uint"));
         // vec3 followed by f32 packs into its padding: offsets 64 and 76, size 80.
-        assert!(code.contains(".offset(1) == 64") && code.contains(".offset(2) == 76") && code.contains("min_size().get() == 80"), "{code}");
+        assert!(
+            code.contains(".offset(1) == 64")
+                && code.contains(".offset(2) == 76")
+                && code.contains("min_size().get() == 80"),
+            "{code}"
+        );
     }
 
     #[test]

@@ -121,9 +121,13 @@ fn link(shader_root: &Path, stage: &StageFile) -> Result<Linked, String> {
     compiler.use_sourcemap(true);
     // Keep every entry point of the stage file (stripping only removes unused helpers).
     compiler.keep_all_entrypoints();
-    let result = compiler
-        .compile(&root)
-        .map_err(|e| format!("error: WESL could not link {}\n{}", stage.rel_path, strip_ansi(&e.to_string())))?;
+    let result = compiler.compile(&root).map_err(|e| {
+        format!(
+            "error: WESL could not link {}\n{}",
+            stage.rel_path,
+            strip_ansi(&e.to_string())
+        )
+    })?;
     let sourcemap = result.sourcemap.as_ref();
 
     let mut text = String::new();
@@ -151,7 +155,10 @@ fn link(shader_root: &Path, stage: &StageFile) -> Result<Linked, String> {
             Some(path) => module_file(shader_root, &path),
             None => Some(stage.rel_path.clone()),
         };
-        origins.push(DeclOrigin { linked: start..end, file: file.map(|f| (f, span)) });
+        origins.push(DeclOrigin {
+            linked: start..end,
+            file: file.map(|f| (f, span)),
+        });
     }
     Ok(Linked { text, origins })
 }
@@ -232,7 +239,10 @@ fn map_span(linked: &Linked, crate_root: &Path, span: std::ops::Range<usize>) ->
         }
     }
     let (s, e) = best.unwrap_or((0, decl_text.find('\n').unwrap_or(decl_text.len())));
-    Some(Mapped { file, range: decl_range.start + s..decl_range.start + e })
+    Some(Mapped {
+        file,
+        range: decl_range.start + s..decl_range.start + e,
+    })
 }
 
 /// Render a naga error against the original files, in naga's own annotated style.
@@ -248,12 +258,18 @@ fn render(
     let mut ids = std::collections::BTreeMap::new();
     let mut diag_labels = Vec::new();
     for (range, text) in labels {
-        let Some(m) = map_span(linked, crate_root, range.clone()) else { continue };
+        let Some(m) = map_span(linked, crate_root, range.clone()) else {
+            continue;
+        };
         let id = *ids.entry(m.file.clone()).or_insert_with(|| {
             let src = std::fs::read_to_string(crate_root.join(&m.file)).unwrap_or_default();
             files.add(m.file.clone(), src)
         });
-        let label = if diag_labels.is_empty() { Label::primary(id, m.range) } else { Label::secondary(id, m.range) };
+        let label = if diag_labels.is_empty() {
+            Label::primary(id, m.range)
+        } else {
+            Label::secondary(id, m.range)
+        };
         diag_labels.push(label.with_message(text.clone()));
     }
     let mut notes = notes;
@@ -265,7 +281,10 @@ fn render(
         }
         notes.push(format!("in stage {}", stage.id()));
     }
-    let diagnostic = Diagnostic::error().with_message(message).with_labels(diag_labels).with_notes(notes);
+    let diagnostic = Diagnostic::error()
+        .with_message(message)
+        .with_labels(diag_labels)
+        .with_notes(notes);
     let mut writer = term::termcolor::NoColor::new(Vec::new());
     let config = term::Config::default();
     if term::emit_to_write_style(&mut writer, &config, &files, &diagnostic).is_err() {
@@ -278,29 +297,52 @@ fn render(
 pub fn build_stage(crate_root: &Path, stage: &StageFile) -> Result<Stage, String> {
     let shader_root = crate_root.join("shaders");
     let linked = link(&shader_root, stage)?;
-    let original = std::fs::read_to_string(&stage.abs_path).map_err(|e| format!("{}: {e}", stage.rel_path))?;
+    let original =
+        std::fs::read_to_string(&stage.abs_path).map_err(|e| format!("{}: {e}", stage.rel_path))?;
     let module = naga::front::wgsl::parse_str(&linked.text).map_err(|e| {
-        let labels: Vec<_> = e.labels().map(|(s, l)| (s.to_range().unwrap_or(0..0), l.to_string())).collect();
+        let labels: Vec<_> = e
+            .labels()
+            .map(|(s, l)| (s.to_range().unwrap_or(0..0), l.to_string()))
+            .collect();
         render(crate_root, &linked, stage, e.message(), &labels, vec![])
     })?;
-    let mut validator =
-        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::default());
+    let mut validator = naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::default(),
+    );
     let info = validator.validate(&module).map_err(|e| {
-        let labels: Vec<_> = e.spans().map(|(s, l)| (s.to_range().unwrap_or(0..0), l.clone())).collect();
+        let labels: Vec<_> = e
+            .spans()
+            .map(|(s, l)| (s.to_range().unwrap_or(0..0), l.clone()))
+            .collect();
         let mut notes = Vec::new();
         let mut source: Option<&dyn std::error::Error> = std::error::Error::source(e.as_inner());
         while let Some(s) = source {
             notes.push(s.to_string());
             source = s.source();
         }
-        render(crate_root, &linked, stage, &e.as_inner().to_string(), &labels, notes)
+        render(
+            crate_root,
+            &linked,
+            stage,
+            &e.as_inner().to_string(),
+            &labels,
+            notes,
+        )
     })?;
-    Ok(Stage { file: stage.clone(), source: linked.text, module, info, original })
+    Ok(Stage {
+        file: stage.clone(),
+        source: linked.text,
+        module,
+        info,
+        original,
+    })
 }
 
 /// Build every stage; on failure return *all* errors, one rendered message per broken stage.
 pub fn build_all(crate_root: &Path) -> Result<Vec<Stage>, Vec<String>> {
-    let files = discover(&crate_root.join("shaders")).map_err(|e| vec![format!("cannot read shaders/: {e}")])?;
+    let files = discover(&crate_root.join("shaders"))
+        .map_err(|e| vec![format!("cannot read shaders/: {e}")])?;
     let mut stages = Vec::new();
     let mut errors = Vec::new();
     for f in &files {
@@ -309,7 +351,11 @@ pub fn build_all(crate_root: &Path) -> Result<Vec<Stage>, Vec<String>> {
             Err(e) => errors.push(e),
         }
     }
-    if errors.is_empty() { Ok(stages) } else { Err(errors) }
+    if errors.is_empty() {
+        Ok(stages)
+    } else {
+        Err(errors)
+    }
 }
 
 #[cfg(test)]
@@ -318,8 +364,12 @@ mod tests {
 
     /// A throwaway crate root with a shared helper and the given stage files.
     fn tree(stages: &[(&str, &str)]) -> PathBuf {
-        let n = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap().as_nanos();
-        let root = std::env::temp_dir().join(format!("fieldkit-toolchain-{}-{n}", std::process::id()));
+        let n = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .unwrap()
+            .as_nanos();
+        let root =
+            std::env::temp_dir().join(format!("fieldkit-toolchain-{}-{n}", std::process::id()));
         std::fs::create_dir_all(root.join("shaders/shared")).unwrap();
         std::fs::create_dir_all(root.join("shaders/room")).unwrap();
         std::fs::write(root.join("shaders/shared/util.wesl"), "// Helpers.\n\nfn twice(x: u32) -> u32 {\n    return x * 2u;\n}\n\nfn broken_helper() -> f32 {\n    return 1u;\n}\n").unwrap();
@@ -333,18 +383,43 @@ mod tests {
     fn every_broken_stage_is_reported_at_its_original_line_and_column() {
         let root = tree(&[
             // Type error in the stage itself, on line 6, after an import that shifts linked text.
-            ("a_type", "// Stage with a type error.\nimport package::shared::util::twice;\n@group(0) @binding(0) var<storage, read_write> out: array<u32>;\n@compute @workgroup_size(1)\nfn main() {\n    out[0] = twice(1.5);\n}\n"),
+            (
+                "a_type",
+                "// Stage with a type error.\nimport package::shared::util::twice;\n@group(0) @binding(0) var<storage, read_write> out: array<u32>;\n@compute @workgroup_size(1)\nfn main() {\n    out[0] = twice(1.5);\n}\n",
+            ),
             // Parse error on line 3.
-            ("b_parse", "// Stage with a syntax error.\n@compute @workgroup_size(1)\nfn main() { let x = ; }\n"),
-            ("c_fine", "// A valid stage.\n@compute @workgroup_size(1)\nfn main() {}\n"),
+            (
+                "b_parse",
+                "// Stage with a syntax error.\n@compute @workgroup_size(1)\nfn main() { let x = ; }\n",
+            ),
+            (
+                "c_fine",
+                "// A valid stage.\n@compute @workgroup_size(1)\nfn main() {}\n",
+            ),
             // Error inside an imported helper: reported in the helper's file.
-            ("d_helper", "// Uses a broken helper.\nimport package::shared::util::broken_helper;\n@compute @workgroup_size(1)\nfn main() { _ = broken_helper(); }\n"),
+            (
+                "d_helper",
+                "// Uses a broken helper.\nimport package::shared::util::broken_helper;\n@compute @workgroup_size(1)\nfn main() { _ = broken_helper(); }\n",
+            ),
         ]);
         let errors = build_all(&root).err().expect("broken stages fail");
         assert_eq!(errors.len(), 3, "{errors:#?}");
-        assert!(errors[0].contains("shaders/room/a_type.wgsl:6:"), "{}", errors[0]);
-        assert!(errors[1].contains("shaders/room/b_parse.wgsl:3:"), "{}", errors[1]);
-        assert!(errors[2].contains("shaders/shared/util.wesl:7:1") && errors[2].contains("8 │     return 1u;"), "{}", errors[2]);
+        assert!(
+            errors[0].contains("shaders/room/a_type.wgsl:6:"),
+            "{}",
+            errors[0]
+        );
+        assert!(
+            errors[1].contains("shaders/room/b_parse.wgsl:3:"),
+            "{}",
+            errors[1]
+        );
+        assert!(
+            errors[2].contains("shaders/shared/util.wesl:7:1")
+                && errors[2].contains("8 │     return 1u;"),
+            "{}",
+            errors[2]
+        );
         eprintln!("{}", errors.join("\n"));
         std::fs::remove_dir_all(root).ok();
     }

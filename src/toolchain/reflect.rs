@@ -33,11 +33,29 @@ pub struct Binding {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum BindingKind {
-    Uniform { min_size: u32, rust: String },
-    Storage { read_only: bool, min_size: u32, rust: String },
-    Texture { dim: String, sample: SampleKind, multisampled: bool },
-    StorageTexture { dim: String, format: String, access: String },
-    Sampler { comparison: bool, filtering: bool },
+    Uniform {
+        min_size: u32,
+        rust: String,
+    },
+    Storage {
+        read_only: bool,
+        min_size: u32,
+        rust: String,
+    },
+    Texture {
+        dim: String,
+        sample: SampleKind,
+        multisampled: bool,
+    },
+    StorageTexture {
+        dim: String,
+        format: String,
+        access: String,
+    },
+    Sampler {
+        comparison: bool,
+        filtering: bool,
+    },
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -133,7 +151,11 @@ fn dim_name(dim: ImageDimension, arrayed: bool) -> String {
         ImageDimension::D3 => "3d",
         ImageDimension::Cube => "cube",
     };
-    if arrayed { format!("{d}_array") } else { d.into() }
+    if arrayed {
+        format!("{d}_array")
+    } else {
+        d.into()
+    }
 }
 
 /// WGSL spelling of a type.
@@ -144,31 +166,63 @@ pub fn wgsl_type(module: &naga::Module, ty: naga::Handle<naga::Type>) -> String 
     }
     match &t.inner {
         TypeInner::Scalar(s) => scalar_name(*s),
-        TypeInner::Vector { size, scalar } => format!("vec{}<{}>", *size as u8, scalar_name(*scalar)),
-        TypeInner::Matrix { columns, rows, scalar } => {
-            format!("mat{}x{}<{}>", *columns as u8, *rows as u8, scalar_name(*scalar))
+        TypeInner::Vector { size, scalar } => {
+            format!("vec{}<{}>", *size as u8, scalar_name(*scalar))
+        }
+        TypeInner::Matrix {
+            columns,
+            rows,
+            scalar,
+        } => {
+            format!(
+                "mat{}x{}<{}>",
+                *columns as u8,
+                *rows as u8,
+                scalar_name(*scalar)
+            )
         }
         TypeInner::Atomic(s) => format!("atomic<{}>", scalar_name(*s)),
         TypeInner::Array { base, size, .. } => match size {
             naga::ArraySize::Constant(n) => format!("array<{}, {n}>", wgsl_type(module, *base)),
             _ => format!("array<{}>", wgsl_type(module, *base)),
         },
-        TypeInner::Image { dim, arrayed, class } => match class {
+        TypeInner::Image {
+            dim,
+            arrayed,
+            class,
+        } => match class {
             ImageClass::Sampled { kind, multi } => format!(
                 "texture_{}{}<{}>",
                 if *multi { "multisampled_" } else { "" },
                 dim_name(*dim, *arrayed),
-                scalar_name(naga::Scalar { kind: *kind, width: 4 })
+                scalar_name(naga::Scalar {
+                    kind: *kind,
+                    width: 4
+                })
             ),
             ImageClass::Depth { multi } => {
-                format!("texture_depth_{}{}", if *multi { "multisampled_" } else { "" }, dim_name(*dim, *arrayed))
+                format!(
+                    "texture_depth_{}{}",
+                    if *multi { "multisampled_" } else { "" },
+                    dim_name(*dim, *arrayed)
+                )
             }
             ImageClass::Storage { format, access } => {
-                format!("texture_storage_{}<{}, {}>", dim_name(*dim, *arrayed), storage_format_wgsl(*format), access_name(*access))
+                format!(
+                    "texture_storage_{}<{}, {}>",
+                    dim_name(*dim, *arrayed),
+                    storage_format_wgsl(*format),
+                    access_name(*access)
+                )
             }
             ImageClass::External => "texture_external".into(),
         },
-        TypeInner::Sampler { comparison } => if *comparison { "sampler_comparison" } else { "sampler" }.into(),
+        TypeInner::Sampler { comparison } => if *comparison {
+            "sampler_comparison"
+        } else {
+            "sampler"
+        }
+        .into(),
         other => format!("{other:?}"),
     }
 }
@@ -193,7 +247,11 @@ pub fn rust_type(module: &naga::Module, ty: naga::Handle<naga::Type>) -> Option<
             };
             format!("glam::{prefix}Vec{}", *size as u8)
         }
-        TypeInner::Matrix { columns, rows, scalar } if columns == rows && scalar.kind == ScalarKind::Float => {
+        TypeInner::Matrix {
+            columns,
+            rows,
+            scalar,
+        } if columns == rows && scalar.kind == ScalarKind::Float => {
             format!("glam::Mat{}", *columns as u8)
         }
         TypeInner::Array { base, size, .. } => {
@@ -223,7 +281,10 @@ pub fn storage_format_wgsl(f: naga::StorageFormat) -> String {
     format!("{f:?}").to_lowercase()
 }
 
-fn vertex_format(module: &naga::Module, ty: naga::Handle<naga::Type>) -> Option<(String, String, u32)> {
+fn vertex_format(
+    module: &naga::Module,
+    ty: naga::Handle<naga::Type>,
+) -> Option<(String, String, u32)> {
     let (n, scalar) = match module.types[ty].inner {
         TypeInner::Scalar(s) => (1u8, s),
         TypeInner::Vector { size, scalar } => (size as u8, scalar),
@@ -235,7 +296,11 @@ fn vertex_format(module: &naga::Module, ty: naga::Handle<naga::Type>) -> Option<
         (ScalarKind::Sint, 4) => "Sint32",
         _ => return None,
     };
-    let format = if n == 1 { base.to_string() } else { format!("{base}x{n}") };
+    let format = if n == 1 {
+        base.to_string()
+    } else {
+        format!("{base}x{n}")
+    };
     let rust = rust_type(module, ty)?;
     Some((format, rust, 4 * n as u32))
 }
@@ -254,7 +319,10 @@ fn scalar_class(module: &naga::Module, ty: naga::Handle<naga::Type>) -> String {
 }
 
 /// Collect `(location, name, type)` of a function's inputs, flattening struct arguments.
-fn located_args(module: &naga::Module, func: &naga::Function) -> Vec<(u32, String, naga::Handle<naga::Type>)> {
+fn located_args(
+    module: &naga::Module,
+    func: &naga::Function,
+) -> Vec<(u32, String, naga::Handle<naga::Type>)> {
     let mut out = Vec::new();
     for arg in &func.arguments {
         match &arg.binding {
@@ -278,7 +346,9 @@ fn located_args(module: &naga::Module, func: &naga::Function) -> Vec<(u32, Strin
 }
 
 fn fragment_outputs(module: &naga::Module, func: &naga::Function) -> Vec<FragmentOutput> {
-    let Some(result) = &func.result else { return vec![] };
+    let Some(result) = &func.result else {
+        return vec![];
+    };
     let mut out = Vec::new();
     match &result.binding {
         Some(naga::Binding::Location { location, .. }) => out.push(FragmentOutput {
@@ -306,7 +376,11 @@ fn fragment_outputs(module: &naga::Module, func: &naga::Function) -> Vec<Fragmen
 }
 
 /// Mark every struct reachable from a host-shareable binding.
-fn mark_shareable(module: &naga::Module, ty: naga::Handle<naga::Type>, out: &mut Vec<naga::Handle<naga::Type>>) {
+fn mark_shareable(
+    module: &naga::Module,
+    ty: naga::Handle<naga::Type>,
+    out: &mut Vec<naga::Handle<naga::Type>>,
+) {
     match &module.types[ty].inner {
         TypeInner::Struct { members, .. } => {
             if !out.contains(&ty) {
@@ -324,7 +398,9 @@ fn mark_shareable(module: &naga::Module, ty: naga::Handle<naga::Type>, out: &mut
 pub fn reflect(stage: &Stage) -> Reflection {
     let module = &stage.module;
     let mut layouter = naga::proc::Layouter::default();
-    layouter.update(module.to_ctx()).expect("validated module has a layout");
+    layouter
+        .update(module.to_ctx())
+        .expect("validated module has a layout");
 
     // Which sampled textures are ever sampled through a sampler (they must be filterable).
     let mut sampled_images = Vec::new();
@@ -358,13 +434,22 @@ pub fn reflect(stage: &Stage) -> Reflection {
                     rust: rust_type(module, var.ty).unwrap_or_default(),
                 }
             }
-            (_, TypeInner::Image { dim, arrayed, class }) => match class {
+            (
+                _,
+                TypeInner::Image {
+                    dim,
+                    arrayed,
+                    class,
+                },
+            ) => match class {
                 ImageClass::Sampled { kind, multi } => BindingKind::Texture {
                     dim: dim_name(*dim, *arrayed),
                     sample: match kind {
                         ScalarKind::Uint => SampleKind::Uint,
                         ScalarKind::Sint => SampleKind::Sint,
-                        _ => SampleKind::Float { filterable: sampled_images.contains(&handle) },
+                        _ => SampleKind::Float {
+                            filterable: sampled_images.contains(&handle),
+                        },
                     },
                     multisampled: *multi,
                 },
@@ -386,7 +471,12 @@ pub fn reflect(stage: &Stage) -> Reflection {
             },
             _ => continue,
         };
-        let linked_offset = module.global_variables.get_span(handle).to_range().map(|r| r.start).unwrap_or(0);
+        let linked_offset = module
+            .global_variables
+            .get_span(handle)
+            .to_range()
+            .map(|r| r.start)
+            .unwrap_or(0);
         bindings.push(Binding {
             group: rb.group,
             binding: rb.binding,
@@ -414,7 +504,12 @@ pub fn reflect(stage: &Stage) -> Reflection {
                 (_, true) => "write",
                 _ => "read",
             };
-            uses.push(BindingUse { group: b.group, binding: b.binding, name: b.name.clone(), access: access.into() });
+            uses.push(BindingUse {
+                group: b.group,
+                binding: b.binding,
+                name: b.name.clone(),
+                access: access.into(),
+            });
         }
         let stage_name = match ep.stage {
             ShaderStage::Compute => "compute",
@@ -427,14 +522,24 @@ pub fn reflect(stage: &Stage) -> Reflection {
                 .into_iter()
                 .filter_map(|(location, name, ty)| {
                     let (format, rust, size) = vertex_format(module, ty)?;
-                    Some(VertexInput { location, name, ty: wgsl_type(module, ty), format, rust, size })
+                    Some(VertexInput {
+                        location,
+                        name,
+                        ty: wgsl_type(module, ty),
+                        format,
+                        rust,
+                        size,
+                    })
                 })
                 .collect()
         } else {
             vec![]
         };
-        let fragment_outputs =
-            if ep.stage == ShaderStage::Fragment { fragment_outputs(module, &ep.function) } else { vec![] };
+        let fragment_outputs = if ep.stage == ShaderStage::Fragment {
+            fragment_outputs(module, &ep.function)
+        } else {
+            vec![]
+        };
         entry_points.push(EntryPoint {
             name: ep.name.clone(),
             stage: stage_name.into(),
@@ -447,7 +552,9 @@ pub fn reflect(stage: &Stage) -> Reflection {
 
     let mut structs = Vec::new();
     for (handle, ty) in module.types.iter() {
-        let TypeInner::Struct { members, span } = &ty.inner else { continue };
+        let TypeInner::Struct { members, span } = &ty.inner else {
+            continue;
+        };
         let Some(name) = &ty.name else { continue };
         // Entry-point interface structs (locations/builtins) are not memory layouts.
         if members.iter().any(|m| m.binding.is_some()) {
@@ -506,9 +613,18 @@ impl Reflection {
                 write!(s, " workgroup_size({x}, {y}, {z})").unwrap();
             }
             writeln!(s).unwrap();
-            writeln!(s, "    {:<5} {:<7} {:<16} {:<15} {:<40} {}", "group", "binding", "name", "kind", "type", "access").unwrap();
+            writeln!(
+                s,
+                "    {:<5} {:<7} {:<16} {:<15} {:<40} {}",
+                "group", "binding", "name", "kind", "type", "access"
+            )
+            .unwrap();
             for u in &ep.uses {
-                let b = self.bindings.iter().find(|b| b.group == u.group && b.binding == u.binding).unwrap();
+                let b = self
+                    .bindings
+                    .iter()
+                    .find(|b| b.group == u.group && b.binding == u.binding)
+                    .unwrap();
                 let kind = match &b.kind {
                     BindingKind::Uniform { .. } => "uniform",
                     BindingKind::Storage { .. } => "storage",
@@ -516,23 +632,55 @@ impl Reflection {
                     BindingKind::StorageTexture { .. } => "storage_texture",
                     BindingKind::Sampler { .. } => "sampler",
                 };
-                writeln!(s, "    {:<5} {:<7} {:<16} {:<15} {:<40} {}", b.group, b.binding, b.name, kind, b.ty, u.access).unwrap();
+                writeln!(
+                    s,
+                    "    {:<5} {:<7} {:<16} {:<15} {:<40} {}",
+                    b.group, b.binding, b.name, kind, b.ty, u.access
+                )
+                .unwrap();
             }
             for v in &ep.vertex_inputs {
-                writeln!(s, "    vertex input @location({}) {}: {} ({})", v.location, v.name, v.ty, v.format).unwrap();
+                writeln!(
+                    s,
+                    "    vertex input @location({}) {}: {} ({})",
+                    v.location, v.name, v.ty, v.format
+                )
+                .unwrap();
             }
             for o in &ep.fragment_outputs {
-                writeln!(s, "    fragment output @location({}): {} ({})", o.location, o.ty, o.scalar).unwrap();
+                writeln!(
+                    s,
+                    "    fragment output @location({}): {} ({})",
+                    o.location, o.ty, o.scalar
+                )
+                .unwrap();
             }
         }
         for st in self.structs.iter().filter(|s| s.host_shareable) {
-            writeln!(s, "  struct {} size {} align {}", st.name, st.size, st.align).unwrap();
+            writeln!(
+                s,
+                "  struct {} size {} align {}",
+                st.name, st.size, st.align
+            )
+            .unwrap();
             for m in &st.members {
-                writeln!(s, "    {:>4}  {:<16} {} (size {})", m.offset, m.name, m.ty, m.size).unwrap();
+                writeln!(
+                    s,
+                    "    {:>4}  {:<16} {} (size {})",
+                    m.offset, m.name, m.ty, m.size
+                )
+                .unwrap();
             }
         }
         for o in &self.overrides {
-            writeln!(s, "  override {}: {}{}", o.name, o.ty, if o.has_default { " (has default)" } else { "" }).unwrap();
+            writeln!(
+                s,
+                "  override {}: {}{}",
+                o.name,
+                o.ty,
+                if o.has_default { " (has default)" } else { "" }
+            )
+            .unwrap();
         }
         s
     }

@@ -9,7 +9,9 @@ pub fn random_mask(w: usize, h: usize, density: f64, seed: u64) -> Vec<bool> {
     let mut s = seed.wrapping_add(0x9e3779b97f4a7c15);
     (0..w * h)
         .map(|_| {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             ((s >> 11) as f64 / (1u64 << 53) as f64) < density
         })
         .collect()
@@ -20,16 +22,31 @@ pub fn to_bytes(mask: &[bool]) -> Vec<u8> {
 }
 
 /// Run the whole 2D chain; returns (nearest, distance).
-pub fn run_jfa(ctx: &Context, jfa: &Jfa2d, mask: &[bool], w: usize, h: usize, options: Options) -> (Vec<u32>, Vec<f32>) {
+pub fn run_jfa(
+    ctx: &Context,
+    jfa: &Jfa2d,
+    mask: &[bool],
+    w: usize,
+    h: usize,
+    options: Options,
+) -> (Vec<u32>, Vec<f32>) {
     let seeds = upload_mask(ctx, &to_bytes(mask), w as u32, h as u32).expect("upload");
     let mut enc = ctx.encoder("test");
-    let field = jfa.encode(&ctx.device, &mut enc, &seeds, &options).expect("encode");
+    let field = jfa
+        .encode(&ctx.device, &mut enc, &seeds, &options)
+        .expect("encode");
     ctx.submit_and_wait("test", enc).expect("run");
-    (read_texture(ctx, &field.nearest).unwrap(), read_texture(ctx, &field.distance).unwrap())
+    (
+        read_texture(ctx, &field.nearest).unwrap(),
+        read_texture(ctx, &field.distance).unwrap(),
+    )
 }
 
 pub fn variant_options(variant: Variant) -> Options {
-    Options { variant, ..Options::default() }
+    Options {
+        variant,
+        ..Options::default()
+    }
 }
 
 /// Deterministic pseudo-random 3D mask, x fastest.
@@ -50,12 +67,26 @@ pub fn size_u32(size: [usize; 3]) -> [u32; 3] {
 }
 
 /// Run a 3D distance computation on a mask; returns (nearest, nearest outside, distance).
-pub fn run_3d(ctx: &Context, d3: &fieldkit::distance::volume::Distance3d, mask: &[bool], size: [usize; 3], options: &fieldkit::distance::volume::Options3d) -> (Vec<u32>, Option<Vec<u32>>, Vec<f32>) {
+pub fn run_3d(
+    ctx: &Context,
+    d3: &fieldkit::distance::volume::Distance3d,
+    mask: &[bool],
+    size: [usize; 3],
+    options: &fieldkit::distance::volume::Options3d,
+) -> (Vec<u32>, Option<Vec<u32>>, Vec<f32>) {
     use fieldkit::gpu::read_buffer;
-    let volume = fieldkit::distance::volume::upload_volume(ctx, &to_bytes(mask), size_u32(size)).expect("upload");
+    let volume = fieldkit::distance::volume::upload_volume(ctx, &to_bytes(mask), size_u32(size))
+        .expect("upload");
     let mut enc = ctx.encoder("test");
-    let field = d3.encode(&ctx.device, &mut enc, &volume, options).expect("encode");
+    let field = d3
+        .encode(&ctx.device, &mut enc, &volume, options)
+        .expect("encode");
     ctx.submit_and_wait("test", enc).expect("run");
-    let words = |b: &wgpu::Buffer| bytemuck::cast_slice::<u8, u32>(&read_buffer(ctx, b).unwrap()).to_vec();
-    (words(&field.nearest), field.nearest_outside.as_ref().map(words), read_texture(ctx, &field.distance).unwrap())
+    let words =
+        |b: &wgpu::Buffer| bytemuck::cast_slice::<u8, u32>(&read_buffer(ctx, b).unwrap()).to_vec();
+    (
+        words(&field.nearest),
+        field.nearest_outside.as_ref().map(words),
+        read_texture(ctx, &field.distance).unwrap(),
+    )
 }

@@ -24,6 +24,8 @@ pub struct Args {
     pub peer: Option<String>,
     /// Narrow band (voxels) for the banded JFA entry.
     pub band: f32,
+    /// Only the exact transform (and the peer): for quick comparisons.
+    pub exact_only: bool,
 }
 
 /// Memory bandwidth the pass figures are compared with (H100 SXM HBM3, rounded down).
@@ -85,22 +87,32 @@ fn pass_bytes(name: &str, cells: u64) -> f64 {
 }
 
 /// Time `reps` runs of `record` (after `warmup`), each recording its passes into a fresh encoder.
-fn time_runs(ctx: &Context, warmup: usize, reps: usize, mut record: impl FnMut(&mut wgpu::CommandEncoder, &mut Profiler)) -> Result<(f64, f64, f64, Vec<(String, f64)>), String> {
-    let mut prof = Profiler::new(ctx, 64).ok_or("the adapter has no timestamp queries; the benchmark needs them")?;
+fn time_runs(
+    ctx: &Context,
+    warmup: usize,
+    reps: usize,
+    mut record: impl FnMut(&mut wgpu::CommandEncoder, &mut Profiler),
+) -> Result<(f64, f64, f64, Vec<(String, f64)>), String> {
+    let mut prof = Profiler::new(ctx, 64)
+        .ok_or("the adapter has no timestamp queries; the benchmark needs them")?;
     let mut totals = Vec::new();
     let mut per_pass: Vec<(String, Vec<f64>)> = Vec::new();
     for run in 0..warmup + reps {
         let mut enc = ctx.encoder("bench");
         record(&mut enc, &mut prof);
         prof.resolve(&mut enc);
-        ctx.submit_and_wait("bench", enc).map_err(|e| e.to_string())?;
+        ctx.submit_and_wait("bench", enc)
+            .map_err(|e| e.to_string())?;
         let (passes, total) = prof.read(ctx).map_err(|e| e.to_string())?;
         if run < warmup {
             continue;
         }
         totals.push(total);
         if per_pass.is_empty() {
-            per_pass = passes.iter().map(|(n, _)| (n.clone(), Vec::new())).collect();
+            per_pass = passes
+                .iter()
+                .map(|(n, _)| (n.clone(), Vec::new()))
+                .collect();
         }
         for (slot, (_, ms)) in per_pass.iter_mut().zip(&passes) {
             slot.1.push(*ms);
@@ -109,7 +121,15 @@ fn time_runs(ctx: &Context, warmup: usize, reps: usize, mut record: impl FnMut(&
     let min = totals.iter().cloned().fold(f64::INFINITY, f64::min);
     let max = totals.iter().cloned().fold(0.0, f64::max);
     let med = median(&mut totals);
-    Ok((med, min, max, per_pass.into_iter().map(|(n, mut v)| (n, median(&mut v))).collect()))
+    Ok((
+        med,
+        min,
+        max,
+        per_pass
+            .into_iter()
+            .map(|(n, mut v)| (n, median(&mut v)))
+            .collect(),
+    ))
 }
 
 /// Squared distance per cell from packed seeds (3D 11/11/10 or 2D 16/16); u64::MAX for none.
@@ -124,7 +144,11 @@ fn d2_of(nearest: &[u32], size: [usize; 3], dims: u32) -> Vec<u64> {
             }
             let (x, y, z) = ((i % w) as i64, ((i / w) % h) as i64, (i / (w * h)) as i64);
             let (sx, sy, sz) = if dims == 3 {
-                ((s & 0x7ff) as i64 - 1, ((s >> 11) & 0x7ff) as i64 - 1, (s >> 22) as i64 - 1)
+                (
+                    (s & 0x7ff) as i64 - 1,
+                    ((s >> 11) & 0x7ff) as i64 - 1,
+                    (s >> 22) as i64 - 1,
+                )
             } else {
                 ((s & 0xffff) as i64 - 1, (s >> 16) as i64 - 1, 0)
             };
@@ -136,7 +160,11 @@ fn d2_of(nearest: &[u32], size: [usize; 3], dims: u32) -> Vec<u64> {
 /// (wrong cells, max error, mean error) in voxels; with a band, distances are clamped to it first.
 fn errors(got: &[u64], exact: &[u64], band: Option<f64>) -> (u64, f64, f64) {
     let clamp = |d2: u64| {
-        let d = if d2 == u64::MAX { f64::INFINITY } else { (d2 as f64).sqrt() };
+        let d = if d2 == u64::MAX {
+            f64::INFINITY
+        } else {
+            (d2 as f64).sqrt()
+        };
         band.map_or(d, |b| d.min(b))
     };
     let (mut wrong, mut max, mut sum) = (0u64, 0f64, 0f64);
@@ -177,13 +205,26 @@ fn run_peer(cmd: &str, mask: &[u8], shape: &[usize], tag: &str) -> Result<Peer, 
         .output()
         .map_err(|e| format!("could not start the peer `{cmd}`: {e}"))?;
     if !out.status.success() {
-        return Err(format!("peer failed: {}", String::from_utf8_lossy(&out.stderr)));
+        return Err(format!(
+            "peer failed: {}",
+            String::from_utf8_lossy(&out.stderr)
+        ));
     }
-    let json = String::from_utf8_lossy(&out.stdout).lines().last().unwrap_or_default().to_string();
-    let v: serde_json::Value = serde_json::from_str(&json).map_err(|e| format!("peer printed `{json}`: {e}"))?;
-    let ms = v["ms_median"].as_f64().ok_or("peer JSON has no ms_median")?;
+    let json = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .last()
+        .unwrap_or_default()
+        .to_string();
+    let v: serde_json::Value =
+        serde_json::from_str(&json).map_err(|e| format!("peer printed `{json}`: {e}"))?;
+    let ms = v["ms_median"]
+        .as_f64()
+        .ok_or("peer JSON has no ms_median")?;
     let bytes = std::fs::read(&dist_path).map_err(|e| e.to_string())?;
-    let d2 = bytemuck::cast_slice::<u8, f32>(&bytes).iter().map(|&d| ((d as f64) * (d as f64)).round() as u64).collect();
+    let d2 = bytemuck::cast_slice::<u8, f32>(&bytes)
+        .iter()
+        .map(|&d| ((d as f64) * (d as f64)).round() as u64)
+        .collect();
     let _ = std::fs::remove_file(&dist_path);
     let _ = std::fs::remove_file(&mask_path);
     Ok(Peer { ms, d2, json })
@@ -210,16 +251,44 @@ fn distance(args: &Args) -> Result<(), String> {
     println!("adapter: {adapter}");
     let d3 = Distance3d::new(&ctx.device).map_err(|e| e.to_string())?;
     let jfa2 = Jfa2d::new(&ctx.device).map_err(|e| e.to_string())?;
-    let sizes3: &[usize] = if args.quick { &[32, 64] } else { &[128, 256, 512] };
-    let sizes2: &[usize] = if args.quick { &[256, 512] } else { &[2048, 4096, 8192] };
+    let sizes3: &[usize] = if args.quick {
+        &[32, 64]
+    } else {
+        &[128, 256, 512]
+    };
+    let sizes2: &[usize] = if args.quick {
+        &[256, 512]
+    } else {
+        &[2048, 4096, 8192]
+    };
     let banded = format!("JFA+2 band {}", args.band);
-    let methods3: Vec<(String, Options3d)> = std::iter::once(("exact".to_string(), Options3d::default()))
-        .chain(Variant::ALL.into_iter().map(|v| (v.name().to_string(), Options3d { method: Method::Jfa(v), ..Options3d::default() })))
-        .chain(std::iter::once((banded.clone(), Options3d { method: Method::Jfa(Variant::JfaPlus2), band: Some(args.band), ..Options3d::default() })))
-        .collect();
-    let total = (sizes3.len() * methods3.len() + sizes2.len() * (1 + Variant::ALL.len())) as u64;
+    let methods3: Vec<(String, Options3d)> =
+        std::iter::once(("exact".to_string(), Options3d::default()))
+            .chain(Variant::ALL.into_iter().map(|v| {
+                (
+                    v.name().to_string(),
+                    Options3d {
+                        method: Method::Jfa(v),
+                        ..Options3d::default()
+                    },
+                )
+            }))
+            .chain(std::iter::once((
+                banded.clone(),
+                Options3d {
+                    method: Method::Jfa(Variant::JfaPlus2),
+                    band: Some(args.band),
+                    ..Options3d::default()
+                },
+            )))
+            .take(if args.exact_only { 1 } else { usize::MAX })
+            .collect();
+    let variants2: &[Variant] = if args.exact_only { &[] } else { &Variant::ALL };
+    let total = (sizes3.len() * methods3.len() + sizes2.len() * (1 + variants2.len())) as u64;
     let bar = indicatif::ProgressBar::new(total);
-    bar.set_style(indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} {elapsed} {msg}").unwrap());
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} {elapsed} {msg}").unwrap(),
+    );
     let mut rows: Vec<Row> = Vec::new();
 
     for &n in sizes3 {
@@ -238,17 +307,23 @@ fn distance(args: &Args) -> Result<(), String> {
         for (name, opts) in &methods3 {
             bar.set_message(format!("{n}³ {name}"));
             let (med, min, max, passes) = time_runs(&ctx, args.warmup, args.reps, |enc, prof| {
-                d3.encode_profiled(&ctx.device, enc, &volume, opts, Some(prof)).expect("encode");
+                d3.encode_profiled(&ctx.device, enc, &volume, opts, Some(prof))
+                    .expect("encode");
             })?;
             let mut enc = ctx.encoder("bench readback");
-            let field = d3.encode(&ctx.device, &mut enc, &volume, opts).map_err(|e| e.to_string())?;
-            ctx.submit_and_wait("bench", enc).map_err(|e| e.to_string())?;
+            let field = d3
+                .encode(&ctx.device, &mut enc, &volume, opts)
+                .map_err(|e| e.to_string())?;
+            ctx.submit_and_wait("bench", enc)
+                .map_err(|e| e.to_string())?;
             let d2 = d2_of(&words(&ctx, &field.nearest)?, size, 3);
             let (wrong, max_err, mean_err, peer_ms) = if opts.method == Method::Exact {
                 // The reference: the peer's distances, or the CPU transform in quick mode.
                 let reference = match &peer {
                     Some(p) => p.d2.clone(),
-                    None => cpu::edt_3d_squared(&mask.iter().map(|&m| m != 0).collect::<Vec<_>>(), size),
+                    None => {
+                        cpu::edt_3d_squared(&mask.iter().map(|&m| m != 0).collect::<Vec<_>>(), size)
+                    }
                 };
                 let (w, mx, mean) = errors(&d2, &reference, None);
                 exact_d2 = d2;
@@ -269,7 +344,13 @@ fn distance(args: &Args) -> Result<(), String> {
                 max_err,
                 mean_err,
                 peer_ms,
-                passes: passes.into_iter().map(|(p, ms)| { let b = pass_bytes(&p, cells); (p, ms, b) }).collect(),
+                passes: passes
+                    .into_iter()
+                    .map(|(p, ms)| {
+                        let b = pass_bytes(&p, cells);
+                        (p, ms, b)
+                    })
+                    .collect(),
             });
             bar.inc(1);
         }
@@ -294,32 +375,78 @@ fn distance(args: &Args) -> Result<(), String> {
         bar.set_message(format!("{n}² exact"));
         let opts = Options3d::default();
         let (med, min, max, passes) = time_runs(&ctx, args.warmup, args.reps, |enc, prof| {
-            d3.encode_exact_2d(&ctx.device, enc, &tex, &opts, Some(prof)).expect("encode");
+            d3.encode_exact_2d(&ctx.device, enc, &tex, &opts, Some(prof))
+                .expect("encode");
         })?;
         let mut enc = ctx.encoder("bench readback");
-        let field = d3.encode_exact_2d(&ctx.device, &mut enc, &tex, &opts, None).map_err(|e| e.to_string())?;
-        ctx.submit_and_wait("bench", enc).map_err(|e| e.to_string())?;
+        let field = d3
+            .encode_exact_2d(&ctx.device, &mut enc, &tex, &opts, None)
+            .map_err(|e| e.to_string())?;
+        ctx.submit_and_wait("bench", enc)
+            .map_err(|e| e.to_string())?;
         let exact_d2 = d2_of(&words(&ctx, &field.nearest)?, size, 2);
         let reference = match &peer {
             Some(p) => p.d2.clone(),
             None => cpu::edt_2d_squared(&mask.iter().map(|&m| m != 0).collect::<Vec<_>>(), n, n),
         };
         let (wrong, max_err, mean_err) = errors(&exact_d2, &reference, None);
-        let pass_rows = |passes: Vec<(String, f64)>| passes.into_iter().map(|(p, ms)| { let b = pass_bytes(&p, cells); (p, ms, b) }).collect();
-        rows.push(Row { dims: 2, size: format!("{n}²"), voxels: cells, method: "exact".into(), median_ms: med, min_ms: min, max_ms: max, wrong, max_err, mean_err, peer_ms: peer.as_ref().map(|p| p.ms), passes: pass_rows(passes) });
+        let pass_rows = |passes: Vec<(String, f64)>| {
+            passes
+                .into_iter()
+                .map(|(p, ms)| {
+                    let b = pass_bytes(&p, cells);
+                    (p, ms, b)
+                })
+                .collect()
+        };
+        rows.push(Row {
+            dims: 2,
+            size: format!("{n}²"),
+            voxels: cells,
+            method: "exact".into(),
+            median_ms: med,
+            min_ms: min,
+            max_ms: max,
+            wrong,
+            max_err,
+            mean_err,
+            peer_ms: peer.as_ref().map(|p| p.ms),
+            passes: pass_rows(passes),
+        });
         bar.inc(1);
-        for v in Variant::ALL {
+        for &v in variants2 {
             bar.set_message(format!("{n}² {}", v.name()));
-            let opts = Options { variant: v, ..Options::default() };
+            let opts = Options {
+                variant: v,
+                ..Options::default()
+            };
             let (med, min, max, passes) = time_runs(&ctx, args.warmup, args.reps, |enc, prof| {
-                jfa2.encode_profiled(&ctx.device, enc, &tex, &opts, Some(prof)).expect("encode");
+                jfa2.encode_profiled(&ctx.device, enc, &tex, &opts, Some(prof))
+                    .expect("encode");
             })?;
             let mut enc = ctx.encoder("bench readback");
-            let field = jfa2.encode(&ctx.device, &mut enc, &tex, &opts).map_err(|e| e.to_string())?;
-            ctx.submit_and_wait("bench", enc).map_err(|e| e.to_string())?;
-            let nearest: Vec<u32> = read_texture(&ctx, &field.nearest).map_err(|e| e.to_string())?;
+            let field = jfa2
+                .encode(&ctx.device, &mut enc, &tex, &opts)
+                .map_err(|e| e.to_string())?;
+            ctx.submit_and_wait("bench", enc)
+                .map_err(|e| e.to_string())?;
+            let nearest: Vec<u32> =
+                read_texture(&ctx, &field.nearest).map_err(|e| e.to_string())?;
             let (wrong, max_err, mean_err) = errors(&d2_of(&nearest, size, 2), &exact_d2, None);
-            rows.push(Row { dims: 2, size: format!("{n}²"), voxels: cells, method: v.name().into(), median_ms: med, min_ms: min, max_ms: max, wrong, max_err, mean_err, peer_ms: None, passes: pass_rows(passes) });
+            rows.push(Row {
+                dims: 2,
+                size: format!("{n}²"),
+                voxels: cells,
+                method: v.name().into(),
+                median_ms: med,
+                min_ms: min,
+                max_ms: max,
+                wrong,
+                max_err,
+                mean_err,
+                peer_ms: None,
+                passes: pass_rows(passes),
+            });
             bar.inc(1);
         }
         if let Some(p) = &peer {
@@ -338,18 +465,47 @@ fn distance(args: &Args) -> Result<(), String> {
 
 fn write_csv(dir: &Path, adapter: &str, rows: &[Row]) -> std::io::Result<()> {
     let mut f = std::fs::File::create(dir.join("distance.csv"))?;
-    writeln!(f, "adapter,dims,size,cells,method,median_ms,min_ms,max_ms,wrong,wrong_fraction,max_err_voxels,mean_err_voxels,peer_ms,ratio_to_peer")?;
+    writeln!(
+        f,
+        "adapter,dims,size,cells,method,median_ms,min_ms,max_ms,wrong,wrong_fraction,max_err_voxels,mean_err_voxels,peer_ms,ratio_to_peer"
+    )?;
     for r in rows {
         let peer = r.peer_ms.map_or(String::new(), |p| format!("{p:.4}"));
-        let ratio = r.peer_ms.map_or(String::new(), |p| format!("{:.3}", r.median_ms / p));
-        writeln!(f, "\"{adapter}\",{},{},{},{},{:.4},{:.4},{:.4},{},{:.3e},{:.4},{:.3e},{peer},{ratio}", r.dims, r.size, r.voxels, r.method, r.median_ms, r.min_ms, r.max_ms, r.wrong, r.wrong as f64 / r.voxels as f64, r.max_err, r.mean_err)?;
+        let ratio = r
+            .peer_ms
+            .map_or(String::new(), |p| format!("{:.3}", r.median_ms / p));
+        writeln!(
+            f,
+            "\"{adapter}\",{},{},{},{},{:.4},{:.4},{:.4},{},{:.3e},{:.4},{:.3e},{peer},{ratio}",
+            r.dims,
+            r.size,
+            r.voxels,
+            r.method,
+            r.median_ms,
+            r.min_ms,
+            r.max_ms,
+            r.wrong,
+            r.wrong as f64 / r.voxels as f64,
+            r.max_err,
+            r.mean_err
+        )?;
     }
     let mut f = std::fs::File::create(dir.join("distance_passes.csv"))?;
-    writeln!(f, "adapter,size,method,pass,median_ms,bytes,gb_per_s,fraction_of_3tb_s")?;
+    writeln!(
+        f,
+        "adapter,size,method,pass,median_ms,bytes,gb_per_s,fraction_of_3tb_s"
+    )?;
     for r in rows {
         for (p, ms, bytes) in &r.passes {
             let bw = bytes / (ms / 1e3);
-            writeln!(f, "\"{adapter}\",{},{},{p},{ms:.4},{bytes:.0},{:.1},{:.3}", r.size, r.method, bw / 1e9, bw / PEAK_BYTES_PER_S)?;
+            writeln!(
+                f,
+                "\"{adapter}\",{},{},{p},{ms:.4},{bytes:.0},{:.1},{:.3}",
+                r.size,
+                r.method,
+                bw / 1e9,
+                bw / PEAK_BYTES_PER_S
+            )?;
         }
     }
     Ok(())
@@ -360,8 +516,13 @@ fn print_table(rows: &[Row]) {
     println!("|---|---|---|---|---|---|---|");
     for r in rows {
         let peer = r.peer_ms.map_or("".into(), |p| format!("{p:.3}"));
-        let ratio = r.peer_ms.map_or("".into(), |p| format!("{:.2}", r.median_ms / p));
-        println!("| {} | {} | {:.3} | {peer} | {ratio} | {} | {:.3} |", r.size, r.method, r.median_ms, r.wrong, r.max_err);
+        let ratio = r
+            .peer_ms
+            .map_or("".into(), |p| format!("{:.2}", r.median_ms / p));
+        println!(
+            "| {} | {} | {:.3} | {peer} | {ratio} | {} | {:.3} |",
+            r.size, r.method, r.median_ms, r.wrong, r.max_err
+        );
     }
 }
 
@@ -370,10 +531,16 @@ fn print_table(rows: &[Row]) {
 /// (below 5e-3, staggered per method so their labels can be read). The peer is a hollow point.
 fn chart(path: &Path, adapter: &str, rows: &[Row], (w, h): (u32, u32)) -> Result<(), String> {
     use plotters::prelude::*;
-    let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular());
+    let _ =
+        plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular());
     let root = BitMapBackend::new(path, (w, h)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| e.to_string())?;
-    let root = root.titled(&format!("distance: GPU time vs max error, {adapter}"), ("sans-serif", 15)).map_err(|e| e.to_string())?;
+    let root = root
+        .titled(
+            &format!("distance: GPU time vs max error, {adapter}"),
+            ("sans-serif", 15),
+        )
+        .map_err(|e| e.to_string())?;
     let panels = root.split_evenly((1, 2));
     let floor = 1e-3;
     let mut methods: Vec<&str> = Vec::new();
@@ -383,22 +550,34 @@ fn chart(path: &Path, adapter: &str, rows: &[Row], (w, h): (u32, u32)) -> Result
         }
     }
     let y_of = |r: &Row| {
-        if r.max_err > 0.0 { r.max_err.max(5e-3) } else { floor * 1.18f64.powi(methods.iter().position(|m| *m == r.method).unwrap_or(0) as i32) }
+        if r.max_err > 0.0 {
+            r.max_err.max(5e-3)
+        } else {
+            floor * 1.18f64.powi(methods.iter().position(|m| *m == r.method).unwrap_or(0) as i32)
+        }
     };
     for (panel, dims) in panels.iter().zip([3u32, 2]) {
         let sel: Vec<&Row> = rows.iter().filter(|r| r.dims == dims).collect();
         if sel.is_empty() {
             continue;
         }
-        let times: Vec<f64> = sel.iter().flat_map(|r| std::iter::once(r.median_ms).chain(r.peer_ms)).collect();
-        let (tmin, tmax) = times.iter().fold((f64::INFINITY, 0f64), |(a, b), &t| (a.min(t), b.max(t)));
+        let times: Vec<f64> = sel
+            .iter()
+            .flat_map(|r| std::iter::once(r.median_ms).chain(r.peer_ms))
+            .collect();
+        let (tmin, tmax) = times
+            .iter()
+            .fold((f64::INFINITY, 0f64), |(a, b), &t| (a.min(t), b.max(t)));
         let emax = sel.iter().map(|r| y_of(r)).fold(1.0, f64::max);
         let mut c = ChartBuilder::on(panel)
             .caption(if dims == 3 { "3D" } else { "2D" }, ("sans-serif", 14))
             .margin(10)
             .x_label_area_size(36)
             .y_label_area_size(56)
-            .build_cartesian_2d((tmin / 1.6..tmax * 2.2).log_scale(), (floor / 1.5..emax * 2.0).log_scale())
+            .build_cartesian_2d(
+                (tmin / 1.6..tmax * 2.2).log_scale(),
+                (floor / 1.5..emax * 2.0).log_scale(),
+            )
             .map_err(|e| e.to_string())?;
         c.configure_mesh()
             .x_desc("GPU time, ms (median, log)")
@@ -410,23 +589,45 @@ fn chart(path: &Path, adapter: &str, rows: &[Row], (w, h): (u32, u32)) -> Result
             .label_style(("sans-serif", 11))
             .draw()
             .map_err(|e| e.to_string())?;
-        c.draw_series(std::iter::once(PathElement::new(vec![(tmin / 1.6, 4.2e-3), (tmax * 2.2, 4.2e-3)], BLACK.mix(0.3))))
-            .map_err(|e| e.to_string())?;
+        c.draw_series(std::iter::once(PathElement::new(
+            vec![(tmin / 1.6, 4.2e-3), (tmax * 2.2, 4.2e-3)],
+            BLACK.mix(0.3),
+        )))
+        .map_err(|e| e.to_string())?;
         let mut sizes: Vec<&str> = sel.iter().map(|r| r.size.as_str()).collect();
         sizes.dedup();
         for (i, size) in sizes.iter().enumerate() {
             let color = Palette99::pick(i + if dims == 2 { 4 } else { 0 }).to_rgba();
             let pts: Vec<&Row> = sel.iter().copied().filter(|r| r.size == *size).collect();
-            c.draw_series(pts.iter().map(|r| Circle::new((r.median_ms, y_of(r)), 4, color.filled())))
-                .map_err(|e| e.to_string())?
-                .label(size.to_string())
-                .legend(move |(x, y)| Circle::new((x, y), 4, color.filled()));
-            c.draw_series(pts.iter().map(|r| Text::new(format!(" {}", r.method), (r.median_ms, y_of(r)), ("sans-serif", 10).into_font().color(&color))))
-                .map_err(|e| e.to_string())?;
+            c.draw_series(
+                pts.iter()
+                    .map(|r| Circle::new((r.median_ms, y_of(r)), 4, color.filled())),
+            )
+            .map_err(|e| e.to_string())?
+            .label(size.to_string())
+            .legend(move |(x, y)| Circle::new((x, y), 4, color.filled()));
+            c.draw_series(pts.iter().map(|r| {
+                Text::new(
+                    format!(" {}", r.method),
+                    (r.median_ms, y_of(r)),
+                    ("sans-serif", 10).into_font().color(&color),
+                )
+            }))
+            .map_err(|e| e.to_string())?;
             let peer: Vec<f64> = pts.iter().filter_map(|r| r.peer_ms).collect();
-            c.draw_series(peer.iter().map(|&p| Circle::new((p, floor), 6, color.stroke_width(2)))).map_err(|e| e.to_string())?;
-            c.draw_series(peer.iter().map(|&p| Text::new(" peer (PBA+)".to_string(), (p, floor / 1.2), ("sans-serif", 10).into_font().color(&color))))
-                .map_err(|e| e.to_string())?;
+            c.draw_series(
+                peer.iter()
+                    .map(|&p| Circle::new((p, floor), 6, color.stroke_width(2))),
+            )
+            .map_err(|e| e.to_string())?;
+            c.draw_series(peer.iter().map(|&p| {
+                Text::new(
+                    " peer (PBA+)".to_string(),
+                    (p, floor / 1.2),
+                    ("sans-serif", 10).into_font().color(&color),
+                )
+            }))
+            .map_err(|e| e.to_string())?;
         }
         c.configure_series_labels()
             .position(SeriesLabelPosition::UpperRight)

@@ -11,23 +11,40 @@ pub fn translate_all(stage: &Stage) -> Vec<(&'static str, Result<usize, String>)
     let mut out = Vec::new();
     // Backends take a module with its overrides already resolved, as wgpu does at pipeline
     // creation; the shader's defaults stand in for the values a pipeline would give.
-    let (module, info) = match naga::back::pipeline_constants::process_overrides(&stage.module, &stage.info, None, &Default::default()) {
+    let (module, info) = match naga::back::pipeline_constants::process_overrides(
+        &stage.module,
+        &stage.info,
+        None,
+        &Default::default(),
+    ) {
         Ok(m) => m,
         Err(e) => return vec![("overrides", Err(e.to_string()))],
     };
     let (module, info) = (&*module, &*info);
-    out.push(("SPIR-V", spv::write_vec(module, info, &spv::Options::default(), None).map(|w| w.len() * 4).map_err(|e| e.to_string())));
+    out.push((
+        "SPIR-V",
+        spv::write_vec(module, info, &spv::Options::default(), None)
+            .map(|w| w.len() * 4)
+            .map_err(|e| e.to_string()),
+    ));
     out.push((
         "MSL",
-        msl::write_string(module, info, &msl::Options::default(), &msl::PipelineOptions::default())
-            .map(|(s, _)| s.len())
-            .map_err(|e| e.to_string()),
+        msl::write_string(
+            module,
+            info,
+            &msl::Options::default(),
+            &msl::PipelineOptions::default(),
+        )
+        .map(|(s, _)| s.len())
+        .map_err(|e| e.to_string()),
     ));
     let hlsl_result = (|| {
         let mut s = String::new();
         let opts = hlsl::Options::default();
         let popts = hlsl::PipelineOptions::default();
-        hlsl::Writer::new(&mut s, &opts, &popts).write(module, info, None).map_err(|e| e.to_string())?;
+        hlsl::Writer::new(&mut s, &opts, &popts)
+            .write(module, info, None)
+            .map_err(|e| e.to_string())?;
         Ok(s.len())
     })();
     out.push(("HLSL", hlsl_result));
@@ -36,10 +53,24 @@ pub fn translate_all(stage: &Stage) -> Vec<(&'static str, Result<usize, String>)
         let mut total = 0;
         for ep in &module.entry_points {
             let mut s = String::new();
-            let opts = glsl::Options { version: glsl::Version::Desktop(430), ..Default::default() };
-            let popts = glsl::PipelineOptions { shader_stage: ep.stage, entry_point: ep.name.clone(), multiview: None };
-            let mut w = glsl::Writer::new(&mut s, module, info, &opts, &popts, naga::proc::BoundsCheckPolicies::default())
-                .map_err(|e| format!("{}: {e}", ep.name))?;
+            let opts = glsl::Options {
+                version: glsl::Version::Desktop(430),
+                ..Default::default()
+            };
+            let popts = glsl::PipelineOptions {
+                shader_stage: ep.stage,
+                entry_point: ep.name.clone(),
+                multiview: None,
+            };
+            let mut w = glsl::Writer::new(
+                &mut s,
+                module,
+                info,
+                &opts,
+                &popts,
+                naga::proc::BoundsCheckPolicies::default(),
+            )
+            .map_err(|e| format!("{}: {e}", ep.name))?;
             w.write().map_err(|e| format!("{}: {e}", ep.name))?;
             total += s.len();
         }
@@ -50,7 +81,9 @@ pub fn translate_all(stage: &Stage) -> Vec<(&'static str, Result<usize, String>)
 }
 
 pub fn run(root: &Path) -> ExitCode {
-    let Some(stages) = crate::stages(root) else { return ExitCode::FAILURE };
+    let Some(stages) = crate::stages(root) else {
+        return ExitCode::FAILURE;
+    };
     let mut failures = 0;
     for stage in &stages {
         let r = reflect(stage);
@@ -60,7 +93,10 @@ pub fn run(root: &Path) -> ExitCode {
                 Ok(_) => langs.push(lang),
                 Err(e) => {
                     failures += 1;
-                    println!("{}:1:1: [portability] cannot translate to {lang}: {e}", stage.file.rel_path);
+                    println!(
+                        "{}:1:1: [portability] cannot translate to {lang}: {e}",
+                        stage.file.rel_path
+                    );
                 }
             }
         }
@@ -69,13 +105,21 @@ pub fn run(root: &Path) -> ExitCode {
             println!("{v}");
         }
         failures += violations.len();
-        eprintln!("  {:<28} valid; {}; {} lint finding(s)", stage.file.id(), langs.join(", "), violations.len());
+        eprintln!(
+            "  {:<28} valid; {}; {} lint finding(s)",
+            stage.file.id(),
+            langs.join(", "),
+            violations.len()
+        );
     }
     if failures > 0 {
         eprintln!("{failures} problem(s)");
         ExitCode::FAILURE
     } else {
-        eprintln!("{} stages: all valid, portable to SPIR-V, MSL, HLSL and GLSL, no lint findings", stages.len());
+        eprintln!(
+            "{} stages: all valid, portable to SPIR-V, MSL, HLSL and GLSL, no lint findings",
+            stages.len()
+        );
         for l in lint::all() {
             eprintln!("  lint {:<20} {}", l.name(), l.summary());
         }
@@ -100,7 +144,11 @@ mod tests {
     #[test]
     fn shipped_stages_have_no_lint_findings() {
         let stages = crate::stages(&crate::crate_root()).expect("stages validate");
-        let v: Vec<String> = stages.iter().flat_map(|s| lint::run(s, &reflect(s))).map(|v| v.to_string()).collect();
+        let v: Vec<String> = stages
+            .iter()
+            .flat_map(|s| lint::run(s, &reflect(s)))
+            .map(|v| v.to_string())
+            .collect();
         assert!(v.is_empty(), "{v:#?}");
     }
 }

@@ -58,6 +58,9 @@ enum Command {
         peer: Option<String>,
         #[arg(long, default_value = "bench")]
         out: PathBuf,
+        /// Only the exact transform (and the peer).
+        #[arg(long)]
+        exact_only: bool,
     },
 }
 
@@ -67,7 +70,10 @@ enum Technique {
 }
 
 fn crate_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_path_buf()
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .unwrap()
+        .to_path_buf()
 }
 
 fn main() -> ExitCode {
@@ -76,15 +82,36 @@ fn main() -> ExitCode {
         Command::Lint => lint::run(&crate_root()),
         Command::Reflect { stage, json } => reflect(&crate_root(), stage.as_deref(), json),
         Command::Gallery { out } => gallery(&out),
-        Command::Bench { technique, quick, reps, warmup, density, band, peer, out } => {
+        Command::Bench {
+            technique,
+            quick,
+            reps,
+            warmup,
+            density,
+            band,
+            peer,
+            out,
+            exact_only,
+        } => {
             if cfg!(debug_assertions) && std::env::var_os("FIELDKIT_BENCH_NO_REEXEC").is_none() {
                 return rerun_release();
             }
             if reps == 0 || !(density > 0.0 && density < 1.0) || !(band.is_finite() && band > 0.0) {
-                eprintln!("bench: --reps must be ≥ 1, --density in (0, 1), --band finite and positive");
+                eprintln!(
+                    "bench: --reps must be ≥ 1, --density in (0, 1), --band finite and positive"
+                );
                 return ExitCode::FAILURE;
             }
-            let args = bench::Args { quick, reps, warmup, density, out, peer, band };
+            let args = bench::Args {
+                quick,
+                reps,
+                warmup,
+                density,
+                out,
+                peer,
+                band,
+                exact_only,
+            };
             match technique {
                 Technique::Distance => bench::run_distance(&args),
             }
@@ -95,11 +122,12 @@ fn main() -> ExitCode {
 /// Benchmarks time release code: a debug xtask runs itself again through `cargo run --release`.
 fn rerun_release() -> ExitCode {
     eprintln!("bench: running again as a release build");
-    let status = std::process::Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
-        .args(["run", "--release", "--package", "xtask", "--"])
-        .args(std::env::args_os().skip(1))
-        .current_dir(crate_root())
-        .status();
+    let status =
+        std::process::Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
+            .args(["run", "--release", "--package", "xtask", "--"])
+            .args(std::env::args_os().skip(1))
+            .current_dir(crate_root())
+            .status();
     match status {
         Ok(s) if s.success() => ExitCode::SUCCESS,
         Ok(_) => ExitCode::FAILURE,
@@ -125,7 +153,9 @@ fn stages(root: &Path) -> Option<Vec<toolchain::Stage>> {
 }
 
 fn reflect(root: &Path, filter: Option<&str>, json: bool) -> ExitCode {
-    let Some(stages) = stages(root) else { return ExitCode::FAILURE };
+    let Some(stages) = stages(root) else {
+        return ExitCode::FAILURE;
+    };
     let text = reflect_text(&stages, filter, json);
     if text.is_empty() {
         eprintln!("no stage matches {:?}", filter.unwrap_or(""));
@@ -147,7 +177,11 @@ fn reflect_text(stages: &[toolchain::Stage], filter: Option<&str>, json: bool) -
     if json {
         serde_json::to_string_pretty(&reflections).unwrap() + "\n"
     } else {
-        reflections.iter().map(|r| r.to_table()).collect::<Vec<_>>().join("\n")
+        reflections
+            .iter()
+            .map(|r| r.to_table())
+            .collect::<Vec<_>>()
+            .join("\n")
     }
 }
 
@@ -181,14 +215,23 @@ mod tests {
     #[test]
     fn reflect_tables_snapshot() {
         let stages = stages(&crate_root()).expect("stages validate");
-        insta::assert_snapshot!("reflect_distance", reflect_text(&stages, Some("distance::"), false));
+        insta::assert_snapshot!(
+            "reflect_distance",
+            reflect_text(&stages, Some("distance::"), false)
+        );
     }
 
     #[test]
     fn reflect_json_names_every_binding() {
         let stages = stages(&crate_root()).expect("stages validate");
-        let v: serde_json::Value = serde_json::from_str(&reflect_text(&stages, Some("jfa_step"), true)).unwrap();
-        let names: Vec<&str> = v[0]["bindings"].as_array().unwrap().iter().map(|b| b["name"].as_str().unwrap()).collect();
+        let v: serde_json::Value =
+            serde_json::from_str(&reflect_text(&stages, Some("jfa_step"), true)).unwrap();
+        let names: Vec<&str> = v[0]["bindings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|b| b["name"].as_str().unwrap())
+            .collect();
         assert_eq!(names, ["params", "src", "dst"]);
     }
 
@@ -198,7 +241,11 @@ mod tests {
         let step = stages.iter().find(|s| s.file.name == "jfa_step").unwrap();
         // SOURCE is the linked WGSL; it is checked by naga, not worth a snapshot line.
         let code = toolchain::codegen::format(&toolchain::codegen::stage_module(step));
-        let code: String = code.lines().filter(|l| !l.contains("pub const SOURCE")).collect::<Vec<_>>().join("\n");
+        let code: String = code
+            .lines()
+            .filter(|l| !l.contains("pub const SOURCE"))
+            .collect::<Vec<_>>()
+            .join("\n");
         insta::assert_snapshot!("codegen_jfa_step", code);
     }
 }

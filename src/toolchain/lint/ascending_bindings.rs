@@ -47,11 +47,15 @@ mod tests {
 
     #[test]
     fn flags_descending_and_accepts_ascending() {
-        let bad = stage(&format!("@group(0) @binding(1) var<uniform> a: u32;\n@group(0) @binding(0) var<uniform> b: u32;\n{BODY}"));
+        let bad = stage(&format!(
+            "@group(0) @binding(1) var<uniform> a: u32;\n@group(0) @binding(0) var<uniform> b: u32;\n{BODY}"
+        ));
         let v = AscendingBindings.check(&bad, &reflect(&bad));
         assert_eq!(v.len(), 1);
         assert_eq!(v[0].line, 2);
-        let good = stage(&format!("@group(0) @binding(0) var<uniform> a: u32;\n@group(0) @binding(1) var<uniform> b: u32;\n{BODY}"));
+        let good = stage(&format!(
+            "@group(0) @binding(0) var<uniform> a: u32;\n@group(0) @binding(1) var<uniform> b: u32;\n{BODY}"
+        ));
         assert!(AscendingBindings.check(&good, &reflect(&good)).is_empty());
     }
 }

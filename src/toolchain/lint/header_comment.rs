@@ -24,7 +24,9 @@ impl Lint for HeaderComment {
             file: stage.file.rel_path.clone(),
             line: 1,
             column: 1,
-            message: "no header comment: start the file with `// <what this stage does> (<source>)`".into(),
+            message:
+                "no header comment: start the file with `// <what this stage does> (<source>)`"
+                    .into(),
         }]
     }
 }

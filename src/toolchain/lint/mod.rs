@@ -21,7 +21,11 @@ pub struct Violation {
 
 impl std::fmt::Display for Violation {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{}:{}:{}: [{}] {}", self.file, self.line, self.column, self.lint, self.message)
+        write!(
+            f,
+            "{}:{}:{}: [{}] {}",
+            self.file, self.line, self.column, self.lint, self.message
+        )
     }
 }
 
@@ -45,7 +49,10 @@ pub fn all() -> Vec<Box<dyn Lint>> {
 
 /// Run every lint on a stage.
 pub fn run(stage: &Stage, reflection: &Reflection) -> Vec<Violation> {
-    all().iter().flat_map(|l| l.check(stage, reflection)).collect()
+    all()
+        .iter()
+        .flat_map(|l| l.check(stage, reflection))
+        .collect()
 }
 
 /// 1-based line and column of the first match of `pat` in the stage file (1:1 if absent).
@@ -63,7 +70,12 @@ pub(crate) fn locate(original: &str, pat: &str) -> (usize, usize) {
 
 /// Where `var ... name` is declared in the stage file.
 pub(crate) fn locate_binding(original: &str, name: &str) -> (usize, usize) {
-    for pat in [format!("> {name}:"), format!("var {name}:"), format!(">{name}:"), format!("var {name} :")] {
+    for pat in [
+        format!("> {name}:"),
+        format!("var {name}:"),
+        format!(">{name}:"),
+        format!("var {name} :"),
+    ] {
         if original.contains(&pat) {
             return locate(original, &pat);
         }
@@ -78,9 +90,12 @@ pub(crate) mod test_util {
     /// Build a stage from WGSL text (no imports), as the build does.
     pub fn stage(src: &str) -> Stage {
         let module = naga::front::wgsl::parse_str(src).expect("test shader parses");
-        let info = naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::default())
-            .validate(&module)
-            .expect("test shader validates");
+        let info = naga::valid::Validator::new(
+            naga::valid::ValidationFlags::all(),
+            naga::valid::Capabilities::default(),
+        )
+        .validate(&module)
+        .expect("test shader validates");
         Stage {
             file: StageFile {
                 room: "test".into(),

@@ -17,7 +17,13 @@ impl Lint for UnusedBinding {
     fn check(&self, stage: &Stage, r: &Reflection) -> Vec<Violation> {
         r.bindings
             .iter()
-            .filter(|b| !r.entry_points.iter().any(|e| e.uses.iter().any(|u| u.group == b.group && u.binding == b.binding)))
+            .filter(|b| {
+                !r.entry_points.iter().any(|e| {
+                    e.uses
+                        .iter()
+                        .any(|u| u.group == b.group && u.binding == b.binding)
+                })
+            })
             .map(|b| {
                 let (line, column) = locate_binding(&stage.original, &b.name);
                 Violation {
@@ -25,7 +31,10 @@ impl Lint for UnusedBinding {
                     file: stage.file.rel_path.clone(),
                     line,
                     column,
-                    message: format!("binding `{}` (@group({}) @binding({})) is used by no entry point", b.name, b.group, b.binding),
+                    message: format!(
+                        "binding `{}` (@group({}) @binding({})) is used by no entry point",
+                        b.name, b.group, b.binding
+                    ),
                 }
             })
             .collect()
@@ -39,7 +48,9 @@ mod tests {
 
     #[test]
     fn flags_unused_only() {
-        let s = stage("@group(0) @binding(0) var<uniform> a: u32;\n@group(0) @binding(1) var<uniform> b: u32;\n@compute @workgroup_size(1) fn main() { _ = a; }");
+        let s = stage(
+            "@group(0) @binding(0) var<uniform> a: u32;\n@group(0) @binding(1) var<uniform> b: u32;\n@compute @workgroup_size(1) fn main() { _ = a; }",
+        );
         let v = UnusedBinding.check(&s, &reflect(&s));
         assert_eq!(v.len(), 1);
         assert!(v[0].message.contains("`b`"));
