@@ -1108,7 +1108,7 @@ impl Distance3d {
         Ok(())
     }
 
-    /// The exact transform of a 2D mask (`R8Unorm`, `R16Float` or `R32Float` 2D texture).
+    /// The exact transform of a 2D mask (any of [`super::SEED_FORMATS`]; red channel marks).
     pub fn encode_exact_2d(
         &self,
         device: &wgpu::Device,
@@ -1118,24 +1118,9 @@ impl Distance3d {
         mut profiler: Option<&mut Profiler>,
     ) -> Result<FieldBuf2d, Error> {
         options.check()?;
-        if mask.dimension() != wgpu::TextureDimension::D2 || mask.depth_or_array_layers() != 1 {
-            return Err(Error::Invalid {
-                stage: STAGE,
-                what: format!(
-                    "the mask must be a single 2D texture, got {:?} × {} layers",
-                    mask.dimension(),
-                    mask.depth_or_array_layers()
-                ),
-            });
-        }
-        if !VOLUME_FORMATS.contains(&mask.format()) {
-            return Err(Error::Format {
-                stage: STAGE,
-                format: mask.format(),
-                supported: "R8Unorm, R16Float, R32Float",
-            });
-        }
-        let (w, h) = (mask.width(), mask.height());
+        // The same checks as the 2D JFA's seed texture (the same formats work), then the exact
+        // transform's own size limit.
+        let (w, h) = super::check_seed_texture(device, mask)?;
         check_size_2d_exact(device, w, h)?;
         let size = [w, h, 1];
         let prof = &mut profiler;
