@@ -87,6 +87,20 @@ pub fn edt_2d_squared(seeds: &[bool], width: usize, height: usize) -> Vec<u64> {
     out
 }
 
+/// Combine the two transforms as the resolve stages do (shared by 2D and 3D).
+fn signed_from(mask: &[bool], to_inside: &[u64], to_outside: &[u64]) -> Vec<f64> {
+    let half_off = |d2: u64, far: f64| if d2 == NONE { far } else { (d2 as f64).sqrt() - 0.5 };
+    (0..mask.len())
+        .map(|i| {
+            if mask[i] {
+                -half_off(to_outside[i], f32::MAX as f64)
+            } else {
+                half_off(to_inside[i], f32::MAX as f64)
+            }
+        })
+        .collect()
+}
+
 /// Signed distance as the GPU resolves it: outside, distance to the nearest inside centre minus
 /// half a texel; inside, minus (distance to the nearest outside centre minus half a texel).
 /// `±f32::MAX` where the other side does not exist.
@@ -94,21 +108,7 @@ pub fn signed_2d(mask: &[bool], width: usize, height: usize) -> Vec<f64> {
     let to_inside = edt_2d_squared(mask, width, height);
     let outside: Vec<bool> = mask.iter().map(|m| !m).collect();
     let to_outside = edt_2d_squared(&outside, width, height);
-    (0..mask.len())
-        .map(|i| {
-            if mask[i] {
-                if to_outside[i] == NONE {
-                    -(f32::MAX as f64)
-                } else {
-                    -((to_outside[i] as f64).sqrt() - 0.5)
-                }
-            } else if to_inside[i] == NONE {
-                f32::MAX as f64
-            } else {
-                (to_inside[i] as f64).sqrt() - 0.5
-            }
-        })
-        .collect()
+    signed_from(mask, &to_inside, &to_outside)
 }
 
 /// The JFA the shaders run, on the CPU: same step order, same 8-neighbour test, same skipping of
@@ -209,21 +209,7 @@ pub fn signed_3d(mask: &[bool], size: [usize; 3]) -> Vec<f64> {
     let to_inside = edt_3d_squared(mask, size);
     let outside: Vec<bool> = mask.iter().map(|m| !m).collect();
     let to_outside = edt_3d_squared(&outside, size);
-    (0..mask.len())
-        .map(|i| {
-            if mask[i] {
-                if to_outside[i] == NONE {
-                    -(f32::MAX as f64)
-                } else {
-                    -((to_outside[i] as f64).sqrt() - 0.5)
-                }
-            } else if to_inside[i] == NONE {
-                f32::MAX as f64
-            } else {
-                (to_inside[i] as f64).sqrt() - 0.5
-            }
-        })
-        .collect()
+    signed_from(mask, &to_inside, &to_outside)
 }
 
 /// Pack a 3D seed as the shaders do (11/11/10 bits, each coordinate + 1).
