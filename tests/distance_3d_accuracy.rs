@@ -262,3 +262,30 @@ fn exact_and_jfa_against_the_cpu_transform() {
         "1+JFA+2 must have no wrong voxels on these cases"
     );
 }
+
+/// The column passes split each column into 1 to 32 bands, each building its own envelope and
+/// searching the others'. Test grids are small, so the automatic choice is always 32 bands; every
+/// other count must be exact too.
+#[test]
+fn every_column_band_count_is_exact() {
+    let ctx = context();
+    let mut d3 = Distance3d::new(&ctx.device).unwrap();
+    for bands in [1, 2, 4, 8, 16, 32] {
+        d3.set_column_bands(Some(bands)).unwrap();
+        for case in cases() {
+            let exact = cpu::edt_3d_squared(&case.mask, case.size);
+            let (nearest, _, dist) =
+                run_3d(&ctx, &d3, &case.mask, case.size, &Options3d::default());
+            let e = score(&case, &nearest, &dist, &exact);
+            assert_eq!(
+                e.wrong, 0,
+                "{} with {bands} bands: {} wrong voxels",
+                case.name, e.wrong
+            );
+        }
+    }
+    for bad in [0, 3, 64] {
+        let err = d3.set_column_bands(Some(bad)).unwrap_err().to_string();
+        assert!(err.contains("column bands"), "{err}");
+    }
+}

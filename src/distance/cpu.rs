@@ -89,7 +89,13 @@ pub fn edt_2d_squared(seeds: &[bool], width: usize, height: usize) -> Vec<u64> {
 
 /// Combine the two transforms as the resolve stages do (shared by 2D and 3D).
 fn signed_from(mask: &[bool], to_inside: &[u64], to_outside: &[u64]) -> Vec<f64> {
-    let half_off = |d2: u64, far: f64| if d2 == NONE { far } else { (d2 as f64).sqrt() - 0.5 };
+    let half_off = |d2: u64, far: f64| {
+        if d2 == NONE {
+            far
+        } else {
+            (d2 as f64).sqrt() - 0.5
+        }
+    };
     (0..mask.len())
         .map(|i| {
             if mask[i] {

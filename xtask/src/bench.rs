@@ -26,6 +26,8 @@ pub struct Args {
     pub band: f32,
     /// Only the exact transform (and the peer): for quick comparisons.
     pub exact_only: bool,
+    /// Bands per column of the exact transform; `None` lets the library choose.
+    pub column_bands: Option<u32>,
 }
 
 /// Memory bandwidth the pass figures are compared with (H100 SXM HBM3, rounded down).
@@ -253,7 +255,9 @@ fn distance(args: &Args) -> Result<(), String> {
     let info = ctx.adapter.get_info();
     let adapter = format!("{} ({:?}, {})", info.name, info.backend, info.driver_info);
     println!("adapter: {adapter}");
-    let d3 = Distance3d::new(&ctx.device).map_err(|e| e.to_string())?;
+    let mut d3 = Distance3d::new(&ctx.device).map_err(|e| e.to_string())?;
+    d3.set_column_bands(args.column_bands)
+        .map_err(|e| e.to_string())?;
     let jfa2 = Jfa2d::new(&ctx.device).map_err(|e| e.to_string())?;
     let sizes3: &[usize] = if args.quick {
         &[32, 64]

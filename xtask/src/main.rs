@@ -61,6 +61,9 @@ enum Command {
         /// Only the exact transform (and the peer).
         #[arg(long)]
         exact_only: bool,
+        /// Bands per column in the exact transform (1, 2, 4, 8, 16, 32); by grid size if absent.
+        #[arg(long)]
+        column_bands: Option<u32>,
     },
 }
 
@@ -92,6 +95,7 @@ fn main() -> ExitCode {
             peer,
             out,
             exact_only,
+            column_bands,
         } => {
             if cfg!(debug_assertions) && std::env::var_os("FIELDKIT_BENCH_NO_REEXEC").is_none() {
                 return rerun_release();
@@ -111,6 +115,7 @@ fn main() -> ExitCode {
                 peer,
                 band,
                 exact_only,
+                column_bands,
             };
             match technique {
                 Technique::Distance => bench::run_distance(&args),
