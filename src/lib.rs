@@ -11,6 +11,7 @@ pub mod error;
 pub mod gallery;
 pub mod gpu;
 pub mod harness;
+pub mod metaball;
 
 pub use error::{BindingError, Error};
 

@@ -697,13 +697,13 @@ impl Distance3d {
     ) -> Result<Field3d, Error> {
         options.check()?;
         check_size_3d(device, size)?;
-        let Method::Jfa(variant) = options.method else {
+        if !matches!(options.method, Method::Jfa(_)) {
             return Err(Error::Invalid {
                 stage: STAGE,
                 what: "sub-voxel seeds need a JFA method; the exact transform takes integer seeds"
                     .into(),
             });
-        };
+        }
         if points.count == 0
             || points.count > MAX_POINTS
             || (points.buffer.size() as u64) < points.count as u64 * 16
@@ -779,16 +779,69 @@ impl Distance3d {
             "seed points",
             prof,
         );
-        let steps = options.steps(variant, size.into_iter().max().unwrap());
-        let nearest = self.encode_flood_inner(
+        self.encode_keyed_points(
             device,
             encoder,
             seeds,
+            &points.buffer,
             size,
-            &steps,
-            Some(&points.buffer),
-            prof,
-        )?;
+            inside,
+            options,
+        )
+    }
+
+    /// Flood and resolve a field of seed keys that a caller's stage wrote itself: `keys` holds,
+    /// per voxel, `point_key(index, offset)` (0: no seed) naming a point of `points` (vec4 per
+    /// point, voxel coordinates). The metaball surface-seed stage writes one this way. Signed
+    /// when `inside` is given, as in [`Self::encode_points`].
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode_keyed_points(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        keys: wgpu::Buffer,
+        points: &wgpu::Buffer,
+        size: [u32; 3],
+        inside: Option<&wgpu::Texture>,
+        options: &Options3d,
+    ) -> Result<Field3d, Error> {
+        options.check()?;
+        check_size_3d(device, size)?;
+        let Method::Jfa(variant) = options.method else {
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: "sub-voxel seeds need a JFA method; the exact transform takes integer seeds"
+                    .into(),
+            });
+        };
+        if keys.size() != voxels(size) * 4 {
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: format!(
+                    "keys buffer has {} bytes, {size:?} needs {}",
+                    keys.size(),
+                    voxels(size) * 4
+                ),
+            });
+        }
+        if let Some(v) = inside {
+            let vs = check_volume(device, v)?;
+            if vs != size {
+                return Err(Error::Invalid {
+                    stage: STAGE,
+                    what: format!("inside volume is {vs:?}, the field {size:?}"),
+                });
+            }
+        }
+        let prof = &mut None;
+        let steps = options.steps(variant, size.into_iter().max().unwrap());
+        let nearest =
+            self.encode_flood_inner(device, encoder, keys, size, &steps, Some(points), prof)?;
+        let points = PointSeeds {
+            buffer: points.clone(),
+            homes: None,
+            count: 0,
+        };
         let params = self.resolve_params(device, size, options);
         let distance = distance_texture(device, size, wgpu::TextureDimension::D3);
         let dv = view(&distance);

@@ -90,3 +90,25 @@ pub fn run_3d(
         read_texture(ctx, &field.distance).unwrap(),
     )
 }
+
+/// Build a metaball field on a fitted grid; returns the field and the seeds stage's outputs
+/// read back (keys, points) from a separate run of the seeds stage alone.
+pub fn metaball_field(
+    ctx: &Context,
+    voxels: &[glam::Vec4],
+    edge: f32,
+    settings: &fieldkit::metaball::Settings,
+) -> fieldkit::metaball::MetaballField {
+    let balls = fieldkit::metaball::Metaballs::new(&ctx.device).unwrap();
+    let grid = settings
+        .fit_grid(voxels, edge)
+        .unwrap()
+        .expect("a non-empty voxel set");
+    let inst = balls.upload(ctx, voxels).unwrap();
+    let mut enc = ctx.encoder("metaball test");
+    let field = balls
+        .encode(&ctx.device, &mut enc, &inst, &grid, edge, settings)
+        .unwrap();
+    ctx.submit_and_wait("metaball test", enc).unwrap();
+    field
+}

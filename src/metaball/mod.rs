@@ -1,0 +1,488 @@
+//! Metaball voxels: a voxel set (centres and scales) splatted into a density grid, iso-surface
+//! seeds, a signed distance field by JFA, and a raymarched surface (see [`render`]).
+//!
+//! ```no_run
+//! # fn f(ctx: &fieldkit::gpu::Context) -> Result<(), fieldkit::Error> {
+//! use fieldkit::metaball::{Metaballs, Settings, packed_grid};
+//! let voxels = packed_grid([8, 8, 8], 1.0); // 512 voxels of edge 1, centred on the origin
+//! let balls = Metaballs::new(&ctx.device)?;
+//! let instances = balls.upload(ctx, &voxels)?;
+//! let settings = Settings::default();
+//! let grid = settings.fit_grid(&voxels, 1.0)?;
+//! let mut encoder = ctx.encoder("metaballs");
+//! let field = balls.encode(&ctx.device, &mut encoder, &instances, &grid, 1.0, &settings)?;
+//! ctx.submit_and_wait("metaballs", encoder)?;
+//! // field.sdf and field.density feed render::Raymarcher.
+//! # Ok(()) }
+//! ```
+
+pub mod cpu;
+pub mod render;
+
+use glam::{Vec3, Vec4};
+
+use crate::bind::ComputePipeline;
+use crate::distance::Variant;
+use crate::distance::volume::{Distance3d, Grid3, Inside, MAX_POINTS, Method, Options3d};
+use crate::error::Error;
+use crate::gpu::{Context, uniform_buffer as uniform};
+use crate::shaders::metaball::{splat, surface_seeds};
+
+const STAGE: &str = "metaball";
+
+/// Fixed-point units per unit density in the splat, as the source used; lowered when many
+/// instances could overflow a u32 sum (see [`fixed_scale`]).
+pub const FIXED_SCALE: f32 = 10000.0;
+
+/// The fixed-point scale for `count` instances: no voxel gets more than one contribution (≤ 1)
+/// per instance, so `count × scale` must fit in a u32.
+pub fn fixed_scale(count: u32) -> f32 {
+    FIXED_SCALE.min((u32::MAX / count.max(1)) as f32).floor()
+}
+
+/// How the voxel set becomes a field.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Settings {
+    /// Iso-level of the surface (the source used 0.5).
+    pub threshold: f32,
+    /// Support radius = edge × scale × ½ × overlap.
+    pub overlap: f32,
+    /// Grid cells per voxel edge when the grid is fitted ([`Settings::fit_grid`]).
+    pub cells_per_edge: f32,
+    /// Distances the SDF must hold, in cells: JFA starts at the power of two above it and the
+    /// field is clamped to ±band (what the raymarcher's steps need, no more).
+    pub band: f32,
+    /// JFA variant of the distance stage.
+    pub variant: Variant,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            threshold: 0.5,
+            overlap: 2.0,
+            cells_per_edge: 4.0,
+            band: 8.0,
+            variant: Variant::JfaPlus2,
+        }
+    }
+}
+
+impl Settings {
+    fn check(&self) -> Result<(), Error> {
+        let bad = |what: &str, v: f32| Error::Invalid {
+            stage: STAGE,
+            what: format!("{what} must be finite and positive, got {v}"),
+        };
+        if !(self.threshold.is_finite() && self.threshold > 0.0 && self.threshold < 1.0) {
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: format!("threshold must be in (0, 1), got {}", self.threshold),
+            });
+        }
+        for (what, v) in [
+            ("overlap", self.overlap),
+            ("cells_per_edge", self.cells_per_edge),
+            ("band", self.band),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(bad(what, v));
+            }
+        }
+        Ok(())
+    }
+
+    /// Support radius of an instance of scale `scale`.
+    pub fn radius(&self, edge: f32, scale: f32) -> f32 {
+        edge * scale * 0.5 * self.overlap
+    }
+
+    /// A grid fitted to the instances' support (plus one cell), with cells of
+    /// `edge / cells_per_edge`. `None` for an empty set or one whose scales are all zero.
+    pub fn fit_grid(&self, voxels: &[Vec4], edge: f32) -> Result<Option<Grid3>, Error> {
+        self.check()?;
+        check_voxels(voxels, edge)?;
+        let cell = edge / self.cells_per_edge;
+        let mut lo = Vec3::splat(f32::INFINITY);
+        let mut hi = Vec3::splat(f32::NEG_INFINITY);
+        for v in voxels.iter().filter(|v| v.w > 0.0) {
+            let r = self.radius(edge, v.w);
+            lo = lo.min(v.truncate() - r);
+            hi = hi.max(v.truncate() + r);
+        }
+        if lo.x > hi.x {
+            return Ok(None);
+        }
+        let lo = lo - cell;
+        let hi = hi + cell;
+        let cells = ((hi - lo) / cell).ceil();
+        let size = [cells.x as u64, cells.y as u64, cells.z as u64];
+        let max = crate::distance::volume::MAX_SIDE_3D;
+        for (i, what) in ["grid width", "grid height", "grid depth"]
+            .into_iter()
+            .enumerate()
+        {
+            if size[i] > max[i] as u64 {
+                return Err(Error::Size {
+                    stage: STAGE,
+                    what,
+                    got: size[i],
+                    max: max[i] as u64,
+                });
+            }
+        }
+        let size = [size[0] as u32, size[1] as u32, size[2] as u32];
+        // Centre the grid on the support so the extra fraction of a cell is split evenly.
+        let extent = Vec3::new(size[0] as f32, size[1] as f32, size[2] as f32) * cell;
+        Ok(Some(Grid3 {
+            size,
+            voxel_size: cell,
+            origin: (lo + hi) * 0.5 - extent * 0.5,
+        }))
+    }
+}
+
+/// The source's grid builder: `region` voxels per axis of edge `block`, packed, centred on the
+/// origin, scale 1 (xyz: centre, w: scale).
+pub fn packed_grid(region: [u32; 3], block: f32) -> Vec<Vec4> {
+    let half = Vec3::new(region[0] as f32, region[1] as f32, region[2] as f32) * block * 0.5;
+    let mut v = Vec::with_capacity((region[0] * region[1] * region[2]) as usize);
+    for z in 0..region[2] {
+        for y in 0..region[1] {
+            for x in 0..region[0] {
+                let c = (Vec3::new(x as f32, y as f32, z as f32) + 0.5) * block - half;
+                v.push(c.extend(1.0));
+            }
+        }
+    }
+    v
+}
+
+/// Per-frame animation of the source's demo: scales s₀·(0.5 + 0.5·sin(2π f t + 0.13 i)) and
+/// Lissajous offsets of the centres, `wobble` × edge at most.
+pub fn animate(base: &[Vec4], edge: f32, t: f32, frequency: f32, wobble: f32) -> Vec<Vec4> {
+    let tau = std::f32::consts::TAU;
+    base.iter()
+        .enumerate()
+        .map(|(i, v)| {
+            let phase = tau * frequency * t + 0.13 * i as f32;
+            let offset = Vec3::new(
+                (phase * 1.0).sin(),
+                (phase * 2.0 + 0.5).sin(),
+                (phase * 3.0 + 1.0).sin(),
+            ) * wobble
+                * edge;
+            (v.truncate() + offset).extend(v.w * (0.5 + 0.5 * phase.sin()))
+        })
+        .collect()
+}
+
+fn check_voxels(voxels: &[Vec4], edge: f32) -> Result<(), Error> {
+    if !(edge.is_finite() && edge > 0.0) {
+        return Err(Error::Invalid {
+            stage: STAGE,
+            what: format!("voxel edge must be finite and positive, got {edge}"),
+        });
+    }
+    if let Some((i, v)) = voxels
+        .iter()
+        .enumerate()
+        .find(|(_, v)| !v.is_finite() || v.w < 0.0)
+    {
+        return Err(Error::Invalid {
+            stage: STAGE,
+            what: format!(
+                "voxel {i} has centre {} and scale {}: centres must be finite and scales finite and ≥ 0",
+                v.truncate(),
+                v.w
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// Instances on the GPU: one vec4 (centre, scale) each, for the splat and the debug cubes.
+#[derive(Debug)]
+pub struct Instances {
+    pub buffer: wgpu::Buffer,
+    pub count: u32,
+}
+
+/// Everything a metaball field keeps on the GPU.
+#[derive(Debug)]
+pub struct MetaballField {
+    pub grid: Grid3,
+    /// Fixed-point density sums (u32 per voxel) and the scale they use.
+    pub density_fixed: wgpu::Buffer,
+    pub fixed_scale: f32,
+    /// Density as `R32Float`.
+    pub density: wgpu::Texture,
+    /// Seed points (voxel coordinates, w = 1 for a seed), indexed by voxel.
+    pub points: wgpu::Buffer,
+    /// Nearest seed key per voxel after JFA.
+    pub nearest: wgpu::Buffer,
+    /// Signed distance (`R32Float`, local units, negative inside, clamped to ±band).
+    pub sdf: wgpu::Texture,
+    /// The clamp of `sdf`, local units.
+    pub band: f32,
+    pub threshold: f32,
+}
+
+/// Output of the splat and surface-seed stages.
+#[derive(Debug)]
+pub struct SurfaceSeeds {
+    pub density_fixed: wgpu::Buffer,
+    pub fixed_scale: f32,
+    pub density: wgpu::Texture,
+    /// Seed key per voxel: `point_key(voxel index, offset)`, 0 for none.
+    pub keys: wgpu::Buffer,
+    /// Seed point per voxel (voxel coordinates, w = 1 for a seed, zero elsewhere).
+    pub points: wgpu::Buffer,
+}
+
+/// The field pipelines. Create once, encode many times.
+pub struct Metaballs {
+    splat: ComputePipeline<splat::splat::Entry>,
+    seeds: ComputePipeline<surface_seeds::surface_seeds::Entry>,
+    distance: Distance3d,
+}
+
+impl Metaballs {
+    pub fn new(device: &wgpu::Device) -> Result<Self, Error> {
+        Ok(Self {
+            splat: ComputePipeline::new(device)?,
+            seeds: ComputePipeline::new(device)?,
+            distance: Distance3d::new(device)?,
+        })
+    }
+
+    /// Upload a voxel set (xyz: centre, w: scale). NaN or infinite centres, and negative or
+    /// non-finite scales, are refused.
+    pub fn upload(&self, ctx: &Context, voxels: &[Vec4]) -> Result<Instances, Error> {
+        check_voxels(voxels, 1.0)?;
+        if voxels.len() > u32::MAX as usize {
+            return Err(Error::Size {
+                stage: STAGE,
+                what: "voxel count",
+                got: voxels.len() as u64,
+                max: u32::MAX as u64,
+            });
+        }
+        let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("metaball instances"),
+            size: (voxels.len().max(1) * 16) as u64,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::VERTEX
+                | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        ctx.queue
+            .write_buffer(&buffer, 0, bytemuck::cast_slice(voxels));
+        Ok(Instances {
+            buffer,
+            count: voxels.len() as u32,
+        })
+    }
+
+    /// Re-upload changed voxels in place (same count): the per-frame path of an animation.
+    pub fn update(
+        &self,
+        ctx: &Context,
+        instances: &Instances,
+        voxels: &[Vec4],
+    ) -> Result<(), Error> {
+        check_voxels(voxels, 1.0)?;
+        if voxels.len() != instances.count as usize {
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: format!(
+                    "{} voxels given for a buffer of {}; upload a new set instead",
+                    voxels.len(),
+                    instances.count
+                ),
+            });
+        }
+        ctx.queue
+            .write_buffer(&instances.buffer, 0, bytemuck::cast_slice(voxels));
+        Ok(())
+    }
+
+    /// Splat, seeds and signed distance for `instances` on `grid` (voxel edge `edge`).
+    pub fn encode(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        instances: &Instances,
+        grid: &Grid3,
+        edge: f32,
+        settings: &Settings,
+    ) -> Result<MetaballField, Error> {
+        let seeds = self.encode_seeds(device, encoder, instances, grid, edge, settings)?;
+        let options = Options3d {
+            method: Method::Jfa(settings.variant),
+            signed: true,
+            inside: Inside::Threshold(settings.threshold),
+            voxel_size: grid.voxel_size,
+            band: Some(settings.band),
+        };
+        // The flood starts from the keys buffer and may leave intermediate steps in it.
+        let field = self.distance.encode_keyed_points(
+            device,
+            encoder,
+            seeds.keys,
+            &seeds.points,
+            grid.size,
+            Some(&seeds.density),
+            &options,
+        )?;
+        Ok(MetaballField {
+            grid: *grid,
+            density_fixed: seeds.density_fixed,
+            fixed_scale: seeds.fixed_scale,
+            density: seeds.density,
+            points: seeds.points,
+            nearest: field.nearest,
+            sdf: field.distance,
+            band: settings.band * grid.voxel_size,
+            threshold: settings.threshold,
+        })
+    }
+
+    /// The splat and surface-seed stages alone.
+    pub fn encode_seeds(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        instances: &Instances,
+        grid: &Grid3,
+        edge: f32,
+        settings: &Settings,
+    ) -> Result<SurfaceSeeds, Error> {
+        settings.check()?;
+        check_voxels(&[], edge)?;
+        if !(grid.voxel_size.is_finite() && grid.voxel_size > 0.0 && grid.origin.is_finite()) {
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: format!(
+                    "grid cell {} and origin {} must be finite (cell positive)",
+                    grid.voxel_size, grid.origin
+                ),
+            });
+        }
+        crate::distance::volume::check_size_3d(device, grid.size)?;
+        let cells: u64 = grid.size.iter().map(|&s| s as u64).product();
+        if cells > MAX_POINTS as u64 + 1 {
+            return Err(Error::Size {
+                stage: STAGE,
+                what: "grid cells (one seed point per cell)",
+                got: cells,
+                max: MAX_POINTS as u64 + 1,
+            });
+        }
+        if instances.buffer.size() < instances.count as u64 * 16 {
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: format!(
+                    "instance buffer has {} bytes for {} instances",
+                    instances.buffer.size(),
+                    instances.count
+                ),
+            });
+        }
+        let storage = |label: &str, bytes: u64| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: bytes,
+                usage: wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_SRC
+                    | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        let density_fixed = storage("metaball density (fixed point)", cells * 4);
+        encoder.clear_buffer(&density_fixed, 0, None);
+        let scale = fixed_scale(instances.count);
+        if instances.count > 0 {
+            let params = uniform(
+                device,
+                "splat params",
+                &splat::SplatParams {
+                    size: grid.size.into(),
+                    count: instances.count,
+                    origin: grid.origin,
+                    cell: grid.voxel_size,
+                    radius_per_scale: settings.radius(edge, 1.0),
+                    fixed_scale: scale,
+                },
+            );
+            let bound = self.splat.bind(
+                device,
+                &splat::splat::Resources {
+                    params: (&params).into(),
+                    instances: (&instances.buffer).into(),
+                    density: (&density_fixed).into(),
+                },
+            )?;
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some(splat::STAGE),
+                timestamp_writes: None,
+            });
+            self.splat
+                .dispatch(&mut pass, &bound, [instances.count.div_ceil(64), 1, 1]);
+        }
+        let density = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("metaball density"),
+            size: wgpu::Extent3d {
+                width: grid.size[0],
+                height: grid.size[1],
+                depth_or_array_layers: grid.size[2],
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D3,
+            format: wgpu::TextureFormat::R32Float,
+            usage: wgpu::TextureUsages::STORAGE_BINDING
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let keys = storage("metaball seed keys", cells * 4);
+        let points = storage("metaball seed points", cells * 16);
+        {
+            let params = uniform(
+                device,
+                "surface seed params",
+                &surface_seeds::SurfaceParams {
+                    size: grid.size.into(),
+                    threshold: settings.threshold,
+                    inv_fixed_scale: 1.0 / scale,
+                },
+            );
+            let dv = density.create_view(&Default::default());
+            let bound = self.seeds.bind(
+                device,
+                &surface_seeds::surface_seeds::Resources {
+                    params: (&params).into(),
+                    density: (&density_fixed).into(),
+                    density_out: (&dv).into(),
+                    keys: (&keys).into(),
+                    points: (&points).into(),
+                },
+            )?;
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some(surface_seeds::STAGE),
+                timestamp_writes: None,
+            });
+            let groups =
+                ComputePipeline::<surface_seeds::surface_seeds::Entry>::groups_for(grid.size);
+            self.seeds.dispatch(&mut pass, &bound, groups);
+        }
+        Ok(SurfaceSeeds {
+            density_fixed,
+            fixed_scale: scale,
+            density,
+            keys,
+            points,
+        })
+    }
+}

@@ -1,0 +1,510 @@
+//! Drawing a metaball field: the full-screen SDF raymarch and the debug voxel cubes, both into a
+//! caller's colour and depth targets so they composite with the caller's scene.
+//!
+//! ```no_run
+//! # fn f(ctx: &fieldkit::gpu::Context, field: &fieldkit::metaball::MetaballField,
+//! #      colour: &wgpu::TextureView, depth: &wgpu::TextureView) -> Result<(), fieldkit::Error> {
+//! use fieldkit::metaball::render::{Raymarcher, RaymarchSettings, View};
+//! use glam::{Mat4, Vec3};
+//! let proj = Mat4::perspective_rh(0.8, 16.0 / 9.0, 0.1, 100.0);
+//! let view = View {
+//!     view_proj: proj * Mat4::look_at_rh(Vec3::new(0.0, 2.0, 12.0), Vec3::ZERO, Vec3::Y),
+//!     viewport: [1920, 1080],
+//!     reversed_z: false,
+//! };
+//! let marcher = Raymarcher::new(
+//!     &ctx.device,
+//!     wgpu::TextureFormat::Rgba8Unorm,
+//!     wgpu::TextureFormat::Depth32Float,
+//!     false,
+//! )?;
+//! let mut encoder = ctx.encoder("frame");
+//! let drawn = marcher.encode(&ctx.device, &mut encoder, colour, depth, field, Mat4::IDENTITY,
+//!     &view, &RaymarchSettings::default())?;
+//! ctx.submit_and_wait("frame", encoder)?;
+//! # Ok(()) }
+//! ```
+
+use glam::{Mat4, Vec3, Vec4};
+
+use super::{Instances, MetaballField};
+use crate::bind::{RenderPipeline, RenderTargets};
+use crate::error::Error;
+use crate::gpu::uniform_buffer as uniform;
+use crate::shaders::raymarch::{sdf_raymarch, voxel_cubes};
+
+/// A camera: view-projection (world → clip, depth 0..1 or reversed 1..0) and target size.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct View {
+    pub view_proj: Mat4,
+    pub viewport: [u32; 2],
+    /// Reversed Z: the near plane at depth 1, far at 0 (depth test `Greater`).
+    pub reversed_z: bool,
+}
+
+impl View {
+    fn check(&self, stage: &'static str) -> Result<(), Error> {
+        if !self.view_proj.is_finite() || self.view_proj.determinant() == 0.0 {
+            return Err(Error::Invalid {
+                stage,
+                what: "view_proj must be finite and invertible".into(),
+            });
+        }
+        if self.viewport[0] == 0 || self.viewport[1] == 0 {
+            return Err(Error::Invalid {
+                stage,
+                what: format!("viewport {:?} has a zero side", self.viewport),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// What the raymarcher writes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Output {
+    /// Lit surface.
+    #[default]
+    Shaded,
+    /// World normal in rgb, distance from the near plane to the hit (world units) in alpha; for
+    /// float targets.
+    Normal,
+    /// Step count per pixel as a heat map, over the whole box.
+    Steps,
+    /// Density just inside the surface as a heat map.
+    Density,
+    /// Signed distance where the ray enters the box (red outside, blue inside).
+    Sdf,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RaymarchSettings {
+    /// Steps per ray before giving up (the pixel is then left as it was).
+    pub max_steps: u32,
+    /// Smallest hit tolerance, in cells; it grows with distance to one pixel's footprint.
+    pub epsilon: f32,
+    /// Step = distance × safety.
+    pub safety: f32,
+    /// World-space direction towards the light.
+    pub light_dir: Vec3,
+    pub base_colour: Vec3,
+    pub rim_colour: Vec3,
+    pub ambient: f32,
+    pub output: Output,
+}
+
+impl Default for RaymarchSettings {
+    fn default() -> Self {
+        Self {
+            max_steps: 128,
+            epsilon: 0.05,
+            safety: 0.9,
+            light_dir: Vec3::new(0.4, 0.8, 0.45),
+            base_colour: Vec3::new(0.85, 0.35, 0.3),
+            rim_colour: Vec3::new(0.5, 0.6, 0.8),
+            ambient: 0.2,
+            output: Output::Shaded,
+        }
+    }
+}
+
+impl RaymarchSettings {
+    fn check(&self) -> Result<(), Error> {
+        let stage = sdf_raymarch::STAGE;
+        if self.max_steps == 0 {
+            return Err(Error::Invalid {
+                stage,
+                what: "max_steps must be at least 1".into(),
+            });
+        }
+        if !(self.epsilon.is_finite() && self.epsilon > 0.0) {
+            return Err(Error::Invalid {
+                stage,
+                what: format!("epsilon must be finite and positive, got {}", self.epsilon),
+            });
+        }
+        if !(self.safety.is_finite() && self.safety > 0.0 && self.safety <= 1.0) {
+            return Err(Error::Invalid {
+                stage,
+                what: format!("safety must be in (0, 1], got {}", self.safety),
+            });
+        }
+        if !(self.light_dir.is_finite() && self.light_dir.length() > 0.0)
+            || !self.base_colour.is_finite()
+            || !self.rim_colour.is_finite()
+            || !self.ambient.is_finite()
+        {
+            return Err(Error::Invalid {
+                stage,
+                what: "light direction (non-zero) and colours must be finite".into(),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// A rigid transform (rotation and translation) within a tolerance.
+fn check_rigid(m: Mat4, stage: &'static str) -> Result<(), Error> {
+    let r = glam::Mat3::from_mat4(m);
+    let rigid = m.is_finite()
+        && (r.transpose() * r).abs_diff_eq(glam::Mat3::IDENTITY, 1e-4)
+        && r.determinant() > 0.0
+        && m.row(3).abs_diff_eq(Vec4::W, 1e-6);
+    if !rigid {
+        return Err(Error::Invalid {
+            stage,
+            what: "local_to_world must be rigid (rotation and translation, no scale): distances \
+                   in the SDF are local lengths"
+                .into(),
+        });
+    }
+    Ok(())
+}
+
+/// Whether a local box under `local_to_world` can be on screen: false when all 8 corners lie
+/// outside one clip plane (the host-side frustum test before drawing).
+pub fn box_visible(view_proj: Mat4, local_to_world: Mat4, lo: Vec3, hi: Vec3) -> bool {
+    let m = view_proj * local_to_world;
+    let corners: Vec<Vec4> = (0..8)
+        .map(|i| {
+            let c = Vec3::new(
+                if i & 1 == 0 { lo.x } else { hi.x },
+                if i & 2 == 0 { lo.y } else { hi.y },
+                if i & 4 == 0 { lo.z } else { hi.z },
+            );
+            m * c.extend(1.0)
+        })
+        .collect();
+    // Planes: -w ≤ x ≤ w, -w ≤ y ≤ w, 0 ≤ z ≤ w (either depth convention keeps z in [0, w]).
+    let planes: [fn(Vec4) -> f32; 6] = [
+        |c| c.w + c.x,
+        |c| c.w - c.x,
+        |c| c.w + c.y,
+        |c| c.w - c.y,
+        |c| c.z,
+        |c| c.w - c.z,
+    ];
+    planes
+        .iter()
+        .all(|plane| corners.iter().any(|&c| plane(c) >= 0.0))
+}
+
+/// The full-screen raymarch for one colour and depth format.
+pub struct Raymarcher {
+    pipeline: RenderPipeline<sdf_raymarch::fs_main::Entry>,
+    reversed_z: bool,
+}
+
+impl Raymarcher {
+    /// `reversed_z` sets the depth test (`Greater` instead of `Less`); it must match the
+    /// [`View`]s drawn with it.
+    pub fn new(
+        device: &wgpu::Device,
+        colour: wgpu::TextureFormat,
+        depth: wgpu::TextureFormat,
+        reversed_z: bool,
+    ) -> Result<Self, Error> {
+        if !depth.is_depth_stencil_format() || !depth.has_depth_aspect() {
+            return Err(Error::Format {
+                stage: sdf_raymarch::STAGE,
+                format: depth,
+                supported: "a depth format (Depth32Float, Depth24Plus, ...)",
+            });
+        }
+        let pipeline = RenderPipeline::new(
+            device,
+            &RenderTargets {
+                color: &[Some(colour.into())],
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: depth,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(if reversed_z {
+                        wgpu::CompareFunction::Greater
+                    } else {
+                        wgpu::CompareFunction::Less
+                    }),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                ..Default::default()
+            },
+        )?;
+        Ok(Self {
+            pipeline,
+            reversed_z,
+        })
+    }
+
+    /// Draw `field` (placed by the rigid `local_to_world`) into `colour` and `depth`, loading
+    /// what they hold. Returns false, drawing nothing, when the box is outside the frustum.
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        colour: &wgpu::TextureView,
+        depth: &wgpu::TextureView,
+        field: &MetaballField,
+        local_to_world: Mat4,
+        view: &View,
+        settings: &RaymarchSettings,
+    ) -> Result<bool, Error> {
+        let stage = sdf_raymarch::STAGE;
+        settings.check()?;
+        view.check(stage)?;
+        check_rigid(local_to_world, stage)?;
+        if view.reversed_z != self.reversed_z {
+            return Err(Error::Invalid {
+                stage,
+                what: format!(
+                    "the view has reversed_z = {}, the pipeline was made for {}",
+                    view.reversed_z, self.reversed_z
+                ),
+            });
+        }
+        let g = &field.grid;
+        let lo = g.origin;
+        let hi = g.origin
+            + Vec3::new(g.size[0] as f32, g.size[1] as f32, g.size[2] as f32) * g.voxel_size;
+        if !box_visible(view.view_proj, local_to_world, lo, hi) {
+            return Ok(false);
+        }
+        let inv = view.view_proj.inverse();
+        let (near_z, far_z) = if view.reversed_z {
+            (1.0, 0.0)
+        } else {
+            (0.0, 1.0)
+        };
+        let unproject = |x: f32, y: f32, z: f32| inv.project_point3(Vec3::new(x, y, z));
+        let n0 = unproject(0.0, 0.0, near_z);
+        let f0 = unproject(0.0, 0.0, far_z);
+        let f1 = unproject(2.0 / view.viewport[0] as f32, 0.0, far_z);
+        let pixel_angle = (f1 - f0).length() / (f0 - n0).length();
+        let params = uniform(
+            device,
+            "raymarch params",
+            &sdf_raymarch::RaymarchParams {
+                inv_view_proj: inv,
+                view_proj: view.view_proj,
+                world_to_local: local_to_world.inverse(),
+                local_to_world,
+                box_min: lo,
+                cell: g.voxel_size,
+                box_max: hi,
+                threshold: field.threshold,
+                light_dir: settings.light_dir.normalize(),
+                max_steps: settings.max_steps,
+                base_colour: settings.base_colour,
+                epsilon: settings.epsilon,
+                rim_colour: settings.rim_colour,
+                pixel_angle,
+                viewport: glam::Vec2::new(view.viewport[0] as f32, view.viewport[1] as f32),
+                near_z,
+                far_z,
+                safety: settings.safety,
+                mode: settings.output as u32,
+                ambient: settings.ambient,
+                band: field.band,
+            },
+        );
+        let sv = field.sdf.create_view(&Default::default());
+        let dv = field.density.create_view(&Default::default());
+        let bound = self.pipeline.bind(
+            device,
+            &sdf_raymarch::fs_main::Resources {
+                params: (&params).into(),
+                sdf: (&sv).into(),
+                density: (&dv).into(),
+            },
+        )?;
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(stage),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: colour,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            ..Default::default()
+        });
+        pass.set_pipeline(&self.pipeline.pipeline);
+        bound.set_render(&mut pass);
+        pass.draw(0..3, 0..1);
+        Ok(true)
+    }
+}
+
+/// How the debug cubes are drawn.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CubeStyle {
+    /// Faces culled; `None` (the source's choice) draws both sides.
+    pub cull: Option<wgpu::Face>,
+    /// `Always` (the source's choice, to be sure the cubes show) or a normal test (`Less`).
+    pub depth_compare: wgpu::CompareFunction,
+    /// Edges only; needs the adapter's `POLYGON_MODE_LINE`.
+    pub wireframe: bool,
+    pub colour: Vec4,
+    /// Cube edge × the voxel's scale; off draws every cube one edge long.
+    pub scale_size: bool,
+}
+
+impl Default for CubeStyle {
+    fn default() -> Self {
+        Self {
+            cull: Some(wgpu::Face::Back),
+            depth_compare: wgpu::CompareFunction::Less,
+            wireframe: false,
+            colour: Vec4::new(0.35, 0.7, 0.45, 1.0),
+            scale_size: true,
+        }
+    }
+}
+
+/// Instanced debug cubes: one draw of 36 vertices × the voxel count.
+pub struct Cubes {
+    pipeline: RenderPipeline<voxel_cubes::fs_main::Entry>,
+    style: CubeStyle,
+}
+
+impl Cubes {
+    pub fn new(
+        device: &wgpu::Device,
+        colour: wgpu::TextureFormat,
+        depth: wgpu::TextureFormat,
+        style: CubeStyle,
+    ) -> Result<Self, Error> {
+        let stage = voxel_cubes::STAGE;
+        if style.wireframe
+            && !device
+                .features()
+                .contains(wgpu::Features::POLYGON_MODE_LINE)
+        {
+            return Err(Error::Invalid {
+                stage,
+                what: "wireframe needs the adapter feature POLYGON_MODE_LINE, which this device \
+                       lacks; draw filled cubes instead"
+                    .into(),
+            });
+        }
+        if !style.colour.is_finite() {
+            return Err(Error::Invalid {
+                stage,
+                what: format!("colour {} must be finite", style.colour),
+            });
+        }
+        if !depth.is_depth_stencil_format() || !depth.has_depth_aspect() {
+            return Err(Error::Format {
+                stage,
+                format: depth,
+                supported: "a depth format (Depth32Float, Depth24Plus, ...)",
+            });
+        }
+        let pipeline = RenderPipeline::new(
+            device,
+            &RenderTargets {
+                color: &[Some(colour.into())],
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: depth,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(style.depth_compare),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                primitive: wgpu::PrimitiveState {
+                    cull_mode: style.cull,
+                    polygon_mode: if style.wireframe {
+                        wgpu::PolygonMode::Line
+                    } else {
+                        wgpu::PolygonMode::Fill
+                    },
+                    ..Default::default()
+                },
+                ..Default::default()
+            },
+        )?;
+        Ok(Self { pipeline, style })
+    }
+
+    /// Draw every instance as a cube of edge `edge` (× scale) into `colour` and `depth`,
+    /// loading what they hold.
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        colour: &wgpu::TextureView,
+        depth: &wgpu::TextureView,
+        instances: &Instances,
+        edge: f32,
+        local_to_world: Mat4,
+        view_proj: Mat4,
+    ) -> Result<(), Error> {
+        let stage = voxel_cubes::STAGE;
+        if !(edge.is_finite() && edge > 0.0)
+            || !local_to_world.is_finite()
+            || !view_proj.is_finite()
+        {
+            return Err(Error::Invalid {
+                stage,
+                what: format!("edge ({edge}) must be finite and positive, matrices finite"),
+            });
+        }
+        if instances.count == 0 {
+            return Ok(());
+        }
+        let params = uniform(
+            device,
+            "cube params",
+            &voxel_cubes::CubeParams {
+                view_proj,
+                local_to_world,
+                colour: self.style.colour,
+                edge,
+                scale_size: self.style.scale_size as u32,
+            },
+        );
+        let bound = self.pipeline.bind(
+            device,
+            &voxel_cubes::fs_main::Resources {
+                params: (&params).into(),
+            },
+        )?;
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(stage),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: colour,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            ..Default::default()
+        });
+        pass.set_pipeline(&self.pipeline.pipeline);
+        bound.set_render(&mut pass);
+        pass.set_vertex_buffer(0, instances.buffer.slice(..instances.count as u64 * 16));
+        pass.draw(0..36, 0..instances.count);
+        Ok(())
+    }
+}

@@ -1,0 +1,279 @@
+//! Metaball field stages against CPU references: the fixed-point splat, the iso-surface seeds,
+//! and the signed distance of one blob against its analytic sphere.
+
+mod common;
+
+use common::*;
+use fieldkit::distance::volume::Grid3;
+use fieldkit::gpu::{read_buffer, read_texture};
+use fieldkit::harness::context;
+use fieldkit::metaball::{Metaballs, Settings, cpu, fixed_scale, packed_grid};
+use glam::{Vec3, Vec4};
+
+fn words(ctx: &fieldkit::gpu::Context, b: &wgpu::Buffer) -> Vec<u32> {
+    bytemuck::cast_slice::<u8, u32>(&read_buffer(ctx, b).unwrap()).to_vec()
+}
+
+fn three_blobs() -> Vec<Vec4> {
+    vec![
+        Vec4::new(0.0, 0.0, 0.0, 1.0),
+        Vec4::new(0.9, 0.2, -0.1, 0.7),
+        Vec4::new(-0.3, 1.1, 0.4, 1.3),
+    ]
+}
+
+#[test]
+fn splat_matches_the_cpu_sums() {
+    let ctx = context();
+    let voxels = three_blobs();
+    let settings = Settings {
+        cells_per_edge: 6.0,
+        ..Settings::default()
+    };
+    let grid = settings.fit_grid(&voxels, 1.0).unwrap().unwrap();
+    let balls = Metaballs::new(&ctx.device).unwrap();
+    let inst = balls.upload(&ctx, &voxels).unwrap();
+    let mut enc = ctx.encoder("splat");
+    let seeds = balls
+        .encode_seeds(&ctx.device, &mut enc, &inst, &grid, 1.0, &settings)
+        .unwrap();
+    ctx.submit_and_wait("splat", enc).unwrap();
+    let gpu = words(&ctx, &seeds.density_fixed);
+    let (cpu_sum, count) = cpu::splat_fixed(&voxels, 1.0, &settings, &grid, seeds.fixed_scale);
+    let mut off = 0;
+    let mut touched = 0;
+    for i in 0..gpu.len() {
+        // Each contribution is rounded from an f32 falloff on the GPU and an f64 one here: they
+        // may fall on either side of a rounding boundary, one unit apart, never more.
+        let diff = (gpu[i] as i64 - cpu_sum[i] as i64).unsigned_abs();
+        assert!(
+            diff <= count[i] as u64,
+            "voxel {i}: GPU {} CPU {} with {} contributions",
+            gpu[i],
+            cpu_sum[i],
+            count[i]
+        );
+        off += (diff > 0) as usize;
+        touched += (count[i] > 0) as usize;
+    }
+    println!("splat: {touched} voxels touched, {off} one unit off");
+    assert!(touched > 1000, "the blobs cover the grid's middle");
+    // Zero where no instance reaches, exactly.
+    assert!(gpu.iter().zip(&count).all(|(&g, &c)| c > 0 || g == 0));
+}
+
+#[test]
+fn fixed_point_scale_keeps_sums_in_u32() {
+    assert_eq!(fixed_scale(1), 10000.0);
+    assert_eq!(fixed_scale(429_496), 10000.0);
+    let s = fixed_scale(1_000_000);
+    assert!(s < 10000.0 && s * 1.0e6 <= u32::MAX as f32, "{s}");
+    // A huge scale covers the whole grid with density ≈ 1 per instance: the sum saturates at
+    // count × scale, not wrapping.
+    let ctx = context();
+    let voxels = vec![Vec4::new(0.0, 0.0, 0.0, 1.0), Vec4::new(0.2, 0.0, 0.0, 1e4)];
+    let settings = Settings::default();
+    let grid = Grid3 {
+        size: [8, 8, 8],
+        voxel_size: 0.25,
+        origin: Vec3::splat(-1.0),
+    };
+    let balls = Metaballs::new(&ctx.device).unwrap();
+    let inst = balls.upload(&ctx, &voxels).unwrap();
+    let mut enc = ctx.encoder("huge");
+    let seeds = balls
+        .encode_seeds(&ctx.device, &mut enc, &inst, &grid, 1.0, &settings)
+        .unwrap();
+    ctx.submit_and_wait("huge", enc).unwrap();
+    let gpu = words(&ctx, &seeds.density_fixed);
+    let max = *gpu.iter().max().unwrap();
+    assert!(
+        max <= 20000,
+        "two instances sum to at most 2 × scale, got {max}"
+    );
+    assert!(
+        gpu.iter().all(|&g| g >= 9990),
+        "the huge blob reaches every voxel at ≈ 1"
+    );
+}
+
+#[test]
+fn seeds_are_the_boundary_voxels_moved_onto_the_surface() {
+    let ctx = context();
+    let voxels = three_blobs();
+    let settings = Settings {
+        cells_per_edge: 6.0,
+        ..Settings::default()
+    };
+    let grid = settings.fit_grid(&voxels, 1.0).unwrap().unwrap();
+    let balls = Metaballs::new(&ctx.device).unwrap();
+    let inst = balls.upload(&ctx, &voxels).unwrap();
+    let mut enc = ctx.encoder("seeds");
+    let seeds = balls
+        .encode_seeds(&ctx.device, &mut enc, &inst, &grid, 1.0, &settings)
+        .unwrap();
+    ctx.submit_and_wait("seeds", enc).unwrap();
+    let fixed = words(&ctx, &seeds.density_fixed);
+    let keys = words(&ctx, &seeds.keys);
+    let points: Vec<[f32; 4]> =
+        bytemuck::cast_slice(&read_buffer(&ctx, &seeds.points).unwrap()).to_vec();
+    let dens: Vec<f32> = read_texture(&ctx, &seeds.density).unwrap();
+    let [w, h, d] = grid.size.map(|s| s as i64);
+    let rho = |x: i64, y: i64, z: i64| -> f64 {
+        if x < 0 || y < 0 || z < 0 || x >= w || y >= h || z >= d {
+            0.0
+        } else {
+            fixed[((z * h + y) * w + x) as usize] as f64 / seeds.fixed_scale as f64
+        }
+    };
+    let t = settings.threshold as f64;
+    let mut n_seeds = 0;
+    let mut max_residual: f64 = 0.0;
+    for z in 0..d {
+        for y in 0..h {
+            for x in 0..w {
+                let i = ((z * h + y) * w + x) as usize;
+                assert!(
+                    (dens[i] as f64 - rho(x, y, z)).abs() < 1e-6,
+                    "density texture at {i}"
+                );
+                let nb = [
+                    rho(x - 1, y, z),
+                    rho(x + 1, y, z),
+                    rho(x, y - 1, z),
+                    rho(x, y + 1, z),
+                    rho(x, y, z - 1),
+                    rho(x, y, z + 1),
+                ];
+                let seed = rho(x, y, z) >= t && nb.iter().any(|&n| n < t);
+                // Integer decision from the same integers: compared exactly.
+                assert_eq!(keys[i] != 0, seed, "voxel ({x},{y},{z})");
+                if seed {
+                    n_seeds += 1;
+                    assert_eq!(
+                        fieldkit::distance::volume::key_index(keys[i]),
+                        Some(i as u32)
+                    );
+                    let p = points[i];
+                    let off = Vec3::new(p[0] - x as f32, p[1] - y as f32, p[2] - z as f32);
+                    assert!(off.length() <= 0.8661, "offset {off} of voxel {i}");
+                    // The point should sit near the analytic iso-surface.
+                    let world = grid.origin.as_dvec3()
+                        + (glam::DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64) + 0.5)
+                            * grid.voxel_size as f64;
+                    let r = cpu::density_at(&voxels, 1.0, &settings, world) - t;
+                    let g = cpu::gradient_at(&voxels, 1.0, &settings, world).length();
+                    max_residual = max_residual.max((r / g).abs() / grid.voxel_size as f64);
+                }
+            }
+        }
+    }
+    println!("seeds: {n_seeds}, max distance to the analytic surface ≈ {max_residual:.3} cells");
+    assert!(n_seeds > 100);
+    // Measured 0.213 cells on llvmpipe at 6 cells per voxel edge (one Newton step on central
+    // differences of a coarse grid).
+    assert!(max_residual < 0.25, "{max_residual}");
+}
+
+#[test]
+fn sdf_of_one_blob_is_its_sphere() {
+    let ctx = context();
+    let voxels = vec![Vec4::new(0.013, -0.021, 0.034, 1.0)];
+    let settings = Settings {
+        cells_per_edge: 16.0,
+        ..Settings::default()
+    };
+    let field = metaball_field(&ctx, &voxels, 1.0, &settings);
+    let sdf: Vec<f32> = read_texture(&ctx, &field.sdf).unwrap();
+    let dens: Vec<f32> = read_texture(&ctx, &field.density).unwrap();
+    let g = field.grid;
+    let r_iso = cpu::blob_iso_radius(settings.radius(1.0, 1.0) as f64, 0.5);
+    let centre = voxels[0].truncate().as_dvec3();
+    let [w, h, d] = g.size;
+    let (mut max_err, mut sum2, mut n) = (0.0f64, 0.0f64, 0usize);
+    for z in 0..d {
+        for y in 0..h {
+            for x in 0..w {
+                let i = ((z * h + y) * w + x) as usize;
+                let c = g.voxel_centre([x, y, z]).as_dvec3();
+                let exact = (c - centre).length() - r_iso;
+                assert_eq!(sdf[i] < 0.0, dens[i] >= 0.5, "sign at {i}");
+                if exact.abs() < 0.75 * field.band as f64 {
+                    let err = (sdf[i] as f64 - exact).abs() / g.voxel_size as f64;
+                    max_err = max_err.max(err);
+                    sum2 += err * err;
+                    n += 1;
+                } else if exact > field.band as f64 * 1.5 {
+                    // Beyond the band: clamped, a safe step for the raymarcher.
+                    assert_eq!(sdf[i], field.band, "clamp at {i}");
+                }
+            }
+        }
+    }
+    let rms = (sum2 / n as f64).sqrt();
+    println!(
+        "one blob: max SDF error {max_err:.3} cells, RMS {rms:.3} over {n} voxels in the band"
+    );
+    // Measured on llvmpipe: max 0.613, RMS 0.099 cells. The distance is to the nearest seed
+    // point, and the points lie about a cell apart on the surface, so a voxel on the surface
+    // between two of them reads up to about half that spacing; the seeds' own error adds to it.
+    assert!(max_err < 0.7 && rms < 0.12, "max {max_err} rms {rms}");
+}
+
+fn err<T>(r: Result<T, fieldkit::Error>) -> String {
+    match r {
+        Ok(_) => panic!("expected an error"),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn bad_input_is_a_typed_error() {
+    let ctx = context();
+    let balls = Metaballs::new(&ctx.device).unwrap();
+    let s = Settings::default();
+    let nan = [Vec4::new(f32::NAN, 0.0, 0.0, 1.0)];
+    assert!(err(balls.upload(&ctx, &nan)).contains("voxel 0"));
+    let neg = [Vec4::new(0.0, 0.0, 0.0, -1.0)];
+    assert!(err(balls.upload(&ctx, &neg)).contains("scale"));
+    assert!(err(s.fit_grid(&three_blobs(), 0.0)).contains("edge"));
+    let bad = Settings {
+        threshold: f32::NAN,
+        ..s
+    };
+    assert!(err(bad.fit_grid(&three_blobs(), 1.0)).contains("threshold"));
+    // Past the 11/11/10-bit seed packing: a grid too large.
+    let far = [
+        Vec4::new(0.0, 0.0, 0.0, 1.0),
+        Vec4::new(1000.0, 0.0, 0.0, 1.0),
+    ];
+    assert!(err(s.fit_grid(&far, 1.0)).contains("grid width"));
+    // A caller-made grid past the seed table.
+    let inst = balls.upload(&ctx, &three_blobs()).unwrap();
+    let grid = Grid3 {
+        size: [300, 300, 300],
+        voxel_size: 0.1,
+        origin: Vec3::ZERO,
+    };
+    let mut enc = ctx.encoder("bad");
+    assert!(err(balls.encode(&ctx.device, &mut enc, &inst, &grid, 1.0, &s)).contains("grid cells"));
+    // Updating with another count.
+    assert!(err(balls.update(&ctx, &inst, &packed_grid([2, 2, 2], 1.0))).contains("voxels given"));
+    // Empty and all-zero sets fit no grid: nothing to draw.
+    assert!(s.fit_grid(&[], 1.0).unwrap().is_none());
+    assert!(
+        s.fit_grid(&[Vec4::new(0.0, 0.0, 0.0, 0.0)], 1.0)
+            .unwrap()
+            .is_none()
+    );
+}
+
+#[test]
+fn packed_grid_is_centred() {
+    let v = packed_grid([3, 2, 1], 2.0);
+    assert_eq!(v.len(), 6);
+    let mean = v.iter().map(|p| p.truncate()).sum::<Vec3>() / 6.0;
+    assert!(mean.length() < 1e-6);
+    assert_eq!(v[0], Vec4::new(-2.0, -1.0, 0.0, 1.0));
+    assert_eq!(v[5], Vec4::new(2.0, 1.0, 0.0, 1.0));
+}
