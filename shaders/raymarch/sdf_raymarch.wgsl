@@ -36,7 +36,7 @@ struct RaymarchParams {
     far_z: f32,
     // Step = distance × safety (≤ 1 keeps sphere tracing conservative on an approximate SDF).
     safety: f32,
-    // 0 shaded, 1 normal (rgb) and hit distance (a), 2 step count, 3 density, 4 SDF at entry.
+    // 0 shaded, 1 normal (rgb) and 1 + hit distance (a), 2 step count, 3 density, 4 SDF at entry.
     mode: u32,
     ambient: f32,
     // Distances in the SDF are clamped to ±band (local units).
@@ -199,7 +199,8 @@ fn fs_main(in: VertexOut) -> FragmentOut {
     out.depth = depth_of(hit_world);
     let n = normalize((params.local_to_world * vec4<f32>(normal_at(p), 0.0)).xyz);
     if params.mode == 1u {
-        out.colour = vec4<f32>(n, length(hit_world - near_w));
+        // Alpha 1 + distance, so 0 still means "not drawn" for a hit on the near plane.
+        out.colour = vec4<f32>(n, 1.0 + length(hit_world - near_w));
         return out;
     }
     // Density just inside the surface: how deep the blobs pile up here.

@@ -6,9 +6,9 @@
 //! #      colour: &wgpu::TextureView, depth: &wgpu::TextureView) -> Result<(), fieldkit::Error> {
 //! use fieldkit::metaball::render::{Raymarcher, RaymarchSettings, View};
 //! use glam::{Mat4, Vec3};
-//! let proj = Mat4::perspective_rh(0.8, 16.0 / 9.0, 0.1, 100.0);
+//! let proj = glam::camera::rh::proj::directx::perspective(0.8, 16.0 / 9.0, 0.1, 100.0);
 //! let view = View {
-//!     view_proj: proj * Mat4::look_at_rh(Vec3::new(0.0, 2.0, 12.0), Vec3::ZERO, Vec3::Y),
+//!     view_proj: proj * glam::camera::rh::view::look_at_mat4(Vec3::new(0.0, 2.0, 12.0), Vec3::ZERO, Vec3::Y),
 //!     viewport: [1920, 1080],
 //!     reversed_z: false,
 //! };
@@ -66,8 +66,8 @@ pub enum Output {
     /// Lit surface.
     #[default]
     Shaded,
-    /// World normal in rgb, distance from the near plane to the hit (world units) in alpha; for
-    /// float targets.
+    /// World normal in rgb, 1 + distance from the near plane to the hit (world units) in alpha,
+    /// so alpha 0 is "not drawn"; for float targets.
     Normal,
     /// Step count per pixel as a heat map, over the whole box.
     Steps,
