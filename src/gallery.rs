@@ -179,6 +179,141 @@ pub fn visualize_distance(
     Ok(px.concat())
 }
 
+/// What the metaball scene draws.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MetaballView {
+    /// The debug cubes, one per voxel.
+    Cubes,
+    /// The raymarched surface, in one of the raymarcher's outputs.
+    Surface(crate::metaball::render::Output),
+}
+
+/// The gallery's metaball scene: a packed 5×4×3 voxel set, animated to time `t` (seconds), seen
+/// from a fixed camera over a grey floor-coloured background, into RGBA8 pixels.
+pub fn metaball_scene(
+    ctx: &Context,
+    width: u32,
+    height: u32,
+    t: f32,
+    what: MetaballView,
+) -> Result<Vec<u8>, Error> {
+    use crate::metaball::render::{CubeStyle, Cubes, RaymarchSettings, Raymarcher, View};
+    use crate::metaball::{Metaballs, Settings, animate, packed_grid};
+    use glam::{Mat4, Vec3};
+    let device = &ctx.device;
+    let edge = 1.0;
+    let base = packed_grid([5, 4, 3], edge);
+    let voxels = animate(&base, edge, t, 0.5, 0.15);
+    let settings = Settings::default();
+    let balls = Metaballs::new(device)?;
+    let instances = balls.upload(ctx, &voxels)?;
+    let colour_format = wgpu::TextureFormat::Rgba8Unorm;
+    let depth_format = wgpu::TextureFormat::Depth32Float;
+    let target = |format, label| {
+        device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width,
+                height,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        })
+    };
+    let colour = target(colour_format, "metaball colour");
+    let depth = target(depth_format, "metaball depth");
+    let cv = colour.create_view(&Default::default());
+    let dv = depth.create_view(&Default::default());
+    let proj = glam::camera::rh::proj::directx::perspective(
+        0.75,
+        width as f32 / height as f32,
+        0.1,
+        100.0,
+    );
+    let eye = Vec3::new(4.5, 3.5, 7.5);
+    let view = View {
+        view_proj: proj * glam::camera::rh::view::look_at_mat4(eye, Vec3::ZERO, Vec3::Y),
+        viewport: [width, height],
+        reversed_z: false,
+    };
+    let mut enc = ctx.encoder("gallery metaballs");
+    {
+        enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("clear"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &cv,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color {
+                        r: 0.09,
+                        g: 0.1,
+                        b: 0.12,
+                        a: 1.0,
+                    }),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &dv,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            ..Default::default()
+        });
+    }
+    match what {
+        MetaballView::Cubes => {
+            let cubes = Cubes::new(device, colour_format, depth_format, CubeStyle::default())?;
+            cubes.encode(
+                device,
+                &mut enc,
+                &cv,
+                &dv,
+                &instances,
+                edge,
+                Mat4::IDENTITY,
+                view.view_proj,
+            )?;
+        }
+        MetaballView::Surface(output) => {
+            let Some(grid) = settings.fit_grid(&voxels, edge)? else {
+                return Err(Error::Invalid {
+                    stage: "gallery",
+                    what: "the scene's voxel set is empty".into(),
+                });
+            };
+            let field = balls.encode(device, &mut enc, &instances, &grid, edge, &settings)?;
+            let marcher = Raymarcher::new(device, colour_format, depth_format, false)?;
+            let rs = RaymarchSettings {
+                output,
+                ..RaymarchSettings::default()
+            };
+            marcher.encode(
+                device,
+                &mut enc,
+                &cv,
+                &dv,
+                &field,
+                Mat4::IDENTITY,
+                &view,
+                &rs,
+            )?;
+        }
+    }
+    ctx.submit_and_wait("gallery metaballs", enc)?;
+    let px: Vec<[u8; 4]> = read_texture(ctx, &colour)?;
+    Ok(px.concat())
+}
+
 /// Render every scene into `out_dir`; returns the files written.
 pub fn run(
     ctx: &Context,
@@ -228,5 +363,46 @@ pub fn run(
     save("distance_2d_signed.png", &rgba, w, h, &mut written)?;
     let mask_rgba: Vec<u8> = mask.iter().flat_map(|&m| [m, m, m, 255]).collect();
     save("distance_2d_mask.png", &mask_rgba, w, h, &mut written)?;
+
+    use crate::metaball::render::Output;
+    let (w, h) = (640, 400);
+    for (name, what, label) in [
+        (
+            "metaball_cubes.png",
+            MetaballView::Cubes,
+            "metaball: debug cubes",
+        ),
+        (
+            "metaball_surface.png",
+            MetaballView::Surface(Output::Shaded),
+            "metaball: raymarched surface",
+        ),
+        (
+            "metaball_steps.png",
+            MetaballView::Surface(Output::Steps),
+            "metaball: step count per pixel",
+        ),
+        (
+            "metaball_density.png",
+            MetaballView::Surface(Output::Density),
+            "metaball: density view",
+        ),
+    ] {
+        progress(label);
+        let rgba = metaball_scene(ctx, w, h, 0.0, what)?;
+        save(name, &rgba, w, h, &mut written)?;
+    }
+    progress("metaball: animation, 6 frames");
+    for frame in 0..6 {
+        let t = frame as f32 / 6.0 * 2.0;
+        let rgba = metaball_scene(ctx, w / 2, h / 2, t, MetaballView::Surface(Output::Shaded))?;
+        save(
+            &format!("metaball_anim_{frame}.png"),
+            &rgba,
+            w / 2,
+            h / 2,
+            &mut written,
+        )?;
+    }
     Ok(written)
 }
