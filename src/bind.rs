@@ -693,7 +693,7 @@ fn build_render(
 
 /// Create the pipeline for any entry point from its table alone (used to prove every generated
 /// pipeline is accepted by wgpu, on the noop backend in tests). Colour targets get a format of
-/// each output's scalar class.
+/// each output's scalar class, and a depth target.
 pub fn create_any(device: &wgpu::Device, info: &'static EntryInfo) -> Result<(), Error> {
     crate::gpu::scoped(device, info.stage, || {
         let layouts = info.layouts(device);
@@ -718,6 +718,14 @@ pub fn create_any(device: &wgpu::Device, info: &'static EntryInfo) -> Result<(),
                     &layouts,
                     &RenderTargets {
                         color: &color,
+                        // A depth target, so stages that write `frag_depth` are accepted too.
+                        depth_stencil: Some(wgpu::DepthStencilState {
+                            format: wgpu::TextureFormat::Depth32Float,
+                            depth_write_enabled: Some(true),
+                            depth_compare: Some(wgpu::CompareFunction::Always),
+                            stencil: Default::default(),
+                            bias: Default::default(),
+                        }),
                         ..Default::default()
                     },
                 );

@@ -8,7 +8,7 @@
 //! let balls = Metaballs::new(&ctx.device)?;
 //! let instances = balls.upload(ctx, &voxels)?;
 //! let settings = Settings::default();
-//! let grid = settings.fit_grid(&voxels, 1.0)?;
+//! let Some(grid) = settings.fit_grid(&voxels, 1.0)? else { return Ok(()) }; // empty set
 //! let mut encoder = ctx.encoder("metaballs");
 //! let field = balls.encode(&ctx.device, &mut encoder, &instances, &grid, 1.0, &settings)?;
 //! ctx.submit_and_wait("metaballs", encoder)?;

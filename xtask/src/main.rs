@@ -4,6 +4,7 @@
 mod toolchain;
 
 mod bench;
+mod bench_metaball;
 mod lint;
 
 use std::path::{Path, PathBuf};
@@ -70,6 +71,7 @@ enum Command {
 #[derive(Clone, Copy, clap::ValueEnum)]
 enum Technique {
     Distance,
+    Metaball,
 }
 
 fn crate_root() -> PathBuf {
@@ -119,6 +121,9 @@ fn main() -> ExitCode {
             };
             match technique {
                 Technique::Distance => bench::run_distance(&args),
+                Technique::Metaball => {
+                    bench_metaball::run(args.quick, args.reps, args.warmup, &args.out)
+                }
             }
         }
     }
