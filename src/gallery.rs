@@ -197,7 +197,7 @@ pub fn metaball_scene(
     t: f32,
     what: MetaballView,
 ) -> Result<Vec<u8>, Error> {
-    use crate::metaball::render::{CubeStyle, Cubes, RaymarchSettings, Raymarcher, View};
+    use crate::metaball::render::{CubeStyle, Cubes, RaymarchSettings, Raymarcher, Targets, View};
     use crate::metaball::{Metaballs, Settings, animate, packed_grid};
     use glam::{Mat4, Vec3};
     let device = &ctx.device;
@@ -209,26 +209,8 @@ pub fn metaball_scene(
     let instances = balls.upload(ctx, &voxels)?;
     let colour_format = wgpu::TextureFormat::Rgba8Unorm;
     let depth_format = wgpu::TextureFormat::Depth32Float;
-    let target = |format, label| {
-        device.create_texture(&wgpu::TextureDescriptor {
-            label: Some(label),
-            size: wgpu::Extent3d {
-                width,
-                height,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        })
-    };
-    let colour = target(colour_format, "metaball colour");
-    let depth = target(depth_format, "metaball depth");
-    let cv = colour.create_view(&Default::default());
-    let dv = depth.create_view(&Default::default());
+    let targets = Targets::new(device, [width, height], colour_format, depth_format);
+    let (cv, dv) = (&targets.colour_view, &targets.depth_view);
     let proj = glam::camera::rh::proj::directx::perspective(
         0.75,
         width as f32 / height as f32,
@@ -242,42 +224,21 @@ pub fn metaball_scene(
         reversed_z: false,
     };
     let mut enc = ctx.encoder("gallery metaballs");
-    {
-        enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("clear"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &cv,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color {
-                        r: 0.09,
-                        g: 0.1,
-                        b: 0.12,
-                        a: 1.0,
-                    }),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &dv,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
-            ..Default::default()
-        });
-    }
+    let background = wgpu::Color {
+        r: 0.09,
+        g: 0.1,
+        b: 0.12,
+        a: 1.0,
+    };
+    targets.clear(&mut enc, background, 1.0);
     match what {
         MetaballView::Cubes => {
             let cubes = Cubes::new(device, colour_format, depth_format, CubeStyle::default())?;
             cubes.encode(
                 device,
                 &mut enc,
-                &cv,
-                &dv,
+                cv,
+                dv,
                 &instances,
                 edge,
                 Mat4::IDENTITY,
@@ -297,20 +258,11 @@ pub fn metaball_scene(
                 output,
                 ..RaymarchSettings::default()
             };
-            marcher.encode(
-                device,
-                &mut enc,
-                &cv,
-                &dv,
-                &field,
-                Mat4::IDENTITY,
-                &view,
-                &rs,
-            )?;
+            marcher.encode(device, &mut enc, cv, dv, &field, Mat4::IDENTITY, &view, &rs)?;
         }
     }
     ctx.submit_and_wait("gallery metaballs", enc)?;
-    let px: Vec<[u8; 4]> = read_texture(ctx, &colour)?;
+    let px: Vec<[u8; 4]> = read_texture(ctx, &targets.colour)?;
     Ok(px.concat())
 }
 

@@ -9,7 +9,9 @@ mod common;
 use common::*;
 use fieldkit::gpu::{Context, read_texture};
 use fieldkit::harness::context;
-use fieldkit::metaball::render::{Output, RaymarchSettings, Raymarcher, View, box_visible};
+use fieldkit::metaball::render::{
+    Output, RaymarchSettings, Raymarcher, Targets, View, box_visible,
+};
 use fieldkit::metaball::{MetaballField, Settings, cpu};
 
 use glam::{DVec3, Mat4, Vec3, Vec4};
@@ -52,26 +54,13 @@ fn shoot(
     clear_depth: f32,
 ) -> Shot {
     let device = &ctx.device;
-    let target = |format, label| {
-        device.create_texture(&wgpu::TextureDescriptor {
-            label: Some(label),
-            size: wgpu::Extent3d {
-                width: W,
-                height: H,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        })
-    };
-    let colour = target(wgpu::TextureFormat::Rgba32Float, "colour");
-    let depth = target(wgpu::TextureFormat::Depth32Float, "depth");
-    let cv = colour.create_view(&Default::default());
-    let dv = depth.create_view(&Default::default());
+    let targets = Targets::new(
+        device,
+        [W, H],
+        wgpu::TextureFormat::Rgba32Float,
+        wgpu::TextureFormat::Depth32Float,
+    );
+    let (cv, dv) = (&targets.colour_view, &targets.depth_view);
     let marcher = Raymarcher::new(
         device,
         wgpu::TextureFormat::Rgba32Float,
@@ -80,30 +69,8 @@ fn shoot(
     )
     .unwrap();
     let mut enc = ctx.encoder("shoot");
-    {
-        // Clear: colour to zero (alpha 0 marks "not drawn"), depth to the caller's value.
-        enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("clear"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &cv,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &dv,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(clear_depth),
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
-            ..Default::default()
-        });
-    }
+    // Colour cleared to zero (alpha 0 marks "not drawn"), depth to the caller's value.
+    targets.clear(&mut enc, wgpu::Color::TRANSPARENT, clear_depth);
     marcher
         .encode(
             device,
@@ -117,8 +84,8 @@ fn shoot(
         )
         .unwrap();
     ctx.submit_and_wait("shoot", enc).unwrap();
-    let colour: Vec<[f32; 4]> = read_texture(ctx, &colour).unwrap();
-    let depth: Vec<f32> = read_texture(ctx, &depth).unwrap();
+    let colour: Vec<[f32; 4]> = read_texture(ctx, &targets.colour).unwrap();
+    let depth: Vec<f32> = read_texture(ctx, &targets.depth).unwrap();
     let hits = colour
         .iter()
         .map(|c| (c[3] != 0.0).then(|| (Vec3::new(c[0], c[1], c[2]), c[3] - 1.0)))

@@ -143,6 +143,104 @@ impl RaymarchSettings {
     }
 }
 
+/// A render pass over the caller's targets that keeps what they hold.
+fn load_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    label: &str,
+    colour: &wgpu::TextureView,
+    depth: &wgpu::TextureView,
+) -> wgpu::RenderPass<'e> {
+    fn load<T>() -> wgpu::Operations<T> {
+        wgpu::Operations {
+            load: wgpu::LoadOp::Load,
+            store: wgpu::StoreOp::Store,
+        }
+    }
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(label),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: colour,
+            depth_slice: None,
+            resolve_target: None,
+            ops: load(),
+        })],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: depth,
+            depth_ops: Some(load()),
+            stencil_ops: None,
+        }),
+        ..Default::default()
+    })
+}
+
+/// Colour and depth targets of one size, readable back (`COPY_SRC`): what a test, the gallery
+/// or a benchmark draws into.
+pub struct Targets {
+    pub colour: wgpu::Texture,
+    pub depth: wgpu::Texture,
+    pub colour_view: wgpu::TextureView,
+    pub depth_view: wgpu::TextureView,
+}
+
+impl Targets {
+    pub fn new(
+        device: &wgpu::Device,
+        [width, height]: [u32; 2],
+        colour: wgpu::TextureFormat,
+        depth: wgpu::TextureFormat,
+    ) -> Self {
+        let make = |format, label| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d {
+                    width,
+                    height,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            })
+        };
+        let colour = make(colour, "fieldkit colour target");
+        let depth = make(depth, "fieldkit depth target");
+        Self {
+            colour_view: colour.create_view(&Default::default()),
+            depth_view: depth.create_view(&Default::default()),
+            colour,
+            depth,
+        }
+    }
+
+    /// Clear both targets.
+    pub fn clear(&self, encoder: &mut wgpu::CommandEncoder, colour: wgpu::Color, depth: f32) {
+        encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("fieldkit clear"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &self.colour_view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(colour),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &self.depth_view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(depth),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            ..Default::default()
+        });
+    }
+}
+
 /// A rigid transform (rotation and translation) within a tolerance.
 fn check_rigid(m: Mat4, stage: &'static str) -> Result<(), Error> {
     let r = glam::Mat3::from_mat4(m);
@@ -317,27 +415,7 @@ impl Raymarcher {
                 density: (&dv).into(),
             },
         )?;
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some(stage),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: colour,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Load,
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: depth,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Load,
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
-            ..Default::default()
-        });
+        let mut pass = load_pass(encoder, stage, colour, depth);
         pass.set_pipeline(&self.pipeline.pipeline);
         bound.set_render(&mut pass);
         pass.draw(0..3, 0..1);
@@ -480,27 +558,7 @@ impl Cubes {
                 params: (&params).into(),
             },
         )?;
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some(stage),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: colour,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Load,
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: depth,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Load,
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
-            ..Default::default()
-        });
+        let mut pass = load_pass(encoder, stage, colour, depth);
         pass.set_pipeline(&self.pipeline.pipeline);
         bound.set_render(&mut pass);
         pass.set_vertex_buffer(0, instances.buffer.slice(..instances.count as u64 * 16));

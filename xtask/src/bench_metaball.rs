@@ -10,7 +10,7 @@ use std::io::Write;
 use std::process::ExitCode;
 
 use fieldkit::gpu::{Context, read_buffer, read_texture};
-use fieldkit::metaball::render::{Output, RaymarchSettings, Raymarcher, View};
+use fieldkit::metaball::render::{Output, RaymarchSettings, Raymarcher, Targets, View};
 use fieldkit::metaball::{Metaballs, Settings, animate, cpu, packed_grid};
 use glam::{DVec3, Mat4, Vec3};
 
@@ -114,26 +114,13 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
         false,
     )
     .map_err(|e| e.to_string())?;
-    let target = |format| {
-        ctx.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("bench target"),
-            size: wgpu::Extent3d {
-                width,
-                height,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        })
-    };
-    let colour = target(wgpu::TextureFormat::Rgba32Float);
-    let depth = target(wgpu::TextureFormat::Depth32Float);
-    let cv = colour.create_view(&Default::default());
-    let dv = depth.create_view(&Default::default());
+    let targets = Targets::new(
+        &ctx.device,
+        [width, height],
+        wgpu::TextureFormat::Rgba32Float,
+        wgpu::TextureFormat::Depth32Float,
+    );
+    let (cv, dv) = (&targets.colour_view, &targets.depth_view);
     std::fs::create_dir_all(out).map_err(|e| e.to_string())?;
     let mut csv = std::fs::File::create(out.join("metaball.csv")).map_err(|e| e.to_string())?;
     writeln!(csv, "adapter,instances,grid,resolution,sdf_ms,raymarch_ms,hit_pixels,max_err_edges,rms_err_edges")
@@ -175,29 +162,7 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
         let mut ray_ms = Vec::new();
         for i in 0..warmup + reps {
             let ms = stamps.time(&ctx, |enc| {
-                {
-                    enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-                        label: Some("clear"),
-                        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                            view: &cv,
-                            depth_slice: None,
-                            resolve_target: None,
-                            ops: wgpu::Operations {
-                                load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                                store: wgpu::StoreOp::Store,
-                            },
-                        })],
-                        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                            view: &dv,
-                            depth_ops: Some(wgpu::Operations {
-                                load: wgpu::LoadOp::Clear(1.0),
-                                store: wgpu::StoreOp::Store,
-                            }),
-                            stencil_ops: None,
-                        }),
-                        ..Default::default()
-                    });
-                }
+                targets.clear(enc, wgpu::Color::TRANSPARENT, 1.0);
                 marcher
                     .encode(
                         &ctx.device,
@@ -217,7 +182,7 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
             }
         }
         // Error at up to 4096 hit pixels spread over the image.
-        let px: Vec<[f32; 4]> = read_texture(&ctx, &colour).map_err(|e| e.to_string())?;
+        let px: Vec<[f32; 4]> = read_texture(&ctx, &targets.colour).map_err(|e| e.to_string())?;
         let hits: Vec<usize> = (0..px.len()).filter(|&i| px[i][3] != 0.0).collect();
         let stride = (hits.len() / 4096).max(1);
         let inv = view.view_proj.as_dmat4().inverse();
