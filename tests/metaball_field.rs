@@ -22,6 +22,23 @@ fn three_blobs() -> Vec<Vec4> {
     ]
 }
 
+/// Splat and seeds alone, on the fitted grid.
+fn seed_stages(
+    ctx: &fieldkit::gpu::Context,
+    voxels: &[Vec4],
+    settings: &Settings,
+) -> (Grid3, fieldkit::metaball::SurfaceSeeds) {
+    let grid = settings.fit_grid(voxels, 1.0).unwrap().unwrap();
+    let balls = Metaballs::new(&ctx.device).unwrap();
+    let inst = balls.upload(ctx, voxels).unwrap();
+    let mut enc = ctx.encoder("seed stages");
+    let seeds = balls
+        .encode_seeds(&ctx.device, &mut enc, &inst, &grid, 1.0, settings)
+        .unwrap();
+    ctx.submit_and_wait("seed stages", enc).unwrap();
+    (grid, seeds)
+}
+
 #[test]
 fn splat_matches_the_cpu_sums() {
     let ctx = context();
@@ -30,14 +47,7 @@ fn splat_matches_the_cpu_sums() {
         cells_per_edge: 6.0,
         ..Settings::default()
     };
-    let grid = settings.fit_grid(&voxels, 1.0).unwrap().unwrap();
-    let balls = Metaballs::new(&ctx.device).unwrap();
-    let inst = balls.upload(&ctx, &voxels).unwrap();
-    let mut enc = ctx.encoder("splat");
-    let seeds = balls
-        .encode_seeds(&ctx.device, &mut enc, &inst, &grid, 1.0, &settings)
-        .unwrap();
-    ctx.submit_and_wait("splat", enc).unwrap();
+    let (grid, seeds) = seed_stages(&ctx, &voxels, &settings);
     let gpu = words(&ctx, &seeds.density_fixed);
     let (cpu_sum, count) = cpu::splat_fixed(&voxels, 1.0, &settings, &grid, seeds.fixed_scale);
     let mut off = 0;
@@ -105,14 +115,7 @@ fn seeds_are_the_boundary_voxels_moved_onto_the_surface() {
         cells_per_edge: 6.0,
         ..Settings::default()
     };
-    let grid = settings.fit_grid(&voxels, 1.0).unwrap().unwrap();
-    let balls = Metaballs::new(&ctx.device).unwrap();
-    let inst = balls.upload(&ctx, &voxels).unwrap();
-    let mut enc = ctx.encoder("seeds");
-    let seeds = balls
-        .encode_seeds(&ctx.device, &mut enc, &inst, &grid, 1.0, &settings)
-        .unwrap();
-    ctx.submit_and_wait("seeds", enc).unwrap();
+    let (grid, seeds) = seed_stages(&ctx, &voxels, &settings);
     let fixed = words(&ctx, &seeds.density_fixed);
     let keys = words(&ctx, &seeds.keys);
     let points: Vec<[f32; 4]> =

@@ -241,6 +241,28 @@ impl Targets {
     }
 }
 
+/// Depth test and write against the caller's depth target, which must have a depth aspect.
+fn depth_state(
+    stage: &'static str,
+    format: wgpu::TextureFormat,
+    compare: wgpu::CompareFunction,
+) -> Result<wgpu::DepthStencilState, Error> {
+    if !format.is_depth_stencil_format() || !format.has_depth_aspect() {
+        return Err(Error::Format {
+            stage,
+            format,
+            supported: "a depth format (Depth32Float, Depth24Plus, ...)",
+        });
+    }
+    Ok(wgpu::DepthStencilState {
+        format,
+        depth_write_enabled: Some(true),
+        depth_compare: Some(compare),
+        stencil: Default::default(),
+        bias: Default::default(),
+    })
+}
+
 /// A rigid transform (rotation and translation) within a tolerance.
 fn check_rigid(m: Mat4, stage: &'static str) -> Result<(), Error> {
     let r = glam::Mat3::from_mat4(m);
@@ -302,28 +324,19 @@ impl Raymarcher {
         depth: wgpu::TextureFormat,
         reversed_z: bool,
     ) -> Result<Self, Error> {
-        if !depth.is_depth_stencil_format() || !depth.has_depth_aspect() {
-            return Err(Error::Format {
-                stage: sdf_raymarch::STAGE,
-                format: depth,
-                supported: "a depth format (Depth32Float, Depth24Plus, ...)",
-            });
-        }
         let pipeline = RenderPipeline::new(
             device,
             &RenderTargets {
                 color: &[Some(colour.into())],
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: depth,
-                    depth_write_enabled: Some(true),
-                    depth_compare: Some(if reversed_z {
+                depth_stencil: Some(depth_state(
+                    sdf_raymarch::STAGE,
+                    depth,
+                    if reversed_z {
                         wgpu::CompareFunction::Greater
                     } else {
                         wgpu::CompareFunction::Less
-                    }),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
+                    },
+                )?),
                 ..Default::default()
             },
         )?;
@@ -481,24 +494,11 @@ impl Cubes {
                 what: format!("colour {} must be finite", style.colour),
             });
         }
-        if !depth.is_depth_stencil_format() || !depth.has_depth_aspect() {
-            return Err(Error::Format {
-                stage,
-                format: depth,
-                supported: "a depth format (Depth32Float, Depth24Plus, ...)",
-            });
-        }
         let pipeline = RenderPipeline::new(
             device,
             &RenderTargets {
                 color: &[Some(colour.into())],
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: depth,
-                    depth_write_enabled: Some(true),
-                    depth_compare: Some(style.depth_compare),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
+                depth_stencil: Some(depth_state(stage, depth, style.depth_compare)?),
                 primitive: wgpu::PrimitiveState {
                     cull_mode: style.cull,
                     polygon_mode: if style.wireframe {
