@@ -186,6 +186,8 @@ pub enum MetaballView {
     Cubes,
     /// The raymarched surface, in one of the raymarcher's outputs.
     Surface(crate::metaball::render::Output),
+    /// The field traced directly from blob bins (no SDF texture).
+    Direct(crate::metaball::render::Direct),
 }
 
 /// The gallery's metaball scene: a packed 5×4×3 voxel set, animated to time `t` (seconds), seen
@@ -259,6 +261,31 @@ pub fn metaball_scene(
                 ..RaymarchSettings::default()
             };
             marcher.encode(device, &mut enc, cv, dv, &field, Mat4::IDENTITY, &view, &rs)?;
+        }
+        MetaballView::Direct(method) => {
+            let Some(grid) = settings.fit_grid(&voxels, edge)? else {
+                return Err(Error::Invalid {
+                    stage: "gallery",
+                    what: "the scene's voxel set is empty".into(),
+                });
+            };
+            let bins = balls.encode_bins(device, &mut enc, &instances, &grid, edge, &settings)?;
+            let marcher = Raymarcher::new(device, colour_format, depth_format, false)?;
+            let rs = RaymarchSettings {
+                max_steps: 4096,
+                ..RaymarchSettings::default()
+            };
+            marcher.encode_direct(
+                device,
+                &mut enc,
+                cv,
+                dv,
+                &bins,
+                method,
+                Mat4::IDENTITY,
+                &view,
+                &rs,
+            )?;
         }
     }
     ctx.submit_and_wait("gallery metaballs", enc)?;
@@ -338,6 +365,11 @@ pub fn run(
             "metaball_density.png",
             MetaballView::Surface(Output::Density),
             "metaball: density view",
+        ),
+        (
+            "metaball_segment.png",
+            MetaballView::Direct(crate::metaball::render::Direct::Segment),
+            "metaball: segment tracing of the field itself",
         ),
     ] {
         progress(label);

@@ -252,7 +252,7 @@ fn bad_input_is_a_typed_error() {
     ];
     assert!(err(s.fit_grid(&far, 1.0)).contains("grid width"));
     // A caller-made grid past the seed table.
-    let inst = balls.upload(&ctx, &three_blobs()).unwrap();
+    let mut inst = balls.upload(&ctx, &three_blobs()).unwrap();
     let grid = Grid3 {
         size: [300, 300, 300],
         voxel_size: 0.1,
@@ -261,7 +261,9 @@ fn bad_input_is_a_typed_error() {
     let mut enc = ctx.encoder("bad");
     assert!(err(balls.encode(&ctx.device, &mut enc, &inst, &grid, 1.0, &s)).contains("grid cells"));
     // Updating with another count.
-    assert!(err(balls.update(&ctx, &inst, &packed_grid([2, 2, 2], 1.0))).contains("voxels given"));
+    assert!(
+        err(balls.update(&ctx, &mut inst, &packed_grid([2, 2, 2], 1.0))).contains("voxels given")
+    );
     // Empty and all-zero sets fit no grid: nothing to draw.
     assert!(s.fit_grid(&[], 1.0).unwrap().is_none());
     assert!(
@@ -279,4 +281,85 @@ fn packed_grid_is_centred() {
     assert!(mean.length() < 1e-6);
     assert_eq!(v[0], Vec4::new(-2.0, -1.0, 0.0, 1.0));
     assert_eq!(v[5], Vec4::new(2.0, 1.0, 0.0, 1.0));
+}
+
+/// The blob bins of direct tracing: starts are an exclusive scan of the lists, every blob whose
+/// support reaches a bin is in that bin's list (what the tracers rely on), no list holds a blob
+/// whose support box misses the bin, and the global bound is the largest bin sum of 1.717/R.
+#[test]
+fn blob_bins_hold_every_blob_that_reaches_them() {
+    let ctx = context();
+    let s = Settings::default();
+    // Scales from 0 (skipped) to 1.3, centres off the lattice.
+    let voxels: Vec<Vec4> = packed_grid([4, 3, 3], 1.0)
+        .iter()
+        .enumerate()
+        .map(|(i, v)| {
+            let k = i as f32;
+            Vec4::new(
+                v.x + 0.31 * (k * 1.7).sin(),
+                v.y + 0.27 * (k * 2.3).cos(),
+                v.z + 0.19 * (k * 0.9).sin(),
+                if i % 7 == 3 {
+                    0.0
+                } else {
+                    0.4 + 0.9 * ((k * 0.61).sin() * 0.5 + 0.5)
+                },
+            )
+        })
+        .collect();
+    let grid = s.fit_grid(&voxels, 1.0).unwrap().unwrap();
+    let balls = Metaballs::new(&ctx.device).unwrap();
+    let inst = balls.upload(&ctx, &voxels).unwrap();
+    let mut enc = ctx.encoder("bins");
+    let bins = balls
+        .encode_bins(&ctx.device, &mut enc, &inst, &grid, 1.0, &s)
+        .unwrap();
+    ctx.submit_and_wait("bins", enc).unwrap();
+    let max_r = s.radius(1.0, voxels.iter().map(|v| v.w).fold(0.0, f32::max));
+    assert_eq!(bins.bin_size, max_r, "bins are one largest radius wide");
+    let starts = words(&ctx, &bins.starts);
+    let items: Vec<Vec4> = bytemuck::cast_slice(&read_buffer(&ctx, &bins.items).unwrap()).to_vec();
+    let stats = words(&ctx, &bins.stats);
+    let [nx, ny, nz] = bins.bins;
+    let n = (nx * ny * nz) as usize;
+    assert_eq!(starts.len(), n + 1);
+    assert!(starts.windows(2).all(|w| w[0] <= w[1]), "starts are a scan");
+    let mut most_slope = 0.0f64;
+    let mut most_count = 0;
+    for z in 0..nz {
+        for y in 0..ny {
+            for x in 0..nx {
+                let b = ((z * ny + y) * nx + x) as usize;
+                let list = &items[starts[b] as usize..starts[b + 1] as usize];
+                let lo = bins.origin + Vec3::new(x as f32, y as f32, z as f32) * bins.bin_size;
+                let hi = lo + Vec3::splat(bins.bin_size);
+                for v in voxels.iter().filter(|v| v.w > 0.0) {
+                    let r = s.radius(1.0, v.w);
+                    let c = v.truncate();
+                    // Sphere against box, with a margin either way for f32 rounding.
+                    let gap = (c.clamp(lo, hi) - c).length();
+                    let listed = list.iter().any(|e| e.truncate() == c && e.w == r);
+                    if gap < r - 1e-4 {
+                        assert!(listed, "bin {x},{y},{z} misses the blob at {c} (r {r})");
+                    }
+                    let box_gap = (c - r - hi).max(lo - (c + r)).max_element();
+                    if box_gap > 1e-4 {
+                        assert!(
+                            !listed,
+                            "bin {x},{y},{z} lists the blob at {c} it cannot reach"
+                        );
+                    }
+                }
+                most_count = most_count.max(list.len() as u32);
+                most_slope = most_slope.max(list.iter().map(|e| 1.7173148 / e.w as f64).sum());
+            }
+        }
+    }
+    assert_eq!(stats[0], most_count);
+    let bound = f32::from_bits(stats[1]) as f64;
+    assert!(
+        (bound - most_slope).abs() < 1e-5 * most_slope,
+        "{bound} vs {most_slope}"
+    );
 }

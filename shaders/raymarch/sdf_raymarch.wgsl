@@ -1,6 +1,12 @@
-// Full-screen SDF raymarch of one volume: sphere tracing on a signed-distance texture, refined by
-// bisection on the density's iso-surface, shaded, and written with depth so it composites with the
-// caller's scene (after the source's Unreal metaball pass; sphere tracing: Hart 1996).
+// SDF raymarch of one volume: sphere tracing on a signed-distance texture, refined by bisection on
+// the density's iso-surface and shaded, both read with one hardware-trilinear fetch from the
+// packed volume of `metaball/march_field` (distance in cells in r, density in g), one thread per pixel of the volume's screen rectangle
+// (after the source's Unreal metaball pass; sphere tracing: Hart 1996). `raymarch/composite` then
+// writes the result with depth into the caller's targets, so it composites with their scene.
+//
+// The march is a compute pass, not a full-screen fragment shader: some adapters run fragment
+// work on a small part of the chip (on the H100 only two TPCs are graphics-capable), and a compute
+// dispatch also covers just the box's screen rectangle.
 //
 // Rays come from the inverse view-projection through each pixel, from the near plane, so a camera
 // inside the volume works; they are moved into the volume's local space (a rigid transform keeps
@@ -8,7 +14,8 @@
 // tolerance grows with distance (a pixel's footprint). A sample below the tolerance, or a sign
 // change, is refined by bisection on density − threshold, whose zero set the seeds came from.
 
-import package::shared::field::{ray_box, trilinear};
+import package::shared::field::ray_box;
+import package::shared::shading::{heat, lit};
 
 struct RaymarchParams {
     inv_view_proj: mat4x4<f32>,
@@ -31,6 +38,9 @@ struct RaymarchParams {
     // Added tolerance per unit of distance: the angle one pixel spans.
     pixel_angle: f32,
     viewport: vec2<f32>,
+    // The pixels marched: the box's screen rectangle (origin, size).
+    rect_origin: vec2<u32>,
+    rect_size: vec2<u32>,
     // NDC depth of the near and far planes (0 and 1; 1 and 0 for reversed Z).
     near_z: f32,
     far_z: f32,
@@ -43,31 +53,33 @@ struct RaymarchParams {
     band: f32,
 }
 
-struct VertexOut {
-    @builtin(position) position: vec4<f32>,
-}
-
-struct FragmentOut {
-    @location(0) colour: vec4<f32>,
-    @builtin(frag_depth) depth: f32,
+struct Shaded {
+    colour: vec4<f32>,
+    // NDC depth; MISS where nothing is drawn.
+    depth: f32,
 }
 
 @group(0) @binding(0) var<uniform> params: RaymarchParams;
-@group(0) @binding(1) var sdf: texture_3d<f32>;
-@group(0) @binding(2) var density: texture_3d<f32>;
+// Distance (cells) in r, density in g; sampled trilinearly, clamped to the edge.
+@group(0) @binding(1) var field: texture_3d<f32>;
+@group(0) @binding(2) var field_sampler: sampler;
+@group(0) @binding(3) var colour_out: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(4) var depth_out: texture_storage_2d<r32float, write>;
 
-const BISECTIONS: u32 = 12u;
+// Depth written for "no surface here": outside [0, 1] in either depth convention.
+const MISS: f32 = -1.0;
 
-fn grid_coord(p: vec3<f32>) -> vec3<f32> {
-    return (p - params.box_min) / params.cell - 0.5;
-}
+const BISECTIONS: u32 = 6u;
 
-fn distance_at(p: vec3<f32>) -> f32 {
-    return trilinear(sdf, grid_coord(p));
+// Distance (local units) in x, density in y, at local point `p`.
+fn field_at(p: vec3<f32>) -> vec2<f32> {
+    let uvw = (p - params.box_min) / (params.cell * vec3<f32>(textureDimensions(field)));
+    let v = textureSampleLevel(field, field_sampler, uvw, 0.0).rg;
+    return vec2<f32>(v.x * params.cell, v.y);
 }
 
 fn density_at(p: vec3<f32>) -> f32 {
-    return trilinear(density, grid_coord(p));
+    return field_at(p).y;
 }
 
 fn unproject(ndc: vec3<f32>) -> vec3<f32> {
@@ -75,17 +87,27 @@ fn unproject(ndc: vec3<f32>) -> vec3<f32> {
     return h.xyz / h.w;
 }
 
-// Root of density − threshold on [a, b], with density(a) below and density(b) at or above it.
+// Root of density − threshold on [a, b], with density(a) below and density(b) at or above it:
+// BISECTIONS halvings, then the secant through the bracket's ends (the density is smooth, so the
+// secant on a bracket a few hundredths of a cell long is far inside the hit tolerance).
 fn bisect(o: vec3<f32>, dir: vec3<f32>, a_in: f32, b_in: f32) -> f32 {
     var a = a_in;
     var b = b_in;
+    var fa = density_at(o + a * dir) - params.threshold;
+    var fb = density_at(o + b * dir) - params.threshold;
     for (var k = 0u; k < BISECTIONS; k++) {
         let m = 0.5 * (a + b);
-        if density_at(o + m * dir) >= params.threshold {
+        let fm = density_at(o + m * dir) - params.threshold;
+        if fm >= 0.0 {
             b = m;
+            fb = fm;
         } else {
             a = m;
+            fa = fm;
         }
+    }
+    if fb - fa > 0.0 && fa < 0.0 {
+        return a + (b - a) * (-fa / (fb - fa));
     }
     return 0.5 * (a + b);
 }
@@ -110,25 +132,13 @@ fn depth_of(world: vec3<f32>) -> f32 {
     return clip.z / clip.w;
 }
 
-fn heat(x: f32) -> vec3<f32> {
-    let t = clamp(x, 0.0, 1.0);
-    return clamp(vec3<f32>(3.0 * t, 3.0 * t - 1.0, 3.0 * t - 2.0), vec3<f32>(0.0), vec3<f32>(1.0));
-}
-
-@vertex
-fn vs_main(@builtin(vertex_index) index: u32) -> VertexOut {
-    // One triangle covering the viewport: (-1,-1), (3,-1), (-1,3).
-    let xy = vec2<f32>(f32((index << 1u) & 2u), f32(index & 2u));
-    var out: VertexOut;
-    out.position = vec4<f32>(xy * 2.0 - 1.0, 0.0, 1.0);
-    return out;
-}
-
-@fragment
-fn fs_main(in: VertexOut) -> FragmentOut {
+// March and shade the ray through the pixel centre `pixel`.
+fn trace(pixel: vec2<f32>) -> Shaded {
+    var out: Shaded;
+    out.depth = MISS;
     let ndc_xy = vec2<f32>(
-        in.position.x / params.viewport.x * 2.0 - 1.0,
-        1.0 - in.position.y / params.viewport.y * 2.0,
+        pixel.x / params.viewport.x * 2.0 - 1.0,
+        1.0 - pixel.y / params.viewport.y * 2.0,
     );
     let near_w = unproject(vec3<f32>(ndc_xy, params.near_z));
     let far_w = unproject(vec3<f32>(ndc_xy, params.far_z));
@@ -140,7 +150,7 @@ fn fs_main(in: VertexOut) -> FragmentOut {
     let t_enter = max(hit_box.x, 0.0);
     let t_exit = min(hit_box.y, length(span));
     if t_enter > t_exit {
-        discard;
+        return out;
     }
 
     var t = t_enter;
@@ -153,14 +163,15 @@ fn fs_main(in: VertexOut) -> FragmentOut {
             break;
         }
         let p = o + t * dir;
-        let d = distance_at(p);
+        let sample = field_at(p);
+        let d = sample.x;
         if steps == 0u {
             first_d = d;
         }
         steps += 1u;
         let tolerance = max(params.epsilon * params.cell, t * params.pixel_angle);
         if d < tolerance {
-            if density_at(p) >= params.threshold {
+            if sample.y >= params.threshold {
                 // Crossed (or started inside): the root lies between the last two samples.
                 t = select(bisect(o, dir, prev_t, t), t, t == prev_t);
                 found = true;
@@ -178,7 +189,6 @@ fn fs_main(in: VertexOut) -> FragmentOut {
         t += max(d * params.safety, tolerance);
     }
 
-    var out: FragmentOut;
     let entry_world = (params.local_to_world * vec4<f32>(o + t_enter * dir, 1.0)).xyz;
     if params.mode == 2u {
         out.colour = vec4<f32>(heat(f32(steps) / f32(max(params.max_steps, 1u))), 1.0);
@@ -192,28 +202,37 @@ fn fs_main(in: VertexOut) -> FragmentOut {
         return out;
     }
     if !found {
-        discard;
+        return out;
     }
     let p = o + t * dir;
     let hit_world = (params.local_to_world * vec4<f32>(p, 1.0)).xyz;
     out.depth = depth_of(hit_world);
-    let n = normalize((params.local_to_world * vec4<f32>(normal_at(p), 0.0)).xyz);
+    let n_local = normal_at(p);
+    let n = normalize((params.local_to_world * vec4<f32>(n_local, 0.0)).xyz);
     if params.mode == 1u {
         // Alpha 1 + distance, so 0 still means "not drawn" for a hit on the near plane.
         out.colour = vec4<f32>(n, 1.0 + length(hit_world - near_w));
         return out;
     }
     // Density just inside the surface: how deep the blobs pile up here.
-    let inner = density_at(p - normal_at(p) * params.cell);
+    let inner = density_at(p - n_local * params.cell);
     if params.mode == 3u {
         out.colour = vec4<f32>(heat(inner / (4.0 * params.threshold)), 1.0);
         return out;
     }
-    let view = normalize(near_w - hit_world);
-    let lambert = max(dot(n, normalize(params.light_dir)), 0.0);
-    let fresnel = pow(1.0 - clamp(dot(n, view), 0.0, 1.0), 5.0);
-    let base = mix(params.base_colour, params.base_colour * 0.55 + 0.45, clamp((inner - params.threshold) / (3.0 * params.threshold), 0.0, 1.0));
-    let lit = base * (params.ambient + (1.0 - params.ambient) * lambert) + params.rim_colour * fresnel;
-    out.colour = vec4<f32>(lit, 1.0);
+    let to_eye = normalize(near_w - hit_world);
+    let colour = lit(n, to_eye, params.light_dir, inner, params.threshold, params.base_colour, params.rim_colour, params.ambient);
+    out.colour = vec4<f32>(colour, 1.0);
     return out;
+}
+
+@compute @workgroup_size(8, 8)
+fn march(@builtin(global_invocation_id) id: vec3<u32>) {
+    if any(id.xy >= params.rect_size) {
+        return;
+    }
+    let xy = params.rect_origin + id.xy;
+    let shaded = trace(vec2<f32>(xy) + 0.5);
+    textureStore(colour_out, xy, shaded.colour);
+    textureStore(depth_out, xy, vec4<f32>(shaded.depth, 0.0, 0.0, 0.0));
 }

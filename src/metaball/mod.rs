@@ -26,7 +26,7 @@ use crate::distance::Variant;
 use crate::distance::volume::{Distance3d, Grid3, Inside, MAX_POINTS, Method, Options3d};
 use crate::error::Error;
 use crate::gpu::{Context, uniform_buffer as uniform};
-use crate::shaders::metaball::{splat, surface_seeds};
+use crate::shaders::metaball::{bin_blobs, march_field, splat, surface_seeds};
 
 const STAGE: &str = "metaball";
 
@@ -177,6 +177,10 @@ pub fn animate(base: &[Vec4], edge: f32, t: f32, frequency: f32, wobble: f32) ->
         .collect()
 }
 
+fn max_scale(voxels: &[Vec4]) -> f32 {
+    voxels.iter().map(|v| v.w).fold(0.0, f32::max)
+}
+
 fn check_voxels(voxels: &[Vec4], edge: f32) -> Result<(), Error> {
     if !(edge.is_finite() && edge > 0.0) {
         return Err(Error::Invalid {
@@ -206,6 +210,8 @@ fn check_voxels(voxels: &[Vec4], edge: f32) -> Result<(), Error> {
 pub struct Instances {
     pub buffer: wgpu::Buffer,
     pub count: u32,
+    /// The largest scale uploaded: it sizes the bins of direct tracing.
+    pub max_scale: f32,
 }
 
 /// Everything a metaball field keeps on the GPU.
@@ -226,7 +232,40 @@ pub struct MetaballField {
     /// The clamp of `sdf`, local units.
     pub band: f32,
     pub threshold: f32,
+    /// What the raymarch reads: distance in cells (r) and density (g) as `Rgba16Float`, one
+    /// filtered fetch for both.
+    pub march: wgpu::Texture,
 }
+
+/// Blobs sorted into a uniform grid of bins for tracing the field directly
+/// ([`render::Raymarcher::encode_direct`]): each bin lists every blob whose support overlaps it.
+#[derive(Debug)]
+pub struct BlobBins {
+    /// Local-space corner of the bins' box, and the bin edge (at least the largest support
+    /// radius).
+    pub origin: Vec3,
+    pub bin_size: f32,
+    pub bins: [u32; 3],
+    /// Per bin, its first entry in `items`, and the total at the end (`u32`).
+    pub starts: wgpu::Buffer,
+    /// Blobs in bin order: centre, support radius (`vec4<f32>`).
+    pub items: wgpu::Buffer,
+    /// The most blobs in a bin (`u32`), then the global Lipschitz bound (`f32`).
+    pub stats: wgpu::Buffer,
+    /// The cell of the grid the bins were fitted to: tolerances are in these units.
+    pub cell: f32,
+    pub threshold: f32,
+}
+
+impl BlobBins {
+    /// The box's far corner.
+    pub fn box_max(&self) -> Vec3 {
+        self.origin + Vec3::from_array(self.bins.map(|b| b as f32)) * self.bin_size
+    }
+}
+
+/// Most bins a [`BlobBins`] holds; beyond it bins grow wider.
+pub const MAX_BINS: u32 = 1 << 21;
 
 /// Output of the splat and surface-seed stages.
 #[derive(Debug)]
@@ -244,6 +283,11 @@ pub struct SurfaceSeeds {
 pub struct Metaballs {
     splat: ComputePipeline<splat::splat::Entry>,
     seeds: ComputePipeline<surface_seeds::surface_seeds::Entry>,
+    pack: ComputePipeline<march_field::march_field::Entry>,
+    bin_count: ComputePipeline<bin_blobs::bin_count::Entry>,
+    bin_scan: ComputePipeline<bin_blobs::bin_scan::Entry>,
+    bin_fill: ComputePipeline<bin_blobs::bin_fill::Entry>,
+    bin_bound: ComputePipeline<bin_blobs::bin_bound::Entry>,
     distance: Distance3d,
 }
 
@@ -252,6 +296,11 @@ impl Metaballs {
         Ok(Self {
             splat: ComputePipeline::new(device)?,
             seeds: ComputePipeline::new(device)?,
+            pack: ComputePipeline::new(device)?,
+            bin_count: ComputePipeline::new(device)?,
+            bin_scan: ComputePipeline::new(device)?,
+            bin_fill: ComputePipeline::new(device)?,
+            bin_bound: ComputePipeline::new(device)?,
             distance: Distance3d::new(device)?,
         })
     }
@@ -281,6 +330,7 @@ impl Metaballs {
         Ok(Instances {
             buffer,
             count: voxels.len() as u32,
+            max_scale: max_scale(voxels),
         })
     }
 
@@ -288,7 +338,7 @@ impl Metaballs {
     pub fn update(
         &self,
         ctx: &Context,
-        instances: &Instances,
+        instances: &mut Instances,
         voxels: &[Vec4],
     ) -> Result<(), Error> {
         check_voxels(voxels, 1.0)?;
@@ -304,6 +354,7 @@ impl Metaballs {
         }
         ctx.queue
             .write_buffer(&instances.buffer, 0, bytemuck::cast_slice(voxels));
+        instances.max_scale = max_scale(voxels);
         Ok(())
     }
 
@@ -335,7 +386,9 @@ impl Metaballs {
             Some(&seeds.density),
             &options,
         )?;
+        let march = self.encode_pack(device, encoder, grid, &field.distance, &seeds.density)?;
         Ok(MetaballField {
+            march,
             grid: *grid,
             density_fixed: seeds.density_fixed,
             fixed_scale: seeds.fixed_scale,
@@ -346,6 +399,202 @@ impl Metaballs {
             band: settings.band * grid.voxel_size,
             threshold: settings.threshold,
         })
+    }
+
+    /// Sort `instances` into bins over `grid`'s box for direct tracing: count, scan, fill, and
+    /// the global Lipschitz bound. Bins are one largest support radius wide (wider if there would
+    /// be more than [`MAX_BINS`]), so a blob lands in at most 27.
+    pub fn encode_bins(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        instances: &Instances,
+        grid: &Grid3,
+        edge: f32,
+        settings: &Settings,
+    ) -> Result<BlobBins, Error> {
+        settings.check()?;
+        check_voxels(&[], edge)?;
+        if !(grid.voxel_size.is_finite() && grid.voxel_size > 0.0 && grid.origin.is_finite()) {
+            return Err(Error::Invalid {
+                stage: bin_blobs::STAGE,
+                what: format!(
+                    "grid cell {} and origin {} must be finite (cell positive)",
+                    grid.voxel_size, grid.origin
+                ),
+            });
+        }
+        let extent = Vec3::from_array(grid.size.map(|s| s as f32)) * grid.voxel_size;
+        let r_max = settings.radius(edge, instances.max_scale);
+        let mut bin_size = if r_max > 0.0 {
+            r_max
+        } else {
+            extent.max_element()
+        };
+        let count_bins = |size: f32| (extent / size).ceil().max(Vec3::ONE);
+        let n = count_bins(bin_size);
+        let total = n.x as f64 * n.y as f64 * n.z as f64;
+        if total > MAX_BINS as f64 {
+            bin_size *= ((total / MAX_BINS as f64).cbrt() * 1.001) as f32;
+        }
+        let n = count_bins(bin_size);
+        let bins = [n.x as u32, n.y as u32, n.z as u32];
+        let bin_total = bins.iter().product::<u32>();
+        let capacity = instances.count as u64 * 27;
+        let max_binding = device.limits().max_storage_buffer_binding_size as u64;
+        if capacity.max(1) * 16 > max_binding {
+            return Err(Error::Size {
+                stage: bin_blobs::STAGE,
+                what: "bin entries (27 per instance, 16 bytes each)",
+                got: capacity,
+                max: max_binding / 16,
+            });
+        }
+        let storage = |label: &str, bytes: u64| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: bytes.max(4),
+                usage: wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_SRC
+                    | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        let counts = storage("blob bin counts", bin_total as u64 * 4);
+        let starts = storage("blob bin starts", (bin_total as u64 + 1) * 4);
+        let items = storage("blob bin items", capacity.max(1) * 16);
+        let stats = storage("blob bin stats", 8);
+        encoder.clear_buffer(&counts, 0, None);
+        encoder.clear_buffer(&stats, 0, None);
+        let params = uniform(
+            device,
+            "blob bin params",
+            &bin_blobs::BinParams {
+                bins: bins.into(),
+                count: instances.count,
+                origin: grid.origin,
+                bin_size,
+                radius_per_scale: settings.radius(edge, 1.0),
+                capacity: capacity as u32,
+            },
+        );
+        let per_instance = [instances.count.div_ceil(64).max(1), 1, 1];
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(bin_blobs::STAGE),
+            timestamp_writes: None,
+        });
+        if instances.count > 0 {
+            let bound = self.bin_count.bind(
+                device,
+                &bin_blobs::bin_count::Resources {
+                    params: (&params).into(),
+                    instances: (&instances.buffer).into(),
+                    counts: (&counts).into(),
+                },
+            )?;
+            self.bin_count.dispatch(&mut pass, &bound, per_instance);
+        }
+        let bound = self.bin_scan.bind(
+            device,
+            &bin_blobs::bin_scan::Resources {
+                params: (&params).into(),
+                counts: (&counts).into(),
+                starts: (&starts).into(),
+                stats: (&stats).into(),
+            },
+        )?;
+        self.bin_scan.dispatch(&mut pass, &bound, [1, 1, 1]);
+        if instances.count > 0 {
+            let bound = self.bin_fill.bind(
+                device,
+                &bin_blobs::bin_fill::Resources {
+                    params: (&params).into(),
+                    instances: (&instances.buffer).into(),
+                    counts: (&counts).into(),
+                    starts: (&starts).into(),
+                    items: (&items).into(),
+                },
+            )?;
+            self.bin_fill.dispatch(&mut pass, &bound, per_instance);
+        }
+        let bound = self.bin_bound.bind(
+            device,
+            &bin_blobs::bin_bound::Resources {
+                params: (&params).into(),
+                starts: (&starts).into(),
+                items: (&items).into(),
+                stats: (&stats).into(),
+            },
+        )?;
+        self.bin_bound
+            .dispatch(&mut pass, &bound, [bin_total.div_ceil(64), 1, 1]);
+        drop(pass);
+        Ok(BlobBins {
+            origin: grid.origin,
+            bin_size,
+            bins,
+            starts,
+            items,
+            stats,
+            cell: grid.voxel_size,
+            threshold: settings.threshold,
+        })
+    }
+
+    /// The distance and density packed into one filterable volume for the raymarch.
+    fn encode_pack(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        grid: &Grid3,
+        sdf: &wgpu::Texture,
+        density: &wgpu::Texture,
+    ) -> Result<wgpu::Texture, Error> {
+        let packed = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("metaball march field"),
+            size: wgpu::Extent3d {
+                width: grid.size[0],
+                height: grid.size[1],
+                depth_or_array_layers: grid.size[2],
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D3,
+            format: wgpu::TextureFormat::Rgba16Float,
+            usage: wgpu::TextureUsages::STORAGE_BINDING
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let params = uniform(
+            device,
+            "march field params",
+            &march_field::PackParams {
+                size: grid.size.into(),
+                inv_cell: 1.0 / grid.voxel_size,
+            },
+        );
+        let (sv, dv, pv) = (
+            sdf.create_view(&Default::default()),
+            density.create_view(&Default::default()),
+            packed.create_view(&Default::default()),
+        );
+        let bound = self.pack.bind(
+            device,
+            &march_field::march_field::Resources {
+                params: (&params).into(),
+                sdf: (&sv).into(),
+                density: (&dv).into(),
+                packed: (&pv).into(),
+            },
+        )?;
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(march_field::STAGE),
+            timestamp_writes: None,
+        });
+        let groups = ComputePipeline::<march_field::march_field::Entry>::groups_for(grid.size);
+        self.pack.dispatch(&mut pass, &bound, groups);
+        Ok(packed)
     }
 
     /// The splat and surface-seed stages alone.

@@ -27,11 +27,11 @@
 
 use glam::{Mat4, Vec3, Vec4};
 
-use super::{Instances, MetaballField};
-use crate::bind::{RenderPipeline, RenderTargets};
+use super::{BlobBins, Instances, MetaballField};
+use crate::bind::{ComputePipeline, RenderPipeline, RenderTargets};
 use crate::error::Error;
 use crate::gpu::uniform_buffer as uniform;
-use crate::shaders::raymarch::{sdf_raymarch, voxel_cubes};
+use crate::shaders::raymarch::{blob_trace, composite, sdf_raymarch, voxel_cubes};
 
 /// A camera: view-projection (world → clip, depth 0..1 or reversed 1..0) and target size.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -309,10 +309,88 @@ pub fn box_visible(view_proj: Mat4, local_to_world: Mat4, lo: Vec3, hi: Vec3) ->
         .all(|plane| corners.iter().any(|&c| plane(c) >= 0.0))
 }
 
-/// The full-screen raymarch for one colour and depth format.
+/// Pixels `[x0, y0]` to `[x1, y1)` of the viewport that the box under `local_to_world` can cover:
+/// the bounding rectangle of its projected corners, or the whole viewport when a corner lies
+/// behind the eye (then its projection says nothing). Empty when the box is off screen.
+pub fn screen_rect(view: &View, local_to_world: Mat4, lo: Vec3, hi: Vec3) -> [u32; 4] {
+    let m = view.view_proj * local_to_world;
+    let [w, h] = view.viewport;
+    let (mut min, mut max) = (
+        glam::Vec2::splat(f32::INFINITY),
+        glam::Vec2::splat(f32::NEG_INFINITY),
+    );
+    for i in 0..8 {
+        let c = Vec3::new(
+            if i & 1 == 0 { lo.x } else { hi.x },
+            if i & 2 == 0 { lo.y } else { hi.y },
+            if i & 4 == 0 { lo.z } else { hi.z },
+        );
+        let clip = m * c.extend(1.0);
+        if clip.w <= 1e-6 * clip.truncate().abs().max_element().max(1.0) {
+            return [0, 0, w, h];
+        }
+        let ndc = glam::Vec2::new(clip.x, clip.y) / clip.w;
+        let px = glam::Vec2::new(
+            (ndc.x + 1.0) * 0.5 * w as f32,
+            (1.0 - ndc.y) * 0.5 * h as f32,
+        );
+        min = min.min(px);
+        max = max.max(px);
+    }
+    // A pixel whose centre the projection only just misses still counts: one pixel of margin.
+    let x0 = (min.x.floor() - 1.0).clamp(0.0, w as f32) as u32;
+    let y0 = (min.y.floor() - 1.0).clamp(0.0, h as f32) as u32;
+    let x1 = (max.x.ceil() + 1.0).clamp(0.0, w as f32) as u32;
+    let y1 = (max.y.ceil() + 1.0).clamp(0.0, h as f32) as u32;
+    [x0, y0, x1.max(x0), y1.max(y0)]
+}
+
+/// The march's output for one viewport size, kept between frames.
+struct Scratch {
+    size: [u32; 2],
+    colour: wgpu::TextureView,
+    depth: wgpu::TextureView,
+}
+
+impl Scratch {
+    fn new(device: &wgpu::Device, size: [u32; 2]) -> Self {
+        let make = |label, format| {
+            device
+                .create_texture(&wgpu::TextureDescriptor {
+                    label: Some(label),
+                    size: wgpu::Extent3d {
+                        width: size[0],
+                        height: size[1],
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format,
+                    usage: wgpu::TextureUsages::STORAGE_BINDING
+                        | wgpu::TextureUsages::TEXTURE_BINDING,
+                    view_formats: &[],
+                })
+                .create_view(&Default::default())
+        };
+        Self {
+            size,
+            colour: make("raymarch colour", wgpu::TextureFormat::Rgba32Float),
+            depth: make("raymarch depth", wgpu::TextureFormat::R32Float),
+        }
+    }
+}
+
+/// The SDF raymarch for one colour and depth format: a compute pass marches and shades the
+/// box's screen rectangle, and a scissored full-screen draw writes the hits into the caller's
+/// targets through their depth test.
 pub struct Raymarcher {
-    pipeline: RenderPipeline<sdf_raymarch::fs_main::Entry>,
+    march: ComputePipeline<sdf_raymarch::march::Entry>,
+    direct: ComputePipeline<blob_trace::trace_blobs::Entry>,
+    composite: RenderPipeline<composite::fs_main::Entry>,
     reversed_z: bool,
+    sampler: wgpu::Sampler,
+    scratch: std::sync::Mutex<Option<std::sync::Arc<Scratch>>>,
 }
 
 impl Raymarcher {
@@ -324,12 +402,12 @@ impl Raymarcher {
         depth: wgpu::TextureFormat,
         reversed_z: bool,
     ) -> Result<Self, Error> {
-        let pipeline = RenderPipeline::new(
+        let composite = RenderPipeline::new(
             device,
             &RenderTargets {
                 color: &[Some(colour.into())],
                 depth_stencil: Some(depth_state(
-                    sdf_raymarch::STAGE,
+                    composite::STAGE,
                     depth,
                     if reversed_z {
                         wgpu::CompareFunction::Greater
@@ -341,26 +419,43 @@ impl Raymarcher {
             },
         )?;
         Ok(Self {
-            pipeline,
+            march: ComputePipeline::new(device)?,
+            direct: ComputePipeline::new(device)?,
+            composite,
             reversed_z,
+            sampler: device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("raymarch field"),
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                ..Default::default()
+            }),
+            scratch: std::sync::Mutex::new(None),
         })
     }
 
-    /// Draw `field` (placed by the rigid `local_to_world`) into `colour` and `depth`, loading
-    /// what they hold. Returns false, drawing nothing, when the box is outside the frustum.
-    #[allow(clippy::too_many_arguments)]
-    pub fn encode(
+    fn scratch(&self, device: &wgpu::Device, size: [u32; 2]) -> std::sync::Arc<Scratch> {
+        let mut slot = self.scratch.lock().unwrap_or_else(|e| e.into_inner());
+        match &*slot {
+            Some(s) if s.size == size => s.clone(),
+            _ => {
+                let s = std::sync::Arc::new(Scratch::new(device, size));
+                *slot = Some(s.clone());
+                s
+            }
+        }
+    }
+
+    /// Checks shared by the tracers, and what they need of the view; `None` when the box
+    /// `lo`..`hi` is off screen.
+    fn frame(
         &self,
-        device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
-        colour: &wgpu::TextureView,
-        depth: &wgpu::TextureView,
-        field: &MetaballField,
-        local_to_world: Mat4,
+        stage: &'static str,
         view: &View,
+        local_to_world: Mat4,
+        lo: Vec3,
+        hi: Vec3,
         settings: &RaymarchSettings,
-    ) -> Result<bool, Error> {
-        let stage = sdf_raymarch::STAGE;
+    ) -> Result<Option<Frame>, Error> {
         settings.check()?;
         view.check(stage)?;
         check_rigid(local_to_world, stage)?;
@@ -373,12 +468,13 @@ impl Raymarcher {
                 ),
             });
         }
-        let g = &field.grid;
-        let lo = g.origin;
-        let hi = g.origin
-            + Vec3::new(g.size[0] as f32, g.size[1] as f32, g.size[2] as f32) * g.voxel_size;
         if !box_visible(view.view_proj, local_to_world, lo, hi) {
-            return Ok(false);
+            return Ok(None);
+        }
+        let rect = screen_rect(view, local_to_world, lo, hi);
+        let rect_size = [rect[2] - rect[0], rect[3] - rect[1]];
+        if rect_size[0] == 0 || rect_size[1] == 0 {
+            return Ok(None);
         }
         let inv = view.view_proj.inverse();
         let (near_z, far_z) = if view.reversed_z {
@@ -390,7 +486,186 @@ impl Raymarcher {
         let n0 = unproject(0.0, 0.0, near_z);
         let f0 = unproject(0.0, 0.0, far_z);
         let f1 = unproject(2.0 / view.viewport[0] as f32, 0.0, far_z);
-        let pixel_angle = (f1 - f0).length() / (f0 - n0).length();
+        Ok(Some(Frame {
+            rect,
+            rect_size,
+            inv,
+            near_z,
+            far_z,
+            pixel_angle: (f1 - f0).length() / (f0 - n0).length(),
+        }))
+    }
+
+    /// Trace the metaball field itself from `bins` (no SDF texture) into `colour` and `depth`,
+    /// with `method`'s step rule: the direct half of the speed-against-accuracy comparison.
+    /// `settings.max_steps` caps the field evaluations per ray. Returns false when off screen.
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode_direct(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        colour: &wgpu::TextureView,
+        depth: &wgpu::TextureView,
+        bins: &BlobBins,
+        method: Direct,
+        local_to_world: Mat4,
+        view: &View,
+        settings: &RaymarchSettings,
+    ) -> Result<bool, Error> {
+        match self.encode_direct_march(
+            device,
+            encoder,
+            bins,
+            method,
+            local_to_world,
+            view,
+            settings,
+        )? {
+            Some(marched) => {
+                self.encode_composite(device, encoder, colour, depth, &marched)?;
+                Ok(true)
+            }
+            None => Ok(false),
+        }
+    }
+
+    /// The compute half of [`Raymarcher::encode_direct`].
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode_direct_march(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        bins: &BlobBins,
+        method: Direct,
+        local_to_world: Mat4,
+        view: &View,
+        settings: &RaymarchSettings,
+    ) -> Result<Option<Marched>, Error> {
+        if settings.output == Output::Sdf {
+            return Err(Error::Invalid {
+                stage: blob_trace::STAGE,
+                what: "direct tracing has no SDF to show; use Output::Steps or Density".into(),
+            });
+        }
+        let (lo, hi) = (bins.origin, bins.box_max());
+        let Some(Frame {
+            rect,
+            rect_size,
+            inv,
+            near_z,
+            far_z,
+            pixel_angle,
+        }) = self.frame(blob_trace::STAGE, view, local_to_world, lo, hi, settings)?
+        else {
+            return Ok(None);
+        };
+        let params = uniform(
+            device,
+            "blob trace params",
+            &blob_trace::TraceParams {
+                inv_view_proj: inv,
+                view_proj: view.view_proj,
+                world_to_local: local_to_world.inverse(),
+                local_to_world,
+                box_min: lo,
+                bin_size: bins.bin_size,
+                box_max: hi,
+                threshold: bins.threshold,
+                light_dir: settings.light_dir.normalize(),
+                max_steps: settings.max_steps,
+                base_colour: settings.base_colour,
+                epsilon: settings.epsilon * bins.cell,
+                rim_colour: settings.rim_colour,
+                pixel_angle,
+                bins: bins.bins.into(),
+                method: method as u32,
+                viewport: glam::Vec2::new(view.viewport[0] as f32, view.viewport[1] as f32),
+                near_z,
+                far_z,
+                rect_origin: glam::UVec2::new(rect[0], rect[1]),
+                rect_size: glam::UVec2::from_array(rect_size),
+                mode: settings.output as u32,
+                ambient: settings.ambient,
+                inner_offset: bins.cell,
+            },
+        );
+        let scratch = self.scratch(device, view.viewport);
+        let bound = self.direct.bind(
+            device,
+            &blob_trace::trace_blobs::Resources {
+                params: (&params).into(),
+                starts: (&bins.starts).into(),
+                items: (&bins.items).into(),
+                stats: (&bins.stats).into(),
+                colour_out: (&scratch.colour).into(),
+                depth_out: (&scratch.depth).into(),
+            },
+        )?;
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some(blob_trace::STAGE),
+                timestamp_writes: None,
+            });
+            self.direct.dispatch(
+                &mut pass,
+                &bound,
+                [rect_size[0].div_ceil(8), rect_size[1].div_ceil(8), 1],
+            );
+        }
+        Ok(Some(Marched { rect, scratch }))
+    }
+
+    /// Draw `field` (placed by the rigid `local_to_world`) into `colour` and `depth`, loading
+    /// what they hold. Returns false, drawing nothing, when the box is outside the frustum.
+    /// [`Raymarcher::encode_march`] then [`Raymarcher::encode_composite`].
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        colour: &wgpu::TextureView,
+        depth: &wgpu::TextureView,
+        field: &MetaballField,
+        local_to_world: Mat4,
+        view: &View,
+        settings: &RaymarchSettings,
+    ) -> Result<bool, Error> {
+        match self.encode_march(device, encoder, field, local_to_world, view, settings)? {
+            Some(marched) => {
+                self.encode_composite(device, encoder, colour, depth, &marched)?;
+                Ok(true)
+            }
+            None => Ok(false),
+        }
+    }
+
+    /// The compute half: march and shade the box's screen rectangle into the raymarcher's own
+    /// colour and depth images (kept between frames of one viewport size). `None` when the box
+    /// is outside the frustum.
+    pub fn encode_march(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        field: &MetaballField,
+        local_to_world: Mat4,
+        view: &View,
+        settings: &RaymarchSettings,
+    ) -> Result<Option<Marched>, Error> {
+        let g = &field.grid;
+        let lo = g.origin;
+        let hi = g.origin
+            + Vec3::new(g.size[0] as f32, g.size[1] as f32, g.size[2] as f32) * g.voxel_size;
+        let Some(Frame {
+            rect,
+            rect_size,
+            inv,
+            near_z,
+            far_z,
+            pixel_angle,
+        }) = self.frame(sdf_raymarch::STAGE, view, local_to_world, lo, hi, settings)?
+        else {
+            return Ok(None);
+        };
         let params = uniform(
             device,
             "raymarch params",
@@ -410,6 +685,8 @@ impl Raymarcher {
                 rim_colour: settings.rim_colour,
                 pixel_angle,
                 viewport: glam::Vec2::new(view.viewport[0] as f32, view.viewport[1] as f32),
+                rect_origin: glam::UVec2::new(rect[0], rect[1]),
+                rect_size: glam::UVec2::from_array(rect_size),
                 near_z,
                 far_z,
                 safety: settings.safety,
@@ -418,22 +695,83 @@ impl Raymarcher {
                 band: field.band,
             },
         );
-        let sv = field.sdf.create_view(&Default::default());
-        let dv = field.density.create_view(&Default::default());
-        let bound = self.pipeline.bind(
+        let scratch = self.scratch(device, view.viewport);
+        let fv = field.march.create_view(&Default::default());
+        let marched = self.march.bind(
             device,
-            &sdf_raymarch::fs_main::Resources {
+            &sdf_raymarch::march::Resources {
                 params: (&params).into(),
-                sdf: (&sv).into(),
-                density: (&dv).into(),
+                field: (&fv).into(),
+                field_sampler: (&self.sampler).into(),
+                colour_out: (&scratch.colour).into(),
+                depth_out: (&scratch.depth).into(),
             },
         )?;
-        let mut pass = load_pass(encoder, stage, colour, depth);
-        pass.set_pipeline(&self.pipeline.pipeline);
-        bound.set_render(&mut pass);
-        pass.draw(0..3, 0..1);
-        Ok(true)
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some(sdf_raymarch::STAGE),
+                timestamp_writes: None,
+            });
+            self.march.dispatch(
+                &mut pass,
+                &marched,
+                [rect_size[0].div_ceil(8), rect_size[1].div_ceil(8), 1],
+            );
+        }
+        Ok(Some(Marched { rect, scratch }))
     }
+
+    /// The draw half: write a march's hits into `colour` and `depth` (the formats this
+    /// raymarcher was made for, the size of the march's viewport) through the depth test.
+    pub fn encode_composite(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        colour: &wgpu::TextureView,
+        depth: &wgpu::TextureView,
+        marched: &Marched,
+    ) -> Result<(), Error> {
+        let bound = self.composite.bind(
+            device,
+            &composite::fs_main::Resources {
+                marched_colour: (&marched.scratch.colour).into(),
+                marched_depth: (&marched.scratch.depth).into(),
+            },
+        )?;
+        let [x0, y0, x1, y1] = marched.rect;
+        let mut pass = load_pass(encoder, composite::STAGE, colour, depth);
+        pass.set_pipeline(&self.composite.pipeline);
+        bound.set_render(&mut pass);
+        pass.set_scissor_rect(x0, y0, x1 - x0, y1 - y0);
+        pass.draw(0..3, 0..1);
+        Ok(())
+    }
+}
+
+/// How [`Raymarcher::encode_direct`] steps along a ray through the blobs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Direct {
+    /// Sphere tracing with one Lipschitz bound for the whole field (the largest bin's sum of
+    /// per-blob bounds): safe everywhere, small steps everywhere.
+    SphereGlobal = 0,
+    /// Segment tracing (Galin et al. 2020): the bound over the segment about to be crossed.
+    Segment = 1,
+}
+
+struct Frame {
+    rect: [u32; 4],
+    rect_size: [u32; 2],
+    inv: Mat4,
+    near_z: f32,
+    far_z: f32,
+    pixel_angle: f32,
+}
+
+/// A march recorded by [`Raymarcher::encode_march`], waiting to be composited.
+pub struct Marched {
+    /// Pixels marched: `[x0, y0, x1, y1)`.
+    pub rect: [u32; 4],
+    scratch: std::sync::Arc<Scratch>,
 }
 
 /// How the debug cubes are drawn.

@@ -28,6 +28,8 @@ pub struct Args {
     pub exact_only: bool,
     /// Bands per column of the exact transform; `None` lets the library choose.
     pub column_bands: Option<u32>,
+    /// Only these sizes of the sweep (empty: all).
+    pub sizes: Vec<usize>,
 }
 
 /// Memory bandwidth the pass figures are compared with (H100 SXM HBM3, rounded down).
@@ -259,16 +261,22 @@ fn distance(args: &Args) -> Result<(), String> {
     d3.set_column_bands(args.column_bands)
         .map_err(|e| e.to_string())?;
     let jfa2 = Jfa2d::new(&ctx.device).map_err(|e| e.to_string())?;
-    let sizes3: &[usize] = if args.quick {
+    let pick = |all: &[usize]| -> Vec<usize> {
+        all.iter()
+            .copied()
+            .filter(|n| args.sizes.is_empty() || args.sizes.contains(n))
+            .collect()
+    };
+    let sizes3 = pick(if args.quick {
         &[32, 64]
     } else {
         &[128, 256, 512]
-    };
-    let sizes2: &[usize] = if args.quick {
+    });
+    let sizes2 = pick(if args.quick {
         &[256, 512]
     } else {
         &[2048, 4096, 8192]
-    };
+    });
     let banded = format!("JFA+2 band {}", args.band);
     let methods3: Vec<(String, Options3d)> =
         std::iter::once(("exact".to_string(), Options3d::default()))
@@ -299,7 +307,7 @@ fn distance(args: &Args) -> Result<(), String> {
     );
     let mut rows: Vec<Row> = Vec::new();
 
-    for &n in sizes3 {
+    for &n in &sizes3 {
         let size = [n, n, n];
         let cells = (n * n * n) as u64;
         let mask = random_mask(n * n * n, args.density, n as u64);
@@ -367,7 +375,7 @@ fn distance(args: &Args) -> Result<(), String> {
         }
     }
 
-    for &n in sizes2 {
+    for &n in &sizes2 {
         let size = [n, n, 1];
         let cells = (n * n) as u64;
         let mask = random_mask(n * n, args.density, 1000 + n as u64);

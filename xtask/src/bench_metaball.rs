@@ -1,18 +1,23 @@
-//! `cargo xtask bench metaball`: SDF build and raymarch time against surface error, for grids of
-//! several resolutions over a 32³ voxel set (16³ with `--quick`), at 1920×1080 (480×270 quick).
+//! `cargo xtask bench metaball`: time per frame against surface error for three ways of drawing
+//! the metaball field: sphere tracing the SDF texture (at several grid resolutions), sphere
+//! tracing the field itself with a global Lipschitz bound, and segment tracing it; for 16³ and
+//! 32³ voxel sets (8³ and 16³ with `--quick`) at 1920×1080 (480×270 quick).
 //!
-//! Time: GPU timestamps written in the command encoder around the whole SDF build (splat, seeds,
-//! JFA, resolve) and around the raymarch pass; median of the timed runs. Error: for up to 4096
-//! hit pixels, the hit point's distance to the analytic iso-surface, (ρ − T)/|∇ρ| in f64, in
-//! voxel edges.
+//! Time: GPU timestamps written in the command encoder, median of the timed runs: the build (SDF:
+//! splat, seeds, JFA, resolve, pack; direct: the blob bins) and the frame (march + composite,
+//! shaded into an 8-bit target cleared beforehand). Error: at up to 2048 pixels spread over the
+//! image, the hit distance along the ray against an f64 reference (the analytic field marched in
+//! 0.02-edge steps, then bisected), in voxel edges; pixels where one side hits and the other
+//! does not are counted apart. Writes `metaball.csv` and `metaball.png`.
 
 use std::io::Write;
 use std::process::ExitCode;
 
+use fieldkit::distance::volume::Grid3;
 use fieldkit::gpu::{Context, read_buffer, read_texture};
-use fieldkit::metaball::render::{Output, RaymarchSettings, Raymarcher, Targets, View};
-use fieldkit::metaball::{Metaballs, Settings, animate, cpu, packed_grid};
-use glam::{DVec3, Mat4, Vec3};
+use fieldkit::metaball::render::{Direct, Output, RaymarchSettings, Raymarcher, Targets, View};
+use fieldkit::metaball::{BlobBins, MetaballField, Metaballs, Settings, animate, cpu, packed_grid};
+use glam::{DVec3, Mat4, Vec3, Vec4};
 
 struct Stamps {
     set: wgpu::QuerySet,
@@ -70,8 +75,8 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
-pub fn run(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> ExitCode {
-    match bench(quick, reps, warmup, out) {
+pub fn run(args: &crate::bench::Args) -> ExitCode {
+    match bench(args.quick, args.reps, args.warmup, args.band, &args.out) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("bench metaball: {e}");
@@ -80,33 +85,90 @@ pub fn run(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Ex
     }
 }
 
-fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Result<(), String> {
+/// One tracer on one voxel set.
+struct Row {
+    instances: usize,
+    method: String,
+    grid: String,
+    build_ms: f64,
+    frame_ms: f64,
+    march_ms: f64,
+    steps: StepStats,
+    hits: usize,
+    rms_err: f64,
+    max_err: f64,
+    /// Sampled pixels where the tracer and the reference disagree on hit or miss, %.
+    mismatch: f64,
+}
+
+/// What is traced: the SDF texture, or the field from blob bins.
+enum Source<'a> {
+    Sdf(&'a MetaballField),
+    Direct(&'a BlobBins, Direct),
+}
+
+fn draw(
+    ctx: &Context,
+    marcher: &Raymarcher,
+    enc: &mut wgpu::CommandEncoder,
+    targets: &Targets,
+    source: &Source,
+    view: &View,
+    rs: &RaymarchSettings,
+) -> Result<(), String> {
+    let (cv, dv) = (&targets.colour_view, &targets.depth_view);
+    match source {
+        Source::Sdf(field) => {
+            marcher.encode(&ctx.device, enc, cv, dv, field, Mat4::IDENTITY, view, rs)
+        }
+        Source::Direct(bins, m) => {
+            marcher.encode_direct(&ctx.device, enc, cv, dv, bins, *m, Mat4::IDENTITY, view, rs)
+        }
+    }
+    .map(|_| ())
+    .map_err(|e| e.to_string())
+}
+
+fn march_only(
+    ctx: &Context,
+    marcher: &Raymarcher,
+    enc: &mut wgpu::CommandEncoder,
+    source: &Source,
+    view: &View,
+    rs: &RaymarchSettings,
+) -> Result<(), String> {
+    match source {
+        Source::Sdf(field) => marcher
+            .encode_march(&ctx.device, enc, field, Mat4::IDENTITY, view, rs)
+            .map(|_| ()),
+        Source::Direct(bins, m) => marcher
+            .encode_direct_march(&ctx.device, enc, bins, *m, Mat4::IDENTITY, view, rs)
+            .map(|_| ()),
+    }
+    .map_err(|e| e.to_string())
+}
+
+fn bench(
+    quick: bool,
+    reps: usize,
+    warmup: usize,
+    band: f32,
+    out: &std::path::Path,
+) -> Result<(), String> {
     let ctx = Context::new().map_err(|e| e.to_string())?;
     let adapter = ctx.adapter_name();
     println!("adapter: {adapter}");
     let stamps = Stamps::new(&ctx)?;
-    let side = if quick { 16 } else { 32 };
+    let sides: &[u32] = if quick { &[8, 16] } else { &[16, 32] };
     let (width, height) = if quick { (480, 270) } else { (1920, 1080) };
     let grids: &[u32] = if quick { &[32, 64] } else { &[64, 128, 192] };
     let edge = 1.0;
-    let voxels = animate(&packed_grid([side; 3], edge), edge, 0.3, 0.5, 0.15);
-    let settings = Settings::default();
-    let fitted = settings
-        .fit_grid(&voxels, edge)
-        .map_err(|e| e.to_string())?
-        .ok_or("empty set")?;
-    let balls = Metaballs::new(&ctx.device).map_err(|e| e.to_string())?;
-    let inst = balls.upload(&ctx, &voxels).map_err(|e| e.to_string())?;
-    let extent = Vec3::from_array(fitted.size.map(|s| s as f32)) * fitted.voxel_size;
-    let centre = fitted.origin + extent * 0.5;
-    let proj =
-        glam::camera::rh::proj::directx::perspective(0.8, width as f32 / height as f32, 0.1, 500.0);
-    let eye = centre + Vec3::new(0.55, 0.4, 0.9) * extent.max_element() * 1.1;
-    let view = View {
-        view_proj: proj * glam::camera::rh::view::look_at_mat4(eye, centre, Vec3::Y),
-        viewport: [width, height],
-        reversed_z: false,
+    let settings = Settings {
+        band,
+        ..Settings::default()
     };
+    println!("field band: {band} cells");
+    let balls = Metaballs::new(&ctx.device).map_err(|e| e.to_string())?;
     let marcher = Raymarcher::new(
         &ctx.device,
         wgpu::TextureFormat::Rgba32Float,
@@ -120,111 +182,477 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
         wgpu::TextureFormat::Rgba32Float,
         wgpu::TextureFormat::Depth32Float,
     );
-    let (cv, dv) = (&targets.colour_view, &targets.depth_view);
+    // A frame as an application draws it: shaded, into an 8-bit colour target. The float target
+    // above is for reading normals, hit distances and step counts back.
+    let frame_marcher = Raymarcher::new(
+        &ctx.device,
+        wgpu::TextureFormat::Rgba8Unorm,
+        wgpu::TextureFormat::Depth32Float,
+        false,
+    )
+    .map_err(|e| e.to_string())?;
+    let frame = Targets::new(
+        &ctx.device,
+        [width, height],
+        wgpu::TextureFormat::Rgba8Unorm,
+        wgpu::TextureFormat::Depth32Float,
+    );
+    let bar = indicatif::ProgressBar::new((sides.len() * (grids.len() + 2)) as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} {elapsed} {msg}").unwrap(),
+    );
+    let mut rows = Vec::new();
+    for &side in sides {
+        let voxels = animate(&packed_grid([side; 3], edge), edge, 0.3, 0.5, 0.15);
+        let fitted = settings
+            .fit_grid(&voxels, edge)
+            .map_err(|e| e.to_string())?
+            .ok_or("empty set")?;
+        let inst = balls.upload(&ctx, &voxels).map_err(|e| e.to_string())?;
+        let extent = Vec3::from_array(fitted.size.map(|s| s as f32)) * fitted.voxel_size;
+        let centre = fitted.origin + extent * 0.5;
+        let proj = glam::camera::rh::proj::directx::perspective(
+            0.8,
+            width as f32 / height as f32,
+            0.1,
+            500.0,
+        );
+        let eye = centre + Vec3::new(0.55, 0.4, 0.9) * extent.max_element() * 1.1;
+        let view = View {
+            view_proj: proj * glam::camera::rh::view::look_at_mat4(eye, centre, Vec3::Y),
+            viewport: [width, height],
+            reversed_z: false,
+        };
+        let reference = Reference::new(&voxels, edge, &settings, &view, &fitted);
+        let scene = Scene {
+            ctx: &ctx,
+            stamps: &stamps,
+            marcher: &marcher,
+            targets: &targets,
+            frame_marcher: &frame_marcher,
+            frame: &frame,
+            view: &view,
+            reference: &reference,
+            warmup,
+            reps,
+        };
+        if side == sides[0] {
+            bar.suspend(|| {
+                println!(
+                    "| instances | method | grid | build ms | frame ms | of it march | steps mean | p95 | at cap | RMS err (edges) | max err | hit/miss off |"
+                );
+                println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+            });
+        }
+        let mut push = |method: &str, grid: String, build_ms: f64, m: Measured| {
+            let row = Row {
+                instances: voxels.len(),
+                method: method.into(),
+                grid,
+                build_ms,
+                frame_ms: m.frame_ms,
+                march_ms: m.march_ms,
+                steps: m.steps,
+                hits: m.hits,
+                rms_err: m.rms_err,
+                max_err: m.max_err,
+                mismatch: m.mismatch,
+            };
+            let line = format!(
+                "| {} | {} | {} | {:.3} | {:.3} | {:.3} | {:.1} | {} | {:.2}% | {:.4} | {:.3} | {:.2}% |",
+                row.instances,
+                row.method,
+                row.grid,
+                row.build_ms,
+                row.frame_ms,
+                row.march_ms,
+                row.steps.mean,
+                row.steps.p95,
+                row.steps.at_cap * 100.0,
+                row.rms_err,
+                row.max_err,
+                row.mismatch
+            );
+            bar.suspend(|| println!("{line}"));
+            rows.push(row);
+            bar.inc(1);
+        };
+        for &n in grids {
+            let cell = extent.max_element() / n as f32;
+            let size = (extent / cell).ceil();
+            let grid = Grid3 {
+                size: [size.x as u32, size.y as u32, size.z as u32],
+                voxel_size: cell,
+                origin: centre - size * cell * 0.5,
+            };
+            let s = Settings {
+                cells_per_edge: edge / cell,
+                ..settings
+            };
+            let label = format!("{}×{}×{}", grid.size[0], grid.size[1], grid.size[2]);
+            bar.set_message(format!("{} instances, SDF {label}", voxels.len()));
+            let (build_ms, field) = scene.time_build(|enc| {
+                balls
+                    .encode(&ctx.device, enc, &inst, &grid, edge, &s)
+                    .map_err(|e| e.to_string())
+            })?;
+            let m = scene.frames(&Source::Sdf(&field), RaymarchSettings::default().max_steps)?;
+            push("SDF texture", label, build_ms, m);
+        }
+        for (name, method) in [
+            ("global-bound sphere", Direct::SphereGlobal),
+            ("segment", Direct::Segment),
+        ] {
+            bar.set_message(format!("{} instances, {name}", voxels.len()));
+            let (build_ms, bins) = scene.time_build(|enc| {
+                balls
+                    .encode_bins(&ctx.device, enc, &inst, &fitted, edge, &settings)
+                    .map_err(|e| e.to_string())
+            })?;
+            let m = scene.frames(&Source::Direct(&bins, method), DIRECT_MAX_STEPS)?;
+            push(name, "bins".into(), build_ms, m);
+        }
+    }
+    bar.finish_and_clear();
     std::fs::create_dir_all(out).map_err(|e| e.to_string())?;
     let mut csv = std::fs::File::create(out.join("metaball.csv")).map_err(|e| e.to_string())?;
-    writeln!(csv, "adapter,instances,grid,resolution,sdf_ms,raymarch_ms,hit_pixels,max_err_edges,rms_err_edges")
-        .map_err(|e| e.to_string())?;
-    println!("| grid | SDF build ms | raymarch ms | hit pixels | max err (edges) | RMS err |");
-    println!("|---|---|---|---|---|---|");
-    for &n in grids {
-        let cell = extent.max_element() / n as f32;
-        let size = (extent / cell).ceil();
-        let grid = fieldkit::distance::volume::Grid3 {
-            size: [size.x as u32, size.y as u32, size.z as u32],
-            voxel_size: cell,
-            origin: centre - size * cell * 0.5,
-        };
-        let s = Settings {
-            cells_per_edge: edge / cell,
-            ..settings
-        };
-        let mut field = None;
-        let mut sdf_ms = Vec::new();
-        for i in 0..warmup + reps {
-            let ms = stamps.time(&ctx, |enc| {
-                field = Some(
-                    balls
-                        .encode(&ctx.device, enc, &inst, &grid, edge, &s)
-                        .map_err(|e| e.to_string())?,
-                );
-                Ok(())
-            })?;
-            if i >= warmup {
-                sdf_ms.push(ms);
-            }
-        }
-        let field = field.unwrap();
-        let rs = RaymarchSettings {
-            output: Output::Normal,
-            ..RaymarchSettings::default()
-        };
-        let mut ray_ms = Vec::new();
-        for i in 0..warmup + reps {
-            let ms = stamps.time(&ctx, |enc| {
-                targets.clear(enc, wgpu::Color::TRANSPARENT, 1.0);
-                marcher
-                    .encode(
-                        &ctx.device,
-                        enc,
-                        &cv,
-                        &dv,
-                        &field,
-                        Mat4::IDENTITY,
-                        &view,
-                        &rs,
-                    )
-                    .map_err(|e| e.to_string())?;
-                Ok(())
-            })?;
-            if i >= warmup {
-                ray_ms.push(ms);
-            }
-        }
-        // Error at up to 4096 hit pixels spread over the image.
-        let px: Vec<[f32; 4]> = read_texture(&ctx, &targets.colour).map_err(|e| e.to_string())?;
-        let hits: Vec<usize> = (0..px.len()).filter(|&i| px[i][3] != 0.0).collect();
-        let stride = (hits.len() / 4096).max(1);
-        let inv = view.view_proj.as_dmat4().inverse();
-        let (mut max, mut sum2, mut k) = (0.0f64, 0.0f64, 0usize);
-        for &i in hits.iter().step_by(stride) {
-            let (x, y) = ((i % width as usize) as f64, (i / width as usize) as f64);
-            let ndc = glam::DVec2::new(
-                (x + 0.5) / width as f64 * 2.0 - 1.0,
-                1.0 - (y + 0.5) / height as f64 * 2.0,
-            );
-            let near = inv.project_point3(ndc.extend(0.0));
-            let far = inv.project_point3(ndc.extend(1.0));
-            let p: DVec3 = near + (far - near).normalize() * (px[i][3] as f64 - 1.0);
-            let r = cpu::density_at(&voxels, edge, &s, p) - s.threshold as f64;
-            let g = cpu::gradient_at(&voxels, edge, &s, p).length();
-            if g > 1e-9 {
-                let e = (r / g).abs() / edge as f64;
-                max = max.max(e);
-                sum2 += e * e;
-                k += 1;
-            }
-        }
-        let rms = (sum2 / k.max(1) as f64).sqrt();
-        let (sdf, ray) = (median(sdf_ms), median(ray_ms));
-        println!(
-            "| {}×{}×{} | {sdf:.3} | {ray:.3} | {} | {max:.3} | {rms:.4} |",
-            grid.size[0],
-            grid.size[1],
-            grid.size[2],
-            hits.len()
-        );
+    writeln!(
+        csv,
+        "adapter,instances,method,grid,resolution,build_ms,frame_ms,march_ms,steps_mean,steps_p95,at_cap,hit_pixels,rms_err_edges,max_err_edges,hit_miss_off_pct"
+    )
+    .map_err(|e| e.to_string())?;
+    for r in &rows {
         writeln!(
             csv,
-            "\"{adapter}\",{},{}x{}x{},{width}x{height},{sdf:.4},{ray:.4},{},{max:.4},{rms:.5}",
-            voxels.len(),
-            grid.size[0],
-            grid.size[1],
-            grid.size[2],
-            hits.len()
+            "\"{adapter}\",{},{},{},{width}x{height},{:.4},{:.4},{:.4},{:.2},{},{:.4},{},{:.5},{:.4},{:.3}",
+            r.instances,
+            r.method,
+            r.grid,
+            r.build_ms,
+            r.frame_ms,
+            r.march_ms,
+            r.steps.mean,
+            r.steps.p95,
+            r.steps.at_cap,
+            r.hits,
+            r.rms_err,
+            r.max_err,
+            r.mismatch
         )
         .map_err(|e| e.to_string())?;
     }
-    println!("wrote {}", out.join("metaball.csv").display());
+    chart(&out.join("metaball.png"), &adapter, &rows)?;
+    println!(
+        "wrote {} and metaball.png",
+        out.join("metaball.csv").display()
+    );
+    Ok(())
+}
+
+/// What a scene's timing and readback need.
+struct Scene<'a> {
+    ctx: &'a Context,
+    stamps: &'a Stamps,
+    marcher: &'a Raymarcher,
+    targets: &'a Targets,
+    frame_marcher: &'a Raymarcher,
+    frame: &'a Targets,
+    view: &'a View,
+    reference: &'a Reference,
+    warmup: usize,
+    reps: usize,
+}
+
+/// A tracer's frame figures.
+struct Measured {
+    frame_ms: f64,
+    march_ms: f64,
+    steps: StepStats,
+    hits: usize,
+    rms_err: f64,
+    max_err: f64,
+    mismatch: f64,
+}
+
+impl Scene<'_> {
+    /// Median GPU time of `build`, and what its last run made.
+    fn time_build<T>(
+        &self,
+        mut build: impl FnMut(&mut wgpu::CommandEncoder) -> Result<T, String>,
+    ) -> Result<(f64, T), String> {
+        let mut times = Vec::new();
+        let mut made = None;
+        for i in 0..self.warmup + self.reps {
+            let ms = self.stamps.time(self.ctx, |enc| {
+                made = Some(build(enc)?);
+                Ok(())
+            })?;
+            if i >= self.warmup {
+                times.push(ms);
+            }
+        }
+        Ok((median(times), made.ok_or("no build ran")?))
+    }
+
+    /// Frame and march times, step counts and error of one tracer.
+    fn frames(&self, src: &Source, max_steps: u32) -> Result<Measured, String> {
+        let (ctx, view) = (self.ctx, self.view);
+        let shaded = RaymarchSettings {
+            max_steps,
+            ..RaymarchSettings::default()
+        };
+        let (mut frame_ms, mut march_ms) = (Vec::new(), Vec::new());
+        for i in 0..self.warmup + self.reps {
+            // Clearing is the application's part of the frame: submitted before the timing.
+            let mut enc = ctx.encoder("bench clear");
+            self.frame.clear(&mut enc, wgpu::Color::TRANSPARENT, 1.0);
+            ctx.submit_and_wait("bench clear", enc)
+                .map_err(|e| e.to_string())?;
+            let ms = self.stamps.time(ctx, |enc| {
+                draw(ctx, self.frame_marcher, enc, self.frame, src, view, &shaded)
+            })?;
+            let march = self.stamps.time(ctx, |enc| {
+                march_only(ctx, self.frame_marcher, enc, src, view, &shaded)
+            })?;
+            if i >= self.warmup {
+                frame_ms.push(ms);
+                march_ms.push(march);
+            }
+        }
+        let read = |output: Output| -> Result<Vec<[f32; 4]>, String> {
+            let rs = RaymarchSettings { output, ..shaded };
+            let mut enc = ctx.encoder("bench readback");
+            self.targets.clear(&mut enc, wgpu::Color::TRANSPARENT, 1.0);
+            draw(ctx, self.marcher, &mut enc, self.targets, src, view, &rs)?;
+            ctx.submit_and_wait("bench readback", enc)
+                .map_err(|e| e.to_string())?;
+            read_texture(ctx, &self.targets.colour).map_err(|e| e.to_string())
+        };
+        let steps = step_stats(&read(Output::Steps)?, max_steps);
+        let normals = read(Output::Normal)?;
+        let (rms_err, max_err, mismatch) = self.reference.compare(&normals);
+        Ok(Measured {
+            frame_ms: median(frame_ms),
+            march_ms: median(march_ms),
+            steps,
+            hits: normals.iter().filter(|p| p[3] != 0.0).count(),
+            rms_err,
+            max_err,
+            mismatch,
+        })
+    }
+}
+
+/// Steps per ray for direct tracing: global-bound sphere tracing needs thousands.
+const DIRECT_MAX_STEPS: u32 = 4096;
+
+struct StepStats {
+    mean: f64,
+    p95: u32,
+    /// Fraction of marched pixels that used every step.
+    at_cap: f64,
+}
+
+/// Steps per marched pixel (pixels whose ray enters the box), from an `Output::Steps` image
+/// (r + g + b = 3 × steps / max_steps).
+fn step_stats(px: &[[f32; 4]], max_steps: u32) -> StepStats {
+    let mut steps: Vec<u32> = px
+        .iter()
+        .filter(|p| p[3] != 0.0)
+        .map(|p| ((p[0] + p[1] + p[2]) as f64 / 3.0 * max_steps as f64).round() as u32)
+        .collect();
+    if steps.is_empty() {
+        return StepStats {
+            mean: 0.0,
+            p95: 0,
+            at_cap: 0.0,
+        };
+    }
+    steps.sort_unstable();
+    let n = steps.len() as f64;
+    StepStats {
+        mean: steps.iter().map(|&s| s as f64).sum::<f64>() / n,
+        p95: steps[(steps.len() * 95 / 100).min(steps.len() - 1)],
+        at_cap: steps.iter().filter(|&&s| s >= max_steps).count() as f64 / n,
+    }
+}
+
+/// The f64 reference: first crossing of the analytic field along sampled pixels' rays, with the
+/// blobs binned on the CPU so each sample sums only nearby blobs.
+struct Reference {
+    /// (pixel index, first hit distance from the near plane in world units).
+    samples: Vec<(usize, Option<f64>)>,
+}
+
+impl Reference {
+    fn new(voxels: &[Vec4], edge: f32, s: &Settings, view: &View, grid: &Grid3) -> Self {
+        let radius = |v: &Vec4| s.radius(edge, v.w) as f64;
+        let r_max = voxels.iter().map(radius).fold(0.0, f64::max).max(1e-6);
+        let lo = grid.origin.as_dvec3();
+        let hi = lo + glam::DVec3::from_array(grid.size.map(|n| n as f64)) * grid.voxel_size as f64;
+        let n = ((hi - lo) / r_max).ceil().max(glam::DVec3::ONE);
+        let dims = [n.x as usize, n.y as usize, n.z as usize];
+        let mut bins: Vec<Vec<(DVec3, f64)>> = vec![Vec::new(); dims[0] * dims[1] * dims[2]];
+        let bin_of = |p: DVec3| -> [usize; 3] {
+            let b = ((p - lo) / r_max).floor();
+            [0, 1, 2].map(|k| (b[k].max(0.0) as usize).min(dims[k] - 1))
+        };
+        for v in voxels.iter().filter(|v| v.w > 0.0) {
+            let (c, r) = (v.truncate().as_dvec3(), radius(v));
+            let (a, b) = (bin_of(c - r), bin_of(c + r));
+            for z in a[2]..=b[2] {
+                for y in a[1]..=b[1] {
+                    for x in a[0]..=b[0] {
+                        bins[(z * dims[1] + y) * dims[0] + x].push((c, r));
+                    }
+                }
+            }
+        }
+        let field = |p: DVec3| -> f64 {
+            let b = bin_of(p);
+            bins[(b[2] * dims[1] + b[1]) * dims[0] + b[0]]
+                .iter()
+                .map(|&(c, r)| cpu::falloff((p - c).length_squared(), r))
+                .sum()
+        };
+        let [w, h] = view.viewport;
+        let inv = view.view_proj.as_dmat4().inverse();
+        let total = (w * h) as usize;
+        let stride = (total / 2048).max(1);
+        let t_iso = s.threshold as f64;
+        let step = 0.02 * edge as f64;
+        let samples = (0..total)
+            .step_by(stride)
+            .map(|i| {
+                let (x, y) = ((i % w as usize) as f64, (i / w as usize) as f64);
+                let ndc = glam::DVec2::new(
+                    (x + 0.5) / w as f64 * 2.0 - 1.0,
+                    1.0 - (y + 0.5) / h as f64 * 2.0,
+                );
+                let near = inv.project_point3(ndc.extend(0.0));
+                let far = inv.project_point3(ndc.extend(1.0));
+                let dir = (far - near).normalize();
+                // The box along the ray.
+                let inv_d = dir.recip();
+                let (a, b) = ((lo - near) * inv_d, (hi - near) * inv_d);
+                let t0 = a.min(b).max_element().max(0.0);
+                let t1 = a.max(b).min_element().min((far - near).length());
+                let f = |t: f64| field(near + dir * t) - t_iso;
+                let mut hit = None;
+                let mut t = t0;
+                while t < t1 {
+                    let u = (t + step).min(t1);
+                    if f(u) >= 0.0 {
+                        let (mut p, mut q) = (t, u);
+                        for _ in 0..50 {
+                            let m = 0.5 * (p + q);
+                            if f(m) >= 0.0 { q = m } else { p = m }
+                        }
+                        hit = Some(0.5 * (p + q));
+                        break;
+                    }
+                    t = u;
+                }
+                (i, hit)
+            })
+            .collect();
+        Self { samples }
+    }
+
+    /// RMS and max hit-distance error (edges, pixels both hit) and the % of samples where one
+    /// side hits and the other does not, for an `Output::Normal` image (alpha = 1 + distance).
+    fn compare(&self, px: &[[f32; 4]]) -> (f64, f64, f64) {
+        let (mut sum2, mut max, mut both, mut off) = (0.0, 0.0f64, 0usize, 0usize);
+        for &(i, hit) in &self.samples {
+            let got = (px[i][3] != 0.0).then(|| px[i][3] as f64 - 1.0);
+            match (hit, got) {
+                (Some(a), Some(b)) => {
+                    let e = (a - b).abs();
+                    sum2 += e * e;
+                    max = max.max(e);
+                    both += 1;
+                }
+                (None, None) => {}
+                _ => off += 1,
+            }
+        }
+        (
+            (sum2 / both.max(1) as f64).sqrt(),
+            max,
+            100.0 * off as f64 / self.samples.len().max(1) as f64,
+        )
+    }
+}
+
+/// Frame time against RMS error, log axes: a point per tracer (and grid), a colour per voxel set.
+fn chart(path: &std::path::Path, adapter: &str, rows: &[Row]) -> Result<(), String> {
+    use plotters::prelude::*;
+    let _ =
+        plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular());
+    let root = BitMapBackend::new(path, (900, 560)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| e.to_string())?;
+    let floor = 1e-4;
+    let y_of = |r: &Row| r.rms_err.max(floor);
+    let (tmin, tmax) = rows.iter().fold((f64::INFINITY, 0f64), |(a, b), r| {
+        (a.min(r.frame_ms), b.max(r.frame_ms))
+    });
+    let emax = rows.iter().map(y_of).fold(1e-2, f64::max);
+    let mut c = ChartBuilder::on(&root)
+        .caption(
+            format!("metaball: frame time vs RMS hit error, {adapter}"),
+            ("sans-serif", 15),
+        )
+        .margin(12)
+        .x_label_area_size(38)
+        .y_label_area_size(60)
+        .build_cartesian_2d(
+            (tmin / 1.6..tmax * 2.5).log_scale(),
+            (floor / 1.5..emax * 3.0).log_scale(),
+        )
+        .map_err(|e| e.to_string())?;
+    c.configure_mesh()
+        .x_desc("frame time, ms (march + composite, median, log)")
+        .y_desc("RMS hit distance error, voxel edges (log)")
+        .x_labels(6)
+        .y_labels(5)
+        .x_label_formatter(&|v| format!("{v:.2}"))
+        .y_label_formatter(&|v| format!("{v:.0e}"))
+        .label_style(("sans-serif", 11))
+        .draw()
+        .map_err(|e| e.to_string())?;
+    let mut counts: Vec<usize> = rows.iter().map(|r| r.instances).collect();
+    counts.dedup();
+    for (k, &n) in counts.iter().enumerate() {
+        let color = Palette99::pick(k).to_rgba();
+        let pts: Vec<&Row> = rows.iter().filter(|r| r.instances == n).collect();
+        c.draw_series(
+            pts.iter()
+                .map(|r| Circle::new((r.frame_ms, y_of(r)), 4, color.filled())),
+        )
+        .map_err(|e| e.to_string())?
+        .label(format!("{n} instances"))
+        .legend(move |(x, y)| Circle::new((x, y), 4, color.filled()));
+        c.draw_series(pts.iter().map(|r| {
+            let label = if r.grid == "bins" {
+                format!(" {} ({:.0} steps)", r.method, r.steps.mean)
+            } else {
+                format!(" SDF {} ({:.0} steps)", r.grid, r.steps.mean)
+            };
+            Text::new(
+                label,
+                (r.frame_ms, y_of(r)),
+                ("sans-serif", 10).into_font().color(&color),
+            )
+        }))
+        .map_err(|e| e.to_string())?;
+    }
+    c.configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 11))
+        .draw()
+        .map_err(|e| e.to_string())?;
+    root.present().map_err(|e| e.to_string())?;
     Ok(())
 }

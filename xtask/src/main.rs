@@ -51,7 +51,7 @@ enum Command {
         /// Fraction of cells that are seeds.
         #[arg(long, default_value_t = 0.01)]
         density: f64,
-        /// Narrow band (voxels) of the banded JFA entry.
+        /// Narrow band (voxels) of the banded JFA entry; for `metaball`, the field's band (cells).
         #[arg(long, default_value_t = 8.0)]
         band: f32,
         /// Peer command, run on the same mask (e.g. `python3 .gpu/peers/edt_cupyx.py`).
@@ -65,6 +65,10 @@ enum Command {
         /// Bands per column in the exact transform (1, 2, 4, 8, 16, 32); by grid size if absent.
         #[arg(long)]
         column_bands: Option<u32>,
+        /// Only these edge lengths (3D edges from the sweep's 3D sizes, 2D from its 2D sizes;
+        /// comma-separated), e.g. `--sizes 512` for one point.
+        #[arg(long, value_delimiter = ',')]
+        sizes: Vec<usize>,
     },
 }
 
@@ -98,6 +102,7 @@ fn main() -> ExitCode {
             out,
             exact_only,
             column_bands,
+            sizes,
         } => {
             if cfg!(debug_assertions) && std::env::var_os("FIELDKIT_BENCH_NO_REEXEC").is_none() {
                 return rerun_release();
@@ -118,12 +123,11 @@ fn main() -> ExitCode {
                 band,
                 exact_only,
                 column_bands,
+                sizes,
             };
             match technique {
                 Technique::Distance => bench::run_distance(&args),
-                Technique::Metaball => {
-                    bench_metaball::run(args.quick, args.reps, args.warmup, &args.out)
-                }
+                Technique::Metaball => bench_metaball::run(&args),
             }
         }
     }
