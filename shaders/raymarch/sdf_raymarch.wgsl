@@ -14,8 +14,8 @@
 // tolerance grows with distance (a pixel's footprint). A sample below the tolerance, or a sign
 // change, is refined by bisection on density − threshold, whose zero set the seeds came from.
 
-import package::shared::field::ray_box;
-import package::shared::shading::{heat, lit};
+import package::shared::field::{ndc_depth, pixel_ray, ray_box};
+import package::shared::shading::{heat, surface_colour};
 
 struct RaymarchParams {
     inv_view_proj: mat4x4<f32>,
@@ -82,11 +82,6 @@ fn density_at(p: vec3<f32>) -> f32 {
     return field_at(p).y;
 }
 
-fn unproject(ndc: vec3<f32>) -> vec3<f32> {
-    let h = params.inv_view_proj * vec4<f32>(ndc, 1.0);
-    return h.xyz / h.w;
-}
-
 // Root of density − threshold on [a, b], with density(a) below and density(b) at or above it:
 // BISECTIONS halvings, then the secant through the bracket's ends (the density is smooth, so the
 // secant on a bracket a few hundredths of a cell long is far inside the hit tolerance).
@@ -127,28 +122,17 @@ fn normal_at(p: vec3<f32>) -> vec3<f32> {
     return -g / len;
 }
 
-fn depth_of(world: vec3<f32>) -> f32 {
-    let clip = params.view_proj * vec4<f32>(world, 1.0);
-    return clip.z / clip.w;
-}
-
 // March and shade the ray through the pixel centre `pixel`.
 fn trace(pixel: vec2<f32>) -> Shaded {
     var out: Shaded;
     out.depth = MISS;
-    let ndc_xy = vec2<f32>(
-        pixel.x / params.viewport.x * 2.0 - 1.0,
-        1.0 - pixel.y / params.viewport.y * 2.0,
-    );
-    let near_w = unproject(vec3<f32>(ndc_xy, params.near_z));
-    let far_w = unproject(vec3<f32>(ndc_xy, params.far_z));
-    let o = (params.world_to_local * vec4<f32>(near_w, 1.0)).xyz;
-    let far_l = (params.world_to_local * vec4<f32>(far_w, 1.0)).xyz;
-    let span = far_l - o;
-    let dir = normalize(span);
+    let ray = pixel_ray(pixel, params.viewport, params.inv_view_proj, params.world_to_local, params.near_z, params.far_z);
+    let near_w = ray.near;
+    let o = ray.origin;
+    let dir = ray.dir;
     let hit_box = ray_box(o, dir, params.box_min, params.box_max);
     let t_enter = max(hit_box.x, 0.0);
-    let t_exit = min(hit_box.y, length(span));
+    let t_exit = min(hit_box.y, ray.length);
     if t_enter > t_exit {
         return out;
     }
@@ -192,13 +176,13 @@ fn trace(pixel: vec2<f32>) -> Shaded {
     let entry_world = (params.local_to_world * vec4<f32>(o + t_enter * dir, 1.0)).xyz;
     if params.mode == 2u {
         out.colour = vec4<f32>(heat(f32(steps) / f32(max(params.max_steps, 1u))), 1.0);
-        out.depth = depth_of(entry_world);
+        out.depth = ndc_depth(params.view_proj, entry_world);
         return out;
     }
     if params.mode == 4u {
         let s = first_d / params.band;
         out.colour = vec4<f32>(max(s, 0.0), 0.2, max(-s, 0.0), 1.0);
-        out.depth = depth_of(entry_world);
+        out.depth = ndc_depth(params.view_proj, entry_world);
         return out;
     }
     if !found {
@@ -206,23 +190,12 @@ fn trace(pixel: vec2<f32>) -> Shaded {
     }
     let p = o + t * dir;
     let hit_world = (params.local_to_world * vec4<f32>(p, 1.0)).xyz;
-    out.depth = depth_of(hit_world);
+    out.depth = ndc_depth(params.view_proj, hit_world);
     let n_local = normal_at(p);
     let n = normalize((params.local_to_world * vec4<f32>(n_local, 0.0)).xyz);
-    if params.mode == 1u {
-        // Alpha 1 + distance, so 0 still means "not drawn" for a hit on the near plane.
-        out.colour = vec4<f32>(n, 1.0 + length(hit_world - near_w));
-        return out;
-    }
     // Density just inside the surface: how deep the blobs pile up here.
     let inner = density_at(p - n_local * params.cell);
-    if params.mode == 3u {
-        out.colour = vec4<f32>(heat(inner / (4.0 * params.threshold)), 1.0);
-        return out;
-    }
-    let to_eye = normalize(near_w - hit_world);
-    let colour = lit(n, to_eye, params.light_dir, inner, params.threshold, params.base_colour, params.rim_colour, params.ambient);
-    out.colour = vec4<f32>(colour, 1.0);
+    out.colour = surface_colour(params.mode, n, inner, hit_world, near_w, params.light_dir, params.threshold, params.base_colour, params.rim_colour, params.ambient);
     return out;
 }
 

@@ -177,6 +177,65 @@ pub fn animate(base: &[Vec4], edge: f32, t: f32, frequency: f32, wobble: f32) ->
         .collect()
 }
 
+/// Settings, voxel edge and grid placement, checked before any stage is encoded.
+fn check_inputs(
+    settings: &Settings,
+    edge: f32,
+    grid: &Grid3,
+    stage: &'static str,
+) -> Result<(), Error> {
+    settings.check()?;
+    check_voxels(&[], edge)?;
+    if !(grid.voxel_size.is_finite() && grid.voxel_size > 0.0 && grid.origin.is_finite()) {
+        return Err(Error::Invalid {
+            stage,
+            what: format!(
+                "grid cell {} and origin {} must be finite (cell positive)",
+                grid.voxel_size, grid.origin
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// A storage buffer the stages write and tests read back (at least 4 bytes: empty sets still
+/// bind something).
+fn storage_buffer(device: &wgpu::Device, label: &str, bytes: u64) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: bytes.max(4),
+        usage: wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_SRC
+            | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
+/// A volume the stages write (storage) and later stages read (sampled), readable back.
+fn volume_texture(
+    device: &wgpu::Device,
+    label: &str,
+    size: [u32; 3],
+    format: wgpu::TextureFormat,
+) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: size[0],
+            height: size[1],
+            depth_or_array_layers: size[2],
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D3,
+        format,
+        usage: wgpu::TextureUsages::STORAGE_BINDING
+            | wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    })
+}
+
 fn max_scale(voxels: &[Vec4]) -> f32 {
     voxels.iter().map(|v| v.w).fold(0.0, f32::max)
 }
@@ -413,17 +472,7 @@ impl Metaballs {
         edge: f32,
         settings: &Settings,
     ) -> Result<BlobBins, Error> {
-        settings.check()?;
-        check_voxels(&[], edge)?;
-        if !(grid.voxel_size.is_finite() && grid.voxel_size > 0.0 && grid.origin.is_finite()) {
-            return Err(Error::Invalid {
-                stage: bin_blobs::STAGE,
-                what: format!(
-                    "grid cell {} and origin {} must be finite (cell positive)",
-                    grid.voxel_size, grid.origin
-                ),
-            });
-        }
+        check_inputs(settings, edge, grid, bin_blobs::STAGE)?;
         let extent = Vec3::from_array(grid.size.map(|s| s as f32)) * grid.voxel_size;
         let r_max = settings.radius(edge, instances.max_scale);
         let mut bin_size = if r_max > 0.0 {
@@ -450,16 +499,7 @@ impl Metaballs {
                 max: max_binding / 16,
             });
         }
-        let storage = |label: &str, bytes: u64| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: bytes.max(4),
-                usage: wgpu::BufferUsages::STORAGE
-                    | wgpu::BufferUsages::COPY_SRC
-                    | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            })
-        };
+        let storage = |label: &str, bytes: u64| storage_buffer(device, label, bytes);
         let counts = storage("blob bin counts", bin_total as u64 * 4);
         let starts = storage("blob bin starts", (bin_total as u64 + 1) * 4);
         let items = storage("blob bin items", capacity.max(1) * 16);
@@ -550,22 +590,12 @@ impl Metaballs {
         sdf: &wgpu::Texture,
         density: &wgpu::Texture,
     ) -> Result<wgpu::Texture, Error> {
-        let packed = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("metaball march field"),
-            size: wgpu::Extent3d {
-                width: grid.size[0],
-                height: grid.size[1],
-                depth_or_array_layers: grid.size[2],
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D3,
-            format: wgpu::TextureFormat::Rgba16Float,
-            usage: wgpu::TextureUsages::STORAGE_BINDING
-                | wgpu::TextureUsages::TEXTURE_BINDING
-                | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
+        let packed = volume_texture(
+            device,
+            "metaball march field",
+            grid.size,
+            wgpu::TextureFormat::Rgba16Float,
+        );
         let params = uniform(
             device,
             "march field params",
@@ -607,17 +637,7 @@ impl Metaballs {
         edge: f32,
         settings: &Settings,
     ) -> Result<SurfaceSeeds, Error> {
-        settings.check()?;
-        check_voxels(&[], edge)?;
-        if !(grid.voxel_size.is_finite() && grid.voxel_size > 0.0 && grid.origin.is_finite()) {
-            return Err(Error::Invalid {
-                stage: STAGE,
-                what: format!(
-                    "grid cell {} and origin {} must be finite (cell positive)",
-                    grid.voxel_size, grid.origin
-                ),
-            });
-        }
+        check_inputs(settings, edge, grid, STAGE)?;
         crate::distance::volume::check_size_3d(device, grid.size)?;
         let cells: u64 = grid.size.iter().map(|&s| s as u64).product();
         if cells > MAX_POINTS as u64 + 1 {
@@ -638,16 +658,7 @@ impl Metaballs {
                 ),
             });
         }
-        let storage = |label: &str, bytes: u64| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: bytes,
-                usage: wgpu::BufferUsages::STORAGE
-                    | wgpu::BufferUsages::COPY_SRC
-                    | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            })
-        };
+        let storage = |label: &str, bytes: u64| storage_buffer(device, label, bytes);
         let density_fixed = storage("metaball density (fixed point)", cells * 4);
         encoder.clear_buffer(&density_fixed, 0, None);
         let scale = fixed_scale(instances.count);
@@ -679,22 +690,12 @@ impl Metaballs {
             self.splat
                 .dispatch(&mut pass, &bound, [instances.count.div_ceil(64), 1, 1]);
         }
-        let density = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("metaball density"),
-            size: wgpu::Extent3d {
-                width: grid.size[0],
-                height: grid.size[1],
-                depth_or_array_layers: grid.size[2],
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D3,
-            format: wgpu::TextureFormat::R32Float,
-            usage: wgpu::TextureUsages::STORAGE_BINDING
-                | wgpu::TextureUsages::TEXTURE_BINDING
-                | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
+        let density = volume_texture(
+            device,
+            "metaball density",
+            grid.size,
+            wgpu::TextureFormat::R32Float,
+        );
         let keys = storage("metaball seed keys", cells * 4);
         let points = storage("metaball seed points", cells * 16);
         {

@@ -512,7 +512,7 @@ impl Raymarcher {
         view: &View,
         settings: &RaymarchSettings,
     ) -> Result<bool, Error> {
-        match self.encode_direct_march(
+        let marched = self.encode_direct_march(
             device,
             encoder,
             bins,
@@ -520,13 +520,8 @@ impl Raymarcher {
             local_to_world,
             view,
             settings,
-        )? {
-            Some(marched) => {
-                self.encode_composite(device, encoder, colour, depth, &marched)?;
-                Ok(true)
-            }
-            None => Ok(false),
-        }
+        )?;
+        self.composite_if(device, encoder, colour, depth, marched)
     }
 
     /// The compute half of [`Raymarcher::encode_direct`].
@@ -630,13 +625,8 @@ impl Raymarcher {
         view: &View,
         settings: &RaymarchSettings,
     ) -> Result<bool, Error> {
-        match self.encode_march(device, encoder, field, local_to_world, view, settings)? {
-            Some(marched) => {
-                self.encode_composite(device, encoder, colour, depth, &marched)?;
-                Ok(true)
-            }
-            None => Ok(false),
-        }
+        let marched = self.encode_march(device, encoder, field, local_to_world, view, settings)?;
+        self.composite_if(device, encoder, colour, depth, marched)
     }
 
     /// The compute half: march and shade the box's screen rectangle into the raymarcher's own
@@ -719,6 +709,22 @@ impl Raymarcher {
             );
         }
         Ok(Some(Marched { rect, scratch }))
+    }
+
+    /// Composite a march if there was one; whether anything was drawn.
+    fn composite_if(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        colour: &wgpu::TextureView,
+        depth: &wgpu::TextureView,
+        marched: Option<Marched>,
+    ) -> Result<bool, Error> {
+        let Some(marched) = marched else {
+            return Ok(false);
+        };
+        self.encode_composite(device, encoder, colour, depth, &marched)?;
+        Ok(true)
     }
 
     /// The draw half: write a march's hits into `colour` and `depth` (the formats this
