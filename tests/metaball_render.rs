@@ -783,3 +783,66 @@ fn grazing_rays_at_the_silhouette() {
         assert!(worst < bound, "{name}: {worst}");
     }
 }
+
+/// The split march/composite API cannot draw garbage: a march whose images a later march reused
+/// is refused, and so is a target of another size than the march's viewport. The latest march
+/// still composites.
+#[test]
+fn composite_refuses_a_stale_march_and_a_wrong_target() {
+    let ctx = context();
+    let (_, field) = one_blob(&ctx);
+    let view = camera(Vec3::new(0.3, 0.4, 2.5), Vec3::ZERO, false);
+    let marcher = Raymarcher::new(
+        &ctx.device,
+        wgpu::TextureFormat::Rgba32Float,
+        wgpu::TextureFormat::Depth32Float,
+        false,
+    )
+    .unwrap();
+    let rs = normals();
+    let mut enc = ctx.encoder("split");
+    let first = marcher
+        .encode_march(&ctx.device, &mut enc, &field, Mat4::IDENTITY, &view, &rs)
+        .unwrap()
+        .expect("on screen");
+    let second = marcher
+        .encode_march(&ctx.device, &mut enc, &field, Mat4::IDENTITY, &view, &rs)
+        .unwrap()
+        .expect("on screen");
+    let targets = Targets::new(
+        &ctx.device,
+        [W, H],
+        wgpu::TextureFormat::Rgba32Float,
+        wgpu::TextureFormat::Depth32Float,
+    );
+    let (cv, dv) = (&targets.colour_view, &targets.depth_view);
+    let stale = marcher
+        .encode_composite(&ctx.device, &mut enc, cv, dv, &first)
+        .unwrap_err()
+        .to_string();
+    assert!(stale.contains("overwritten"), "{stale}");
+    let small = Targets::new(
+        &ctx.device,
+        [W / 2, H],
+        wgpu::TextureFormat::Rgba32Float,
+        wgpu::TextureFormat::Depth32Float,
+    );
+    let size = marcher
+        .encode_composite(
+            &ctx.device,
+            &mut enc,
+            &small.colour_view,
+            &small.depth_view,
+            &second,
+        )
+        .unwrap_err()
+        .to_string();
+    assert!(size.contains("viewport"), "{size}");
+    targets.clear(&mut enc, wgpu::Color::TRANSPARENT, 1.0);
+    marcher
+        .encode_composite(&ctx.device, &mut enc, cv, dv, &second)
+        .unwrap();
+    ctx.submit_and_wait("split", enc).unwrap();
+    let px: Vec<[f32; 4]> = read_texture(&ctx, &targets.colour).unwrap();
+    assert!(px.iter().filter(|p| p[3] != 0.0).count() > 200);
+}

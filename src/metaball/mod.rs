@@ -490,7 +490,7 @@ impl Metaballs {
         let bins = [n.x as u32, n.y as u32, n.z as u32];
         let bin_total = bins.iter().product::<u32>();
         let capacity = instances.count as u64 * 27;
-        let max_binding = device.limits().max_storage_buffer_binding_size as u64;
+        let max_binding = device.limits().max_storage_buffer_binding_size;
         if capacity.max(1) * 16 > max_binding {
             return Err(Error::Size {
                 stage: bin_blobs::STAGE,

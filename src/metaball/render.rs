@@ -350,6 +350,9 @@ struct Scratch {
     size: [u32; 2],
     colour: wgpu::TextureView,
     depth: wgpu::TextureView,
+    /// Marches recorded into these images so far: a [`Marched`] is current while it holds the
+    /// latest number.
+    marches: std::sync::atomic::AtomicU64,
 }
 
 impl Scratch {
@@ -377,6 +380,7 @@ impl Scratch {
             size,
             colour: make("raymarch colour", wgpu::TextureFormat::Rgba32Float),
             depth: make("raymarch depth", wgpu::TextureFormat::R32Float),
+            marches: std::sync::atomic::AtomicU64::new(0),
         }
     }
 }
@@ -596,18 +600,14 @@ impl Raymarcher {
                 depth_out: (&scratch.depth).into(),
             },
         )?;
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some(blob_trace::STAGE),
-                timestamp_writes: None,
-            });
-            self.direct.dispatch(
-                &mut pass,
-                &bound,
-                [rect_size[0].div_ceil(8), rect_size[1].div_ceil(8), 1],
-            );
-        }
-        Ok(Some(Marched { rect, scratch }))
+        Ok(Some(dispatch_rect(
+            encoder,
+            blob_trace::STAGE,
+            &self.direct,
+            &bound,
+            rect,
+            scratch,
+        )))
     }
 
     /// Draw `field` (placed by the rigid `local_to_world`) into `colour` and `depth`, loading
@@ -697,18 +697,14 @@ impl Raymarcher {
                 depth_out: (&scratch.depth).into(),
             },
         )?;
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some(sdf_raymarch::STAGE),
-                timestamp_writes: None,
-            });
-            self.march.dispatch(
-                &mut pass,
-                &marched,
-                [rect_size[0].div_ceil(8), rect_size[1].div_ceil(8), 1],
-            );
-        }
-        Ok(Some(Marched { rect, scratch }))
+        Ok(Some(dispatch_rect(
+            encoder,
+            sdf_raymarch::STAGE,
+            &self.march,
+            &marched,
+            rect,
+            scratch,
+        )))
     }
 
     /// Composite a march if there was one; whether anything was drawn.
@@ -737,6 +733,35 @@ impl Raymarcher {
         depth: &wgpu::TextureView,
         marched: &Marched,
     ) -> Result<(), Error> {
+        let stage = composite::STAGE;
+        let latest = marched
+            .scratch
+            .marches
+            .load(std::sync::atomic::Ordering::Relaxed);
+        if marched.number != latest {
+            return Err(Error::Invalid {
+                stage,
+                what: format!(
+                    "march {} was overwritten by march {latest} of this raymarcher: composite \
+                     each march before encoding the next",
+                    marched.number
+                ),
+            });
+        }
+        for (what, view) in [("colour", colour), ("depth", depth)] {
+            let t = view.texture();
+            if [t.width(), t.height()] != marched.scratch.size {
+                return Err(Error::Invalid {
+                    stage,
+                    what: format!(
+                        "{what} target is {}×{}, the march's viewport {:?}",
+                        t.width(),
+                        t.height(),
+                        marched.scratch.size
+                    ),
+                });
+            }
+        }
         let bound = self.composite.bind(
             device,
             &composite::fs_main::Resources {
@@ -774,10 +799,44 @@ struct Frame {
 }
 
 /// A march recorded by [`Raymarcher::encode_march`], waiting to be composited.
+///
+/// The march's images belong to the raymarcher and the next march reuses them, so composite
+/// each march before encoding another; a stale one is refused.
 pub struct Marched {
     /// Pixels marched: `[x0, y0, x1, y1)`.
     pub rect: [u32; 4],
     scratch: std::sync::Arc<Scratch>,
+    number: u64,
+}
+
+/// Record a march over `rect` (8×8 pixels per workgroup) into `scratch`.
+fn dispatch_rect<E: crate::bind::Entry>(
+    encoder: &mut wgpu::CommandEncoder,
+    label: &str,
+    pipeline: &ComputePipeline<E>,
+    bound: &crate::bind::Bound<E>,
+    rect: [u32; 4],
+    scratch: std::sync::Arc<Scratch>,
+) -> Marched {
+    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+        label: Some(label),
+        timestamp_writes: None,
+    });
+    let groups = [
+        (rect[2] - rect[0]).div_ceil(8),
+        (rect[3] - rect[1]).div_ceil(8),
+        1,
+    ];
+    pipeline.dispatch(&mut pass, bound, groups);
+    let number = scratch
+        .marches
+        .fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+        + 1;
+    Marched {
+        rect,
+        scratch,
+        number,
+    }
 }
 
 /// How the debug cubes are drawn.

@@ -169,34 +169,20 @@ fn bench(
     };
     println!("field band: {band} cells");
     let balls = Metaballs::new(&ctx.device).map_err(|e| e.to_string())?;
-    let marcher = Raymarcher::new(
-        &ctx.device,
-        wgpu::TextureFormat::Rgba32Float,
-        wgpu::TextureFormat::Depth32Float,
-        false,
-    )
-    .map_err(|e| e.to_string())?;
-    let targets = Targets::new(
-        &ctx.device,
-        [width, height],
-        wgpu::TextureFormat::Rgba32Float,
-        wgpu::TextureFormat::Depth32Float,
-    );
-    // A frame as an application draws it: shaded, into an 8-bit colour target. The float target
-    // above is for reading normals, hit distances and step counts back.
-    let frame_marcher = Raymarcher::new(
-        &ctx.device,
-        wgpu::TextureFormat::Rgba8Unorm,
-        wgpu::TextureFormat::Depth32Float,
-        false,
-    )
-    .map_err(|e| e.to_string())?;
-    let frame = Targets::new(
-        &ctx.device,
-        [width, height],
-        wgpu::TextureFormat::Rgba8Unorm,
-        wgpu::TextureFormat::Depth32Float,
-    );
+    // A raymarcher and full-size targets for one colour format.
+    let pair = |format| -> Result<(Raymarcher, Targets), String> {
+        let depth = wgpu::TextureFormat::Depth32Float;
+        let marcher =
+            Raymarcher::new(&ctx.device, format, depth, false).map_err(|e| e.to_string())?;
+        Ok((
+            marcher,
+            Targets::new(&ctx.device, [width, height], format, depth),
+        ))
+    };
+    // Float targets for reading normals, hit distances and step counts back; and a frame as an
+    // application draws it: shaded, into an 8-bit colour target.
+    let (marcher, targets) = pair(wgpu::TextureFormat::Rgba32Float)?;
+    let (frame_marcher, frame) = pair(wgpu::TextureFormat::Rgba8Unorm)?;
     let bar = indicatif::ProgressBar::new((sides.len() * (grids.len() + 2)) as u64);
     bar.set_style(
         indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} {elapsed} {msg}").unwrap(),
