@@ -9,6 +9,8 @@ use fieldkit::gallery::{MetaballView, metaball_scene};
 use fieldkit::gpu::{Context, read_buffer, read_texture};
 use fieldkit::harness::{Summary, context};
 use fieldkit::metaball::render::Output;
+use fieldkit::distance::Variant;
+use fieldkit::distance::volume::Method;
 use fieldkit::metaball::{Metaballs, Settings, SurfaceSeeds};
 use glam::Vec4;
 
@@ -75,8 +77,21 @@ fn seed_stage() {
 
 #[test]
 fn jfa_and_sdf_stages() {
+    insta::assert_snapshot!(distance_summary(Method::Jfa(Variant::JfaPlus2)));
+}
+
+#[test]
+fn line_passes_and_sdf_stages() {
+    insta::assert_snapshot!(distance_summary(Method::Lines));
+}
+
+/// The nearest seed (by table index) and the SDF after the distance stage with `method`.
+fn distance_summary(method: Method) -> String {
     let ctx = context();
-    let s = settings();
+    let s = Settings {
+        method,
+        ..settings()
+    };
     let field = metaball_field(&ctx, &voxels(), 1.0, &s);
     let [w, h, d] = field.grid.size.map(|x| x as usize);
     let nearest = words(&ctx, &field.nearest);
@@ -86,11 +101,9 @@ fn jfa_and_sdf_stages() {
         .map(|&k| fieldkit::distance::volume::key_index(k).unwrap_or(u32::MAX))
         .collect();
     let sdf: Vec<f32> = read_texture(&ctx, &field.sdf).unwrap();
-    insta::assert_snapshot!(
-        Summary::ints(&[d, h, w], &seeded)
-            .and("sdf", Summary::floats(&[d, h, w], &sdf, 3))
-            .to_string()
-    );
+    Summary::ints(&[d, h, w], &seeded)
+        .and("sdf", Summary::floats(&[d, h, w], &sdf, 3))
+        .to_string()
 }
 
 /// Images summarised by coverage and mean colour (1 decimal, 0..255), over the background.

@@ -22,7 +22,6 @@ pub mod render;
 use glam::{Vec3, Vec4};
 
 use crate::bind::ComputePipeline;
-use crate::distance::Variant;
 use crate::distance::volume::{Distance3d, Grid3, Inside, MAX_POINTS, Method, Options3d};
 use crate::error::Error;
 use crate::gpu::{Context, uniform_buffer as uniform};
@@ -49,11 +48,15 @@ pub struct Settings {
     pub overlap: f32,
     /// Grid cells per voxel edge when the grid is fitted ([`Settings::fit_grid`]).
     pub cells_per_edge: f32,
-    /// Distances the SDF must hold, in cells: JFA starts at the power of two above it and the
-    /// field is clamped to ±band (what the raymarcher's steps need, no more).
+    /// Distances the SDF must hold, in cells: the line passes scan this far, JFA starts at the
+    /// power of two above it, and the field is clamped to ±band (what the raymarcher's steps
+    /// need, no more).
     pub band: f32,
-    /// JFA variant of the distance stage.
-    pub variant: Variant,
+    /// How the distance stage finds each voxel's nearest seed: [`Method::Lines`] (default; 2.6×
+    /// faster than JFA+2 on the H100 at 128³, same raymarched surface error) or
+    /// [`Method::Jfa`] (nearer seeds away from the surface). The exact transform takes integer
+    /// seeds only and is refused.
+    pub method: Method,
 }
 
 impl Default for Settings {
@@ -63,7 +66,7 @@ impl Default for Settings {
             overlap: 2.0,
             cells_per_edge: 4.0,
             band: 8.0,
-            variant: Variant::JfaPlus2,
+            method: Method::Lines,
         }
     }
 }
@@ -88,6 +91,14 @@ impl Settings {
             if !(v.is_finite() && v > 0.0) {
                 return Err(bad(what, v));
             }
+        }
+        if self.method == Method::Exact {
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: "method: the exact transform takes integer seeds; the surface seeds are \
+                       sub-voxel (use Method::Lines or Method::Jfa)"
+                    .into(),
+            });
         }
         Ok(())
     }
@@ -429,7 +440,7 @@ impl Metaballs {
     ) -> Result<MetaballField, Error> {
         let seeds = self.encode_seeds(device, encoder, instances, grid, edge, settings)?;
         let options = Options3d {
-            method: Method::Jfa(settings.variant),
+            method: settings.method,
             signed: true,
             inside: Inside::Threshold(settings.threshold),
             voxel_size: grid.voxel_size,

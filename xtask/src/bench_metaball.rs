@@ -13,7 +13,8 @@
 use std::io::Write;
 use std::process::ExitCode;
 
-use fieldkit::distance::volume::Grid3;
+use fieldkit::distance::Variant;
+use fieldkit::distance::volume::{Grid3, Method};
 use fieldkit::gpu::{Context, read_buffer, read_texture};
 use fieldkit::metaball::render::{Direct, Output, RaymarchSettings, Raymarcher, Targets, View};
 use fieldkit::metaball::{BlobBins, MetaballField, Metaballs, Settings, animate, cpu, packed_grid};
@@ -183,7 +184,7 @@ fn bench(
     // application draws it: shaded, into an 8-bit colour target.
     let (marcher, targets) = pair(wgpu::TextureFormat::Rgba32Float)?;
     let (frame_marcher, frame) = pair(wgpu::TextureFormat::Rgba8Unorm)?;
-    let bar = indicatif::ProgressBar::new((sides.len() * (grids.len() + 2)) as u64);
+    let bar = indicatif::ProgressBar::new((sides.len() * (2 * grids.len() + 2)) as u64);
     bar.set_style(
         indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} {elapsed} {msg}").unwrap(),
     );
@@ -271,19 +272,27 @@ fn bench(
                 voxel_size: cell,
                 origin: centre - size * cell * 0.5,
             };
-            let s = Settings {
-                cells_per_edge: edge / cell,
-                ..settings
-            };
             let label = format!("{}×{}×{}", grid.size[0], grid.size[1], grid.size[2]);
-            bar.set_message(format!("{} instances, SDF {label}", voxels.len()));
-            let (build_ms, field) = scene.time_build(|enc| {
-                balls
-                    .encode(&ctx.device, enc, &inst, &grid, edge, &s)
-                    .map_err(|e| e.to_string())
-            })?;
-            let m = scene.frames(&Source::Sdf(&field), RaymarchSettings::default().max_steps)?;
-            push("SDF texture", label, build_ms, m);
+            // The distance stage's two methods for sub-voxel seeds (see `Settings::method`).
+            for (name, method) in [
+                ("SDF texture, lines", Method::Lines),
+                ("SDF texture, JFA+2", Method::Jfa(Variant::JfaPlus2)),
+            ] {
+                let s = Settings {
+                    cells_per_edge: edge / cell,
+                    method,
+                    ..settings
+                };
+                bar.set_message(format!("{} instances, {name} {label}", voxels.len()));
+                let (build_ms, field) = scene.time_build(|enc| {
+                    balls
+                        .encode(&ctx.device, enc, &inst, &grid, edge, &s)
+                        .map_err(|e| e.to_string())
+                })?;
+                let m =
+                    scene.frames(&Source::Sdf(&field), RaymarchSettings::default().max_steps)?;
+                push(name, label.clone(), build_ms, m);
+            }
         }
         for (name, method) in [
             ("global-bound sphere", Direct::SphereGlobal),
@@ -622,7 +631,8 @@ fn chart(path: &std::path::Path, adapter: &str, rows: &[Row]) -> Result<(), Stri
             let label = if r.grid == "bins" {
                 format!(" {} ({:.0} steps)", r.method, r.steps.mean)
             } else {
-                format!(" SDF {} ({:.0} steps)", r.grid, r.steps.mean)
+                let how = r.method.trim_start_matches("SDF texture, ");
+                format!(" SDF {how} {} ({:.0} steps)", r.grid, r.steps.mean)
             };
             Text::new(
                 label,
