@@ -85,6 +85,21 @@ fn compare(nearest: &[u32], points: &[Vec3], exact2: &[f64], size: [u32; 3], ban
     m
 }
 
+/// A seed table on the GPU, each point's home the voxel it lies in.
+fn point_seeds(ctx: &Context, table: &[Vec4]) -> PointSeeds {
+    PointSeeds {
+        buffer: ctx
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("points"),
+                contents: bytemuck::cast_slice(table),
+                usage: wgpu::BufferUsages::STORAGE,
+            }),
+        homes: None,
+        count: table.len() as u32,
+    }
+}
+
 fn options(method: Method, band: f32) -> Options3d {
     Options3d {
         method,
@@ -111,17 +126,7 @@ fn line_passes_are_exact_for_seeds_at_voxel_centres() {
         .collect();
     assert!(points.len() > 3, "the scene needs seeds");
     let table: Vec<Vec4> = points.iter().map(|p| p.extend(1.0)).collect();
-    let seeds = PointSeeds {
-        buffer: ctx
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("points"),
-                contents: bytemuck::cast_slice(&table),
-                usage: wgpu::BufferUsages::STORAGE,
-            }),
-        homes: None,
-        count: points.len() as u32,
-    };
+    let seeds = point_seeds(&ctx, &table);
     let mut enc = ctx.encoder("lines");
     let field = d3
         .encode_points(
@@ -227,17 +232,7 @@ fn line_passes_need_a_band_and_sub_voxel_seeds() {
     let d3 = Distance3d::new(&ctx.device).unwrap();
     let size = [8u32, 8, 8];
     let table = [Vec4::new(3.0, 4.0, 2.0, 1.0)];
-    let seeds = PointSeeds {
-        buffer: ctx
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("points"),
-                contents: bytemuck::cast_slice(&table),
-                usage: wgpu::BufferUsages::STORAGE,
-            }),
-        homes: None,
-        count: 1,
-    };
+    let seeds = point_seeds(&ctx, &table);
     let no_band = Options3d {
         band: None,
         ..options(Method::Lines, 1.0)

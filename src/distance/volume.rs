@@ -722,7 +722,8 @@ impl Distance3d {
         })
     }
 
-    /// Distance field of sub-voxel seeds (JFA; the exact transform takes integer seeds only).
+    /// Distance field of sub-voxel seeds (JFA or the line passes; the exact transform takes
+    /// integer seeds only).
     /// Signed when `inside` is given: negative where its value ≥ `options.inside`'s threshold.
     pub fn encode_points(
         &self,
