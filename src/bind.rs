@@ -306,14 +306,14 @@ fn check(slot: &Slot, res: &Resource<'_>, device: &wgpu::Device) -> Result<(), S
                 .size
                 .map(|s| s.get())
                 .unwrap_or(b.buffer.size().saturating_sub(b.offset));
-            if let Some(min) = min_binding_size {
-                if size < min.get() {
-                    return Err(format!(
-                        "{size} bytes bound, the shader's `{}` needs at least {}",
-                        slot.wgsl,
-                        min.get()
-                    ));
-                }
+            if let Some(min) = min_binding_size
+                && size < min.get()
+            {
+                return Err(format!(
+                    "{size} bytes bound, the shader's `{}` needs at least {}",
+                    slot.wgsl,
+                    min.get()
+                ));
             }
             Ok(())
         }

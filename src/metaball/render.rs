@@ -129,11 +129,9 @@ impl RaymarchSettings {
                 what: format!("safety must be in (0, 1], got {}", self.safety),
             });
         }
-        if !(self.light_dir.is_finite() && self.light_dir.length() > 0.0)
-            || !self.base_colour.is_finite()
-            || !self.rim_colour.is_finite()
-            || !self.ambient.is_finite()
-        {
+        let finite =
+            self.base_colour.is_finite() && self.rim_colour.is_finite() && self.ambient.is_finite();
+        if !(finite && self.light_dir.is_finite() && self.light_dir.length() > 0.0) {
             return Err(Error::Invalid {
                 stage,
                 what: "light direction (non-zero) and colours must be finite".into(),
@@ -932,9 +930,7 @@ impl Cubes {
         view_proj: Mat4,
     ) -> Result<(), Error> {
         let stage = voxel_cubes::STAGE;
-        if !(edge.is_finite() && edge > 0.0)
-            || !local_to_world.is_finite()
-            || !view_proj.is_finite()
+        if !(edge.is_finite() && edge > 0.0 && local_to_world.is_finite() && view_proj.is_finite())
         {
             return Err(Error::Invalid {
                 stage,

@@ -615,8 +615,8 @@ impl Reflection {
             writeln!(s).unwrap();
             writeln!(
                 s,
-                "    {:<5} {:<7} {:<16} {:<15} {:<40} {}",
-                "group", "binding", "name", "kind", "type", "access"
+                "    {:<5} {:<7} {:<16} {:<15} {:<40} access",
+                "group", "binding", "name", "kind", "type"
             )
             .unwrap();
             for u in &ep.uses {
