@@ -376,17 +376,83 @@ pub fn run(
         let rgba = metaball_scene(ctx, w, h, 0.0, what)?;
         save(name, &rgba, w, h, &mut written)?;
     }
-    progress("metaball: animation, 6 frames");
-    for frame in 0..6 {
-        let t = frame as f32 / 6.0 * 2.0;
-        let rgba = metaball_scene(ctx, w / 2, h / 2, t, MetaballView::Surface(Output::Shaded))?;
-        save(
-            &format!("metaball_anim_{frame}.png"),
-            &rgba,
-            w / 2,
-            h / 2,
-            &mut written,
-        )?;
+    // One period of the animation (0.5 Hz: 2 s) as a looping GIF, and every other frame as a
+    // lossless PNG still.
+    const FRAMES: u32 = 12;
+    const PERIOD_S: f32 = 2.0;
+    progress("metaball: animation, 12 frames");
+    let (aw, ah) = (w / 2, h / 2);
+    let mut frames = Vec::new();
+    for frame in 0..FRAMES {
+        let t = frame as f32 / FRAMES as f32 * PERIOD_S;
+        let rgba = metaball_scene(ctx, aw, ah, t, MetaballView::Surface(Output::Shaded))?;
+        if frame % 2 == 0 {
+            save(
+                &format!("metaball_anim_{}.png", frame / 2),
+                &rgba,
+                aw,
+                ah,
+                &mut written,
+            )?;
+        }
+        frames.push(rgba);
     }
+    let path = out_dir.join("metaball_anim.gif");
+    save_gif(&path, &frames, aw, ah, PERIOD_S * 1000.0 / FRAMES as f32)?;
+    written.push(path);
     Ok(written)
+}
+
+/// A looping GIF of RGBA frames, `frame_ms` each.
+fn save_gif(path: &Path, frames: &[Vec<u8>], w: u32, h: u32, frame_ms: f32) -> Result<(), Error> {
+    use image::codecs::gif::{GifEncoder, Repeat};
+    let err = |e: &dyn std::fmt::Display| Error::Invalid {
+        stage: "gallery",
+        what: format!("{}: {e}", path.display()),
+    };
+    let file = std::fs::File::create(path).map_err(|e| err(&e))?;
+    // Speed 10 of 1–30: NeuQuant palettes good enough for a preview, in a fraction of speed 1's time.
+    let mut gif = GifEncoder::new_with_speed(std::io::BufWriter::new(file), 10);
+    gif.set_repeat(Repeat::Infinite).map_err(|e| err(&e))?;
+    let delay = image::Delay::from_numer_denom_ms(frame_ms.round() as u32, 1);
+    for rgba in frames {
+        let img = image::RgbaImage::from_raw(w, h, rgba.clone())
+            .ok_or_else(|| err(&"frame size does not match its pixels"))?;
+        gif.encode_frame(image::Frame::from_parts(img, 0, 0, delay))
+            .map_err(|e| err(&e))?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use image::AnimationDecoder;
+
+    #[test]
+    fn gif_keeps_every_frame_its_delay_and_colours() {
+        let (w, h) = (6, 4);
+        let colours = [[200u8, 40, 30, 255], [20, 30, 40, 255], [90, 160, 220, 255]];
+        let frames: Vec<Vec<u8>> = colours.iter().map(|c| c.repeat(w * h)).collect();
+        let path = std::env::temp_dir().join(format!("fieldkit_gif_{}.gif", std::process::id()));
+        save_gif(&path, &frames, w as u32, h as u32, 250.0).unwrap();
+        let file = std::io::BufReader::new(std::fs::File::open(&path).unwrap());
+        let decoded = image::codecs::gif::GifDecoder::new(file)
+            .unwrap()
+            .into_frames()
+            .collect_frames()
+            .unwrap();
+        std::fs::remove_file(&path).ok();
+        assert_eq!(decoded.len(), colours.len());
+        for (frame, colour) in decoded.iter().zip(colours) {
+            assert_eq!(frame.delay().numer_denom_ms(), (250, 1));
+            assert_eq!(frame.buffer().dimensions(), (w as u32, h as u32));
+            // The palette is quantised (NeuQuant); a flat frame comes back within a few levels.
+            for px in frame.buffer().pixels() {
+                for (got, want) in px.0.iter().zip(colour) {
+                    assert!(got.abs_diff(want) <= 4, "{:?} for {colour:?}", px.0);
+                }
+            }
+        }
+    }
 }

@@ -154,6 +154,13 @@ fn line_passes_are_exact_for_seeds_at_voxel_centres() {
         let got = (points[key_index(nearest[i])] - voxel_of(i, size)).length_squared();
         // Integer coordinates: squared distances are exact in f32.
         assert_eq!(got as f64, e2, "voxel {i}");
+        // The last line pass resolves the distance itself: its square root, to f32 rounding.
+        let d = distance[i] as f64;
+        assert!(
+            (d - e2.sqrt()).abs() <= 1e-6 * e2.sqrt(),
+            "voxel {i}: distance {d}, exact {}",
+            e2.sqrt()
+        );
     }
     assert!(within > 1000, "only {within} voxels in the band");
 }
@@ -243,8 +250,7 @@ fn line_passes_need_a_band_and_sub_voxel_seeds() {
         .unwrap_err();
     assert!(e.to_string().contains("needs a band"), "{e}");
     let mask = mask_3d([8, 8, 8], &[[1, 2, 3]]);
-    let volume =
-        fieldkit::distance::volume::upload_volume(&ctx, &to_bytes(&mask), size).unwrap();
+    let volume = fieldkit::distance::volume::upload_volume(&ctx, &to_bytes(&mask), size).unwrap();
     let e = d3
         .encode(&ctx.device, &mut enc, &volume, &options(Method::Lines, 4.0))
         .unwrap_err();

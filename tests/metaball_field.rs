@@ -197,7 +197,10 @@ fn sdf_of_one_blob_is_its_sphere() {
         };
         let (max_err, rms) = one_blob_error(&settings);
         println!("one blob, {method:?}: max SDF error {max_err:.3} cells, RMS {rms:.3}");
-        assert!(max_err < 0.7 && rms < rms_bound, "{method:?}: max {max_err} rms {rms}");
+        assert!(
+            max_err < 0.7 && rms < rms_bound,
+            "{method:?}: max {max_err} rms {rms}"
+        );
     }
 }
 

@@ -5,12 +5,12 @@
 mod common;
 
 use common::*;
+use fieldkit::distance::Variant;
+use fieldkit::distance::volume::Method;
 use fieldkit::gallery::{MetaballView, metaball_scene};
 use fieldkit::gpu::{Context, read_buffer, read_texture};
 use fieldkit::harness::{Summary, context};
 use fieldkit::metaball::render::Output;
-use fieldkit::distance::Variant;
-use fieldkit::distance::volume::Method;
 use fieldkit::metaball::{Metaballs, Settings, SurfaceSeeds};
 use glam::Vec4;
 

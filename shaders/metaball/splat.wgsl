@@ -40,16 +40,29 @@ fn splat(@builtin(global_invocation_id) id: vec3<u32>) {
     let lo = vec3<i32>(max(ceil(g - reach), vec3<f32>(0.0)));
     let hi = vec3<i32>(min(floor(g + reach), vec3<f32>(params.size) - 1.0));
     let inv_r2 = 1.0 / (r * r);
+    // Only voxels inside the support sphere add anything, about half of its box: each row
+    // visits the sphere's chord, widened by a voxel on each side, and rows that miss the
+    // sphere are skipped. The widening covers rounding, so no voxel with a nonzero
+    // contribution is left out; the weights are computed as for the whole box.
     for (var z = lo.z; z <= hi.z; z++) {
+        let pz = (f32(z) - g.z) * params.cell;
         for (var y = lo.y; y <= hi.y; y++) {
-            for (var x = lo.x; x <= hi.x; x++) {
+            let py = (f32(y) - g.y) * params.cell;
+            let chord2 = r * r - pz * pz - py * py;
+            if chord2 <= 0.0 {
+                continue;
+            }
+            let half = sqrt(chord2) / params.cell + 1.0;
+            let x0 = max(lo.x, i32(ceil(g.x - half)));
+            let x1 = min(hi.x, i32(floor(g.x + half)));
+            let row = (u32(z) * params.size.y + u32(y)) * params.size.x;
+            for (var x = x0; x <= x1; x++) {
                 let p = (vec3<f32>(f32(x), f32(y), f32(z)) - g) * params.cell;
                 let q = 1.0 - dot(p, p) * inv_r2;
                 if q > 0.0 {
                     let w = u32(round(q * q * q * params.fixed_scale));
                     if w > 0u {
-                        let i = (u32(z) * params.size.y + u32(y)) * params.size.x + u32(x);
-                        atomicAdd(&density[i], w);
+                        atomicAdd(&density[row + u32(x)], w);
                     }
                 }
             }

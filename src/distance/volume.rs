@@ -295,6 +295,7 @@ pub struct Distance3d {
     lines_x: ComputePipeline<point_lines::lines_x::Entry>,
     lines_y: ComputePipeline<point_lines::lines_y::Entry>,
     lines_z: ComputePipeline<point_lines::lines_z::Entry>,
+    lines_z_signed: ComputePipeline<point_lines::lines_z_signed::Entry>,
     rows: ComputePipeline<edt_rows::rows::Entry>,
     rows_2d: ComputePipeline<edt_rows::rows_2d::Entry>,
     /// Column pass per band count (3D packing, then 2D), made on first use.
@@ -523,7 +524,7 @@ fn upload_points_inner(
     homes: Option<&[[u32; 3]]>,
 ) -> Result<PointSeeds, Error> {
     check_size_3d(&ctx.device, grid.size)?;
-    if !(grid.voxel_size.is_finite() && grid.voxel_size > 0.0) || !grid.origin.is_finite() {
+    if !(grid.voxel_size.is_finite() && grid.voxel_size > 0.0 && grid.origin.is_finite()) {
         return Err(Error::Invalid {
             stage: STAGE,
             what: format!(
@@ -635,6 +636,7 @@ impl Distance3d {
             lines_x: ComputePipeline::new(device)?,
             lines_y: ComputePipeline::new(device)?,
             lines_z: ComputePipeline::new(device)?,
+            lines_z_signed: ComputePipeline::new(device)?,
             rows: ComputePipeline::new(device)?,
             rows_2d: ComputePipeline::new(device)?,
             columns: Default::default(),
@@ -739,7 +741,7 @@ impl Distance3d {
         options.check_points()?;
         if points.count == 0
             || points.count > MAX_POINTS
-            || (points.buffer.size() as u64) < points.count as u64 * 16
+            || points.buffer.size() < points.count as u64 * 16
         {
             return Err(Error::Size {
                 stage: STAGE,
@@ -838,6 +840,24 @@ impl Distance3d {
         inside: Option<&wgpu::Texture>,
         options: &Options3d,
     ) -> Result<Field3d, Error> {
+        self.encode_keyed_points_profiled(
+            device, encoder, keys, points, size, inside, options, None,
+        )
+    }
+
+    /// [`Self::encode_keyed_points`] with each pass timed by `profiler`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode_keyed_points_profiled(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        keys: wgpu::Buffer,
+        points: &wgpu::Buffer,
+        size: [u32; 3],
+        inside: Option<&wgpu::Texture>,
+        options: &Options3d,
+        mut profiler: Option<&mut Profiler>,
+    ) -> Result<Field3d, Error> {
         options.check()?;
         check_size_3d(device, size)?;
         options.check_points()?;
@@ -860,14 +880,23 @@ impl Distance3d {
                 });
             }
         }
-        let prof = &mut None;
+        let prof = &mut profiler;
         let nearest = match (options.method, options.band) {
             (Method::Jfa(variant), _) => {
                 let steps = options.steps(variant, size.into_iter().max().unwrap());
                 self.encode_flood_inner(device, encoder, keys, size, &steps, Some(points), prof)?
             }
+            // The line passes resolve in their last pass.
             (Method::Lines, Some(band)) => {
-                self.encode_lines(device, encoder, keys, points, size, band, prof)?
+                let (nearest, distance) = self.encode_lines(
+                    device, encoder, keys, points, size, inside, options, band, prof,
+                )?;
+                return Ok(Field3d {
+                    size,
+                    nearest,
+                    nearest_outside: None,
+                    distance,
+                });
             }
             // `check_points` refuses the rest.
             _ => unreachable!("checked by Options3d::check_points"),
@@ -988,7 +1017,8 @@ impl Distance3d {
     }
 
     /// The line passes over seed keys (`point_lines.wgsl`): x from the keys and their points,
-    /// then y and z over carried candidates; returns a new buffer of the nearest keys.
+    /// then y and z over carried candidates. The z pass also resolves: returns the nearest keys
+    /// and the distance texture, signed when `inside` is given.
     #[allow(clippy::too_many_arguments)]
     fn encode_lines(
         &self,
@@ -997,9 +1027,11 @@ impl Distance3d {
         keys: wgpu::Buffer,
         points: &wgpu::Buffer,
         size: [u32; 3],
+        inside: Option<&wgpu::Texture>,
+        options: &Options3d,
         band: f32,
         prof: Prof,
-    ) -> Result<wgpu::Buffer, Error> {
+    ) -> Result<(wgpu::Buffer, wgpu::Texture), Error> {
         // Each voxel carries an 8-byte candidate between passes.
         check_bytes(&device.limits(), voxels(size) * 8)?;
         let candidates = |label| {
@@ -1010,7 +1042,10 @@ impl Distance3d {
                 mapped_at_creation: false,
             })
         };
-        let (a, b) = (candidates("line candidates x"), candidates("line candidates y"));
+        let (a, b) = (
+            candidates("line candidates x"),
+            candidates("line candidates y"),
+        );
         // A point within `band` of a voxel centre lies within √3/2 of its own voxel's centre.
         let reach = (band + 0.8660254).floor().min(u32::MAX as f32) as u32;
         let params = uniform(
@@ -1019,6 +1054,9 @@ impl Distance3d {
             &point_lines::LineParams {
                 size: size.into(),
                 reach,
+                voxel_size: options.voxel_size,
+                band: band * options.voxel_size,
+                threshold: options.inside.threshold(),
             },
         );
         let bound = self.lines_x.bind(
@@ -1043,20 +1081,59 @@ impl Distance3d {
         let groups = ComputePipeline::<point_lines::lines_y::Entry>::groups_for(size);
         pass(encoder, &self.lines_y, &bound, groups, "lines y", prof);
         let nearest = field_buffer(device, "nearest seed", size);
-        let bound = self.lines_z.bind(
-            device,
-            &point_lines::lines_z::Resources {
-                params: (&params).into(),
-                keys: (&keys).into(),
-                src: (&b).into(),
-                nearest: (&nearest).into(),
-            },
-        )?;
+        let distance = distance_texture(device, size, wgpu::TextureDimension::D3);
+        let dv = view(&distance);
         let groups = ComputePipeline::<point_lines::lines_z::Entry>::groups_for(size);
-        pass(encoder, &self.lines_z, &bound, groups, "lines z", prof);
-        Ok(nearest)
+        match inside {
+            None => {
+                let bound = self.lines_z.bind(
+                    device,
+                    &point_lines::lines_z::Resources {
+                        params: (&params).into(),
+                        keys: (&keys).into(),
+                        points: points.into(),
+                        src: (&b).into(),
+                        nearest: (&nearest).into(),
+                        distance: (&dv).into(),
+                    },
+                )?;
+                pass(
+                    encoder,
+                    &self.lines_z,
+                    &bound,
+                    groups,
+                    "lines z + resolve",
+                    prof,
+                );
+            }
+            Some(v) => {
+                let vv = view(v);
+                let bound = self.lines_z_signed.bind(
+                    device,
+                    &point_lines::lines_z_signed::Resources {
+                        params: (&params).into(),
+                        keys: (&keys).into(),
+                        points: points.into(),
+                        src: (&b).into(),
+                        nearest: (&nearest).into(),
+                        volume: (&vv).into(),
+                        distance: (&dv).into(),
+                    },
+                )?;
+                pass(
+                    encoder,
+                    &self.lines_z_signed,
+                    &bound,
+                    groups,
+                    "lines z + resolve",
+                    prof,
+                );
+            }
+        }
+        Ok((nearest, distance))
     }
 
+    #[allow(clippy::too_many_arguments)]
     fn encode_flood_inner(
         &self,
         device: &wgpu::Device,

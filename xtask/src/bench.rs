@@ -95,7 +95,7 @@ fn pass_bytes(name: &str, cells: u64, dims: u32) -> f64 {
 }
 
 /// Time `reps` runs of `record` (after `warmup`), each recording its passes into a fresh encoder.
-fn time_runs(
+pub(crate) fn time_runs(
     ctx: &Context,
     warmup: usize,
     reps: usize,

@@ -292,6 +292,19 @@ fn bench(
                 let m =
                     scene.frames(&Source::Sdf(&field), RaymarchSettings::default().max_steps)?;
                 push(name, label.clone(), build_ms, m);
+                // Where the build's time goes: each pass on its own timestamps (the passes'
+                // sum leaves out the gaps between them, which the build time above includes).
+                let (_, _, _, passes) = crate::bench::time_runs(&ctx, warmup, reps, |enc, p| {
+                    balls
+                        .encode_profiled(&ctx.device, enc, &inst, &grid, edge, &s, Some(p))
+                        .expect("the same build ran above");
+                })?;
+                let split = passes
+                    .iter()
+                    .map(|(n, ms)| format!("{n} {ms:.3}"))
+                    .collect::<Vec<_>>()
+                    .join(", ");
+                bar.suspend(|| println!("|   | per pass (ms): {split} |"));
             }
         }
         for (name, method) in [
