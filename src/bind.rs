@@ -353,9 +353,10 @@ fn check(slot: &Slot, res: &Resource<'_>, device: &wgpu::Device) -> Result<(), S
                     wgpu::TextureSampleType::Float { filterable: true },
                     Some(wgpu::TextureSampleType::Float { filterable }),
                 ) => filterable,
+                // Depth formats may be read as unfilterable float (textureLoad).
                 (
                     wgpu::TextureSampleType::Float { filterable: false },
-                    Some(wgpu::TextureSampleType::Float { .. }),
+                    Some(wgpu::TextureSampleType::Float { .. } | wgpu::TextureSampleType::Depth),
                 ) => true,
                 (want, Some(h)) => *want == h,
                 (_, None) => false,

@@ -400,7 +400,120 @@ pub fn run(
     let path = out_dir.join("metaball_anim.gif");
     save_gif(&path, &frames, aw, ah, PERIOD_S * 1000.0 / FRAMES as f32)?;
     written.push(path);
+    progress("volume: an fBm cloud from outside and from inside");
+    for (name, eye, target) in [
+        (
+            "volume_cloud_outside.png",
+            glam::Vec3::new(0.9, 0.45, 1.4),
+            glam::Vec3::ZERO,
+        ),
+        (
+            "volume_cloud_inside.png",
+            glam::Vec3::new(0.06, 0.04, 0.1),
+            glam::Vec3::new(-0.6, 0.15, -1.0),
+        ),
+    ] {
+        let rgba = cloud_scene(ctx, w, h, eye, target)?;
+        save(name, &rgba, w, h, &mut written)?;
+    }
     Ok(written)
+}
+
+/// A 96³ fBm cloud under a sky-blue background, lit through the light volume, seen from `eye`.
+pub fn cloud_scene(
+    ctx: &Context,
+    w: u32,
+    h: u32,
+    eye: glam::Vec3,
+    target: glam::Vec3,
+) -> Result<Vec<u8>, Error> {
+    use crate::metaball::render::View;
+    use crate::volume::{MarchSettings, TransferFunction, Volume, VolumeRenderer, fbm_cloud};
+    let dims = [96; 3];
+    let volume = Volume::upload(
+        ctx,
+        &fbm_cloud(dims, 7),
+        dims,
+        wgpu::TextureFormat::R8Unorm,
+        glam::Vec3::splat(1.0 / 96.0),
+        glam::Vec3::splat(-0.5),
+    )?;
+    let renderer = VolumeRenderer::new(&ctx.device, wgpu::TextureFormat::Rgba8Unorm)?;
+    let tf = TransferFunction::cloud();
+    let settings = MarchSettings {
+        step: 1.0 / 96.0,
+        ..MarchSettings::default()
+    };
+    let proj = glam::camera::rh::proj::directx::perspective(0.9, w as f32 / h as f32, 0.01, 50.0);
+    let view = View {
+        view_proj: proj * glam::camera::rh::view::look_at_mat4(eye, target, glam::Vec3::Y),
+        viewport: [w, h],
+        reversed_z: false,
+    };
+    let colour = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("gallery cloud"),
+        size: wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba8Unorm,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    });
+    let cv = colour.create_view(&Default::default());
+    let mut enc = ctx.encoder("gallery cloud");
+    enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some("sky"),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: &cv,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Clear(wgpu::Color {
+                    r: 0.32,
+                    g: 0.52,
+                    b: 0.82,
+                    a: 1.0,
+                }),
+                store: wgpu::StoreOp::Store,
+            },
+        })],
+        depth_stencil_attachment: None,
+        timestamp_writes: None,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    });
+    let bricks = renderer.encode_bricks(&ctx.device, &mut enc, &volume)?;
+    let light = renderer.encode_light(
+        &ctx.device,
+        &mut enc,
+        &volume,
+        &bricks,
+        &tf,
+        glam::Mat4::IDENTITY,
+        &settings,
+    )?;
+    if let Some(m) = renderer.encode_march(
+        &ctx.device,
+        &mut enc,
+        &volume,
+        &bricks,
+        Some(&light),
+        &tf,
+        glam::Mat4::IDENTITY,
+        &view,
+        None,
+        &settings,
+    )? {
+        renderer.encode_composite(&ctx.device, &mut enc, &cv, &m)?;
+    }
+    ctx.submit_and_wait("gallery cloud", enc)?;
+    let px: Vec<[u8; 4]> = read_texture(ctx, &colour)?;
+    Ok(px.concat())
 }
 
 /// A looping GIF of RGBA frames, `frame_ms` each.

@@ -100,10 +100,12 @@ impl Context {
             }
         };
         let info = adapter.get_info();
-        // Optional: timing, and wireframe for the debug cubes. Used where the adapter has them.
+        // Optional: timing, wireframe for the debug cubes, trilinear R32Float volumes. Used where
+        // the adapter has them.
         let wanted = wgpu::Features::TIMESTAMP_QUERY
             | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS
-            | wgpu::Features::POLYGON_MODE_LINE;
+            | wgpu::Features::POLYGON_MODE_LINE
+            | wgpu::Features::FLOAT32_FILTERABLE;
         let (device, queue) = adapter
             .request_device(&wgpu::DeviceDescriptor {
                 label: Some("fieldkit"),

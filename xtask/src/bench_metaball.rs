@@ -20,14 +20,14 @@ use fieldkit::metaball::render::{Direct, Output, RaymarchSettings, Raymarcher, T
 use fieldkit::metaball::{BlobBins, MetaballField, Metaballs, Settings, animate, cpu, packed_grid};
 use glam::{DVec3, Mat4, Vec3, Vec4};
 
-struct Stamps {
+pub(crate) struct Stamps {
     set: wgpu::QuerySet,
     buf: wgpu::Buffer,
     period: f64,
 }
 
 impl Stamps {
-    fn new(ctx: &Context) -> Result<Self, String> {
+    pub(crate) fn new(ctx: &Context) -> Result<Self, String> {
         let need =
             wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
         if !ctx.device.features().contains(need) {
@@ -53,7 +53,7 @@ impl Stamps {
     }
 
     /// Run `record` between two timestamps; returns milliseconds.
-    fn time(
+    pub(crate) fn time(
         &self,
         ctx: &Context,
         record: impl FnOnce(&mut wgpu::CommandEncoder) -> Result<(), String>,
@@ -71,7 +71,7 @@ impl Stamps {
     }
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
+pub(crate) fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(|a, b| a.total_cmp(b));
     v[v.len() / 2]
 }

@@ -5,6 +5,7 @@ mod toolchain;
 
 mod bench;
 mod bench_metaball;
+mod bench_volume;
 mod lint;
 
 use std::path::{Path, PathBuf};
@@ -76,6 +77,7 @@ enum Command {
 enum Technique {
     Distance,
     Metaball,
+    Volume,
 }
 
 fn crate_root() -> PathBuf {
@@ -128,6 +130,7 @@ fn main() -> ExitCode {
             match technique {
                 Technique::Distance => bench::run_distance(&args),
                 Technique::Metaball => bench_metaball::run(&args),
+                Technique::Volume => bench_volume::run(&args),
             }
         }
     }

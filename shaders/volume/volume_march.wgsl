@@ -1,0 +1,323 @@
+// Volume raymarch of a 3D density texture: emission-absorption with single scattering toward one
+// light, maximum-intensity projection, or the first-hit iso-surface. A compute pass over the
+// volume's screen rectangle, one thread per pixel; `volume/volume_composite` then blends the
+// premultiplied result over the caller's colour target.
+//
+// Rays start on the near plane, so a camera inside the box marches from the near plane and one
+// outside from the box entry: max(box entry, near plane), continuous across the boundary (the
+// write-up's back-face-culling trouble does not arise: there is no proxy geometry). They stop at
+// the box exit or at the caller's opaque depth, whichever is nearer. Ray parameters are world
+// lengths: the direction is carried into local space unnormalised, so any invertible affine
+// local-to-world works, scale and shear included.
+//
+// Segments: the ray is cut at a lattice (k + jitter + ½)·step measured from the near plane, so it
+// does not move with the box; each segment clipped to [entry, exit] is sampled at its own
+// midpoint, and its opacity is corrected for its own length: α′ = 1 − (1 − α)^(len / Δ₀). A
+// constant density then gives exp(−σ·chord) whatever the step, and the midpoint rule is exact on
+// a density that is linear along the segment. There is no separate step cap: the loop ends at the
+// exit, with a bound from the box diagonal only as a guard.
+//
+// Empty-space skipping: in a brick whose largest density the transfer function maps to zero
+// opacity (`volume/bricks`), the march jumps to the segment that holds the brick's exit. The
+// skipped segments' samples all lie in that brick, so each would have added nothing.
+
+struct MarchParams {
+    inv_view_proj: mat4x4<f32>,
+    world_to_local: mat4x4<f32>,
+    // Local-space box of the volume.
+    box_min: vec3<f32>,
+    // Segment length Δs (world units).
+    step: f32,
+    box_max: vec3<f32>,
+    // Δ₀: the step the transfer function's opacities are given for (world units).
+    reference_step: f32,
+    dims: vec3<u32>,
+    // Voxels per brick side.
+    brick: u32,
+    bricks: vec3<u32>,
+    // 0 emission-absorption, 1 maximum intensity, 2 first-hit iso-surface.
+    mode: u32,
+    // Towards the light, in local space, scaled so a unit of its parameter is one world unit.
+    light_local: vec3<f32>,
+    // 0 no shadowing, 1 shadow rays, 2 the precomputed light volume.
+    shadow: u32,
+    // Lit colour = transfer colour × (ambient + light_colour × transmittance toward the light).
+    light_colour: vec3<f32>,
+    ambient: f32,
+    viewport: vec2<f32>,
+    rect_origin: vec2<u32>,
+    rect_size: vec2<u32>,
+    // NDC depth of the near and far planes (0 and 1; 1 and 0 for reversed Z).
+    near_z: f32,
+    far_z: f32,
+    // Density at the first and last transfer-function entry.
+    tf_range: vec2<f32>,
+    tf_count: u32,
+    // 1: skip bricks.
+    skip: u32,
+    // Densities at or below this get zero opacity from the transfer function.
+    skip_below: f32,
+    iso: f32,
+    // Rays stop once the transmittance falls below this.
+    min_transmittance: f32,
+    // 1: jitter the lattice per pixel (interleaved gradient noise).
+    jitter: u32,
+    frame: u32,
+    // Guard on segments per ray: the box diagonal over the step, plus the two partial ends.
+    max_steps: u32,
+    // Shadow-ray segment length (world units) and guard.
+    shadow_step: f32,
+    shadow_max_steps: u32,
+    // 1: stop rays at `scene_depth`.
+    use_depth: u32,
+    // 1: write the number of density samples each ray took in red instead of the colour.
+    count_samples: u32,
+}
+
+@group(0) @binding(0) var<uniform> params: MarchParams;
+@group(0) @binding(1) var density: texture_3d<f32>;
+@group(0) @binding(2) var linear_clamp: sampler;
+// Transfer function: rgb colour, opacity α for a segment of length Δ₀; evenly spaced over
+// `tf_range`, interpolated linearly, clamped at the ends.
+@group(0) @binding(3) var<storage, read> tf: array<vec4<f32>>;
+@group(0) @binding(4) var<storage, read> ranges: array<vec2<f32>>;
+@group(0) @binding(5) var light_in: texture_3d<f32>;
+// The caller's Depth32Float target, read as unfilterable float (WebGPU allows it; a depth
+// texture type would not translate to GLSL).
+@group(0) @binding(6) var scene_depth: texture_2d<f32>;
+@group(0) @binding(7) var colour_out: texture_storage_2d<rgba16float, write>;
+@group(0) @binding(8) var light_out: texture_storage_3d<rgba16float, write>;
+
+const INF: f32 = 3.4e38;
+
+fn transfer(d: f32) -> vec4<f32> {
+    let n = params.tf_count;
+    let x = clamp((d - params.tf_range.x) / (params.tf_range.y - params.tf_range.x), 0.0, 1.0);
+    let f = x * f32(n - 1u);
+    let i = min(u32(f), n - 2u);
+    let w = f - f32(i);
+    return tf[i] * (1.0 - w) + tf[i + 1u] * w;
+}
+
+fn uvw_of(p: vec3<f32>) -> vec3<f32> {
+    return (p - params.box_min) / (params.box_max - params.box_min);
+}
+
+fn density_at(p: vec3<f32>) -> f32 {
+    return textureSampleLevel(density, linear_clamp, uvw_of(p), 0.0).r;
+}
+
+// Opacity of a segment of world length `len` whose transfer-function opacity is `a` (per Δ₀).
+fn corrected(a: f32, len: f32) -> f32 {
+    return 1.0 - pow(max(1.0 - a, 0.0), len / params.reference_step);
+}
+
+fn ray_box(origin: vec3<f32>, dir: vec3<f32>, lo: vec3<f32>, hi: vec3<f32>) -> vec2<f32> {
+    let inv = 1.0 / dir;
+    let a = (lo - origin) * inv;
+    let b = (hi - origin) * inv;
+    let near = min(a, b);
+    let far = max(a, b);
+    return vec2<f32>(max(max(near.x, near.y), near.z), min(min(far.x, far.y), far.z));
+}
+
+// Transmittance from local point `p` to where the ray toward the light leaves the box.
+fn toward_light(p: vec3<f32>) -> f32 {
+    let exit = ray_box(p, params.light_local, params.box_min, params.box_max).y;
+    var t_light = 1.0;
+    let h = params.shadow_step;
+    for (var k = 0u; k < params.shadow_max_steps; k++) {
+        let a = f32(k) * h;
+        if a >= exit || t_light < params.min_transmittance {
+            break;
+        }
+        let b = min(a + h, exit);
+        let alpha = transfer(density_at(p + 0.5 * (a + b) * params.light_local)).a;
+        t_light *= 1.0 - corrected(alpha, b - a);
+    }
+    return t_light;
+}
+
+fn light_at(p: vec3<f32>) -> f32 {
+    switch params.shadow {
+        case 1u: {
+            return toward_light(p);
+        }
+        case 2u: {
+            return textureSampleLevel(light_in, linear_clamp, uvw_of(p), 0.0).r;
+        }
+        default: {
+            return 1.0;
+        }
+    }
+}
+
+// Local exit distance of the ray from the brick holding local point `p`, and the brick's range.
+struct Brick {
+    exit: f32,
+    range: vec2<f32>,
+}
+
+fn brick_at(p: vec3<f32>, o: vec3<f32>, dir: vec3<f32>) -> Brick {
+    let voxel = (params.box_max - params.box_min) / vec3<f32>(params.dims);
+    let b = min(vec3<u32>(max(uvw_of(p), vec3<f32>(0.0)) * vec3<f32>(params.dims)) / params.brick,
+                params.bricks - 1u);
+    let lo = params.box_min + vec3<f32>(b * params.brick) * voxel;
+    let hi = min(lo + f32(params.brick) * voxel, params.box_max);
+    let i = (b.z * params.bricks.y + b.y) * params.bricks.x + b.x;
+    return Brick(ray_box(o, dir, lo, hi).y, ranges[i]);
+}
+
+// Interleaved gradient noise (Jimenez 2014), shifted per frame.
+fn jitter_of(pixel: vec2<f32>) -> f32 {
+    if params.jitter == 0u {
+        return 0.0;
+    }
+    let q = pixel + 5.588238 * f32(params.frame % 64u);
+    return fract(52.9829189 * fract(dot(q, vec2<f32>(0.06711056, 0.00583715))));
+}
+
+fn unproject(ndc: vec3<f32>) -> vec3<f32> {
+    let h = params.inv_view_proj * vec4<f32>(ndc, 1.0);
+    return h.xyz / h.w;
+}
+
+// Root of density − iso between ray parameters a (below) and b (at or above): bisection.
+fn refine(o: vec3<f32>, dir: vec3<f32>, a_in: f32, b_in: f32) -> f32 {
+    var a = a_in;
+    var b = b_in;
+    for (var k = 0u; k < 8u; k++) {
+        let m = 0.5 * (a + b);
+        if density_at(o + m * dir) >= params.iso {
+            b = m;
+        } else {
+            a = m;
+        }
+    }
+    return 0.5 * (a + b);
+}
+
+fn iso_normal(p: vec3<f32>) -> vec3<f32> {
+    let h = 0.5 * (params.box_max - params.box_min) / vec3<f32>(params.dims);
+    let g = vec3<f32>(
+        density_at(p + vec3<f32>(h.x, 0.0, 0.0)) - density_at(p - vec3<f32>(h.x, 0.0, 0.0)),
+        density_at(p + vec3<f32>(0.0, h.y, 0.0)) - density_at(p - vec3<f32>(0.0, h.y, 0.0)),
+        density_at(p + vec3<f32>(0.0, 0.0, h.z)) - density_at(p - vec3<f32>(0.0, 0.0, h.z)),
+    ) / h;
+    let len = length(g);
+    return select(vec3<f32>(0.0, 0.0, 1.0), -g / len, len > 1e-12);
+}
+
+fn march_pixel(pixel: vec2<f32>) -> vec4<f32> {
+    let ndc = vec2<f32>(pixel.x / params.viewport.x * 2.0 - 1.0, 1.0 - pixel.y / params.viewport.y * 2.0);
+    let near_w = unproject(vec3<f32>(ndc, params.near_z));
+    let far_w = unproject(vec3<f32>(ndc, params.far_z));
+    let dir_w = normalize(far_w - near_w);
+    let o = (params.world_to_local * vec4<f32>(near_w, 1.0)).xyz;
+    let dir = (params.world_to_local * vec4<f32>(dir_w, 0.0)).xyz;
+    // The scene's opaque depth ends the ray; the far plane (cleared depth) does not.
+    var t_scene = INF;
+    if params.use_depth != 0u {
+        let depth = textureLoad(scene_depth, vec2<i32>(pixel), 0).r;
+        if depth != params.far_z {
+            t_scene = dot(unproject(vec3<f32>(ndc, depth)) - near_w, dir_w);
+        }
+    }
+    let hit = ray_box(o, dir, params.box_min, params.box_max);
+    let t0 = max(hit.x, 0.0);
+    let t1 = min(min(hit.y, length(far_w - near_w)), t_scene);
+    if !(t0 < t1) {
+        return vec4<f32>(0.0);
+    }
+    let h = params.step;
+    let j = jitter_of(pixel);
+    var k = floor(t0 / h - j);
+    var colour = vec3<f32>(0.0);
+    var transmittance = 1.0;
+    var peak = -INF;
+    var below = t0;
+    // The brick is looked up once per brick the ray enters, not per sample.
+    var brick_end = -INF;
+    var samples = 0u;
+    for (var n = 0u; n < params.max_steps; n++) {
+        let a = max((k + j) * h, t0);
+        if a >= t1 {
+            break;
+        }
+        let b = min((k + j + 1.0) * h, t1);
+        let t = 0.5 * (a + b);
+        let p = o + t * dir;
+        if params.skip != 0u && t >= brick_end {
+            let brick = brick_at(p, o, dir);
+            brick_end = brick.exit;
+            let empty = select(brick.range.y <= params.skip_below, brick.range.y <= peak, params.mode == 1u);
+            let iso_empty = params.mode == 2u && brick.range.y < params.iso;
+            if (empty && params.mode != 2u) || iso_empty {
+                // Continue with the segment holding the brick's exit (never go back).
+                k = max(k + 1.0, floor(brick.exit / h - j));
+                below = min(brick.exit, t1);
+                continue;
+            }
+        }
+        let d = density_at(p);
+        samples += 1u;
+        if params.mode == 1u {
+            peak = max(peak, d);
+        } else if params.mode == 2u {
+            if d >= params.iso {
+                let th = refine(o, dir, below, t);
+                let q = o + th * dir;
+                let n_local = iso_normal(q);
+                let l = normalize(params.light_local);
+                let lit = params.ambient + params.light_colour * max(dot(n_local, l), 0.0) * light_at(q);
+                let c = transfer(params.iso).rgb * lit;
+                return select(vec4<f32>(c, 1.0), vec4<f32>(f32(samples), 0.0, 0.0, 1.0), params.count_samples != 0u);
+            }
+            below = t;
+        } else {
+            let s = transfer(d);
+            let alpha = corrected(s.a, b - a);
+            if alpha > 0.0 {
+                let lit = params.ambient + params.light_colour * light_at(p);
+                colour += transmittance * alpha * s.rgb * lit;
+                transmittance *= 1.0 - alpha;
+                if transmittance < params.min_transmittance {
+                    break;
+                }
+            }
+        }
+        k += 1.0;
+    }
+    if params.count_samples != 0u {
+        return vec4<f32>(f32(samples), 0.0, 0.0, 1.0);
+    }
+    if params.mode == 1u {
+        if peak == -INF {
+            return vec4<f32>(0.0);
+        }
+        let s = transfer(peak);
+        return vec4<f32>(s.rgb * s.a, s.a);
+    }
+    return vec4<f32>(colour, 1.0 - transmittance);
+}
+
+@compute @workgroup_size(8, 8)
+fn march(@builtin(global_invocation_id) id: vec3<u32>) {
+    if any(id.xy >= params.rect_size) {
+        return;
+    }
+    let xy = params.rect_origin + id.xy;
+    textureStore(colour_out, xy, march_pixel(vec2<f32>(xy) + 0.5));
+}
+
+// The light volume: transmittance toward the light from each of its voxel centres, read back
+// trilinearly by the march instead of a shadow ray per sample.
+@compute @workgroup_size(4, 4, 4)
+fn light_volume(@builtin(global_invocation_id) id: vec3<u32>) {
+    let size = textureDimensions(light_out);
+    if any(id >= size) {
+        return;
+    }
+    let p = params.box_min + (vec3<f32>(id) + 0.5) / vec3<f32>(size) * (params.box_max - params.box_min);
+    textureStore(light_out, id, vec4<f32>(toward_light(p), 0.0, 0.0, 1.0));
+}

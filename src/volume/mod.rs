@@ -1,0 +1,1022 @@
+//! Volume raymarching of a 3D density texture that keeps working with the camera inside
+//! (`shaders/volume/`): emission-absorption with single scattering toward one light (shadow rays
+//! or a precomputed light volume), maximum-intensity projection and the first-hit iso-surface;
+//! empty-space skipping over a min-max brick grid; depth-aware, premultiplied compositing over
+//! the caller's scene.
+//!
+//! ```no_run
+//! # fn f(ctx: &fieldkit::gpu::Context, colour: &wgpu::TextureView) -> Result<(), fieldkit::Error> {
+//! use fieldkit::metaball::render::View;
+//! use fieldkit::volume::{MarchSettings, TransferFunction, Volume, VolumeRenderer, fbm_cloud};
+//! use glam::{Mat4, Vec3};
+//! let dims = [64, 64, 64];
+//! let volume = Volume::upload(ctx, &fbm_cloud(dims, 7), dims, wgpu::TextureFormat::R8Unorm,
+//!     Vec3::splat(1.0 / 64.0), Vec3::splat(-0.5))?;
+//! let renderer = VolumeRenderer::new(&ctx.device, wgpu::TextureFormat::Rgba8Unorm)?;
+//! let tf = TransferFunction::cloud();
+//! let proj = glam::camera::rh::proj::directx::perspective(0.8, 16.0 / 9.0, 0.05, 100.0);
+//! let view = View {
+//!     view_proj: proj * glam::camera::rh::view::look_at_mat4(Vec3::new(0.0, 0.3, 2.0), Vec3::ZERO, Vec3::Y),
+//!     viewport: [1920, 1080],
+//!     reversed_z: false,
+//! };
+//! let mut encoder = ctx.encoder("frame");
+//! let bricks = renderer.encode_bricks(&ctx.device, &mut encoder, &volume)?;
+//! if let Some(marched) = renderer.encode_march(&ctx.device, &mut encoder, &volume, &bricks, None,
+//!     &tf, Mat4::IDENTITY, &view, None, &MarchSettings::default())? {
+//!     renderer.encode_composite(&ctx.device, &mut encoder, colour, &marched)?;
+//! }
+//! ctx.submit_and_wait("frame", encoder)?;
+//! # Ok(()) }
+//! ```
+
+use glam::{Mat4, Vec3};
+
+use crate::bind::{ComputePipeline, RenderPipeline, RenderTargets};
+use crate::error::Error;
+use crate::gpu::{Context, uniform_buffer as uniform};
+use crate::metaball::render::{View, box_visible, screen_rect};
+use crate::shaders::volume::{bricks, volume_composite, volume_march};
+
+const STAGE: &str = volume_march::STAGE;
+
+/// Voxels per side of a skipping brick.
+pub const BRICK: u32 = 8;
+
+/// A density volume: a 3D texture and where its voxels sit in local space.
+pub struct Volume {
+    pub texture: wgpu::Texture,
+    pub dims: [u32; 3],
+    /// Local-space corner of voxel (0, 0, 0); the box runs to `origin + dims × spacing`.
+    pub origin: Vec3,
+    /// Voxel edge per axis (anisotropic spacing allowed).
+    pub spacing: Vec3,
+}
+
+impl Volume {
+    /// Formats the march samples with hardware trilinear filtering.
+    pub const FORMATS: &'static str = "R8Unorm, R16Float, R32Float (with FLOAT32_FILTERABLE)";
+
+    /// Wrap an existing texture (3D, `TEXTURE_BINDING`, one of [`Self::FORMATS`]).
+    pub fn new(
+        device: &wgpu::Device,
+        texture: wgpu::Texture,
+        origin: Vec3,
+        spacing: Vec3,
+    ) -> Result<Self, Error> {
+        check_format(device, texture.format())?;
+        if texture.dimension() != wgpu::TextureDimension::D3 {
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: format!("the density texture is {:?}, not 3D", texture.dimension()),
+            });
+        }
+        if !texture
+            .usage()
+            .contains(wgpu::TextureUsages::TEXTURE_BINDING)
+        {
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: "the density texture needs TEXTURE_BINDING usage".into(),
+            });
+        }
+        if !(origin.is_finite() && spacing.is_finite() && spacing.min_element() > 0.0) {
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: format!(
+                    "origin must be finite and spacing finite and positive, got {origin} and {spacing}"
+                ),
+            });
+        }
+        let dims = [
+            texture.width(),
+            texture.height(),
+            texture.depth_or_array_layers(),
+        ];
+        Ok(Self {
+            texture,
+            dims,
+            origin,
+            spacing,
+        })
+    }
+
+    /// Upload `data` (x fastest, values as the format stores them: 0..1 for R8Unorm) in
+    /// `format`.
+    pub fn upload(
+        ctx: &Context,
+        data: &[f32],
+        dims: [u32; 3],
+        format: wgpu::TextureFormat,
+        spacing: Vec3,
+        origin: Vec3,
+    ) -> Result<Self, Error> {
+        check_format(&ctx.device, format)?;
+        let max = ctx.device.limits().max_texture_dimension_3d;
+        for (axis, &d) in dims.iter().enumerate() {
+            if d == 0 || d > max {
+                return Err(Error::Size {
+                    stage: STAGE,
+                    what: ["volume width", "volume height", "volume depth"][axis],
+                    got: d as u64,
+                    max: max as u64,
+                });
+            }
+        }
+        let count = dims.iter().map(|&d| d as u64).product::<u64>();
+        if data.len() as u64 != count {
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: format!("{} densities for {dims:?} ({count} voxels)", data.len()),
+            });
+        }
+        if let Some(i) = data.iter().position(|v| !v.is_finite()) {
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: format!("density {i} is {}", data[i]),
+            });
+        }
+        let (bytes, texel): (Vec<u8>, u32) = match format {
+            wgpu::TextureFormat::R8Unorm => (
+                data.iter()
+                    .map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
+                    .collect(),
+                1,
+            ),
+            wgpu::TextureFormat::R16Float => (
+                data.iter()
+                    .flat_map(|&v| half::f16::from_f32(v).to_le_bytes())
+                    .collect(),
+                2,
+            ),
+            _ => (bytemuck::cast_slice(data).to_vec(), 4),
+        };
+        let texture = crate::gpu::scoped(&ctx.device, STAGE, || {
+            let t = ctx.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("density volume"),
+                size: wgpu::Extent3d {
+                    width: dims[0],
+                    height: dims[1],
+                    depth_or_array_layers: dims[2],
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D3,
+                format,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                view_formats: &[],
+            });
+            ctx.queue.write_texture(
+                t.as_image_copy(),
+                &bytes,
+                wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(dims[0] * texel),
+                    rows_per_image: Some(dims[1]),
+                },
+                t.size(),
+            );
+            t
+        })?;
+        Self::new(&ctx.device, texture, origin, spacing)
+    }
+
+    /// Local-space box of the volume.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        let size = Vec3::new(
+            self.dims[0] as f32,
+            self.dims[1] as f32,
+            self.dims[2] as f32,
+        );
+        (self.origin, self.origin + size * self.spacing)
+    }
+}
+
+fn check_format(device: &wgpu::Device, format: wgpu::TextureFormat) -> Result<(), Error> {
+    use wgpu::TextureFormat as F;
+    match format {
+        F::R8Unorm | F::R16Float => Ok(()),
+        F::R32Float
+            if device
+                .features()
+                .contains(wgpu::Features::FLOAT32_FILTERABLE) =>
+        {
+            Ok(())
+        }
+        F::R32Float => Err(Error::Invalid {
+            stage: STAGE,
+            what: "R32Float volumes are sampled trilinearly, which needs the device feature \
+                   FLOAT32_FILTERABLE; enable it or upload as R16Float"
+                .into(),
+        }),
+        format => Err(Error::Format {
+            stage: STAGE,
+            format,
+            supported: Volume::FORMATS,
+        }),
+    }
+}
+
+/// Density → colour (rgb) and opacity (α for a segment of length `reference_step`), as evenly
+/// spaced entries over `range`, interpolated linearly and clamped at the ends.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TransferFunction {
+    pub entries: Vec<[f32; 4]>,
+    pub range: [f32; 2],
+}
+
+impl TransferFunction {
+    /// One colour and opacity for every density.
+    pub fn constant(rgb: Vec3, alpha: f32) -> Self {
+        let e = [rgb.x, rgb.y, rgb.z, alpha];
+        Self {
+            entries: vec![e, e],
+            range: [0.0, 1.0],
+        }
+    }
+
+    /// Extinction proportional to density: σ = `sigma` × density per world unit, so
+    /// α(ρ) = 1 − exp(−σ·ρ·Δ₀), sampled at `n` entries over `range`.
+    pub fn extinction(
+        rgb: Vec3,
+        sigma: f32,
+        reference_step: f32,
+        range: [f32; 2],
+        n: usize,
+    ) -> Self {
+        let entries = (0..n)
+            .map(|i| {
+                let rho = range[0] + (range[1] - range[0]) * i as f32 / (n - 1) as f32;
+                [
+                    rgb.x,
+                    rgb.y,
+                    rgb.z,
+                    1.0 - (-sigma * rho * reference_step).exp(),
+                ]
+            })
+            .collect();
+        Self { entries, range }
+    }
+
+    /// A white cloud: clear below 0.1, then denser toward 1.
+    pub fn cloud() -> Self {
+        let entries = (0..64)
+            .map(|i| {
+                let d = i as f32 / 63.0;
+                let a = ((d - 0.1) / 0.9).clamp(0.0, 1.0);
+                let c = 0.75 + 0.25 * d;
+                [c, c, c * 1.02, 0.35 * a]
+            })
+            .collect();
+        Self {
+            entries,
+            range: [0.0, 1.0],
+        }
+    }
+
+    fn check(&self) -> Result<(), Error> {
+        let bad = |what: String| Error::Invalid {
+            stage: STAGE,
+            what: format!("transfer function: {what}"),
+        };
+        if self.entries.len() < 2 {
+            return Err(bad(format!(
+                "{} entries, needs at least 2",
+                self.entries.len()
+            )));
+        }
+        if !(self.range[0].is_finite()
+            && self.range[1].is_finite()
+            && self.range[1] > self.range[0])
+        {
+            return Err(bad(format!(
+                "range {:?} must be finite and increasing",
+                self.range
+            )));
+        }
+        if let Some(e) = self
+            .entries
+            .iter()
+            .find(|e| e.iter().any(|v| !v.is_finite()) || !(0.0..=1.0).contains(&e[3]))
+        {
+            return Err(bad(format!(
+                "entry {e:?}: values must be finite, opacity in [0, 1]"
+            )));
+        }
+        Ok(())
+    }
+
+    /// Densities at or below this map to zero opacity (what a skipped brick must not exceed).
+    pub fn clear_below(&self) -> f32 {
+        match self.entries.iter().position(|e| e[3] > 0.0) {
+            None => f32::INFINITY,
+            Some(0) => f32::NEG_INFINITY,
+            Some(i) => {
+                let n = (self.entries.len() - 1) as f32;
+                self.range[0] + (self.range[1] - self.range[0]) * (i - 1) as f32 / n
+            }
+        }
+    }
+}
+
+/// What a ray accumulates.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Mode {
+    /// Front-to-back emission-absorption: C += T·α·c, T *= 1 − α.
+    EmissionAbsorption,
+    /// The largest density along the ray, through the transfer function.
+    MaximumIntensity,
+    /// The first point where the density reaches `iso`, refined by bisection and lit.
+    IsoSurface { iso: f32 },
+}
+
+/// Shadowing toward the light.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Shadow {
+    /// Unshadowed light.
+    None,
+    /// A shadow ray per sample, segments of `step` world units.
+    Rays { step: f32 },
+    /// A light volume at half the density's resolution, built by [`VolumeRenderer::encode_light`]
+    /// with shadow rays of `step`, read trilinearly.
+    LightVolume { step: f32 },
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MarchSettings {
+    /// Segment length Δs, world units.
+    pub step: f32,
+    /// Δ₀, the segment length the transfer function's opacities are for, world units.
+    pub reference_step: f32,
+    pub mode: Mode,
+    pub shadow: Shadow,
+    /// World direction towards the light.
+    pub light_dir: Vec3,
+    pub light_colour: Vec3,
+    pub ambient: f32,
+    /// Jitter each pixel's lattice (interleaved gradient noise, shifted by `frame`).
+    pub jitter: bool,
+    pub frame: u32,
+    /// Skip bricks the transfer function leaves clear.
+    pub skip: bool,
+    /// Stop rays once the transmittance falls below this (0: never stop early).
+    pub min_transmittance: f32,
+    /// Debug output: the number of density samples each ray took, in red, instead of colour.
+    pub count_samples: bool,
+}
+
+impl Default for MarchSettings {
+    fn default() -> Self {
+        Self {
+            step: 1.0 / 128.0,
+            reference_step: 1.0 / 128.0,
+            mode: Mode::EmissionAbsorption,
+            shadow: Shadow::LightVolume { step: 1.0 / 64.0 },
+            light_dir: Vec3::new(0.4, 1.0, 0.3),
+            light_colour: Vec3::splat(1.2),
+            ambient: 0.35,
+            jitter: true,
+            frame: 0,
+            skip: true,
+            min_transmittance: 1e-3,
+            count_samples: false,
+        }
+    }
+}
+
+impl MarchSettings {
+    fn check(&self) -> Result<(), Error> {
+        let bad = |what: String| Error::Invalid { stage: STAGE, what };
+        let positive = |name: &str, v: f32| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(bad(format!("{name} must be finite and positive, got {v}")))
+            }
+        };
+        positive("step", self.step)?;
+        positive("reference_step", self.reference_step)?;
+        match self.shadow {
+            Shadow::None => {}
+            Shadow::Rays { step } | Shadow::LightVolume { step } => positive("shadow step", step)?,
+        }
+        if let Mode::IsoSurface { iso } = self.mode
+            && !iso.is_finite()
+        {
+            return Err(bad(format!("iso must be finite, got {iso}")));
+        }
+        if !(self.light_dir.is_finite() && self.light_dir.length() > 0.0) {
+            return Err(bad(format!(
+                "light_dir {} must be finite and nonzero",
+                self.light_dir
+            )));
+        }
+        if !(self.light_colour.is_finite() && self.ambient.is_finite()) {
+            return Err(bad("light_colour and ambient must be finite".into()));
+        }
+        if !(0.0..1.0).contains(&self.min_transmittance) {
+            return Err(bad(format!(
+                "min_transmittance must be in [0, 1), got {}",
+                self.min_transmittance
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// The min-max brick grid of one volume ([`VolumeRenderer::encode_bricks`]).
+pub struct Bricks {
+    pub ranges: wgpu::Buffer,
+    pub count: [u32; 3],
+}
+
+/// Transmittance toward the light per voxel of a half-resolution grid.
+pub struct LightVolume {
+    pub texture: wgpu::Texture,
+    light_dir: Vec3,
+    step: f32,
+}
+
+/// A march waiting to be composited: premultiplied colour and coverage over `rect`.
+pub struct VolumeMarched {
+    /// Pixels marched: `[x0, y0, x1, y1)`.
+    pub rect: [u32; 4],
+    pub colour: wgpu::Texture,
+}
+
+pub struct VolumeRenderer {
+    bricks: ComputePipeline<bricks::bricks::Entry>,
+    march: ComputePipeline<volume_march::march::Entry>,
+    light: ComputePipeline<volume_march::light_volume::Entry>,
+    composite: RenderPipeline<volume_composite::fs_main::Entry>,
+    sampler: wgpu::Sampler,
+    no_light: wgpu::Texture,
+    no_depth: wgpu::Texture,
+}
+
+impl VolumeRenderer {
+    /// `colour`: the format of the targets [`Self::encode_composite`] blends into.
+    pub fn new(device: &wgpu::Device, colour: wgpu::TextureFormat) -> Result<Self, Error> {
+        let composite = RenderPipeline::new(
+            device,
+            &RenderTargets {
+                color: &[Some(wgpu::ColorTargetState {
+                    format: colour,
+                    blend: Some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING),
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+                ..Default::default()
+            },
+        )?;
+        let tiny = |label, format, usage| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d {
+                    width: 1,
+                    height: 1,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: if format == wgpu::TextureFormat::Depth32Float {
+                    wgpu::TextureDimension::D2
+                } else {
+                    wgpu::TextureDimension::D3
+                },
+                format,
+                usage,
+                view_formats: &[],
+            })
+        };
+        Ok(Self {
+            bricks: ComputePipeline::new(device)?,
+            march: ComputePipeline::new(device)?,
+            light: ComputePipeline::new(device)?,
+            composite,
+            sampler: device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("volume trilinear"),
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                ..Default::default()
+            }),
+            no_light: tiny(
+                "no light volume",
+                wgpu::TextureFormat::Rgba16Float,
+                wgpu::TextureUsages::TEXTURE_BINDING,
+            ),
+            no_depth: tiny(
+                "no scene depth",
+                wgpu::TextureFormat::Depth32Float,
+                wgpu::TextureUsages::TEXTURE_BINDING,
+            ),
+        })
+    }
+
+    /// Build the min-max brick grid of `volume` (once per volume, again when it changes).
+    pub fn encode_bricks(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        volume: &Volume,
+    ) -> Result<Bricks, Error> {
+        let count = volume.dims.map(|d| d.div_ceil(BRICK));
+        let n = count.iter().map(|&c| c as u64).product::<u64>();
+        let ranges = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("volume bricks"),
+            size: n * 8,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let params = uniform(
+            device,
+            "brick params",
+            &bricks::BrickParams {
+                dims: volume.dims.into(),
+                brick: BRICK,
+                bricks: count.into(),
+            },
+        );
+        let dv = volume.texture.create_view(&Default::default());
+        let bound = self.bricks.bind(
+            device,
+            &bricks::bricks::Resources {
+                params: (&params).into(),
+                density: (&dv).into(),
+                ranges: (&ranges).into(),
+            },
+        )?;
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(bricks::STAGE),
+            timestamp_writes: None,
+        });
+        let groups = ComputePipeline::<bricks::bricks::Entry>::groups_for(count);
+        self.bricks.dispatch(&mut pass, &bound, groups);
+        Ok(Bricks { ranges, count })
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn params(
+        &self,
+        device: &wgpu::Device,
+        volume: &Volume,
+        bricks: &Bricks,
+        tf: &TransferFunction,
+        local_to_world: Mat4,
+        view: &View,
+        settings: &MarchSettings,
+        rect: [u32; 4],
+        use_depth: bool,
+    ) -> Result<wgpu::Buffer, Error> {
+        let (lo, hi) = volume.bounds();
+        let world_to_local = local_to_world.inverse();
+        let light_local = world_to_local.transform_vector3(settings.light_dir.normalize());
+        let diagonal_world = local_to_world.transform_vector3(hi - lo).length()
+            + local_to_world
+                .transform_vector3(Vec3::new(hi.x - lo.x, lo.y - hi.y, hi.z - lo.z))
+                .length()
+            + local_to_world
+                .transform_vector3(Vec3::new(lo.x - hi.x, hi.y - lo.y, hi.z - lo.z))
+                .length()
+            + local_to_world
+                .transform_vector3(Vec3::new(hi.x - lo.x, hi.y - lo.y, lo.z - hi.z))
+                .length();
+        // The longest chord through a parallelepiped is one of its four diagonals; their sum
+        // bounds it generously.
+        let guard = |step: f32| ((diagonal_world / step).ceil() + 2.0).min(u32::MAX as f32) as u32;
+        let (mode, iso) = match settings.mode {
+            Mode::EmissionAbsorption => (0, 0.0),
+            Mode::MaximumIntensity => (1, 0.0),
+            Mode::IsoSurface { iso } => (2, iso),
+        };
+        let (shadow, shadow_step) = match settings.shadow {
+            Shadow::None => (0, 1.0),
+            Shadow::Rays { step } => (1, step),
+            Shadow::LightVolume { step } => (2, step),
+        };
+        let (near_z, far_z) = if view.reversed_z {
+            (1.0, 0.0)
+        } else {
+            (0.0, 1.0)
+        };
+        Ok(uniform(
+            device,
+            "volume march params",
+            &volume_march::MarchParams {
+                inv_view_proj: view.view_proj.inverse(),
+                world_to_local,
+                box_min: lo,
+                step: settings.step,
+                box_max: hi,
+                reference_step: settings.reference_step,
+                dims: volume.dims.into(),
+                brick: BRICK,
+                bricks: bricks.count.into(),
+                mode,
+                // Unit world length along the light per unit of its parameter.
+                light_local,
+                shadow,
+                light_colour: settings.light_colour,
+                ambient: settings.ambient,
+                viewport: glam::Vec2::new(view.viewport[0] as f32, view.viewport[1] as f32),
+                rect_origin: glam::UVec2::new(rect[0], rect[1]),
+                rect_size: glam::UVec2::new(rect[2] - rect[0], rect[3] - rect[1]),
+                near_z,
+                far_z,
+                tf_range: glam::Vec2::from_array(tf.range),
+                tf_count: tf.entries.len() as u32,
+                skip: settings.skip as u32,
+                skip_below: tf.clear_below().clamp(f32::MIN, f32::MAX),
+                iso,
+                min_transmittance: settings.min_transmittance,
+                jitter: settings.jitter as u32,
+                frame: settings.frame,
+                max_steps: guard(settings.step),
+                shadow_step,
+                shadow_max_steps: guard(shadow_step),
+                use_depth: use_depth as u32,
+                count_samples: settings.count_samples as u32,
+            },
+        ))
+    }
+
+    /// Transmittance toward the light for `settings.shadow == Shadow::LightVolume` (rebuild when
+    /// the volume, transfer function, light or transform changes).
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode_light(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        volume: &Volume,
+        bricks: &Bricks,
+        tf: &TransferFunction,
+        local_to_world: Mat4,
+        settings: &MarchSettings,
+    ) -> Result<LightVolume, Error> {
+        settings.check()?;
+        tf.check()?;
+        check_transform(local_to_world)?;
+        let Shadow::LightVolume { step } = settings.shadow else {
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: "encode_light needs settings.shadow = Shadow::LightVolume".into(),
+            });
+        };
+        let size = volume.dims.map(|d| d.div_ceil(2));
+        let texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("light volume"),
+            size: wgpu::Extent3d {
+                width: size[0],
+                height: size[1],
+                depth_or_array_layers: size[2],
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D3,
+            format: wgpu::TextureFormat::Rgba16Float,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::STORAGE_BINDING,
+            view_formats: &[],
+        });
+        // The light pass reads only the volume fields of the view-independent parameters.
+        let view = View {
+            view_proj: Mat4::IDENTITY,
+            viewport: [1, 1],
+            reversed_z: false,
+        };
+        let params = self.params(
+            device,
+            volume,
+            bricks,
+            tf,
+            local_to_world,
+            &view,
+            settings,
+            [0, 0, 1, 1],
+            false,
+        )?;
+        let tf_buffer = tf_buffer(device, tf);
+        let (dv, lv) = (
+            volume.texture.create_view(&Default::default()),
+            texture.create_view(&Default::default()),
+        );
+        let bound = self.light.bind(
+            device,
+            &volume_march::light_volume::Resources {
+                params: (&params).into(),
+                density: (&dv).into(),
+                linear_clamp: (&self.sampler).into(),
+                tf: (&tf_buffer).into(),
+                light_out: (&lv).into(),
+            },
+        )?;
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("volume light"),
+            timestamp_writes: None,
+        });
+        let groups = ComputePipeline::<volume_march::light_volume::Entry>::groups_for(size);
+        self.light.dispatch(&mut pass, &bound, groups);
+        Ok(LightVolume {
+            texture,
+            light_dir: settings.light_dir,
+            step,
+        })
+    }
+
+    /// March `volume` under `local_to_world` for `view` into a premultiplied image. Rays stop at
+    /// `scene_depth` (the caller's depth target, `Depth32Float`, viewport-sized) when given.
+    /// `light` is needed for [`Shadow::LightVolume`]. `None` when the box is off screen.
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode_march(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        volume: &Volume,
+        bricks: &Bricks,
+        light: Option<&LightVolume>,
+        tf: &TransferFunction,
+        local_to_world: Mat4,
+        view: &View,
+        scene_depth: Option<&wgpu::TextureView>,
+        settings: &MarchSettings,
+    ) -> Result<Option<VolumeMarched>, Error> {
+        settings.check()?;
+        tf.check()?;
+        check_transform(local_to_world)?;
+        check_view(view)?;
+        if bricks.count != volume.dims.map(|d| d.div_ceil(BRICK)) {
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: "the brick grid was built for a volume of another size".into(),
+            });
+        }
+        let light_view = match (settings.shadow, light) {
+            (Shadow::LightVolume { step }, Some(l)) => {
+                if l.step != step || l.light_dir != settings.light_dir {
+                    return Err(Error::Invalid {
+                        stage: STAGE,
+                        what: "the light volume was built for another light or shadow step".into(),
+                    });
+                }
+                l.texture.create_view(&Default::default())
+            }
+            (Shadow::LightVolume { .. }, None) => {
+                return Err(Error::Invalid {
+                    stage: STAGE,
+                    what: "Shadow::LightVolume needs the light volume from encode_light".into(),
+                });
+            }
+            _ => self.no_light.create_view(&Default::default()),
+        };
+        if let Some(d) = scene_depth {
+            let t = d.texture();
+            if t.format() != wgpu::TextureFormat::Depth32Float
+                || [t.width(), t.height()] != view.viewport
+            {
+                return Err(Error::Invalid {
+                    stage: STAGE,
+                    what: format!(
+                        "scene depth must be Depth32Float of the viewport's size {:?}, got {:?} {}×{}",
+                        view.viewport,
+                        t.format(),
+                        t.width(),
+                        t.height()
+                    ),
+                });
+            }
+        }
+        let (lo, hi) = volume.bounds();
+        if !box_visible(view.view_proj, local_to_world, lo, hi) {
+            return Ok(None);
+        }
+        let rect = screen_rect(view, local_to_world, lo, hi);
+        if rect[2] <= rect[0] || rect[3] <= rect[1] {
+            return Ok(None);
+        }
+        let params = self.params(
+            device,
+            volume,
+            bricks,
+            tf,
+            local_to_world,
+            view,
+            settings,
+            rect,
+            scene_depth.is_some(),
+        )?;
+        let colour = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("volume march"),
+            size: wgpu::Extent3d {
+                width: view.viewport[0],
+                height: view.viewport[1],
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba16Float,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::STORAGE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let tf_buffer = tf_buffer(device, tf);
+        let no_depth = self.no_depth.create_view(&Default::default());
+        let (dv, cv) = (
+            volume.texture.create_view(&Default::default()),
+            colour.create_view(&Default::default()),
+        );
+        let bound = self.march.bind(
+            device,
+            &volume_march::march::Resources {
+                params: (&params).into(),
+                density: (&dv).into(),
+                linear_clamp: (&self.sampler).into(),
+                tf: (&tf_buffer).into(),
+                ranges: (&bricks.ranges).into(),
+                light_in: (&light_view).into(),
+                scene_depth: scene_depth.unwrap_or(&no_depth).into(),
+                colour_out: (&cv).into(),
+            },
+        )?;
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(STAGE),
+            timestamp_writes: None,
+        });
+        let groups = [
+            (rect[2] - rect[0]).div_ceil(8),
+            (rect[3] - rect[1]).div_ceil(8),
+            1,
+        ];
+        self.march.dispatch(&mut pass, &bound, groups);
+        Ok(Some(VolumeMarched { rect, colour }))
+    }
+
+    /// Blend a march over `colour` (the format this renderer was made for, the march's size).
+    pub fn encode_composite(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        colour: &wgpu::TextureView,
+        marched: &VolumeMarched,
+    ) -> Result<(), Error> {
+        let t = colour.texture();
+        if [t.width(), t.height()] != [marched.colour.width(), marched.colour.height()] {
+            return Err(Error::Invalid {
+                stage: volume_composite::STAGE,
+                what: format!(
+                    "colour target is {}×{}, the march {}×{}",
+                    t.width(),
+                    t.height(),
+                    marched.colour.width(),
+                    marched.colour.height()
+                ),
+            });
+        }
+        let mv = marched.colour.create_view(&Default::default());
+        let bound = self.composite.bind(
+            device,
+            &volume_composite::fs_main::Resources {
+                marched: (&mv).into(),
+            },
+        )?;
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(volume_composite::STAGE),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: colour,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.composite.pipeline);
+        bound.set_render(&mut pass);
+        let [x0, y0, x1, y1] = marched.rect;
+        pass.set_scissor_rect(x0, y0, x1 - x0, y1 - y0);
+        pass.draw(0..3, 0..1);
+        Ok(())
+    }
+}
+
+fn tf_buffer(device: &wgpu::Device, tf: &TransferFunction) -> wgpu::Buffer {
+    use wgpu::util::DeviceExt;
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("transfer function"),
+        contents: bytemuck::cast_slice(&tf.entries),
+        usage: wgpu::BufferUsages::STORAGE,
+    })
+}
+
+fn check_transform(m: Mat4) -> Result<(), Error> {
+    let det = m.determinant();
+    if !m.is_finite() || det == 0.0 || !det.is_finite() || !m.inverse().is_finite() {
+        return Err(Error::Invalid {
+            stage: STAGE,
+            what: "local_to_world must be finite and invertible".into(),
+        });
+    }
+    Ok(())
+}
+
+/// An invertible view whose near plane lies in front of the eye.
+fn check_view(view: &View) -> Result<(), Error> {
+    let bad = |what: String| Error::Invalid { stage: STAGE, what };
+    if !view.view_proj.is_finite() || view.view_proj.determinant() == 0.0 {
+        return Err(bad(
+            "view_proj must be finite and invertible (a near plane at 0 makes it singular)".into(),
+        ));
+    }
+    if view.viewport[0] == 0 || view.viewport[1] == 0 {
+        return Err(bad(format!("viewport {:?} has a zero side", view.viewport)));
+    }
+    let inv = view.view_proj.inverse();
+    let (near_z, far_z) = if view.reversed_z {
+        (1.0, 0.0)
+    } else {
+        (0.0, 1.0)
+    };
+    // A perspective eye: where clip w vanishes. A near plane at or behind it is refused.
+    let eye = inv * glam::Vec4::new(0.0, 0.0, 1.0, 0.0);
+    if eye.w.abs() > 1e-12 * eye.truncate().length().max(1.0) {
+        let eye = eye.truncate() / eye.w;
+        let near = inv.project_point3(Vec3::new(0.0, 0.0, near_z));
+        let far = inv.project_point3(Vec3::new(0.0, 0.0, far_z));
+        if (near - eye).dot(far - eye) <= 0.0 || (near - eye).length() >= (far - eye).length() {
+            return Err(bad(
+                "the projection's near plane must lie in front of the eye (near > 0)".into(),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A procedural cloud: fBm of value noise (5 octaves) shaped by a soft ellipsoid, in [0, 1],
+/// x fastest. Deterministic for a `seed`.
+pub fn fbm_cloud(dims: [u32; 3], seed: u32) -> Vec<f32> {
+    let hash = |x: i32, y: i32, z: i32, o: u32| -> f32 {
+        let mut h = (x as u32).wrapping_mul(0x8da6_b343)
+            ^ (y as u32).wrapping_mul(0xd816_3841)
+            ^ (z as u32).wrapping_mul(0xcb1a_b31f)
+            ^ seed.wrapping_mul(0x1656_67b1)
+            ^ o.wrapping_mul(0x27d4_eb2d);
+        h ^= h >> 15;
+        h = h.wrapping_mul(0x2c1b_3c6d);
+        h ^= h >> 12;
+        (h & 0xffff) as f32 / 65535.0
+    };
+    let noise = |p: Vec3, o: u32| -> f32 {
+        let i = p.floor();
+        let f = p - i;
+        let s = f * f * (Vec3::splat(3.0) - 2.0 * f);
+        let (x, y, z) = (i.x as i32, i.y as i32, i.z as i32);
+        let c = |dx, dy, dz| hash(x + dx, y + dy, z + dz, o);
+        let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
+        let x00 = lerp(c(0, 0, 0), c(1, 0, 0), s.x);
+        let x10 = lerp(c(0, 1, 0), c(1, 1, 0), s.x);
+        let x01 = lerp(c(0, 0, 1), c(1, 0, 1), s.x);
+        let x11 = lerp(c(0, 1, 1), c(1, 1, 1), s.x);
+        lerp(lerp(x00, x10, s.y), lerp(x01, x11, s.y), s.z)
+    };
+    let slice = (dims[0] * dims[1]) as usize;
+    let mut out = vec![0.0f32; slice * dims[2] as usize];
+    let voxel = |x: u32, y: u32, z: u32| {
+        let u = (Vec3::new(x as f32, y as f32, z as f32) + 0.5)
+            / Vec3::new(dims[0] as f32, dims[1] as f32, dims[2] as f32);
+        let q = (u - 0.5) * Vec3::new(2.0, 2.6, 2.0);
+        let shape = (1.0 - q.length_squared()).max(0.0);
+        let mut sum = 0.0;
+        let mut amp = 0.5;
+        let mut p = u * 4.0;
+        for o in 0..5 {
+            sum += amp * noise(p, o);
+            p *= 2.03;
+            amp *= 0.5;
+        }
+        ((sum - 0.35) * 2.2 * shape.sqrt()).clamp(0.0, 1.0)
+    };
+    // Slabs of z on every core: 512³ is 134 M voxels.
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let per = (dims[2] as usize).div_ceil(threads).max(1) * slice;
+    std::thread::scope(|scope| {
+        for (k, chunk) in out.chunks_mut(per).enumerate() {
+            let voxel = &voxel;
+            scope.spawn(move || {
+                for (i, v) in chunk.iter_mut().enumerate() {
+                    let at = k * per + i;
+                    let (z, r) = (at / slice, at % slice);
+                    *v = voxel(
+                        (r % dims[0] as usize) as u32,
+                        (r / dims[0] as usize) as u32,
+                        z as u32,
+                    );
+                }
+            });
+        }
+    });
+    out
+}

@@ -1,0 +1,418 @@
+//! `cargo xtask bench volume`: time per frame against image error for the volume raymarch of an
+//! fBm cloud, 256³ and 512³ (64³ and 128³ with `--quick`), at 1920×1080 (480×270 quick), with
+//! the camera outside the box and inside it; across step length, brick skipping on and off,
+//! jitter on and off, and shadowing by shadow rays against the precomputed light volume.
+//!
+//! Time: GPU timestamps around the march and the composite into an 8-bit target, median of the
+//! timed runs; the brick grid and the light volume are built once per volume and timed apart.
+//! Error: RMS and largest difference of the premultiplied RGBA against a reference march (a
+//! quarter-voxel step, no skipping, no jitter, the same light volume), over every pixel.
+//! Writes `volume.csv` and `volume.png`.
+
+use std::io::Write;
+use std::process::ExitCode;
+
+use fieldkit::gpu::{Context, read_texture};
+use fieldkit::metaball::render::View;
+use fieldkit::volume::{
+    Bricks, LightVolume, MarchSettings, Shadow, TransferFunction, Volume, VolumeMarched,
+    VolumeRenderer, fbm_cloud,
+};
+use glam::{Mat4, Vec3};
+
+use crate::bench_metaball::{Stamps, median};
+
+pub fn run(args: &crate::bench::Args) -> ExitCode {
+    match bench(args.quick, args.reps, args.warmup, &args.out) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("bench volume: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+struct Row {
+    size: u32,
+    camera: &'static str,
+    config: String,
+    step_voxels: f32,
+    skip: bool,
+    jitter: bool,
+    shadow: &'static str,
+    frame_ms: f64,
+    rms_err: f64,
+    max_err: f64,
+}
+
+struct Scene<'a> {
+    ctx: &'a Context,
+    renderer: &'a VolumeRenderer,
+    volume: &'a Volume,
+    bricks: &'a Bricks,
+    light: &'a LightVolume,
+    tf: &'a TransferFunction,
+    view: &'a View,
+    target: &'a wgpu::TextureView,
+}
+
+impl Scene<'_> {
+    fn march(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        s: &MarchSettings,
+    ) -> Result<Option<VolumeMarched>, String> {
+        let light = matches!(s.shadow, Shadow::LightVolume { .. }).then_some(self.light);
+        self.renderer
+            .encode_march(
+                &self.ctx.device,
+                enc,
+                self.volume,
+                self.bricks,
+                light,
+                self.tf,
+                Mat4::IDENTITY,
+                self.view,
+                None,
+                s,
+            )
+            .map_err(|e| e.to_string())
+    }
+
+    /// The march's premultiplied RGBA.
+    fn image(&self, s: &MarchSettings) -> Result<Vec<[f32; 4]>, String> {
+        let mut enc = self.ctx.encoder("bench volume image");
+        let m = self.march(&mut enc, s)?.ok_or("the volume is off screen")?;
+        self.ctx
+            .submit_and_wait("bench volume image", enc)
+            .map_err(|e| e.to_string())?;
+        let px: Vec<[u16; 4]> = read_texture(self.ctx, &m.colour).map_err(|e| e.to_string())?;
+        Ok(px
+            .iter()
+            .map(|p| p.map(|h| half::f16::from_bits(h).to_f32()))
+            .collect())
+    }
+
+    fn frame_ms(
+        &self,
+        stamps: &Stamps,
+        s: &MarchSettings,
+        warmup: usize,
+        reps: usize,
+    ) -> Result<f64, String> {
+        let mut times = Vec::new();
+        for i in 0..warmup + reps {
+            let ms = stamps.time(self.ctx, |enc| {
+                let m = self.march(enc, s)?.ok_or("the volume is off screen")?;
+                self.renderer
+                    .encode_composite(&self.ctx.device, enc, self.target, &m)
+                    .map_err(|e| e.to_string())
+            })?;
+            if i >= warmup {
+                times.push(ms);
+            }
+        }
+        Ok(median(times))
+    }
+}
+
+fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Result<(), String> {
+    let ctx = Context::new().map_err(|e| e.to_string())?;
+    let adapter = ctx.adapter_name();
+    println!("adapter: {adapter}");
+    let stamps = Stamps::new(&ctx)?;
+    let sizes: &[u32] = if quick { &[64, 128] } else { &[256, 512] };
+    let (width, height) = if quick { (480, 270) } else { (1920, 1080) };
+    let renderer = VolumeRenderer::new(&ctx.device, wgpu::TextureFormat::Rgba8Unorm)
+        .map_err(|e| e.to_string())?;
+    let target = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("bench volume target"),
+        size: wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba8Unorm,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+        view_formats: &[],
+    });
+    let target_view = target.create_view(&Default::default());
+    let tf = TransferFunction::cloud();
+    let proj =
+        glam::camera::rh::proj::directx::perspective(0.9, width as f32 / height as f32, 0.01, 50.0);
+    let cameras = [
+        ("outside", Vec3::new(0.9, 0.5, 1.5), Vec3::ZERO),
+        (
+            "inside",
+            Vec3::new(0.08, 0.05, 0.12),
+            Vec3::new(-0.6, 0.1, -1.0),
+        ),
+    ];
+    println!(
+        "| volume | camera | config | frame ms | RMS err | max err |\n|---|---|---|---|---|---|"
+    );
+    let mut rows = Vec::new();
+    for &n in sizes {
+        let dims = [n; 3];
+        let voxel = 1.0 / n as f32;
+        let volume = Volume::upload(
+            &ctx,
+            &fbm_cloud(dims, 7),
+            dims,
+            wgpu::TextureFormat::R8Unorm,
+            Vec3::splat(voxel),
+            Vec3::splat(-0.5),
+        )
+        .map_err(|e| e.to_string())?;
+        let base = MarchSettings {
+            step: voxel,
+            reference_step: 1.0 / 256.0,
+            shadow: Shadow::LightVolume { step: 2.0 * voxel },
+            ..MarchSettings::default()
+        };
+        let mut made = None;
+        let bricks_ms = stamps.time(&ctx, |enc| {
+            made = Some(
+                renderer
+                    .encode_bricks(&ctx.device, enc, &volume)
+                    .map_err(|e| e.to_string())?,
+            );
+            Ok(())
+        })?;
+        let bricks = made.ok_or("no bricks")?;
+        let mut lit = None;
+        let light_ms = stamps.time(&ctx, |enc| {
+            lit = Some(
+                renderer
+                    .encode_light(
+                        &ctx.device,
+                        enc,
+                        &volume,
+                        &bricks,
+                        &tf,
+                        Mat4::IDENTITY,
+                        &base,
+                    )
+                    .map_err(|e| e.to_string())?,
+            );
+            Ok(())
+        })?;
+        let light = lit.ok_or("no light volume")?;
+        println!(
+            "| {n}³ | — | brick grid build {bricks_ms:.3} ms, light volume build {light_ms:.3} ms | | | |"
+        );
+        for (camera, eye, target) in cameras {
+            let view = View {
+                view_proj: proj * glam::camera::rh::view::look_at_mat4(eye, target, Vec3::Y),
+                viewport: [width, height],
+                reversed_z: false,
+            };
+            let scene = Scene {
+                ctx: &ctx,
+                renderer: &renderer,
+                volume: &volume,
+                bricks: &bricks,
+                light: &light,
+                tf: &tf,
+                view: &view,
+                target: &target_view,
+            };
+            let reference = scene.image(&MarchSettings {
+                step: 0.25 * voxel,
+                skip: false,
+                jitter: false,
+                ..base
+            })?;
+            let mut configs: Vec<(String, MarchSettings, &'static str)> = Vec::new();
+            for k in [0.5f32, 1.0, 2.0] {
+                configs.push((
+                    format!("step {k} voxel"),
+                    MarchSettings {
+                        step: k * voxel,
+                        ..base
+                    },
+                    "light volume",
+                ));
+            }
+            configs.push((
+                "step 1, no skipping".into(),
+                MarchSettings {
+                    skip: false,
+                    ..base
+                },
+                "light volume",
+            ));
+            configs.push((
+                "step 1, no jitter".into(),
+                MarchSettings {
+                    jitter: false,
+                    ..base
+                },
+                "light volume",
+            ));
+            configs.push((
+                "step 1, shadow rays".into(),
+                MarchSettings {
+                    shadow: Shadow::Rays { step: 2.0 * voxel },
+                    ..base
+                },
+                "shadow rays",
+            ));
+            configs.push((
+                "step 1, unshadowed".into(),
+                MarchSettings {
+                    shadow: Shadow::None,
+                    ..base
+                },
+                "none",
+            ));
+            // Density samples per ray (the march's sample-count output), as the CPU model
+            // counted them: plain, with brick skipping, with early termination, with both.
+            let mut counts = Vec::new();
+            for (skip, min_t) in [(false, 0.0), (true, 0.0), (false, 1e-3), (true, 1e-3)] {
+                let img = scene.image(&MarchSettings {
+                    skip,
+                    min_transmittance: min_t,
+                    jitter: false,
+                    count_samples: true,
+                    ..base
+                })?;
+                counts.push(img.iter().map(|p| p[0] as f64).sum::<f64>() / img.len() as f64);
+            }
+            println!(
+                "| {n}³ | {camera} | samples per pixel: plain {:.1}; fewer by skipping {:.2}×, by early termination {:.2}×, by both {:.2}× | | | |",
+                counts[0],
+                counts[0] / counts[1],
+                counts[0] / counts[2],
+                counts[0] / counts[3]
+            );
+            for (name, s, shadow) in configs {
+                let frame_ms = scene.frame_ms(&stamps, &s, warmup, reps)?;
+                let img = scene.image(&s)?;
+                let (mut sum, mut max) = (0.0f64, 0.0f64);
+                for (p, q) in img.iter().zip(&reference) {
+                    for c in 0..4 {
+                        let d = (p[c] - q[c]).abs() as f64;
+                        sum += d * d;
+                        max = max.max(d);
+                    }
+                }
+                let rms = (sum / (4 * img.len()) as f64).sqrt();
+                println!("| {n}³ | {camera} | {name} | {frame_ms:.3} | {rms:.5} | {max:.4} |");
+                rows.push(Row {
+                    size: n,
+                    camera,
+                    config: name,
+                    step_voxels: s.step / voxel,
+                    skip: s.skip,
+                    jitter: s.jitter,
+                    shadow,
+                    frame_ms,
+                    rms_err: rms,
+                    max_err: max,
+                });
+            }
+        }
+    }
+    std::fs::create_dir_all(out).map_err(|e| e.to_string())?;
+    let csv = out.join("volume.csv");
+    let mut f = std::fs::File::create(&csv).map_err(|e| e.to_string())?;
+    writeln!(
+        f,
+        "adapter,volume,resolution,camera,config,step_voxels,skip,jitter,shadow,frame_ms,rms_err,max_err"
+    )
+    .map_err(|e| e.to_string())?;
+    for r in &rows {
+        writeln!(
+            f,
+            "\"{adapter}\",{},{width}x{height},{},{},{},{},{},{},{:.4},{:.6},{:.5}",
+            r.size,
+            r.camera,
+            r.config,
+            r.step_voxels,
+            r.skip,
+            r.jitter,
+            r.shadow,
+            r.frame_ms,
+            r.rms_err,
+            r.max_err
+        )
+        .map_err(|e| e.to_string())?;
+    }
+    chart(&out.join("volume.png"), &adapter, &rows)?;
+    println!("wrote {} and volume.png", csv.display());
+    Ok(())
+}
+
+fn chart(path: &std::path::Path, adapter: &str, rows: &[Row]) -> Result<(), String> {
+    use plotters::prelude::*;
+    let _ =
+        plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular());
+    let root = BitMapBackend::new(path, (900, 560)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| e.to_string())?;
+    let floor = 1e-5;
+    let y_of = |r: &Row| r.rms_err.max(floor);
+    let (tmin, tmax) = rows.iter().fold((f64::INFINITY, 0f64), |(a, b), r| {
+        (a.min(r.frame_ms), b.max(r.frame_ms))
+    });
+    let emax = rows.iter().map(y_of).fold(1e-3, f64::max);
+    let mut c = ChartBuilder::on(&root)
+        .caption(
+            format!("volume raymarch: frame time vs RMS RGBA error, {adapter}"),
+            ("sans-serif", 15),
+        )
+        .margin(12)
+        .x_label_area_size(38)
+        .y_label_area_size(60)
+        .build_cartesian_2d(
+            (tmin / 1.6..tmax * 2.5).log_scale(),
+            (floor / 1.5..emax * 3.0).log_scale(),
+        )
+        .map_err(|e| e.to_string())?;
+    c.configure_mesh()
+        .x_desc("frame time, ms (march + composite, median, log)")
+        .y_desc("RMS error against a quarter-voxel reference (log)")
+        .x_labels(6)
+        .y_labels(5)
+        .x_label_formatter(&|v| format!("{v:.2}"))
+        .y_label_formatter(&|v| format!("{v:.0e}"))
+        .label_style(("sans-serif", 11))
+        .draw()
+        .map_err(|e| e.to_string())?;
+    let mut groups: Vec<(u32, &str)> = rows.iter().map(|r| (r.size, r.camera)).collect();
+    groups.dedup();
+    for (k, &(size, camera)) in groups.iter().enumerate() {
+        let color = Palette99::pick(k).to_rgba();
+        let pts: Vec<&Row> = rows
+            .iter()
+            .filter(|r| r.size == size && r.camera == camera)
+            .collect();
+        c.draw_series(
+            pts.iter()
+                .map(|r| Circle::new((r.frame_ms, y_of(r)), 4, color.filled())),
+        )
+        .map_err(|e| e.to_string())?
+        .label(format!("{size}³, camera {camera}"))
+        .legend(move |(x, y)| Circle::new((x, y), 4, color.filled()));
+        c.draw_series(pts.iter().map(|r| {
+            Text::new(
+                format!(" {}", r.config),
+                (r.frame_ms, y_of(r)),
+                ("sans-serif", 9).into_font().color(&color),
+            )
+        }))
+        .map_err(|e| e.to_string())?;
+    }
+    c.configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 11))
+        .draw()
+        .map_err(|e| e.to_string())?;
+    root.present().map_err(|e| e.to_string())?;
+    Ok(())
+}
