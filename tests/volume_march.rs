@@ -776,65 +776,39 @@ fn light_volume_and_shadow_rays_agree() {
 fn bad_input_is_a_typed_error() {
     let rig = Rig::new();
     let ctx = &rig.ctx;
+    let upload = |data: &[f32], dims: [u32; 3], format, spacing| {
+        Volume::upload(ctx, data, dims, format, spacing, Vec3::ZERO)
+    };
     let err = |r: Result<Volume, fieldkit::Error>| r.err().expect("should be refused").to_string();
-    // Formats.
-    let e = err(Volume::upload(
-        ctx,
-        &[0.0; 8],
-        [2, 2, 2],
-        wgpu::TextureFormat::Rgba8Unorm,
-        Vec3::ONE,
-        Vec3::ZERO,
-    ));
-    assert!(e.contains("Rgba8Unorm"), "{e}");
-    // Sizes: zero and past the device's 3D limit.
-    let e = err(Volume::upload(
-        ctx,
-        &[],
-        [0, 2, 2],
-        wgpu::TextureFormat::R8Unorm,
-        Vec3::ONE,
-        Vec3::ZERO,
-    ));
-    assert!(e.contains("volume width is 0"), "{e}");
     let max = ctx.device.limits().max_texture_dimension_3d;
-    let e = err(Volume::upload(
-        ctx,
-        &[],
-        [2, max + 1, 2],
-        wgpu::TextureFormat::R8Unorm,
-        Vec3::ONE,
-        Vec3::ZERO,
-    ));
-    assert!(e.contains("volume height"), "{e}");
-    // Data: wrong count, NaN, bad spacing.
-    let e = err(Volume::upload(
-        ctx,
-        &[0.0; 7],
-        [2, 2, 2],
-        wgpu::TextureFormat::R8Unorm,
-        Vec3::ONE,
-        Vec3::ZERO,
-    ));
-    assert!(e.contains("7 densities"), "{e}");
-    let e = err(Volume::upload(
-        ctx,
-        &[f32::NAN; 8],
-        [2, 2, 2],
-        wgpu::TextureFormat::R8Unorm,
-        Vec3::ONE,
-        Vec3::ZERO,
-    ));
-    assert!(e.contains("NaN"), "{e}");
-    let e = err(Volume::upload(
-        ctx,
-        &[0.0; 8],
-        [2, 2, 2],
-        wgpu::TextureFormat::R8Unorm,
-        Vec3::new(1.0, 0.0, 1.0),
-        Vec3::ZERO,
-    ));
-    assert!(e.contains("spacing"), "{e}");
+    use wgpu::TextureFormat::{R8Unorm, Rgba8Unorm};
+    let two = [2u32, 2, 2];
+    for (data, dims, format, spacing, named) in [
+        // A format the march does not sample.
+        (&[0.0f32; 8][..], two, Rgba8Unorm, Vec3::ONE, "Rgba8Unorm"),
+        // Sizes: zero, and past the device's 3D limit.
+        (&[][..], [0, 2, 2], R8Unorm, Vec3::ONE, "volume width is 0"),
+        (
+            &[][..],
+            [2, max + 1, 2],
+            R8Unorm,
+            Vec3::ONE,
+            "volume height",
+        ),
+        // Data: the wrong count, NaN, a zero spacing.
+        (&[0.0; 7][..], two, R8Unorm, Vec3::ONE, "7 densities"),
+        (&[f32::NAN; 8][..], two, R8Unorm, Vec3::ONE, "NaN"),
+        (
+            &[0.0; 8][..],
+            two,
+            R8Unorm,
+            Vec3::new(1.0, 0.0, 1.0),
+            "spacing",
+        ),
+    ] {
+        let e = err(upload(data, dims, format, spacing));
+        assert!(e.contains(named), "{e}");
+    }
 
     let volume = rig.volume(&[0.5; 8], [2, 2, 2], Vec3::ONE, Vec3::splat(-1.0));
     let tf = TransferFunction::constant(Vec3::ONE, 0.1);
@@ -868,38 +842,41 @@ fn bad_input_is_a_typed_error() {
     };
     let e = march(Mat4::from_scale(Vec3::new(1.0, 0.0, 1.0)), &view, &ok, &tf);
     assert!(e.contains("invertible"), "{e}");
-    let e = march(
-        Mat4::IDENTITY,
-        &view,
-        &MarchSettings {
-            step: f32::NAN,
-            ..ok
-        },
-        &tf,
-    );
-    assert!(e.contains("step"), "{e}");
-    let e = march(
-        Mat4::IDENTITY,
-        &view,
-        &MarchSettings {
-            light_dir: Vec3::ZERO,
-            ..ok
-        },
-        &tf,
-    );
-    assert!(e.contains("light_dir"), "{e}");
-    let e = march(
-        Mat4::IDENTITY,
-        &view,
-        &MarchSettings {
-            mode: Mode::IsoSurface { iso: f32::NAN },
-            ..ok
-        },
-        &tf,
-    );
-    assert!(e.contains("iso"), "{e}");
-    let e = march(Mat4::IDENTITY, &view, &MarchSettings::default(), &tf);
-    assert!(e.contains("light volume"), "{e}");
+    for (settings, named) in [
+        (
+            MarchSettings {
+                step: f32::NAN,
+                ..ok
+            },
+            "step",
+        ),
+        (
+            MarchSettings {
+                light_dir: Vec3::ZERO,
+                ..ok
+            },
+            "light_dir",
+        ),
+        (
+            MarchSettings {
+                mode: Mode::IsoSurface { iso: f32::NAN },
+                ..ok
+            },
+            "iso",
+        ),
+        (
+            MarchSettings {
+                min_transmittance: 1.0,
+                ..ok
+            },
+            "min_transmittance",
+        ),
+        // The default shadows through a light volume, and none is given.
+        (MarchSettings::default(), "light volume"),
+    ] {
+        let e = march(Mat4::IDENTITY, &view, &settings, &tf);
+        assert!(e.contains(named), "{e}");
+    }
     let bad_tf = TransferFunction {
         entries: vec![[1.0, 1.0, 1.0, 1.5]; 2],
         range: [0.0, 1.0],
@@ -923,14 +900,7 @@ fn bad_input_is_a_typed_error() {
     let e = march(Mat4::IDENTITY, &behind, &ok, &tf);
     assert!(e.contains("near plane"), "{e}");
     // R32Float needs FLOAT32_FILTERABLE: accepted where the device has it, refused by name where not.
-    let r = Volume::upload(
-        ctx,
-        &[0.0; 8],
-        [2, 2, 2],
-        wgpu::TextureFormat::R32Float,
-        Vec3::ONE,
-        Vec3::ZERO,
-    );
+    let r = upload(&[0.0; 8], two, wgpu::TextureFormat::R32Float, Vec3::ONE);
     if ctx
         .device
         .features()
