@@ -770,6 +770,54 @@ fn light_volume_and_shadow_rays_agree() {
     assert!(baked_off < 0.25 * unlit_off, "{baked_off} vs {unlit_off}");
     // Opacity does not depend on lighting.
     assert!(rays.iter().zip(&baked).all(|(p, q)| p[3] == q[3]));
+    // A light volume is refused for a march with another transfer function or transform: it
+    // would shadow with the old one.
+    let ctx = &rig.ctx;
+    let s = MarchSettings {
+        shadow: Shadow::LightVolume { step: 1.0 / 64.0 },
+        ..base
+    };
+    let mut enc = ctx.encoder("stale light");
+    let bricks = rig
+        .renderer
+        .encode_bricks(&ctx.device, &mut enc, &volume)
+        .unwrap();
+    let light = rig
+        .renderer
+        .encode_light(
+            &ctx.device,
+            &mut enc,
+            &volume,
+            &bricks,
+            &tf,
+            Mat4::IDENTITY,
+            &s,
+        )
+        .unwrap();
+    let other_tf = TransferFunction::constant(Vec3::ONE, 0.2);
+    for (tf, l2w) in [
+        (&other_tf, Mat4::IDENTITY),
+        (&tf, Mat4::from_translation(Vec3::X)),
+    ] {
+        let e = rig
+            .renderer
+            .encode_march(
+                &ctx.device,
+                &mut enc,
+                &volume,
+                &bricks,
+                Some(&light),
+                tf,
+                l2w,
+                &view,
+                None,
+                &s,
+            )
+            .err()
+            .expect("a stale light volume should be refused")
+            .to_string();
+        assert!(e.contains("rebuild"), "{e}");
+    }
 }
 
 #[test]

@@ -21,6 +21,8 @@
 // opacity (`volume/bricks`), the march jumps to the segment that holds the brick's exit. The
 // skipped segments' samples all lie in that brick, so each would have added nothing.
 
+import package::shared::field::{ray_box, unproject};
+
 struct MarchParams {
     inv_view_proj: mat4x4<f32>,
     world_to_local: mat4x4<f32>,
@@ -112,15 +114,6 @@ fn corrected(a: f32, len: f32) -> f32 {
     return 1.0 - pow(max(1.0 - a, 0.0), len / params.reference_step);
 }
 
-fn ray_box(origin: vec3<f32>, dir: vec3<f32>, lo: vec3<f32>, hi: vec3<f32>) -> vec2<f32> {
-    let inv = 1.0 / dir;
-    let a = (lo - origin) * inv;
-    let b = (hi - origin) * inv;
-    let near = min(a, b);
-    let far = max(a, b);
-    return vec2<f32>(max(max(near.x, near.y), near.z), min(min(far.x, far.y), far.z));
-}
-
 // Transmittance from local point `p` to where the ray toward the light leaves the box.
 fn toward_light(p: vec3<f32>) -> f32 {
     let exit = ray_box(p, params.light_local, params.box_min, params.box_max).y;
@@ -177,11 +170,6 @@ fn jitter_of(pixel: vec2<f32>) -> f32 {
     return fract(52.9829189 * fract(dot(q, vec2<f32>(0.06711056, 0.00583715))));
 }
 
-fn unproject(ndc: vec3<f32>) -> vec3<f32> {
-    let h = params.inv_view_proj * vec4<f32>(ndc, 1.0);
-    return h.xyz / h.w;
-}
-
 // Root of density − iso between ray parameters a (below) and b (at or above): bisection.
 fn refine(o: vec3<f32>, dir: vec3<f32>, a_in: f32, b_in: f32) -> f32 {
     var a = a_in;
@@ -210,8 +198,8 @@ fn iso_normal(p: vec3<f32>) -> vec3<f32> {
 
 fn march_pixel(pixel: vec2<f32>) -> vec4<f32> {
     let ndc = vec2<f32>(pixel.x / params.viewport.x * 2.0 - 1.0, 1.0 - pixel.y / params.viewport.y * 2.0);
-    let near_w = unproject(vec3<f32>(ndc, params.near_z));
-    let far_w = unproject(vec3<f32>(ndc, params.far_z));
+    let near_w = unproject(params.inv_view_proj, vec3<f32>(ndc, params.near_z));
+    let far_w = unproject(params.inv_view_proj, vec3<f32>(ndc, params.far_z));
     let dir_w = normalize(far_w - near_w);
     let o = (params.world_to_local * vec4<f32>(near_w, 1.0)).xyz;
     let dir = (params.world_to_local * vec4<f32>(dir_w, 0.0)).xyz;
@@ -220,7 +208,7 @@ fn march_pixel(pixel: vec2<f32>) -> vec4<f32> {
     if params.use_depth != 0u {
         let depth = textureLoad(scene_depth, vec2<i32>(pixel), 0).r;
         if depth != params.far_z {
-            t_scene = dot(unproject(vec3<f32>(ndc, depth)) - near_w, dir_w);
+            t_scene = dot(unproject(params.inv_view_proj, vec3<f32>(ndc, depth)) - near_w, dir_w);
         }
     }
     let hit = ray_box(o, dir, params.box_min, params.box_max);

@@ -433,8 +433,8 @@ pub struct Bricks {
 /// Transmittance toward the light per voxel of a half-resolution grid.
 pub struct LightVolume {
     pub texture: wgpu::Texture,
-    light_dir: Vec3,
-    step: f32,
+    /// What it was built for: a march with anything else is refused, not drawn wrong.
+    built_for: (Vec3, f32, Mat4, TransferFunction),
 }
 
 /// A march waiting to be composited: premultiplied colour and coverage over `rect`.
@@ -716,8 +716,7 @@ impl VolumeRenderer {
         self.light.dispatch(&mut pass, &bound, groups);
         Ok(LightVolume {
             texture,
-            light_dir: settings.light_dir,
-            step,
+            built_for: (settings.light_dir, step, local_to_world, tf.clone()),
         })
     }
 
@@ -750,10 +749,17 @@ impl VolumeRenderer {
         }
         let light_view = match (settings.shadow, light) {
             (Shadow::LightVolume { step }, Some(l)) => {
-                if l.step != step || l.light_dir != settings.light_dir {
+                let (dir, built_step, transform, built_tf) = &l.built_for;
+                if *built_step != step
+                    || *dir != settings.light_dir
+                    || *transform != local_to_world
+                    || built_tf != tf
+                {
                     return Err(Error::Invalid {
                         stage: STAGE,
-                        what: "the light volume was built for another light or shadow step".into(),
+                        what: "the light volume was built for another light, shadow step, \
+                               transform or transfer function: rebuild it with encode_light"
+                            .into(),
                     });
                 }
                 l.texture.create_view(&Default::default())

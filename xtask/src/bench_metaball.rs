@@ -594,74 +594,25 @@ impl Reference {
 
 /// Frame time against RMS error, log axes: a point per tracer (and grid), a colour per voxel set.
 fn chart(path: &std::path::Path, adapter: &str, rows: &[Row]) -> Result<(), String> {
-    use plotters::prelude::*;
-    let _ =
-        plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular());
-    let root = BitMapBackend::new(path, (900, 560)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| e.to_string())?;
-    let floor = 1e-4;
-    let y_of = |r: &Row| r.rms_err.max(floor);
-    let (tmin, tmax) = rows.iter().fold((f64::INFINITY, 0f64), |(a, b), r| {
-        (a.min(r.frame_ms), b.max(r.frame_ms))
-    });
-    let emax = rows.iter().map(y_of).fold(1e-2, f64::max);
-    let mut c = ChartBuilder::on(&root)
-        .caption(
-            format!("metaball: frame time vs RMS hit error, {adapter}"),
-            ("sans-serif", 15),
-        )
-        .margin(12)
-        .x_label_area_size(38)
-        .y_label_area_size(60)
-        .build_cartesian_2d(
-            (tmin / 1.6..tmax * 2.5).log_scale(),
-            (floor / 1.5..emax * 3.0).log_scale(),
-        )
-        .map_err(|e| e.to_string())?;
-    c.configure_mesh()
-        .x_desc("frame time, ms (march + composite, median, log)")
-        .y_desc("RMS hit distance error, voxel edges (log)")
-        .x_labels(6)
-        .y_labels(5)
-        .x_label_formatter(&|v| format!("{v:.2}"))
-        .y_label_formatter(&|v| format!("{v:.0e}"))
-        .label_style(("sans-serif", 11))
-        .draw()
-        .map_err(|e| e.to_string())?;
-    let mut counts: Vec<usize> = rows.iter().map(|r| r.instances).collect();
-    counts.dedup();
-    for (k, &n) in counts.iter().enumerate() {
-        let color = Palette99::pick(k).to_rgba();
-        let pts: Vec<&Row> = rows.iter().filter(|r| r.instances == n).collect();
-        c.draw_series(
-            pts.iter()
-                .map(|r| Circle::new((r.frame_ms, y_of(r)), 4, color.filled())),
-        )
-        .map_err(|e| e.to_string())?
-        .label(format!("{n} instances"))
-        .legend(move |(x, y)| Circle::new((x, y), 4, color.filled()));
-        c.draw_series(pts.iter().map(|r| {
-            let label = if r.grid == "bins" {
-                format!(" {} ({:.0} steps)", r.method, r.steps.mean)
+    let points: Vec<crate::chart::Point> = rows
+        .iter()
+        .map(|r| crate::chart::Point {
+            group: format!("{} instances", r.instances),
+            ms: r.frame_ms,
+            err: r.rms_err,
+            label: if r.grid == "bins" {
+                format!("{} ({:.0} steps)", r.method, r.steps.mean)
             } else {
                 let how = r.method.trim_start_matches("SDF texture, ");
-                format!(" SDF {how} {} ({:.0} steps)", r.grid, r.steps.mean)
-            };
-            Text::new(
-                label,
-                (r.frame_ms, y_of(r)),
-                ("sans-serif", 10).into_font().color(&color),
-            )
-        }))
-        .map_err(|e| e.to_string())?;
-    }
-    c.configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 11))
-        .draw()
-        .map_err(|e| e.to_string())?;
-    root.present().map_err(|e| e.to_string())?;
-    Ok(())
+                format!("SDF {how} {} ({:.0} steps)", r.grid, r.steps.mean)
+            },
+        })
+        .collect();
+    let axes = crate::chart::Axes {
+        caption: format!("metaball: frame time vs RMS hit error, {adapter}"),
+        x: "frame time, ms (march + composite, median, log)",
+        y: "RMS hit distance error, voxel edges (log)",
+        floor: 1e-4,
+    };
+    crate::chart::time_vs_error(path, &axes, &points)
 }

@@ -348,71 +348,20 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
 }
 
 fn chart(path: &std::path::Path, adapter: &str, rows: &[Row]) -> Result<(), String> {
-    use plotters::prelude::*;
-    let _ =
-        plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular());
-    let root = BitMapBackend::new(path, (900, 560)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| e.to_string())?;
-    let floor = 1e-5;
-    let y_of = |r: &Row| r.rms_err.max(floor);
-    let (tmin, tmax) = rows.iter().fold((f64::INFINITY, 0f64), |(a, b), r| {
-        (a.min(r.frame_ms), b.max(r.frame_ms))
-    });
-    let emax = rows.iter().map(y_of).fold(1e-3, f64::max);
-    let mut c = ChartBuilder::on(&root)
-        .caption(
-            format!("volume raymarch: frame time vs RMS RGBA error, {adapter}"),
-            ("sans-serif", 15),
-        )
-        .margin(12)
-        .x_label_area_size(38)
-        .y_label_area_size(60)
-        .build_cartesian_2d(
-            (tmin / 1.6..tmax * 2.5).log_scale(),
-            (floor / 1.5..emax * 3.0).log_scale(),
-        )
-        .map_err(|e| e.to_string())?;
-    c.configure_mesh()
-        .x_desc("frame time, ms (march + composite, median, log)")
-        .y_desc("RMS error against a quarter-voxel reference (log)")
-        .x_labels(6)
-        .y_labels(5)
-        .x_label_formatter(&|v| format!("{v:.2}"))
-        .y_label_formatter(&|v| format!("{v:.0e}"))
-        .label_style(("sans-serif", 11))
-        .draw()
-        .map_err(|e| e.to_string())?;
-    let mut groups: Vec<(u32, &str)> = rows.iter().map(|r| (r.size, r.camera)).collect();
-    groups.dedup();
-    for (k, &(size, camera)) in groups.iter().enumerate() {
-        let color = Palette99::pick(k).to_rgba();
-        let pts: Vec<&Row> = rows
-            .iter()
-            .filter(|r| r.size == size && r.camera == camera)
-            .collect();
-        c.draw_series(
-            pts.iter()
-                .map(|r| Circle::new((r.frame_ms, y_of(r)), 4, color.filled())),
-        )
-        .map_err(|e| e.to_string())?
-        .label(format!("{size}³, camera {camera}"))
-        .legend(move |(x, y)| Circle::new((x, y), 4, color.filled()));
-        c.draw_series(pts.iter().map(|r| {
-            Text::new(
-                format!(" {}", r.config),
-                (r.frame_ms, y_of(r)),
-                ("sans-serif", 9).into_font().color(&color),
-            )
-        }))
-        .map_err(|e| e.to_string())?;
-    }
-    c.configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 11))
-        .draw()
-        .map_err(|e| e.to_string())?;
-    root.present().map_err(|e| e.to_string())?;
-    Ok(())
+    let points: Vec<crate::chart::Point> = rows
+        .iter()
+        .map(|r| crate::chart::Point {
+            group: format!("{}³, camera {}", r.size, r.camera),
+            ms: r.frame_ms,
+            err: r.rms_err,
+            label: r.config.clone(),
+        })
+        .collect();
+    let axes = crate::chart::Axes {
+        caption: format!("volume raymarch: frame time vs RMS RGBA error, {adapter}"),
+        x: "frame time, ms (march + composite, median, log)",
+        y: "RMS error against a quarter-voxel reference (log)",
+        floor: 1e-5,
+    };
+    crate::chart::time_vs_error(path, &axes, &points)
 }

@@ -6,6 +6,7 @@ mod toolchain;
 mod bench;
 mod bench_metaball;
 mod bench_volume;
+mod chart;
 mod lint;
 
 use std::path::{Path, PathBuf};
