@@ -66,6 +66,17 @@ impl Rig {
         .unwrap()
     }
 
+    /// An fBm cloud of n³ voxels filling the unit box around the origin.
+    fn cloud(&self, n: u32, seed: u32) -> Volume {
+        let dims = [n; 3];
+        self.volume(
+            &fbm_cloud(dims, seed),
+            dims,
+            Vec3::splat(1.0 / n as f32),
+            Vec3::splat(-0.5),
+        )
+    }
+
     /// The marched image (premultiplied rgba per pixel), all zero where the box is off screen.
     fn march(
         &self,
@@ -250,13 +261,7 @@ fn constant_density_transmittance_outside_inside_and_on_the_boundary() {
 #[test]
 fn opacity_correction_makes_the_step_length_irrelevant() {
     let rig = Rig::new();
-    let dims = [16u32; 3];
-    let volume = rig.volume(
-        &fbm_cloud(dims, 3),
-        dims,
-        Vec3::splat(1.0 / 16.0),
-        Vec3::splat(-0.5),
-    );
+    let volume = rig.cloud(16, 3);
     let tf = TransferFunction::extinction(Vec3::ONE, 6.0, 1.0 / 64.0, [0.0, 1.0], 64);
     let view = view_from(Vec3::new(0.4, 0.5, 1.6), Vec3::ZERO, 0.05);
     let fine = rig.march(&volume, &tf, &view, None, &plain(1.0 / 256.0, 1.0 / 64.0));
@@ -394,14 +399,14 @@ fn jittered_mean_matches_a_thin_slab_where_the_fixed_lattice_bands() {
         let area = (tent_cdf(u(t1), c) - tent_cdf(u(t0), c)).abs();
         (-sigma * area / (d.x.abs() as f64 * n as f64)).exp()
     };
-    let fixed = rig.march(&volume, &tf, &view, None, &plain(step, reference as f32));
+    let fixed = rig.march(&volume, &tf, &view, None, &plain(step, reference));
     let frames = 64;
     let mut mean = vec![0.0f64; (SIZE * SIZE) as usize];
     for frame in 0..frames {
         let s = MarchSettings {
             jitter: true,
             frame,
-            ..plain(step, reference as f32)
+            ..plain(step, reference)
         };
         for (m, p) in mean
             .iter_mut()
@@ -481,9 +486,7 @@ fn a_box_longer_than_any_fixed_cap_is_marched_to_its_end() {
 #[test]
 fn skipping_bricks_does_not_change_the_image() {
     let rig = Rig::new();
-    let dims = [32u32; 3];
-    let cloud = fbm_cloud(dims, 11);
-    let volume = rig.volume(&cloud, dims, Vec3::splat(1.0 / 32.0), Vec3::splat(-0.5));
+    let volume = rig.cloud(32, 11);
     let tf = TransferFunction::cloud();
     for (name, mode) in [
         ("emission-absorption", Mode::EmissionAbsorption),
@@ -673,13 +676,7 @@ fn rays_stop_at_the_scene_depth_standard_and_reversed() {
 #[test]
 fn snapshots_outside_inside_and_across_the_boundary() {
     let rig = Rig::new();
-    let dims = [24u32; 3];
-    let volume = rig.volume(
-        &fbm_cloud(dims, 5),
-        dims,
-        Vec3::splat(1.0 / 24.0),
-        Vec3::splat(-0.5),
-    );
+    let volume = rig.cloud(24, 5);
     let tf = TransferFunction::cloud();
     let s = MarchSettings {
         jitter: false,
@@ -711,13 +708,7 @@ fn snapshots_outside_inside_and_across_the_boundary() {
 #[test]
 fn light_volume_and_shadow_rays_agree() {
     let rig = Rig::new();
-    let dims = [24u32; 3];
-    let volume = rig.volume(
-        &fbm_cloud(dims, 5),
-        dims,
-        Vec3::splat(1.0 / 24.0),
-        Vec3::splat(-0.5),
-    );
+    let volume = rig.cloud(24, 5);
     let tf = TransferFunction::cloud();
     let view = view_from(Vec3::new(0.6, 0.3, 1.5), Vec3::ZERO, 0.05);
     let base = MarchSettings {
