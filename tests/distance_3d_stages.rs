@@ -109,13 +109,13 @@ fn exact_rows_then_columns() {
     ctx.submit_and_wait("rows", enc).unwrap();
     let rows = words(&ctx, &nearest);
     // CPU model of the row pass: nearest marked x in the row, the left one on a tie.
-    for i in 0..rows.len() {
+    for (i, &got) in rows.iter().enumerate() {
         let (x, row) = (i % w, i - i % w);
         let best = (0..w)
             .filter(|&s| m[row + s])
             .min_by_key(|&s| (s.abs_diff(x), s));
         let want = best.map_or(0, |s| cpu::pack_seed3(s, (i / w) % h, i / (w * h)));
-        assert_eq!(rows[i], want, "row pass, voxel {i}");
+        assert_eq!(got, want, "row pass, voxel {i}");
     }
     let stack = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: None,

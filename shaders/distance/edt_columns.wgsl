@@ -18,20 +18,32 @@
 // Latency, not bandwidth, bounds a sequential walk: the build keeps four loads of its band in
 // flight and the top two stack entries in registers;
 // the query keeps its own band's current and next site in registers so it loads only on
-// advance, and looks other bands up by binary search, keeping no per-band state (private arrays
+// advance. The adjacent bands are consulted only near the band's ends, where their nearest site
+// is almost always their last (below) or first (above): a walk from that end stops after a load
+// or two. Farther bands are looked up by binary search, keeping no per-band state (private arrays
 // live in local memory, and zero-initialising them cost as much traffic as the field itself).
+//
+// The last pass of a 3D transform can resolve distances as `field_resolve.wgsl` would, in the
+// same sweep (`columns_resolve`, `columns_resolve_signed`): that saves reading the field again.
 
-import package::shared::seed::{NO_SEED, dist2, dist2_3, unpack_seed2, unpack_seed3};
+import package::shared::seed::{FAR, NO_SEED, dist2, dist2_3, pack_seed3, signed_distance, unpack_seed2, unpack_seed3};
 
 struct ColumnParams {
     size: vec3<u32>,
     // 1: columns run along y; 2: along z.
     axis: u32,
+    // The resolving entries: world units per voxel, and the band (world units) distances are
+    // clamped to (FAR when none).
+    voxel_size: f32,
+    band: f32,
 }
 
 @group(0) @binding(0) var<uniform> params: ColumnParams;
 @group(0) @binding(1) var<storage, read_write> nearest: array<u32>;
 @group(0) @binding(2) var<storage, read_write> stack: array<u32>;
+// `columns_resolve_signed` runs in the outside seeds' field; this is the inside seeds' field.
+@group(0) @binding(3) var<storage, read> nearest_inside: array<u32>;
+@group(0) @binding(4) var distance: texture_storage_3d<r32float, write>;
 
 // 2D fields pack 16/16 bits (sides to 16384 keep every separator numerator in i32).
 override PACK_2D: bool = false;
@@ -97,156 +109,312 @@ fn nearest_on(at: u32, size: u32, stride: u32, p: vec3<i32>) -> u32 {
     return stack[at + lo * stride];
 }
 
-@compute @workgroup_size(32, 8)
-fn columns(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
-    let columns_per_group = 256u / BANDS;
-    let lane = li % columns_per_group;
-    let band = li / columns_per_group;
-    let x = wg.x * columns_per_group + lane;
-    let other = wg.y;
-    let n = params.size[params.axis];
+// `nearest_on` for a band that lies wholly after `p`: walks forward from its first site, which
+// is usually the nearest.
+fn nearest_on_from_start(at: u32, size: u32, stride: u32, p: vec3<i32>) -> u32 {
+    var s = stack[at];
+    var d = cost(s, p);
+    for (var k = 1u; k < size; k++) {
+        let t = stack[at + k * stride];
+        let e = cost(t, p);
+        if e >= d {
+            break;
+        }
+        s = t;
+        d = e;
+    }
+    return s;
+}
+
+// `nearest_on` for a band that lies wholly before `p`: walks back from its last site while the
+// one before it is as near or nearer, so it stops at the same site as the binary search.
+fn nearest_on_from_end(at: u32, size: u32, stride: u32, p: vec3<i32>) -> u32 {
+    var s = stack[at + (size - 1u) * stride];
+    var d = cost(s, p);
+    for (var k = size - 1u; k > 0u; k--) {
+        let t = stack[at + (k - 1u) * stride];
+        let e = cost(t, p);
+        if e > d {
+            break;
+        }
+        s = t;
+        d = e;
+    }
+    return s;
+}
+
+// One band of one column, as the thread that owns it sees it.
+struct Column {
+    x: u32,
+    other: u32,
+    band: u32,
+    lane: u32,
+    columns_per_group: u32,
+    // Column length, first element, element stride; the band is [lo, hi).
+    n: u32,
+    base: u32,
+    stride: u32,
+    band_len: u32,
+    lo: u32,
+    hi: u32,
+    valid: bool,
+}
+
+fn column_of(li: u32, wg: vec3<u32>) -> Column {
+    var c: Column;
+    c.columns_per_group = 256u / BANDS;
+    c.lane = li % c.columns_per_group;
+    c.band = li / c.columns_per_group;
+    c.x = wg.x * c.columns_per_group + c.lane;
+    c.other = wg.y;
+    c.n = params.size[params.axis];
     let row = params.size.x;
     let plane = params.size.x * params.size.y;
-    let base = select(other * row + x, other * plane + x, params.axis == 1u);
-    let stride = select(plane, row, params.axis == 1u);
-    let band_len = (n + BANDS - 1u) / BANDS;
-    let lo = min(n, band * band_len);
-    let hi = min(n, lo + band_len);
-    let valid = x < params.size.x;
+    c.base = select(c.other * row + c.x, c.other * plane + c.x, params.axis == 1u);
+    c.stride = select(plane, row, params.axis == 1u);
+    c.band_len = (c.n + BANDS - 1u) / BANDS;
+    c.lo = min(c.n, c.band * c.band_len);
+    c.hi = min(c.n, c.lo + c.band_len);
+    c.valid = c.x < params.size.x;
+    return c;
+}
 
-    // Build: Meijster's stack over this band's sites, valid for the whole column [0, n).
+// Build: Meijster's stack over this band's sites, valid for the whole column [0, n); returns
+// its size. Every thread of the workgroup calls it, then records the size in `band_size`.
+fn build(c: Column) -> u32 {
     var top = -1;
     var s_top = NO_SEED;
     var s_below = NO_SEED;
-    if valid {
-        let at = base + lo * stride;
-        // Four loads in flight: the next elements are requested before this one is processed,
-        // rotating through registers (an unrolled chunk would multiply the loop body and the
-        // registers it holds, and cut how many threads fit on a core).
-        var q0 = NO_SEED;
-        var q1 = NO_SEED;
-        var q2 = NO_SEED;
-        var q3 = NO_SEED;
-        if lo < hi {
-            q0 = nearest[base + lo * stride];
-        }
-        if lo + 1u < hi {
-            q1 = nearest[base + (lo + 1u) * stride];
-        }
-        if lo + 2u < hi {
-            q2 = nearest[base + (lo + 2u) * stride];
-        }
-        for (var i = lo; i < hi; i++) {
-            if i + 3u < hi {
-                q3 = nearest[base + (i + 3u) * stride];
-            }
-            let s = q0;
-            q0 = q1;
-            q1 = q2;
-            q2 = q3;
-            if s == NO_SEED {
-                continue;
-            }
-            loop {
-                if top < 0 {
-                    break;
-                }
-                var t = 0;
-                if top > 0 {
-                    t = start_of(s_below, s_top, x, other);
-                }
-                let pt = voxel(x, other, u32(t));
-                if cost(s_top, pt) <= cost(s, pt) {
-                    break;
-                }
-                top -= 1;
-                s_top = s_below;
-                if top > 0 {
-                    s_below = stack[at + u32(top - 1) * stride];
-                }
-            }
-            if top < 0 || start_of(s_top, s, x, other) < i32(n) {
-                top += 1;
-                s_below = s_top;
-                s_top = s;
-                stack[at + u32(top) * stride] = s;
-            }
-        }
+    if !c.valid {
+        return 0u;
     }
-    band_size[band * columns_per_group + lane] = u32(top + 1);
-    storageBarrier();
-    workgroupBarrier();
-    if !valid {
-        return;
+    let at = c.base + c.lo * c.stride;
+    // Four loads in flight: the next elements are requested before this one is processed,
+    // rotating through registers (an unrolled chunk would multiply the loop body and the
+    // registers it holds, and cut how many threads fit on a core).
+    var q0 = NO_SEED;
+    var q1 = NO_SEED;
+    var q2 = NO_SEED;
+    var q3 = NO_SEED;
+    if c.lo < c.hi {
+        q0 = nearest[c.base + c.lo * c.stride];
     }
-
-    // Query: positions of this band against every band's envelope, nearest bands first.
-    var own_k = 0u;
-    let own_size = u32(top + 1);
-    let own_at = base + lo * stride;
-    var own_s = select(NO_SEED, stack[own_at], own_size > 0u);
-    var own_next = select(NO_SEED, stack[own_at + stride], own_size > 1u);
-    for (var i = lo; i < hi; i++) {
-        let p = voxel(x, other, i);
-        var best = NO_SEED;
-        var best_d = FAR_D2;
-        if own_size > 0u {
-            var d = cost(own_s, p);
-            while own_k + 1u < own_size {
-                let d_next = cost(own_next, p);
-                if d_next >= d {
-                    break;
-                }
-                own_k += 1u;
-                own_s = own_next;
-                d = d_next;
-                if own_k + 1u < own_size {
-                    own_next = stack[own_at + (own_k + 1u) * stride];
-                }
-            }
-            best = own_s;
-            best_d = d;
+    if c.lo + 1u < c.hi {
+        q1 = nearest[c.base + (c.lo + 1u) * c.stride];
+    }
+    if c.lo + 2u < c.hi {
+        q2 = nearest[c.base + (c.lo + 2u) * c.stride];
+    }
+    for (var i = c.lo; i < c.hi; i++) {
+        if i + 3u < c.hi {
+            q3 = nearest[c.base + (i + 3u) * c.stride];
         }
-        // Other bands outward, both sides at once; a band whose nearest position is already as
-        // far as the best found cannot win, and the ones beyond it are farther still.
-        for (var off = 1u; off < BANDS; off++) {
-            var open = false;
-            if band + off < BANDS {
-                let c = band + off;
-                let c_lo = c * band_len;
-                if c_lo < n && i32((c_lo - i) * (c_lo - i)) < best_d {
-                    open = true;
-                    let size = band_size[c * columns_per_group + lane];
-                    if size > 0u {
-                        let s = nearest_on(base + c_lo * stride, size, stride, p);
-                        let d = cost(s, p);
-                        if d < best_d {
-                            best = s;
-                            best_d = d;
-                        }
-                    }
-                }
-            }
-            if off <= band {
-                let c = band - off;
-                let c_hi = (c + 1u) * band_len - 1u;
-                if i32((i - c_hi) * (i - c_hi)) < best_d {
-                    open = true;
-                    let size = band_size[c * columns_per_group + lane];
-                    if size > 0u {
-                        let s = nearest_on(base + c * band_len * stride, size, stride, p);
-                        let d = cost(s, p);
-                        if d < best_d {
-                            best = s;
-                            best_d = d;
-                        }
-                    }
-                }
-            }
-            if !open {
+        let s = q0;
+        q0 = q1;
+        q1 = q2;
+        q2 = q3;
+        if s == NO_SEED {
+            continue;
+        }
+        loop {
+            if top < 0 {
                 break;
             }
+            var t = 0;
+            if top > 0 {
+                t = start_of(s_below, s_top, c.x, c.other);
+            }
+            let pt = voxel(c.x, c.other, u32(t));
+            if cost(s_top, pt) <= cost(s, pt) {
+                break;
+            }
+            top -= 1;
+            s_top = s_below;
+            if top > 0 {
+                s_below = stack[at + u32(top - 1) * c.stride];
+            }
         }
-        nearest[base + i * stride] = best;
+        if top < 0 || start_of(s_top, s, c.x, c.other) < i32(c.n) {
+            top += 1;
+            s_below = s_top;
+            s_top = s;
+            stack[at + u32(top) * c.stride] = s;
+        }
+    }
+    return u32(top + 1);
+}
+
+// The query's walk along its own band's envelope: the current site and the next.
+struct Walk {
+    k: u32,
+    size: u32,
+    at: u32,
+    s: u32,
+    next: u32,
+}
+
+fn walk_of(c: Column, size: u32) -> Walk {
+    let at = c.base + c.lo * c.stride;
+    return Walk(
+        0u,
+        size,
+        at,
+        select(NO_SEED, stack[at], size > 0u),
+        select(NO_SEED, stack[at + c.stride], size > 1u),
+    );
+}
+
+// The nearest site to position `i` of this band, against every band's envelope, nearest bands
+// first. Positions must come in increasing order. Returns the site and its squared distance.
+fn query(c: Column, walk: ptr<function, Walk>, i: u32) -> vec2<u32> {
+    let p = voxel(c.x, c.other, i);
+    var best = NO_SEED;
+    var best_d = FAR_D2;
+    if (*walk).size > 0u {
+        var d = cost((*walk).s, p);
+        while (*walk).k + 1u < (*walk).size {
+            let d_next = cost((*walk).next, p);
+            if d_next >= d {
+                break;
+            }
+            (*walk).k += 1u;
+            (*walk).s = (*walk).next;
+            d = d_next;
+            if (*walk).k + 1u < (*walk).size {
+                (*walk).next = stack[(*walk).at + ((*walk).k + 1u) * c.stride];
+            }
+        }
+        best = (*walk).s;
+        best_d = d;
+    }
+    // Other bands outward, both sides at once; a band whose nearest position is already as
+    // far as the best found cannot win, and the ones beyond it are farther still.
+    for (var off = 1u; off < BANDS; off++) {
+        var open = false;
+        if c.band + off < BANDS {
+            let b = c.band + off;
+            let b_lo = b * c.band_len;
+            if b_lo < c.n && i32((b_lo - i) * (b_lo - i)) < best_d {
+                open = true;
+                let size = band_size[b * c.columns_per_group + c.lane];
+                if size > 0u {
+                    let at = c.base + b_lo * c.stride;
+                    var s: u32;
+                    if off == 1u {
+                        s = nearest_on_from_start(at, size, c.stride, p);
+                    } else {
+                        s = nearest_on(at, size, c.stride, p);
+                    }
+                    let d = cost(s, p);
+                    if d < best_d {
+                        best = s;
+                        best_d = d;
+                    }
+                }
+            }
+        }
+        if off <= c.band {
+            let b = c.band - off;
+            let b_hi = (b + 1u) * c.band_len - 1u;
+            if i32((i - b_hi) * (i - b_hi)) < best_d {
+                open = true;
+                let size = band_size[b * c.columns_per_group + c.lane];
+                if size > 0u {
+                    let at = c.base + b * c.band_len * c.stride;
+                    var s: u32;
+                    if off == 1u {
+                        s = nearest_on_from_end(at, size, c.stride, p);
+                    } else {
+                        s = nearest_on(at, size, c.stride, p);
+                    }
+                    let d = cost(s, p);
+                    if d < best_d {
+                        best = s;
+                        best_d = d;
+                    }
+                }
+            }
+        }
+        if !open {
+            break;
+        }
+    }
+    return vec2<u32>(best, u32(best_d));
+}
+
+// World distance of a query's answer, clamped to the band (FAR where there is no seed).
+fn world(found: vec2<u32>) -> f32 {
+    if found.x == NO_SEED {
+        return FAR;
+    }
+    return sqrt(f32(found.y)) * params.voxel_size;
+}
+
+fn banded(d: f32) -> f32 {
+    return clamp(d, -params.band, params.band);
+}
+
+@compute @workgroup_size(32, 8)
+fn columns(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
+    let c = column_of(li, wg);
+    let size = build(c);
+    band_size[c.band * c.columns_per_group + c.lane] = size;
+    storageBarrier();
+    workgroupBarrier();
+    if !c.valid {
+        return;
+    }
+    // The answer overwrites `nearest` in place; all of it was read before the barrier.
+    var walk = walk_of(c, size);
+    for (var i = c.lo; i < c.hi; i++) {
+        nearest[c.base + i * c.stride] = query(c, &walk, i).x;
+    }
+}
+
+// `columns`, and the unsigned distance of every voxel it answers (3D).
+@compute @workgroup_size(32, 8)
+fn columns_resolve(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
+    let c = column_of(li, wg);
+    let size = build(c);
+    band_size[c.band * c.columns_per_group + c.lane] = size;
+    storageBarrier();
+    workgroupBarrier();
+    if !c.valid {
+        return;
+    }
+    var walk = walk_of(c, size);
+    for (var i = c.lo; i < c.hi; i++) {
+        let found = query(c, &walk, i);
+        nearest[c.base + i * c.stride] = found.x;
+        let p = vec3<u32>(voxel(c.x, c.other, i));
+        textureStore(distance, p, vec4<f32>(banded(world(found)), 0.0, 0.0, 0.0));
+    }
+}
+
+// `columns` in the outside seeds' field, and the signed distance of every voxel it answers,
+// as `field_resolve.wgsl`'s `resolve_signed` gives it from both fields (3D).
+@compute @workgroup_size(32, 8)
+fn columns_resolve_signed(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
+    let c = column_of(li, wg);
+    let size = build(c);
+    band_size[c.band * c.columns_per_group + c.lane] = size;
+    storageBarrier();
+    workgroupBarrier();
+    if !c.valid {
+        return;
+    }
+    var walk = walk_of(c, size);
+    for (var i = c.lo; i < c.hi; i++) {
+        let found = query(c, &walk, i);
+        let at = c.base + i * c.stride;
+        nearest[at] = found.x;
+        let p = vec3<u32>(voxel(c.x, c.other, i));
+        let s_in = nearest_inside[at];
+        var to_inside = FAR;
+        if s_in != NO_SEED {
+            to_inside = length(vec3<f32>(unpack_seed3(s_in) - vec3<i32>(p))) * params.voxel_size;
+        }
+        let d = signed_distance(s_in, pack_seed3(p), to_inside, world(found), found.x, 0.5 * params.voxel_size);
+        textureStore(distance, p, vec4<f32>(banded(d), 0.0, 0.0, 0.0));
     }
 }

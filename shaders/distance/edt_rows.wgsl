@@ -3,9 +3,9 @@
 //
 // One workgroup per row; every global read and write is a contiguous run of the row, so the pass
 // is coalesced although the row is the direction a thread-per-line scheme would stride across.
-// `rows` (3D, rows ≤ 2046) holds the whole row in workgroup memory: each thread sweeps a short
-// segment, a scan over the 256 segments carries the nearest marks across them, and the volume is
-// read once and the field written once (5 bytes per voxel). `rows_2d` (rows to 16384) walks the
+// `rows` (3D, rows ≤ 2046) holds whole rows in workgroup memory, as many as fit (ROWS): each
+// thread sweeps a short segment, a scan over the row's segments carries the nearest marks across
+// them, and the volume is read once and the field written once (5 bytes per voxel). `rows_2d` (rows to 16384) walks the
 // row in chunks of 256 with a max-scan from the left and a min-scan from the right, and packs
 // 16/16 bits.
 
@@ -28,11 +28,14 @@ const CHUNK: u32 = 256u;
 // "Nothing to the right yet" for the min-scan.
 const NONE_RIGHT: u32 = 0xffffffffu;
 
-// `rows` holds a whole row: the 3D packing's 2046 fits.
+// `rows` holds whole rows: the 3D packing's 2046 fits.
 const MAX_ROW: u32 = 2048u;
+// `rows`: rows per workgroup (a power of two; ROWS × width ≤ MAX_ROW). Short rows share a
+// workgroup so that each barrier serves several rows and each thread sweeps a few cells.
+override ROWS: u32 = 1u;
 
 var<workgroup> scan: array<u32, 256>;
-// `rows`: the row's marks, then its packed nearest seeds.
+// `rows`: the rows' marks, then their packed nearest seeds.
 var<workgroup> row_cells: array<u32, MAX_ROW>;
 // `rows`: per segment, the last mark + 1 (0: none) and the first mark (NONE_RIGHT: none),
 // scanned into prefix maxima and suffix minima.
@@ -100,63 +103,78 @@ fn nearer(x: u32, left: u32, right: u32) -> u32 {
 
 @compute @workgroup_size(256)
 fn rows(@builtin(local_invocation_id) lid: vec3<u32>, @builtin(workgroup_id) wg: vec3<u32>) {
-    let y = wg.x;
-    let z = wg.y;
     let w = params.size.x;
-    let t = lid.x;
-    for (var x = t; x < w; x += CHUNK) {
-        row_cells[x] = u32(is_seed(textureLoad(volume, vec3<u32>(x, y, z), 0).r));
+    // ROWS rows per workgroup, `lanes` threads each; row r's cells start at r * w.
+    let lanes = CHUNK / ROWS;
+    let r = lid.x / lanes;
+    let t = lid.x % lanes;
+    let y = wg.x * ROWS + r;
+    let z = wg.y;
+    let live = y < params.size.y;
+    let cells = r * w;
+    for (var x = t; x < w; x += lanes) {
+        if live {
+            row_cells[cells + x] = u32(is_seed(textureLoad(volume, vec3<u32>(x, y, z), 0).r));
+        }
     }
     workgroupBarrier();
-    // Thread t owns the contiguous segment [s0, s1).
-    let k = (w + CHUNK - 1u) / CHUNK;
+    // Thread t owns the contiguous segment [s0, s1) of its row.
+    let k = (w + lanes - 1u) / lanes;
     let s0 = min(w, t * k);
     let s1 = min(w, s0 + k);
     var last = 0u;
     var first = NONE_RIGHT;
-    for (var x = s0; x < s1; x++) {
-        if row_cells[x] != 0u {
-            last = x + 1u;
-            first = min(first, x);
+    if live {
+        for (var x = s0; x < s1; x++) {
+            if row_cells[cells + x] != 0u {
+                last = x + 1u;
+                first = min(first, x);
+            }
         }
     }
-    seg_last[t] = last;
-    seg_first[t] = first;
+    seg_last[lid.x] = last;
+    seg_first[lid.x] = first;
     workgroupBarrier();
-    for (var offset = 1u; offset < CHUNK; offset <<= 1u) {
-        // Indices are clamped so no read leaves the arrays; select then drops those values.
-        let l = select(0u, seg_last[max(t, offset) - offset], t >= offset);
-        let r = select(NONE_RIGHT, seg_first[min(t + offset, CHUNK - 1u)], t + offset < CHUNK);
+    // Prefix maxima of `seg_last` and suffix minima of `seg_first` within each row's lanes.
+    for (var offset = 1u; offset < lanes; offset <<= 1u) {
+        // Indices are clamped so no read leaves the row; select then drops those values.
+        let l = select(0u, seg_last[lid.x - min(t, offset)], t >= offset);
+        let r_i = lid.x + min(lanes - 1u - t, offset);
+        let rv = select(NONE_RIGHT, seg_first[r_i], t + offset < lanes);
         workgroupBarrier();
-        seg_last[t] = max(seg_last[t], l);
-        seg_first[t] = min(seg_first[t], r);
+        seg_last[lid.x] = max(seg_last[lid.x], l);
+        seg_first[lid.x] = min(seg_first[lid.x], rv);
         workgroupBarrier();
     }
-    // Sweep the own segment both ways; only this thread touches its cells from here. The right
-    // sweep leaves the nearest mark to the right + 1 in the low bits and the mark in bit 31, so
-    // nothing is kept in a private array (those live in slow local memory).
-    var right = select(NONE_RIGHT, seg_first[min(t + 1u, CHUNK - 1u)], t + 1u < CHUNK);
-    for (var x = s1; x > s0; x--) {
-        let marked = row_cells[x - 1u] != 0u;
-        if marked {
-            right = x - 1u;
+    if live {
+        // Sweep the own segment both ways; only this thread touches its cells from here. The
+        // right sweep leaves the nearest mark to the right + 1 in the low bits and the mark in
+        // bit 31, so nothing is kept in a private array (those live in slow local memory).
+        var right = select(NONE_RIGHT, seg_first[lid.x + min(1u, lanes - 1u - t)], t + 1u < lanes);
+        for (var x = s1; x > s0; x--) {
+            let marked = row_cells[cells + x - 1u] != 0u;
+            if marked {
+                right = x - 1u;
+            }
+            row_cells[cells + x - 1u] = select(0u, right + 1u, right != NONE_RIGHT) | (u32(marked) << 31u);
         }
-        row_cells[x - 1u] = select(0u, right + 1u, right != NONE_RIGHT) | (u32(marked) << 31u);
-    }
-    var left = select(0u, seg_last[max(t, 1u) - 1u], t > 0u);
-    for (var x = s0; x < s1; x++) {
-        let cell = row_cells[x];
-        if (cell >> 31u) != 0u {
-            left = x + 1u;
+        var left = select(0u, seg_last[lid.x - min(t, 1u)], t > 0u);
+        for (var x = s0; x < s1; x++) {
+            let cell = row_cells[cells + x];
+            if (cell >> 31u) != 0u {
+                left = x + 1u;
+            }
+            let rc = cell & 0x7fffffffu;
+            let near = nearer(x, left, select(NONE_RIGHT, rc - 1u, rc != 0u));
+            row_cells[cells + x] = select(NO_SEED, pack_seed3(vec3<u32>(near - 1u, y, z)), near != 0u);
         }
-        let r = cell & 0x7fffffffu;
-        let near = nearer(x, left, select(NONE_RIGHT, r - 1u, r != 0u));
-        row_cells[x] = select(NO_SEED, pack_seed3(vec3<u32>(near - 1u, y, z)), near != 0u);
     }
     workgroupBarrier();
-    let row_start = (z * params.size.y + y) * w;
-    for (var x = t; x < w; x += CHUNK) {
-        nearest[row_start + x] = row_cells[x];
+    if live {
+        let row_start = (z * params.size.y + y) * w;
+        for (var x = t; x < w; x += lanes) {
+            nearest[row_start + x] = row_cells[cells + x];
+        }
     }
 }
 

@@ -6,7 +6,7 @@
 // seeds lie on the surface itself: the distance is to the seed point, and the sign comes from
 // the volume (negative where the voxel's value is ≥ threshold), as the sources' metaball SDF does.
 
-import package::shared::seed::{FAR, NO_SEED, key_index, pack_seed2, pack_seed3, unpack_seed2, unpack_seed3};
+import package::shared::seed::{FAR, NO_SEED, key_index, signed_distance, pack_seed2, pack_seed3, unpack_seed2, unpack_seed3};
 
 struct ResolveParams {
     size: vec3<u32>,
@@ -55,11 +55,7 @@ fn seed_distance2(s: u32, p: vec2<u32>) -> f32 {
 
 // Signed from the two fields: `own` is the packed seed naming this voxel itself.
 fn signed(inside_seed: u32, own: u32, to_inside: f32, to_outside: f32, outside_seed: u32) -> f32 {
-    let half = 0.5 * params.voxel_size;
-    if inside_seed == own {
-        return select(-(to_outside - half), -FAR, outside_seed == NO_SEED);
-    }
-    return select(to_inside - half, FAR, inside_seed == NO_SEED);
+    return signed_distance(inside_seed, own, to_inside, to_outside, outside_seed, 0.5 * params.voxel_size);
 }
 
 @compute @workgroup_size(32, 4, 2)

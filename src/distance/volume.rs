@@ -57,6 +57,41 @@ fn bands_for(columns: u32, length: u32) -> usize {
     BAND_CHOICES.iter().position(|&b| b == want).unwrap()
 }
 
+/// Rows per workgroup in the exact row pass (`edt_rows.wgsl`, `ROWS`): a power of two up to 32,
+/// as many rows of `width` as its 2048 cells of workgroup memory hold while each thread still
+/// sweeps at most 8 cells, and no more than there are rows. Short rows then share the scan's
+/// barriers: at 512³ four rows share a workgroup.
+fn rows_per_group(width: u32, rows: u32) -> u32 {
+    let mut r = 32u32;
+    while r > 1 && (r * width > 2048 || width.div_ceil(256 / r) > 8 || r / 2 >= rows) {
+        r /= 2;
+    }
+    r
+}
+
+/// Where the last exact column pass writes distances (`columns_resolve*` in `edt_columns.wgsl`).
+struct Fuse<'a> {
+    /// `R32Float` 3D storage view.
+    distance: &'a wgpu::TextureView,
+    voxel_size: f32,
+    /// World units; `f32::MAX` for none.
+    band: f32,
+    /// Signed: the inside seeds' field (the pass runs in the outside seeds' field).
+    inside_field: Option<&'a wgpu::Buffer>,
+}
+
+/// A pipeline specialised by `overrides`, made on first use.
+fn cached<'a, E: Entry>(
+    slot: &'a std::sync::OnceLock<ComputePipeline<E>>,
+    device: &wgpu::Device,
+    overrides: &[(&str, f64)],
+) -> Result<&'a ComputePipeline<E>, Error> {
+    if slot.get().is_none() {
+        let _ = slot.set(ComputePipeline::with_overrides(device, overrides)?);
+    }
+    Ok(slot.get().expect("set above"))
+}
+
 /// Most sub-voxel seeds one table may hold (24-bit index in the key).
 pub const MAX_POINTS: u32 = 0xfffffe;
 
@@ -296,10 +331,15 @@ pub struct Distance3d {
     lines_y: ComputePipeline<point_lines::lines_y::Entry>,
     lines_z: ComputePipeline<point_lines::lines_z::Entry>,
     lines_z_signed: ComputePipeline<point_lines::lines_z_signed::Entry>,
-    rows: ComputePipeline<edt_rows::rows::Entry>,
+    /// By rows per workgroup: 1, 2, 4, ..., 32 (`rows_per_group`).
+    rows: [std::sync::OnceLock<ComputePipeline<edt_rows::rows::Entry>>; 6],
     rows_2d: ComputePipeline<edt_rows::rows_2d::Entry>,
     /// Column pass per band count (3D packing, then 2D), made on first use.
     columns: [std::sync::OnceLock<ComputePipeline<edt_columns::columns::Entry>>; 12],
+    /// The last 3D column pass with the resolve folded in, per band count.
+    columns_resolve: [std::sync::OnceLock<ComputePipeline<edt_columns::columns_resolve::Entry>>; 6],
+    columns_resolve_signed:
+        [std::sync::OnceLock<ComputePipeline<edt_columns::columns_resolve_signed::Entry>>; 6],
     /// Bands per column chosen by the caller; `None` picks by grid size.
     column_bands: Option<u32>,
     resolve_unsigned: ComputePipeline<field_resolve::resolve_unsigned::Entry>,
@@ -637,9 +677,11 @@ impl Distance3d {
             lines_y: ComputePipeline::new(device)?,
             lines_z: ComputePipeline::new(device)?,
             lines_z_signed: ComputePipeline::new(device)?,
-            rows: ComputePipeline::new(device)?,
+            rows: Default::default(),
             rows_2d: ComputePipeline::new(device)?,
             columns: Default::default(),
+            columns_resolve: Default::default(),
+            columns_resolve_signed: Default::default(),
             column_bands: None,
             resolve_unsigned: ComputePipeline::new(device)?,
             resolve_signed: ComputePipeline::new(device)?,
@@ -701,6 +743,46 @@ impl Distance3d {
                 }
             }
         };
+        if matches!(options.method, Method::Exact) {
+            // The last column pass resolves as it answers (`columns_resolve*`): the field is not
+            // read a second time.
+            let distance = distance_texture(device, size, wgpu::TextureDimension::D3);
+            let dv = view(&distance);
+            let resolve = |inside_field| Fuse {
+                distance: &dv,
+                voxel_size: options.voxel_size,
+                band: options.band.map_or(f32::MAX, |b| b * options.voxel_size),
+                inside_field,
+            };
+            let nearest = self.encode_exact_fused(
+                device,
+                encoder,
+                volume,
+                options.inside,
+                false,
+                (!options.signed).then(|| resolve(None)),
+                prof,
+            )?;
+            let nearest_outside = if options.signed {
+                Some(self.encode_exact_fused(
+                    device,
+                    encoder,
+                    volume,
+                    options.inside,
+                    true,
+                    Some(resolve(Some(&nearest))),
+                    prof,
+                )?)
+            } else {
+                None
+            };
+            return Ok(Field3d {
+                size,
+                nearest,
+                nearest_outside,
+                distance,
+            });
+        }
         let nearest = flood(encoder, false, prof)?;
         let nearest_outside = if options.signed {
             Some(flood(encoder, true, prof)?)
@@ -1228,15 +1310,91 @@ impl Distance3d {
         invert: bool,
         prof: Prof,
     ) -> Result<wgpu::Buffer, Error> {
+        self.encode_exact_fused(device, encoder, volume, inside, invert, None, prof)
+    }
+
+    /// [`Self::encode_exact`], resolving into `fuse` in its last pass when given.
+    #[allow(clippy::too_many_arguments)]
+    fn encode_exact_fused(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        volume: &wgpu::Texture,
+        inside: Inside,
+        invert: bool,
+        fuse: Option<Fuse>,
+        prof: Prof,
+    ) -> Result<wgpu::Buffer, Error> {
         let size = check_volume(device, volume)?;
         let nearest = self.encode_rows(device, encoder, volume, inside, invert, prof)?;
         let stack = field_buffer(device, "edt envelope stack", size);
-        for axis in [1u32, 2] {
-            if size[axis as usize] > 1 {
-                self.encode_column_pass(device, encoder, &nearest, &stack, size, axis, prof)?;
-            }
+        let axes: Vec<u32> = [1u32, 2]
+            .into_iter()
+            .filter(|&a| size[a as usize] > 1)
+            .collect();
+        let mut fuse = fuse;
+        for (k, &axis) in axes.iter().enumerate() {
+            let last = k + 1 == axes.len();
+            let f = if last { fuse.take() } else { None };
+            self.encode_columns(
+                device, encoder, false, &nearest, &stack, size, axis, size[3 - axis as usize],
+                f, prof,
+            )?;
+        }
+        if let Some(f) = fuse {
+            // A single row (no column pass ran): resolve on its own.
+            self.resolve_into(device, encoder, size, &nearest, f, prof)?;
         }
         Ok(nearest)
+    }
+
+    /// Unsigned or signed resolve of integer seeds into `fuse.distance` in a pass of its own.
+    fn resolve_into(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        size: [u32; 3],
+        nearest: &wgpu::Buffer,
+        fuse: Fuse,
+        prof: Prof,
+    ) -> Result<(), Error> {
+        let params = uniform(
+            device,
+            "resolve params",
+            &field_resolve::ResolveParams {
+                size: size.into(),
+                voxel_size: fuse.voxel_size,
+                band: fuse.band,
+                threshold: 0.0,
+            },
+        );
+        let groups = ComputePipeline::<field_resolve::resolve_unsigned::Entry>::groups_for(size);
+        match fuse.inside_field {
+            None => {
+                let bound = self.resolve_unsigned.bind(
+                    device,
+                    &field_resolve::resolve_unsigned::Resources {
+                        params: (&params).into(),
+                        nearest: nearest.into(),
+                        distance: fuse.distance.into(),
+                    },
+                )?;
+                pass(encoder, &self.resolve_unsigned, &bound, groups, "resolve", prof);
+            }
+            Some(inside) => {
+                let bound = self.resolve_signed.bind(
+                    device,
+                    &field_resolve::resolve_signed::Resources {
+                        params: (&params).into(),
+                        nearest: inside.into(),
+                        nearest_outside: nearest.into(),
+                        distance: fuse.distance.into(),
+                    },
+                )?;
+                pass(encoder, &self.resolve_signed, &bound, groups, "resolve", prof);
+            }
+        }
+        Ok(())
     }
 
     /// First exact pass alone: per row, the nearest marked voxel along x (a new buffer).
@@ -1261,7 +1419,13 @@ impl Distance3d {
             },
         );
         let vv = view(volume);
-        let bound = self.rows.bind(
+        let per_group = rows_per_group(size[0], size[1]);
+        let rows = cached(
+            &self.rows[per_group.trailing_zeros() as usize],
+            device,
+            &[("ROWS", per_group as f64)],
+        )?;
+        let bound = rows.bind(
             device,
             &edt_rows::rows::Resources {
                 params: (&params).into(),
@@ -1271,9 +1435,9 @@ impl Distance3d {
         )?;
         pass(
             encoder,
-            &self.rows,
+            rows,
             &bound,
-            [size[1], size[2], 1],
+            [size[1].div_ceil(per_group), size[2], 1],
             "rows (x)",
             prof,
         );
@@ -1314,7 +1478,7 @@ impl Distance3d {
         }
         let others = if axis == 1 { size[2] } else { size[1] };
         self.encode_columns(
-            device, encoder, false, nearest, stack, size, axis, others, prof,
+            device, encoder, false, nearest, stack, size, axis, others, None, prof,
         )
     }
 
@@ -1329,6 +1493,7 @@ impl Distance3d {
         size: [u32; 3],
         axis: u32,
         others: u32,
+        fuse: Option<Fuse>,
         prof: Prof,
     ) -> Result<(), Error> {
         let choice = match self.column_bands {
@@ -1339,44 +1504,77 @@ impl Distance3d {
             None => bands_for(size[0] * others, size[axis as usize]),
         };
         let bands = BAND_CHOICES[choice];
-        let slot = &self.columns[choice + if pack_2d { 6 } else { 0 }];
-        if slot.get().is_none() {
-            let p = ComputePipeline::with_overrides(
-                device,
-                &[("PACK_2D", pack_2d as u32 as f64), ("BANDS", bands as f64)],
-            )?;
-            let _ = slot.set(p);
-        }
-        let pipeline = slot.get().expect("set above");
+        let overrides = [("PACK_2D", pack_2d as u32 as f64), ("BANDS", bands as f64)];
         let params = uniform(
             device,
             "edt columns params",
             &edt_columns::ColumnParams {
                 size: size.into(),
                 axis,
+                voxel_size: fuse.as_ref().map_or(1.0, |f| f.voxel_size),
+                band: fuse.as_ref().map_or(f32::MAX, |f| f.band),
             },
         );
-        let bound = pipeline.bind(
-            device,
-            &edt_columns::columns::Resources {
-                params: (&params).into(),
-                nearest: nearest.into(),
-                stack: stack.into(),
-            },
-        )?;
-        let name = if axis == 1 {
-            "columns (y)"
-        } else {
-            "columns (z)"
+        let groups = [size[0].div_ceil(256 / bands), others, 1];
+        let name = match (axis, &fuse) {
+            (1, None) => "columns (y)",
+            (1, Some(_)) => "columns (y) + resolve",
+            (_, None) => "columns (z)",
+            (_, Some(_)) => "columns (z) + resolve",
         };
-        pass(
-            encoder,
-            pipeline,
-            &bound,
-            [size[0].div_ceil(256 / bands), others, 1],
-            name,
-            prof,
-        );
+        match fuse {
+            None => {
+                let pipeline = cached(
+                    &self.columns[choice + if pack_2d { 6 } else { 0 }],
+                    device,
+                    &overrides,
+                )?;
+                let bound = pipeline.bind(
+                    device,
+                    &edt_columns::columns::Resources {
+                        params: (&params).into(),
+                        nearest: nearest.into(),
+                        stack: stack.into(),
+                    },
+                )?;
+                pass(encoder, pipeline, &bound, groups, name, prof);
+            }
+            Some(Fuse {
+                distance,
+                inside_field: None,
+                ..
+            }) => {
+                let pipeline = cached(&self.columns_resolve[choice], device, &overrides)?;
+                let bound = pipeline.bind(
+                    device,
+                    &edt_columns::columns_resolve::Resources {
+                        params: (&params).into(),
+                        nearest: nearest.into(),
+                        stack: stack.into(),
+                        distance: distance.into(),
+                    },
+                )?;
+                pass(encoder, pipeline, &bound, groups, name, prof);
+            }
+            Some(Fuse {
+                distance,
+                inside_field: Some(inside),
+                ..
+            }) => {
+                let pipeline = cached(&self.columns_resolve_signed[choice], device, &overrides)?;
+                let bound = pipeline.bind(
+                    device,
+                    &edt_columns::columns_resolve_signed::Resources {
+                        params: (&params).into(),
+                        nearest: nearest.into(),
+                        stack: stack.into(),
+                        nearest_inside: inside.into(),
+                        distance: distance.into(),
+                    },
+                )?;
+                pass(encoder, pipeline, &bound, groups, name, prof);
+            }
+        }
         Ok(())
     }
 
@@ -1422,7 +1620,9 @@ impl Distance3d {
             )?;
             pass(encoder, &self.rows_2d, &bound, [h, 1, 1], "rows (x)", prof);
             if h > 1 {
-                self.encode_columns(device, encoder, true, &nearest, &stack, size, 1, 1, prof)?;
+                self.encode_columns(
+                    device, encoder, true, &nearest, &stack, size, 1, 1, None, prof,
+                )?;
             }
             Ok(nearest)
         };

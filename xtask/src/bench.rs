@@ -80,6 +80,9 @@ fn pass_bytes(name: &str, cells: u64, dims: u32) -> f64 {
         // 2D rows are walked twice: mask read in both sweeps, left result written and re-read,
         // final seed written.
         1.0 * 2.0 + 4.0 * 3.0
+    } else if name.starts_with("columns") && name.ends_with("+ resolve") {
+        // As below, plus the distance written.
+        20.0
     } else if name.starts_with("columns") {
         // Field read, envelope written and read back, answer written.
         16.0
@@ -94,27 +97,41 @@ fn pass_bytes(name: &str, cells: u64, dims: u32) -> f64 {
     per * cells as f64
 }
 
-/// Time `reps` runs of `record` (after `warmup`), each recording its passes into a fresh encoder.
+/// Least wall time of warm-up before the timed runs. GPU clocks fall while the CPU checks the
+/// previous point: on the H100, 2048² exact measured 1.19 ms after three warm-up runs that
+/// followed the 512³ sweep, and 0.26 ms once warmed up for longer.
+const WARMUP_TIME: std::time::Duration = std::time::Duration::from_millis(500);
+
+/// Median, fastest and slowest total ms, and each pass's median ms.
+pub(crate) type Timing = (f64, f64, f64, Vec<(String, f64)>);
+
+/// Time `reps` runs of `record` (after at least `warmup` runs and `WARMUP_TIME`), each recording
+/// its passes into a fresh encoder.
 pub(crate) fn time_runs(
     ctx: &Context,
     warmup: usize,
     reps: usize,
     mut record: impl FnMut(&mut wgpu::CommandEncoder, &mut Profiler),
-) -> Result<(f64, f64, f64, Vec<(String, f64)>), String> {
+) -> Result<Timing, String> {
     let mut prof = Profiler::new(ctx, 64)
         .ok_or("the adapter has no timestamp queries; the benchmark needs them")?;
     let mut totals = Vec::new();
     let mut per_pass: Vec<(String, Vec<f64>)> = Vec::new();
-    for run in 0..warmup + reps {
+    let start = std::time::Instant::now();
+    let mut warm = 0;
+    let mut timed = 0;
+    while timed < reps {
         let mut enc = ctx.encoder("bench");
         record(&mut enc, &mut prof);
         prof.resolve(&mut enc);
         ctx.submit_and_wait("bench", enc)
             .map_err(|e| e.to_string())?;
         let (passes, total) = prof.read(ctx).map_err(|e| e.to_string())?;
-        if run < warmup {
+        if warm < warmup || start.elapsed() < WARMUP_TIME {
+            warm += 1;
             continue;
         }
+        timed += 1;
         totals.push(total);
         if per_pass.is_empty() {
             per_pass = passes
@@ -253,14 +270,6 @@ pub fn run_distance(args: &Args) -> ExitCode {
 }
 
 fn distance(args: &Args) -> Result<(), String> {
-    let ctx = Context::new().map_err(|e| e.to_string())?;
-    let info = ctx.adapter.get_info();
-    let adapter = format!("{} ({:?}, {})", info.name, info.backend, info.driver_info);
-    println!("adapter: {adapter}");
-    let mut d3 = Distance3d::new(&ctx.device).map_err(|e| e.to_string())?;
-    d3.set_column_bands(args.column_bands)
-        .map_err(|e| e.to_string())?;
-    let jfa2 = Jfa2d::new(&ctx.device).map_err(|e| e.to_string())?;
     let pick = |all: &[usize]| -> Vec<usize> {
         all.iter()
             .copied()
@@ -277,6 +286,32 @@ fn distance(args: &Args) -> Result<(), String> {
     } else {
         &[2048, 4096, 8192]
     });
+    let mask3 = |n: usize| random_mask(n * n * n, args.density, n as u64);
+    let mask2 = |n: usize| random_mask(n * n, args.density, 1000 + n as u64);
+    // The peer runs first, every size, before this process opens its device. On the H100 a CUDA
+    // process started while our Vulkan device was open left every later run of this process
+    // slower: 512³ exact took 16.05 ms after it against 6.95 ms in a fresh process, although the
+    // peer had exited (smaller sizes were not affected).
+    let mut peers3 = std::collections::HashMap::new();
+    let mut peers2 = std::collections::HashMap::new();
+    if let Some(cmd) = &args.peer {
+        for &n in &sizes3 {
+            eprintln!("peer {n}³");
+            peers3.insert(n, run_peer(cmd, &mask3(n), &[n, n, n], &format!("{n}c"))?);
+        }
+        for &n in &sizes2 {
+            eprintln!("peer {n}²");
+            peers2.insert(n, run_peer(cmd, &mask2(n), &[n, n], &format!("{n}s"))?);
+        }
+    }
+    let ctx = Context::new().map_err(|e| e.to_string())?;
+    let info = ctx.adapter.get_info();
+    let adapter = format!("{} ({:?}, {})", info.name, info.backend, info.driver_info);
+    println!("adapter: {adapter}");
+    let mut d3 = Distance3d::new(&ctx.device).map_err(|e| e.to_string())?;
+    d3.set_column_bands(args.column_bands)
+        .map_err(|e| e.to_string())?;
+    let jfa2 = Jfa2d::new(&ctx.device).map_err(|e| e.to_string())?;
     let banded = format!("JFA+2 band {}", args.band);
     let methods3: Vec<(String, Options3d)> =
         std::iter::once(("exact".to_string(), Options3d::default()))
@@ -310,15 +345,9 @@ fn distance(args: &Args) -> Result<(), String> {
     for &n in &sizes3 {
         let size = [n, n, n];
         let cells = (n * n * n) as u64;
-        let mask = random_mask(n * n * n, args.density, n as u64);
+        let mask = mask3(n);
         let volume = upload_volume(&ctx, &mask, [n as u32; 3]).map_err(|e| e.to_string())?;
-        let peer = match &args.peer {
-            Some(cmd) => {
-                bar.set_message(format!("{n}³ peer"));
-                Some(run_peer(cmd, &mask, &[n, n, n], &format!("{n}c"))?)
-            }
-            None => None,
-        };
+        let peer = peers3.remove(&n);
         let mut exact_d2: Vec<u64> = Vec::new();
         for (name, opts) in &methods3 {
             bar.set_message(format!("{n}³ {name}"));
@@ -378,15 +407,9 @@ fn distance(args: &Args) -> Result<(), String> {
     for &n in &sizes2 {
         let size = [n, n, 1];
         let cells = (n * n) as u64;
-        let mask = random_mask(n * n, args.density, 1000 + n as u64);
+        let mask = mask2(n);
         let tex = upload_mask(&ctx, &mask, n as u32, n as u32).map_err(|e| e.to_string())?;
-        let peer = match &args.peer {
-            Some(cmd) => {
-                bar.set_message(format!("{n}² peer"));
-                Some(run_peer(cmd, &mask, &[n, n], &format!("{n}s"))?)
-            }
-            None => None,
-        };
+        let peer = peers2.remove(&n);
         // Exact.
         bar.set_message(format!("{n}² exact"));
         let opts = Options3d::default();

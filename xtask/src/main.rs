@@ -47,7 +47,7 @@ enum Command {
         /// Timed runs per point; the median is reported.
         #[arg(long, default_value_t = 20)]
         reps: usize,
-        /// Untimed runs first.
+        /// Untimed runs first: at least this many, and at least 0.5 s of them.
         #[arg(long, default_value_t = 3)]
         warmup: usize,
         /// Fraction of cells that are seeds.
