@@ -499,6 +499,18 @@ impl<E: Entry> ComputePipeline<E> {
         Self::with_overrides(device, &[])
     }
 
+    /// The pipeline specialised by `overrides` held in `slot`, made there on first use.
+    pub(crate) fn cached<'a>(
+        slot: &'a std::sync::OnceLock<Self>,
+        device: &wgpu::Device,
+        overrides: &[(&str, f64)],
+    ) -> Result<&'a Self, Error> {
+        if slot.get().is_none() {
+            let _ = slot.set(Self::with_overrides(device, overrides)?);
+        }
+        Ok(slot.get().expect("set above"))
+    }
+
     /// Create the pipeline with values for the shader's `override` constants.
     pub fn with_overrides(device: &wgpu::Device, overrides: &[(&str, f64)]) -> Result<Self, Error> {
         let info = E::INFO;

@@ -80,18 +80,6 @@ struct Fuse<'a> {
     inside_field: Option<&'a wgpu::Buffer>,
 }
 
-/// A pipeline specialised by `overrides`, made on first use.
-fn cached<'a, E: Entry>(
-    slot: &'a std::sync::OnceLock<ComputePipeline<E>>,
-    device: &wgpu::Device,
-    overrides: &[(&str, f64)],
-) -> Result<&'a ComputePipeline<E>, Error> {
-    if slot.get().is_none() {
-        let _ = slot.set(ComputePipeline::with_overrides(device, overrides)?);
-    }
-    Ok(slot.get().expect("set above"))
-}
-
 /// Most sub-voxel seeds one table may hold (24-bit index in the key).
 pub const MAX_POINTS: u32 = 0xfffffe;
 
@@ -1420,7 +1408,7 @@ impl Distance3d {
         );
         let vv = view(volume);
         let per_group = rows_per_group(size[0], size[1]);
-        let rows = cached(
+        let rows = ComputePipeline::cached(
             &self.rows[per_group.trailing_zeros() as usize],
             device,
             &[("ROWS", per_group as f64)],
@@ -1524,7 +1512,7 @@ impl Distance3d {
         };
         match fuse {
             None => {
-                let pipeline = cached(
+                let pipeline = ComputePipeline::cached(
                     &self.columns[choice + if pack_2d { 6 } else { 0 }],
                     device,
                     &overrides,
@@ -1544,7 +1532,7 @@ impl Distance3d {
                 inside_field: None,
                 ..
             }) => {
-                let pipeline = cached(&self.columns_resolve[choice], device, &overrides)?;
+                let pipeline = ComputePipeline::cached(&self.columns_resolve[choice], device, &overrides)?;
                 let bound = pipeline.bind(
                     device,
                     &edt_columns::columns_resolve::Resources {
@@ -1561,7 +1549,7 @@ impl Distance3d {
                 inside_field: Some(inside),
                 ..
             }) => {
-                let pipeline = cached(&self.columns_resolve_signed[choice], device, &overrides)?;
+                let pipeline = ComputePipeline::cached(&self.columns_resolve_signed[choice], device, &overrides)?;
                 let bound = pipeline.bind(
                     device,
                     &edt_columns::columns_resolve_signed::Resources {

@@ -437,6 +437,21 @@ pub struct LightVolume {
     built_for: (Vec3, f32, Mat4, TransferFunction),
 }
 
+/// The march's `MODE` and `SHADOW` overrides for `settings`.
+fn march_variant(settings: &MarchSettings) -> (usize, usize) {
+    let mode = match settings.mode {
+        Mode::EmissionAbsorption => 0,
+        Mode::MaximumIntensity => 1,
+        Mode::IsoSurface { .. } => 2,
+    };
+    let shadow = match settings.shadow {
+        Shadow::None => 0,
+        Shadow::Rays { .. } => 1,
+        Shadow::LightVolume { .. } => 2,
+    };
+    (mode, shadow)
+}
+
 /// A march waiting to be composited: premultiplied colour and coverage over `rect`.
 pub struct VolumeMarched {
     /// Pixels marched: `[x0, y0, x1, y1)`.
@@ -446,7 +461,9 @@ pub struct VolumeMarched {
 
 pub struct VolumeRenderer {
     bricks: ComputePipeline<bricks::bricks::Entry>,
-    march: ComputePipeline<volume_march::march::Entry>,
+    /// One march pipeline per mode × shadow × skip × sample count (`march_index`), made on
+    /// first use.
+    march: Vec<std::sync::OnceLock<ComputePipeline<volume_march::march::Entry>>>,
     light: ComputePipeline<volume_march::light_volume::Entry>,
     composite: RenderPipeline<volume_composite::fs_main::Entry>,
     sampler: wgpu::Sampler,
@@ -490,7 +507,7 @@ impl VolumeRenderer {
         };
         Ok(Self {
             bricks: ComputePipeline::new(device)?,
-            march: ComputePipeline::new(device)?,
+            march: (0..36).map(|_| std::sync::OnceLock::new()).collect(),
             light: ComputePipeline::new(device)?,
             composite,
             sampler: device.create_sampler(&wgpu::SamplerDescriptor {
@@ -583,15 +600,13 @@ impl VolumeRenderer {
         // The longest chord through a parallelepiped is one of its four diagonals; their sum
         // bounds it generously.
         let guard = |step: f32| ((diagonal_world / step).ceil() + 2.0).min(u32::MAX as f32) as u32;
-        let (mode, iso) = match settings.mode {
-            Mode::EmissionAbsorption => (0, 0.0),
-            Mode::MaximumIntensity => (1, 0.0),
-            Mode::IsoSurface { iso } => (2, iso),
+        let iso = match settings.mode {
+            Mode::IsoSurface { iso } => iso,
+            _ => 0.0,
         };
-        let (shadow, shadow_step) = match settings.shadow {
-            Shadow::None => (0, 1.0),
-            Shadow::Rays { step } => (1, step),
-            Shadow::LightVolume { step } => (2, step),
+        let shadow_step = match settings.shadow {
+            Shadow::None => 1.0,
+            Shadow::Rays { step } | Shadow::LightVolume { step } => step,
         };
         let (near_z, far_z) = if view.reversed_z {
             (1.0, 0.0)
@@ -611,10 +626,8 @@ impl VolumeRenderer {
                 dims: volume.dims.into(),
                 brick: BRICK,
                 bricks: bricks.count.into(),
-                mode,
                 // Unit world length along the light per unit of its parameter.
                 light_local,
-                shadow,
                 light_colour: settings.light_colour,
                 ambient: settings.ambient,
                 viewport: glam::Vec2::new(view.viewport[0] as f32, view.viewport[1] as f32),
@@ -624,7 +637,6 @@ impl VolumeRenderer {
                 far_z,
                 tf_range: glam::Vec2::from_array(tf.range),
                 tf_count: tf.entries.len() as u32,
-                skip: settings.skip as u32,
                 skip_below: tf.clear_below().clamp(f32::MIN, f32::MAX),
                 iso,
                 min_transmittance: settings.min_transmittance,
@@ -634,7 +646,6 @@ impl VolumeRenderer {
                 shadow_step,
                 shadow_max_steps: guard(shadow_step),
                 use_depth: use_depth as u32,
-                count_samples: settings.count_samples as u32,
             },
         ))
     }
@@ -830,7 +841,19 @@ impl VolumeRenderer {
             volume.texture.create_view(&Default::default()),
             colour.create_view(&Default::default()),
         );
-        let bound = self.march.bind(
+        let (mode, shadow) = march_variant(settings);
+        let march = ComputePipeline::cached(
+            &self.march[((mode * 3 + shadow) * 2 + settings.skip as usize) * 2
+                + settings.count_samples as usize],
+            device,
+            &[
+                ("MODE", mode as f64),
+                ("SHADOW", shadow as f64),
+                ("SKIP", settings.skip as u32 as f64),
+                ("COUNT_SAMPLES", settings.count_samples as u32 as f64),
+            ],
+        )?;
+        let bound = march.bind(
             device,
             &volume_march::march::Resources {
                 params: (&params).into(),
@@ -852,7 +875,7 @@ impl VolumeRenderer {
             (rect[3] - rect[1]).div_ceil(8),
             1,
         ];
-        self.march.dispatch(&mut pass, &bound, groups);
+        march.dispatch(&mut pass, &bound, groups);
         Ok(Some(VolumeMarched { rect, colour }))
     }
 
