@@ -12,6 +12,7 @@ pub mod gallery;
 pub mod gpu;
 pub mod harness;
 pub mod metaball;
+pub mod ocean;
 pub mod volume;
 
 pub use error::{BindingError, Error};

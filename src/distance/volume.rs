@@ -1325,8 +1325,16 @@ impl Distance3d {
             let last = k + 1 == axes.len();
             let f = if last { fuse.take() } else { None };
             self.encode_columns(
-                device, encoder, false, &nearest, &stack, size, axis, size[3 - axis as usize],
-                f, prof,
+                device,
+                encoder,
+                false,
+                &nearest,
+                &stack,
+                size,
+                axis,
+                size[3 - axis as usize],
+                f,
+                prof,
             )?;
         }
         if let Some(f) = fuse {
@@ -1367,7 +1375,14 @@ impl Distance3d {
                         distance: fuse.distance.into(),
                     },
                 )?;
-                pass(encoder, &self.resolve_unsigned, &bound, groups, "resolve", prof);
+                pass(
+                    encoder,
+                    &self.resolve_unsigned,
+                    &bound,
+                    groups,
+                    "resolve",
+                    prof,
+                );
             }
             Some(inside) => {
                 let bound = self.resolve_signed.bind(
@@ -1379,7 +1394,14 @@ impl Distance3d {
                         distance: fuse.distance.into(),
                     },
                 )?;
-                pass(encoder, &self.resolve_signed, &bound, groups, "resolve", prof);
+                pass(
+                    encoder,
+                    &self.resolve_signed,
+                    &bound,
+                    groups,
+                    "resolve",
+                    prof,
+                );
             }
         }
         Ok(())
@@ -1532,7 +1554,8 @@ impl Distance3d {
                 inside_field: None,
                 ..
             }) => {
-                let pipeline = ComputePipeline::cached(&self.columns_resolve[choice], device, &overrides)?;
+                let pipeline =
+                    ComputePipeline::cached(&self.columns_resolve[choice], device, &overrides)?;
                 let bound = pipeline.bind(
                     device,
                     &edt_columns::columns_resolve::Resources {
@@ -1549,7 +1572,11 @@ impl Distance3d {
                 inside_field: Some(inside),
                 ..
             }) => {
-                let pipeline = ComputePipeline::cached(&self.columns_resolve_signed[choice], device, &overrides)?;
+                let pipeline = ComputePipeline::cached(
+                    &self.columns_resolve_signed[choice],
+                    device,
+                    &overrides,
+                )?;
                 let bound = pipeline.bind(
                     device,
                     &edt_columns::columns_resolve_signed::Resources {

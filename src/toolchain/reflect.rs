@@ -158,11 +158,21 @@ fn dim_name(dim: ImageDimension, arrayed: bool) -> String {
     }
 }
 
+/// The name a struct imported through WESL is known by: the linker spells
+/// `package::shared::gerstner::GerstnerWave` as `package_shared_gerstner_GerstnerWave`, and
+/// the host code should say `GerstnerWave`. Names with escaped underscores are left alone.
+pub fn host_name(name: &str) -> String {
+    match name.strip_prefix("package_") {
+        Some(rest) if !rest.contains("__") => rest.rsplit('_').next().unwrap_or(rest).to_string(),
+        _ => name.to_string(),
+    }
+}
+
 /// WGSL spelling of a type.
 pub fn wgsl_type(module: &naga::Module, ty: naga::Handle<naga::Type>) -> String {
     let t = &module.types[ty];
     if let Some(name) = &t.name {
-        return name.clone();
+        return host_name(name);
     }
     match &t.inner {
         TypeInner::Scalar(s) => scalar_name(*s),
@@ -231,7 +241,7 @@ pub fn wgsl_type(module: &naga::Module, ty: naga::Handle<naga::Type>) -> String 
 pub fn rust_type(module: &naga::Module, ty: naga::Handle<naga::Type>) -> Option<String> {
     let t = &module.types[ty];
     Some(match &t.inner {
-        TypeInner::Struct { .. } => t.name.clone()?,
+        TypeInner::Struct { .. } => host_name(t.name.as_deref()?),
         TypeInner::Scalar(s) | TypeInner::Atomic(s) => match (s.kind, s.width) {
             (ScalarKind::Float, 4) => "f32".into(),
             (ScalarKind::Uint, 4) => "u32".into(),
@@ -561,7 +571,7 @@ pub fn reflect(stage: &Stage) -> Reflection {
             continue;
         }
         structs.push(StructInfo {
-            name: name.clone(),
+            name: host_name(name),
             size: *span,
             align: layouter[handle].alignment.round_up(1),
             members: members
