@@ -1,4 +1,4 @@
-//! Gerstner waves (`ocean/waves`, `fieldkit::ocean`): the GPU sum against the f64 reference,
+//! Gerstner waves (`ocean/surface`, `fieldkit::ocean`): the GPU sum against the f64 reference,
 //! far from the origin and late in time, the trochoid and its cusp, the Jacobian bound for
 //! aligned waves, steepness past 1 refused or clamped, bugs seen in public ports, the CPU query
 //! for floating objects, waves shared between threads, and bad input.

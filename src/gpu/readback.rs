@@ -43,14 +43,20 @@ pub fn read_buffer(ctx: &Context, buffer: &wgpu::Buffer) -> Result<Vec<u8>, Erro
 }
 
 /// Read mip 0 of a 2D or 3D texture into texels of type `T` (e.g. `u32` for `R32Uint`,
-/// `f32` for `R32Float`, `[u8; 4]` for `Rgba8Unorm`), rows tightly packed, x fastest, then y, then z.
+/// `f32` for `R32Float` and `Depth32Float`, `[u8; 4]` for `Rgba8Unorm`), rows tightly packed, x fastest, then y, then z.
 pub fn read_texture<T: bytemuck::Pod>(
     ctx: &Context,
     texture: &wgpu::Texture,
 ) -> Result<Vec<T>, Error> {
     let format = texture.format();
+    // Depth formats are read through their depth aspect (`f32` for `Depth32Float`).
+    let aspect = if format.has_depth_aspect() {
+        wgpu::TextureAspect::DepthOnly
+    } else {
+        wgpu::TextureAspect::All
+    };
     let texel = format
-        .block_copy_size(None)
+        .block_copy_size(Some(aspect))
         .ok_or_else(|| Error::Readback(format!("{format:?} cannot be copied")))?;
     if texel as usize != std::mem::size_of::<T>() {
         return Err(Error::Readback(format!(
@@ -76,7 +82,10 @@ pub fn read_texture<T: bytemuck::Pod>(
     });
     let mut enc = ctx.encoder("texture readback");
     enc.copy_texture_to_buffer(
-        texture.as_image_copy(),
+        wgpu::TexelCopyTextureInfo {
+            aspect,
+            ..texture.as_image_copy()
+        },
         wgpu::TexelCopyBufferInfo {
             buffer: &staging,
             layout: wgpu::TexelCopyBufferLayout {

@@ -23,6 +23,8 @@
 //! # Ok::<(), fieldkit::Error>(())
 //! ```
 
+pub mod render;
+
 use std::sync::{Arc, RwLock};
 
 use glam::{DVec2, DVec3, UVec2, Vec2, Vec4};
@@ -30,7 +32,7 @@ use glam::{DVec2, DVec3, UVec2, Vec2, Vec4};
 use crate::bind::ComputePipeline;
 use crate::error::Error;
 use crate::gpu::uniform_buffer as uniform;
-use crate::shaders::ocean::waves::{self as stage, GerstnerWave, GridParams, WaveSet};
+use crate::shaders::ocean::surface::{self as stage, GerstnerWave, GridParams, WaveSet};
 
 const STAGE: &str = stage::STAGE;
 
@@ -305,7 +307,7 @@ impl SharedWaves {
     }
 }
 
-/// The wave sum on a regular grid on the GPU (`ocean/waves`): displaced positions relative to
+/// The wave sum on a regular grid on the GPU (`ocean/surface`): displaced positions relative to
 /// the waves' origin and normals, one `vec4` each per point, x fastest.
 pub struct WaveGrid {
     pipeline: ComputePipeline<stage::displace_grid::Entry>,

@@ -1,0 +1,594 @@
+//! Drawing the ocean (`ocean/surface`): patches of a grid displaced by the wave sum and the
+//! height-map layers, shaded with normal-map layers and depth fade, into one forward colour
+//! target or four G-buffer targets, testing and writing your depth target.
+//!
+//! Depth fade needs the scene's depth behind the water while the water writes depth itself.
+//! [`OceanRenderer::encode`] copies the depth target first (it needs `COPY_SRC`) and reads the
+//! copy, so both happen in one frame, in one pass.
+
+use std::sync::Mutex;
+
+use glam::{DMat4, DVec2, DVec3, Mat4, Vec2, Vec3, Vec4};
+
+use super::Waves;
+use crate::bind::{RenderPipeline, RenderTargets};
+use crate::error::Error;
+use crate::gpu::uniform_buffer as uniform;
+use crate::shaders::ocean::surface::{self as stage, DetailLayer, FrameParams};
+
+const STAGE: &str = stage::STAGE;
+
+/// Quads per patch side (the shader's `PATCH_QUADS`).
+pub const PATCH_QUADS: u32 = 64;
+/// Most height layers and most normal layers.
+pub const MAX_LAYERS: usize = 4;
+/// Side of the detail texture (texels).
+pub const DETAIL_SIZE: u32 = 256;
+
+/// Where the fragments go.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Output {
+    /// One lit colour target.
+    Forward(wgpu::TextureFormat),
+    /// Scene colour (emissive), world normal, metallic/specular/roughness/shading model, base
+    /// colour: four targets, in that order.
+    GBuffer([wgpu::TextureFormat; 4]),
+}
+
+/// A square of ocean to draw: its world corner (x, z, smallest) and side, in metres.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Patch {
+    pub corner: DVec2,
+    pub size: f64,
+}
+
+/// A scrolling layer of the detail texture.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Layer {
+    /// Metres per repeat of the texture.
+    pub tile: f32,
+    /// Metres per second the pattern moves.
+    pub velocity: Vec2,
+    /// Height layers: metres of height per unit of the texture. Normal layers: slope scale.
+    pub strength: f32,
+}
+
+/// Colours, light and the detail layers.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Look {
+    pub height_layers: Vec<Layer>,
+    pub normal_layers: Vec<Layer>,
+    /// Towards the sun (normalised on use).
+    pub sun_direction: Vec3,
+    pub sun_colour: Vec3,
+    pub deep_colour: Vec3,
+    pub shallow_colour: Vec3,
+    pub sky_colour: Vec3,
+    pub roughness: f32,
+    /// Metres of water over which the colour fades from shallow to deep.
+    pub fade_distance: f32,
+    /// Written to the G-buffer's shading-model channel.
+    pub shading_model: u8,
+    /// Metres the skirts under patch edges reach down (hides cracks between levels).
+    pub skirt: f32,
+}
+
+impl Default for Look {
+    fn default() -> Self {
+        Self {
+            height_layers: vec![
+                Layer {
+                    tile: 23.0,
+                    velocity: Vec2::new(0.9, 0.4),
+                    strength: 0.06,
+                },
+                Layer {
+                    tile: 7.3,
+                    velocity: Vec2::new(-0.5, 0.8),
+                    strength: 0.02,
+                },
+            ],
+            normal_layers: vec![
+                Layer {
+                    tile: 3.1,
+                    velocity: Vec2::new(0.6, 0.2),
+                    strength: 0.03,
+                },
+                Layer {
+                    tile: 1.3,
+                    velocity: Vec2::new(-0.3, 0.5),
+                    strength: 0.01,
+                },
+            ],
+            sun_direction: Vec3::new(0.3, 0.6, -0.7),
+            sun_colour: Vec3::new(1.0, 0.95, 0.85),
+            deep_colour: Vec3::new(0.01, 0.06, 0.12),
+            shallow_colour: Vec3::new(0.1, 0.45, 0.45),
+            sky_colour: Vec3::new(0.55, 0.7, 0.85),
+            roughness: 0.15,
+            fade_distance: 3.0,
+            shading_model: 1,
+            skirt: 2.0,
+        }
+    }
+}
+
+/// The camera, in f64 world coordinates: the renderer draws relative to its (x, z).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OceanCamera {
+    /// World to view.
+    pub view: DMat4,
+    /// View to clip (the depth convention must match the renderer's `reversed_z`).
+    pub proj: Mat4,
+}
+
+impl OceanCamera {
+    /// A right-handed camera at `eye` looking at `target`, y up, in f64 (as the glam
+    /// `look_at` functions build it in f32).
+    pub fn look_at(eye: DVec3, target: DVec3, proj: Mat4) -> Self {
+        let f = (target - eye).normalize();
+        let s = f.cross(DVec3::Y).normalize();
+        let u = s.cross(f);
+        let view = DMat4::from_cols(
+            glam::DVec4::new(s.x, u.x, -f.x, 0.0),
+            glam::DVec4::new(s.y, u.y, -f.y, 0.0),
+            glam::DVec4::new(s.z, u.z, -f.z, 0.0),
+            glam::DVec4::new(-s.dot(eye), -u.dot(eye), f.dot(eye), 1.0),
+        );
+        Self { view, proj }
+    }
+
+    /// The eye's world position.
+    pub fn eye(&self) -> DVec3 {
+        self.view.inverse().transform_point3(DVec3::ZERO)
+    }
+}
+
+pub struct OceanRenderer {
+    output: Output,
+    reversed_z: bool,
+    forward: Option<RenderPipeline<stage::fs_forward::Entry>>,
+    gbuffer: Option<RenderPipeline<stage::fs_gbuffer::Entry>>,
+    indices: wgpu::Buffer,
+    index_count: u32,
+    detail: wgpu::Texture,
+    sampler: wgpu::Sampler,
+    /// The copy of the scene's depth the fade reads, kept while the size holds.
+    depth_copy: Mutex<Option<wgpu::Texture>>,
+}
+
+fn invalid(what: String) -> Error {
+    Error::Invalid { stage: STAGE, what }
+}
+
+/// Triangle indices of one patch: (n + 1)² grid vertices, x fastest, then the skirt ring under
+/// the edges z = 0, x = n, z = n, x = 0 (as `patch_vertex` numbers them).
+pub fn patch_indices(n: u32) -> Vec<u32> {
+    let row = n + 1;
+    let mut out = Vec::with_capacity((6 * n * n + 24 * n) as usize);
+    for j in 0..n {
+        for i in 0..n {
+            let a = j * row + i;
+            let (b, c, d) = (a + 1, a + row, a + row + 1);
+            out.extend_from_slice(&[a, c, b, b, c, d]);
+        }
+    }
+    let grid = |i: u32, j: u32| j * row + i;
+    let skirt_base = row * row;
+    for edge in 0..4u32 {
+        for t in 0..n {
+            let (g0, g1) = match edge {
+                0 => (grid(t, 0), grid(t + 1, 0)),
+                1 => (grid(n, t), grid(n, t + 1)),
+                2 => (grid(t, n), grid(t + 1, n)),
+                _ => (grid(0, t), grid(0, t + 1)),
+            };
+            let s0 = skirt_base + edge * row + t;
+            out.extend_from_slice(&[g0, s0, g1, g1, s0, s0 + 1]);
+        }
+    }
+    out
+}
+
+/// A tileable detail texture: fBm height in r (about −1 to 1), its slope per texture unit in g
+/// (along u) and b (along v), from a periodic value noise so every layer repeats seamlessly.
+pub fn detail_texels(size: u32, seed: u32) -> Vec<Vec4> {
+    let n = size as usize;
+    let hash = |x: u32, y: u32, o: u32| -> f32 {
+        let mut h = x.wrapping_mul(0x8da6b343) ^ y.wrapping_mul(0xd8163841) ^ (seed.wrapping_add(o)).wrapping_mul(0xcb1ab31f);
+        h ^= h >> 13;
+        h = h.wrapping_mul(0x5bd1e995);
+        h ^= h >> 15;
+        (h & 0xffff) as f32 / 32767.5 - 1.0
+    };
+    let mut height = vec![0f32; n * n];
+    let mut amp = 0.5f32;
+    let mut period = 8u32;
+    let mut octave = 0;
+    while period <= size / 2 && octave < 5 {
+        for y in 0..n {
+            for x in 0..n {
+                let fx = x as f32 * period as f32 / size as f32;
+                let fy = y as f32 * period as f32 / size as f32;
+                let (x0, y0) = (fx.floor() as u32, fy.floor() as u32);
+                let (tx, ty) = (fx - x0 as f32, fy - y0 as f32);
+                let s = |t: f32| t * t * (3.0 - 2.0 * t);
+                let c = |i: u32, j: u32| hash(i % period, j % period, octave);
+                let a = c(x0, y0) + (c(x0 + 1, y0) - c(x0, y0)) * s(tx);
+                let b = c(x0, y0 + 1) + (c(x0 + 1, y0 + 1) - c(x0, y0 + 1)) * s(tx);
+                height[y * n + x] += amp * (a + (b - a) * s(ty));
+            }
+        }
+        amp *= 0.5;
+        period *= 2;
+        octave += 1;
+    }
+    let at = |x: usize, y: usize| height[(y % n) * n + (x % n)];
+    (0..n * n)
+        .map(|i| {
+            let (x, y) = (i % n, i / n);
+            let du = (at(x + 1, y) - at(x + n - 1, y)) * 0.5 * n as f32;
+            let dv = (at(x, y + 1) - at(x, y + n - 1)) * 0.5 * n as f32;
+            Vec4::new(at(x, y), du, dv, 0.0)
+        })
+        .collect()
+}
+
+fn layer_uniforms(layers: &[Layer], origin: DVec2, time: f64) -> [DetailLayer; MAX_LAYERS] {
+    let mut out = [DetailLayer::default(); MAX_LAYERS];
+    for (slot, l) in out.iter_mut().zip(layers) {
+        let tile = l.tile as f64;
+        // (origin − v t) / tile, folded to [0, 1) in f64.
+        let o = (origin - l.velocity.as_dvec2() * time) / tile;
+        *slot = DetailLayer {
+            offset: Vec2::new(o.x.rem_euclid(1.0) as f32, o.y.rem_euclid(1.0) as f32),
+            per_metre: (1.0 / tile) as f32,
+            strength: l.strength,
+        };
+    }
+    out
+}
+
+impl Look {
+    fn check(&self) -> Result<(), Error> {
+        for (kind, layers) in [("height", &self.height_layers), ("normal", &self.normal_layers)] {
+            if layers.len() > MAX_LAYERS {
+                return Err(Error::Size {
+                    stage: STAGE,
+                    what: if kind == "height" { "height layers" } else { "normal layers" },
+                    got: layers.len() as u64,
+                    max: MAX_LAYERS as u64,
+                });
+            }
+            for (i, l) in layers.iter().enumerate() {
+                if !(l.tile.is_finite() && l.tile > 0.0) {
+                    return Err(invalid(format!("{kind} layer {i}: tile must be > 0, got {}", l.tile)));
+                }
+                if !(l.velocity.is_finite() && l.strength.is_finite()) {
+                    return Err(invalid(format!("{kind} layer {i}: velocity and strength must be finite")));
+                }
+            }
+        }
+        let colours = [self.sun_colour, self.deep_colour, self.shallow_colour, self.sky_colour];
+        if !colours.iter().all(|c| c.is_finite())
+            || !(self.sun_direction.is_finite() && self.sun_direction.length_squared() > 0.0)
+        {
+            return Err(invalid("colours must be finite and the sun direction non-zero".into()));
+        }
+        if !(self.roughness.is_finite() && self.roughness > 0.0) {
+            return Err(invalid(format!("roughness must be > 0, got {}", self.roughness)));
+        }
+        if !(self.fade_distance.is_finite() && self.fade_distance > 0.0) {
+            return Err(invalid(format!("fade distance must be > 0, got {}", self.fade_distance)));
+        }
+        if !(self.skirt.is_finite() && self.skirt >= 0.0) {
+            return Err(invalid(format!("skirt must be ≥ 0, got {}", self.skirt)));
+        }
+        Ok(())
+    }
+}
+
+impl OceanRenderer {
+    /// Pipelines for `output`, testing and writing a `Depth32Float` target (`reversed_z`: the
+    /// nearer surface has the larger depth).
+    pub fn new(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        output: Output,
+        reversed_z: bool,
+    ) -> Result<Self, Error> {
+        let depth_stencil = Some(wgpu::DepthStencilState {
+            format: wgpu::TextureFormat::Depth32Float,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(if reversed_z {
+                wgpu::CompareFunction::Greater
+            } else {
+                wgpu::CompareFunction::Less
+            }),
+            stencil: Default::default(),
+            bias: Default::default(),
+        });
+        let target = |f| {
+            Some(wgpu::ColorTargetState {
+                format: f,
+                blend: None,
+                write_mask: wgpu::ColorWrites::ALL,
+            })
+        };
+        let (mut forward, mut gbuffer) = (None, None);
+        match output {
+            Output::Forward(f) => {
+                forward = Some(RenderPipeline::new(
+                    device,
+                    &RenderTargets {
+                        color: &[target(f)],
+                        depth_stencil,
+                        ..Default::default()
+                    },
+                )?)
+            }
+            Output::GBuffer(fs) => {
+                gbuffer = Some(RenderPipeline::new(
+                    device,
+                    &RenderTargets {
+                        color: &fs.map(target),
+                        depth_stencil,
+                        ..Default::default()
+                    },
+                )?)
+            }
+        }
+        use wgpu::util::DeviceExt;
+        let idx = patch_indices(PATCH_QUADS);
+        let indices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("ocean patch indices"),
+            contents: bytemuck::cast_slice(&idx),
+            usage: wgpu::BufferUsages::INDEX,
+        });
+        let texels: Vec<u8> = detail_texels(DETAIL_SIZE, 7)
+            .iter()
+            .flat_map(|v| v.to_array())
+            .flat_map(|c| half::f16::from_f32(c).to_le_bytes())
+            .collect();
+        let detail = device.create_texture_with_data(
+            queue,
+            &wgpu::TextureDescriptor {
+                label: Some("ocean detail"),
+                size: wgpu::Extent3d {
+                    width: DETAIL_SIZE,
+                    height: DETAIL_SIZE,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rgba16Float,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            },
+            wgpu::util::TextureDataOrder::LayerMajor,
+            &texels,
+        );
+        Ok(Self {
+            output,
+            reversed_z,
+            forward,
+            gbuffer,
+            indices,
+            index_count: idx.len() as u32,
+            detail,
+            sampler: device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("ocean detail"),
+                address_mode_u: wgpu::AddressMode::Repeat,
+                address_mode_v: wgpu::AddressMode::Repeat,
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                ..Default::default()
+            }),
+            depth_copy: Mutex::new(None),
+        })
+    }
+
+    pub fn output(&self) -> Output {
+        self.output
+    }
+
+    /// Whether the depth test keeps the larger depth (reversed Z).
+    pub fn reversed_z(&self) -> bool {
+        self.reversed_z
+    }
+
+    /// Draw `patches` of `waves` at `time` seen by `camera` into `targets` (one view for
+    /// [`Output::Forward`], four for [`Output::GBuffer`], all the depth target's size), loading
+    /// and storing what they hold, and testing and writing `depth` (`Depth32Float`, with
+    /// `RENDER_ATTACHMENT` and, when `fade` is on, `COPY_SRC`: its copy is what the fade reads).
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        waves: &Waves,
+        time: f64,
+        camera: &OceanCamera,
+        look: &Look,
+        patches: &[Patch],
+        targets: &[&wgpu::TextureView],
+        depth: &wgpu::Texture,
+        fade: bool,
+    ) -> Result<(), Error> {
+        look.check()?;
+        if !time.is_finite() {
+            return Err(invalid(format!("time must be finite, got {time}")));
+        }
+        if !(camera.view.is_finite() && camera.proj.is_finite()) {
+            return Err(invalid("the camera's matrices must be finite".into()));
+        }
+        for (i, p) in patches.iter().enumerate() {
+            if !(p.corner.is_finite() && p.size.is_finite() && p.size > 0.0) {
+                return Err(invalid(format!("patch {i}: corner must be finite and size > 0, got {p:?}")));
+            }
+        }
+        let want = match self.output {
+            Output::Forward(_) => 1,
+            Output::GBuffer(_) => 4,
+        };
+        if targets.len() != want {
+            return Err(invalid(format!("{} targets given, the output takes {want}", targets.len())));
+        }
+        if depth.format() != wgpu::TextureFormat::Depth32Float {
+            return Err(Error::Format {
+                stage: STAGE,
+                format: depth.format(),
+                supported: "Depth32Float",
+            });
+        }
+        let needs = wgpu::TextureUsages::RENDER_ATTACHMENT
+            | if fade { wgpu::TextureUsages::COPY_SRC } else { wgpu::TextureUsages::empty() };
+        if !depth.usage().contains(needs) {
+            return Err(invalid(format!(
+                "the depth target needs {needs:?} (depth fade reads a copy of it), it has {:?}",
+                depth.usage()
+            )));
+        }
+        let size = depth.size();
+        for (i, t) in targets.iter().enumerate() {
+            let e = t.texture().size();
+            if (e.width, e.height) != (size.width, size.height) {
+                return Err(invalid(format!(
+                    "target {i} is {}×{}, the depth target {}×{}",
+                    e.width, e.height, size.width, size.height
+                )));
+            }
+        }
+        // Everything relative to the eye's (x, z): f32 sees small numbers.
+        let eye = camera.eye();
+        let origin = DVec2::new(eye.x, eye.z);
+        let shift = DMat4::from_translation(DVec3::new(origin.x, 0.0, origin.y));
+        let view = (camera.view * shift).as_mat4();
+        let wave_set = waves.gpu(origin, time);
+        let frame = FrameParams {
+            view_proj: camera.proj * view,
+            inv_proj: camera.proj.inverse(),
+            camera: Vec3::new(0.0, eye.y as f32, 0.0),
+            skirt: look.skirt,
+            height_layers: layer_uniforms(&look.height_layers, origin, time),
+            normal_layers: layer_uniforms(&look.normal_layers, origin, time),
+            height_layer_count: look.height_layers.len() as u32,
+            normal_layer_count: look.normal_layers.len() as u32,
+            fade_distance: look.fade_distance,
+            roughness: look.roughness,
+            sun_direction: look.sun_direction.normalize(),
+            shading_model: look.shading_model as u32,
+            sun_colour: look.sun_colour,
+            use_fade: fade as u32,
+            deep_colour: look.deep_colour,
+            shallow_colour: look.shallow_colour,
+            sky_colour: look.sky_colour,
+        };
+        // The copy of the scene's depth (a 1×1 stand-in without fade).
+        let mut cache = self.depth_copy.lock().unwrap_or_else(|e| e.into_inner());
+        let copy_size = if fade {
+            size
+        } else {
+            wgpu::Extent3d {
+                width: 1,
+                height: 1,
+                depth_or_array_layers: 1,
+            }
+        };
+        if cache.as_ref().is_none_or(|c| c.size() != copy_size) {
+            *cache = Some(device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("ocean scene depth copy"),
+                size: copy_size,
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Depth32Float,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                view_formats: &[],
+            }));
+        }
+        let copy = cache.as_ref().expect("made above").clone();
+        drop(cache);
+        if fade {
+            encoder.copy_texture_to_texture(
+                depth.as_image_copy(),
+                copy.as_image_copy(),
+                size,
+            );
+        }
+        if patches.is_empty() {
+            return Ok(());
+        }
+        let instances: Vec<Vec4> = patches
+            .iter()
+            .map(|p| {
+                let c = p.corner - origin;
+                Vec4::new(c.x as f32, c.y as f32, p.size as f32, 0.0)
+            })
+            .collect();
+        use wgpu::util::DeviceExt;
+        let instance_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("ocean patches"),
+            contents: bytemuck::cast_slice(&instances),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let wave_buffer = uniform(device, "ocean waves", &wave_set);
+        let frame_buffer = uniform(device, "ocean frame", &frame);
+        let detail_view = self.detail.create_view(&Default::default());
+        let copy_view = copy.create_view(&Default::default());
+        let depth_view = depth.create_view(&Default::default());
+        let attachments: Vec<Option<wgpu::RenderPassColorAttachment>> = targets
+            .iter()
+            .map(|v| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view: v,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Load,
+                        store: wgpu::StoreOp::Store,
+                    },
+                })
+            })
+            .collect();
+        macro_rules! draw {
+            ($pipeline:expr, $module:ident) => {{
+                let bound = $pipeline.bind(
+                    device,
+                    &stage::$module::Resources {
+                        waves: (&wave_buffer).into(),
+                        frame: (&frame_buffer).into(),
+                        detail: (&detail_view).into(),
+                        detail_sampler: (&self.sampler).into(),
+                        scene_depth: (&copy_view).into(),
+                    },
+                )?;
+                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some(STAGE),
+                    color_attachments: &attachments,
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: &depth_view,
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Load,
+                            store: wgpu::StoreOp::Store,
+                        }),
+                        stencil_ops: None,
+                    }),
+                    ..Default::default()
+                });
+                pass.set_pipeline(&$pipeline.pipeline);
+                bound.set_render(&mut pass);
+                pass.set_vertex_buffer(0, instance_buffer.slice(..));
+                pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(0..self.index_count, 0, 0..patches.len() as u32);
+            }};
+        }
+        match (&self.forward, &self.gbuffer) {
+            (Some(p), _) => draw!(p, fs_forward),
+            (_, Some(p)) => draw!(p, fs_gbuffer),
+            _ => unreachable!("one pipeline is made in new"),
+        }
+        Ok(())
+    }
+}

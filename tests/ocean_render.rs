@@ -1,0 +1,379 @@
+//! The ocean's render stage (`ocean/surface`: `vs_surface` with `fs_forward` or `fs_gbuffer`):
+//! depth fade against a closed form, the depth the pass writes, the G-buffer normal against the
+//! f64 wave normal, snapshots of both outputs, and bad input.
+//!
+//! Tolerances were set on llvmpipe.
+
+use fieldkit::Error;
+use fieldkit::gpu::{Context, read_texture};
+use fieldkit::harness::{Summary, context};
+use fieldkit::ocean::render::{Look, OceanCamera, OceanRenderer, Output, Patch};
+use fieldkit::ocean::{Wave, Waves};
+use glam::{DVec2, DVec3, DVec4, Vec2, Vec3, Vec4};
+
+const W: u32 = 96;
+const H: u32 = 64;
+const RGBA32: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+const CLEAR: f64 = -1.0;
+
+fn wave(dx: f32, dz: f32, amplitude: f32, wavelength: f32, speed: f32) -> Wave {
+    Wave {
+        direction: Vec2::new(dx, dz),
+        amplitude,
+        wavelength,
+        speed,
+    }
+}
+
+fn sea() -> Waves {
+    Waves::new(
+        vec![
+            wave(1.0, 0.15, 0.5, 31.0, 7.0),
+            wave(0.4, 1.0, 0.25, 13.5, 4.6),
+            wave(-0.7, 0.6, 0.08, 5.3, 2.9),
+        ],
+        0.6,
+    )
+    .unwrap()
+}
+
+/// Far from the world origin, looking down the z axis at about 17°.
+fn camera() -> OceanCamera {
+    let eye = DVec3::new(2.0e4, 6.0, -3.5e4);
+    OceanCamera::look_at(
+        eye,
+        eye + DVec3::new(0.0, -6.0, -20.0),
+        glam::camera::rh::proj::directx::perspective(1.0, W as f32 / H as f32, 0.1, 400.0),
+    )
+}
+
+/// 6 × 6 patches of 16 m around the eye.
+fn patches(cam: &OceanCamera) -> Vec<Patch> {
+    let eye = cam.eye();
+    let mut out = Vec::new();
+    for j in 0..6 {
+        for i in 0..6 {
+            out.push(Patch {
+                corner: DVec2::new(eye.x - 48.0 + 16.0 * i as f64, eye.z - 80.0 + 16.0 * j as f64),
+                size: 16.0,
+            });
+        }
+    }
+    out
+}
+
+fn target(ctx: &Context, format: wgpu::TextureFormat) -> wgpu::Texture {
+    ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("test target"),
+        size: wgpu::Extent3d {
+            width: W,
+            height: H,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::COPY_SRC
+            | wgpu::TextureUsages::TEXTURE_BINDING,
+        view_formats: &[],
+    })
+}
+
+/// Clear the colour targets to CLEAR and the depth to `depth`, then draw.
+#[allow(clippy::too_many_arguments)]
+fn draw(
+    ctx: &Context,
+    renderer: &OceanRenderer,
+    waves: &Waves,
+    look: &Look,
+    targets: &[wgpu::Texture],
+    depth: &wgpu::Texture,
+    clear_depth: f32,
+    fade: bool,
+) {
+    let cam = camera();
+    let views: Vec<wgpu::TextureView> = targets.iter().map(|t| t.create_view(&Default::default())).collect();
+    let depth_view = depth.create_view(&Default::default());
+    let mut enc = ctx.encoder("ocean test");
+    {
+        let attachments: Vec<_> = views
+            .iter()
+            .map(|v| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view: v,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color {
+                            r: CLEAR,
+                            g: CLEAR,
+                            b: CLEAR,
+                            a: CLEAR,
+                        }),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })
+            })
+            .collect();
+        enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("clear"),
+            color_attachments: &attachments,
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &depth_view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(clear_depth),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            ..Default::default()
+        });
+    }
+    let refs: Vec<&wgpu::TextureView> = views.iter().collect();
+    renderer
+        .encode(&ctx.device, &mut enc, waves, 12.5, &cam, look, &patches(&cam), &refs, depth, fade)
+        .unwrap();
+    ctx.submit_and_wait("ocean test", enc).unwrap();
+}
+
+/// The pixel centre's ray hitting y = 0: view depth and NDC depth, if it hits ahead.
+fn plane_hit(cam: &OceanCamera, x: u32, y: u32) -> Option<(f64, f64)> {
+    let proj = cam.proj.as_dmat4();
+    let inv = (proj * cam.view).inverse();
+    let ndc = DVec2::new((x as f64 + 0.5) / W as f64 * 2.0 - 1.0, 1.0 - (y as f64 + 0.5) / H as f64 * 2.0);
+    let un = |z: f64| {
+        let h = inv * DVec4::new(ndc.x, ndc.y, z, 1.0);
+        h.truncate() / h.w
+    };
+    let (a, b) = (un(0.0), un(1.0));
+    let t = a.y / (a.y - b.y);
+    if !(t > 0.0 && t < 1.0) {
+        return None;
+    }
+    let p = a + (b - a) * t;
+    let v = cam.view * p.extend(1.0);
+    let clip = proj * v;
+    Some((-v.z, clip.z / clip.w))
+}
+
+/// NDC depth of view depth `d`.
+fn ndc_of(cam: &OceanCamera, d: f64) -> f64 {
+    let clip = cam.proj.as_dmat4() * DVec4::new(0.0, 0.0, -d, 1.0);
+    clip.z / clip.w
+}
+
+fn calm_look() -> Look {
+    Look {
+        height_layers: vec![],
+        normal_layers: vec![],
+        deep_colour: Vec3::ZERO,
+        shallow_colour: Vec3::ONE,
+        fade_distance: 3.0,
+        skirt: 0.0,
+        ..Look::default()
+    }
+}
+
+/// A calm sea (0.1 mm waves) over a scene at a constant view depth of 15 m: where the water is
+/// nearer, it is drawn with fade = 1 − saturate((15 − its depth) / 3), which the base-colour
+/// target shows directly (deep black, shallow white), and its depth is written; elsewhere the
+/// scene's depth and the clear colour stay.
+#[test]
+fn depth_fade_and_depth_write_in_one_pass() {
+    let ctx = context();
+    let calm = Waves::new(vec![wave(1.0, 0.0, 1e-4, 50.0, 0.0)], 0.0).unwrap();
+    let renderer = OceanRenderer::new(&ctx.device, &ctx.queue, Output::GBuffer([RGBA32; 4]), false).unwrap();
+    let targets: Vec<_> = (0..4).map(|_| target(&ctx, RGBA32)).collect();
+    let depth = target(&ctx, wgpu::TextureFormat::Depth32Float);
+    let cam = camera();
+    let scene = 15.0;
+    let scene_ndc = ndc_of(&cam, scene) as f32;
+    draw(&ctx, &renderer, &calm, &calm_look(), &targets, &depth, scene_ndc, true);
+    let base: Vec<Vec4> = read_texture(&ctx, &targets[3]).unwrap();
+    let z: Vec<f32> = read_texture(&ctx, &depth).unwrap();
+    let (mut drawn, mut faded, mut worst_fade, mut worst_z) = (0, 0, 0f64, 0f64);
+    for y in 0..H {
+        for x in 0..W {
+            let i = (y * W + x) as usize;
+            let hit = plane_hit(&cam, x, y);
+            match hit {
+                Some((d, ndc)) if d < scene - 0.05 => {
+                    drawn += 1;
+                    let want = 1.0 - ((scene - d) / 3.0).clamp(0.0, 1.0);
+                    if want > 0.0 {
+                        faded += 1;
+                    }
+                    worst_fade = worst_fade.max((base[i].x as f64 - want).abs());
+                    worst_z = worst_z.max((z[i] as f64 - ndc).abs());
+                }
+                Some((d, _)) if d < scene + 0.05 => {} // on the boundary
+                _ => {
+                    assert_eq!(base[i].x as f64, CLEAR, "pixel ({x}, {y}) should not be drawn");
+                    assert_eq!(z[i], scene_ndc, "pixel ({x}, {y}) depth should be the scene's");
+                }
+            }
+        }
+    }
+    println!("{drawn} pixels drawn, {faded} fading; fade error {worst_fade:.2e}, depth error {worst_z:.2e}");
+    assert!(drawn > 500 && faded > 100, "{drawn} drawn, {faded} fading");
+    // llvmpipe: 1.7e-4 (the fade's depths come back through f32 NDC) and 3.5e-7.
+    assert!(worst_fade < 2e-3, "fade error {worst_fade}");
+    assert!(worst_z < 1e-5, "depth error {worst_z}");
+}
+
+/// The G-buffer normal at a pixel is the f64 wave normal at the point the depth says was drawn
+/// (found with the CPU query), with no detail layers.
+#[test]
+fn gbuffer_normal_is_the_wave_normal() {
+    let ctx = context();
+    let waves = sea();
+    let renderer = OceanRenderer::new(&ctx.device, &ctx.queue, Output::GBuffer([RGBA32; 4]), false).unwrap();
+    let targets: Vec<_> = (0..4).map(|_| target(&ctx, RGBA32)).collect();
+    let depth = target(&ctx, wgpu::TextureFormat::Depth32Float);
+    draw(&ctx, &renderer, &waves, &calm_look(), &targets, &depth, 1.0, false);
+    let normals: Vec<Vec4> = read_texture(&ctx, &targets[1]).unwrap();
+    let z: Vec<f32> = read_texture(&ctx, &depth).unwrap();
+    let cam = camera();
+    let inv = (cam.proj.as_dmat4() * cam.view).inverse();
+    let (mut n, mut worst) = (0, 0f64);
+    for y in (H / 2..H).step_by(4) {
+        for x in (0..W).step_by(6) {
+            let i = (y * W + x) as usize;
+            if z[i] >= 1.0 {
+                continue;
+            }
+            let ndc = DVec4::new((x as f64 + 0.5) / W as f64 * 2.0 - 1.0, 1.0 - (y as f64 + 0.5) / H as f64 * 2.0, z[i] as f64, 1.0);
+            let h = inv * ndc;
+            let p = h.truncate() / h.w;
+            let want = waves.sample(DVec2::new(p.x, p.z), 12.5).normal;
+            let got = (normals[i].truncate().as_dvec3() * 2.0 - 1.0).normalize();
+            worst = worst.max((got - want).length());
+            n += 1;
+        }
+    }
+    println!("{n} pixels, worst normal difference {worst:.4}");
+    assert!(n > 50, "{n} pixels checked");
+    // llvmpipe: 0.0023 (interpolation across 0.25 m triangles, f32 depth).
+    assert!(worst < 0.03, "normal difference {worst}");
+}
+
+#[test]
+fn forward_and_gbuffer_snapshots() {
+    let ctx = context();
+    let waves = sea();
+    let forward = OceanRenderer::new(&ctx.device, &ctx.queue, Output::Forward(RGBA32), false).unwrap();
+    let colour = target(&ctx, RGBA32);
+    let depth = target(&ctx, wgpu::TextureFormat::Depth32Float);
+    draw(&ctx, &forward, &waves, &Look::default(), std::slice::from_ref(&colour), &depth, 1.0, false);
+    let lum = |v: &[Vec4]| -> Vec<f32> { v.iter().map(|c| (c.x + c.y + c.z) / 3.0).collect() };
+    let shape = [H as usize, W as usize];
+    let image: Vec<Vec4> = read_texture(&ctx, &colour).unwrap();
+    let gbuffer = OceanRenderer::new(&ctx.device, &ctx.queue, Output::GBuffer([RGBA32; 4]), false).unwrap();
+    let targets: Vec<_> = (0..4).map(|_| target(&ctx, RGBA32)).collect();
+    draw(&ctx, &gbuffer, &waves, &Look::default(), &targets, &depth, 1.0, false);
+    let g: Vec<Vec<Vec4>> = targets.iter().map(|t| read_texture(&ctx, t).unwrap()).collect();
+    let normal_y: Vec<f32> = g[1].iter().map(|n| n.y).collect();
+    let roughness: Vec<f32> = g[2].iter().map(|m| m.z).collect();
+    insta::assert_snapshot!(
+        Summary::floats(&shape, &lum(&image), 3)
+            .and("scene colour", Summary::floats(&shape, &lum(&g[0]), 3))
+            .and("normal y", Summary::floats(&shape, &normal_y, 3))
+            .and("roughness", Summary::floats(&shape, &roughness, 3))
+            .and("base colour", Summary::floats(&shape, &lum(&g[3]), 3))
+            .to_string()
+    );
+}
+
+#[test]
+fn bad_input_gets_typed_errors() {
+    let ctx = context();
+    let waves = sea();
+    let cam = camera();
+    let renderer = OceanRenderer::new(&ctx.device, &ctx.queue, Output::Forward(RGBA32), false).unwrap();
+    let colour = target(&ctx, RGBA32);
+    let view = colour.create_view(&Default::default());
+    let depth = target(&ctx, wgpu::TextureFormat::Depth32Float);
+    let other = target(&ctx, wgpu::TextureFormat::Depth24Plus);
+    let no_copy = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: None,
+        size: depth.size(),
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Depth32Float,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+        view_formats: &[],
+    });
+    let small = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        size: wgpu::Extent3d {
+            width: 8,
+            height: 8,
+            depth_or_array_layers: 1,
+        },
+        ..depth_desc()
+    });
+    let good = Look::default();
+    let many = Look {
+        normal_layers: vec![good.normal_layers[0]; 5],
+        ..Look::default()
+    };
+    let no_fade = Look {
+        fade_distance: 0.0,
+        ..Look::default()
+    };
+    let nan_sun = Look {
+        sun_direction: Vec3::NAN,
+        ..Look::default()
+    };
+    let bad_patch = [Patch {
+        corner: DVec2::ZERO,
+        size: 0.0,
+    }];
+    let ok_patches = patches(&cam);
+    let cases: Vec<(&str, f64, &Look, &[Patch], Vec<&wgpu::TextureView>, &wgpu::Texture, bool)> = vec![
+        ("NaN time", f64::NAN, &good, &ok_patches, vec![&view], &depth, true),
+        ("two targets for forward", 0.0, &good, &ok_patches, vec![&view, &view], &depth, true),
+        ("Depth24Plus", 0.0, &good, &ok_patches, vec![&view], &other, true),
+        ("depth without COPY_SRC, fade on", 0.0, &good, &ok_patches, vec![&view], &no_copy, true),
+        ("depth of another size", 0.0, &good, &ok_patches, vec![&view], &small, true),
+        ("five normal layers", 0.0, &many, &ok_patches, vec![&view], &depth, true),
+        ("zero fade distance", 0.0, &no_fade, &ok_patches, vec![&view], &depth, true),
+        ("NaN sun", 0.0, &nan_sun, &ok_patches, vec![&view], &depth, true),
+        ("zero-size patch", 0.0, &good, &bad_patch, vec![&view], &depth, true),
+    ];
+    for (name, time, look, patches, targets, depth, fade) in cases {
+        let mut enc = ctx.encoder("bad");
+        let err = renderer
+            .encode(&ctx.device, &mut enc, &waves, time, &cam, look, patches, &targets, depth, fade)
+            .err()
+            .unwrap_or_else(|| panic!("{name}: accepted"));
+        assert!(
+            matches!(err, Error::Invalid { .. } | Error::Size { .. } | Error::Format { .. }),
+            "{name}: {err:?}"
+        );
+    }
+    // Without fade no copy is made, so COPY_SRC is not needed.
+    let mut enc = ctx.encoder("no fade");
+    renderer
+        .encode(&ctx.device, &mut enc, &waves, 0.0, &cam, &good, &ok_patches, &[&view], &no_copy, false)
+        .unwrap();
+}
+
+fn depth_desc() -> wgpu::TextureDescriptor<'static> {
+    wgpu::TextureDescriptor {
+        label: None,
+        size: wgpu::Extent3d {
+            width: W,
+            height: H,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Depth32Float,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    }
+}
