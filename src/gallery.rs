@@ -416,6 +416,11 @@ pub fn run(
         let rgba = cloud_scene(ctx, w, h, eye, target)?;
         save(name, &rgba, w, h, &mut written)?;
     }
+    progress("ocean: a shoreline with depth fade, and its G-buffer targets");
+    for (name, gbuffer) in [("ocean_shore.png", false), ("ocean_gbuffer.png", true)] {
+        let rgba = ocean_scene(ctx, w, h, gbuffer)?;
+        save(name, &rgba, w, h, &mut written)?;
+    }
     Ok(written)
 }
 
@@ -514,6 +519,162 @@ pub fn cloud_scene(
     ctx.submit_and_wait("gallery cloud", enc)?;
     let px: Vec<[u8; 4]> = read_texture(ctx, &colour)?;
     Ok(px.concat())
+}
+
+/// The gallery's shoreline: an island of metaballs (raymarched into colour and depth) in a
+/// Gerstner sea whose colour fades with the depth of the water over it. `gbuffer`: the four
+/// G-buffer targets in a 2 × 2 grid (scene colour, normal; material, base colour) instead of the
+/// forward-shaded image; each quarter is `w/2 × h/2`.
+pub fn ocean_scene(ctx: &Context, w: u32, h: u32, gbuffer: bool) -> Result<Vec<u8>, Error> {
+    use crate::metaball::render::{RaymarchSettings, Raymarcher, Targets, View};
+    use crate::metaball::{Metaballs, Settings, packed_grid};
+    use crate::ocean::render::{Look, OceanCamera, OceanRenderer, Output, Patch};
+    use crate::ocean::{Wave, Waves};
+    use glam::{DVec2, DVec3, Mat4, Vec2, Vec3};
+    let device = &ctx.device;
+    let (tw, th) = if gbuffer { (w / 2, h / 2) } else { (w, h) };
+    let colour_format = wgpu::TextureFormat::Rgba8Unorm;
+    let depth_format = wgpu::TextureFormat::Depth32Float;
+    let targets = Targets::new(device, [tw, th], colour_format, depth_format);
+    // The island: a mound of blobs 3 m across on a wide shelf just under the water, so the
+    // water over the shelf is shallow and fades.
+    let edge = 3.0;
+    let voxels: Vec<glam::Vec4> = packed_grid([13, 3, 9], edge)
+        .into_iter()
+        .map(|v| v - glam::Vec4::new(0.0, 3.5, 0.0, 0.0))
+        .filter(|v| {
+            let r = (v.x * v.x + 1.6 * v.z * v.z).sqrt();
+            r < 19.0 - 4.0 * (v.y + 3.5)
+        })
+        .collect();
+    let balls = Metaballs::new(device)?;
+    let instances = balls.upload(ctx, &voxels)?;
+    let settings = Settings::default();
+    let eye = DVec3::new(-5.0, 8.0, 30.0);
+    let proj = glam::camera::rh::proj::directx::perspective(0.8, tw as f32 / th as f32, 0.1, 500.0);
+    let camera = OceanCamera::look_at(eye, DVec3::new(0.0, -1.0, 0.0), proj);
+    let view = View {
+        view_proj: proj * camera.view.as_mat4(),
+        viewport: [tw, th],
+        reversed_z: false,
+    };
+    let mut enc = ctx.encoder("gallery ocean");
+    let sky = wgpu::Color {
+        r: 0.55,
+        g: 0.7,
+        b: 0.85,
+        a: 1.0,
+    };
+    targets.clear(&mut enc, sky, 1.0);
+    if let Some(grid) = settings.fit_grid(&voxels, edge)? {
+        let field = balls.encode(device, &mut enc, &instances, &grid, edge, &settings)?;
+        let marcher = Raymarcher::new(device, colour_format, depth_format, false)?;
+        marcher.encode(
+            device,
+            &mut enc,
+            &targets.colour_view,
+            &targets.depth_view,
+            &field,
+            Mat4::IDENTITY,
+            &view,
+            &RaymarchSettings::default(),
+        )?;
+    }
+    let waves = Waves::new(
+        vec![
+            Wave {
+                direction: Vec2::new(1.0, 0.3),
+                amplitude: 0.35,
+                wavelength: 21.0,
+                speed: 5.7,
+            },
+            Wave {
+                direction: Vec2::new(0.2, 1.0),
+                amplitude: 0.18,
+                wavelength: 9.5,
+                speed: 3.8,
+            },
+            Wave {
+                direction: Vec2::new(-0.8, 0.5),
+                amplitude: 0.06,
+                wavelength: 4.1,
+                speed: 2.5,
+            },
+        ],
+        0.7,
+    )?;
+    let look = Look {
+        fade_distance: 3.0,
+        sun_direction: Vec3::new(-0.4, 0.5, -0.75),
+        ..Look::default()
+    };
+    let patches: Vec<Patch> = (0..100)
+        .map(|k| Patch {
+            corner: DVec2::new(
+                -160.0 + 32.0 * (k % 10) as f64,
+                -160.0 + 32.0 * (k / 10) as f64,
+            ),
+            size: 32.0,
+        })
+        .collect();
+    let out = if gbuffer {
+        let formats = [wgpu::TextureFormat::Rgba8Unorm; 4];
+        let renderer = OceanRenderer::new(device, &ctx.queue, Output::GBuffer(formats), false)?;
+        let g: Vec<Targets> = (0..4)
+            .map(|_| Targets::new(device, [tw, th], colour_format, depth_format))
+            .collect();
+        for t in &g {
+            t.clear(&mut enc, wgpu::Color::BLACK, 1.0);
+        }
+        let views: Vec<&wgpu::TextureView> = g.iter().map(|t| &t.colour_view).collect();
+        renderer.encode(
+            device,
+            &mut enc,
+            &waves,
+            4.0,
+            &camera,
+            &look,
+            &patches,
+            &views,
+            &targets.depth,
+            true,
+        )?;
+        ctx.submit_and_wait("gallery ocean", enc)?;
+        let quarters: Vec<Vec<[u8; 4]>> = g
+            .iter()
+            .map(|t| read_texture(ctx, &t.colour))
+            .collect::<Result<_, _>>()?;
+        let mut px = vec![[0u8; 4]; (w * h) as usize];
+        for (q, quarter) in quarters.iter().enumerate() {
+            let (ox, oy) = ((q as u32 % 2) * tw, (q as u32 / 2) * th);
+            for y in 0..th {
+                for x in 0..tw {
+                    // Alpha shown opaque (the material target keeps the shading model there).
+                    let [r, g, b, _] = quarter[(y * tw + x) as usize];
+                    px[((oy + y) * w + ox + x) as usize] = [r, g, b, 255];
+                }
+            }
+        }
+        px
+    } else {
+        let renderer =
+            OceanRenderer::new(device, &ctx.queue, Output::Forward(colour_format), false)?;
+        renderer.encode(
+            device,
+            &mut enc,
+            &waves,
+            4.0,
+            &camera,
+            &look,
+            &patches,
+            &[&targets.colour_view],
+            &targets.depth,
+            true,
+        )?;
+        ctx.submit_and_wait("gallery ocean", enc)?;
+        read_texture(ctx, &targets.colour)?
+    };
+    Ok(out.concat())
 }
 
 /// A looping GIF of RGBA frames, `frame_ms` each.

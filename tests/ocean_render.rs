@@ -54,7 +54,10 @@ fn patches(cam: &OceanCamera) -> Vec<Patch> {
     for j in 0..6 {
         for i in 0..6 {
             out.push(Patch {
-                corner: DVec2::new(eye.x - 48.0 + 16.0 * i as f64, eye.z - 80.0 + 16.0 * j as f64),
+                corner: DVec2::new(
+                    eye.x - 48.0 + 16.0 * i as f64,
+                    eye.z - 80.0 + 16.0 * j as f64,
+                ),
                 size: 16.0,
             });
         }
@@ -94,7 +97,10 @@ fn draw(
     fade: bool,
 ) {
     let cam = camera();
-    let views: Vec<wgpu::TextureView> = targets.iter().map(|t| t.create_view(&Default::default())).collect();
+    let views: Vec<wgpu::TextureView> = targets
+        .iter()
+        .map(|t| t.create_view(&Default::default()))
+        .collect();
     let depth_view = depth.create_view(&Default::default());
     let mut enc = ctx.encoder("ocean test");
     {
@@ -133,7 +139,18 @@ fn draw(
     }
     let refs: Vec<&wgpu::TextureView> = views.iter().collect();
     renderer
-        .encode(&ctx.device, &mut enc, waves, 12.5, &cam, look, &patches(&cam), &refs, depth, fade)
+        .encode(
+            &ctx.device,
+            &mut enc,
+            waves,
+            12.5,
+            &cam,
+            look,
+            &patches(&cam),
+            &refs,
+            depth,
+            fade,
+        )
         .unwrap();
     ctx.submit_and_wait("ocean test", enc).unwrap();
 }
@@ -142,7 +159,10 @@ fn draw(
 fn plane_hit(cam: &OceanCamera, x: u32, y: u32) -> Option<(f64, f64)> {
     let proj = cam.proj.as_dmat4();
     let inv = (proj * cam.view).inverse();
-    let ndc = DVec2::new((x as f64 + 0.5) / W as f64 * 2.0 - 1.0, 1.0 - (y as f64 + 0.5) / H as f64 * 2.0);
+    let ndc = DVec2::new(
+        (x as f64 + 0.5) / W as f64 * 2.0 - 1.0,
+        1.0 - (y as f64 + 0.5) / H as f64 * 2.0,
+    );
     let un = |z: f64| {
         let h = inv * DVec4::new(ndc.x, ndc.y, z, 1.0);
         h.truncate() / h.w
@@ -184,13 +204,23 @@ fn calm_look() -> Look {
 fn depth_fade_and_depth_write_in_one_pass() {
     let ctx = context();
     let calm = Waves::new(vec![wave(1.0, 0.0, 1e-4, 50.0, 0.0)], 0.0).unwrap();
-    let renderer = OceanRenderer::new(&ctx.device, &ctx.queue, Output::GBuffer([RGBA32; 4]), false).unwrap();
+    let renderer =
+        OceanRenderer::new(&ctx.device, &ctx.queue, Output::GBuffer([RGBA32; 4]), false).unwrap();
     let targets: Vec<_> = (0..4).map(|_| target(&ctx, RGBA32)).collect();
     let depth = target(&ctx, wgpu::TextureFormat::Depth32Float);
     let cam = camera();
     let scene = 15.0;
     let scene_ndc = ndc_of(&cam, scene) as f32;
-    draw(&ctx, &renderer, &calm, &calm_look(), &targets, &depth, scene_ndc, true);
+    draw(
+        &ctx,
+        &renderer,
+        &calm,
+        &calm_look(),
+        &targets,
+        &depth,
+        scene_ndc,
+        true,
+    );
     let base: Vec<Vec4> = read_texture(&ctx, &targets[3]).unwrap();
     let z: Vec<f32> = read_texture(&ctx, &depth).unwrap();
     let (mut drawn, mut faded, mut worst_fade, mut worst_z) = (0, 0, 0f64, 0f64);
@@ -210,13 +240,21 @@ fn depth_fade_and_depth_write_in_one_pass() {
                 }
                 Some((d, _)) if d < scene + 0.05 => {} // on the boundary
                 _ => {
-                    assert_eq!(base[i].x as f64, CLEAR, "pixel ({x}, {y}) should not be drawn");
-                    assert_eq!(z[i], scene_ndc, "pixel ({x}, {y}) depth should be the scene's");
+                    assert_eq!(
+                        base[i].x as f64, CLEAR,
+                        "pixel ({x}, {y}) should not be drawn"
+                    );
+                    assert_eq!(
+                        z[i], scene_ndc,
+                        "pixel ({x}, {y}) depth should be the scene's"
+                    );
                 }
             }
         }
     }
-    println!("{drawn} pixels drawn, {faded} fading; fade error {worst_fade:.2e}, depth error {worst_z:.2e}");
+    println!(
+        "{drawn} pixels drawn, {faded} fading; fade error {worst_fade:.2e}, depth error {worst_z:.2e}"
+    );
     assert!(drawn > 500 && faded > 100, "{drawn} drawn, {faded} fading");
     // llvmpipe: 1.7e-4 (the fade's depths come back through f32 NDC) and 3.5e-7.
     assert!(worst_fade < 2e-3, "fade error {worst_fade}");
@@ -229,10 +267,20 @@ fn depth_fade_and_depth_write_in_one_pass() {
 fn gbuffer_normal_is_the_wave_normal() {
     let ctx = context();
     let waves = sea();
-    let renderer = OceanRenderer::new(&ctx.device, &ctx.queue, Output::GBuffer([RGBA32; 4]), false).unwrap();
+    let renderer =
+        OceanRenderer::new(&ctx.device, &ctx.queue, Output::GBuffer([RGBA32; 4]), false).unwrap();
     let targets: Vec<_> = (0..4).map(|_| target(&ctx, RGBA32)).collect();
     let depth = target(&ctx, wgpu::TextureFormat::Depth32Float);
-    draw(&ctx, &renderer, &waves, &calm_look(), &targets, &depth, 1.0, false);
+    draw(
+        &ctx,
+        &renderer,
+        &waves,
+        &calm_look(),
+        &targets,
+        &depth,
+        1.0,
+        false,
+    );
     let normals: Vec<Vec4> = read_texture(&ctx, &targets[1]).unwrap();
     let z: Vec<f32> = read_texture(&ctx, &depth).unwrap();
     let cam = camera();
@@ -244,7 +292,12 @@ fn gbuffer_normal_is_the_wave_normal() {
             if z[i] >= 1.0 {
                 continue;
             }
-            let ndc = DVec4::new((x as f64 + 0.5) / W as f64 * 2.0 - 1.0, 1.0 - (y as f64 + 0.5) / H as f64 * 2.0, z[i] as f64, 1.0);
+            let ndc = DVec4::new(
+                (x as f64 + 0.5) / W as f64 * 2.0 - 1.0,
+                1.0 - (y as f64 + 0.5) / H as f64 * 2.0,
+                z[i] as f64,
+                1.0,
+            );
             let h = inv * ndc;
             let p = h.truncate() / h.w;
             let want = waves.sample(DVec2::new(p.x, p.z), 12.5).normal;
@@ -263,17 +316,40 @@ fn gbuffer_normal_is_the_wave_normal() {
 fn forward_and_gbuffer_snapshots() {
     let ctx = context();
     let waves = sea();
-    let forward = OceanRenderer::new(&ctx.device, &ctx.queue, Output::Forward(RGBA32), false).unwrap();
+    let forward =
+        OceanRenderer::new(&ctx.device, &ctx.queue, Output::Forward(RGBA32), false).unwrap();
     let colour = target(&ctx, RGBA32);
     let depth = target(&ctx, wgpu::TextureFormat::Depth32Float);
-    draw(&ctx, &forward, &waves, &Look::default(), std::slice::from_ref(&colour), &depth, 1.0, false);
+    draw(
+        &ctx,
+        &forward,
+        &waves,
+        &Look::default(),
+        std::slice::from_ref(&colour),
+        &depth,
+        1.0,
+        false,
+    );
     let lum = |v: &[Vec4]| -> Vec<f32> { v.iter().map(|c| (c.x + c.y + c.z) / 3.0).collect() };
     let shape = [H as usize, W as usize];
     let image: Vec<Vec4> = read_texture(&ctx, &colour).unwrap();
-    let gbuffer = OceanRenderer::new(&ctx.device, &ctx.queue, Output::GBuffer([RGBA32; 4]), false).unwrap();
+    let gbuffer =
+        OceanRenderer::new(&ctx.device, &ctx.queue, Output::GBuffer([RGBA32; 4]), false).unwrap();
     let targets: Vec<_> = (0..4).map(|_| target(&ctx, RGBA32)).collect();
-    draw(&ctx, &gbuffer, &waves, &Look::default(), &targets, &depth, 1.0, false);
-    let g: Vec<Vec<Vec4>> = targets.iter().map(|t| read_texture(&ctx, t).unwrap()).collect();
+    draw(
+        &ctx,
+        &gbuffer,
+        &waves,
+        &Look::default(),
+        &targets,
+        &depth,
+        1.0,
+        false,
+    );
+    let g: Vec<Vec<Vec4>> = targets
+        .iter()
+        .map(|t| read_texture(&ctx, t).unwrap())
+        .collect();
     let normal_y: Vec<f32> = g[1].iter().map(|n| n.y).collect();
     let roughness: Vec<f32> = g[2].iter().map(|m| m.z).collect();
     insta::assert_snapshot!(
@@ -286,12 +362,24 @@ fn forward_and_gbuffer_snapshots() {
     );
 }
 
+/// Name, time, look, patches, targets, depth target, fade.
+type Case<'a> = (
+    &'a str,
+    f64,
+    &'a Look,
+    &'a [Patch],
+    Vec<&'a wgpu::TextureView>,
+    &'a wgpu::Texture,
+    bool,
+);
+
 #[test]
 fn bad_input_gets_typed_errors() {
     let ctx = context();
     let waves = sea();
     let cam = camera();
-    let renderer = OceanRenderer::new(&ctx.device, &ctx.queue, Output::Forward(RGBA32), false).unwrap();
+    let renderer =
+        OceanRenderer::new(&ctx.device, &ctx.queue, Output::Forward(RGBA32), false).unwrap();
     let colour = target(&ctx, RGBA32);
     let view = colour.create_view(&Default::default());
     let depth = target(&ctx, wgpu::TextureFormat::Depth32Float);
@@ -332,32 +420,129 @@ fn bad_input_gets_typed_errors() {
         size: 0.0,
     }];
     let ok_patches = patches(&cam);
-    let cases: Vec<(&str, f64, &Look, &[Patch], Vec<&wgpu::TextureView>, &wgpu::Texture, bool)> = vec![
-        ("NaN time", f64::NAN, &good, &ok_patches, vec![&view], &depth, true),
-        ("two targets for forward", 0.0, &good, &ok_patches, vec![&view, &view], &depth, true),
-        ("Depth24Plus", 0.0, &good, &ok_patches, vec![&view], &other, true),
-        ("depth without COPY_SRC, fade on", 0.0, &good, &ok_patches, vec![&view], &no_copy, true),
-        ("depth of another size", 0.0, &good, &ok_patches, vec![&view], &small, true),
-        ("five normal layers", 0.0, &many, &ok_patches, vec![&view], &depth, true),
-        ("zero fade distance", 0.0, &no_fade, &ok_patches, vec![&view], &depth, true),
-        ("NaN sun", 0.0, &nan_sun, &ok_patches, vec![&view], &depth, true),
-        ("zero-size patch", 0.0, &good, &bad_patch, vec![&view], &depth, true),
+    let cases: Vec<Case> = vec![
+        (
+            "NaN time",
+            f64::NAN,
+            &good,
+            &ok_patches,
+            vec![&view],
+            &depth,
+            true,
+        ),
+        (
+            "two targets for forward",
+            0.0,
+            &good,
+            &ok_patches,
+            vec![&view, &view],
+            &depth,
+            true,
+        ),
+        (
+            "Depth24Plus",
+            0.0,
+            &good,
+            &ok_patches,
+            vec![&view],
+            &other,
+            true,
+        ),
+        (
+            "depth without COPY_SRC, fade on",
+            0.0,
+            &good,
+            &ok_patches,
+            vec![&view],
+            &no_copy,
+            true,
+        ),
+        (
+            "depth of another size",
+            0.0,
+            &good,
+            &ok_patches,
+            vec![&view],
+            &small,
+            true,
+        ),
+        (
+            "five normal layers",
+            0.0,
+            &many,
+            &ok_patches,
+            vec![&view],
+            &depth,
+            true,
+        ),
+        (
+            "zero fade distance",
+            0.0,
+            &no_fade,
+            &ok_patches,
+            vec![&view],
+            &depth,
+            true,
+        ),
+        (
+            "NaN sun",
+            0.0,
+            &nan_sun,
+            &ok_patches,
+            vec![&view],
+            &depth,
+            true,
+        ),
+        (
+            "zero-size patch",
+            0.0,
+            &good,
+            &bad_patch,
+            vec![&view],
+            &depth,
+            true,
+        ),
     ];
     for (name, time, look, patches, targets, depth, fade) in cases {
         let mut enc = ctx.encoder("bad");
         let err = renderer
-            .encode(&ctx.device, &mut enc, &waves, time, &cam, look, patches, &targets, depth, fade)
+            .encode(
+                &ctx.device,
+                &mut enc,
+                &waves,
+                time,
+                &cam,
+                look,
+                patches,
+                &targets,
+                depth,
+                fade,
+            )
             .err()
             .unwrap_or_else(|| panic!("{name}: accepted"));
         assert!(
-            matches!(err, Error::Invalid { .. } | Error::Size { .. } | Error::Format { .. }),
+            matches!(
+                err,
+                Error::Invalid { .. } | Error::Size { .. } | Error::Format { .. }
+            ),
             "{name}: {err:?}"
         );
     }
     // Without fade no copy is made, so COPY_SRC is not needed.
     let mut enc = ctx.encoder("no fade");
     renderer
-        .encode(&ctx.device, &mut enc, &waves, 0.0, &cam, &good, &ok_patches, &[&view], &no_copy, false)
+        .encode(
+            &ctx.device,
+            &mut enc,
+            &waves,
+            0.0,
+            &cam,
+            &good,
+            &ok_patches,
+            &[&view],
+            &no_copy,
+            false,
+        )
         .unwrap();
 }
 

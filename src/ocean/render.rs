@@ -195,7 +195,9 @@ pub fn patch_indices(n: u32) -> Vec<u32> {
 pub fn detail_texels(size: u32, seed: u32) -> Vec<Vec4> {
     let n = size as usize;
     let hash = |x: u32, y: u32, o: u32| -> f32 {
-        let mut h = x.wrapping_mul(0x8da6b343) ^ y.wrapping_mul(0xd8163841) ^ (seed.wrapping_add(o)).wrapping_mul(0xcb1ab31f);
+        let mut h = x.wrapping_mul(0x8da6b343)
+            ^ y.wrapping_mul(0xd8163841)
+            ^ (seed.wrapping_add(o)).wrapping_mul(0xcb1ab31f);
         h ^= h >> 13;
         h = h.wrapping_mul(0x5bd1e995);
         h ^= h >> 15;
@@ -251,35 +253,60 @@ fn layer_uniforms(layers: &[Layer], origin: DVec2, time: f64) -> [DetailLayer; M
 
 impl Look {
     fn check(&self) -> Result<(), Error> {
-        for (kind, layers) in [("height", &self.height_layers), ("normal", &self.normal_layers)] {
+        for (kind, layers) in [
+            ("height", &self.height_layers),
+            ("normal", &self.normal_layers),
+        ] {
             if layers.len() > MAX_LAYERS {
                 return Err(Error::Size {
                     stage: STAGE,
-                    what: if kind == "height" { "height layers" } else { "normal layers" },
+                    what: if kind == "height" {
+                        "height layers"
+                    } else {
+                        "normal layers"
+                    },
                     got: layers.len() as u64,
                     max: MAX_LAYERS as u64,
                 });
             }
             for (i, l) in layers.iter().enumerate() {
                 if !(l.tile.is_finite() && l.tile > 0.0) {
-                    return Err(invalid(format!("{kind} layer {i}: tile must be > 0, got {}", l.tile)));
+                    return Err(invalid(format!(
+                        "{kind} layer {i}: tile must be > 0, got {}",
+                        l.tile
+                    )));
                 }
                 if !(l.velocity.is_finite() && l.strength.is_finite()) {
-                    return Err(invalid(format!("{kind} layer {i}: velocity and strength must be finite")));
+                    return Err(invalid(format!(
+                        "{kind} layer {i}: velocity and strength must be finite"
+                    )));
                 }
             }
         }
-        let colours = [self.sun_colour, self.deep_colour, self.shallow_colour, self.sky_colour];
-        if !colours.iter().all(|c| c.is_finite())
-            || !(self.sun_direction.is_finite() && self.sun_direction.length_squared() > 0.0)
-        {
-            return Err(invalid("colours must be finite and the sun direction non-zero".into()));
+        let colours = [
+            self.sun_colour,
+            self.deep_colour,
+            self.shallow_colour,
+            self.sky_colour,
+        ];
+        let finite = colours.iter().all(|c| c.is_finite());
+        let sun = self.sun_direction.is_finite() && self.sun_direction.length_squared() > 0.0;
+        if !(finite && sun) {
+            return Err(invalid(
+                "colours must be finite and the sun direction non-zero".into(),
+            ));
         }
         if !(self.roughness.is_finite() && self.roughness > 0.0) {
-            return Err(invalid(format!("roughness must be > 0, got {}", self.roughness)));
+            return Err(invalid(format!(
+                "roughness must be > 0, got {}",
+                self.roughness
+            )));
         }
         if !(self.fade_distance.is_finite() && self.fade_distance > 0.0) {
-            return Err(invalid(format!("fade distance must be > 0, got {}", self.fade_distance)));
+            return Err(invalid(format!(
+                "fade distance must be > 0, got {}",
+                self.fade_distance
+            )));
         }
         if !(self.skirt.is_finite() && self.skirt >= 0.0) {
             return Err(invalid(format!("skirt must be ≥ 0, got {}", self.skirt)));
@@ -425,7 +452,9 @@ impl OceanRenderer {
         }
         for (i, p) in patches.iter().enumerate() {
             if !(p.corner.is_finite() && p.size.is_finite() && p.size > 0.0) {
-                return Err(invalid(format!("patch {i}: corner must be finite and size > 0, got {p:?}")));
+                return Err(invalid(format!(
+                    "patch {i}: corner must be finite and size > 0, got {p:?}"
+                )));
             }
         }
         let want = match self.output {
@@ -433,7 +462,10 @@ impl OceanRenderer {
             Output::GBuffer(_) => 4,
         };
         if targets.len() != want {
-            return Err(invalid(format!("{} targets given, the output takes {want}", targets.len())));
+            return Err(invalid(format!(
+                "{} targets given, the output takes {want}",
+                targets.len()
+            )));
         }
         if depth.format() != wgpu::TextureFormat::Depth32Float {
             return Err(Error::Format {
@@ -443,7 +475,11 @@ impl OceanRenderer {
             });
         }
         let needs = wgpu::TextureUsages::RENDER_ATTACHMENT
-            | if fade { wgpu::TextureUsages::COPY_SRC } else { wgpu::TextureUsages::empty() };
+            | if fade {
+                wgpu::TextureUsages::COPY_SRC
+            } else {
+                wgpu::TextureUsages::empty()
+            };
         if !depth.usage().contains(needs) {
             return Err(invalid(format!(
                 "the depth target needs {needs:?} (depth fade reads a copy of it), it has {:?}",
@@ -511,11 +547,7 @@ impl OceanRenderer {
         let copy = cache.as_ref().expect("made above").clone();
         drop(cache);
         if fade {
-            encoder.copy_texture_to_texture(
-                depth.as_image_copy(),
-                copy.as_image_copy(),
-                size,
-            );
+            encoder.copy_texture_to_texture(depth.as_image_copy(), copy.as_image_copy(), size);
         }
         if patches.is_empty() {
             return Ok(());
