@@ -23,6 +23,7 @@
 //! # Ok::<(), fieldkit::Error>(())
 //! ```
 
+pub mod lod;
 pub mod render;
 
 use std::sync::{Arc, RwLock};
