@@ -39,7 +39,7 @@ impl Default for LodSettings {
     }
 }
 
-/// The patches chosen, and what they cost and miss.
+/// The patches chosen (nearest first), and what they cost and miss.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Selection {
     pub patches: Vec<Patch>,
@@ -196,6 +196,12 @@ pub fn select(
         out.triangles += patch_triangles(PATCH_QUADS);
         out.patches.push(Patch { corner, size });
     }
+    // Nearest first, so the depth test rejects what nearer water hides before it is shaded.
+    let dist = |p: &Patch| {
+        let c = p.corner + DVec2::splat(p.size / 2.0);
+        (c - DVec2::new(eye.x, eye.z)).length_squared()
+    };
+    out.patches.sort_by(|a, b| dist(a).total_cmp(&dist(b)));
     Ok(out)
 }
 

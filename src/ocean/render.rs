@@ -166,11 +166,16 @@ fn invalid(what: String) -> Error {
 pub fn patch_indices(n: u32) -> Vec<u32> {
     let row = n + 1;
     let mut out = Vec::with_capacity((6 * n * n + 24 * n) as usize);
-    for j in 0..n {
-        for i in 0..n {
-            let a = j * row + i;
-            let (b, c, d) = (a + 1, a + row, a + row + 1);
-            out.extend_from_slice(&[a, c, b, b, c, d]);
+    // Columns of STRIP quads, row by row, so a row's lower vertices are still in the GPU's
+    // post-transform cache when the next row uses them as its upper ones.
+    const STRIP: u32 = 8;
+    for i0 in (0..n).step_by(STRIP as usize) {
+        for j in 0..n {
+            for i in i0..(i0 + STRIP).min(n) {
+                let a = j * row + i;
+                let (b, c, d) = (a + 1, a + row, a + row + 1);
+                out.extend_from_slice(&[a, c, b, b, c, d]);
+            }
         }
     }
     let grid = |i: u32, j: u32| j * row + i;

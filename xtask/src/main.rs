@@ -5,6 +5,7 @@ mod toolchain;
 
 mod bench;
 mod bench_metaball;
+mod bench_ocean;
 mod bench_volume;
 mod chart;
 mod lint;
@@ -79,6 +80,7 @@ enum Technique {
     Distance,
     Metaball,
     Volume,
+    Ocean,
 }
 
 fn crate_root() -> PathBuf {
@@ -132,6 +134,7 @@ fn main() -> ExitCode {
                 Technique::Distance => bench::run_distance(&args),
                 Technique::Metaball => bench_metaball::run(&args),
                 Technique::Volume => bench_volume::run(&args),
+                Technique::Ocean => bench_ocean::run(&args),
             }
         }
     }
