@@ -362,6 +362,154 @@ fn forward_and_gbuffer_snapshots() {
     );
 }
 
+/// Where a fine patch meets a coarse one, the coarse edge interpolates between vertices the fine
+/// edge has in between: without skirts light shows through the cracks (pixels that see the
+/// water's mean plane inside the patches keep the clear colour); with skirts none do.
+#[test]
+fn skirts_close_the_cracks_between_levels() {
+    let ctx = context();
+    // A short wave along the shared edge: the coarse edge is off by up to 6 cm between vertices.
+    let waves = Waves::new(vec![wave(0.0, 1.0, 0.2, 1.0, 0.0)], 0.0).unwrap();
+    let (w, h) = (256u32, 192u32);
+    let make = |format| {
+        ctx.device.create_texture(&wgpu::TextureDescriptor {
+            size: wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+            format,
+            ..depth_desc()
+        })
+    };
+    let eye = DVec3::new(5.0, 1.6, 3.0);
+    let cam = OceanCamera::look_at(
+        eye,
+        DVec3::new(9.0, 0.0, 4.0),
+        glam::camera::rh::proj::directx::perspective(1.0, w as f32 / h as f32, 0.05, 100.0),
+    );
+    // A fine patch (0.125 m spacing) beside a coarse one (0.25 m) sharing the edge x = 8.
+    let patches = [
+        Patch {
+            corner: DVec2::new(0.0, 0.0),
+            size: 8.0,
+        },
+        Patch {
+            corner: DVec2::new(8.0, -8.0),
+            size: 16.0,
+        },
+    ];
+    let renderer =
+        OceanRenderer::new(&ctx.device, &ctx.queue, Output::Forward(RGBA32), false).unwrap();
+    let inv = (cam.proj.as_dmat4() * cam.view).inverse();
+    let mut holes = Vec::new();
+    for skirt in [0.0f32, 0.5] {
+        let colour = make(RGBA32);
+        let depth = make(wgpu::TextureFormat::Depth32Float);
+        let look = Look {
+            skirt,
+            height_layers: vec![],
+            normal_layers: vec![],
+            ..Look::default()
+        };
+        let (cv, dv) = (
+            colour.create_view(&Default::default()),
+            depth.create_view(&Default::default()),
+        );
+        let mut enc = ctx.encoder("cracks");
+        enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("clear"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &cv,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color {
+                        r: CLEAR,
+                        g: CLEAR,
+                        b: CLEAR,
+                        a: CLEAR,
+                    }),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &dv,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            ..Default::default()
+        });
+        renderer
+            .encode(
+                &ctx.device,
+                &mut enc,
+                &waves,
+                0.3,
+                &cam,
+                &look,
+                &patches,
+                &[&cv],
+                &depth,
+                false,
+            )
+            .unwrap();
+        ctx.submit_and_wait("cracks", enc).unwrap();
+        let px: Vec<Vec4> = read_texture(&ctx, &colour).unwrap();
+        let mut count = 0;
+        for y in 0..h {
+            for x in 0..w {
+                let ndc = DVec2::new(
+                    (x as f64 + 0.5) / w as f64 * 2.0 - 1.0,
+                    1.0 - (y as f64 + 0.5) / h as f64 * 2.0,
+                );
+                let un = |z: f64| {
+                    let q = inv * DVec4::new(ndc.x, ndc.y, z, 1.0);
+                    q.truncate() / q.w
+                };
+                let (a, b) = (un(0.0), un(1.0));
+                let t = a.y / (a.y - b.y);
+                if !(t > 0.0 && t < 1.0) {
+                    continue;
+                }
+                let p = a + (b - a) * t;
+                // Well inside the two patches: 0.5 m from their outer edges, and 4 m from the far
+                // one, where grazing rays pass over troughs and out of the patch (the coarse
+                // patch's edge x = 8 is an outer edge where z < 0).
+                let inside = (p.x > 0.5 && p.x < 8.0 && p.z > 0.5 && p.z < 7.5)
+                    || (p.x >= 8.0
+                        && p.x < 20.0
+                        && p.z > -7.5
+                        && p.z < 7.5
+                        && (p.x > 8.5 || p.z > 0.5));
+                if inside && px[(y * w + x) as usize].x as f64 == CLEAR {
+                    count += 1;
+                    // Cracks are at the shared edge (rays through them meet the plane a little
+                    // beyond it).
+                    assert!(
+                        (p.x - 8.0).abs() < 1.5,
+                        "a hole away from the shared edge, at {p}"
+                    );
+                }
+            }
+        }
+        holes.push(count);
+    }
+    println!(
+        "clear pixels inside the patches: {} without skirts, {} with",
+        holes[0], holes[1]
+    );
+    assert!(
+        holes[0] >= 5,
+        "expected cracks without skirts, saw {}",
+        holes[0]
+    );
+    assert_eq!(holes[1], 0, "skirts should close every crack");
+}
+
 /// Name, time, look, patches, targets, depth target, fade.
 type Case<'a> = (
     &'a str,
