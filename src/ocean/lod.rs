@@ -12,7 +12,7 @@
 use glam::{DMat4, DVec2, DVec3, DVec4};
 
 use super::Waves;
-use super::render::{Look, OceanCamera, PATCH_QUADS, Patch};
+use super::render::{DETAIL_OCTAVES, Look, OceanCamera, PATCH_QUADS, Patch};
 use crate::error::Error;
 
 /// The ocean square and the error to refine to.
@@ -68,15 +68,14 @@ pub fn height_error(waves: &Waves, look: &Look, h: f64) -> f64 {
         .iter()
         .map(|w| sampled(w.amplitude as f64, w.wavelength as f64))
         .sum();
-    // The detail texture's octaves (`render::detail_texels`): periods 8, 16, … 128 per texture,
-    // amplitudes 1/2, 1/4, …
+    // The detail texture's octaves (`render::DETAIL_OCTAVES`), each taken as a wave as long as
+    // one noise cell (shorter than the noise's own wavelengths: the error is overestimated).
     for l in &look.height_layers {
-        let mut amp = 0.5;
-        let mut period = 8.0;
-        while period <= 128.0 {
-            e += sampled(l.strength.abs() as f64 * amp, l.tile as f64 / period);
-            amp *= 0.5;
-            period *= 2.0;
+        for &(cells, amp) in &DETAIL_OCTAVES {
+            e += sampled(
+                l.strength.abs() as f64 * amp as f64,
+                l.tile as f64 / cells as f64,
+            );
         }
     }
     e

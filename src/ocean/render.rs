@@ -195,6 +195,13 @@ pub fn patch_indices(n: u32) -> Vec<u32> {
     out
 }
 
+/// The detail texture's octaves: value-noise cells per repeat, and amplitude. It is band-limited
+/// to 32 cells a repeat: the vertex stage displaces by it, and detail finer than the vertices
+/// can hold would only force finer patches (with 128 cells, 1 px of error took 1.25 M triangles
+/// instead of 0.36 M in `tests/ocean_lod.rs`'s view). The normal layers, with small repeats,
+/// carry the fine detail.
+pub const DETAIL_OCTAVES: [(u32, f32); 3] = [(8, 0.5), (16, 0.25), (32, 0.125)];
+
 /// A tileable detail texture: fBm height in r (about −1 to 1), its slope per texture unit in g
 /// (along u) and b (along v), from a periodic value noise so every layer repeats seamlessly.
 pub fn detail_texels(size: u32, seed: u32) -> Vec<Vec4> {
@@ -209,10 +216,8 @@ pub fn detail_texels(size: u32, seed: u32) -> Vec<Vec4> {
         (h & 0xffff) as f32 / 32767.5 - 1.0
     };
     let mut height = vec![0f32; n * n];
-    let mut amp = 0.5f32;
-    let mut period = 8u32;
-    let mut octave = 0;
-    while period <= size / 2 && octave < 5 {
+    for (octave, &(period, amp)) in DETAIL_OCTAVES.iter().enumerate() {
+        let octave = octave as u32;
         for y in 0..n {
             for x in 0..n {
                 let fx = x as f32 * period as f32 / size as f32;
@@ -226,9 +231,6 @@ pub fn detail_texels(size: u32, seed: u32) -> Vec<Vec4> {
                 height[y * n + x] += amp * (a + (b - a) * s(ty));
             }
         }
-        amp *= 0.5;
-        period *= 2;
-        octave += 1;
     }
     let at = |x: usize, y: usize| height[(y % n) * n + (x % n)];
     (0..n * n)
