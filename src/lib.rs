@@ -14,6 +14,7 @@ pub mod harness;
 pub mod metaball;
 pub mod ocean;
 pub mod volume;
+pub mod voxelize;
 
 pub use error::{BindingError, Error};
 

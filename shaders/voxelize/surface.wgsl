@@ -1,0 +1,155 @@
+// Conservative surface voxelization (Schwarz & Seidel 2010): every voxel a triangle touches,
+// closed boxes, written to an occupancy bitset with atomicOr. Vertices arrive in grid-local
+// coordinates (origin 0, voxel size 1; the host transforms them in f64).
+//
+// Per triangle: the bounding-box pre-test, then for each 2D column along the dominant axis of
+// the triangle's normal, only the voxels whose column the plane crosses, each tested against
+// the plane (the critical-point form) and the three 2D edge functions of the xy, yz and zx
+// projections. A voxel passes exactly when the triangle and the box overlap (the 13-axis
+// separating-axis test says the same). Every test is widened by `slack`, a bound on the f32
+// rounding of its terms, so rounding can add voxels within that margin but never drop one.
+//
+// One thread per triangle; `first` and `count` select a run of the triangle list so the host
+// can split the work.
+
+struct SurfaceParams {
+    grid: vec3<u32>,
+    first: u32,
+    count: u32,
+    // Relative rounding bound for the tests (a few ulp of f32).
+    slack: f32,
+}
+
+@group(0) @binding(0) var<uniform> params: SurfaceParams;
+// Three vertices per triangle, grid-local (w unused).
+@group(0) @binding(1) var<storage, read> triangles: array<vec4<f32>>;
+// Occupancy, one bit per voxel, x fastest: voxel (x, y, z) is bit i % 32 of word i / 32 with
+// i = (z · ny + y) · nx + x.
+@group(0) @binding(2) var<storage, read_write> occupancy: array<atomic<u32>>;
+
+fn set_voxel(p: vec3<i32>) {
+    let g = vec3<i32>(params.grid);
+    let i = u32((p.z * g.y + p.y) * g.x + p.x);
+    atomicOr(&occupancy[i / 32u], 1u << (i % 32u));
+}
+
+// 2D edge functions of one projection: normals and offsets for the three edges, oriented by
+// the sign of the normal's component along the dropped axis so the inside is positive. A
+// voxel's projection (its min corner q, side 1) overlaps the triangle's when every edge
+// function at q plus its critical offset is ≥ 0.
+struct Edges {
+    n0: vec2<f32>,
+    n1: vec2<f32>,
+    n2: vec2<f32>,
+    d: vec3<f32>,
+    slack: vec3<f32>,
+}
+
+fn edges(a: vec2<f32>, b: vec2<f32>, c: vec2<f32>, facing: f32, scale: f32) -> Edges {
+    let s = select(-1.0, 1.0, facing >= 0.0);
+    var e: Edges;
+    let v = array<vec2<f32>, 3>(a, b, c);
+    var n: array<vec2<f32>, 3>;
+    var d: vec3<f32>;
+    var sl: vec3<f32>;
+    for (var i = 0u; i < 3u; i++) {
+        let p = v[i];
+        let q = v[(i + 1u) % 3u];
+        let edge = q - p;
+        let ni = vec2<f32>(-edge.y, edge.x) * s;
+        n[i] = ni;
+        d[i] = -dot(ni, p) + max(0.0, ni.x) + max(0.0, ni.y);
+        sl[i] = params.slack * (abs(ni.x) + abs(ni.y)) * scale;
+    }
+    e.n0 = n[0];
+    e.n1 = n[1];
+    e.n2 = n[2];
+    e.d = d;
+    e.slack = sl;
+    return e;
+}
+
+fn inside(e: Edges, q: vec2<f32>) -> bool {
+    return dot(e.n0, q) + e.d.x >= -e.slack.x
+        && dot(e.n1, q) + e.d.y >= -e.slack.y
+        && dot(e.n2, q) + e.d.z >= -e.slack.z;
+}
+
+@compute @workgroup_size(64)
+fn surface(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= params.count {
+        return;
+    }
+    let t = params.first + id.x;
+    let v0 = triangles[3u * t].xyz;
+    let v1 = triangles[3u * t + 1u].xyz;
+    let v2 = triangles[3u * t + 2u].xyz;
+    let g = vec3<i32>(params.grid);
+    // Closed boxes: a triangle reaching x = k also touches the voxel that ends at k.
+    let lo = max(vec3<i32>(ceil(min(min(v0, v1), v2))) - 1, vec3<i32>(0));
+    let hi = min(vec3<i32>(floor(max(max(v0, v1), v2))), g - 1);
+    if any(lo > hi) {
+        return;
+    }
+    let n = cross(v1 - v0, v2 - v0);
+    // Largest coordinate involved: the rounding of every product scales with it.
+    let scale = max(max(max(abs(v0.x), abs(v0.y)), max(abs(v0.z), abs(v1.x))),
+                    max(max(abs(v1.y), abs(v1.z)), max(max(abs(v2.x), abs(v2.y)), abs(v2.z)))) + 2.0;
+    // Plane: the voxel with min corner p overlaps it iff (n·p + d1)(n·p + d2) ≤ 0.
+    let c = select(vec3<f32>(0.0), vec3<f32>(1.0), n > vec3<f32>(0.0));
+    let d1 = dot(n, c - v0);
+    let d2 = dot(n, vec3<f32>(1.0) - c - v0);
+    let plane_slack = params.slack * (abs(n.x) + abs(n.y) + abs(n.z)) * scale;
+    let exy = edges(v0.xy, v1.xy, v2.xy, n.z, scale);
+    let eyz = edges(v0.yz, v1.yz, v2.yz, n.x, scale);
+    let ezx = edges(v0.zx, v1.zx, v2.zx, n.y, scale);
+    // Columns along the dominant axis k; (u, w) the other two.
+    let an = abs(n);
+    var k = 2;
+    if an.x >= an.y && an.x >= an.z {
+        k = 0;
+    } else if an.y >= an.z {
+        k = 1;
+    }
+    let u = (k + 1) % 3;
+    let w = (k + 2) % 3;
+    for (var a = lo[u]; a <= hi[u]; a++) {
+        for (var b = lo[w]; b <= hi[w]; b++) {
+            // The plane's k over the column's square: n_k·x_k = n·v0 − n_u·x_u − n_w·x_w.
+            var kmin = f32(lo[k]);
+            var kmax = f32(hi[k]) + 1.0;
+            if an[k] > 0.0 {
+                let base = dot(n, v0);
+                var e0 = 3.4e38;
+                var e1 = -3.4e38;
+                for (var corner = 0; corner < 4; corner++) {
+                    let xu = f32(a + (corner & 1));
+                    let xw = f32(b + (corner >> 1));
+                    let xk = (base - n[u] * xu - n[w] * xw) / n[k];
+                    e0 = min(e0, xk);
+                    e1 = max(e1, xk);
+                }
+                // One voxel of margin each way: the exact tests below decide.
+                kmin = max(kmin, floor(e0) - 1.0);
+                kmax = min(kmax, floor(e1) + 2.0);
+            }
+            for (var z = i32(kmin); z < i32(kmax); z++) {
+                var p = vec3<i32>(0);
+                p[k] = z;
+                p[u] = a;
+                p[w] = b;
+                if any(p < lo) || any(p > hi) {
+                    continue;
+                }
+                let pf = vec3<f32>(p);
+                let np = dot(n, pf);
+                if (np + d1) * (np + d2) > plane_slack * (abs(np + d1) + abs(np + d2) + plane_slack) {
+                    continue;
+                }
+                if inside(exy, pf.xy) && inside(eyz, pf.yz) && inside(ezx, pf.zx) {
+                    set_voxel(p);
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,257 @@
+//! Conservative surface voxelization (`voxelize/surface`) against the 13-axis SAT in f64
+//! (`fieldkit::voxelize::cpu`), and the failure modes of the issue, each a test.
+
+use fieldkit::Error;
+use fieldkit::gpu::Context;
+use fieldkit::harness::context;
+use fieldkit::voxelize::{Grid, GridMesh, Mesh, Voxelizer, cpu};
+use glam::{DVec3, Vec4};
+
+/// GPU and CPU voxels: (misses, extras); every extra must overlap the triangle within `margin`
+/// voxels (the GPU's rounding slack).
+fn compare(ctx: &Context, mesh: &Mesh, grid: &Grid) -> (usize, usize, GridMesh) {
+    let v = Voxelizer::new(&ctx.device).unwrap();
+    let mut enc = ctx.encoder("voxelize");
+    let s = v.encode_surface(ctx, &mut enc, mesh, grid).unwrap();
+    ctx.submit_and_wait("voxelize", enc).unwrap();
+    let gpu = s.read(ctx).unwrap();
+    let local = mesh.to_grid(grid).unwrap();
+    let want = cpu::conservative(&local, grid.size);
+    let [nx, ny, _] = grid.size.map(|n| n as usize);
+    let (mut misses, mut extras) = (0, 0);
+    for (i, (&g, &w)) in gpu.iter().zip(&want).enumerate() {
+        if w && !g {
+            misses += 1;
+        }
+        if g && !w {
+            extras += 1;
+            let p = DVec3::new(
+                (i % nx) as f64,
+                ((i / nx) % ny) as f64,
+                (i / (nx * ny)) as f64,
+            );
+            let near = local.vertices.chunks(3).any(|t| {
+                let [a, b, c] = [t[0], t[1], t[2]].map(|q: Vec4| q.truncate().as_dvec3());
+                cpu::overlaps_box(a, b, c, p + DVec3::splat(0.5), DVec3::splat(0.5 + 1e-3))
+            });
+            assert!(
+                near,
+                "extra voxel {p} is not within 1e-3 voxels of any triangle"
+            );
+        }
+    }
+    (misses, extras, local)
+}
+
+fn mesh(positions: Vec<DVec3>, triangles: Vec<[u32; 3]>) -> Mesh {
+    Mesh {
+        positions,
+        triangles,
+    }
+}
+
+fn unit_grid(size: [u32; 3]) -> Grid {
+    Grid {
+        origin: DVec3::ZERO,
+        voxel: 1.0,
+        size,
+    }
+}
+
+#[test]
+fn sphere_matches_the_sat_reference() {
+    let ctx = context();
+    let sphere = Mesh::uv_sphere(DVec3::new(16.3, 15.7, 16.1), 11.37, 48, 24);
+    let (misses, extras, local) = compare(&ctx, &sphere, &unit_grid([32, 32, 32]));
+    println!(
+        "{} triangles: {misses} missed, {extras} extra",
+        local.vertices.len() / 3
+    );
+    assert_eq!(misses, 0);
+}
+
+/// Failure modes, each in a small grid: no voxel the SAT finds may be missed.
+#[test]
+fn failure_modes_miss_nothing() {
+    let ctx = context();
+    let g = unit_grid([12, 12, 12]);
+    let d = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
+    let cases: Vec<(&str, Mesh, Grid)> = vec![
+        // Lying exactly in the plane z = 5: both layers z = 4 and z = 5 touch it.
+        (
+            "on a voxel face",
+            mesh(
+                vec![d(1.2, 1.3, 5.0), d(9.7, 2.1, 5.0), d(4.4, 10.6, 5.0)],
+                vec![[0, 1, 2]],
+            ),
+            g,
+        ),
+        (
+            "vertices on voxel corners",
+            mesh(
+                vec![d(2.0, 2.0, 2.0), d(9.0, 3.0, 4.0), d(3.0, 8.0, 7.0)],
+                vec![[0, 1, 2]],
+            ),
+            g,
+        ),
+        // Edge-on to z: its xy projection is a segment.
+        (
+            "edge-on",
+            mesh(
+                vec![d(1.5, 1.5, 1.2), d(9.5, 7.5, 1.2), d(1.5, 1.5, 10.7)],
+                vec![[0, 1, 2]],
+            ),
+            g,
+        ),
+        (
+            "sliver, aspect 1e4",
+            mesh(
+                vec![d(0.5, 6.1, 6.2), d(11.5, 6.1, 6.2), d(6.0, 6.1011, 6.2007)],
+                vec![[0, 1, 2]],
+            ),
+            g,
+        ),
+        (
+            "larger than the grid",
+            mesh(
+                vec![d(-30.0, -20.0, 5.5), d(40.0, -10.0, 6.5), d(5.0, 50.0, 7.5)],
+                vec![[0, 1, 2]],
+            ),
+            g,
+        ),
+        (
+            "non-cubic grid",
+            Mesh::uv_sphere(d(20.2, 7.9, 11.3), 6.8, 24, 12),
+            unit_grid([40, 17, 23]),
+        ),
+        (
+            "more than 1024 voxels along x",
+            mesh(
+                vec![d(0.3, 0.4, 0.6), d(1099.6, 2.7, 1.1), d(550.0, 3.6, 3.9)],
+                vec![[0, 1, 2]],
+            ),
+            unit_grid([1100, 4, 4]),
+        ),
+    ];
+    for (name, m, grid) in cases {
+        let (misses, extras, local) = compare(&ctx, &m, &grid);
+        println!("{name}: {misses} missed, {extras} extra");
+        assert_eq!(misses, 0, "{name}");
+        if name == "on a voxel face" {
+            // The reference itself: closed boxes on both sides of the plane z = 5.
+            let want = cpu::conservative(&local, grid.size);
+            let layer = |z: usize| want[z * 144..(z + 1) * 144].iter().filter(|&&o| o).count();
+            assert!(
+                layer(4) > 10 && layer(4) == layer(5),
+                "layers {} and {}",
+                layer(4),
+                layer(5)
+            );
+            assert_eq!(layer(3) + layer(6), 0);
+        }
+    }
+}
+
+/// 100 km from the origin (cuda_voxelizer's issues #7 and #61 come from voxelizing in world f32):
+/// the mesh moves into grid-local coordinates in f64 first, so it voxelizes exactly as at the
+/// origin.
+#[test]
+fn far_from_the_origin_is_the_same_as_at_it() {
+    let ctx = context();
+    let far = DVec3::new(1.0e5, -3.0e4, 7.0e4);
+    let near = Mesh::uv_sphere(DVec3::new(8.3, 7.9, 8.2), 5.4, 24, 12);
+    let moved = Mesh {
+        positions: near.positions.iter().map(|p| *p * 0.25 + far).collect(),
+        triangles: near.triangles.clone(),
+    };
+    let v = Voxelizer::new(&ctx.device).unwrap();
+    let run = |m: &Mesh, grid: &Grid| {
+        let mut enc = ctx.encoder("voxelize");
+        let s = v.encode_surface(&ctx, &mut enc, m, grid).unwrap();
+        ctx.submit_and_wait("voxelize", enc).unwrap();
+        s.read(&ctx).unwrap()
+    };
+    let a = run(&near, &unit_grid([16, 16, 16]));
+    let b = run(
+        &moved,
+        &Grid {
+            origin: far,
+            voxel: 0.25,
+            size: [16, 16, 16],
+        },
+    );
+    assert!(a.iter().filter(|&&o| o).count() > 100);
+    assert_eq!(a, b);
+}
+
+#[test]
+fn zero_area_triangles_are_left_out_and_counted() {
+    let ctx = context();
+    let d = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
+    let m = mesh(
+        vec![
+            d(1.0, 1.0, 1.0),
+            d(5.0, 5.0, 5.0),
+            d(9.0, 9.0, 9.0),
+            d(2.0, 7.0, 3.0),
+        ],
+        vec![[0, 1, 2], [0, 0, 3], [0, 1, 3]],
+    );
+    let v = Voxelizer::new(&ctx.device).unwrap();
+    let mut enc = ctx.encoder("voxelize");
+    let s = v
+        .encode_surface(&ctx, &mut enc, &m, &unit_grid([12, 12, 12]))
+        .unwrap();
+    ctx.submit_and_wait("voxelize", enc).unwrap();
+    assert_eq!(s.degenerate, 2);
+    assert!(s.read(&ctx).unwrap().iter().any(|&o| o));
+}
+
+#[test]
+fn bad_input_gets_typed_errors() {
+    let ctx = context();
+    let v = Voxelizer::new(&ctx.device).unwrap();
+    let tri = |p: Vec<DVec3>| mesh(p, vec![[0, 1, 2]]);
+    let ok = vec![DVec3::ZERO, DVec3::X, DVec3::Y];
+    let g = unit_grid([8, 8, 8]);
+    let cases: Vec<(&str, Mesh, Grid)> = vec![
+        ("empty mesh", Mesh::default(), g),
+        (
+            "NaN vertex",
+            tri(vec![DVec3::ZERO, DVec3::NAN, DVec3::Y]),
+            g,
+        ),
+        ("index out of range", mesh(ok.clone(), vec![[0, 1, 3]]), g),
+        ("zero grid side", tri(ok.clone()), unit_grid([8, 0, 8])),
+        (
+            "grid past the limit",
+            tri(ok.clone()),
+            unit_grid([8, 8, 5000]),
+        ),
+        ("zero voxel", tri(ok.clone()), Grid { voxel: 0.0, ..g }),
+        (
+            "NaN origin",
+            tri(ok.clone()),
+            Grid {
+                origin: DVec3::NAN,
+                ..g
+            },
+        ),
+        (
+            "bitset past the binding limit",
+            tri(ok.clone()),
+            unit_grid([4096, 4096, 512]),
+        ),
+    ];
+    for (name, m, grid) in cases {
+        let mut enc = ctx.encoder("bad");
+        let err = v
+            .encode_surface(&ctx, &mut enc, &m, &grid)
+            .err()
+            .unwrap_or_else(|| panic!("{name}: accepted"));
+        assert!(
+            matches!(err, Error::Invalid { .. } | Error::Size { .. }),
+            "{name}: {err:?}"
+        );
+    }
+}
