@@ -8,22 +8,7 @@ use fieldkit::ocean::{Wave, Waves};
 use glam::{DVec2, DVec3, DVec4, Vec2};
 
 fn waves() -> Waves {
-    let w = |dx: f32, dz: f32, a: f32, l: f32, s: f32| Wave {
-        direction: Vec2::new(dx, dz),
-        amplitude: a,
-        wavelength: l,
-        speed: s,
-    };
-    Waves::new(
-        vec![
-            w(1.0, 0.2, 1.2, 60.0, 9.0),
-            w(0.3, 1.0, 0.6, 31.0, 7.0),
-            w(-0.6, 0.8, 0.25, 13.0, 4.5),
-            w(0.9, -0.4, 0.1, 5.5, 2.9),
-        ],
-        0.6,
-    )
-    .unwrap()
+    Waves::open_sea()
 }
 
 /// 1080p, 60° vertical field of view, 12 m above the water looking 8° down, somewhere inside

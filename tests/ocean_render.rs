@@ -84,6 +84,47 @@ fn target(ctx: &Context, format: wgpu::TextureFormat) -> wgpu::Texture {
     })
 }
 
+/// Clear `views` to CLEAR and `depth` to `clear_depth`.
+fn clear(
+    enc: &mut wgpu::CommandEncoder,
+    views: &[&wgpu::TextureView],
+    depth: &wgpu::TextureView,
+    clear_depth: f32,
+) {
+    let attachments: Vec<_> = views
+        .iter()
+        .map(|v| {
+            Some(wgpu::RenderPassColorAttachment {
+                view: v,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color {
+                        r: CLEAR,
+                        g: CLEAR,
+                        b: CLEAR,
+                        a: CLEAR,
+                    }),
+                    store: wgpu::StoreOp::Store,
+                },
+            })
+        })
+        .collect();
+    enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some("clear"),
+        color_attachments: &attachments,
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: depth,
+            depth_ops: Some(wgpu::Operations {
+                load: wgpu::LoadOp::Clear(clear_depth),
+                store: wgpu::StoreOp::Store,
+            }),
+            stencil_ops: None,
+        }),
+        ..Default::default()
+    });
+}
+
 /// Clear the colour targets to CLEAR and the depth to `depth`, then draw.
 #[allow(clippy::too_many_arguments)]
 fn draw(
@@ -103,40 +144,12 @@ fn draw(
         .collect();
     let depth_view = depth.create_view(&Default::default());
     let mut enc = ctx.encoder("ocean test");
-    {
-        let attachments: Vec<_> = views
-            .iter()
-            .map(|v| {
-                Some(wgpu::RenderPassColorAttachment {
-                    view: v,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color {
-                            r: CLEAR,
-                            g: CLEAR,
-                            b: CLEAR,
-                            a: CLEAR,
-                        }),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })
-            })
-            .collect();
-        enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("clear"),
-            color_attachments: &attachments,
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &depth_view,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(clear_depth),
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
-            ..Default::default()
-        });
-    }
+    clear(
+        &mut enc,
+        &views.iter().collect::<Vec<_>>(),
+        &depth_view,
+        clear_depth,
+    );
     let refs: Vec<&wgpu::TextureView> = views.iter().collect();
     renderer
         .encode(
@@ -417,32 +430,7 @@ fn skirts_close_the_cracks_between_levels() {
             depth.create_view(&Default::default()),
         );
         let mut enc = ctx.encoder("cracks");
-        enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("clear"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &cv,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color {
-                        r: CLEAR,
-                        g: CLEAR,
-                        b: CLEAR,
-                        a: CLEAR,
-                    }),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &dv,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
-            ..Default::default()
-        });
+        clear(&mut enc, &[&cv], &dv, 1.0);
         renderer
             .encode(
                 &ctx.device,

@@ -354,18 +354,32 @@ fn banded(d: f32) -> f32 {
     return clamp(d, -params.band, params.band);
 }
 
-@compute @workgroup_size(32, 8)
-fn columns(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
+// Every entry starts the same: build this band's envelope, publish its size, wait for the
+// workgroup, and start the walk along the own envelope. Called by every thread (it holds the
+// barriers); the caller returns if the column is past the grid.
+struct Started {
+    c: Column,
+    walk: Walk,
+}
+
+fn start(li: u32, wg: vec3<u32>) -> Started {
     let c = column_of(li, wg);
     let size = build(c);
     band_size[c.band * c.columns_per_group + c.lane] = size;
     storageBarrier();
     workgroupBarrier();
+    return Started(c, walk_of(c, size));
+}
+
+@compute @workgroup_size(32, 8)
+fn columns(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
+    let s = start(li, wg);
+    let c = s.c;
     if !c.valid {
         return;
     }
     // The answer overwrites `nearest` in place; all of it was read before the barrier.
-    var walk = walk_of(c, size);
+    var walk = s.walk;
     for (var i = c.lo; i < c.hi; i++) {
         nearest[c.base + i * c.stride] = query(c, &walk, i).x;
     }
@@ -374,15 +388,12 @@ fn columns(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: 
 // `columns`, and the unsigned distance of every voxel it answers (3D).
 @compute @workgroup_size(32, 8)
 fn columns_resolve(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
-    let c = column_of(li, wg);
-    let size = build(c);
-    band_size[c.band * c.columns_per_group + c.lane] = size;
-    storageBarrier();
-    workgroupBarrier();
+    let s = start(li, wg);
+    let c = s.c;
     if !c.valid {
         return;
     }
-    var walk = walk_of(c, size);
+    var walk = s.walk;
     for (var i = c.lo; i < c.hi; i++) {
         let found = query(c, &walk, i);
         nearest[c.base + i * c.stride] = found.x;
@@ -395,15 +406,12 @@ fn columns_resolve(@builtin(local_invocation_index) li: u32, @builtin(workgroup_
 // as `field_resolve.wgsl`'s `resolve_signed` gives it from both fields (3D).
 @compute @workgroup_size(32, 8)
 fn columns_resolve_signed(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
-    let c = column_of(li, wg);
-    let size = build(c);
-    band_size[c.band * c.columns_per_group + c.lane] = size;
-    storageBarrier();
-    workgroupBarrier();
+    let s = start(li, wg);
+    let c = s.c;
     if !c.valid {
         return;
     }
-    var walk = walk_of(c, size);
+    var walk = s.walk;
     for (var i = c.lo; i < c.hi; i++) {
         let found = query(c, &walk, i);
         let at = c.base + i * c.stride;

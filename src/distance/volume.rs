@@ -207,6 +207,11 @@ impl Default for Options3d {
 }
 
 impl Options3d {
+    /// The band in world units distances are clamped to; `f32::MAX` for none.
+    fn world_band(&self) -> f32 {
+        self.band.map_or(f32::MAX, |b| b * self.voxel_size)
+    }
+
     fn check(&self) -> Result<(), Error> {
         if !(self.voxel_size.is_finite() && self.voxel_size > 0.0) {
             return Err(Error::Invalid {
@@ -739,7 +744,7 @@ impl Distance3d {
             let resolve = |inside_field| Fuse {
                 distance: &dv,
                 voxel_size: options.voxel_size,
-                band: options.band.map_or(f32::MAX, |b| b * options.voxel_size),
+                band: options.world_band(),
                 inside_field,
             };
             let nearest = self.encode_exact_fused(
@@ -1705,7 +1710,7 @@ impl Distance3d {
         size: [u32; 3],
         options: &Options3d,
     ) -> wgpu::Buffer {
-        let band = options.band.map_or(f32::MAX, |b| b * options.voxel_size);
+        let band = options.world_band();
         uniform(
             device,
             "resolve params",
@@ -1732,49 +1737,23 @@ impl Distance3d {
     ) -> Result<wgpu::Texture, Error> {
         options.check()?;
         check_size_3d(device, size)?;
-        let params = self.resolve_params(device, size, options);
         let distance = distance_texture(device, size, wgpu::TextureDimension::D3);
         let dv = view(&distance);
-        let groups = ComputePipeline::<field_resolve::resolve_unsigned::Entry>::groups_for(size);
-        match nearest_outside {
-            None => {
-                let bound = self.resolve_unsigned.bind(
-                    device,
-                    &field_resolve::resolve_unsigned::Resources {
-                        params: (&params).into(),
-                        nearest: nearest.into(),
-                        distance: (&dv).into(),
-                    },
-                )?;
-                pass(
-                    encoder,
-                    &self.resolve_unsigned,
-                    &bound,
-                    groups,
-                    "resolve",
-                    prof,
-                );
-            }
-            Some(o) => {
-                let bound = self.resolve_signed.bind(
-                    device,
-                    &field_resolve::resolve_signed::Resources {
-                        params: (&params).into(),
-                        nearest: nearest.into(),
-                        nearest_outside: o.into(),
-                        distance: (&dv).into(),
-                    },
-                )?;
-                pass(
-                    encoder,
-                    &self.resolve_signed,
-                    &bound,
-                    groups,
-                    "resolve",
-                    prof,
-                );
-            }
-        }
+        let fuse = Fuse {
+            distance: &dv,
+            voxel_size: options.voxel_size,
+            band: options.world_band(),
+            // The signed pass runs "in" the outside field with the inside field beside it.
+            inside_field: nearest_outside.map(|_| nearest),
+        };
+        self.resolve_into(
+            device,
+            encoder,
+            size,
+            nearest_outside.unwrap_or(nearest),
+            fuse,
+            prof,
+        )?;
         Ok(distance)
     }
 }

@@ -149,6 +149,26 @@ impl Waves {
         Ok((Self::new(waves, steepness)?, None))
     }
 
+    /// A moderate open sea of four waves (60 m down to 5.5 m, steepness 0.6): the sea of the
+    /// LOD tests and `cargo xtask bench ocean`, and a starting point.
+    pub fn open_sea() -> Self {
+        let w = |dx: f32, dz: f32, amplitude: f32, wavelength: f32, speed: f32| Wave {
+            direction: Vec2::new(dx, dz),
+            amplitude,
+            wavelength,
+            speed,
+        };
+        Self {
+            waves: vec![
+                w(1.0, 0.2, 1.2, 60.0, 9.0),
+                w(0.3, 1.0, 0.6, 31.0, 7.0),
+                w(-0.6, 0.8, 0.25, 13.0, 4.5),
+                w(0.9, -0.4, 0.1, 5.5, 2.9),
+            ],
+            steepness: 0.6,
+        }
+    }
+
     pub fn waves(&self) -> &[Wave] {
         &self.waves
     }

@@ -12,8 +12,8 @@ use std::process::ExitCode;
 use fieldkit::gpu::Context;
 use fieldkit::ocean::lod::{LodSettings, select, writeup_patches};
 use fieldkit::ocean::render::{Look, OceanCamera, OceanRenderer, Output, PATCH_QUADS, Patch};
-use fieldkit::ocean::{Wave, Waves};
-use glam::{DVec2, DVec3, Vec2};
+use fieldkit::ocean::Waves;
+use glam::{DVec2, DVec3};
 
 use crate::bench_metaball::{Stamps, median};
 
@@ -33,26 +33,6 @@ struct Row {
     triangles: u64,
     max_error_px: f64,
     frame_ms: f64,
-}
-
-/// The sea of `tests/ocean_lod.rs`.
-fn sea() -> Waves {
-    let w = |dx: f32, dz: f32, a: f32, l: f32, s: f32| Wave {
-        direction: Vec2::new(dx, dz),
-        amplitude: a,
-        wavelength: l,
-        speed: s,
-    };
-    Waves::new(
-        vec![
-            w(1.0, 0.2, 1.2, 60.0, 9.0),
-            w(0.3, 1.0, 0.6, 31.0, 7.0),
-            w(-0.6, 0.8, 0.25, 13.0, 4.5),
-            w(0.9, -0.4, 0.1, 5.5, 2.9),
-        ],
-        0.6,
-    )
-    .expect("valid waves")
 }
 
 fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Result<(), String> {
@@ -86,7 +66,7 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
         wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
     );
     let colour_view = colour.create_view(&Default::default());
-    let waves = sea();
+    let waves = Waves::open_sea();
     let look = Look::default();
     let eye = DVec3::new(130.0, 12.0, -260.0);
     let camera = OceanCamera::look_at(
