@@ -26,6 +26,7 @@ use glam::{DVec3, Vec4};
 use crate::bind::ComputePipeline;
 use crate::error::Error;
 use crate::gpu::{Context, read_buffer, uniform_buffer as uniform};
+use crate::shaders::voxelize::solid::{self as solid_stage, SolidParams};
 use crate::shaders::voxelize::surface::{self as stage, SurfaceParams};
 
 const STAGE: &str = stage::STAGE;
@@ -67,41 +68,106 @@ fn invalid(what: String) -> Error {
 }
 
 impl Mesh {
-    /// A UV sphere (for tests and examples): `segments` around, `rings` from pole to pole.
+    /// A closed UV sphere (for tests and examples): `segments` around, `rings` from pole to
+    /// pole, one vertex at each pole, triangles facing out.
     pub fn uv_sphere(centre: DVec3, radius: f64, segments: u32, rings: u32) -> Self {
-        let mut positions = Vec::new();
-        for r in 0..=rings {
+        let point = |theta: f64, phi: f64| {
+            centre
+                + radius
+                    * DVec3::new(
+                        theta.sin() * phi.cos(),
+                        theta.cos(),
+                        theta.sin() * phi.sin(),
+                    )
+        };
+        let mut positions = vec![point(0.0, 0.0)];
+        for r in 1..rings {
             let theta = std::f64::consts::PI * r as f64 / rings as f64;
             for s in 0..segments {
-                let phi = std::f64::consts::TAU * s as f64 / segments as f64;
-                positions.push(
-                    centre
-                        + radius
-                            * DVec3::new(
-                                theta.sin() * phi.cos(),
-                                theta.cos(),
-                                theta.sin() * phi.sin(),
-                            ),
-                );
+                positions.push(point(
+                    theta,
+                    std::f64::consts::TAU * s as f64 / segments as f64,
+                ));
             }
         }
-        let at = |r: u32, s: u32| r * segments + s % segments;
+        let south = positions.len() as u32;
+        positions.push(point(std::f64::consts::PI, 0.0));
+        let at = |r: u32, s: u32| 1 + (r - 1) * segments + s % segments;
         let mut triangles = Vec::new();
-        for r in 0..rings {
+        for s in 0..segments {
+            triangles.push([0, at(1, s + 1), at(1, s)]);
+            triangles.push([south, at(rings - 1, s), at(rings - 1, s + 1)]);
+        }
+        for r in 1..rings - 1 {
             for s in 0..segments {
                 let (a, b, c, d) = (at(r, s), at(r, s + 1), at(r + 1, s), at(r + 1, s + 1));
-                if r > 0 {
-                    triangles.push([a, b, c]);
-                }
-                if r + 1 < rings {
-                    triangles.push([b, d, c]);
-                }
+                triangles.push([a, b, c]);
+                triangles.push([b, d, c]);
             }
         }
         Self {
             positions,
             triangles,
         }
+    }
+
+    /// A torus around the y axis through `centre` (for tests and examples): tube radius
+    /// `minor` around a circle of radius `major`.
+    pub fn torus(centre: DVec3, major: f64, minor: f64, segments: u32, sides: u32) -> Self {
+        let mut positions = Vec::new();
+        for s in 0..segments {
+            let phi = std::f64::consts::TAU * s as f64 / segments as f64;
+            for k in 0..sides {
+                let theta = std::f64::consts::TAU * k as f64 / sides as f64;
+                let r = major + minor * theta.cos();
+                positions
+                    .push(centre + DVec3::new(r * phi.cos(), minor * theta.sin(), r * phi.sin()));
+            }
+        }
+        let at = |s: u32, k: u32| (s % segments) * sides + k % sides;
+        let mut triangles = Vec::new();
+        for s in 0..segments {
+            for k in 0..sides {
+                let (a, b, c, d) = (at(s, k), at(s + 1, k), at(s, k + 1), at(s + 1, k + 1));
+                triangles.push([a, c, b]);
+                triangles.push([b, c, d]);
+            }
+        }
+        Self {
+            positions,
+            triangles,
+        }
+    }
+
+    /// Whether every edge is shared by exactly two triangles that run along it in opposite
+    /// directions (closed and consistently oriented): what solid voxelization needs. Returns
+    /// the first offending edge otherwise.
+    pub fn open_edge(&self) -> Option<[u32; 2]> {
+        let mut uses = std::collections::HashMap::<(u32, u32), i32>::new();
+        for t in &self.triangles {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                *uses.entry((a.min(b), a.max(b))).or_default() += if a < b { 1 } else { 1 << 8 };
+            }
+        }
+        let mut bad: Vec<_> = uses
+            .into_iter()
+            .filter(|&(_, n)| n != 1 + (1 << 8))
+            .collect();
+        bad.sort();
+        bad.first().map(|&((a, b), _)| [a, b])
+    }
+
+    /// Volume enclosed by a closed mesh (divergence theorem), in world units cubed; positive
+    /// for outward-facing triangles.
+    pub fn volume(&self) -> f64 {
+        self.triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| self.positions[i as usize]);
+                a.dot(b.cross(c)) / 6.0
+            })
+            .sum()
     }
 
     /// Check the mesh and move it into `grid`'s local coordinates in f64, then round to f32.
@@ -189,25 +255,89 @@ impl Surface {
 
 pub struct Voxelizer {
     surface: ComputePipeline<stage::surface::Entry>,
+    solid: ComputePipeline<solid_stage::solid::Entry>,
 }
+
+/// Triangles per dispatch: at most 65535 workgroups of 64.
+const PER_DISPATCH: u32 = 65535 * 64;
 
 impl Voxelizer {
     pub fn new(device: &wgpu::Device) -> Result<Self, Error> {
         Ok(Self {
             surface: ComputePipeline::new(device)?,
+            solid: ComputePipeline::new(device)?,
         })
     }
 
-    /// Conservative surface voxels of `mesh` in `grid`: every voxel (a closed box) a triangle
-    /// touches.
-    pub fn encode_surface(
+    /// Solid voxels of a closed mesh: every voxel whose centre is inside, by parity along x
+    /// (`voxelize/solid`), ORed with the conservative surface so parts thinner than a voxel
+    /// survive. A mesh with an open or inconsistently oriented edge is refused (its inside is
+    /// not defined). `with_surface: false` gives the parity fill alone.
+    pub fn encode_solid(
         &self,
         ctx: &Context,
         encoder: &mut wgpu::CommandEncoder,
         mesh: &Mesh,
         grid: &Grid,
+        with_surface: bool,
     ) -> Result<Surface, Error> {
+        if let Some([a, b]) = mesh.open_edge() {
+            return Err(invalid(format!(
+                "solid voxelization needs a closed, consistently oriented mesh: the edge between \
+                 vertices {a} and {b} is not shared by exactly two triangles running opposite ways"
+            )));
+        }
         let local = mesh.to_grid(grid)?;
+        let (occupancy, triangles) = self.bitset(ctx, encoder, &local, grid)?;
+        let device = &ctx.device;
+        let count = (local.vertices.len() / 3) as u32;
+        let mut first = 0;
+        while first < count {
+            let n = (count - first).min(PER_DISPATCH);
+            let params = uniform(
+                device,
+                "voxelize solid params",
+                &SolidParams {
+                    grid: grid.size.into(),
+                    first,
+                    count: n,
+                },
+            );
+            let bound = self.solid.bind(
+                device,
+                &solid_stage::solid::Resources {
+                    params: (&params).into(),
+                    triangles: (&triangles).into(),
+                    occupancy: (&occupancy).into(),
+                },
+            )?;
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some(solid_stage::STAGE),
+                timestamp_writes: None,
+            });
+            self.solid
+                .dispatch(&mut pass, &bound, [n.div_ceil(64), 1, 1]);
+            drop(pass);
+            first += n;
+        }
+        if with_surface {
+            self.surface_into(device, encoder, &occupancy, &triangles, count, grid)?;
+        }
+        Ok(Surface {
+            size: grid.size,
+            occupancy,
+            degenerate: local.degenerate,
+        })
+    }
+
+    /// A cleared bitset for `grid` and the triangle buffer of `local`.
+    fn bitset(
+        &self,
+        ctx: &Context,
+        encoder: &mut wgpu::CommandEncoder,
+        local: &GridMesh,
+        grid: &Grid,
+    ) -> Result<(wgpu::Buffer, wgpu::Buffer), Error> {
         let device = &ctx.device;
         let voxels: u64 = grid.size.iter().map(|&s| s as u64).product();
         let words = voxels.div_ceil(32).max(1);
@@ -229,25 +359,33 @@ impl Voxelizer {
             mapped_at_creation: false,
         });
         encoder.clear_buffer(&occupancy, 0, None);
-        let count = (local.vertices.len() / 3) as u32;
-        if count == 0 {
-            return Ok(Surface {
-                size: grid.size,
-                occupancy,
-                degenerate: local.degenerate,
-            });
-        }
         use wgpu::util::DeviceExt;
+        // One padding vertex keeps the buffer non-empty when every triangle was degenerate.
+        let mut vertices = local.vertices.clone();
+        if vertices.is_empty() {
+            vertices.push(Vec4::ZERO);
+        }
         let triangles = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("voxelize triangles"),
-            contents: bytemuck::cast_slice(&local.vertices),
+            contents: bytemuck::cast_slice(&vertices),
             usage: wgpu::BufferUsages::STORAGE,
         });
-        // Dispatches of at most 65535 workgroups of 64 triangles.
-        let per_dispatch = 65535 * 64;
+        Ok((occupancy, triangles))
+    }
+
+    /// The conservative surface pass over `count` triangles, ORed into `occupancy`.
+    fn surface_into(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        occupancy: &wgpu::Buffer,
+        triangles: &wgpu::Buffer,
+        count: u32,
+        grid: &Grid,
+    ) -> Result<(), Error> {
         let mut first = 0;
         while first < count {
-            let n = (count - first).min(per_dispatch);
+            let n = (count - first).min(PER_DISPATCH);
             let params = uniform(
                 device,
                 "voxelize params",
@@ -262,8 +400,8 @@ impl Voxelizer {
                 device,
                 &stage::surface::Resources {
                     params: (&params).into(),
-                    triangles: (&triangles).into(),
-                    occupancy: (&occupancy).into(),
+                    triangles: triangles.into(),
+                    occupancy: occupancy.into(),
                 },
             )?;
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -275,6 +413,22 @@ impl Voxelizer {
             drop(pass);
             first += n;
         }
+        Ok(())
+    }
+
+    /// Conservative surface voxels of `mesh` in `grid`: every voxel (a closed box) a triangle
+    /// touches.
+    pub fn encode_surface(
+        &self,
+        ctx: &Context,
+        encoder: &mut wgpu::CommandEncoder,
+        mesh: &Mesh,
+        grid: &Grid,
+    ) -> Result<Surface, Error> {
+        let local = mesh.to_grid(grid)?;
+        let (occupancy, triangles) = self.bitset(ctx, encoder, &local, grid)?;
+        let count = (local.vertices.len() / 3) as u32;
+        self.surface_into(&ctx.device, encoder, &occupancy, &triangles, count, grid)?;
         Ok(Surface {
             size: grid.size,
             occupancy,

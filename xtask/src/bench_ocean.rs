@@ -10,9 +10,9 @@ use std::io::Write;
 use std::process::ExitCode;
 
 use fieldkit::gpu::Context;
+use fieldkit::ocean::Waves;
 use fieldkit::ocean::lod::{LodSettings, select, writeup_patches};
 use fieldkit::ocean::render::{Look, OceanCamera, OceanRenderer, Output, PATCH_QUADS, Patch};
-use fieldkit::ocean::Waves;
 use glam::{DVec2, DVec3};
 
 use crate::bench_metaball::{Stamps, median};
