@@ -4,7 +4,7 @@
 use fieldkit::Error;
 use fieldkit::gpu::Context;
 use fieldkit::harness::context;
-use fieldkit::voxelize::{Grid, GridMesh, Mesh, Voxelizer, cpu};
+use fieldkit::voxelize::{Grid, GridMesh, Mesh, Separation, Voxelizer, cpu};
 use glam::{DVec3, Vec4};
 
 /// GPU and CPU voxels: (misses, extras); every extra must overlap the triangle within `margin`
@@ -252,6 +252,127 @@ fn bad_input_gets_typed_errors() {
         assert!(
             matches!(err, Error::Invalid { .. } | Error::Size { .. }),
             "{name}: {err:?}"
+        );
+    }
+}
+
+/// Voxels reached from the grid's boundary through empty voxels, with 6 or 26 neighbours.
+fn flood(occupied: &[bool], size: [u32; 3], neighbours: usize) -> Vec<bool> {
+    let [nx, ny, nz] = size.map(|n| n as i64);
+    let index = |x: i64, y: i64, z: i64| ((z * ny + y) * nx + x) as usize;
+    let mut seen = vec![false; occupied.len()];
+    let mut stack = Vec::new();
+    for z in 0..nz {
+        for y in 0..ny {
+            for x in 0..nx {
+                let edge = x == 0 || y == 0 || z == 0 || x == nx - 1 || y == ny - 1 || z == nz - 1;
+                if edge && !occupied[index(x, y, z)] {
+                    seen[index(x, y, z)] = true;
+                    stack.push((x, y, z));
+                }
+            }
+        }
+    }
+    while let Some((x, y, z)) = stack.pop() {
+        for dz in -1..=1i64 {
+            for dy in -1..=1i64 {
+                for dx in -1..=1i64 {
+                    let steps = dx.abs() + dy.abs() + dz.abs();
+                    if steps == 0 || (neighbours == 6 && steps > 1) {
+                        continue;
+                    }
+                    let (a, b, c) = (x + dx, y + dy, z + dz);
+                    if a < 0 || b < 0 || c < 0 || a >= nx || b >= ny || c >= nz {
+                        continue;
+                    }
+                    let i = index(a, b, c);
+                    if !seen[i] && !occupied[i] {
+                        seen[i] = true;
+                        stack.push((a, b, c));
+                    }
+                }
+            }
+        }
+    }
+    seen
+}
+
+/// The two thicknesses against flood fills from outside a closed sphere and torus: the
+/// conservative voxels stop 26-connected floods, the six-separating ones stop 6-connected
+/// floods, are a subset of the conservative ones, and let a 26-connected flood through (what
+/// they are not made for).
+#[test]
+fn separation_holds_against_flood_fills() {
+    let ctx = context();
+    let v = Voxelizer::new(&ctx.device).unwrap();
+    let g = unit_grid([32, 32, 32]);
+    let sphere_c = DVec3::new(16.3, 15.7, 16.1);
+    let torus_c = DVec3::new(16.2, 15.9, 16.4);
+    let shapes: Vec<(&str, Mesh, Box<dyn Fn(DVec3) -> f64>)> = vec![
+        (
+            "sphere",
+            Mesh::uv_sphere(sphere_c, 11.37, 48, 24),
+            Box::new(move |p: DVec3| (p - sphere_c).length() - 11.37),
+        ),
+        (
+            "torus",
+            Mesh::torus(torus_c, 10.2, 3.7, 64, 24),
+            Box::new(move |p: DVec3| {
+                let q = p - torus_c;
+                let ring = (q.x * q.x + q.z * q.z).sqrt() - 10.2;
+                (ring * ring + q.y * q.y).sqrt() - 3.7
+            }),
+        ),
+    ];
+    for (name, mesh, signed) in shapes {
+        let run = |sep| {
+            let mut enc = ctx.encoder("voxelize");
+            let s = v
+                .encode_surface_with(&ctx, &mut enc, &mesh, &g, sep)
+                .unwrap();
+            ctx.submit_and_wait("voxelize", enc).unwrap();
+            s.read(&ctx).unwrap()
+        };
+        let thick = run(Separation::Conservative);
+        let thin = run(Separation::Six);
+        assert!(
+            thin.iter().zip(&thick).all(|(&t, &k)| !t || k),
+            "{name}: six-separating outside the conservative set"
+        );
+        let deep: Vec<usize> = (0..thick.len())
+            .filter(|&i| {
+                let p =
+                    DVec3::new((i % 32) as f64, ((i / 32) % 32) as f64, (i / 1024) as f64) + 0.5;
+                signed(p) < -1.5
+            })
+            .collect();
+        let leaks = |occ: &[bool], k| {
+            let reached = flood(occ, g.size, k);
+            deep.iter().filter(|&&i| reached[i]).count()
+        };
+        let (n_thick, n_thin) = (
+            thick.iter().filter(|&&o| o).count(),
+            thin.iter().filter(|&&o| o).count(),
+        );
+        let (l26_thick, l6_thin, l26_thin) = (leaks(&thick, 26), leaks(&thin, 6), leaks(&thin, 26));
+        println!(
+            "{name}: conservative {n_thick} voxels, 26-flood reaches {l26_thick} of {} deep voxels; \
+             six-separating {n_thin} voxels, 6-flood reaches {l6_thin}, 26-flood reaches {l26_thin}",
+            deep.len()
+        );
+        assert!(!deep.is_empty());
+        assert_eq!(
+            l26_thick, 0,
+            "{name}: a 26-connected flood got through the conservative surface"
+        );
+        assert_eq!(
+            l6_thin, 0,
+            "{name}: a 6-connected flood got through the six-separating surface"
+        );
+        assert!(n_thin < n_thick, "{name}: six-separating is not thinner");
+        assert!(
+            l26_thin > 0,
+            "{name}: expected a 26-connected flood to leak through the thin surface"
         );
     }
 }

@@ -253,8 +253,20 @@ impl Surface {
     }
 }
 
+/// How thick a surface voxelization is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Separation {
+    /// Every voxel a triangle touches (closed boxes): no 26-connected path crosses it.
+    #[default]
+    Conservative,
+    /// Thinner: voxels whose inner cross the triangle's plane crosses and whose centre
+    /// projects within half a voxel of the triangle: no 6-connected path crosses it.
+    Six,
+}
+
 pub struct Voxelizer {
     surface: ComputePipeline<stage::surface::Entry>,
+    surface_six: ComputePipeline<stage::surface::Entry>,
     solid: ComputePipeline<solid_stage::solid::Entry>,
 }
 
@@ -265,6 +277,7 @@ impl Voxelizer {
     pub fn new(device: &wgpu::Device) -> Result<Self, Error> {
         Ok(Self {
             surface: ComputePipeline::new(device)?,
+            surface_six: ComputePipeline::with_overrides(device, &[("SIX_SEPARATING", 1.0)])?,
             solid: ComputePipeline::new(device)?,
         })
     }
@@ -321,7 +334,15 @@ impl Voxelizer {
             first += n;
         }
         if with_surface {
-            self.surface_into(device, encoder, &occupancy, &triangles, count, grid)?;
+            self.surface_into(
+                device,
+                encoder,
+                &self.surface,
+                &occupancy,
+                &triangles,
+                count,
+                grid,
+            )?;
         }
         Ok(Surface {
             size: grid.size,
@@ -373,11 +394,14 @@ impl Voxelizer {
         Ok((occupancy, triangles))
     }
 
-    /// The conservative surface pass over `count` triangles, ORed into `occupancy`.
+    /// A surface pass (`pipeline`: conservative or six-separating) over `count` triangles, ORed
+    /// into `occupancy`.
+    #[allow(clippy::too_many_arguments)]
     fn surface_into(
         &self,
         device: &wgpu::Device,
         encoder: &mut wgpu::CommandEncoder,
+        pipeline: &ComputePipeline<stage::surface::Entry>,
         occupancy: &wgpu::Buffer,
         triangles: &wgpu::Buffer,
         count: u32,
@@ -396,7 +420,7 @@ impl Voxelizer {
                     slack: SLACK,
                 },
             );
-            let bound = self.surface.bind(
+            let bound = pipeline.bind(
                 device,
                 &stage::surface::Resources {
                     params: (&params).into(),
@@ -408,8 +432,7 @@ impl Voxelizer {
                 label: Some(STAGE),
                 timestamp_writes: None,
             });
-            self.surface
-                .dispatch(&mut pass, &bound, [n.div_ceil(64), 1, 1]);
+            pipeline.dispatch(&mut pass, &bound, [n.div_ceil(64), 1, 1]);
             drop(pass);
             first += n;
         }
@@ -425,10 +448,34 @@ impl Voxelizer {
         mesh: &Mesh,
         grid: &Grid,
     ) -> Result<Surface, Error> {
+        self.encode_surface_with(ctx, encoder, mesh, grid, Separation::Conservative)
+    }
+
+    /// Surface voxels of `mesh` in `grid`, as thick as `separation` says.
+    pub fn encode_surface_with(
+        &self,
+        ctx: &Context,
+        encoder: &mut wgpu::CommandEncoder,
+        mesh: &Mesh,
+        grid: &Grid,
+        separation: Separation,
+    ) -> Result<Surface, Error> {
         let local = mesh.to_grid(grid)?;
         let (occupancy, triangles) = self.bitset(ctx, encoder, &local, grid)?;
         let count = (local.vertices.len() / 3) as u32;
-        self.surface_into(&ctx.device, encoder, &occupancy, &triangles, count, grid)?;
+        let pipeline = match separation {
+            Separation::Conservative => &self.surface,
+            Separation::Six => &self.surface_six,
+        };
+        self.surface_into(
+            &ctx.device,
+            encoder,
+            pipeline,
+            &occupancy,
+            &triangles,
+            count,
+            grid,
+        )?;
         Ok(Surface {
             size: grid.size,
             occupancy,
