@@ -297,6 +297,9 @@ fn flood(occupied: &[bool], size: [u32; 3], neighbours: usize) -> Vec<bool> {
     seen
 }
 
+/// Signed distance to an analytic shape (negative inside).
+type SignedDistance = Box<dyn Fn(DVec3) -> f64>;
+
 /// The two thicknesses against flood fills from outside a closed sphere and torus: the
 /// conservative voxels stop 26-connected floods, the six-separating ones stop 6-connected
 /// floods, are a subset of the conservative ones, and let a 26-connected flood through (what
@@ -308,7 +311,7 @@ fn separation_holds_against_flood_fills() {
     let g = unit_grid([32, 32, 32]);
     let sphere_c = DVec3::new(16.3, 15.7, 16.1);
     let torus_c = DVec3::new(16.2, 15.9, 16.4);
-    let shapes: Vec<(&str, Mesh, Box<dyn Fn(DVec3) -> f64>)> = vec![
+    let shapes: Vec<(&str, Mesh, SignedDistance)> = vec![
         (
             "sphere",
             Mesh::uv_sphere(sphere_c, 11.37, 48, 24),
