@@ -234,6 +234,28 @@ fn check_grid(grid: &Grid) -> Result<(), Error> {
     Ok(())
 }
 
+/// Chunks of [`CHUNK`] columns the heavy triangles of `local` can need at most: whichever axis
+/// is dominant, a triangle's columns are at most the largest product of two of its box's
+/// sides (clamped to the grid).
+pub fn heavy_chunk_bound(local: &GridMesh, size: [u32; 3]) -> u32 {
+    let mut total: u64 = 0;
+    for t in local.vertices.chunks(3) {
+        let lo = t[0].min(t[1]).min(t[2]).truncate();
+        let hi = t[0].max(t[1]).max(t[2]).truncate();
+        let side = |a: usize| {
+            let l = (lo[a].ceil() as i64 - 1).max(0);
+            let h = (hi[a].floor() as i64).min(size[a] as i64 - 1);
+            (h - l + 1).max(0) as u64
+        };
+        let (x, y, z) = (side(0), side(1), side(2));
+        let most = (x * y).max(y * z).max(z * x);
+        if most > CHUNK as u64 {
+            total += most.div_ceil(CHUNK as u64);
+        }
+    }
+    total.min(u32::MAX as u64) as u32
+}
+
 /// Surface voxels on the GPU: one bit per voxel.
 pub struct Surface {
     pub size: [u32; 3],
@@ -264,9 +286,31 @@ pub enum Separation {
     Six,
 }
 
+/// The three entries of one surface variant: triangles, heavy triangles' chunks, and the
+/// indirect arguments between them.
+struct SurfacePipelines {
+    light: ComputePipeline<stage::surface::Entry>,
+    heavy: ComputePipeline<stage::surface_heavy::Entry>,
+    args: ComputePipeline<stage::heavy_args::Entry>,
+}
+
+impl SurfacePipelines {
+    fn new(device: &wgpu::Device, six: bool) -> Result<Self, Error> {
+        let o = [("SIX_SEPARATING", six as u32 as f64)];
+        Ok(Self {
+            light: ComputePipeline::with_overrides(device, &o)?,
+            heavy: ComputePipeline::with_overrides(device, &o)?,
+            args: ComputePipeline::new(device)?,
+        })
+    }
+}
+
+/// Columns per chunk of a heavy triangle (the shader's `CHUNK`).
+pub const CHUNK: u32 = 64;
+
 pub struct Voxelizer {
-    surface: ComputePipeline<stage::surface::Entry>,
-    surface_six: ComputePipeline<stage::surface::Entry>,
+    surface: SurfacePipelines,
+    surface_six: SurfacePipelines,
     solid: ComputePipeline<solid_stage::solid::Entry>,
 }
 
@@ -276,8 +320,8 @@ const PER_DISPATCH: u32 = 65535 * 64;
 impl Voxelizer {
     pub fn new(device: &wgpu::Device) -> Result<Self, Error> {
         Ok(Self {
-            surface: ComputePipeline::new(device)?,
-            surface_six: ComputePipeline::with_overrides(device, &[("SIX_SEPARATING", 1.0)])?,
+            surface: SurfacePipelines::new(device, false)?,
+            surface_six: SurfacePipelines::new(device, true)?,
             solid: ComputePipeline::new(device)?,
         })
     }
@@ -340,7 +384,7 @@ impl Voxelizer {
                 &self.surface,
                 &occupancy,
                 &triangles,
-                count,
+                &local,
                 grid,
             )?;
         }
@@ -394,23 +438,43 @@ impl Voxelizer {
         Ok((occupancy, triangles))
     }
 
-    /// A surface pass (`pipeline`: conservative or six-separating) over `count` triangles, ORed
-    /// into `occupancy`.
+    /// A surface pass (`pipelines`: conservative or six-separating) over the triangles of
+    /// `local`, ORed into `occupancy`: light triangles one per thread, heavy ones (more than
+    /// [`CHUNK`] columns) in chunks through a work list and an indirect dispatch.
     #[allow(clippy::too_many_arguments)]
     fn surface_into(
         &self,
         device: &wgpu::Device,
         encoder: &mut wgpu::CommandEncoder,
-        pipeline: &ComputePipeline<stage::surface::Entry>,
+        pipelines: &SurfacePipelines,
         occupancy: &wgpu::Buffer,
         triangles: &wgpu::Buffer,
-        count: u32,
+        local: &GridMesh,
         grid: &Grid,
     ) -> Result<(), Error> {
-        let mut first = 0;
-        while first < count {
-            let n = (count - first).min(PER_DISPATCH);
-            let params = uniform(
+        let count = (local.vertices.len() / 3) as u32;
+        if count == 0 {
+            return Ok(());
+        }
+        let capacity = heavy_chunk_bound(local, grid.size);
+        let buffer = |label, size: u64, usage| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage: wgpu::BufferUsages::STORAGE | usage,
+                mapped_at_creation: false,
+            })
+        };
+        let work = buffer(
+            "voxelize work list",
+            capacity.max(1) as u64 * 8,
+            wgpu::BufferUsages::empty(),
+        );
+        let work_count = buffer("voxelize work count", 4, wgpu::BufferUsages::COPY_DST);
+        let dispatch = buffer("voxelize heavy dispatch", 12, wgpu::BufferUsages::INDIRECT);
+        encoder.clear_buffer(&work_count, 0, None);
+        let params_for = |first, n| {
+            uniform(
                 device,
                 "voxelize params",
                 &SurfaceParams {
@@ -418,24 +482,69 @@ impl Voxelizer {
                     first,
                     count: n,
                     slack: SLACK,
+                    capacity,
                 },
-            );
-            let bound = pipeline.bind(
+            )
+        };
+        let mut first = 0;
+        while first < count {
+            let n = (count - first).min(PER_DISPATCH);
+            let params = params_for(first, n);
+            let bound = pipelines.light.bind(
                 device,
                 &stage::surface::Resources {
                     params: (&params).into(),
                     triangles: triangles.into(),
                     occupancy: occupancy.into(),
+                    work: (&work).into(),
+                    work_count: (&work_count).into(),
                 },
             )?;
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some(STAGE),
                 timestamp_writes: None,
             });
-            pipeline.dispatch(&mut pass, &bound, [n.div_ceil(64), 1, 1]);
+            pipelines
+                .light
+                .dispatch(&mut pass, &bound, [n.div_ceil(64), 1, 1]);
             drop(pass);
             first += n;
         }
+        if capacity == 0 {
+            return Ok(());
+        }
+        let params = params_for(0, count);
+        let args = pipelines.args.bind(
+            device,
+            &stage::heavy_args::Resources {
+                params: (&params).into(),
+                work_count: (&work_count).into(),
+                heavy_dispatch: (&dispatch).into(),
+            },
+        )?;
+        let heavy = pipelines.heavy.bind(
+            device,
+            &stage::surface_heavy::Resources {
+                params: (&params).into(),
+                triangles: triangles.into(),
+                occupancy: occupancy.into(),
+                work: (&work).into(),
+                work_count: (&work_count).into(),
+            },
+        )?;
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("voxelize heavy arguments"),
+            timestamp_writes: None,
+        });
+        pipelines.args.dispatch(&mut pass, &args, [1, 1, 1]);
+        drop(pass);
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("voxelize heavy triangles"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(&pipelines.heavy.pipeline);
+        heavy.set_compute(&mut pass);
+        pass.dispatch_workgroups_indirect(&dispatch, 0);
         Ok(())
     }
 
@@ -462,18 +571,17 @@ impl Voxelizer {
     ) -> Result<Surface, Error> {
         let local = mesh.to_grid(grid)?;
         let (occupancy, triangles) = self.bitset(ctx, encoder, &local, grid)?;
-        let count = (local.vertices.len() / 3) as u32;
-        let pipeline = match separation {
+        let pipelines = match separation {
             Separation::Conservative => &self.surface,
             Separation::Six => &self.surface_six,
         };
         self.surface_into(
             &ctx.device,
             encoder,
-            pipeline,
+            pipelines,
             &occupancy,
             &triangles,
-            count,
+            &local,
             grid,
         )?;
         Ok(Surface {
