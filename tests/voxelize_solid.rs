@@ -167,3 +167,64 @@ fn open_meshes_are_refused() {
             .is_err()
     );
 }
+
+/// The solid sphere written as binvox and .vox and read back by independent parsers here.
+#[test]
+fn binvox_and_vox_read_back() {
+    use fieldkit::voxelize::export::{binvox, vox};
+    let ctx = context();
+    let grid = Grid {
+        origin: DVec3::new(-1.0, 2.0, 0.5),
+        voxel: 0.25,
+        size: [20, 12, 16],
+    };
+    let mesh = Mesh::uv_sphere(DVec3::new(1.6, 3.4, 2.5), 1.3, 24, 12);
+    let occupied = solid(&ctx, &mesh, &grid, true);
+    let [nx, ny, nz] = grid.size.map(|n| n as usize);
+    assert!(occupied.iter().any(|&o| o));
+
+    // binvox: header lines, then (value, count) pairs in y-fastest, then z, then x order.
+    let bytes = binvox(&occupied, &grid).unwrap();
+    let data_at = bytes.windows(5).position(|w| w == b"data\n").unwrap() + 5;
+    let header = std::str::from_utf8(&bytes[..data_at]).unwrap();
+    assert!(
+        header.starts_with("#binvox 1\ndim 20 12 16\ntranslate -1 2 0.5\nscale 5\n"),
+        "{header}"
+    );
+    let mut values = Vec::new();
+    for pair in bytes[data_at..].chunks(2) {
+        values.extend(std::iter::repeat_n(pair[0] == 1, pair[1] as usize));
+    }
+    assert_eq!(values.len(), nx * ny * nz);
+    for x in 0..nx {
+        for z in 0..nz {
+            for y in 0..ny {
+                assert_eq!(
+                    values[(x * nz + z) * ny + y],
+                    occupied[(z * ny + y) * nx + x]
+                );
+            }
+        }
+    }
+
+    // .vox: "VOX " 150, MAIN with SIZE (x, z, y: z-up) and XYZI.
+    let bytes = vox(&occupied, grid.size).unwrap();
+    let u32_at = |i: usize| u32::from_le_bytes(bytes[i..i + 4].try_into().unwrap());
+    assert_eq!(&bytes[..4], b"VOX ");
+    assert_eq!(u32_at(4), 150);
+    assert_eq!(&bytes[8..12], b"MAIN");
+    assert_eq!(&bytes[20..24], b"SIZE");
+    assert_eq!([u32_at(32), u32_at(36), u32_at(40)], [20, 16, 12]);
+    assert_eq!(&bytes[44..48], b"XYZI");
+    let count = u32_at(56) as usize;
+    assert_eq!(count, occupied.iter().filter(|&&o| o).count());
+    let mut back = vec![false; occupied.len()];
+    for v in bytes[60..60 + 4 * count].chunks(4) {
+        let (x, z, y) = (v[0] as usize, v[1] as usize, v[2] as usize);
+        back[(z * ny + y) * nx + x] = true;
+    }
+    assert_eq!(back, occupied);
+    // Past MagicaVoxel's 256 per side: a typed error.
+    assert!(vox(&vec![false; 300], [300, 1, 1]).is_err());
+    assert!(binvox(&occupied[1..], &grid).is_err());
+}

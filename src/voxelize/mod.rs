@@ -20,6 +20,7 @@
 //! ```
 
 pub mod cpu;
+pub mod export;
 
 use glam::{DVec3, Vec4};
 
