@@ -27,6 +27,7 @@ use glam::{DVec3, Vec4};
 use crate::bind::ComputePipeline;
 use crate::error::Error;
 use crate::gpu::{Context, read_buffer, uniform_buffer as uniform};
+use crate::shaders::voxelize::occupancy_volume::{self as volume_stage, VolumeParams};
 use crate::shaders::voxelize::solid::{self as solid_stage, SolidParams};
 use crate::shaders::voxelize::surface::{self as stage, SurfaceParams};
 
@@ -313,6 +314,7 @@ pub struct Voxelizer {
     surface: SurfacePipelines,
     surface_six: SurfacePipelines,
     solid: ComputePipeline<solid_stage::solid::Entry>,
+    to_volume: ComputePipeline<volume_stage::to_volume::Entry>,
 }
 
 /// Triangles per dispatch: at most 65535 workgroups of 64.
@@ -324,6 +326,7 @@ impl Voxelizer {
             surface: SurfacePipelines::new(device, false)?,
             surface_six: SurfacePipelines::new(device, true)?,
             solid: ComputePipeline::new(device)?,
+            to_volume: ComputePipeline::new(device)?,
         })
     }
 
@@ -394,6 +397,60 @@ impl Voxelizer {
             occupancy,
             degenerate: local.degenerate,
         })
+    }
+
+    /// `voxels` as an `R32Float` 3D texture (1 occupied, 0 empty) that the distance stages
+    /// read: `Distance3d::encode` with `Inside::Mask` gives the mesh's distance field.
+    pub fn encode_volume(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        voxels: &Surface,
+    ) -> Result<wgpu::Texture, Error> {
+        let [w, h, d] = voxels.size;
+        let volume = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("voxel occupancy volume"),
+            size: wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: d,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D3,
+            format: wgpu::TextureFormat::R32Float,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::STORAGE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let view = volume.create_view(&Default::default());
+        let params = uniform(
+            device,
+            "voxel volume params",
+            &VolumeParams {
+                grid: voxels.size.into(),
+            },
+        );
+        let bound = self.to_volume.bind(
+            device,
+            &volume_stage::to_volume::Resources {
+                params: (&params).into(),
+                occupancy: (&voxels.occupancy).into(),
+                volume: (&view).into(),
+            },
+        )?;
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(volume_stage::STAGE),
+            timestamp_writes: None,
+        });
+        self.to_volume.dispatch(
+            &mut pass,
+            &bound,
+            ComputePipeline::<volume_stage::to_volume::Entry>::groups_for(voxels.size),
+        );
+        drop(pass);
+        Ok(volume)
     }
 
     /// A cleared bitset for `grid` and the triangle buffer of `local`.
