@@ -30,6 +30,8 @@ pub struct Args {
     pub column_bands: Option<u32>,
     /// Only these sizes of the sweep (empty: all).
     pub sizes: Vec<usize>,
+    /// `voxelize`: the bunny's `index.js` (`scripts/fetch-bunny.sh`).
+    pub mesh: Option<PathBuf>,
 }
 
 /// Memory bandwidth the pass figures are compared with (H100 SXM HBM3, rounded down).

@@ -7,6 +7,7 @@ mod bench;
 mod bench_metaball;
 mod bench_ocean;
 mod bench_volume;
+mod bench_voxelize;
 mod chart;
 mod lint;
 
@@ -72,6 +73,9 @@ enum Command {
         /// comma-separated), e.g. `--sizes 512` for one point.
         #[arg(long, value_delimiter = ',')]
         sizes: Vec<usize>,
+        /// `voxelize`: the Stanford bunny's `index.js` from `scripts/fetch-bunny.sh`.
+        #[arg(long)]
+        mesh: Option<PathBuf>,
     },
 }
 
@@ -81,6 +85,7 @@ enum Technique {
     Metaball,
     Volume,
     Ocean,
+    Voxelize,
 }
 
 fn crate_root() -> PathBuf {
@@ -108,6 +113,7 @@ fn main() -> ExitCode {
             exact_only,
             column_bands,
             sizes,
+            mesh,
         } => {
             if cfg!(debug_assertions) && std::env::var_os("FIELDKIT_BENCH_NO_REEXEC").is_none() {
                 return rerun_release();
@@ -129,12 +135,14 @@ fn main() -> ExitCode {
                 exact_only,
                 column_bands,
                 sizes,
+                mesh,
             };
             match technique {
                 Technique::Distance => bench::run_distance(&args),
                 Technique::Metaball => bench_metaball::run(&args),
                 Technique::Volume => bench_volume::run(&args),
                 Technique::Ocean => bench_ocean::run(&args),
+                Technique::Voxelize => bench_voxelize::run(&args),
             }
         }
     }

@@ -1,0 +1,215 @@
+//! `cargo xtask bench voxelize`: GPU time of conservative surface voxelization (and solid
+//! fill) of the Stanford bunny (`scripts/fetch-bunny.sh`, passed with `--mesh`) and a
+//! procedural torus of about a million triangles, in grids of 128³ to 1024³ fitted to each
+//! mesh. Time: GPU timestamps around the whole encode (clear, passes, heavy-triangle work
+//! list), median of the timed runs. Writes `voxelize.csv` and `voxelize.png` (time against
+//! the voxel edge relative to the mesh's longest side).
+
+use std::io::Write;
+use std::process::ExitCode;
+
+use fieldkit::gpu::Context;
+use fieldkit::voxelize::{Grid, Mesh, Voxelizer};
+use glam::DVec3;
+
+use crate::bench_metaball::{Stamps, median};
+
+pub fn run(args: &crate::bench::Args) -> ExitCode {
+    match bench(args) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("bench voxelize: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// The npm package `bunny`'s `index.js`: `exports.positions=[[x,y,z],…]`,
+/// `exports.cells=[[a,b,c],…]`.
+pub(crate) fn load_bunny(path: &std::path::Path) -> Result<Mesh, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let array = |name: &str| -> Result<serde_json::Value, String> {
+        let key = format!("exports.{name}=");
+        let start = text
+            .find(&key)
+            .ok_or(format!("no {key} in {}", path.display()))?
+            + key.len();
+        let end = text[start..]
+            .find([';', '\n'])
+            .map_or(text.len(), |e| start + e);
+        serde_json::from_str(&text[start..end]).map_err(|e| format!("{name}: {e}"))
+    };
+    let positions = array("positions")?
+        .as_array()
+        .ok_or("positions is not an array")?
+        .iter()
+        .map(|p| {
+            let c: Vec<f64> = p
+                .as_array()
+                .into_iter()
+                .flatten()
+                .filter_map(|v| v.as_f64())
+                .collect();
+            (c.len() == 3)
+                .then(|| DVec3::new(c[0], c[1], c[2]))
+                .ok_or("a position is not 3 numbers")
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let triangles = array("cells")?
+        .as_array()
+        .ok_or("cells is not an array")?
+        .iter()
+        .map(|t| {
+            let c: Vec<u32> = t
+                .as_array()
+                .into_iter()
+                .flatten()
+                .filter_map(|v| v.as_u64())
+                .map(|v| v as u32)
+                .collect();
+            (c.len() == 3)
+                .then(|| [c[0], c[1], c[2]])
+                .ok_or("a cell is not 3 indices")
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(Mesh {
+        positions,
+        triangles,
+    })
+}
+
+/// A grid of `n` voxels along the mesh's longest side, fitted to its bounds with a voxel of
+/// margin.
+fn fit(mesh: &Mesh, n: u32) -> Grid {
+    let lo = mesh
+        .positions
+        .iter()
+        .fold(DVec3::splat(f64::MAX), |a, &p| a.min(p));
+    let hi = mesh
+        .positions
+        .iter()
+        .fold(DVec3::splat(f64::MIN), |a, &p| a.max(p));
+    let voxel = (hi - lo).max_element() / (n - 2) as f64;
+    let size = ((hi - lo) / voxel).ceil().as_uvec3() + 2;
+    Grid {
+        origin: lo - DVec3::splat(voxel),
+        voxel,
+        size: size.min(glam::UVec3::splat(n)).to_array(),
+    }
+}
+
+struct Row {
+    mesh: String,
+    triangles: usize,
+    n: u32,
+    mode: &'static str,
+    ms: f64,
+    voxels: usize,
+}
+
+fn bench(args: &crate::bench::Args) -> Result<(), String> {
+    let ctx = Context::new().map_err(|e| e.to_string())?;
+    let adapter = ctx.adapter_name();
+    println!("adapter: {adapter}");
+    let stamps = Stamps::new(&ctx)?;
+    let v = Voxelizer::new(&ctx.device).map_err(|e| e.to_string())?;
+    let mut meshes = Vec::new();
+    match &args.mesh {
+        Some(path) => meshes.push(("bunny".to_string(), load_bunny(path)?)),
+        None => println!(
+            "no --mesh: run scripts/fetch-bunny.sh and pass --mesh target/bunny/index.js for the bunny"
+        ),
+    }
+    let (segments, sides) = if args.quick { (200, 100) } else { (1000, 500) };
+    meshes.push((
+        format!("torus {segments}×{sides}"),
+        Mesh::torus(DVec3::ZERO, 1.0, 0.35, segments, sides),
+    ));
+    let sizes: &[u32] = if args.quick {
+        &[64, 128]
+    } else {
+        &[128, 256, 512, 1024]
+    };
+    println!("| mesh | triangles | grid | mode | ms | voxels |\n|---|---|---|---|---|---|");
+    let mut rows = Vec::new();
+    for (name, mesh) in &meshes {
+        for &n in sizes {
+            let grid = fit(mesh, n);
+            for mode in ["surface", "solid"] {
+                let mut times = Vec::new();
+                for i in 0..args.warmup.max(3) + args.reps {
+                    let ms = stamps.time(&ctx, |enc| {
+                        let r = if mode == "surface" {
+                            v.encode_surface(&ctx, enc, mesh, &grid)
+                        } else {
+                            v.encode_solid(&ctx, enc, mesh, &grid, true)
+                        };
+                        r.map(|_| ()).map_err(|e| e.to_string())
+                    })?;
+                    if i >= args.warmup.max(3) {
+                        times.push(ms);
+                    }
+                }
+                let ms = median(times);
+                let mut enc = ctx.encoder("count");
+                let s = if mode == "surface" {
+                    v.encode_surface(&ctx, &mut enc, mesh, &grid)
+                } else {
+                    v.encode_solid(&ctx, &mut enc, mesh, &grid, true)
+                }
+                .map_err(|e| e.to_string())?;
+                ctx.submit_and_wait("count", enc)
+                    .map_err(|e| e.to_string())?;
+                let voxels = s
+                    .read(&ctx)
+                    .map_err(|e| e.to_string())?
+                    .iter()
+                    .filter(|&&o| o)
+                    .count();
+                println!(
+                    "| {name} | {} | {:?} | {mode} | {ms:.3} | {voxels} |",
+                    mesh.triangles.len(),
+                    grid.size
+                );
+                rows.push(Row {
+                    mesh: name.clone(),
+                    triangles: mesh.triangles.len(),
+                    n,
+                    mode,
+                    ms,
+                    voxels,
+                });
+            }
+        }
+    }
+    std::fs::create_dir_all(&args.out).map_err(|e| e.to_string())?;
+    let csv = args.out.join("voxelize.csv");
+    let mut f = std::fs::File::create(&csv).map_err(|e| e.to_string())?;
+    writeln!(f, "adapter,mesh,triangles,grid,mode,ms,voxels").map_err(|e| e.to_string())?;
+    for r in &rows {
+        writeln!(
+            f,
+            "\"{adapter}\",\"{}\",{},{},{},{:.4},{}",
+            r.mesh, r.triangles, r.n, r.mode, r.ms, r.voxels
+        )
+        .map_err(|e| e.to_string())?;
+    }
+    let points: Vec<crate::chart::Point> = rows
+        .iter()
+        .map(|r| crate::chart::Point {
+            group: format!("{}, {}", r.mesh, r.mode),
+            ms: r.ms,
+            err: 1.0 / r.n as f64,
+            label: format!("{}³", r.n),
+        })
+        .collect();
+    let axes = crate::chart::Axes {
+        caption: format!("voxelization: GPU time vs voxel edge, {adapter}"),
+        x: "GPU time, ms (median, log)",
+        y: "voxel edge / longest side of the mesh (log)",
+        floor: 1e-4,
+    };
+    crate::chart::time_vs_error(&args.out.join("voxelize.png"), &axes, &points)?;
+    println!("wrote {} and voxelize.png", csv.display());
+    Ok(())
+}
