@@ -317,6 +317,21 @@ pub struct Voxelizer {
     to_volume: ComputePipeline<volume_stage::to_volume::Entry>,
 }
 
+/// One compute pass of `groups` workgroups of `pipeline`, labelled `label`.
+fn run_pass<E: crate::bind::Entry>(
+    encoder: &mut wgpu::CommandEncoder,
+    label: &str,
+    pipeline: &ComputePipeline<E>,
+    bound: &crate::bind::Bound<E>,
+    groups: [u32; 3],
+) {
+    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+        label: Some(label),
+        timestamp_writes: None,
+    });
+    pipeline.dispatch(&mut pass, bound, groups);
+}
+
 /// Triangles per dispatch: at most 65535 workgroups of 64.
 const PER_DISPATCH: u32 = 65535 * 64;
 
@@ -372,13 +387,13 @@ impl Voxelizer {
                     occupancy: (&occupancy).into(),
                 },
             )?;
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some(solid_stage::STAGE),
-                timestamp_writes: None,
-            });
-            self.solid
-                .dispatch(&mut pass, &bound, [n.div_ceil(64), 1, 1]);
-            drop(pass);
+            run_pass(
+                encoder,
+                solid_stage::STAGE,
+                &self.solid,
+                &bound,
+                [n.div_ceil(64), 1, 1],
+            );
             first += n;
         }
         if with_surface {
@@ -440,16 +455,13 @@ impl Voxelizer {
                 volume: (&view).into(),
             },
         )?;
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(volume_stage::STAGE),
-            timestamp_writes: None,
-        });
-        self.to_volume.dispatch(
-            &mut pass,
+        run_pass(
+            encoder,
+            volume_stage::STAGE,
+            &self.to_volume,
             &bound,
             ComputePipeline::<volume_stage::to_volume::Entry>::groups_for(voxels.size),
         );
-        drop(pass);
         Ok(volume)
     }
 
@@ -558,14 +570,13 @@ impl Voxelizer {
                     work_count: (&work_count).into(),
                 },
             )?;
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some(STAGE),
-                timestamp_writes: None,
-            });
-            pipelines
-                .light
-                .dispatch(&mut pass, &bound, [n.div_ceil(64), 1, 1]);
-            drop(pass);
+            run_pass(
+                encoder,
+                STAGE,
+                &pipelines.light,
+                &bound,
+                [n.div_ceil(64), 1, 1],
+            );
             first += n;
         }
         if capacity == 0 {
@@ -590,12 +601,13 @@ impl Voxelizer {
                 work_count: (&work_count).into(),
             },
         )?;
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("voxelize heavy arguments"),
-            timestamp_writes: None,
-        });
-        pipelines.args.dispatch(&mut pass, &args, [1, 1, 1]);
-        drop(pass);
+        run_pass(
+            encoder,
+            "voxelize heavy arguments",
+            &pipelines.args,
+            &args,
+            [1, 1, 1],
+        );
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("voxelize heavy triangles"),
             timestamp_writes: None,

@@ -99,6 +99,25 @@ fn pass_bytes(name: &str, cells: u64, dims: u32) -> f64 {
     per * cells as f64
 }
 
+/// Write `name` under `dir` (created if missing): the `header` line, then one line per row.
+/// Returns the file's path.
+pub(crate) fn write_table(
+    dir: &std::path::Path,
+    name: &str,
+    header: &str,
+    lines: impl IntoIterator<Item = String>,
+) -> Result<PathBuf, String> {
+    std::fs::create_dir_all(dir).map_err(|e| e.to_string())?;
+    let path = dir.join(name);
+    let mut text = format!("{header}\n");
+    for line in lines {
+        text.push_str(&line);
+        text.push('\n');
+    }
+    std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok(path)
+}
+
 /// Least wall time of warm-up before the timed runs. GPU clocks fall while the CPU checks the
 /// previous point: on the H100, 2048² exact measured 1.19 ms after three warm-up runs that
 /// followed the 512³ sweep, and 0.26 ms once warmed up for longer.

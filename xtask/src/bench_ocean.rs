@@ -6,7 +6,6 @@
 //! with depth fade on, median of the timed runs. Error: the projected height error the LOD
 //! computes (`fieldkit::ocean::lod`), in pixels. Writes `ocean.csv` and `ocean.png`.
 
-use std::io::Write;
 use std::process::ExitCode;
 
 use fieldkit::gpu::Context;
@@ -221,22 +220,17 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
         &look,
         true,
     )?;
-    std::fs::create_dir_all(out).map_err(|e| e.to_string())?;
-    let csv = out.join("ocean.csv");
-    let mut f = std::fs::File::create(&csv).map_err(|e| e.to_string())?;
-    writeln!(
-        f,
-        "adapter,resolution,layout,patches,triangles,max_error_px,frame_ms"
-    )
-    .map_err(|e| e.to_string())?;
-    for r in &rows {
-        writeln!(
-            f,
-            "\"{adapter}\",{width}x{height},\"{}\",{},{},{:.4},{:.4}",
-            r.layout, r.patches, r.triangles, r.max_error_px, r.frame_ms
-        )
-        .map_err(|e| e.to_string())?;
-    }
+    let csv = crate::bench::write_table(
+        out,
+        "ocean.csv",
+        "adapter,resolution,layout,patches,triangles,max_error_px,frame_ms",
+        rows.iter().map(|r| {
+            format!(
+                "\"{adapter}\",{width}x{height},\"{}\",{},{},{:.4},{:.4}",
+                r.layout, r.patches, r.triangles, r.max_error_px, r.frame_ms
+            )
+        }),
+    )?;
     // The rows with parts left out share the default's error: in the CSV, not the chart.
     let points: Vec<crate::chart::Point> = rows
         .iter()

@@ -9,7 +9,6 @@
 //! quarter-voxel step, no skipping, no jitter, the same light volume), over every pixel.
 //! Writes `volume.csv` and `volume.png`.
 
-use std::io::Write;
 use std::process::ExitCode;
 
 use fieldkit::gpu::{Context, read_texture};
@@ -317,31 +316,26 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
             }
         }
     }
-    std::fs::create_dir_all(out).map_err(|e| e.to_string())?;
-    let csv = out.join("volume.csv");
-    let mut f = std::fs::File::create(&csv).map_err(|e| e.to_string())?;
-    writeln!(
-        f,
-        "adapter,volume,resolution,camera,config,step_voxels,skip,jitter,shadow,frame_ms,rms_err,max_err"
-    )
-    .map_err(|e| e.to_string())?;
-    for r in &rows {
-        writeln!(
-            f,
-            "\"{adapter}\",{},{width}x{height},{},{},{},{},{},{},{:.4},{:.6},{:.5}",
-            r.size,
-            r.camera,
-            r.config,
-            r.step_voxels,
-            r.skip,
-            r.jitter,
-            r.shadow,
-            r.frame_ms,
-            r.rms_err,
-            r.max_err
-        )
-        .map_err(|e| e.to_string())?;
-    }
+    let csv = crate::bench::write_table(
+        out,
+        "volume.csv",
+        "adapter,volume,resolution,camera,config,step_voxels,skip,jitter,shadow,frame_ms,rms_err,max_err",
+        rows.iter().map(|r| {
+            format!(
+                "\"{adapter}\",{},{width}x{height},{},{},{},{},{},{},{:.4},{:.6},{:.5}",
+                r.size,
+                r.camera,
+                r.config,
+                r.step_voxels,
+                r.skip,
+                r.jitter,
+                r.shadow,
+                r.frame_ms,
+                r.rms_err,
+                r.max_err
+            )
+        }),
+    )?;
     chart(&out.join("volume.png"), &adapter, &rows)?;
     println!("wrote {} and volume.png", csv.display());
     Ok(())

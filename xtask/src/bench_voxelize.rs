@@ -5,7 +5,6 @@
 //! list), median of the timed runs. Writes `voxelize.csv` and `voxelize.png` (time against
 //! the voxel edge relative to the mesh's longest side).
 
-use std::io::Write;
 use std::process::ExitCode;
 
 use fieldkit::gpu::Context;
@@ -26,7 +25,7 @@ pub fn run(args: &crate::bench::Args) -> ExitCode {
 
 /// The npm package `bunny`'s `index.js`: `exports.positions=[[x,y,z],…]`,
 /// `exports.cells=[[a,b,c],…]`.
-pub(crate) fn load_bunny(path: &std::path::Path) -> Result<Mesh, String> {
+fn load_bunny(path: &std::path::Path) -> Result<Mesh, String> {
     let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
     let array = |name: &str| -> Result<serde_json::Value, String> {
         let key = format!("exports.{name}=");
@@ -182,18 +181,17 @@ fn bench(args: &crate::bench::Args) -> Result<(), String> {
             }
         }
     }
-    std::fs::create_dir_all(&args.out).map_err(|e| e.to_string())?;
-    let csv = args.out.join("voxelize.csv");
-    let mut f = std::fs::File::create(&csv).map_err(|e| e.to_string())?;
-    writeln!(f, "adapter,mesh,triangles,grid,mode,ms,voxels").map_err(|e| e.to_string())?;
-    for r in &rows {
-        writeln!(
-            f,
-            "\"{adapter}\",\"{}\",{},{},{},{:.4},{}",
-            r.mesh, r.triangles, r.n, r.mode, r.ms, r.voxels
-        )
-        .map_err(|e| e.to_string())?;
-    }
+    let csv = crate::bench::write_table(
+        &args.out,
+        "voxelize.csv",
+        "adapter,mesh,triangles,grid,mode,ms,voxels",
+        rows.iter().map(|r| {
+            format!(
+                "\"{adapter}\",\"{}\",{},{},{},{:.4},{}",
+                r.mesh, r.triangles, r.n, r.mode, r.ms, r.voxels
+            )
+        }),
+    )?;
     let points: Vec<crate::chart::Point> = rows
         .iter()
         .map(|r| crate::chart::Point {
