@@ -133,6 +133,7 @@ fn thin_parts_survive_through_the_surface() {
             [1, 3, 5],
             [3, 7, 5],
         ],
+        ..Mesh::default()
     };
     assert!(box_mesh.open_edge().is_none() && box_mesh.volume() > 0.0);
     let grid = unit_grid([12, 12, 12]);

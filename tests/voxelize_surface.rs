@@ -47,6 +47,7 @@ fn mesh(positions: Vec<DVec3>, triangles: Vec<[u32; 3]>) -> Mesh {
     Mesh {
         positions,
         triangles,
+        ..Mesh::default()
     }
 }
 
@@ -170,6 +171,7 @@ fn far_from_the_origin_is_the_same_as_at_it() {
     let moved = Mesh {
         positions: near.positions.iter().map(|p| *p * 0.25 + far).collect(),
         triangles: near.triangles.clone(),
+        ..Mesh::default()
     };
     let v = Voxelizer::new(&ctx.device).unwrap();
     let run = |m: &Mesh, grid: &Grid| {

@@ -19,8 +19,11 @@
 //! # let _ = occupied; Ok(()) }
 //! ```
 
+mod attributes;
 pub mod cpu;
 pub mod export;
+
+pub use attributes::{Attributes, PendingAttributes, VoxelAttributes};
 
 use glam::{DVec3, Vec4};
 
@@ -36,6 +39,9 @@ const STAGE: &str = stage::STAGE;
 /// Largest side of a voxel grid.
 pub const MAX_SIDE: u32 = 4096;
 
+/// Most voxels in a grid: the shaders index voxels with u32.
+pub const MAX_VOXELS: u64 = 1 << 32;
+
 /// Relative slack on the GPU's tests: a few f32 ulp, so rounding only ever adds voxels within
 /// about this fraction of the coordinates' size.
 pub const SLACK: f32 = 4.0 * f32::EPSILON;
@@ -45,6 +51,11 @@ pub const SLACK: f32 = 4.0 * f32::EPSILON;
 pub struct Mesh {
     pub positions: Vec<DVec3>,
     pub triangles: Vec<[u32; 3]>,
+    /// Per-vertex RGBA8 colours, or empty (white) when the mesh has none.
+    pub colors: Vec<[u8; 4]>,
+    /// Per-vertex normals, or empty when the mesh has none (each triangle's own normal is
+    /// used). Need not be unit length.
+    pub normals: Vec<DVec3>,
 }
 
 /// Where the voxels are: the world position of voxel (0, 0, 0)'s min corner, the voxel edge and
@@ -63,6 +74,8 @@ pub struct GridMesh {
     pub vertices: Vec<Vec4>,
     /// Triangles left out for having no area (after rounding).
     pub degenerate: usize,
+    /// For each triangle kept, its index in the mesh.
+    pub source: Vec<u32>,
 }
 
 fn invalid(what: String) -> Error {
@@ -110,6 +123,7 @@ impl Mesh {
         Self {
             positions,
             triangles,
+            ..Self::default()
         }
     }
 
@@ -138,6 +152,7 @@ impl Mesh {
         Self {
             positions,
             triangles,
+            ..Self::default()
         }
     }
 
@@ -192,6 +207,7 @@ impl Mesh {
         let n = self.positions.len() as u32;
         let mut vertices = Vec::with_capacity(self.triangles.len() * 3);
         let mut degenerate = 0;
+        let mut source = Vec::with_capacity(self.triangles.len());
         for (t, tri) in self.triangles.iter().enumerate() {
             if let Some(&bad) = tri.iter().find(|&&i| i >= n) {
                 return Err(invalid(format!(
@@ -205,10 +221,12 @@ impl Mesh {
                 continue;
             }
             vertices.extend(v.iter().map(|p| p.extend(0.0)));
+            source.push(t as u32);
         }
         Ok(GridMesh {
             vertices,
             degenerate,
+            source,
         })
     }
 }
@@ -232,6 +250,16 @@ fn check_grid(grid: &Grid) -> Result<(), Error> {
                 max: MAX_SIDE as u64,
             });
         }
+    }
+    // Voxel indices are u32 in the shaders.
+    let voxels: u64 = grid.size.iter().map(|&n| n as u64).product();
+    if voxels > MAX_VOXELS {
+        return Err(Error::Size {
+            stage: STAGE,
+            what: "voxels in the grid",
+            got: voxels,
+            max: MAX_VOXELS,
+        });
     }
     Ok(())
 }
@@ -315,6 +343,7 @@ pub struct Voxelizer {
     surface_six: SurfacePipelines,
     solid: ComputePipeline<solid_stage::solid::Entry>,
     to_volume: ComputePipeline<volume_stage::to_volume::Entry>,
+    attribute_pipelines: attributes::AttributePipelines,
 }
 
 /// One compute pass of `groups` workgroups of `pipeline`, labelled `label`.
@@ -335,6 +364,22 @@ fn run_pass<E: crate::bind::Entry>(
 /// Triangles per dispatch: at most 65535 workgroups of 64.
 const PER_DISPATCH: u32 = 65535 * 64;
 
+/// `count` triangles as (first, count) runs of at most [`PER_DISPATCH`].
+fn batches(count: u32) -> impl Iterator<Item = (u32, u32)> {
+    (0..count)
+        .step_by(PER_DISPATCH as usize)
+        .map(move |first| (first, (count - first).min(PER_DISPATCH)))
+}
+
+/// The heavy triangles' chunks a surface pass listed, and the indirect dispatch that walks
+/// them.
+struct HeavyWork {
+    work: wgpu::Buffer,
+    work_count: wgpu::Buffer,
+    dispatch: wgpu::Buffer,
+    capacity: u32,
+}
+
 impl Voxelizer {
     pub fn new(device: &wgpu::Device) -> Result<Self, Error> {
         Ok(Self {
@@ -342,6 +387,7 @@ impl Voxelizer {
             surface_six: SurfacePipelines::new(device, true)?,
             solid: ComputePipeline::new(device)?,
             to_volume: ComputePipeline::new(device)?,
+            attribute_pipelines: Default::default(),
         })
     }
 
@@ -367,9 +413,7 @@ impl Voxelizer {
         let (occupancy, triangles) = self.bitset(ctx, encoder, &local, grid)?;
         let device = &ctx.device;
         let count = (local.vertices.len() / 3) as u32;
-        let mut first = 0;
-        while first < count {
-            let n = (count - first).min(PER_DISPATCH);
+        for (first, n) in batches(count) {
             let params = uniform(
                 device,
                 "voxelize solid params",
@@ -394,10 +438,9 @@ impl Voxelizer {
                 &bound,
                 [n.div_ceil(64), 1, 1],
             );
-            first += n;
         }
         if with_surface {
-            self.surface_into(
+            let _ = self.surface_into(
                 device,
                 encoder,
                 &self.surface,
@@ -510,7 +553,8 @@ impl Voxelizer {
 
     /// A surface pass (`pipelines`: conservative or six-separating) over the triangles of
     /// `local`, ORed into `occupancy`: light triangles one per thread, heavy ones (more than
-    /// [`CHUNK`] columns) in chunks through a work list and an indirect dispatch.
+    /// [`CHUNK`] columns) in chunks through a work list and an indirect dispatch. Returns the
+    /// work list, which the attribute pass walks again.
     #[allow(clippy::too_many_arguments)]
     fn surface_into(
         &self,
@@ -521,11 +565,8 @@ impl Voxelizer {
         triangles: &wgpu::Buffer,
         local: &GridMesh,
         grid: &Grid,
-    ) -> Result<(), Error> {
+    ) -> Result<HeavyWork, Error> {
         let count = (local.vertices.len() / 3) as u32;
-        if count == 0 {
-            return Ok(());
-        }
         let capacity = heavy_chunk_bound(local, grid.size);
         let buffer = |label, size: u64, usage| {
             device.create_buffer(&wgpu::BufferDescriptor {
@@ -535,14 +576,31 @@ impl Voxelizer {
                 mapped_at_creation: false,
             })
         };
-        let work = buffer(
-            "voxelize work list",
-            capacity.max(1) as u64 * 8,
-            wgpu::BufferUsages::empty(),
-        );
-        let work_count = buffer("voxelize work count", 4, wgpu::BufferUsages::COPY_DST);
-        let dispatch = buffer("voxelize heavy dispatch", 12, wgpu::BufferUsages::INDIRECT);
-        encoder.clear_buffer(&work_count, 0, None);
+        let heavy_work = HeavyWork {
+            work: buffer(
+                "voxelize work list",
+                capacity.max(1) as u64 * 8,
+                wgpu::BufferUsages::empty(),
+            ),
+            work_count: buffer("voxelize work count", 4, wgpu::BufferUsages::COPY_DST),
+            dispatch: buffer(
+                "voxelize heavy dispatch",
+                12,
+                wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
+            ),
+            capacity,
+        };
+        let HeavyWork {
+            work,
+            work_count,
+            dispatch,
+            ..
+        } = &heavy_work;
+        encoder.clear_buffer(work_count, 0, None);
+        encoder.clear_buffer(dispatch, 0, None);
+        if count == 0 {
+            return Ok(heavy_work);
+        }
         let params_for = |first, n| {
             uniform(
                 device,
@@ -556,9 +614,7 @@ impl Voxelizer {
                 },
             )
         };
-        let mut first = 0;
-        while first < count {
-            let n = (count - first).min(PER_DISPATCH);
+        for (first, n) in batches(count) {
             let params = params_for(first, n);
             let bound = pipelines.light.bind(
                 device,
@@ -566,8 +622,8 @@ impl Voxelizer {
                     params: (&params).into(),
                     triangles: triangles.into(),
                     occupancy: occupancy.into(),
-                    work: (&work).into(),
-                    work_count: (&work_count).into(),
+                    work: work.into(),
+                    work_count: work_count.into(),
                 },
             )?;
             run_pass(
@@ -577,18 +633,17 @@ impl Voxelizer {
                 &bound,
                 [n.div_ceil(64), 1, 1],
             );
-            first += n;
         }
         if capacity == 0 {
-            return Ok(());
+            return Ok(heavy_work);
         }
         let params = params_for(0, count);
         let args = pipelines.args.bind(
             device,
             &stage::heavy_args::Resources {
                 params: (&params).into(),
-                work_count: (&work_count).into(),
-                heavy_dispatch: (&dispatch).into(),
+                work_count: work_count.into(),
+                heavy_dispatch: dispatch.into(),
             },
         )?;
         let heavy = pipelines.heavy.bind(
@@ -597,8 +652,8 @@ impl Voxelizer {
                 params: (&params).into(),
                 triangles: triangles.into(),
                 occupancy: occupancy.into(),
-                work: (&work).into(),
-                work_count: (&work_count).into(),
+                work: work.into(),
+                work_count: work_count.into(),
             },
         )?;
         run_pass(
@@ -614,8 +669,8 @@ impl Voxelizer {
         });
         pass.set_pipeline(&pipelines.heavy.pipeline);
         heavy.set_compute(&mut pass);
-        pass.dispatch_workgroups_indirect(&dispatch, 0);
-        Ok(())
+        pass.dispatch_workgroups_indirect(dispatch, 0);
+        Ok(heavy_work)
     }
 
     /// Conservative surface voxels of `mesh` in `grid`: every voxel (a closed box) a triangle
@@ -645,7 +700,7 @@ impl Voxelizer {
             Separation::Conservative => &self.surface,
             Separation::Six => &self.surface_six,
         };
-        self.surface_into(
+        let _ = self.surface_into(
             &ctx.device,
             encoder,
             pipelines,

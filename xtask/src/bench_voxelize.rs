@@ -74,6 +74,7 @@ fn load_bunny(path: &std::path::Path) -> Result<Mesh, String> {
     Ok(Mesh {
         positions,
         triangles,
+        ..Mesh::default()
     })
 }
 

@@ -1,0 +1,189 @@
+// Voxel attributes: the colour and normal of the triangles that touch each voxel, averaged
+// (OpenGL Insights' voxelization, Crassin & Green, made deterministic). Every triangle adds its
+// attributes at each voxel it touches (the same conservative test as `voxelize/surface`) into
+// integer sums with atomicAdd, one record per occupied voxel (the indices from
+// `voxelize/compact`); `resolve` divides. Integer sums do not depend on the order threads run
+// in, so two runs give identical output, which the write-up's compare-exchange loop on an
+// RGBA8 texel does not.
+//
+// A triangle's attribute at a voxel is its vertex attributes interpolated at the voxel centre's
+// closest point on the triangle's plane (barycentrics clamped to the triangle),
+// written as a0 + b1·(a1 − a0) + b2·(a2 − a0) so a constant attribute stays exact.
+
+import package::shared::triangle_box::{CHUNK, Setup, column, overlaps, setup};
+
+struct AttributeParams {
+    grid: vec3<u32>,
+    first: u32,
+    count: u32,
+    slack: f32,
+    // Entries the heavy work list holds.
+    capacity: u32,
+    // Words in the occupancy bitset.
+    words: u32,
+}
+
+@group(0) @binding(0) var<uniform> params: AttributeParams;
+// Three vertices per triangle, grid-local (w unused).
+@group(0) @binding(1) var<storage, read> triangles: array<vec4<f32>>;
+// Per triangle corner: RGBA8 colour, then the normal's x, y, z as f32 bits.
+@group(0) @binding(2) var<storage, read> corners: array<vec4<u32>>;
+// The surface pass's bitset and `voxelize/compact`'s offsets.
+@group(0) @binding(3) var<storage, read> occupancy: array<u32>;
+@group(0) @binding(4) var<storage, read> word_offsets: array<u32>;
+@group(0) @binding(5) var<storage, read> block_offsets: array<u32>;
+// The surface pass's heavy triangles, (triangle, first column) per chunk.
+@group(0) @binding(6) var<storage, read> work: array<vec2<u32>>;
+@group(0) @binding(7) var<storage, read> work_count: u32;
+// SUMS words per occupied voxel: colour r, g, b, a (COLOR_SCALE per 8-bit level), normal x, y,
+// z (NORMAL_SCALE per unit, two's complement), triangles.
+@group(0) @binding(8) var<storage, read_write> sums: array<atomic<u32>>;
+// Per occupied voxel in voxel order: (voxel index, RGBA8 colour, octahedral normal as two
+// snorm16 or NO_NORMAL, triangles).
+@group(0) @binding(9) var<storage, read_write> voxels: array<vec4<u32>>;
+
+const SUMS: u32 = 8u;
+// Sum units per 8-bit colour level: 4 bits below the output's precision. The sums hold
+// 2^32 / (255 · 16) ≈ 1 M contributions per voxel, the normal's 2^31 / 4096 = 512 k.
+const COLOR_SCALE: f32 = 16.0;
+const NORMAL_SCALE: f32 = 4096.0;
+const BLOCK_WORDS: u32 = 1024u;
+// The packed normal of a voxel whose triangles' normals cancel: two snorm16 of −32768, which
+// pack2x16snorm never writes.
+const NO_NORMAL: u32 = 0x80008000u;
+
+fn compact_index(i: u32) -> u32 {
+    let w = i / 32u;
+    let below = occupancy[w] & ((1u << (i % 32u)) - 1u);
+    return block_offsets[w / BLOCK_WORDS] + word_offsets[w] + countOneBits(below);
+}
+
+fn cross2(a: vec2<f32>, b: vec2<f32>) -> f32 {
+    return a.x * b.y - a.y * b.x;
+}
+
+fn add_voxel(s: Setup, t: u32, p: vec3<i32>) {
+    // Barycentrics of the voxel centre's closest point on the plane, computed in the
+    // projection that drops k (the triangle's largest, never degenerate for a triangle with
+    // area). The closest point does not depend on k, so neither does the result where two
+    // axes tie.
+    let v0 = triangles[3u * t].xyz;
+    let v1 = triangles[3u * t + 1u].xyz;
+    let v2 = triangles[3u * t + 2u].xyz;
+    let centre = vec3<f32>(p) + 0.5;
+    let q = centre - s.n * (dot(s.n, centre - v0) / dot(s.n, s.n));
+    let a = vec2<f32>(v0[s.u], v0[s.w]);
+    let e1 = vec2<f32>(v1[s.u], v1[s.w]) - a;
+    let e2 = vec2<f32>(v2[s.u], v2[s.w]) - a;
+    let r = vec2<f32>(q[s.u], q[s.w]) - a;
+    let area = cross2(e1, e2);
+    var b = max(vec2<f32>(cross2(r, e2), cross2(e1, r)) / area, vec2<f32>(0.0));
+    if b.x + b.y > 1.0 {
+        b /= b.x + b.y;
+    }
+    let c0 = corners[3u * t];
+    let c1 = corners[3u * t + 1u];
+    let c2 = corners[3u * t + 2u];
+    let k0 = unpack4x8unorm(c0.x) * 255.0;
+    let colour = k0 + b.x * (unpack4x8unorm(c1.x) * 255.0 - k0)
+        + b.y * (unpack4x8unorm(c2.x) * 255.0 - k0);
+    let n0 = bitcast<vec3<f32>>(c0.yzw);
+    var n = n0 + b.x * (bitcast<vec3<f32>>(c1.yzw) - n0) + b.y * (bitcast<vec3<f32>>(c2.yzw) - n0);
+    if dot(n, n) == 0.0 {
+        n = s.n;
+    }
+    let rgba = vec4<u32>(round(colour * COLOR_SCALE));
+    let nq = bitcast<vec3<u32>>(vec3<i32>(round(normalize(n) * NORMAL_SCALE)));
+    let g = vec3<i32>(params.grid);
+    let at = SUMS * compact_index(u32((p.z * g.y + p.y) * g.x + p.x));
+    atomicAdd(&sums[at], rgba.x);
+    atomicAdd(&sums[at + 1u], rgba.y);
+    atomicAdd(&sums[at + 2u], rgba.z);
+    atomicAdd(&sums[at + 3u], rgba.w);
+    atomicAdd(&sums[at + 4u], nq.x);
+    atomicAdd(&sums[at + 5u], nq.y);
+    atomicAdd(&sums[at + 6u], nq.z);
+    atomicAdd(&sums[at + 7u], 1u);
+}
+
+fn load(t: u32) -> Setup {
+    return setup(triangles[3u * t].xyz, triangles[3u * t + 1u].xyz, triangles[3u * t + 2u].xyz,
+                 vec3<i32>(params.grid), params.slack, false);
+}
+
+fn accumulate_columns(s: Setup, t: u32, first: u32, count: u32) {
+    let end = min(first + count, s.columns);
+    for (var j = first; j < end; j++) {
+        let c = column(s, j);
+        var p = c.p;
+        for (var z = c.k0; z < c.k1; z++) {
+            p[s.k] = z;
+            if overlaps(s, p, false) {
+                add_voxel(s, t, p);
+            }
+        }
+    }
+}
+
+// Unit vector to two snorm16 (octahedral map).
+fn octahedral(n: vec3<f32>) -> u32 {
+    var p = n.xy / (abs(n.x) + abs(n.y) + abs(n.z));
+    if n.z < 0.0 {
+        p = (1.0 - abs(p.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), p >= vec2<f32>(0.0));
+    }
+    return pack2x16snorm(p);
+}
+
+// Light triangles, one per thread; heavy ones (more than CHUNK columns) are in the work list.
+@compute @workgroup_size(64)
+fn accumulate(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= params.count {
+        return;
+    }
+    let t = params.first + id.x;
+    let s = load(t);
+    if s.columns <= CHUNK {
+        accumulate_columns(s, t, 0u, s.columns);
+    }
+}
+
+@compute @workgroup_size(64)
+fn accumulate_heavy(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= min(work_count, params.capacity) {
+        return;
+    }
+    let item = work[id.x];
+    accumulate_columns(load(item.x), item.x, item.y, CHUNK);
+}
+
+// One bitset word per thread (a 2D dispatch: rows of 65535 workgroups).
+@compute @workgroup_size(64)
+fn resolve(@builtin(global_invocation_id) id: vec3<u32>,
+           @builtin(num_workgroups) groups: vec3<u32>) {
+    let w = id.y * groups.x * 64u + id.x;
+    if w >= params.words {
+        return;
+    }
+    var bits = occupancy[w];
+    var j = block_offsets[w / BLOCK_WORDS] + word_offsets[w];
+    while bits != 0u {
+        let bit = firstTrailingBit(bits);
+        bits &= bits - 1u;
+        let at = SUMS * j;
+        let n = atomicLoad(&sums[at + 7u]);
+        let div = max(n, 1u) * u32(COLOR_SCALE);
+        let half = div / 2u;
+        let rgba = (vec4<u32>(atomicLoad(&sums[at]), atomicLoad(&sums[at + 1u]),
+                              atomicLoad(&sums[at + 2u]), atomicLoad(&sums[at + 3u])) + half) / div;
+        let normal = vec3<f32>(bitcast<vec3<i32>>(vec3<u32>(atomicLoad(&sums[at + 4u]),
+                                                           atomicLoad(&sums[at + 5u]),
+                                                           atomicLoad(&sums[at + 6u]))));
+        var packed_normal = NO_NORMAL;
+        if dot(normal, normal) > 0.0 {
+            packed_normal = octahedral(normalize(normal));
+        }
+        let colour = rgba.x | (rgba.y << 8u) | (rgba.z << 16u) | (rgba.w << 24u);
+        voxels[j] = vec4<u32>(w * 32u + bit, colour, packed_normal, n);
+        j++;
+    }
+}

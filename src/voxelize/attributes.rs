@@ -1,0 +1,441 @@
+//! Averaged voxel attributes: each occupied voxel's colour and normal, averaged over the
+//! triangles that touch it with integer atomic sums and a count (`voxelize/attributes`), in a
+//! list compacted to the occupied voxels in voxel order (`voxelize/compact`). Integer sums do
+//! not depend on the order the GPU runs threads in, so two runs give identical bytes.
+//!
+//! Sizing the compact list needs the number of occupied voxels, which only the GPU knows:
+//! [`Voxelizer::attributes`] reads it back between two submissions. Callers that keep their
+//! own encoders use [`Voxelizer::encode_attributes`], [`PendingAttributes::occupied`] and
+//! [`Voxelizer::encode_resolve_attributes`].
+
+use std::sync::OnceLock;
+
+use glam::{DVec3, Vec3};
+
+use super::{
+    Grid, GridMesh, HeavyWork, Mesh, SLACK, Surface, Voxelizer, batches, invalid, run_pass,
+};
+use crate::bind::ComputePipeline;
+use crate::error::Error;
+use crate::gpu::{Context, read_buffer, uniform_buffer as uniform};
+use crate::shaders::voxelize::attributes::{self as stage, AttributeParams};
+use crate::shaders::voxelize::compact::{self as compact, CompactParams};
+
+/// Words of the bitset one workgroup of `compact::scan_words` covers (the shader's
+/// `BLOCK_WORDS`).
+const BLOCK_WORDS: u64 = 1024;
+/// `u32` sums per occupied voxel (the shader's `SUMS`).
+const SUMS: u64 = 8;
+/// The packed normal of a voxel whose normals cancel (the shader's `NO_NORMAL`).
+const NO_NORMAL: u32 = 0x8000_8000;
+
+#[derive(Default)]
+pub(super) struct AttributePipelines {
+    scan_words: OnceLock<ComputePipeline<compact::scan_words::Entry>>,
+    scan_blocks: OnceLock<ComputePipeline<compact::scan_blocks::Entry>>,
+    accumulate: OnceLock<ComputePipeline<stage::accumulate::Entry>>,
+    accumulate_heavy: OnceLock<ComputePipeline<stage::accumulate_heavy::Entry>>,
+    resolve: OnceLock<ComputePipeline<stage::resolve::Entry>>,
+}
+
+/// The first half of an attribute pass, recorded: surface voxels, their dense indices, and the
+/// triangles' attributes on the GPU. [`PendingAttributes::occupied`] reads how many voxels
+/// the second half needs room for.
+pub struct PendingAttributes {
+    surface: Surface,
+    grid: Grid,
+    triangles: wgpu::Buffer,
+    corners: wgpu::Buffer,
+    heavy: HeavyWork,
+    word_offsets: wgpu::Buffer,
+    block_offsets: wgpu::Buffer,
+    total: wgpu::Buffer,
+    words: u32,
+    count: u32,
+}
+
+impl PendingAttributes {
+    /// Occupied voxels, read back once the encoder that recorded this has been submitted.
+    pub fn occupied(&self, ctx: &Context) -> Result<u32, Error> {
+        let bytes = read_buffer(ctx, &self.total)?;
+        Ok(bytemuck::pod_read_unaligned(&bytes[..4]))
+    }
+}
+
+/// Averaged attributes of every occupied voxel.
+pub struct Attributes {
+    /// The conservative surface voxels the list covers.
+    pub surface: Surface,
+    /// Occupied voxels: entries in `voxels`.
+    pub count: u32,
+    /// Per occupied voxel, in voxel order, a `vec4<u32>`: the voxel index
+    /// ((z · ny + y) · nx + x), the RGBA8 colour, the normal as an octahedral pair of snorm16
+    /// (0x80008000 where the normals cancel) and the number of triangles. 16 bytes per
+    /// occupied voxel rather than per voxel of the grid.
+    pub voxels: wgpu::Buffer,
+}
+
+/// One occupied voxel's averages, as [`Attributes::read`] decodes them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VoxelAttributes {
+    pub voxel: [u32; 3],
+    /// Mean colour, rounded to the nearest 8-bit level.
+    pub color: [u8; 4],
+    /// Direction of the summed normals; `None` where they cancel.
+    pub normal: Option<Vec3>,
+    /// Triangles that touch the voxel.
+    pub triangles: u32,
+}
+
+/// The octahedral pair of snorm16 the shader writes, back to a unit vector.
+fn decode_normal(packed: u32) -> Option<Vec3> {
+    if packed == NO_NORMAL {
+        return None;
+    }
+    let s = |v: u32| ((v & 0xffff) as u16 as i16 as f32 / 32767.0).max(-1.0);
+    let (x, y) = (s(packed), s(packed >> 16));
+    let z = 1.0 - x.abs() - y.abs();
+    let (x, y) = if z < 0.0 {
+        ((1.0 - y.abs()) * x.signum(), (1.0 - x.abs()) * y.signum())
+    } else {
+        (x, y)
+    };
+    Some(Vec3::new(x, y, z).normalize())
+}
+
+impl Attributes {
+    /// Every occupied voxel's averages, in voxel order.
+    pub fn read(&self, ctx: &Context) -> Result<Vec<VoxelAttributes>, Error> {
+        let bytes = read_buffer(ctx, &self.voxels)?;
+        let words: &[[u32; 4]] = bytemuck::cast_slice(&bytes);
+        let [nx, ny, _] = self.surface.size;
+        Ok(words[..self.count as usize]
+            .iter()
+            .map(|&[i, colour, normal, triangles]| VoxelAttributes {
+                voxel: [i % nx, i / nx % ny, i / (nx * ny)],
+                color: colour.to_le_bytes(),
+                normal: decode_normal(normal),
+                triangles,
+            })
+            .collect())
+    }
+}
+
+/// Per triangle corner of `local`: the RGBA8 colour and the normal's f32 bits (the vertex
+/// normal, or the triangle's own where the mesh has none).
+fn corners(mesh: &Mesh, local: &GridMesh) -> Result<Vec<[u32; 4]>, Error> {
+    let n = mesh.positions.len();
+    for (what, len) in [
+        ("colors", mesh.colors.len()),
+        ("normals", mesh.normals.len()),
+    ] {
+        if len != 0 && len != n {
+            return Err(invalid(format!(
+                "the mesh has {n} positions but {len} {what} (give one per vertex, or none)"
+            )));
+        }
+    }
+    if let Some(i) = mesh.normals.iter().position(|v| !v.is_finite()) {
+        return Err(invalid(format!(
+            "normal {i} is not finite: {}",
+            mesh.normals[i]
+        )));
+    }
+    let mut out = Vec::with_capacity(local.vertices.len());
+    for &t in &local.source {
+        let tri = mesh.triangles[t as usize];
+        let [a, b, c] = tri.map(|i| mesh.positions[i as usize]);
+        let face = (b - a).cross(c - a).normalize_or_zero();
+        for i in tri {
+            let colour = mesh.colors.get(i as usize).copied().unwrap_or([255; 4]);
+            let normal: DVec3 = mesh.normals.get(i as usize).copied().unwrap_or(face);
+            let normal = normal.as_vec3();
+            out.push([
+                u32::from_le_bytes(colour),
+                normal.x.to_bits(),
+                normal.y.to_bits(),
+                normal.z.to_bits(),
+            ]);
+        }
+    }
+    Ok(out)
+}
+
+impl Voxelizer {
+    /// Conservative surface voxels of `mesh` with each voxel's colour and normal averaged
+    /// over the triangles that touch it. Submits twice: the number of occupied voxels is read
+    /// back in between to size the compact list.
+    ///
+    /// ```
+    /// # fn f(ctx: &fieldkit::gpu::Context) -> Result<(), fieldkit::Error> {
+    /// use fieldkit::voxelize::{Grid, Mesh, Voxelizer};
+    /// use glam::DVec3;
+    /// let mut mesh = Mesh::uv_sphere(DVec3::ZERO, 1.0, 24, 12);
+    /// mesh.colors = vec![[200, 40, 90, 255]; mesh.positions.len()];
+    /// let grid = Grid { origin: DVec3::splat(-1.25), voxel: 2.5 / 32.0, size: [32, 32, 32] };
+    /// let voxels = Voxelizer::new(&ctx.device)?.attributes(ctx, &mesh, &grid)?.read(ctx)?;
+    /// assert!(voxels.iter().all(|v| v.color == [200, 40, 90, 255]));
+    /// # Ok(()) }
+    /// ```
+    pub fn attributes(&self, ctx: &Context, mesh: &Mesh, grid: &Grid) -> Result<Attributes, Error> {
+        let mut encoder = ctx.encoder("voxelize attributes");
+        let pending = self.encode_attributes(ctx, &mut encoder, mesh, grid)?;
+        ctx.submit_and_wait("voxelize attributes", encoder)?;
+        let occupied = pending.occupied(ctx)?;
+        let mut encoder = ctx.encoder("voxelize attributes resolve");
+        let attributes = self.encode_resolve_attributes(ctx, &mut encoder, pending, occupied)?;
+        ctx.submit_and_wait("voxelize attributes resolve", encoder)?;
+        Ok(attributes)
+    }
+
+    /// Record the first half of [`Voxelizer::attributes`]: the conservative surface and the
+    /// dense index of every occupied voxel.
+    pub fn encode_attributes(
+        &self,
+        ctx: &Context,
+        encoder: &mut wgpu::CommandEncoder,
+        mesh: &Mesh,
+        grid: &Grid,
+    ) -> Result<PendingAttributes, Error> {
+        let local = mesh.to_grid(grid)?;
+        let corner_data = corners(mesh, &local)?;
+        let device = &ctx.device;
+        let (occupancy, triangles) = self.bitset(ctx, encoder, &local, grid)?;
+        let heavy = self.surface_into(
+            device,
+            encoder,
+            &self.surface,
+            &occupancy,
+            &triangles,
+            &local,
+            grid,
+        )?;
+        let voxels: u64 = grid.size.iter().map(|&s| s as u64).product();
+        let words = voxels.div_ceil(32);
+        let blocks = words.div_ceil(BLOCK_WORDS);
+        if blocks > device.limits().max_compute_workgroups_per_dimension as u64 {
+            return Err(Error::Size {
+                stage: stage::STAGE,
+                what: "bitset blocks of 1024 words (voxels / 32768)",
+                got: blocks,
+                max: device.limits().max_compute_workgroups_per_dimension as u64,
+            });
+        }
+        let storage = |label, size: u64, extra| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: size.max(4),
+                usage: wgpu::BufferUsages::STORAGE | extra,
+                mapped_at_creation: false,
+            })
+        };
+        let word_offsets = storage("voxel word offsets", words * 4, wgpu::BufferUsages::empty());
+        let block_offsets = storage(
+            "voxel block offsets",
+            blocks * 4,
+            wgpu::BufferUsages::empty(),
+        );
+        let total = storage("occupied voxels", 4, wgpu::BufferUsages::COPY_SRC);
+        let params = uniform(
+            device,
+            "voxel compact params",
+            &CompactParams {
+                words: words as u32,
+            },
+        );
+        let resources = |_| compact::scan_words::Resources {
+            params: (&params).into(),
+            occupancy: (&occupancy).into(),
+            word_offsets: (&word_offsets).into(),
+            block_offsets: (&block_offsets).into(),
+        };
+        let p = &self.attribute_pipelines;
+        let scan_words = ComputePipeline::cached(&p.scan_words, device, &[])?;
+        let bound = scan_words.bind(device, &resources(()))?;
+        run_pass(
+            encoder,
+            compact::STAGE,
+            scan_words,
+            &bound,
+            [blocks as u32, 1, 1],
+        );
+        let scan_blocks = ComputePipeline::cached(&p.scan_blocks, device, &[])?;
+        let bound = scan_blocks.bind(
+            device,
+            &compact::scan_blocks::Resources {
+                params: (&params).into(),
+                block_offsets: (&block_offsets).into(),
+                total: (&total).into(),
+            },
+        )?;
+        run_pass(encoder, compact::STAGE, scan_blocks, &bound, [1, 1, 1]);
+        use wgpu::util::DeviceExt;
+        let mut corner_data = corner_data;
+        if corner_data.is_empty() {
+            corner_data.push([0; 4]);
+        }
+        let corners = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("voxelize corner attributes"),
+            contents: bytemuck::cast_slice(&corner_data),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        Ok(PendingAttributes {
+            surface: Surface {
+                size: grid.size,
+                occupancy,
+                degenerate: local.degenerate,
+            },
+            grid: *grid,
+            triangles,
+            corners,
+            heavy,
+            word_offsets,
+            block_offsets,
+            total,
+            words: words as u32,
+            count: (local.vertices.len() / 3) as u32,
+        })
+    }
+
+    /// Record the second half of [`Voxelizer::attributes`] for `occupied` voxels (what
+    /// [`PendingAttributes::occupied`] read): the sums, then the averages.
+    pub fn encode_resolve_attributes(
+        &self,
+        ctx: &Context,
+        encoder: &mut wgpu::CommandEncoder,
+        pending: PendingAttributes,
+        occupied: u32,
+    ) -> Result<Attributes, Error> {
+        let device = &ctx.device;
+        let limit = device.limits().max_storage_buffer_binding_size;
+        let sum_bytes = occupied as u64 * SUMS * 4;
+        if sum_bytes > limit {
+            return Err(Error::Size {
+                stage: stage::STAGE,
+                what: "attribute sum bytes (32 per occupied voxel)",
+                got: sum_bytes,
+                max: limit,
+            });
+        }
+        let PendingAttributes {
+            surface,
+            grid,
+            triangles,
+            corners,
+            heavy,
+            word_offsets,
+            block_offsets,
+            words,
+            count,
+            ..
+        } = pending;
+        let buffer = |label, size: u64, usage| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: size.max(16),
+                usage: wgpu::BufferUsages::STORAGE | usage,
+                mapped_at_creation: false,
+            })
+        };
+        let sums = buffer(
+            "voxel attribute sums",
+            sum_bytes,
+            wgpu::BufferUsages::COPY_DST,
+        );
+        let voxels = buffer(
+            "voxel attributes",
+            occupied as u64 * 16,
+            wgpu::BufferUsages::COPY_SRC,
+        );
+        encoder.clear_buffer(&sums, 0, None);
+        let params_for = |first, n| {
+            uniform(
+                device,
+                "voxel attribute params",
+                &AttributeParams {
+                    grid: grid.size.into(),
+                    first,
+                    count: n,
+                    slack: SLACK,
+                    capacity: heavy.capacity,
+                    words,
+                },
+            )
+        };
+        let p = &self.attribute_pipelines;
+        let accumulate = ComputePipeline::cached(&p.accumulate, device, &[])?;
+        for (first, n) in batches(count) {
+            let params = params_for(first, n);
+            let bound = accumulate.bind(
+                device,
+                &stage::accumulate::Resources {
+                    params: (&params).into(),
+                    triangles: (&triangles).into(),
+                    corners: (&corners).into(),
+                    occupancy: (&surface.occupancy).into(),
+                    word_offsets: (&word_offsets).into(),
+                    block_offsets: (&block_offsets).into(),
+                    sums: (&sums).into(),
+                },
+            )?;
+            run_pass(
+                encoder,
+                stage::STAGE,
+                accumulate,
+                &bound,
+                [n.div_ceil(64), 1, 1],
+            );
+        }
+        let params = params_for(0, count);
+        if heavy.capacity > 0 {
+            let pipeline = ComputePipeline::cached(&p.accumulate_heavy, device, &[])?;
+            let bound = pipeline.bind(
+                device,
+                &stage::accumulate_heavy::Resources {
+                    params: (&params).into(),
+                    triangles: (&triangles).into(),
+                    corners: (&corners).into(),
+                    occupancy: (&surface.occupancy).into(),
+                    word_offsets: (&word_offsets).into(),
+                    block_offsets: (&block_offsets).into(),
+                    work: (&heavy.work).into(),
+                    work_count: (&heavy.work_count).into(),
+                    sums: (&sums).into(),
+                },
+            )?;
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("voxel attributes of heavy triangles"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&pipeline.pipeline);
+            bound.set_compute(&mut pass);
+            pass.dispatch_workgroups_indirect(&heavy.dispatch, 0);
+        }
+        let resolve = ComputePipeline::cached(&p.resolve, device, &[])?;
+        let bound = resolve.bind(
+            device,
+            &stage::resolve::Resources {
+                params: (&params).into(),
+                occupancy: (&surface.occupancy).into(),
+                word_offsets: (&word_offsets).into(),
+                block_offsets: (&block_offsets).into(),
+                sums: (&sums).into(),
+                voxels: (&voxels).into(),
+            },
+        )?;
+        let groups = words.div_ceil(64);
+        let row = device.limits().max_compute_workgroups_per_dimension;
+        run_pass(
+            encoder,
+            stage::STAGE,
+            resolve,
+            &bound,
+            [groups.min(row), groups.div_ceil(row), 1],
+        );
+        Ok(Attributes {
+            surface,
+            count: occupied,
+            voxels,
+        })
+    }
+}

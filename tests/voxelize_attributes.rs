@@ -1,0 +1,239 @@
+//! Averaged voxel attributes (`voxelize/attributes`, `voxelize/compact`): a constant colour comes
+//! back exactly, colours, normals and triangle counts match the f64 reference
+//! (`voxelize::cpu::attribute_sums`), heavy triangles count once, cancelling normals are
+//! reported, two runs give identical bytes, and bad attribute arrays get typed errors.
+
+use fieldkit::Error;
+use fieldkit::gpu::{Context, read_buffer};
+use fieldkit::harness::context;
+use fieldkit::voxelize::{Attributes, Grid, Mesh, VoxelAttributes, Voxelizer, cpu};
+use glam::DVec3;
+
+fn sphere_grid() -> Grid {
+    Grid {
+        origin: DVec3::new(-1.3, -1.25, -1.2),
+        voxel: 2.5 / 24.0,
+        size: [26, 24, 25],
+    }
+}
+
+/// A sphere with a colour ramp over its vertices and its exact vertex normals.
+fn painted_sphere() -> Mesh {
+    let mut mesh = Mesh::uv_sphere(DVec3::new(0.02, -0.03, 0.01), 1.0, 20, 11);
+    mesh.colors = mesh
+        .positions
+        .iter()
+        .map(|p| {
+            let q = (*p + 1.0) * 0.5 * 255.0;
+            [q.x as u8, q.y as u8, q.z as u8, 255 - q.x as u8]
+        })
+        .collect();
+    mesh.normals = mesh
+        .positions
+        .iter()
+        .map(|p| *p - DVec3::new(0.02, -0.03, 0.01))
+        .collect();
+    mesh
+}
+
+fn run(ctx: &Context, mesh: &Mesh, grid: &Grid) -> (Attributes, Vec<VoxelAttributes>) {
+    let v = Voxelizer::new(&ctx.device).unwrap();
+    let a = v.attributes(ctx, mesh, grid).unwrap();
+    let read = a.read(ctx).unwrap();
+    (a, read)
+}
+
+/// Every voxel of the list against the reference: the same voxels in the same order, the same
+/// triangle counts (integers, exactly), colours within one 8-bit level and normals within
+/// `normal_tolerance` radians.
+fn check_against_reference(
+    mesh: &Mesh,
+    grid: &Grid,
+    got: &[VoxelAttributes],
+    normal_tolerance: f32,
+) {
+    let local = mesh.to_grid(grid).unwrap();
+    let want = cpu::attribute_sums(mesh, &local, grid.size);
+    let [nx, ny, _] = grid.size.map(u64::from);
+    let got_index: Vec<u64> = got
+        .iter()
+        .map(|v| (v.voxel[2] as u64 * ny + v.voxel[1] as u64) * nx + v.voxel[0] as u64)
+        .collect();
+    let want_index: Vec<u64> = want.keys().copied().collect();
+    assert_eq!(
+        got_index, want_index,
+        "voxels or their order differ from the reference"
+    );
+    let (mut worst_colour, mut worst_normal) = (0.0f64, 0.0f32);
+    for (g, w) in got.iter().zip(want.values()) {
+        assert_eq!(
+            g.triangles, w.triangles,
+            "triangle count at voxel {:?}",
+            g.voxel
+        );
+        for ch in 0..4 {
+            let mean = w.color[ch] / w.triangles as f64;
+            worst_colour = worst_colour.max((g.color[ch] as f64 - mean).abs());
+        }
+        let n = g.normal.expect("normals do not cancel on a sphere");
+        let angle = n.angle_between(w.normal.normalize().as_vec3());
+        worst_normal = worst_normal.max(angle);
+    }
+    // Rounding to the nearest level is 0.5 off at most, the sums' 1/16-level steps add 1/32
+    // per contribution at most, f32 barycentrics a little more (llvmpipe: 0.531).
+    assert!(worst_colour <= 0.55, "colour off by {worst_colour} levels");
+    eprintln!("worst colour {worst_colour} levels, normal {worst_normal} rad");
+    assert!(
+        worst_normal <= normal_tolerance,
+        "normal off by {worst_normal} rad"
+    );
+}
+
+#[test]
+fn constant_colour_comes_back_exactly() {
+    let ctx = context();
+    let mut mesh = Mesh::uv_sphere(DVec3::ZERO, 1.0, 24, 12);
+    let colour = [201, 37, 94, 250];
+    mesh.colors = vec![colour; mesh.positions.len()];
+    let (a, got) = run(&ctx, &mesh, &sphere_grid());
+    let surface = a.surface.read(&ctx).unwrap();
+    assert_eq!(got.len(), surface.iter().filter(|&&b| b).count());
+    assert_eq!(a.count as usize, got.len());
+    assert!(got.len() > 500, "only {} voxels", got.len());
+    for v in &got {
+        assert_eq!(v.color, colour, "voxel {:?}", v.voxel);
+    }
+}
+
+#[test]
+fn colours_normals_and_counts_match_the_reference() {
+    let ctx = context();
+    let mesh = painted_sphere();
+    let grid = sphere_grid();
+    let (_, got) = run(&ctx, &mesh, &grid);
+    // Octahedral snorm16 loses 1e-4 rad; f32 interpolation and the sums' 1/4096 steps more
+    // (llvmpipe: 4.9e-4).
+    check_against_reference(&mesh, &grid, &got, 1e-3);
+    // Face normals when the mesh has none: the averages still point away from the centre.
+    let mut flat = mesh.clone();
+    flat.normals.clear();
+    let (_, got) = run(&ctx, &flat, &grid);
+    check_against_reference(&flat, &grid, &got, 1e-3);
+}
+
+/// Triangles with more than 64 columns go through the surface pass's work list; the attribute
+/// pass must walk the same list and count each of their voxels once.
+#[test]
+fn heavy_triangles_count_once() {
+    let ctx = context();
+    let (lo, hi) = (DVec3::new(1.3, 2.2, 1.7), DVec3::new(21.6, 19.4, 22.1));
+    let corner = |i: u32| {
+        DVec3::new(
+            if i & 1 == 0 { lo.x } else { hi.x },
+            if i & 2 == 0 { lo.y } else { hi.y },
+            if i & 4 == 0 { lo.z } else { hi.z },
+        )
+    };
+    let mesh = Mesh {
+        positions: (0..8).map(corner).collect(),
+        triangles: vec![
+            [0, 2, 1],
+            [1, 2, 3],
+            [4, 5, 6],
+            [5, 7, 6],
+            [0, 1, 4],
+            [1, 5, 4],
+            [2, 6, 3],
+            [3, 6, 7],
+            [0, 4, 2],
+            [2, 4, 6],
+            [1, 3, 5],
+            [3, 7, 5],
+        ],
+        colors: (0..8)
+            .map(|i| [30 * i as u8, 255 - 20 * i as u8, 100, 255])
+            .collect(),
+        ..Mesh::default()
+    };
+    let grid = Grid {
+        origin: DVec3::ZERO,
+        voxel: 1.0,
+        size: [24, 22, 24],
+    };
+    let (_, got) = run(&ctx, &mesh, &grid);
+    // The box's faces carry their own normals: exact up to the encoding (5e-5 rad), except
+    // along edges, where two faces' normals are averaged just as the reference does.
+    check_against_reference(&mesh, &grid, &got, 1e-3);
+    // Edge voxels see both faces' triangles (and the diagonal's two); a face's inner voxels
+    // see one or two.
+    assert!(got.iter().any(|v| v.triangles >= 3));
+}
+
+/// A sheet drawn twice with opposite windings: its normals cancel, and the voxels say so.
+#[test]
+fn cancelling_normals_are_reported() {
+    let ctx = context();
+    let p = vec![
+        DVec3::new(1.2, 1.3, 3.5),
+        DVec3::new(6.7, 1.1, 3.5),
+        DVec3::new(3.9, 6.6, 3.5),
+    ];
+    let mesh = Mesh {
+        positions: p,
+        triangles: vec![[0, 1, 2], [0, 2, 1]],
+        ..Mesh::default()
+    };
+    let grid = Grid {
+        origin: DVec3::ZERO,
+        voxel: 1.0,
+        size: [8, 8, 8],
+    };
+    let (_, got) = run(&ctx, &mesh, &grid);
+    assert!(!got.is_empty());
+    for v in &got {
+        assert_eq!(v.normal, None, "voxel {:?}", v.voxel);
+        assert_eq!(v.triangles, 2);
+    }
+}
+
+#[test]
+fn two_runs_give_identical_bytes() {
+    let ctx = context();
+    let mesh = painted_sphere();
+    let grid = sphere_grid();
+    let (a, _) = run(&ctx, &mesh, &grid);
+    let (b, _) = run(&ctx, &mesh, &grid);
+    assert_eq!(
+        read_buffer(&ctx, &a.voxels).unwrap(),
+        read_buffer(&ctx, &b.voxels).unwrap()
+    );
+}
+
+#[test]
+fn bad_attribute_arrays_get_typed_errors() {
+    let ctx = context();
+    let v = Voxelizer::new(&ctx.device).unwrap();
+    let grid = sphere_grid();
+    let mut mesh = painted_sphere();
+    mesh.colors.pop();
+    let err = v
+        .attributes(&ctx, &mesh, &grid)
+        .err()
+        .expect("short colours");
+    assert!(
+        matches!(&err, Error::Invalid { what, .. } if what.contains("colors")),
+        "{err}"
+    );
+    let mut mesh = painted_sphere();
+    mesh.normals[3] = DVec3::new(f64::NAN, 0.0, 1.0);
+    let err = v.attributes(&ctx, &mesh, &grid).err().expect("NaN normal");
+    assert!(
+        matches!(&err, Error::Invalid { what, .. } if what.contains("normal 3")),
+        "{err}"
+    );
+    let empty = Mesh::default();
+    assert!(matches!(
+        v.attributes(&ctx, &empty, &grid),
+        Err(Error::Size { .. })
+    ));
+}
