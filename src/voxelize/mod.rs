@@ -22,6 +22,7 @@
 mod attributes;
 pub mod cpu;
 pub mod export;
+mod obj;
 
 pub use attributes::{Attributes, PendingAttributes, VoxelAttributes};
 

@@ -1,0 +1,112 @@
+//! Wavefront OBJ input through `tobj`: positions, per-vertex colours (`v x y z r g b`) and
+//! normals, polygons triangulated as fans.
+
+use std::collections::HashMap;
+use std::io::BufRead;
+use std::path::Path;
+
+use glam::DVec3;
+
+use super::{Mesh, invalid};
+use crate::error::Error;
+
+impl Mesh {
+    /// Read a mesh from OBJ text. Every object and group goes into one mesh; vertices with
+    /// bit-identical positions are welded, so a closed surface split into groups stays closed
+    /// for solid voxelization (the first vertex's colour is kept). Normals given per face
+    /// corner are averaged per vertex, each distinct one once. Materials, texture coordinates, points and lines are
+    /// ignored.
+    ///
+    /// ```
+    /// let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    /// let mesh = fieldkit::voxelize::Mesh::from_obj(&mut obj.as_bytes()).unwrap();
+    /// assert_eq!(mesh.triangles, vec![[0, 1, 2]]);
+    /// ```
+    pub fn from_obj(reader: &mut impl BufRead) -> Result<Self, Error> {
+        read_obj(reader).map_err(|e| invalid(format!("OBJ: {e}")))
+    }
+
+    /// [`Mesh::from_obj`] on a file.
+    pub fn load_obj(path: impl AsRef<Path>) -> Result<Self, Error> {
+        let path = path.as_ref();
+        let file = std::fs::File::open(path)
+            .map_err(|e| invalid(format!("cannot open {}: {e}", path.display())))?;
+        read_obj(&mut std::io::BufReader::new(file))
+            .map_err(|e| invalid(format!("OBJ {}: {e}", path.display())))
+    }
+}
+
+fn read_obj(reader: &mut impl BufRead) -> Result<Mesh, tobj::LoadError> {
+    let options = tobj::LoadOptions {
+        triangulate: true,
+        ignore_points: true,
+        ignore_lines: true,
+        ..Default::default()
+    };
+    let (models, _materials) =
+        tobj::load_obj_buf(reader, &options, |_| Err(tobj::LoadError::OpenFileFailed))?;
+    let mut mesh = Mesh::default();
+    let mut welded = HashMap::<[u64; 3], u32>::new();
+    let any_colour = models.iter().any(|m| !m.mesh.vertex_color.is_empty());
+    let any_normal = models.iter().any(|m| !m.mesh.normals.is_empty());
+    let mut normal_sums = Vec::<DVec3>::new();
+    let mut seen = std::collections::HashSet::new();
+    for (model_index, model) in models.iter().enumerate() {
+        let m = &model.mesh;
+        let position = |i: usize| {
+            DVec3::new(
+                m.positions[3 * i] as f64,
+                m.positions[3 * i + 1] as f64,
+                m.positions[3 * i + 2] as f64,
+            )
+        };
+        let mut remap = Vec::with_capacity(m.positions.len() / 3);
+        for i in 0..m.positions.len() / 3 {
+            let p = position(i);
+            let key = p.to_array().map(f64::to_bits);
+            let next = mesh.positions.len() as u32;
+            let id = *welded.entry(key).or_insert(next);
+            if id == next {
+                mesh.positions.push(p);
+                let colour = if m.vertex_color.len() >= 3 * (i + 1) {
+                    let c = |k: usize| {
+                        (m.vertex_color[3 * i + k].clamp(0.0, 1.0) * 255.0).round() as u8
+                    };
+                    [c(0), c(1), c(2), 255]
+                } else {
+                    [255; 4]
+                };
+                mesh.colors.push(colour);
+                normal_sums.push(DVec3::ZERO);
+            }
+            remap.push(id);
+        }
+        for (f, tri) in m.indices.chunks_exact(3).enumerate() {
+            mesh.triangles
+                .push([0, 1, 2].map(|k| remap[tri[k] as usize]));
+            if m.normals.is_empty() {
+                continue;
+            }
+            for k in 0..3 {
+                // Normals share the position indices unless the file gave their own; each
+                // distinct normal a vertex is given counts once.
+                let n = m.normal_indices.get(3 * f + k).copied().unwrap_or(tri[k]) as usize;
+                let vertex = remap[tri[k] as usize];
+                if !seen.insert((vertex, model_index, n)) {
+                    continue;
+                }
+                if let Some(v) = m.normals.get(3 * n..3 * n + 3) {
+                    normal_sums[vertex as usize] +=
+                        DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64);
+                }
+            }
+        }
+    }
+    if !any_colour {
+        mesh.colors.clear();
+    }
+    if any_normal {
+        mesh.normals = normal_sums;
+    }
+    Ok(mesh)
+}

@@ -1,0 +1,92 @@
+//! OBJ input (`Mesh::from_obj`, through tobj): quads triangulated, groups welded back into one
+//! closed mesh, vertex colours and per-corner normals read, bad files refused with typed errors.
+
+use fieldkit::Error;
+use fieldkit::voxelize::Mesh;
+use glam::DVec3;
+
+/// A unit cube in two groups (so tobj gives two models with their own copies of the shared
+/// vertices), quads, vertex colours, and one normal per face given per corner.
+const CUBE: &str = "\
+v 0 0 0 1 0 0
+v 1 0 0 0 1 0
+v 0 1 0 0 0 1
+v 1 1 0 1 1 0
+v 0 0 1 0 1 1
+v 1 0 1 1 0 1
+v 0 1 1 0.5 0.5 0.5
+v 1 1 1 1 1 1
+vn -1 0 0
+vn 1 0 0
+vn 0 -1 0
+vn 0 1 0
+vn 0 0 -1
+vn 0 0 1
+g sides
+f 1//1 5//1 7//1 3//1
+f 2//2 4//2 8//2 6//2
+f 1//3 2//3 6//3 5//3
+f 3//4 7//4 8//4 4//4
+g caps
+f 1//5 3//5 4//5 2//5
+f 5//6 6//6 8//6 7//6
+";
+
+#[test]
+fn a_grouped_quad_cube_comes_back_closed_with_its_attributes() {
+    let mesh = Mesh::from_obj(&mut CUBE.as_bytes()).unwrap();
+    assert_eq!(
+        mesh.positions.len(),
+        8,
+        "groups' shared vertices are welded"
+    );
+    assert_eq!(mesh.triangles.len(), 12);
+    assert_eq!(mesh.open_edge(), None);
+    assert!(
+        (mesh.volume() - 1.0).abs() < 1e-12,
+        "volume {}",
+        mesh.volume()
+    );
+    // Every vertex keeps its colour, converted to 8 bits.
+    for (p, c) in mesh.positions.iter().zip(&mesh.colors) {
+        let want = if *p == DVec3::new(0.0, 1.0, 1.0) {
+            [128, 128, 128, 255]
+        } else {
+            let i = (p.x + 2.0 * p.y + 4.0 * p.z) as usize;
+            let rgb = [
+                [255, 0, 0],
+                [0, 255, 0],
+                [0, 0, 255],
+                [255, 255, 0],
+                [0, 255, 255],
+                [255, 0, 255],
+                [0; 3],
+                [255; 3],
+            ][i];
+            [rgb[0], rgb[1], rgb[2], 255]
+        };
+        assert_eq!(*c, want, "colour of {p}");
+    }
+    // Each corner touches three faces: the normals given per corner sum to the diagonal.
+    for (p, n) in mesh.positions.iter().zip(&mesh.normals) {
+        let want = (*p * 2.0 - 1.0).normalize();
+        assert!(n.normalize().distance(want) < 1e-12, "normal {n} at {p}");
+    }
+}
+
+#[test]
+fn bad_obj_input_gets_typed_errors() {
+    let err = Mesh::from_obj(&mut "v 0 0 0\nv 1 0 0\nf 1 2 9\n".as_bytes()).unwrap_err();
+    assert!(
+        matches!(&err, Error::Invalid { what, .. } if what.starts_with("OBJ")),
+        "{err}"
+    );
+    let err = Mesh::load_obj("/nonexistent/bunny.obj").unwrap_err();
+    assert!(
+        matches!(&err, Error::Invalid { what, .. } if what.contains("/nonexistent/bunny.obj")),
+        "{err}"
+    );
+    // An OBJ with no faces is an empty mesh, which voxelization refuses by name.
+    let empty = Mesh::from_obj(&mut "v 0 0 0\n".as_bytes()).unwrap();
+    assert!(empty.triangles.is_empty());
+}
