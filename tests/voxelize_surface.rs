@@ -71,13 +71,11 @@ fn sphere_matches_the_sat_reference() {
     assert_eq!(misses, 0);
 }
 
-/// Failure modes, each in a small grid: no voxel the SAT finds may be missed.
-#[test]
-fn failure_modes_miss_nothing() {
-    let ctx = context();
+/// The failure modes, each in a small grid.
+fn failure_cases() -> Vec<(&'static str, Mesh, Grid)> {
     let g = unit_grid([12, 12, 12]);
     let d = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
-    let cases: Vec<(&str, Mesh, Grid)> = vec![
+    vec![
         // Lying exactly in the plane z = 5: both layers z = 4 and z = 5 touch it.
         (
             "on a voxel face",
@@ -133,8 +131,14 @@ fn failure_modes_miss_nothing() {
             ),
             unit_grid([1100, 4, 4]),
         ),
-    ];
-    for (name, m, grid) in cases {
+    ]
+}
+
+/// Failure modes: no voxel the SAT finds may be missed.
+#[test]
+fn failure_modes_miss_nothing() {
+    let ctx = context();
+    for (name, m, grid) in failure_cases() {
         let (misses, extras, local) = compare(&ctx, &m, &grid);
         println!("{name}: {misses} missed, {extras} extra");
         assert_eq!(misses, 0, "{name}");
@@ -385,6 +389,52 @@ fn separation_holds_against_flood_fills() {
         assert!(
             l26_thin > 0,
             "{name}: expected a 26-connected flood to leak through the thin surface"
+        );
+    }
+}
+
+/// The write-up's raster path (`voxelize/raster`) finds columns with enlarged triangles
+/// instead of walking boxes; its fragments run the same exact tests, so it must give the
+/// compute path's voxels bit for bit. A missed column (too little enlargement) shows as a
+/// missing voxel.
+#[test]
+fn raster_path_gives_the_compute_voxels() {
+    let ctx = context();
+    let v = Voxelizer::new(&ctx.device).unwrap();
+    let mut cases = failure_cases();
+    cases.push((
+        "sphere",
+        Mesh::uv_sphere(DVec3::new(16.3, 15.7, 16.1), 11.37, 48, 24),
+        unit_grid([32, 32, 32]),
+    ));
+    cases.push((
+        "torus",
+        Mesh::torus(DVec3::new(12.1, 6.2, 11.9), 8.3, 3.1, 40, 16),
+        unit_grid([25, 13, 24]),
+    ));
+    for (name, m, grid) in cases {
+        let run = |raster: bool| {
+            let mut enc = ctx.encoder("voxelize");
+            let s = if raster {
+                v.encode_surface_raster(&ctx, &mut enc, &m, &grid)
+            } else {
+                v.encode_surface(&ctx, &mut enc, &m, &grid)
+            }
+            .unwrap();
+            ctx.submit_and_wait("voxelize", enc).unwrap();
+            s.read(&ctx).unwrap()
+        };
+        let (compute, raster) = (run(false), run(true));
+        let count = |v: &[bool]| v.iter().filter(|&&o| o).count();
+        println!(
+            "{name}: compute {} voxels, raster {}",
+            count(&compute),
+            count(&raster)
+        );
+        assert!(count(&compute) > 0, "{name}");
+        assert!(
+            compute == raster,
+            "{name}: raster and compute voxels differ"
         );
     }
 }

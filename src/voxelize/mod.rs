@@ -32,6 +32,7 @@ use crate::bind::ComputePipeline;
 use crate::error::Error;
 use crate::gpu::{Context, read_buffer, uniform_buffer as uniform};
 use crate::shaders::voxelize::occupancy_volume::{self as volume_stage, VolumeParams};
+use crate::shaders::voxelize::raster::{self as raster_stage, RasterParams};
 use crate::shaders::voxelize::solid::{self as solid_stage, SolidParams};
 use crate::shaders::voxelize::surface::{self as stage, SurfaceParams};
 
@@ -155,6 +156,40 @@ impl Mesh {
             triangles,
             ..Self::default()
         }
+    }
+
+    /// Every triangle split into four at its edges' midpoints: the same surface with four
+    /// times the triangles (colours and normals interpolated too). Midpoints are shared
+    /// between neighbours, so a closed mesh stays closed.
+    pub fn subdivided(&self) -> Self {
+        let mut out = self.clone();
+        let mut midpoints = std::collections::HashMap::<(u32, u32), u32>::new();
+        let mut midpoint = |a: u32, b: u32, out: &mut Mesh| {
+            *midpoints.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                let (i, j) = (a as usize, b as usize);
+                out.positions
+                    .push((self.positions[i] + self.positions[j]) * 0.5);
+                if !self.colors.is_empty() {
+                    let (ci, cj) = (self.colors[i], self.colors[j]);
+                    out.colors.push(std::array::from_fn(|k| {
+                        ((ci[k] as u16 + cj[k] as u16 + 1) / 2) as u8
+                    }));
+                }
+                if !self.normals.is_empty() {
+                    out.normals.push(self.normals[i] + self.normals[j]);
+                }
+                out.positions.len() as u32 - 1
+            })
+        };
+        out.triangles = Vec::with_capacity(self.triangles.len() * 4);
+        for &[a, b, c] in &self.triangles {
+            let ab = midpoint(a, b, &mut out);
+            let bc = midpoint(b, c, &mut out);
+            let ca = midpoint(c, a, &mut out);
+            out.triangles
+                .extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
+        }
+        out
     }
 
     /// Whether every edge is shared by exactly two triangles that run along it in opposite
@@ -345,6 +380,7 @@ pub struct Voxelizer {
     solid: ComputePipeline<solid_stage::solid::Entry>,
     to_volume: ComputePipeline<volume_stage::to_volume::Entry>,
     attribute_pipelines: attributes::AttributePipelines,
+    raster: std::sync::OnceLock<crate::bind::RenderPipeline<raster_stage::fs_raster::Entry>>,
 }
 
 /// One compute pass of `groups` workgroups of `pipeline`, labelled `label`.
@@ -389,6 +425,7 @@ impl Voxelizer {
             solid: ComputePipeline::new(device)?,
             to_volume: ComputePipeline::new(device)?,
             attribute_pipelines: Default::default(),
+            raster: Default::default(),
         })
     }
 
@@ -672,6 +709,108 @@ impl Voxelizer {
         heavy.set_compute(&mut pass);
         pass.dispatch_workgroups_indirect(dispatch, 0);
         Ok(heavy_work)
+    }
+
+    /// The conservative surface voxels of [`Voxelizer::encode_surface`], found through the
+    /// rasterizer as the write-up did (`voxelize/raster`): each triangle drawn on the plane of
+    /// its dominant axis into a square target of the grid's largest side, enlarged by half a
+    /// pixel's diagonal so every column it touches gets a fragment, which runs the exact tests.
+    /// Kept to compare with the compute path; the voxels are the same.
+    pub fn encode_surface_raster(
+        &self,
+        ctx: &Context,
+        encoder: &mut wgpu::CommandEncoder,
+        mesh: &Mesh,
+        grid: &Grid,
+    ) -> Result<Surface, Error> {
+        let device = &ctx.device;
+        let side = grid.size.into_iter().max().unwrap_or(1);
+        let max = device.limits().max_texture_dimension_2d;
+        if side > max {
+            return Err(Error::Size {
+                stage: raster_stage::STAGE,
+                what: "largest grid side (the raster target's side)",
+                got: side as u64,
+                max: max as u64,
+            });
+        }
+        let local = mesh.to_grid(grid)?;
+        let (occupancy, triangles) = self.bitset(ctx, encoder, &local, grid)?;
+        let format = wgpu::TextureFormat::R8Unorm;
+        let pipeline = if let Some(p) = self.raster.get() {
+            p
+        } else {
+            let p = crate::bind::RenderPipeline::new(
+                device,
+                &crate::bind::RenderTargets {
+                    color: &[Some(wgpu::ColorTargetState {
+                        format,
+                        blend: None,
+                        write_mask: wgpu::ColorWrites::empty(),
+                    })],
+                    ..Default::default()
+                },
+            )?;
+            let _ = self.raster.set(p);
+            self.raster.get().expect("set above")
+        };
+        let target = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("voxelize raster target"),
+            size: wgpu::Extent3d {
+                width: side,
+                height: side,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            view_formats: &[],
+        });
+        let view = target.create_view(&Default::default());
+        let params = uniform(
+            device,
+            "voxelize raster params",
+            &RasterParams {
+                grid: grid.size.into(),
+                side,
+                slack: SLACK,
+                // Rasterizers snap to 1/256 pixel or finer; 1/64 covers that with room.
+                margin: 1.0 / 64.0,
+            },
+        );
+        let bound = pipeline.bind(
+            device,
+            &raster_stage::fs_raster::Resources {
+                params: (&params).into(),
+                triangles: (&triangles).into(),
+                occupancy: (&occupancy).into(),
+            },
+        )?;
+        let count = (local.vertices.len() / 3) as u32;
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(raster_stage::STAGE),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Discard,
+                },
+            })],
+            ..Default::default()
+        });
+        pass.set_pipeline(&pipeline.pipeline);
+        bound.set_render(&mut pass);
+        pass.draw(0..count * 3, 0..1);
+        drop(pass);
+        Ok(Surface {
+            size: grid.size,
+            occupancy,
+            degenerate: local.degenerate,
+        })
     }
 
     /// Conservative surface voxels of `mesh` in `grid`: every voxel (a closed box) a triangle

@@ -1,14 +1,16 @@
-//! `cargo xtask bench voxelize`: GPU time of conservative surface voxelization (and solid
-//! fill) of the Stanford bunny (`scripts/fetch-bunny.sh`, passed with `--mesh`) and a
+//! `cargo xtask bench voxelize`: GPU time of conservative surface voxelization (compute and
+//! the write-up's raster path), solid fill and averaged attributes, for the Stanford bunny
+//! (`scripts/fetch-bunny.sh`, passed with `--mesh`; also split twice, 59 k triangles) and a
 //! procedural torus of about a million triangles, in grids of 128³ to 1024³ fitted to each
 //! mesh. Time: GPU timestamps around the whole encode (clear, passes, heavy-triangle work
-//! list), median of the timed runs. Writes `voxelize.csv` and `voxelize.png` (time against
+//! list; for attributes both halves, without the read-back between them), median of the
+//! timed runs. Writes `voxelize.csv` and `voxelize.png` (time against
 //! the voxel edge relative to the mesh's longest side).
 
 use std::process::ExitCode;
 
 use fieldkit::gpu::Context;
-use fieldkit::voxelize::{Grid, Mesh, Voxelizer};
+use fieldkit::voxelize::{Grid, Mesh, Surface, Voxelizer};
 use glam::DVec3;
 
 use crate::bench_metaball::{Stamps, median};
@@ -115,7 +117,14 @@ fn bench(args: &crate::bench::Args) -> Result<(), String> {
     let v = Voxelizer::new(&ctx.device).map_err(|e| e.to_string())?;
     let mut meshes = Vec::new();
     match &args.mesh {
-        Some(path) => meshes.push(("bunny".to_string(), load_bunny(path)?)),
+        Some(path) => {
+            let bunny = load_bunny(path)?;
+            // The npm bunny is the 3.7 k-triangle scan; split twice it is the same surface in
+            // 59 k triangles, the size of the 70 k original.
+            let fine = bunny.subdivided().subdivided();
+            meshes.push(("bunny".to_string(), bunny));
+            meshes.push(("bunny, split twice".to_string(), fine));
+        }
         None => println!(
             "no --mesh: run scripts/fetch-bunny.sh and pass --mesh target/bunny/index.js for the bunny"
         ),
@@ -135,29 +144,41 @@ fn bench(args: &crate::bench::Args) -> Result<(), String> {
     for (name, mesh) in &meshes {
         for &n in sizes {
             let grid = fit(mesh, n);
-            for mode in ["surface", "solid"] {
+            for mode in ["surface", "raster", "solid", "attributes"] {
+                // The attribute list is sized from the occupied count, read once here.
+                let occupied = if mode == "attributes" {
+                    match v.attributes(&ctx, mesh, &grid) {
+                        Ok(a) => a.count,
+                        Err(e) => {
+                            println!("| {name} | {:?} | {mode} | skipped: {e} |", grid.size);
+                            continue;
+                        }
+                    }
+                } else {
+                    0
+                };
+                let encode = |enc: &mut wgpu::CommandEncoder| -> Result<Surface, String> {
+                    match mode {
+                        "surface" => v.encode_surface(&ctx, enc, mesh, &grid),
+                        "raster" => v.encode_surface_raster(&ctx, enc, mesh, &grid),
+                        "solid" => v.encode_solid(&ctx, enc, mesh, &grid, true),
+                        _ => v.encode_attributes(&ctx, enc, mesh, &grid).and_then(|p| {
+                            v.encode_resolve_attributes(&ctx, enc, p, occupied)
+                                .map(|a| a.surface)
+                        }),
+                    }
+                    .map_err(|e| e.to_string())
+                };
                 let mut times = Vec::new();
                 for i in 0..args.warmup.max(3) + args.reps {
-                    let ms = stamps.time(&ctx, |enc| {
-                        let r = if mode == "surface" {
-                            v.encode_surface(&ctx, enc, mesh, &grid)
-                        } else {
-                            v.encode_solid(&ctx, enc, mesh, &grid, true)
-                        };
-                        r.map(|_| ()).map_err(|e| e.to_string())
-                    })?;
+                    let ms = stamps.time(&ctx, |enc| encode(enc).map(|_| ()))?;
                     if i >= args.warmup.max(3) {
                         times.push(ms);
                     }
                 }
                 let ms = median(times);
                 let mut enc = ctx.encoder("count");
-                let s = if mode == "surface" {
-                    v.encode_surface(&ctx, &mut enc, mesh, &grid)
-                } else {
-                    v.encode_solid(&ctx, &mut enc, mesh, &grid, true)
-                }
-                .map_err(|e| e.to_string())?;
+                let s = encode(&mut enc)?;
                 ctx.submit_and_wait("count", enc)
                     .map_err(|e| e.to_string())?;
                 let voxels = s
