@@ -172,7 +172,7 @@ impl Mesh {
                 if !self.colors.is_empty() {
                     let (ci, cj) = (self.colors[i], self.colors[j]);
                     out.colors.push(std::array::from_fn(|k| {
-                        ((ci[k] as u16 + cj[k] as u16 + 1) / 2) as u8
+                        (ci[k] as u16 + cj[k] as u16).div_ceil(2) as u8
                     }));
                 }
                 if !self.normals.is_empty() {

@@ -32,7 +32,11 @@ pub fn translate_all(stage: &Stage) -> Vec<(&'static str, Result<usize, String>)
         msl::write_string(
             module,
             info,
-            &msl::Options::default(),
+            // wgpu's Metal backend writes MSL 2.x (fragment-stage storage writes need ≥ 1.2).
+            &msl::Options {
+                lang_version: (2, 1),
+                ..Default::default()
+            },
             &msl::PipelineOptions::default(),
         )
         .map(|(s, _)| s.len())
