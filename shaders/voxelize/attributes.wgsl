@@ -58,6 +58,11 @@ fn compact_index(i: u32) -> u32 {
     return block_offsets[w / BLOCK_WORDS] + word_offsets[w] + countOneBits(below);
 }
 
+// p on the (u, w) axes.
+fn flat(s: Setup, p: vec3<f32>) -> vec2<f32> {
+    return vec2<f32>(dot(p, vec3<f32>(s.eu)), dot(p, vec3<f32>(s.ew)));
+}
+
 fn cross2(a: vec2<f32>, b: vec2<f32>) -> f32 {
     return a.x * b.y - a.y * b.x;
 }
@@ -72,10 +77,10 @@ fn add_voxel(s: Setup, t: u32, p: vec3<i32>) {
     let v2 = triangles[3u * t + 2u].xyz;
     let centre = vec3<f32>(p) + 0.5;
     let q = centre - s.n * (dot(s.n, centre - v0) / dot(s.n, s.n));
-    let a = vec2<f32>(v0[s.u], v0[s.w]);
-    let e1 = vec2<f32>(v1[s.u], v1[s.w]) - a;
-    let e2 = vec2<f32>(v2[s.u], v2[s.w]) - a;
-    let r = vec2<f32>(q[s.u], q[s.w]) - a;
+    let a = flat(s, v0);
+    let e1 = flat(s, v1) - a;
+    let e2 = flat(s, v2) - a;
+    let r = flat(s, q) - a;
     let area = cross2(e1, e2);
     var b = max(vec2<f32>(cross2(r, e2), cross2(e1, r)) / area, vec2<f32>(0.0));
     if b.x + b.y > 1.0 {
@@ -115,9 +120,8 @@ fn accumulate_columns(s: Setup, t: u32, first: u32, count: u32) {
     let end = min(first + count, s.columns);
     for (var j = first; j < end; j++) {
         let c = column(s, j);
-        var p = c.p;
         for (var z = c.k0; z < c.k1; z++) {
-            p[s.k] = z;
+            let p = c.p + s.ek * z;
             if overlaps(s, p, false) {
                 add_voxel(s, t, p);
             }

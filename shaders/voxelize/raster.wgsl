@@ -7,7 +7,7 @@
 // fragment then runs the exact tests of `shared/triangle_box` on its column and sets bits with
 // atomicOr, so the voxels are the compute path's, and only the way columns are found differs.
 
-import package::shared::triangle_box::{Setup, column_at, overlaps, setup};
+import package::shared::triangle_box::{Setup, column_at, in_box, overlaps, setup};
 
 struct RasterParams {
     grid: vec3<u32>,
@@ -35,8 +35,9 @@ fn load(t: u32) -> Setup {
                  vec3<i32>(params.grid), params.slack, false);
 }
 
+// p on the (u, w) axes.
 fn flat(s: Setup, p: vec3<f32>) -> vec2<f32> {
-    return vec2<f32>(p[s.u], p[s.w]);
+    return vec2<f32>(dot(p, vec3<f32>(s.eu)), dot(p, vec3<f32>(s.ew)));
 }
 
 // The line through a and b as (n, d) with n · x + d = 0 and n pointing away from `inside`'s
@@ -77,11 +78,11 @@ fn vs_raster(@builtin(vertex_index) index: u32) -> Raster {
 fn fs_raster(in: Raster) -> @location(0) vec4<f32> {
     let s = load(in.triangle);
     let c = column_at(s, i32(floor(in.position.x)), i32(floor(in.position.y)));
-    var p = c.p;
     let g = vec3<i32>(params.grid);
     for (var z = c.k0; z < c.k1; z++) {
-        p[s.k] = z;
-        if overlaps(s, p, false) {
+        let p = c.p + s.ek * z;
+        // The enlarged triangle reaches columns outside the box; those hold nothing.
+        if in_box(s, p) && overlaps(s, p, false) {
             let i = u32((p.z * g.y + p.y) * g.x + p.x);
             atomicOr(&occupancy[i / 32u], 1u << (i % 32u));
         }

@@ -55,9 +55,8 @@ fn voxelize_columns(s: Setup, first: u32, count: u32) {
     let end = min(first + count, s.columns);
     for (var j = first; j < end; j++) {
         let c = column(s, j);
-        var p = c.p;
         for (var z = c.k0; z < c.k1; z++) {
-            p[s.k] = z;
+            let p = c.p + s.ek * z;
             if overlaps(s, p, SIX_SEPARATING) {
                 set_voxel(p);
             }

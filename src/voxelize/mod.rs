@@ -372,7 +372,7 @@ impl SurfacePipelines {
 }
 
 /// Columns per chunk of a heavy triangle (the shader's `CHUNK`).
-pub const CHUNK: u32 = 64;
+pub const CHUNK: u32 = 16;
 
 pub struct Voxelizer {
     surface: SurfacePipelines,

@@ -32,6 +32,8 @@ pub struct Args {
     pub sizes: Vec<usize>,
     /// `voxelize`: the bunny's `index.js` (`scripts/fetch-bunny.sh`).
     pub mesh: Option<PathBuf>,
+    /// `voxelize`: only these modes (empty: all).
+    pub modes: Vec<String>,
 }
 
 /// Memory bandwidth the pass figures are compared with (H100 SXM HBM3, rounded down).
@@ -121,7 +123,7 @@ pub(crate) fn write_table(
 /// Least wall time of warm-up before the timed runs. GPU clocks fall while the CPU checks the
 /// previous point: on the H100, 2048² exact measured 1.19 ms after three warm-up runs that
 /// followed the 512³ sweep, and 0.26 ms once warmed up for longer.
-const WARMUP_TIME: std::time::Duration = std::time::Duration::from_millis(500);
+pub(crate) const WARMUP_TIME: std::time::Duration = std::time::Duration::from_millis(500);
 
 /// Median, fastest and slowest total ms, and each pass's median ms.
 pub(crate) type Timing = (f64, f64, f64, Vec<(String, f64)>);

@@ -76,6 +76,9 @@ enum Command {
         /// `voxelize`: the Stanford bunny's `index.js` from `scripts/fetch-bunny.sh`.
         #[arg(long)]
         mesh: Option<PathBuf>,
+        /// `voxelize`: only these modes (surface, raster, solid, attributes; comma-separated).
+        #[arg(long, value_delimiter = ',')]
+        modes: Vec<String>,
     },
 }
 
@@ -114,6 +117,7 @@ fn main() -> ExitCode {
             column_bands,
             sizes,
             mesh,
+            modes,
         } => {
             if cfg!(debug_assertions) && std::env::var_os("FIELDKIT_BENCH_NO_REEXEC").is_none() {
                 return rerun_release();
@@ -136,6 +140,7 @@ fn main() -> ExitCode {
                 column_bands,
                 sizes,
                 mesh,
+                modes,
             };
             match technique {
                 Technique::Distance => bench::run_distance(&args),
