@@ -121,7 +121,7 @@ fn colours_normals_and_counts_match_the_reference() {
     check_against_reference(&flat, &grid, &got, 1e-3);
 }
 
-/// Triangles with more than 64 columns go through the surface pass's work list; the attribute
+/// Triangles with more than `LIGHT` (16) columns go through the surface pass's work list; the attribute
 /// pass must walk the same list and count each of their voxels once.
 #[test]
 fn heavy_triangles_count_once() {

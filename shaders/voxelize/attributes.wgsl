@@ -10,7 +10,7 @@
 // closest point on the triangle's plane (barycentrics clamped to the triangle),
 // written as a0 + b1·(a1 − a0) + b2·(a2 − a0) so a constant attribute stays exact.
 
-import package::shared::triangle_box::{CHUNK, Setup, column, overlaps, setup};
+import package::shared::triangle_box::{CHUNK, LIGHT, Setup, column, overlaps, setup};
 
 struct AttributeParams {
     grid: vec3<u32>,
@@ -138,7 +138,7 @@ fn octahedral(n: vec3<f32>) -> u32 {
     return pack2x16snorm(p);
 }
 
-// Light triangles, one per thread; heavy ones (more than CHUNK columns) are in the work list.
+// Light triangles, one per thread; heavy ones (more than LIGHT columns) are in the work list.
 @compute @workgroup_size(64)
 fn accumulate(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= params.count {
@@ -146,7 +146,7 @@ fn accumulate(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let t = params.first + id.x;
     let s = load(t);
-    if s.columns <= CHUNK {
+    if s.columns <= LIGHT {
         accumulate_columns(s, t, 0u, s.columns);
     }
 }

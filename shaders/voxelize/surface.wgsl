@@ -5,14 +5,14 @@
 // 13-axis separating-axis test says the same), widened by `slack` against rounding.
 //
 // One thread per triangle (`first` and `count` select a run of the triangle list). A triangle
-// with more than CHUNK columns does not stall its thread: `surface` appends it to a work list
+// with more than LIGHT columns does not stall its thread: `surface` appends it to a work list
 // in chunks of CHUNK columns, `heavy_args` sizes an indirect dispatch from the list's length,
 // and `surface_heavy` takes one chunk per thread.
 //
 // SIX_SEPARATING gives the thinner voxelization of the same paper, through which no
 // 6-connected path gets; 26-connected paths can.
 
-import package::shared::triangle_box::{CHUNK, Setup, column, overlaps, setup};
+import package::shared::triangle_box::{CHUNK, LIGHT, Setup, column, overlaps, setup};
 
 struct SurfaceParams {
     grid: vec3<u32>,
@@ -71,7 +71,7 @@ fn surface(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let t = params.first + id.x;
     let s = load(t);
-    if s.columns > CHUNK {
+    if s.columns > LIGHT {
         let chunks = (s.columns + CHUNK - 1u) / CHUNK;
         let at = atomicAdd(&work_count, chunks);
         for (var c = 0u; c < chunks; c++) {

@@ -315,7 +315,7 @@ pub fn heavy_chunk_bound(local: &GridMesh, size: [u32; 3]) -> u32 {
         };
         let (x, y, z) = (side(0), side(1), side(2));
         let most = (x * y).max(y * z).max(z * x);
-        if most > CHUNK as u64 {
+        if most > LIGHT as u64 {
             total += most.div_ceil(CHUNK as u64);
         }
     }
@@ -372,7 +372,10 @@ impl SurfacePipelines {
 }
 
 /// Columns per chunk of a heavy triangle (the shader's `CHUNK`).
-pub const CHUNK: u32 = 16;
+pub const CHUNK: u32 = 4;
+/// Most columns a triangle walks in its own thread; heavier ones go through the work list (the
+/// shader's `LIGHT`).
+pub const LIGHT: u32 = 16;
 
 pub struct Voxelizer {
     surface: SurfacePipelines,
@@ -591,7 +594,7 @@ impl Voxelizer {
 
     /// A surface pass (`pipelines`: conservative or six-separating) over the triangles of
     /// `local`, ORed into `occupancy`: light triangles one per thread, heavy ones (more than
-    /// [`CHUNK`] columns) in chunks through a work list and an indirect dispatch. Returns the
+    /// [`LIGHT`] columns) in chunks of [`CHUNK`] through a work list and an indirect dispatch. Returns the
     /// work list, which the attribute pass walks again.
     #[allow(clippy::too_many_arguments)]
     fn surface_into(
