@@ -293,10 +293,13 @@ pub fn metaball_scene(
     Ok(px.concat())
 }
 
-/// Render every scene into `out_dir`; returns the files written.
+/// Render every scene into `out_dir`; returns the files written. `bunny` is the mesh the
+/// voxelization scenes use (the npm package `bunny`, which `cargo xtask gallery` fetches);
+/// without it they voxelize a torus.
 pub fn run(
     ctx: &Context,
     out_dir: &Path,
+    bunny: Option<&crate::voxelize::Mesh>,
     mut progress: impl FnMut(&str),
 ) -> Result<Vec<PathBuf>, Error> {
     std::fs::create_dir_all(out_dir).map_err(|e| Error::Invalid {
@@ -421,6 +424,21 @@ pub fn run(
         let rgba = ocean_scene(ctx, w, h, gbuffer)?;
         save(name, &rgba, w, h, &mut written)?;
     }
+    let torus;
+    let (mesh, what) = match bunny {
+        Some(b) => (b, "the Stanford bunny"),
+        None => {
+            torus = crate::voxelize::Mesh::torus(glam::DVec3::ZERO, 1.0, 0.4, 96, 48);
+            (&torus, "a torus (no bunny given)")
+        }
+    };
+    progress(&format!(
+        "voxelize: {what} as cubes coloured by the averaged normal, and its distance field"
+    ));
+    let rgba = voxelize_scene(ctx, mesh, 96, w, h)?;
+    save("voxelize_cubes.png", &rgba, w, h, &mut written)?;
+    let (rgba, sw, sh) = voxelize_distance_slice(ctx, mesh, 128, 4)?;
+    save("voxelize_distance_slice.png", &rgba, sw, sh, &mut written)?;
     Ok(written)
 }
 
@@ -696,6 +714,155 @@ fn save_gif(path: &Path, frames: &[Vec<u8>], w: u32, h: u32, frame_ms: f32) -> R
             .map_err(|e| err(&e))?;
     }
     Ok(())
+}
+
+/// A grid of about `n` voxels along the mesh's longest side, fitted to its bounds with a voxel
+/// of margin.
+pub fn fit_grid(mesh: &crate::voxelize::Mesh, n: u32) -> crate::voxelize::Grid {
+    use glam::DVec3;
+    let lo = mesh
+        .positions
+        .iter()
+        .fold(DVec3::splat(f64::MAX), |a, &p| a.min(p));
+    let hi = mesh
+        .positions
+        .iter()
+        .fold(DVec3::splat(f64::MIN), |a, &p| a.max(p));
+    let voxel = (hi - lo).max_element() / (n.max(3) - 2) as f64;
+    let size = ((hi - lo) / voxel).ceil().as_uvec3() + 2;
+    crate::voxelize::Grid {
+        origin: lo - DVec3::splat(voxel),
+        voxel,
+        size: size.min(glam::UVec3::splat(n.max(3))).to_array(),
+    }
+}
+
+/// `mesh` voxelized in a grid of `n` along its longest side, drawn as cubes coloured by each
+/// voxel's averaged normal, into RGBA8 pixels.
+pub fn voxelize_scene(
+    ctx: &Context,
+    mesh: &crate::voxelize::Mesh,
+    n: u32,
+    w: u32,
+    h: u32,
+) -> Result<Vec<u8>, Error> {
+    use crate::metaball::render::Targets;
+    use crate::voxelize::Voxelizer;
+    use crate::voxelize::view::{ColourBy, VoxelView};
+    use glam::Vec3;
+    let device = &ctx.device;
+    let grid = fit_grid(mesh, n);
+    let voxels = Voxelizer::new(device)?.attributes(ctx, mesh, &grid)?;
+    let colour_format = wgpu::TextureFormat::Rgba8Unorm;
+    let depth_format = wgpu::TextureFormat::Depth32Float;
+    let targets = Targets::new(device, [w, h], colour_format, depth_format);
+    let centre =
+        (grid.origin + glam::DVec3::from(grid.size.map(f64::from)) * grid.voxel * 0.5).as_vec3();
+    let radius = grid.size.into_iter().max().unwrap_or(1) as f32 * grid.voxel as f32 * 0.5;
+    let eye = centre + Vec3::new(0.75, 0.45, 1.0).normalize() * radius * 3.2;
+    let proj = glam::camera::rh::proj::directx::perspective(
+        0.7,
+        w as f32 / h as f32,
+        radius * 0.1,
+        radius * 10.0,
+    );
+    let view_proj = proj * glam::camera::rh::view::look_at_mat4(eye, centre, Vec3::Y);
+    let view = VoxelView::new(device, colour_format, depth_format)?;
+    let mut enc = ctx.encoder("gallery voxelize");
+    targets.clear(
+        &mut enc,
+        wgpu::Color {
+            r: 0.16,
+            g: 0.17,
+            b: 0.2,
+            a: 1.0,
+        },
+        1.0,
+    );
+    view.encode(
+        device,
+        &mut enc,
+        &targets.colour_view,
+        &targets.depth_view,
+        &voxels,
+        &grid,
+        view_proj,
+        Vec3::new(0.4, 0.8, 0.5),
+        ColourBy::Normal,
+    )?;
+    ctx.submit_and_wait("gallery voxelize", enc)?;
+    let px: Vec<[u8; 4]> = read_texture(ctx, &targets.colour)?;
+    Ok(px.concat())
+}
+
+/// The signed distance field of a closed `mesh` (solid voxels, then the exact 3D transform),
+/// in a grid of `n` along its longest side: the slice through the middle of z, +y up, colour
+/// mapped with iso-lines every 4 voxels and scaled up `zoom` times. Returns pixels, width and
+/// height.
+pub fn voxelize_distance_slice(
+    ctx: &Context,
+    mesh: &crate::voxelize::Mesh,
+    n: u32,
+    zoom: u32,
+) -> Result<(Vec<u8>, u32, u32), Error> {
+    use crate::distance::volume::{Distance3d, Options3d};
+    use crate::voxelize::Voxelizer;
+    let device = &ctx.device;
+    let grid = fit_grid(mesh, n);
+    let v = Voxelizer::new(device)?;
+    let mut enc = ctx.encoder("gallery mesh distance");
+    let solid = v.encode_solid(ctx, &mut enc, mesh, &grid, false)?;
+    let volume = v.encode_volume(device, &mut enc, &solid)?;
+    let field = Distance3d::new(device)?.encode(
+        device,
+        &mut enc,
+        &volume,
+        &Options3d {
+            signed: true,
+            ..Options3d::default()
+        },
+    )?;
+    ctx.submit_and_wait("gallery mesh distance", enc)?;
+    let d: Vec<f32> = read_texture(ctx, &field.distance)?;
+    let [nx, ny, nz] = grid.size;
+    let z = nz / 2;
+    let slice: Vec<f32> = (0..ny)
+        .rev()
+        .flat_map(|y| {
+            let row = ((z * ny + y) * nx) as usize;
+            d[row..row + nx as usize].to_vec()
+        })
+        .collect();
+    use wgpu::util::DeviceExt;
+    let texture = device.create_texture_with_data(
+        &ctx.queue,
+        &wgpu::TextureDescriptor {
+            label: Some("gallery distance slice"),
+            size: wgpu::Extent3d {
+                width: nx,
+                height: ny,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::R32Float,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        },
+        wgpu::util::TextureDataOrder::LayerMajor,
+        bytemuck::cast_slice(&slice),
+    );
+    let small = visualize_distance(ctx, &texture, 4.0, n as f32 * 0.4)?;
+    let (w, h) = (nx * zoom, ny * zoom);
+    let mut out = Vec::with_capacity((w * h * 4) as usize);
+    for y in 0..h {
+        for x in 0..w {
+            let i = (((y / zoom) * nx + x / zoom) * 4) as usize;
+            out.extend_from_slice(&small[i..i + 4]);
+        }
+    }
+    Ok((out, w, h))
 }
 
 #[cfg(test)]

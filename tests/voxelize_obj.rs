@@ -112,3 +112,36 @@ fn subdivision_keeps_the_surface_closed_and_its_volume() {
         2
     );
 }
+
+/// The npm `bunny` layout (`exports.positions=[[x,y,z],…]; exports.cells=[[a,b,c],…]`), which
+/// the gallery and the bench read.
+#[test]
+fn positions_and_cells_text_is_read_and_checked() {
+    let js = "exports.positions=[[0,0,0],[1,0,0],[0,1,0],[0,0,1.5e0]];\nexports.cells=[[0,2,1],[0,1,3],[0,3,2],[1,2,3]];\n";
+    let mesh = Mesh::from_positions_cells(js).unwrap();
+    assert_eq!(mesh.positions[3], DVec3::new(0.0, 0.0, 1.5));
+    assert_eq!(mesh.triangles[3], [1, 2, 3]);
+    assert_eq!(mesh.open_edge(), None);
+    assert!((mesh.volume() - 0.25).abs() < 1e-12, "{}", mesh.volume());
+    for (bad, says) in [
+        (
+            "exports.positions=[[0,0],[1,0,0]];exports.cells=[[0,1,1]];",
+            "threes",
+        ),
+        (
+            "exports.positions=[[0,0,0]];exports.cells=[[0,-1,0]];",
+            "not a vertex index",
+        ),
+        ("exports.positions=[[0,0,0]];", "cells"),
+        (
+            "exports.positions=[[0,0,x]];exports.cells=[[0,0,0]];",
+            "\"x\"",
+        ),
+    ] {
+        let err = Mesh::from_positions_cells(bad).unwrap_err();
+        assert!(
+            matches!(&err, fieldkit::Error::Invalid { what, .. } if what.contains(says)),
+            "{bad}: {err}"
+        );
+    }
+}

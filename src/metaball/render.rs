@@ -142,7 +142,7 @@ impl RaymarchSettings {
 }
 
 /// A render pass over the caller's targets that keeps what they hold.
-fn load_pass<'e>(
+pub(crate) fn load_pass<'e>(
     encoder: &'e mut wgpu::CommandEncoder,
     label: &str,
     colour: &wgpu::TextureView,
@@ -240,7 +240,7 @@ impl Targets {
 }
 
 /// Depth test and write against the caller's depth target, which must have a depth aspect.
-fn depth_state(
+pub(crate) fn depth_state(
     stage: &'static str,
     format: wgpu::TextureFormat,
     compare: wgpu::CompareFunction,

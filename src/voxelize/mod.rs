@@ -23,6 +23,7 @@ mod attributes;
 pub mod cpu;
 pub mod export;
 mod obj;
+pub mod view;
 
 pub use attributes::{Attributes, PendingAttributes, VoxelAttributes};
 

@@ -110,3 +110,71 @@ fn read_obj(reader: &mut impl BufRead) -> Result<Mesh, tobj::LoadError> {
     }
     Ok(mesh)
 }
+
+/// The numbers of the first bracketed array after `key` in `text`, flattened.
+fn nested_numbers(text: &str, key: &str) -> Result<Vec<f64>, String> {
+    let at = text.find(key).ok_or(format!("no `{key}` array"))?;
+    let start = at
+        + text[at..]
+            .find('[')
+            .ok_or(format!("no array after `{key}`"))?;
+    let mut depth = 0;
+    let mut end = None;
+    for (i, c) in text[start..].char_indices() {
+        match c {
+            '[' => depth += 1,
+            ']' => {
+                depth -= 1;
+                if depth == 0 {
+                    end = Some(start + i);
+                    break;
+                }
+            }
+            _ => {}
+        }
+    }
+    let end = end.ok_or(format!("`{key}` array is not closed"))?;
+    text[start..end]
+        .split(|c: char| c == '[' || c == ']' || c == ',' || c.is_whitespace())
+        .filter(|s| !s.is_empty())
+        .map(|s| s.parse::<f64>().map_err(|e| format!("`{key}`: {s:?}: {e}")))
+        .collect()
+}
+
+impl Mesh {
+    /// Read a mesh from the `positions` and `cells` arrays of a JavaScript or JSON text (the
+    /// "simplicial complex" layout of the stack.gl packages, which the npm package `bunny`
+    /// ships as `index.js`).
+    ///
+    /// ```
+    /// let js = "exports.positions=[[0,0,0],[1,0,0],[0,1,0]];\nexports.cells=[[0,1,2]];";
+    /// let mesh = fieldkit::voxelize::Mesh::from_positions_cells(js).unwrap();
+    /// assert_eq!((mesh.positions.len(), mesh.triangles.len()), (3, 1));
+    /// ```
+    pub fn from_positions_cells(text: &str) -> Result<Self, Error> {
+        let bad = |what: String| invalid(format!("positions/cells text: {what}"));
+        let p = nested_numbers(text, "positions").map_err(bad)?;
+        let c = nested_numbers(text, "cells").map_err(bad)?;
+        if p.len() % 3 != 0 || c.len() % 3 != 0 {
+            return Err(bad(format!(
+                "{} position numbers and {} cell indices: both must come in threes",
+                p.len(),
+                c.len()
+            )));
+        }
+        if let Some(i) = c
+            .iter()
+            .find(|&&i| i < 0.0 || i.fract() != 0.0 || i > u32::MAX as f64)
+        {
+            return Err(bad(format!("cell index {i} is not a vertex index")));
+        }
+        Ok(Mesh {
+            positions: p.chunks(3).map(|v| DVec3::new(v[0], v[1], v[2])).collect(),
+            triangles: c
+                .chunks(3)
+                .map(|t| [t[0] as u32, t[1] as u32, t[2] as u32])
+                .collect(),
+            ..Mesh::default()
+        })
+    }
+}

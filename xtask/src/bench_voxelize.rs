@@ -25,79 +25,10 @@ pub fn run(args: &crate::bench::Args) -> ExitCode {
     }
 }
 
-/// The npm package `bunny`'s `index.js`: `exports.positions=[[x,y,z],…]`,
-/// `exports.cells=[[a,b,c],…]`.
+/// The npm package `bunny`'s `index.js`.
 fn load_bunny(path: &std::path::Path) -> Result<Mesh, String> {
     let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let array = |name: &str| -> Result<serde_json::Value, String> {
-        let key = format!("exports.{name}=");
-        let start = text
-            .find(&key)
-            .ok_or(format!("no {key} in {}", path.display()))?
-            + key.len();
-        let end = text[start..]
-            .find([';', '\n'])
-            .map_or(text.len(), |e| start + e);
-        serde_json::from_str(&text[start..end]).map_err(|e| format!("{name}: {e}"))
-    };
-    let positions = array("positions")?
-        .as_array()
-        .ok_or("positions is not an array")?
-        .iter()
-        .map(|p| {
-            let c: Vec<f64> = p
-                .as_array()
-                .into_iter()
-                .flatten()
-                .filter_map(|v| v.as_f64())
-                .collect();
-            (c.len() == 3)
-                .then(|| DVec3::new(c[0], c[1], c[2]))
-                .ok_or("a position is not 3 numbers")
-        })
-        .collect::<Result<Vec<_>, _>>()?;
-    let triangles = array("cells")?
-        .as_array()
-        .ok_or("cells is not an array")?
-        .iter()
-        .map(|t| {
-            let c: Vec<u32> = t
-                .as_array()
-                .into_iter()
-                .flatten()
-                .filter_map(|v| v.as_u64())
-                .map(|v| v as u32)
-                .collect();
-            (c.len() == 3)
-                .then(|| [c[0], c[1], c[2]])
-                .ok_or("a cell is not 3 indices")
-        })
-        .collect::<Result<Vec<_>, _>>()?;
-    Ok(Mesh {
-        positions,
-        triangles,
-        ..Mesh::default()
-    })
-}
-
-/// A grid of `n` voxels along the mesh's longest side, fitted to its bounds with a voxel of
-/// margin.
-fn fit(mesh: &Mesh, n: u32) -> Grid {
-    let lo = mesh
-        .positions
-        .iter()
-        .fold(DVec3::splat(f64::MAX), |a, &p| a.min(p));
-    let hi = mesh
-        .positions
-        .iter()
-        .fold(DVec3::splat(f64::MIN), |a, &p| a.max(p));
-    let voxel = (hi - lo).max_element() / (n - 2) as f64;
-    let size = ((hi - lo) / voxel).ceil().as_uvec3() + 2;
-    Grid {
-        origin: lo - DVec3::splat(voxel),
-        voxel,
-        size: size.min(glam::UVec3::splat(n)).to_array(),
-    }
+    Mesh::from_positions_cells(&text).map_err(|e| format!("{}: {e}", path.display()))
 }
 
 struct Row {
@@ -152,7 +83,7 @@ fn bench(args: &crate::bench::Args) -> Result<(), String> {
             if !args.sizes.is_empty() && !args.sizes.contains(&(n as usize)) {
                 continue;
             }
-            let grid = fit(mesh, n);
+            let grid = fieldkit::gallery::fit_grid(mesh, n);
             for mode in ["surface", "raster", "solid", "attributes"] {
                 if !args.modes.is_empty() && !args.modes.iter().any(|m| m == mode) {
                     continue;

@@ -1,0 +1,64 @@
+// Debug view of voxelization's output: one cube per occupied voxel, pulled by instance index
+// from the compact attribute list of `voxelize/attributes` (no vertex or instance buffer),
+// coloured by the voxel's averaged normal or colour and lit by one directional light.
+
+import package::shared::cube::{cube_corner, cube_face_normal};
+
+struct ViewParams {
+    view_proj: mat4x4<f32>,
+    // Grid-local (voxel units, origin at voxel (0, 0, 0)'s min corner) to world.
+    grid_to_world: mat4x4<f32>,
+    // Unit vector toward the light, in world space (w unused).
+    light: vec4<f32>,
+    grid: vec3<u32>,
+    // 0: the averaged normal as a colour (n · ½ + ½); 1: the averaged colour.
+    colour_by: u32,
+}
+
+struct VertexOut {
+    @builtin(position) position: vec4<f32>,
+    @location(0) colour: vec3<f32>,
+}
+
+@group(0) @binding(0) var<uniform> params: ViewParams;
+// Per occupied voxel: (voxel index, RGBA8 colour, octahedral normal or NO_NORMAL, triangles).
+@group(0) @binding(1) var<storage, read> voxels: array<vec4<u32>>;
+
+const NO_NORMAL: u32 = 0x80008000u;
+
+// The octahedral pair `voxelize/attributes` writes, back to a unit vector (zero for NO_NORMAL).
+fn decode_normal(packed: u32) -> vec3<f32> {
+    if packed == NO_NORMAL {
+        return vec3<f32>(0.0);
+    }
+    let p = unpack2x16snorm(packed);
+    var n = vec3<f32>(p, 1.0 - abs(p.x) - abs(p.y));
+    if n.z < 0.0 {
+        n = vec3<f32>((1.0 - abs(p.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), p >= vec2<f32>(0.0)), n.z);
+    }
+    return normalize(n);
+}
+
+@vertex
+fn vs_view(@builtin(vertex_index) index: u32, @builtin(instance_index) instance: u32) -> VertexOut {
+    let v = voxels[instance];
+    let g = params.grid;
+    let cell = vec3<f32>(vec3<u32>(v.x % g.x, (v.x / g.x) % g.y, v.x / (g.x * g.y)));
+    let local = cell + 0.5 + cube_corner(index);
+    var out: VertexOut;
+    out.position = params.view_proj * params.grid_to_world * vec4<f32>(local, 1.0);
+    var base = unpack4x8unorm(v.y).rgb;
+    if params.colour_by == 0u {
+        base = decode_normal(v.z) * 0.5 + 0.5;
+    }
+    // The grid maps to the world by a scale and a translation, so face normals keep their
+    // direction.
+    let lambert = max(dot(cube_face_normal(index), params.light.xyz), 0.0);
+    out.colour = base * (0.35 + 0.65 * lambert);
+    return out;
+}
+
+@fragment
+fn fs_view(in: VertexOut) -> @location(0) vec4<f32> {
+    return vec4<f32>(in.colour, 1.0);
+}
