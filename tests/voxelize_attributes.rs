@@ -237,3 +237,52 @@ fn bad_attribute_arrays_get_typed_errors() {
         Err(Error::Size { .. })
     ));
 }
+
+/// The dense volumes other stages sample (`voxelize/attribute_volume`): every listed voxel's
+/// colour exactly and its normal to snorm8 precision, zero everywhere else.
+#[test]
+fn attribute_volumes_hold_the_list() {
+    let ctx = context();
+    let mesh = painted_sphere();
+    let grid = sphere_grid();
+    let v = Voxelizer::new(&ctx.device).unwrap();
+    let a = v.attributes(&ctx, &mesh, &grid).unwrap();
+    let list = a.read(&ctx).unwrap();
+    let mut enc = ctx.encoder("volumes");
+    let volumes = v
+        .encode_attribute_volumes(&ctx.device, &mut enc, &a)
+        .unwrap();
+    ctx.submit_and_wait("volumes", enc).unwrap();
+    let colour: Vec<[u8; 4]> = fieldkit::gpu::read_texture(&ctx, &volumes.colour).unwrap();
+    let normal: Vec<[i8; 4]> = fieldkit::gpu::read_texture(&ctx, &volumes.normal).unwrap();
+    let [nx, ny, _] = grid.size.map(|n| n as usize);
+    let mut listed = vec![false; colour.len()];
+    for voxel in &list {
+        let [x, y, z] = voxel.voxel.map(|c| c as usize);
+        let i = (z * ny + y) * nx + x;
+        listed[i] = true;
+        assert_eq!(colour[i], voxel.color, "colour at {:?}", voxel.voxel);
+        let n = voxel.normal.unwrap();
+        let got = glam::Vec3::new(
+            normal[i][0] as f32,
+            normal[i][1] as f32,
+            normal[i][2] as f32,
+        ) / 127.0;
+        // snorm8: half a step, 1/254, per component.
+        assert!(
+            (got - n).abs().max_element() <= 0.5 / 127.0 + 1e-6,
+            "normal at {:?}: {got} vs {n}",
+            voxel.voxel
+        );
+        assert_eq!(normal[i][3], 127);
+    }
+    for (i, &l) in listed.iter().enumerate() {
+        if !l {
+            assert_eq!(
+                (colour[i], normal[i]),
+                ([0; 4], [0; 4]),
+                "texel {i} holds no voxel"
+            );
+        }
+    }
+}

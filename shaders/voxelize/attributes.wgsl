@@ -10,6 +10,7 @@
 // closest point on the triangle's plane (barycentrics clamped to the triangle),
 // written as a0 + b1·(a1 − a0) + b2·(a2 − a0) so a constant attribute stays exact.
 
+import package::shared::octahedral::{NO_NORMAL, encode_octahedral};
 import package::shared::triangle_box::{CHUNK, LIGHT, Setup, column, overlaps, setup};
 
 struct AttributeParams {
@@ -48,9 +49,6 @@ const SUMS: u32 = 8u;
 const COLOR_SCALE: f32 = 16.0;
 const NORMAL_SCALE: f32 = 4096.0;
 const BLOCK_WORDS: u32 = 1024u;
-// The packed normal of a voxel whose triangles' normals cancel: two snorm16 of −32768, which
-// pack2x16snorm never writes.
-const NO_NORMAL: u32 = 0x80008000u;
 
 fn compact_index(i: u32) -> u32 {
     let w = i / 32u;
@@ -129,15 +127,6 @@ fn accumulate_columns(s: Setup, t: u32, first: u32, count: u32) {
     }
 }
 
-// Unit vector to two snorm16 (octahedral map).
-fn octahedral(n: vec3<f32>) -> u32 {
-    var p = n.xy / (abs(n.x) + abs(n.y) + abs(n.z));
-    if n.z < 0.0 {
-        p = (1.0 - abs(p.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), p >= vec2<f32>(0.0));
-    }
-    return pack2x16snorm(p);
-}
-
 // Light triangles, one per thread; heavy ones (more than LIGHT columns) are in the work list.
 @compute @workgroup_size(64)
 fn accumulate(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -184,7 +173,7 @@ fn resolve(@builtin(global_invocation_id) id: vec3<u32>,
                                                            atomicLoad(&sums[at + 6u]))));
         var packed_normal = NO_NORMAL;
         if dot(normal, normal) > 0.0 {
-            packed_normal = octahedral(normalize(normal));
+            packed_normal = encode_octahedral(normalize(normal));
         }
         let colour = rgba.x | (rgba.y << 8u) | (rgba.z << 16u) | (rgba.w << 24u);
         voxels[j] = vec4<u32>(w * 32u + bit, colour, packed_normal, n);

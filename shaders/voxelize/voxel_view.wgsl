@@ -3,6 +3,7 @@
 // coloured by the voxel's averaged normal or colour and lit by one directional light.
 
 import package::shared::cube::{cube_corner, cube_face_normal};
+import package::shared::octahedral::decode_octahedral;
 
 struct ViewParams {
     view_proj: mat4x4<f32>,
@@ -24,21 +25,6 @@ struct VertexOut {
 // Per occupied voxel: (voxel index, RGBA8 colour, octahedral normal or NO_NORMAL, triangles).
 @group(0) @binding(1) var<storage, read> voxels: array<vec4<u32>>;
 
-const NO_NORMAL: u32 = 0x80008000u;
-
-// The octahedral pair `voxelize/attributes` writes, back to a unit vector (zero for NO_NORMAL).
-fn decode_normal(packed: u32) -> vec3<f32> {
-    if packed == NO_NORMAL {
-        return vec3<f32>(0.0);
-    }
-    let p = unpack2x16snorm(packed);
-    var n = vec3<f32>(p, 1.0 - abs(p.x) - abs(p.y));
-    if n.z < 0.0 {
-        n = vec3<f32>((1.0 - abs(p.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), p >= vec2<f32>(0.0)), n.z);
-    }
-    return normalize(n);
-}
-
 @vertex
 fn vs_view(@builtin(vertex_index) index: u32, @builtin(instance_index) instance: u32) -> VertexOut {
     let v = voxels[instance];
@@ -49,7 +35,7 @@ fn vs_view(@builtin(vertex_index) index: u32, @builtin(instance_index) instance:
     out.position = params.view_proj * params.grid_to_world * vec4<f32>(local, 1.0);
     var base = unpack4x8unorm(v.y).rgb;
     if params.colour_by == 0u {
-        base = decode_normal(v.z) * 0.5 + 0.5;
+        base = decode_octahedral(v.z) * 0.5 + 0.5;
     }
     // The grid maps to the world by a scale and a translation, so face normals keep their
     // direction.

@@ -18,6 +18,7 @@ use super::{
 use crate::bind::ComputePipeline;
 use crate::error::Error;
 use crate::gpu::{Context, read_buffer, uniform_buffer as uniform};
+use crate::shaders::voxelize::attribute_volume::{self as volume_stage, AttributeVolumeParams};
 use crate::shaders::voxelize::attributes::{self as stage, AttributeParams};
 use crate::shaders::voxelize::compact::{self as compact, CompactParams};
 
@@ -36,6 +37,17 @@ pub(super) struct AttributePipelines {
     accumulate: OnceLock<ComputePipeline<stage::accumulate::Entry>>,
     accumulate_heavy: OnceLock<ComputePipeline<stage::accumulate_heavy::Entry>>,
     resolve: OnceLock<ComputePipeline<stage::resolve::Entry>>,
+    to_volumes: OnceLock<ComputePipeline<volume_stage::to_volumes::Entry>>,
+}
+
+/// Voxel attributes as dense 3D textures (`voxelize/attribute_volume`), for stages that sample
+/// them: zero where no voxel is.
+pub struct AttributeVolumes {
+    /// `Rgba8Unorm`: each occupied voxel's averaged colour.
+    pub colour: wgpu::Texture,
+    /// `Rgba8Snorm`: each occupied voxel's averaged normal in xyz, 1 in w (all zero where the
+    /// normals cancel but w).
+    pub normal: wgpu::Texture,
 }
 
 /// The first half of an attribute pass, recorded: surface voxels, their dense indices, and the
@@ -186,6 +198,83 @@ impl Voxelizer {
         let attributes = self.encode_resolve_attributes(ctx, &mut encoder, pending, occupied)?;
         ctx.submit_and_wait("voxelize attributes resolve", encoder)?;
         Ok(attributes)
+    }
+
+    /// Scatter `attributes` into dense colour and normal 3D textures of the grid's size. The
+    /// grid must fit the device's 3D texture limit (2048 per side by default).
+    pub fn encode_attribute_volumes(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        attributes: &Attributes,
+    ) -> Result<AttributeVolumes, Error> {
+        let [w, h, d] = attributes.surface.size;
+        let max = device.limits().max_texture_dimension_3d;
+        if w.max(h).max(d) > max {
+            return Err(Error::Size {
+                stage: volume_stage::STAGE,
+                what: "largest grid side (3D texture side)",
+                got: w.max(h).max(d) as u64,
+                max: max as u64,
+            });
+        }
+        let texture = |label, format| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d {
+                    width: w,
+                    height: h,
+                    depth_or_array_layers: d,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D3,
+                format,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING
+                    | wgpu::TextureUsages::STORAGE_BINDING
+                    | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            })
+        };
+        let volumes = AttributeVolumes {
+            colour: texture("voxel colour volume", wgpu::TextureFormat::Rgba8Unorm),
+            normal: texture("voxel normal volume", wgpu::TextureFormat::Rgba8Snorm),
+        };
+        if attributes.count == 0 {
+            return Ok(volumes);
+        }
+        let params = uniform(
+            device,
+            "voxel attribute volume params",
+            &AttributeVolumeParams {
+                grid: attributes.surface.size.into(),
+                count: attributes.count,
+            },
+        );
+        let (colour, normal) = (
+            volumes.colour.create_view(&Default::default()),
+            volumes.normal.create_view(&Default::default()),
+        );
+        let pipeline = ComputePipeline::cached(&self.attribute_pipelines.to_volumes, device, &[])?;
+        let bound = pipeline.bind(
+            device,
+            &volume_stage::to_volumes::Resources {
+                params: (&params).into(),
+                voxels: (&attributes.voxels).into(),
+                colour: (&colour).into(),
+                normal: (&normal).into(),
+            },
+        )?;
+        let groups = attributes.count.div_ceil(64);
+        let row = device.limits().max_compute_workgroups_per_dimension;
+        run_pass(
+            encoder,
+            volume_stage::STAGE,
+            pipeline,
+            &bound,
+            [groups.min(row), groups.div_ceil(row), 1],
+        );
+        Ok(volumes)
     }
 
     /// Record the first half of [`Voxelizer::attributes`]: the conservative surface and the

@@ -25,7 +25,7 @@ pub mod export;
 mod obj;
 pub mod view;
 
-pub use attributes::{Attributes, PendingAttributes, VoxelAttributes};
+pub use attributes::{AttributeVolumes, Attributes, PendingAttributes, VoxelAttributes};
 
 use glam::{DVec3, Vec4};
 
