@@ -10,7 +10,7 @@
 use std::process::ExitCode;
 
 use fieldkit::gpu::Context;
-use fieldkit::voxelize::{Grid, Mesh, Surface, Voxelizer};
+use fieldkit::voxelize::{Mesh, Surface, Voxelizer};
 use glam::DVec3;
 
 use crate::bench_metaball::{Stamps, median};
