@@ -13,7 +13,8 @@ use std::sync::OnceLock;
 use glam::{DVec3, Vec3};
 
 use super::{
-    Grid, GridMesh, HeavyWork, Mesh, SLACK, Surface, Voxelizer, batches, invalid, run_pass,
+    Grid, GridMesh, HeavyWork, Mesh, SLACK, Surface, Voxelizer, batches, invalid, run_indirect,
+    run_pass, volume_texture,
 };
 use crate::bind::ComputePipeline;
 use crate::error::Error;
@@ -218,24 +219,7 @@ impl Voxelizer {
                 max: max as u64,
             });
         }
-        let texture = |label, format| {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size: wgpu::Extent3d {
-                    width: w,
-                    height: h,
-                    depth_or_array_layers: d,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D3,
-                format,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING
-                    | wgpu::TextureUsages::STORAGE_BINDING
-                    | wgpu::TextureUsages::COPY_SRC,
-                view_formats: &[],
-            })
-        };
+        let texture = |label, format| volume_texture(device, label, [w, h, d], format);
         let volumes = AttributeVolumes {
             colour: texture("voxel colour volume", wgpu::TextureFormat::Rgba8Unorm),
             normal: texture("voxel normal volume", wgpu::TextureFormat::Rgba8Snorm),
@@ -492,13 +476,13 @@ impl Voxelizer {
                     sums: (&sums).into(),
                 },
             )?;
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("voxel attributes of heavy triangles"),
-                timestamp_writes: None,
-            });
-            pass.set_pipeline(&pipeline.pipeline);
-            bound.set_compute(&mut pass);
-            pass.dispatch_workgroups_indirect(&heavy.dispatch, 0);
+            run_indirect(
+                encoder,
+                "voxel attributes of heavy triangles",
+                pipeline,
+                &bound,
+                &heavy.dispatch,
+            );
         }
         let resolve = ComputePipeline::cached(&p.resolve, device, &[])?;
         let bound = resolve.bind(

@@ -402,6 +402,49 @@ fn run_pass<E: crate::bind::Entry>(
     pipeline.dispatch(&mut pass, bound, groups);
 }
 
+/// One compute pass of `pipeline` with its workgroup counts read from `args` (three u32).
+fn run_indirect<E: crate::bind::Entry>(
+    encoder: &mut wgpu::CommandEncoder,
+    label: &str,
+    pipeline: &ComputePipeline<E>,
+    bound: &crate::bind::Bound<E>,
+    args: &wgpu::Buffer,
+) {
+    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+        label: Some(label),
+        timestamp_writes: None,
+    });
+    pass.set_pipeline(&pipeline.pipeline);
+    bound.set_compute(&mut pass);
+    pass.dispatch_workgroups_indirect(args, 0);
+}
+
+/// A 3D texture of `size` that stages sample and write (`TEXTURE_BINDING`, `STORAGE_BINDING`)
+/// and tests read back (`COPY_SRC`).
+fn volume_texture(
+    device: &wgpu::Device,
+    label: &str,
+    [width, height, depth]: [u32; 3],
+    format: wgpu::TextureFormat,
+) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: depth,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D3,
+        format,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::STORAGE_BINDING
+            | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    })
+}
+
 /// Triangles per dispatch: at most 65535 workgroups of 64.
 const PER_DISPATCH: u32 = 65535 * 64;
 
@@ -507,23 +550,12 @@ impl Voxelizer {
         encoder: &mut wgpu::CommandEncoder,
         voxels: &Surface,
     ) -> Result<wgpu::Texture, Error> {
-        let [w, h, d] = voxels.size;
-        let volume = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("voxel occupancy volume"),
-            size: wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: d,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D3,
-            format: wgpu::TextureFormat::R32Float,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING
-                | wgpu::TextureUsages::STORAGE_BINDING
-                | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
+        let volume = volume_texture(
+            device,
+            "voxel occupancy volume",
+            voxels.size,
+            wgpu::TextureFormat::R32Float,
+        );
         let view = volume.create_view(&Default::default());
         let params = uniform(
             device,
@@ -705,13 +737,13 @@ impl Voxelizer {
             &args,
             [1, 1, 1],
         );
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("voxelize heavy triangles"),
-            timestamp_writes: None,
-        });
-        pass.set_pipeline(&pipelines.heavy.pipeline);
-        heavy.set_compute(&mut pass);
-        pass.dispatch_workgroups_indirect(dispatch, 0);
+        run_indirect(
+            encoder,
+            "voxelize heavy triangles",
+            &pipelines.heavy,
+            &heavy,
+            dispatch,
+        );
         Ok(heavy_work)
     }
 
