@@ -627,12 +627,14 @@ pub fn ocean_scene(ctx: &Context, w: u32, h: u32, gbuffer: bool) -> Result<Vec<u
         ..Look::default()
     };
     let patches: Vec<Patch> = (0..100)
-        .map(|k| Patch {
-            corner: DVec2::new(
-                -160.0 + 32.0 * (k % 10) as f64,
-                -160.0 + 32.0 * (k / 10) as f64,
-            ),
-            size: 32.0,
+        .map(|k| {
+            Patch::new(
+                DVec2::new(
+                    -160.0 + 32.0 * (k % 10) as f64,
+                    -160.0 + 32.0 * (k / 10) as f64,
+                ),
+                32.0,
+            )
         })
         .collect();
     let out = if gbuffer {

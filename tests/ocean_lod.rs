@@ -3,7 +3,7 @@
 //! count against the write-up's patches of 256 vertices per row at the same largest error.
 
 use fieldkit::ocean::lod::{LodSettings, height_error, patch_triangles, select, writeup_patches};
-use fieldkit::ocean::render::{Look, OceanCamera, PATCH_QUADS};
+use fieldkit::ocean::render::{Look, OceanCamera};
 use fieldkit::ocean::{Wave, Waves};
 use glam::{DVec2, DVec3, DVec4, Vec2};
 
@@ -41,7 +41,24 @@ fn every_drawn_patch_meets_the_error_or_the_depth_limit() {
     );
     assert_eq!(
         sel.triangles,
-        sel.patches.len() as u64 * patch_triangles(PATCH_QUADS)
+        sel.patches
+            .iter()
+            .map(|p| patch_triangles(p.quads))
+            .sum::<u64>()
+    );
+    // Each patch drawn with the fewest of 32, 24 and 16 quads a side that keep the error; some
+    // of each are needed in this view.
+    let q = settings.patch_quads;
+    for quads in [q, q * 3 / 4, q / 2] {
+        assert!(
+            sel.patches.iter().any(|p| p.quads == quads),
+            "no patch of {quads} quads"
+        );
+    }
+    assert!(
+        sel.patches
+            .iter()
+            .all(|p| [q, q * 3 / 4, q / 2].contains(&p.quads))
     );
     // Finer patches near the eye, coarser far away.
     let sizes: Vec<f64> = sel.patches.iter().map(|p| p.size).collect();

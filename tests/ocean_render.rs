@@ -53,13 +53,13 @@ fn patches(cam: &OceanCamera) -> Vec<Patch> {
     let mut out = Vec::new();
     for j in 0..6 {
         for i in 0..6 {
-            out.push(Patch {
-                corner: DVec2::new(
+            out.push(Patch::new(
+                DVec2::new(
                     eye.x - 48.0 + 16.0 * i as f64,
                     eye.z - 80.0 + 16.0 * j as f64,
                 ),
-                size: 16.0,
-            });
+                16.0,
+            ));
         }
     }
     out
@@ -401,101 +401,108 @@ fn skirts_close_the_cracks_between_levels() {
         DVec3::new(9.0, 0.0, 4.0),
         glam::camera::rh::proj::directx::perspective(1.0, w as f32 / h as f32, 0.05, 100.0),
     );
-    // A fine patch (0.125 m spacing) beside a coarse one (0.25 m) sharing the edge x = 8.
-    let patches = [
-        Patch {
-            corner: DVec2::new(0.0, 0.0),
-            size: 8.0,
-        },
-        Patch {
-            corner: DVec2::new(8.0, -8.0),
-            size: 16.0,
-        },
-    ];
     let renderer =
         OceanRenderer::new(&ctx.device, &ctx.queue, Output::Forward(RGBA32), false).unwrap();
     let inv = (cam.proj.as_dmat4() * cam.view).inverse();
-    let mut holes = Vec::new();
-    for skirt in [0.0f32, 0.5] {
-        let colour = make(RGBA32);
-        let depth = make(wgpu::TextureFormat::Depth32Float);
-        let look = Look {
-            skirt,
-            height_layers: vec![],
-            normal_layers: vec![],
-            ..Look::default()
-        };
-        let (cv, dv) = (
-            colour.create_view(&Default::default()),
-            depth.create_view(&Default::default()),
-        );
-        let mut enc = ctx.encoder("cracks");
-        clear(&mut enc, &[&cv], &dv, 1.0);
-        renderer
-            .encode(
-                &ctx.device,
-                &mut enc,
-                &waves,
-                0.3,
-                &cam,
-                &look,
-                &patches,
-                &[&cv],
-                &depth,
-                false,
-            )
-            .unwrap();
-        ctx.submit_and_wait("cracks", enc).unwrap();
-        let px: Vec<Vec4> = read_texture(&ctx, &colour).unwrap();
-        let mut count = 0;
-        for y in 0..h {
-            for x in 0..w {
-                let ndc = DVec2::new(
-                    (x as f64 + 0.5) / w as f64 * 2.0 - 1.0,
-                    1.0 - (y as f64 + 0.5) / h as f64 * 2.0,
-                );
-                let un = |z: f64| {
-                    let q = inv * DVec4::new(ndc.x, ndc.y, z, 1.0);
-                    q.truncate() / q.w
-                };
-                let (a, b) = (un(0.0), un(1.0));
-                let t = a.y / (a.y - b.y);
-                if !(t > 0.0 && t < 1.0) {
-                    continue;
-                }
-                let p = a + (b - a) * t;
-                // Well inside the two patches: 0.5 m from their outer edges, and 4 m from the far
-                // one, where grazing rays pass over troughs and out of the patch (the coarse
-                // patch's edge x = 8 is an outer edge where z < 0).
-                let inside = (p.x > 0.5 && p.x < 8.0 && p.z > 0.5 && p.z < 7.5)
-                    || (p.x >= 8.0
-                        && p.x < 20.0
-                        && p.z > -7.5
-                        && p.z < 7.5
-                        && (p.x > 8.5 || p.z > 0.5));
-                if inside && px[(y * w + x) as usize].x as f64 == CLEAR {
-                    count += 1;
-                    // Cracks are at the shared edge (rays through them meet the plane a little
-                    // beyond it).
-                    assert!(
-                        (p.x - 8.0).abs() < 1.5,
-                        "a hole away from the shared edge, at {p}"
+    // A fine patch (0.125 m spacing) beside a coarse one (0.25 m) sharing the edge x = 8, as a
+    // quadtree level change makes them; then the same squares with quad counts that turn it
+    // round (0.5 m beside 0.25 m), as `lod::select`'s choice of quads per patch can.
+    let layouts = [
+        [
+            Patch::new(DVec2::new(0.0, 0.0), 8.0),
+            Patch::new(DVec2::new(8.0, -8.0), 16.0),
+        ],
+        [
+            Patch {
+                quads: 16,
+                ..Patch::new(DVec2::new(0.0, 0.0), 8.0)
+            },
+            Patch::new(DVec2::new(8.0, -8.0), 16.0),
+        ],
+    ];
+    for patches in layouts {
+        let mut holes = Vec::new();
+        for skirt in [0.0f32, 0.5] {
+            let colour = make(RGBA32);
+            let depth = make(wgpu::TextureFormat::Depth32Float);
+            let look = Look {
+                skirt,
+                height_layers: vec![],
+                normal_layers: vec![],
+                ..Look::default()
+            };
+            let (cv, dv) = (
+                colour.create_view(&Default::default()),
+                depth.create_view(&Default::default()),
+            );
+            let mut enc = ctx.encoder("cracks");
+            clear(&mut enc, &[&cv], &dv, 1.0);
+            renderer
+                .encode(
+                    &ctx.device,
+                    &mut enc,
+                    &waves,
+                    0.3,
+                    &cam,
+                    &look,
+                    &patches,
+                    &[&cv],
+                    &depth,
+                    false,
+                )
+                .unwrap();
+            ctx.submit_and_wait("cracks", enc).unwrap();
+            let px: Vec<Vec4> = read_texture(&ctx, &colour).unwrap();
+            let mut count = 0;
+            for y in 0..h {
+                for x in 0..w {
+                    let ndc = DVec2::new(
+                        (x as f64 + 0.5) / w as f64 * 2.0 - 1.0,
+                        1.0 - (y as f64 + 0.5) / h as f64 * 2.0,
                     );
+                    let un = |z: f64| {
+                        let q = inv * DVec4::new(ndc.x, ndc.y, z, 1.0);
+                        q.truncate() / q.w
+                    };
+                    let (a, b) = (un(0.0), un(1.0));
+                    let t = a.y / (a.y - b.y);
+                    if !(t > 0.0 && t < 1.0) {
+                        continue;
+                    }
+                    let p = a + (b - a) * t;
+                    // Well inside the two patches: 0.5 m from their outer edges, and 4 m from the far
+                    // one, where grazing rays pass over troughs and out of the patch (the coarse
+                    // patch's edge x = 8 is an outer edge where z < 0).
+                    let inside = (p.x > 0.5 && p.x < 8.0 && p.z > 0.5 && p.z < 7.5)
+                        || (p.x >= 8.0
+                            && p.x < 20.0
+                            && p.z > -7.5
+                            && p.z < 7.5
+                            && (p.x > 8.5 || p.z > 0.5));
+                    if inside && px[(y * w + x) as usize].x as f64 == CLEAR {
+                        count += 1;
+                        // Cracks are at the shared edge (rays through them meet the plane a little
+                        // beyond it).
+                        assert!(
+                            (p.x - 8.0).abs() < 1.5,
+                            "a hole away from the shared edge, at {p}"
+                        );
+                    }
                 }
             }
+            holes.push(count);
         }
-        holes.push(count);
+        println!(
+            "clear pixels inside the patches: {} without skirts, {} with",
+            holes[0], holes[1]
+        );
+        assert!(
+            holes[0] >= 5,
+            "expected cracks without skirts, saw {}",
+            holes[0]
+        );
+        assert_eq!(holes[1], 0, "skirts should close every crack");
     }
-    println!(
-        "clear pixels inside the patches: {} without skirts, {} with",
-        holes[0], holes[1]
-    );
-    assert!(
-        holes[0] >= 5,
-        "expected cracks without skirts, saw {}",
-        holes[0]
-    );
-    assert_eq!(holes[1], 0, "skirts should close every crack");
 }
 
 /// Name, time, look, patches, targets, depth target, fade.
@@ -551,10 +558,7 @@ fn bad_input_gets_typed_errors() {
         sun_direction: Vec3::NAN,
         ..Look::default()
     };
-    let bad_patch = [Patch {
-        corner: DVec2::ZERO,
-        size: 0.0,
-    }];
+    let bad_patch = [Patch::new(DVec2::ZERO, 0.0)];
     let ok_patches = patches(&cam);
     let cases: Vec<Case> = vec![
         (

@@ -118,15 +118,12 @@ struct GBuffer {
 // A copy of the scene's Depth32Float depth, read as unfilterable float.
 @group(0) @binding(7) var scene_depth: texture_2d<f32>;
 
-// Quads per patch side; the host's index buffer is made for the same number.
-override PATCH_QUADS: u32 = 64u;
-
-// Undisplaced (x, z) of vertex `index` of the patch `square` (corner x, z and side) and
-// whether it is a skirt vertex: (n + 1)² grid
-// vertices x fastest, then a ring of 4 (n + 1) skirt vertices under the edges z = 0, x = n,
-// z = n, x = 0.
+// Undisplaced (x, z) of vertex `index` of the patch `square` (corner x, z, side and n, its
+// quads per side; the host draws it with an index buffer made for n) and whether it is a skirt
+// vertex: (n + 1)² grid vertices x fastest, then a ring of 4 (n + 1) skirt vertices under the
+// edges z = 0, x = n, z = n, x = 0.
 fn patch_vertex(index: u32, square: vec4<f32>) -> vec3<f32> {
-    let n = PATCH_QUADS;
+    let n = u32(square.w);
     let row = n + 1u;
     var ij: vec2<u32>;
     var skirt = 0.0;

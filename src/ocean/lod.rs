@@ -12,7 +12,7 @@
 use glam::{DMat4, DVec2, DVec3, DVec4};
 
 use super::Waves;
-use super::render::{DETAIL_OCTAVES, Look, OceanCamera, PATCH_QUADS, Patch};
+use super::render::{DETAIL_OCTAVES, Look, MAX_PATCH_QUADS, OceanCamera, Patch};
 use crate::error::Error;
 
 /// The ocean square and the error to refine to.
@@ -26,6 +26,10 @@ pub struct LodSettings {
     pub max_error_px: f64,
     /// Deepest level (the root is 0): patches are at least `size / 2^max_depth` across.
     pub max_depth: u32,
+    /// Most quads per patch side: a patch is split until its error at this many quads is
+    /// within `max_error_px`, then drawn with the fewest of this, ¾ and ½ of it that keep it
+    /// there.
+    pub patch_quads: u32,
 }
 
 impl Default for LodSettings {
@@ -35,6 +39,7 @@ impl Default for LodSettings {
             size: 2560.0,
             max_error_px: 1.0,
             max_depth: 12,
+            patch_quads: 32,
         }
     }
 }
@@ -144,10 +149,16 @@ pub fn select(
             what: format!("the ocean square needs a finite centre and size > 0, got {s:?}"),
         });
     }
-    if !(s.max_error_px.is_finite() && s.max_error_px > 0.0) || s.max_depth > 24 {
+    if !(s.max_error_px.is_finite() && s.max_error_px > 0.0)
+        || s.max_depth > 24
+        || !(2..=MAX_PATCH_QUADS).contains(&s.patch_quads)
+    {
         return Err(Error::Invalid {
             stage: "ocean::lod",
-            what: format!("max_error_px must be > 0 and max_depth ≤ 24, got {s:?}"),
+            what: format!(
+                "max_error_px must be > 0, max_depth ≤ 24 and patch_quads 2 to \
+                 {MAX_PATCH_QUADS}, got {s:?}"
+            ),
         });
     }
     if viewport_height == 0 || !(camera.view.is_finite() && camera.proj.is_finite()) {
@@ -179,7 +190,9 @@ pub fn select(
         }
         let nearest = eye.clamp(lo, hi);
         let dist = (nearest - eye).length().max(1e-6);
-        let error_px = height_error(waves, look, size / PATCH_QUADS as f64) * px_per_tan / dist;
+        let error_at =
+            |quads: u32| height_error(waves, look, size / quads as f64) * px_per_tan / dist;
+        let error_px = error_at(s.patch_quads);
         if error_px > s.max_error_px && depth < s.max_depth {
             let half = size / 2.0;
             for (i, j) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
@@ -191,9 +204,22 @@ pub fn select(
             }
             continue;
         }
+        // The fewest quads that keep the error: a patch's error falls off with its distance,
+        // so leaves far from where their parent was split need fewer.
+        let (mut quads, mut error_px) = (s.patch_quads, error_px);
+        for fewer in [s.patch_quads * 3 / 4, s.patch_quads / 2] {
+            let e = error_at(fewer);
+            if e <= s.max_error_px {
+                (quads, error_px) = (fewer, e);
+            }
+        }
         out.max_error_px = out.max_error_px.max(error_px);
-        out.triangles += patch_triangles(PATCH_QUADS);
-        out.patches.push(Patch { corner, size });
+        out.triangles += patch_triangles(quads);
+        out.patches.push(Patch {
+            corner,
+            size,
+            quads,
+        });
     }
     // Nearest first, so the depth test rejects what nearer water hides before it is shaded.
     let dist = |p: &Patch| {
@@ -251,7 +277,11 @@ pub fn writeup_patches(
             }
             continue;
         }
-        out.patches.push(Patch { corner, size });
+        out.patches.push(Patch {
+            corner,
+            size,
+            quads,
+        });
         if !outside(&frustum, lo, hi) {
             out.visible += 1;
             let e = height_error(waves, look, size / quads as f64) * px_per_tan / dist;

@@ -18,7 +18,7 @@ use crate::shaders::ocean::surface::{self as stage, DetailLayer, FrameParams};
 
 const STAGE: &str = stage::STAGE;
 
-/// Quads per patch side (the shader's `PATCH_QUADS`).
+/// Quads per side of a patch made with [`Patch::new`].
 pub const PATCH_QUADS: u32 = 64;
 /// Most height layers and most normal layers.
 pub const MAX_LAYERS: usize = 4;
@@ -35,12 +35,29 @@ pub enum Output {
     GBuffer([wgpu::TextureFormat; 4]),
 }
 
-/// A square of ocean to draw: its world corner (x, z, smallest) and side, in metres.
+/// A square of ocean to draw: its world corner (x, z, smallest) and side, in metres, and its
+/// grid's quads per side (1 to [`MAX_PATCH_QUADS`]; `ocean::lod` picks the fewest that keep
+/// its error).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Patch {
     pub corner: DVec2,
     pub size: f64,
+    pub quads: u32,
 }
+
+impl Patch {
+    /// A patch of [`PATCH_QUADS`] quads per side.
+    pub fn new(corner: DVec2, size: f64) -> Self {
+        Self {
+            corner,
+            size,
+            quads: PATCH_QUADS,
+        }
+    }
+}
+
+/// Most quads per patch side.
+pub const MAX_PATCH_QUADS: u32 = 256;
 
 /// A scrolling layer of the detail texture.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -149,8 +166,8 @@ pub struct OceanRenderer {
     reversed_z: bool,
     forward: Option<RenderPipeline<stage::fs_forward::Entry>>,
     gbuffer: Option<RenderPipeline<stage::fs_gbuffer::Entry>>,
-    indices: wgpu::Buffer,
-    index_count: u32,
+    /// Index buffers per quad count, made on first use.
+    indices: Mutex<std::collections::HashMap<u32, (wgpu::Buffer, u32)>>,
     detail: wgpu::Texture,
     sampler: wgpu::Sampler,
     /// The copy of the scene's depth the fade reads, kept while the size holds.
@@ -373,12 +390,6 @@ impl OceanRenderer {
             }
         }
         use wgpu::util::DeviceExt;
-        let idx = patch_indices(PATCH_QUADS);
-        let indices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("ocean patch indices"),
-            contents: bytemuck::cast_slice(&idx),
-            usage: wgpu::BufferUsages::INDEX,
-        });
         let texels: Vec<u8> = detail_texels(DETAIL_SIZE, 7)
             .iter()
             .flat_map(|v| v.to_array())
@@ -408,8 +419,7 @@ impl OceanRenderer {
             reversed_z,
             forward,
             gbuffer,
-            indices,
-            index_count: idx.len() as u32,
+            indices: Mutex::new(Default::default()),
             detail,
             sampler: device.create_sampler(&wgpu::SamplerDescriptor {
                 label: Some("ocean detail"),
@@ -458,9 +468,13 @@ impl OceanRenderer {
             return Err(invalid("the camera's matrices must be finite".into()));
         }
         for (i, p) in patches.iter().enumerate() {
-            if !(p.corner.is_finite() && p.size.is_finite() && p.size > 0.0) {
+            if !(p.corner.is_finite()
+                && p.size.is_finite()
+                && p.size > 0.0
+                && (1..=MAX_PATCH_QUADS).contains(&p.quads))
+            {
                 return Err(invalid(format!(
-                    "patch {i}: corner must be finite and size > 0, got {p:?}"
+                    "patch {i}: corner must be finite, size > 0 and quads 1 to {MAX_PATCH_QUADS}, got {p:?}"
                 )));
             }
         }
@@ -559,13 +573,45 @@ impl OceanRenderer {
         if patches.is_empty() {
             return Ok(());
         }
-        let instances: Vec<Vec4> = patches
+        // Grouped by quad count, one draw per group; within a group nearest first still.
+        let mut order: Vec<usize> = (0..patches.len()).collect();
+        order.sort_by_key(|&i| patches[i].quads);
+        let instances: Vec<Vec4> = order
             .iter()
-            .map(|p| {
+            .map(|&i| {
+                let p = &patches[i];
                 let c = p.corner - origin;
-                Vec4::new(c.x as f32, c.y as f32, p.size as f32, 0.0)
+                Vec4::new(c.x as f32, c.y as f32, p.size as f32, p.quads as f32)
             })
             .collect();
+        let mut groups: Vec<(u32, std::ops::Range<u32>)> = Vec::new();
+        for (k, &i) in order.iter().enumerate() {
+            let q = patches[i].quads;
+            match groups.last_mut() {
+                Some((gq, range)) if *gq == q => range.end = k as u32 + 1,
+                _ => groups.push((q, k as u32..k as u32 + 1)),
+            }
+        }
+        let index_buffers: Vec<(wgpu::Buffer, u32, std::ops::Range<u32>)> = {
+            let mut cache = self.indices.lock().unwrap_or_else(|e| e.into_inner());
+            groups
+                .into_iter()
+                .map(|(q, range)| {
+                    let (buffer, count) = cache.entry(q).or_insert_with(|| {
+                        let idx = patch_indices(q);
+                        (
+                            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                                label: Some("ocean patch indices"),
+                                contents: bytemuck::cast_slice(&idx),
+                                usage: wgpu::BufferUsages::INDEX,
+                            }),
+                            idx.len() as u32,
+                        )
+                    });
+                    (buffer.clone(), *count, range)
+                })
+                .collect()
+        };
         use wgpu::util::DeviceExt;
         let instance_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("ocean patches"),
@@ -619,8 +665,10 @@ impl OceanRenderer {
                 pass.set_pipeline(&$pipeline.pipeline);
                 bound.set_render(&mut pass);
                 pass.set_vertex_buffer(0, instance_buffer.slice(..));
-                pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
-                pass.draw_indexed(0..self.index_count, 0, 0..patches.len() as u32);
+                for (indices, count, range) in &index_buffers {
+                    pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+                    pass.draw_indexed(0..*count, 0, range.clone());
+                }
             }};
         }
         match (&self.forward, &self.gbuffer) {

@@ -204,9 +204,8 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
         .iter()
         .flat_map(|p| {
             let q = p.size / 4.0;
-            (0..16).map(move |k| Patch {
-                corner: p.corner + DVec2::new((k % 4) as f64, (k / 4) as f64) * q,
-                size: q,
+            (0..16).map(move |k| {
+                Patch::new(p.corner + DVec2::new((k % 4) as f64, (k / 4) as f64) * q, q)
             })
         })
         .collect();
