@@ -127,33 +127,11 @@ fn colours_normals_and_counts_match_the_reference() {
 fn heavy_triangles_count_once() {
     let ctx = context();
     let (lo, hi) = (DVec3::new(1.3, 2.2, 1.7), DVec3::new(21.6, 19.4, 22.1));
-    let corner = |i: u32| {
-        DVec3::new(
-            if i & 1 == 0 { lo.x } else { hi.x },
-            if i & 2 == 0 { lo.y } else { hi.y },
-            if i & 4 == 0 { lo.z } else { hi.z },
-        )
-    };
     let mesh = Mesh {
-        positions: (0..8).map(corner).collect(),
-        triangles: vec![
-            [0, 2, 1],
-            [1, 2, 3],
-            [4, 5, 6],
-            [5, 7, 6],
-            [0, 1, 4],
-            [1, 5, 4],
-            [2, 6, 3],
-            [3, 6, 7],
-            [0, 4, 2],
-            [2, 4, 6],
-            [1, 3, 5],
-            [3, 7, 5],
-        ],
         colors: (0..8)
             .map(|i| [30 * i as u8, 255 - 20 * i as u8, 100, 255])
             .collect(),
-        ..Mesh::default()
+        ..Mesh::cuboid(lo, hi)
     };
     let grid = Grid {
         origin: DVec3::ZERO,

@@ -108,33 +108,7 @@ fn sphere_and_torus_against_analytic_insides() {
 fn thin_parts_survive_through_the_surface() {
     let ctx = context();
     let (lo, hi) = (DVec3::new(2.2, 2.3, 5.05), DVec3::new(9.7, 9.6, 5.25));
-    let box_mesh = Mesh {
-        positions: (0..8)
-            .map(|i| {
-                DVec3::new(
-                    if i & 1 == 0 { lo.x } else { hi.x },
-                    if i & 2 == 0 { lo.y } else { hi.y },
-                    if i & 4 == 0 { lo.z } else { hi.z },
-                )
-            })
-            .collect(),
-        // Outward-facing faces of the box.
-        triangles: vec![
-            [0, 2, 1],
-            [1, 2, 3],
-            [4, 5, 6],
-            [5, 7, 6],
-            [0, 1, 4],
-            [1, 5, 4],
-            [2, 6, 3],
-            [3, 6, 7],
-            [0, 4, 2],
-            [2, 4, 6],
-            [1, 3, 5],
-            [3, 7, 5],
-        ],
-        ..Mesh::default()
-    };
+    let box_mesh = Mesh::cuboid(lo, hi);
     assert!(box_mesh.open_edge().is_none() && box_mesh.volume() > 0.0);
     let grid = unit_grid([12, 12, 12]);
     let fill = solid(&ctx, &box_mesh, &grid, false);

@@ -283,7 +283,7 @@ impl Voxelizer {
             &local,
             grid,
         )?;
-        let voxels: u64 = grid.size.iter().map(|&s| s as u64).product();
+        let voxels = grid.voxels();
         let words = voxels.div_ceil(32);
         let blocks = words.div_ceil(BLOCK_WORDS);
         if blocks > device.limits().max_compute_workgroups_per_dimension as u64 {

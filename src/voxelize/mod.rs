@@ -70,6 +70,13 @@ pub struct Grid {
     pub size: [u32; 3],
 }
 
+impl Grid {
+    /// Voxels in the grid.
+    pub fn voxels(&self) -> u64 {
+        self.size.iter().map(|&n| n as u64).product()
+    }
+}
+
 /// A mesh moved into a grid's local coordinates and rounded to f32, as the GPU sees it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GridMesh {
@@ -155,6 +162,38 @@ impl Mesh {
         Self {
             positions,
             triangles,
+            ..Self::default()
+        }
+    }
+
+    /// An axis-aligned box from `lo` to `hi` (for tests and examples): 8 vertices, vertex i at
+    /// (x of bit 0, y of bit 1, z of bit 2), 12 triangles facing out.
+    pub fn cuboid(lo: DVec3, hi: DVec3) -> Self {
+        let pick = |bit: bool, a: f64, b: f64| if bit { b } else { a };
+        Self {
+            positions: (0..8)
+                .map(|i| {
+                    DVec3::new(
+                        pick(i & 1 != 0, lo.x, hi.x),
+                        pick(i & 2 != 0, lo.y, hi.y),
+                        pick(i & 4 != 0, lo.z, hi.z),
+                    )
+                })
+                .collect(),
+            triangles: vec![
+                [0, 2, 1],
+                [1, 2, 3],
+                [4, 5, 6],
+                [5, 7, 6],
+                [0, 1, 4],
+                [1, 5, 4],
+                [2, 6, 3],
+                [3, 6, 7],
+                [0, 4, 2],
+                [2, 4, 6],
+                [1, 3, 5],
+                [3, 7, 5],
+            ],
             ..Self::default()
         }
     }
@@ -289,7 +328,7 @@ fn check_grid(grid: &Grid) -> Result<(), Error> {
         }
     }
     // Voxel indices are u32 in the shaders.
-    let voxels: u64 = grid.size.iter().map(|&n| n as u64).product();
+    let voxels = grid.voxels();
     if voxels > MAX_VOXELS {
         return Err(Error::Size {
             stage: STAGE,
@@ -591,7 +630,7 @@ impl Voxelizer {
         grid: &Grid,
     ) -> Result<(wgpu::Buffer, wgpu::Buffer), Error> {
         let device = &ctx.device;
-        let voxels: u64 = grid.size.iter().map(|&s| s as u64).product();
+        let voxels = grid.voxels();
         let words = voxels.div_ceil(32).max(1);
         let limit = device.limits().max_storage_buffer_binding_size;
         if words * 4 > limit {
