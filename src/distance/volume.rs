@@ -343,8 +343,7 @@ pub struct Distance3d {
     resolve_signed_2d: ComputePipeline<field_resolve::resolve_signed_2d::Entry>,
 }
 
-/// Optional per-pass timing, threaded through the encode functions.
-pub type Prof<'a, 'b> = &'a mut Option<&'b mut Profiler>;
+pub use crate::gpu::Prof;
 
 fn pass<E: Entry>(
     encoder: &mut wgpu::CommandEncoder,

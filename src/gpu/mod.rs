@@ -4,7 +4,7 @@ mod readback;
 mod timing;
 
 pub use readback::{read_buffer, read_texture};
-pub use timing::{Profiler, Timer};
+pub use timing::{Prof, Profiler, Timer};
 
 use std::sync::{Arc, Mutex};
 

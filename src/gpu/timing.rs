@@ -74,6 +74,9 @@ impl Timer {
     }
 }
 
+/// Optional per-pass timing, threaded through the encode functions.
+pub type Prof<'a, 'b> = &'a mut Option<&'b mut Profiler>;
+
 /// Named GPU time per pass: hand [`Profiler::next`] to each compute pass as it is recorded; passes
 /// past the capacity go untimed. Used by `cargo xtask bench`.
 pub struct Profiler {

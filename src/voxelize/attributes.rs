@@ -257,6 +257,7 @@ impl Voxelizer {
             pipeline,
             &bound,
             [groups.min(row), groups.div_ceil(row), 1],
+            &mut None,
         );
         Ok(volumes)
     }
@@ -282,6 +283,7 @@ impl Voxelizer {
             &triangles,
             &local,
             grid,
+            &mut None,
         )?;
         let voxels = grid.voxels();
         let words = voxels.div_ceil(32);
@@ -331,6 +333,7 @@ impl Voxelizer {
             scan_words,
             &bound,
             [blocks as u32, 1, 1],
+            &mut None,
         );
         let scan_blocks = ComputePipeline::cached(&p.scan_blocks, device, &[])?;
         let bound = scan_blocks.bind(
@@ -341,7 +344,14 @@ impl Voxelizer {
                 total: (&total).into(),
             },
         )?;
-        run_pass(encoder, compact::STAGE, scan_blocks, &bound, [1, 1, 1]);
+        run_pass(
+            encoder,
+            compact::STAGE,
+            scan_blocks,
+            &bound,
+            [1, 1, 1],
+            &mut None,
+        );
         use wgpu::util::DeviceExt;
         let mut corner_data = corner_data;
         if corner_data.is_empty() {
@@ -457,6 +467,7 @@ impl Voxelizer {
                 accumulate,
                 &bound,
                 [n.div_ceil(64), 1, 1],
+                &mut None,
             );
         }
         let params = params_for(0, count);
@@ -482,6 +493,7 @@ impl Voxelizer {
                 pipeline,
                 &bound,
                 &heavy.dispatch,
+                &mut None,
             );
         }
         let resolve = ComputePipeline::cached(&p.resolve, device, &[])?;
@@ -504,6 +516,7 @@ impl Voxelizer {
             resolve,
             &bound,
             [groups.min(row), groups.div_ceil(row), 1],
+            &mut None,
         );
         Ok(Attributes {
             surface,

@@ -31,7 +31,7 @@ use glam::{DVec3, Vec4};
 
 use crate::bind::ComputePipeline;
 use crate::error::Error;
-use crate::gpu::{Context, read_buffer, uniform_buffer as uniform};
+use crate::gpu::{Context, Prof, Profiler, read_buffer, uniform_buffer as uniform};
 use crate::shaders::voxelize::occupancy_volume::{self as volume_stage, VolumeParams};
 use crate::shaders::voxelize::raster::{self as raster_stage, RasterParams};
 use crate::shaders::voxelize::solid::{self as solid_stage, SolidParams};
@@ -433,10 +433,12 @@ fn run_pass<E: crate::bind::Entry>(
     pipeline: &ComputePipeline<E>,
     bound: &crate::bind::Bound<E>,
     groups: [u32; 3],
+    prof: Prof,
 ) {
+    let timestamp_writes = prof.as_mut().and_then(|p| p.next(label));
     let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
         label: Some(label),
-        timestamp_writes: None,
+        timestamp_writes,
     });
     pipeline.dispatch(&mut pass, bound, groups);
 }
@@ -448,10 +450,12 @@ fn run_indirect<E: crate::bind::Entry>(
     pipeline: &ComputePipeline<E>,
     bound: &crate::bind::Bound<E>,
     args: &wgpu::Buffer,
+    prof: Prof,
 ) {
+    let timestamp_writes = prof.as_mut().and_then(|p| p.next(label));
     let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
         label: Some(label),
-        timestamp_writes: None,
+        timestamp_writes,
     });
     pass.set_pipeline(&pipeline.pipeline);
     bound.set_compute(&mut pass);
@@ -527,6 +531,20 @@ impl Voxelizer {
         grid: &Grid,
         with_surface: bool,
     ) -> Result<Surface, Error> {
+        self.encode_solid_profiled(ctx, encoder, mesh, grid, with_surface, None)
+    }
+
+    /// [`Self::encode_solid`] with each pass timed by `profiler`.
+    pub fn encode_solid_profiled(
+        &self,
+        ctx: &Context,
+        encoder: &mut wgpu::CommandEncoder,
+        mesh: &Mesh,
+        grid: &Grid,
+        with_surface: bool,
+        mut profiler: Option<&mut Profiler>,
+    ) -> Result<Surface, Error> {
+        let prof = &mut profiler;
         if let Some([a, b]) = mesh.open_edge() {
             return Err(invalid(format!(
                 "solid voxelization needs a closed, consistently oriented mesh: the edge between \
@@ -561,6 +579,7 @@ impl Voxelizer {
                 &self.solid,
                 &bound,
                 [n.div_ceil(64), 1, 1],
+                prof,
             );
         }
         if with_surface {
@@ -572,6 +591,7 @@ impl Voxelizer {
                 &triangles,
                 &local,
                 grid,
+                prof,
             )?;
         }
         Ok(Surface {
@@ -617,6 +637,7 @@ impl Voxelizer {
             &self.to_volume,
             &bound,
             ComputePipeline::<volume_stage::to_volume::Entry>::groups_for(voxels.size),
+            &mut None,
         );
         Ok(volume)
     }
@@ -678,6 +699,7 @@ impl Voxelizer {
         triangles: &wgpu::Buffer,
         local: &GridMesh,
         grid: &Grid,
+        prof: Prof,
     ) -> Result<HeavyWork, Error> {
         let count = (local.vertices.len() / 3) as u32;
         let capacity = heavy_chunk_bound(local, grid.size);
@@ -745,6 +767,7 @@ impl Voxelizer {
                 &pipelines.light,
                 &bound,
                 [n.div_ceil(64), 1, 1],
+                prof,
             );
         }
         if capacity == 0 {
@@ -775,6 +798,7 @@ impl Voxelizer {
             &pipelines.args,
             &args,
             [1, 1, 1],
+            prof,
         );
         run_indirect(
             encoder,
@@ -782,6 +806,7 @@ impl Voxelizer {
             &pipelines.heavy,
             &heavy,
             dispatch,
+            prof,
         );
         Ok(heavy_work)
     }
@@ -909,6 +934,19 @@ impl Voxelizer {
         grid: &Grid,
         separation: Separation,
     ) -> Result<Surface, Error> {
+        self.encode_surface_profiled(ctx, encoder, mesh, grid, separation, None)
+    }
+
+    /// [`Self::encode_surface_with`] with each pass timed by `profiler`.
+    pub fn encode_surface_profiled(
+        &self,
+        ctx: &Context,
+        encoder: &mut wgpu::CommandEncoder,
+        mesh: &Mesh,
+        grid: &Grid,
+        separation: Separation,
+        mut profiler: Option<&mut Profiler>,
+    ) -> Result<Surface, Error> {
         let local = mesh.to_grid(grid)?;
         let (occupancy, triangles) = self.bitset(ctx, encoder, &local, grid)?;
         let pipelines = match separation {
@@ -923,6 +961,7 @@ impl Voxelizer {
             &triangles,
             &local,
             grid,
+            &mut profiler,
         )?;
         Ok(Surface {
             size: grid.size,

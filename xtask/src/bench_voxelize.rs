@@ -41,6 +41,10 @@ struct Row {
     voxels: usize,
 }
 
+fn gcd(a: usize, b: usize) -> usize {
+    if b == 0 { a } else { gcd(b, a % b) }
+}
+
 /// Encodes per submission for the back-to-back figure.
 const BATCH: usize = 10;
 
@@ -58,6 +62,18 @@ fn bench(args: &crate::bench::Args) -> Result<(), String> {
             // 59 k triangles, the size of the 70 k original.
             let fine = bunny.subdivided().subdivided();
             meshes.push(("bunny".to_string(), bunny));
+            if std::env::var_os("FIELDKIT_BENCH_SHUFFLED").is_some() {
+                // The same triangles in a scattered order: neighbours in the list are then not
+                // neighbours on the surface, so their atomics hit different words.
+                let mut shuffled = fine.clone();
+                let n = shuffled.triangles.len();
+                let step = (0..)
+                    .map(|k| n / 2 + 1 + k)
+                    .find(|&s| gcd(s, n) == 1)
+                    .unwrap_or(1);
+                shuffled.triangles = (0..n).map(|i| fine.triangles[i * step % n]).collect();
+                meshes.push(("bunny, split twice, shuffled".to_string(), shuffled));
+            }
             meshes.push(("bunny, split twice".to_string(), fine));
         }
         None => println!(
@@ -135,6 +151,33 @@ fn bench(args: &crate::bench::Args) -> Result<(), String> {
                     batched.push(total / BATCH as f64);
                 }
                 let ms_batched = median(batched);
+                if mode == "surface" || mode == "solid" {
+                    // Each pass on its own (the clears between them are not passes).
+                    let (total, _, _, passes) =
+                        crate::bench::time_runs(&ctx, args.warmup, args.reps, |enc, prof| {
+                            let r = if mode == "surface" {
+                                v.encode_surface_profiled(
+                                    &ctx,
+                                    enc,
+                                    mesh,
+                                    &grid,
+                                    fieldkit::voxelize::Separation::Conservative,
+                                    Some(prof),
+                                )
+                            } else {
+                                v.encode_solid_profiled(&ctx, enc, mesh, &grid, true, Some(prof))
+                            };
+                            r.expect("encode");
+                        })?;
+                    let list: Vec<String> = passes
+                        .iter()
+                        .map(|(n, ms)| format!("{n} {ms:.4}"))
+                        .collect();
+                    println!(
+                        "  passes ({total:.4} ms first to last): {}",
+                        list.join(", ")
+                    );
+                }
                 let mut enc = ctx.encoder("count");
                 let s = encode(&mut enc)?;
                 ctx.submit_and_wait("count", enc)
