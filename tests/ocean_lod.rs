@@ -1,9 +1,10 @@
 //! The ocean's LOD (`fieldkit::ocean::lod`, CPU): the error bound holds for every drawn patch,
-//! the view is covered without overlaps, culling keeps what the camera sees, and the triangle
-//! count against the write-up's patches of 256 vertices per row at the same largest error.
+//! the view is covered without overlaps, culling keeps what the camera sees, skirts are only
+//! where the vertex spacing changes, and the triangle count against the write-up's patches of
+//! 256 vertices per row at the same largest error.
 
 use fieldkit::ocean::lod::{LodSettings, height_error, patch_triangles, select, writeup_patches};
-use fieldkit::ocean::render::{Look, OceanCamera};
+use fieldkit::ocean::render::{Look, OceanCamera, Patch};
 use fieldkit::ocean::{Wave, Waves};
 use glam::{DVec2, DVec3, DVec4, Vec2};
 
@@ -41,31 +42,77 @@ fn every_drawn_patch_meets_the_error_or_the_depth_limit() {
     );
     assert_eq!(
         sel.triangles,
-        sel.patches
-            .iter()
-            .map(|p| patch_triangles(p.quads))
-            .sum::<u64>()
+        sel.patches.iter().map(|p| p.triangles()).sum::<u64>()
     );
-    // Each patch drawn with the fewest of 32, 24 and 16 quads a side that keep the error; some
-    // of each are needed in this view.
+    assert!(
+        sel.triangles
+            < sel
+                .patches
+                .iter()
+                .map(|p| patch_triangles(p.quads))
+                .sum::<u64>()
+    );
+    // Each patch drawn with the fewest quads a side, from 16 down to 8, that keep the error;
+    // each count is needed somewhere in this view.
     let q = settings.patch_quads;
-    for quads in [q, q * 3 / 4, q / 2] {
+    for quads in q / 2..=q {
         assert!(
             sel.patches.iter().any(|p| p.quads == quads),
             "no patch of {quads} quads"
         );
     }
-    assert!(
-        sel.patches
-            .iter()
-            .all(|p| [q, q * 3 / 4, q / 2].contains(&p.quads))
-    );
+    assert!(sel.patches.iter().all(|p| (q / 2..=q).contains(&p.quads)));
     // Finer patches near the eye, coarser far away.
     let sizes: Vec<f64> = sel.patches.iter().map(|p| p.size).collect();
     let (min, max) = sizes
         .iter()
         .fold((f64::MAX, 0f64), |(a, b), &s| (a.min(s), b.max(s)));
     assert!(max / min >= 16.0, "sizes from {min} to {max}");
+}
+
+/// Skirts only where a crack can be: an edge has one exactly when a drawn patch of another size
+/// or quad count touches it from across. Checked against every pair of patches.
+#[test]
+fn skirts_only_where_the_spacing_changes() {
+    let (w, look, cam) = (waves(), Look::default(), camera());
+    let sel = select(&w, &look, &cam, 1080, &LodSettings::default()).unwrap();
+    // Per edge (z low, x high, z high, x low): the line it lies on, the axis along it.
+    let edges = |p: &Patch| {
+        let (lo, hi) = (p.corner, p.corner + DVec2::splat(p.size));
+        [(1, lo.y, 0), (0, hi.x, 1), (1, hi.y, 0), (0, lo.x, 1)]
+            .map(|(axis, at, along)| (axis, at, (lo[along], hi[along])))
+    };
+    let (mut bare, mut skirted) = (0, 0);
+    for (i, p) in sel.patches.iter().enumerate() {
+        for (e, (axis, at, (a0, a1))) in edges(p).into_iter().enumerate() {
+            // Drawn patches across this edge (corners are exact in f64: sums of halvings).
+            let across: Vec<&Patch> = sel
+                .patches
+                .iter()
+                .enumerate()
+                .filter(|&(k, q)| {
+                    let (qlo, qhi) = (q.corner, q.corner + DVec2::splat(q.size));
+                    let along = 1 - axis;
+                    k != i
+                        && (qlo[axis] == at || qhi[axis] == at)
+                        && qlo[along] < a1
+                        && qhi[along] > a0
+                })
+                .map(|(_, q)| q)
+                .collect();
+            let differs = across
+                .iter()
+                .any(|q| q.size != p.size || q.quads != p.quads);
+            let has = p.skirts & (1 << e) != 0;
+            assert_eq!(
+                has, differs,
+                "patch {p:?} edge {e}: skirt {has}, patches across {across:?}"
+            );
+            if has { skirted += 1 } else { bare += 1 }
+        }
+    }
+    println!("{skirted} edges with skirts, {bare} without");
+    assert!(skirted > 0 && bare > 0);
 }
 
 /// Every point of the square that the camera sees (on the mean surface, inside the image) lies

@@ -7,7 +7,7 @@
 use fieldkit::Error;
 use fieldkit::gpu::{Context, read_texture};
 use fieldkit::harness::{Summary, context};
-use fieldkit::ocean::render::{Look, OceanCamera, OceanRenderer, Output, Patch};
+use fieldkit::ocean::render::{ALL_SKIRTS, Look, OceanCamera, OceanRenderer, Output, Patch};
 use fieldkit::ocean::{Wave, Waves};
 use glam::{DVec2, DVec3, DVec4, Vec2, Vec3, Vec4};
 
@@ -407,20 +407,69 @@ fn skirts_close_the_cracks_between_levels() {
     // A fine patch (0.125 m spacing) beside a coarse one (0.25 m) sharing the edge x = 8, as a
     // quadtree level change makes them; then the same squares with quad counts that turn it
     // round (0.5 m beside 0.25 m), as `lod::select`'s choice of quads per patch can.
-    let layouts = [
-        [
-            Patch::new(DVec2::new(0.0, 0.0), 8.0),
-            Patch::new(DVec2::new(8.0, -8.0), 16.0),
-        ],
-        [
-            Patch {
-                quads: 16,
-                ..Patch::new(DVec2::new(0.0, 0.0), 8.0)
-            },
-            Patch::new(DVec2::new(8.0, -8.0), 16.0),
-        ],
+    // Well inside the two patches: 0.5 m from their outer edges, and 4 m from the far one, where
+    // grazing rays pass over troughs and out of the patch (the coarse patch's edge x = 8 is an
+    // outer edge where z < 0).
+    let level_change = |p: DVec3| {
+        (p.x > 0.5 && p.x < 8.0 && p.z > 0.5 && p.z < 7.5)
+            || (p.x >= 8.0 && p.x < 20.0 && p.z > -7.5 && p.z < 7.5 && (p.x > 8.5 || p.z > 0.5))
+    };
+    // Two patches of the same size and quads share their edge's vertices bit for bit, so they
+    // meet without a crack and without a skirt: `lod::select` leaves that edge bare.
+    let bare = Patch {
+        skirts: 0,
+        ..Patch::new(DVec2::new(0.0, 0.0), 8.0)
+    };
+    let same = |p: DVec3| p.x > 0.5 && p.x < 12.0 && p.z > 0.5 && p.z < 7.5;
+    // The level change again with the shared edge's skirts left out (bit 2: x high; bit 8: x
+    // low): the renderer draws only the skirts a patch lists, so the cracks stay.
+    let unskirted = [
+        Patch {
+            skirts: ALL_SKIRTS & !2,
+            ..Patch::new(DVec2::new(0.0, 0.0), 8.0)
+        },
+        Patch {
+            skirts: ALL_SKIRTS & !8,
+            ..Patch::new(DVec2::new(8.0, -8.0), 16.0)
+        },
     ];
-    for patches in layouts {
+    let layouts: [CrackLayout; 4] = [
+        (
+            [
+                Patch::new(DVec2::new(0.0, 0.0), 8.0),
+                Patch::new(DVec2::new(8.0, -8.0), 16.0),
+            ],
+            &level_change,
+            true,
+            true,
+        ),
+        (
+            [
+                Patch {
+                    quads: 16,
+                    ..Patch::new(DVec2::new(0.0, 0.0), 8.0)
+                },
+                Patch::new(DVec2::new(8.0, -8.0), 16.0),
+            ],
+            &level_change,
+            true,
+            true,
+        ),
+        (unskirted, &level_change, true, false),
+        (
+            [
+                bare,
+                Patch {
+                    corner: DVec2::new(8.0, 0.0),
+                    ..bare
+                },
+            ],
+            &same,
+            false,
+            true,
+        ),
+    ];
+    for (patches, inside, cracks, closed) in layouts {
         let mut holes = Vec::new();
         for skirt in [0.0f32, 0.5] {
             let colour = make(RGBA32);
@@ -470,16 +519,7 @@ fn skirts_close_the_cracks_between_levels() {
                         continue;
                     }
                     let p = a + (b - a) * t;
-                    // Well inside the two patches: 0.5 m from their outer edges, and 4 m from the far
-                    // one, where grazing rays pass over troughs and out of the patch (the coarse
-                    // patch's edge x = 8 is an outer edge where z < 0).
-                    let inside = (p.x > 0.5 && p.x < 8.0 && p.z > 0.5 && p.z < 7.5)
-                        || (p.x >= 8.0
-                            && p.x < 20.0
-                            && p.z > -7.5
-                            && p.z < 7.5
-                            && (p.x > 8.5 || p.z > 0.5));
-                    if inside && px[(y * w + x) as usize].x as f64 == CLEAR {
+                    if inside(p) && px[(y * w + x) as usize].x as f64 == CLEAR {
                         count += 1;
                         // Cracks are at the shared edge (rays through them meet the plane a little
                         // beyond it).
@@ -496,14 +536,33 @@ fn skirts_close_the_cracks_between_levels() {
             "clear pixels inside the patches: {} without skirts, {} with",
             holes[0], holes[1]
         );
-        assert!(
-            holes[0] >= 5,
-            "expected cracks without skirts, saw {}",
-            holes[0]
-        );
-        assert_eq!(holes[1], 0, "skirts should close every crack");
+        if cracks {
+            assert!(
+                holes[0] >= 5,
+                "expected cracks without skirts, saw {}",
+                holes[0]
+            );
+        } else {
+            assert_eq!(
+                holes[0], 0,
+                "patches of one spacing should meet without a crack"
+            );
+        }
+        if closed {
+            assert_eq!(holes[1], 0, "skirts should close every crack");
+        } else {
+            assert!(
+                holes[1] >= 5,
+                "unskirted edges should still crack, saw {}",
+                holes[1]
+            );
+        }
     }
 }
+
+/// Patches, where to look for holes, whether there are cracks to close, whether the patches'
+/// skirts close them.
+type CrackLayout<'a> = ([Patch; 2], &'a dyn Fn(DVec3) -> bool, bool, bool);
 
 /// Name, time, look, patches, targets, depth target, fade.
 type Case<'a> = (
@@ -527,7 +586,7 @@ fn bad_input_gets_typed_errors() {
     let view = colour.create_view(&Default::default());
     let depth = target(&ctx, wgpu::TextureFormat::Depth32Float);
     let other = target(&ctx, wgpu::TextureFormat::Depth24Plus);
-    let no_copy = ctx.device.create_texture(&wgpu::TextureDescriptor {
+    let no_binding = ctx.device.create_texture(&wgpu::TextureDescriptor {
         label: None,
         size: depth.size(),
         mip_level_count: 1,
@@ -589,12 +648,12 @@ fn bad_input_gets_typed_errors() {
             true,
         ),
         (
-            "depth without COPY_SRC, fade on",
+            "depth without TEXTURE_BINDING, fade on",
             0.0,
             &good,
             &ok_patches,
             vec![&view],
-            &no_copy,
+            &no_binding,
             true,
         ),
         (
@@ -668,7 +727,7 @@ fn bad_input_gets_typed_errors() {
             "{name}: {err:?}"
         );
     }
-    // Without fade no copy is made, so COPY_SRC is not needed.
+    // Without fade no copy is made, so TEXTURE_BINDING is not needed.
     let mut enc = ctx.encoder("no fade");
     renderer
         .encode(
@@ -680,7 +739,7 @@ fn bad_input_gets_typed_errors() {
             &good,
             &ok_patches,
             &[&view],
-            &no_copy,
+            &no_binding,
             false,
         )
         .unwrap();
@@ -698,7 +757,9 @@ fn depth_desc() -> wgpu::TextureDescriptor<'static> {
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
         format: wgpu::TextureFormat::Depth32Float,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::COPY_SRC
+            | wgpu::TextureUsages::TEXTURE_BINDING,
         view_formats: &[],
     }
 }

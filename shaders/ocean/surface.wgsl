@@ -115,15 +115,18 @@ struct GBuffer {
 // Tileable detail: height in r, its slope per texture unit in g (along u = x) and b (v = z).
 @group(0) @binding(5) var detail: texture_2d<f32>;
 @group(0) @binding(6) var detail_sampler: sampler;
-// A copy of the scene's Depth32Float depth, read as unfilterable float.
+// A copy of the scene's depth (`ocean/depth_copy`), read as unfilterable float.
 @group(0) @binding(7) var scene_depth: texture_2d<f32>;
 
-// Undisplaced (x, z) of vertex `index` of the patch `square` (corner x, z, side and n, its
-// quads per side; the host draws it with an index buffer made for n) and whether it is a skirt
-// vertex: (n + 1)² grid vertices x fastest, then a ring of 4 (n + 1) skirt vertices under the
-// edges z = 0, x = n, z = n, x = 0.
-fn patch_vertex(index: u32, square: vec4<f32>) -> vec3<f32> {
-    let n = u32(square.w);
+// Undisplaced (x, z) of vertex `index` of the patch `square` (its smallest corner x, z, then
+// its largest) of n quads per side (the host draws it with an index buffer made for n), and
+// whether it is a skirt vertex: (n + 1)² grid vertices x fastest, then a ring of 4 (n + 1)
+// skirt vertices under the edges z = 0, x = n, z = n, x = 0.
+//
+// Both ends of a row come straight from the corners, never from corner + side: a neighbour of
+// the same size and quads then computes the shared edge's vertices from the very same f32
+// values and gets them bit for bit, so the two meet without a crack and need no skirt.
+fn patch_vertex(index: u32, square: vec4<f32>, n: u32) -> vec3<f32> {
     let row = n + 1u;
     var ij: vec2<u32>;
     var skirt = 0.0;
@@ -140,7 +143,8 @@ fn patch_vertex(index: u32, square: vec4<f32>) -> vec3<f32> {
             default: { ij = vec2<u32>(0u, t); }
         }
     }
-    let p = square.xy + vec2<f32>(ij) / f32(n) * square.z;
+    let p = select(square.xy + (square.zw - square.xy) * (vec2<f32>(ij) / f32(n)), square.zw,
+                   ij == vec2<u32>(n));
     return vec3<f32>(p, skirt);
 }
 
@@ -149,8 +153,11 @@ fn detail_at(layer: DetailLayer, rest: vec2<f32>) -> vec3<f32> {
 }
 
 @vertex
-fn vs_surface(@builtin(vertex_index) index: u32, @location(0) instance_patch: vec4<f32>) -> SurfaceOut {
-    let v = patch_vertex(index, instance_patch);
+// Per instance: the patch's corners (`patch_vertex`) and its quads per side in x (y to w
+// unused: a whole vec4 keeps the instance 32 bytes with no padding).
+fn vs_surface(@builtin(vertex_index) index: u32, @location(0) instance_patch: vec4<f32>,
+              @location(1) instance_quads: vec4<u32>) -> SurfaceOut {
+    let v = patch_vertex(index, instance_patch, instance_quads.x);
     let p = v.xy;
     var s = flat_surface(p);
     for (var i = 0u; i < waves.count; i++) {

@@ -171,8 +171,8 @@ pub(crate) fn load_pass<'e>(
     })
 }
 
-/// Colour and depth targets of one size, readable back (`COPY_SRC`): what a test, the gallery
-/// or a benchmark draws into.
+/// Colour and depth targets of one size, readable back (`COPY_SRC`) and sampled
+/// (`TEXTURE_BINDING`): what a test, the gallery or a benchmark draws into.
 pub struct Targets {
     pub colour: wgpu::Texture,
     pub depth: wgpu::Texture,
@@ -199,7 +199,10 @@ impl Targets {
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
                 format,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                // Read back by tests, sampled by later stages (the ocean's fade reads the depth).
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                    | wgpu::TextureUsages::COPY_SRC
+                    | wgpu::TextureUsages::TEXTURE_BINDING,
                 view_formats: &[],
             })
         };

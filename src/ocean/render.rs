@@ -3,17 +3,19 @@
 //! target or four G-buffer targets, testing and writing your depth target.
 //!
 //! Depth fade needs the scene's depth behind the water while the water writes depth itself.
-//! [`OceanRenderer::encode`] copies the depth target first (it needs `COPY_SRC`) and reads the
-//! copy, so both happen in one frame, in one pass.
+//! [`OceanRenderer::encode`] copies the depth target first with a compute pass
+//! (`ocean/depth_copy`; the target needs `TEXTURE_BINDING`) and reads the copy, so both happen
+//! in one frame, in one draw pass.
 
 use std::sync::Mutex;
 
 use glam::{DMat4, DVec2, DVec3, Mat4, Vec2, Vec3, Vec4};
 
 use super::Waves;
-use crate::bind::{RenderPipeline, RenderTargets};
+use crate::bind::{ComputePipeline, RenderPipeline, RenderTargets};
 use crate::error::Error;
 use crate::gpu::uniform_buffer as uniform;
+use crate::shaders::ocean::depth_copy;
 use crate::shaders::ocean::surface::{self as stage, DetailLayer, FrameParams};
 
 const STAGE: &str = stage::STAGE;
@@ -35,24 +37,43 @@ pub enum Output {
     GBuffer([wgpu::TextureFormat; 4]),
 }
 
-/// A square of ocean to draw: its world corner (x, z, smallest) and side, in metres, and its
+/// A square of ocean to draw: its world corner (x, z, smallest) and side, in metres, its
 /// grid's quads per side (1 to [`MAX_PATCH_QUADS`]; `ocean::lod` picks the fewest that keep
-/// its error).
+/// its error), and which of its edges hang a skirt.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Patch {
     pub corner: DVec2,
     pub size: f64,
     pub quads: u32,
+    /// Edges with a skirt, one bit each: 1 the edge at the smallest z, 2 the largest x, 4 the
+    /// largest z, 8 the smallest x. A skirt hides the crack beside a patch of another vertex
+    /// spacing; two patches of the same size and quads meet without one.
+    pub skirts: u8,
 }
 
+/// Every edge of a patch: [`Patch::skirts`].
+pub const ALL_SKIRTS: u8 = 0b1111;
+
 impl Patch {
-    /// A patch of [`PATCH_QUADS`] quads per side.
+    /// A patch of [`PATCH_QUADS`] quads per side, skirted on every edge.
     pub fn new(corner: DVec2, size: f64) -> Self {
         Self {
             corner,
             size,
             quads: PATCH_QUADS,
+            skirts: ALL_SKIRTS,
         }
+    }
+
+    /// The same patch with `quads` per side.
+    pub fn with_quads(self, quads: u32) -> Self {
+        Self { quads, ..self }
+    }
+
+    /// Triangles it draws: its grid and its skirts.
+    pub fn triangles(&self) -> u64 {
+        let n = self.quads as u64;
+        2 * n * n + 2 * n * (self.skirts & ALL_SKIRTS).count_ones() as u64
     }
 }
 
@@ -167,11 +188,12 @@ pub struct OceanRenderer {
     forward: Option<RenderPipeline<stage::fs_forward::Entry>>,
     gbuffer: Option<RenderPipeline<stage::fs_gbuffer::Entry>>,
     /// Index buffers per quad count, made on first use.
-    indices: Mutex<std::collections::HashMap<u32, (wgpu::Buffer, u32)>>,
+    indices: Mutex<std::collections::HashMap<u32, wgpu::Buffer>>,
     detail: wgpu::Texture,
     sampler: wgpu::Sampler,
-    /// The copy of the scene's depth the fade reads, kept while the size holds.
+    /// The copy of the scene's depth the fade reads (`R32Float`), kept while the size holds.
     depth_copy: Mutex<Option<wgpu::Texture>>,
+    copy_depth: ComputePipeline<depth_copy::copy_depth::Entry>,
 }
 
 fn invalid(what: String) -> Error {
@@ -430,6 +452,7 @@ impl OceanRenderer {
                 ..Default::default()
             }),
             depth_copy: Mutex::new(None),
+            copy_depth: ComputePipeline::new(device)?,
         })
     }
 
@@ -445,7 +468,8 @@ impl OceanRenderer {
     /// Draw `patches` of `waves` at `time` seen by `camera` into `targets` (one view for
     /// [`Output::Forward`], four for [`Output::GBuffer`], all the depth target's size), loading
     /// and storing what they hold, and testing and writing `depth` (`Depth32Float`, with
-    /// `RENDER_ATTACHMENT` and, when `fade` is on, `COPY_SRC`: its copy is what the fade reads).
+    /// `RENDER_ATTACHMENT` and, when `fade` is on, `TEXTURE_BINDING`: a compute pass copies it
+    /// for the fade to read).
     #[allow(clippy::too_many_arguments)]
     pub fn encode(
         &self,
@@ -497,7 +521,7 @@ impl OceanRenderer {
         }
         let needs = wgpu::TextureUsages::RENDER_ATTACHMENT
             | if fade {
-                wgpu::TextureUsages::COPY_SRC
+                wgpu::TextureUsages::TEXTURE_BINDING
             } else {
                 wgpu::TextureUsages::empty()
             };
@@ -560,55 +584,98 @@ impl OceanRenderer {
                 mip_level_count: 1,
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
-                format: wgpu::TextureFormat::Depth32Float,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                format: wgpu::TextureFormat::R32Float,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::STORAGE_BINDING,
                 view_formats: &[],
             }));
         }
         let copy = cache.as_ref().expect("made above").clone();
         drop(cache);
+        let copy_view = copy.create_view(&Default::default());
         if fade {
-            encoder.copy_texture_to_texture(depth.as_image_copy(), copy.as_image_copy(), size);
+            let depth_in = depth.create_view(&wgpu::TextureViewDescriptor {
+                aspect: wgpu::TextureAspect::DepthOnly,
+                ..Default::default()
+            });
+            let bound = self.copy_depth.bind(
+                device,
+                &depth_copy::copy_depth::Resources {
+                    depth_in: (&depth_in).into(),
+                    depth_out: (&copy_view).into(),
+                },
+            )?;
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some(depth_copy::STAGE),
+                timestamp_writes: None,
+            });
+            self.copy_depth.dispatch(
+                &mut pass,
+                &bound,
+                ComputePipeline::<depth_copy::copy_depth::Entry>::groups_for([
+                    size.width,
+                    size.height,
+                    1,
+                ]),
+            );
         }
         if patches.is_empty() {
             return Ok(());
         }
-        // Grouped by quad count, one draw per group; within a group nearest first still.
+        // Grouped by quad count, one draw of the grids per group (within a group nearest first
+        // still), then one draw per group and edge of the skirts that edge needs: the same
+        // patches again, listed after the grids.
         let mut order: Vec<usize> = (0..patches.len()).collect();
         order.sort_by_key(|&i| patches[i].quads);
-        let instances: Vec<Vec4> = order
-            .iter()
-            .map(|&i| {
-                let p = &patches[i];
-                let c = p.corner - origin;
-                Vec4::new(c.x as f32, c.y as f32, p.size as f32, p.quads as f32)
-            })
-            .collect();
-        let mut groups: Vec<(u32, std::ops::Range<u32>)> = Vec::new();
-        for (k, &i) in order.iter().enumerate() {
-            let q = patches[i].quads;
-            match groups.last_mut() {
-                Some((gq, range)) if *gq == q => range.end = k as u32 + 1,
-                _ => groups.push((q, k as u32..k as u32 + 1)),
+        let instance = |p: &Patch| {
+            // Both corners from f64, so neighbours share their edge's f32 values exactly.
+            let lo = p.corner - origin;
+            let hi = p.corner + DVec2::splat(p.size) - origin;
+            stage::fs_forward::Instance {
+                instance_patch: Vec4::new(lo.x as f32, lo.y as f32, hi.x as f32, hi.y as f32),
+                instance_quads: glam::UVec4::new(p.quads, 0, 0, 0),
             }
+        };
+        let mut instances: Vec<stage::fs_forward::Instance> =
+            order.iter().map(|&i| instance(&patches[i])).collect();
+        // (quads, first index, index count, instances)
+        let mut draws: Vec<(u32, u32, u32, std::ops::Range<u32>)> = Vec::new();
+        let mut start = 0;
+        while start < order.len() {
+            let q = patches[order[start]].quads;
+            let end = start
+                + order[start..]
+                    .iter()
+                    .take_while(|&&i| patches[i].quads == q)
+                    .count();
+            draws.push((q, 0, 6 * q * q, start as u32..end as u32));
+            for edge in 0..4u32 {
+                let first = instances.len() as u32;
+                instances.extend(
+                    order[start..end]
+                        .iter()
+                        .filter(|&&i| patches[i].skirts & (1 << edge) != 0)
+                        .map(|&i| instance(&patches[i])),
+                );
+                let last = instances.len() as u32;
+                if last > first {
+                    draws.push((q, 6 * q * q + edge * 6 * q, 6 * q, first..last));
+                }
+            }
+            start = end;
         }
-        let index_buffers: Vec<(wgpu::Buffer, u32, std::ops::Range<u32>)> = {
+        let index_buffers: Vec<(wgpu::Buffer, std::ops::Range<u32>, std::ops::Range<u32>)> = {
             let mut cache = self.indices.lock().unwrap_or_else(|e| e.into_inner());
-            groups
+            draws
                 .into_iter()
-                .map(|(q, range)| {
-                    let (buffer, count) = cache.entry(q).or_insert_with(|| {
-                        let idx = patch_indices(q);
-                        (
-                            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                                label: Some("ocean patch indices"),
-                                contents: bytemuck::cast_slice(&idx),
-                                usage: wgpu::BufferUsages::INDEX,
-                            }),
-                            idx.len() as u32,
-                        )
+                .map(|(q, first, count, range)| {
+                    let buffer = cache.entry(q).or_insert_with(|| {
+                        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                            label: Some("ocean patch indices"),
+                            contents: bytemuck::cast_slice(&patch_indices(q)),
+                            usage: wgpu::BufferUsages::INDEX,
+                        })
                     });
-                    (buffer.clone(), *count, range)
+                    (buffer.clone(), first..first + count, range)
                 })
                 .collect()
         };
@@ -621,7 +688,6 @@ impl OceanRenderer {
         let wave_buffer = uniform(device, "ocean waves", &wave_set);
         let frame_buffer = uniform(device, "ocean frame", &frame);
         let detail_view = self.detail.create_view(&Default::default());
-        let copy_view = copy.create_view(&Default::default());
         let depth_view = depth.create_view(&Default::default());
         let attachments: Vec<Option<wgpu::RenderPassColorAttachment>> = targets
             .iter()
@@ -665,9 +731,9 @@ impl OceanRenderer {
                 pass.set_pipeline(&$pipeline.pipeline);
                 bound.set_render(&mut pass);
                 pass.set_vertex_buffer(0, instance_buffer.slice(..));
-                for (indices, count, range) in &index_buffers {
+                for (indices, part, range) in &index_buffers {
                     pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
-                    pass.draw_indexed(0..*count, 0, range.clone());
+                    pass.draw_indexed(part.clone(), 0, range.clone());
                 }
             }};
         }

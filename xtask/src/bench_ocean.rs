@@ -62,7 +62,7 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
     let colour = make(format, wgpu::TextureUsages::RENDER_ATTACHMENT);
     let depth = make(
         wgpu::TextureFormat::Depth32Float,
-        wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
     );
     let colour_view = colour.create_view(&Default::default());
     let waves = Waves::open_sea();
@@ -83,7 +83,10 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
         Waves::new(waves.waves()[..1].to_vec(), waves.steepness()).map_err(|e| e.to_string())?;
     let time = |waves: &Waves, patches: &[Patch], look: &Look, fade: bool| -> Result<f64, String> {
         let mut times = Vec::new();
-        for i in 0..warmup.max(3) + reps {
+        let start = std::time::Instant::now();
+        let mut i = 0;
+        while times.len() < reps {
+            i += 1;
             let ms = stamps.time(&ctx, |enc| {
                 renderer
                     .encode(
@@ -100,7 +103,7 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
                     )
                     .map_err(|e| e.to_string())
             })?;
-            if i >= warmup.max(3) {
+            if i > warmup.max(3) && start.elapsed() >= crate::bench::WARMUP_TIME {
                 times.push(ms);
             }
         }
@@ -159,6 +162,38 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
             true,
         )?;
         if target == settings.max_error_px {
+            // Other patch sizes at the default error: smaller patches follow the error more
+            // closely (fewer triangles) but cost more CPU to select and more instances.
+            for quads in [8, 16, 32] {
+                if quads == settings.patch_quads {
+                    continue;
+                }
+                let t = std::time::Instant::now();
+                let other = select(
+                    &waves,
+                    &look,
+                    &camera,
+                    height,
+                    &LodSettings {
+                        patch_quads: quads,
+                        ..settings
+                    },
+                )
+                .map_err(|e| e.to_string())?;
+                println!(
+                    "  select with {quads} quads a patch: {:?} on the CPU",
+                    t.elapsed()
+                );
+                push(
+                    format!("quadtree, {target} px, {quads} quads a patch"),
+                    &waves,
+                    &other.patches,
+                    other.triangles,
+                    other.max_error_px,
+                    &look,
+                    true,
+                )?;
+            }
             // What each part of the frame costs, at the default error.
             let bare = Look {
                 height_layers: vec![],
@@ -197,6 +232,16 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
             }
         }
     }
+    // The fade's fixed part: the depth copy with nothing drawn.
+    push(
+        "depth copy alone (no patches)".into(),
+        &waves,
+        &[],
+        0,
+        0.0,
+        &look,
+        true,
+    )?;
     // The write-up's patches of 256 vertices per row, drawn as 4 × 4 of ours (256 quads a side).
     let writeup = writeup_patches(&waves, &look, &camera, height, &settings, 4 * PATCH_QUADS);
     let split: Vec<Patch> = writeup
@@ -219,6 +264,29 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
         &look,
         true,
     )?;
+    let floor = floor(
+        &ctx,
+        &stamps,
+        width,
+        height,
+        format,
+        &colour_view,
+        &depth,
+        warmup,
+        reps,
+    )?;
+    crate::bench::write_table(
+        out,
+        "ocean_floor.csv",
+        "adapter,resolution,triangles,px_per_triangle,frame_ms,ns_per_triangle",
+        floor.iter().map(|(t, ms)| {
+            format!(
+                "\"{adapter}\",{width}x{height},{t},{:.2},{ms:.4},{:.3}",
+                (width * height) as f64 / *t as f64,
+                ms * 1e6 / *t as f64
+            )
+        }),
+    )?;
     let csv = crate::bench::write_table(
         out,
         "ocean.csv",
@@ -230,10 +298,11 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
             )
         }),
     )?;
-    // The rows with parts left out share the default's error: in the CSV, not the chart.
+    // The rows with parts left out or other patch sizes share the default's error: in the CSV,
+    // not the chart.
     let points: Vec<crate::chart::Point> = rows
         .iter()
-        .filter(|r| !r.layout.contains(", no "))
+        .filter(|r| !r.layout.contains(", no ") && !r.layout.contains("quads a patch"))
         .map(|r| crate::chart::Point {
             group: if r.layout.starts_with("quadtree") {
                 "quadtree".into()
@@ -256,4 +325,130 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
     crate::chart::time_vs_error(&out.join("ocean.png"), &axes, &points)?;
     println!("wrote {} and ocean.png", csv.display());
     Ok(())
+}
+
+/// What the rasterizer alone costs: a screen-filling grid of `2·n²` triangles drawn with a
+/// pass-through vertex stage and a constant colour (no buffers, no textures), depth tested like
+/// the ocean. The ocean's frame cannot be cheaper than this for as many triangles of that size.
+/// A probe of the adapter, not a stage of the crate, so its shader lives here.
+#[allow(clippy::too_many_arguments)]
+fn floor(
+    ctx: &Context,
+    stamps: &Stamps,
+    width: u32,
+    height: u32,
+    format: wgpu::TextureFormat,
+    colour: &wgpu::TextureView,
+    depth: &wgpu::Texture,
+    warmup: usize,
+    reps: usize,
+) -> Result<Vec<(u64, f64)>, String> {
+    const PROBE: &str = "
+struct P { n: u32 }
+@group(0) @binding(0) var<uniform> p: P;
+@vertex fn vs(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    // Quad q = i / 6, corner from the two-triangle pattern.
+    let q = i / 6u;
+    let c = array<vec2<u32>, 6>(vec2(0u, 0u), vec2(1u, 0u), vec2(0u, 1u), vec2(1u, 0u), vec2(1u, 1u), vec2(0u, 1u))[i % 6u];
+    let xy = vec2<f32>(vec2(q % p.n, q / p.n) + c) / f32(p.n);
+    return vec4<f32>(xy * 2.0 - 1.0, 0.5, 1.0);
+}
+@fragment fn fs() -> @location(0) vec4<f32> { return vec4<f32>(0.1, 0.3, 0.5, 1.0); }
+";
+    let device = &ctx.device;
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("ocean bench floor probe"),
+        source: wgpu::ShaderSource::Wgsl(PROBE.into()),
+    });
+    let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("ocean bench floor probe"),
+        layout: None,
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: Default::default(),
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: wgpu::TextureFormat::Depth32Float,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::LessEqual),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some("fs"),
+            compilation_options: Default::default(),
+            targets: &[Some(format.into())],
+        }),
+        multiview_mask: None,
+        cache: None,
+    });
+    let depth_view = depth.create_view(&Default::default());
+    let mut rows = Vec::new();
+    println!("| probe: triangles | px each | frame ms | ns per triangle |\n|---|---|---|---|");
+    for n in [128u32, 256, 384, 512, 724] {
+        use wgpu::util::DeviceExt;
+        let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("floor probe params"),
+            contents: bytemuck::bytes_of(&n),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: None,
+            layout: &pipeline.get_bind_group_layout(0),
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: params.as_entire_binding(),
+            }],
+        });
+        let mut times = Vec::new();
+        let start = std::time::Instant::now();
+        let mut i = 0;
+        while times.len() < reps {
+            i += 1;
+            let ms = stamps.time(ctx, |enc| {
+                let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("floor probe"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: colour,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: &depth_view,
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(1.0),
+                            store: wgpu::StoreOp::Store,
+                        }),
+                        stencil_ops: None,
+                    }),
+                    ..Default::default()
+                });
+                pass.set_pipeline(&pipeline);
+                pass.set_bind_group(0, &bind, &[]);
+                pass.draw(0..n * n * 6, 0..1);
+                Ok(())
+            })?;
+            if i > warmup.max(3) && start.elapsed() >= crate::bench::WARMUP_TIME {
+                times.push(ms);
+            }
+        }
+        let ms = median(times);
+        let triangles = 2 * (n as u64) * (n as u64);
+        println!(
+            "| {triangles} | {:.2} | {ms:.4} | {:.3} |",
+            (width * height) as f64 / triangles as f64,
+            ms * 1e6 / triangles as f64
+        );
+        rows.push((triangles, ms));
+    }
+    Ok(rows)
 }
