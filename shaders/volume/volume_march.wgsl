@@ -69,6 +69,12 @@ struct MarchParams {
     shadow_max_steps: u32,
     // 1: stop rays at `scene_depth`.
     use_depth: u32,
+    // Reciprocals the host takes once, so the per-sample work has no division: of the box's
+    // extent (local point to texture coordinate), of the transfer function's density range,
+    // and of Δ₀.
+    inv_extent: vec3<f32>,
+    tf_scale: f32,
+    inv_reference_step: f32,
 }
 
 // What the march does is fixed per pipeline, so each variant carries only its own code and
@@ -100,7 +106,7 @@ const INF: f32 = 3.4e38;
 
 fn transfer(d: f32) -> vec4<f32> {
     let n = params.tf_count;
-    let x = clamp((d - params.tf_range.x) / (params.tf_range.y - params.tf_range.x), 0.0, 1.0);
+    let x = clamp((d - params.tf_range.x) * params.tf_scale, 0.0, 1.0);
     let f = x * f32(n - 1u);
     let i = min(u32(f), n - 2u);
     let w = f - f32(i);
@@ -108,7 +114,7 @@ fn transfer(d: f32) -> vec4<f32> {
 }
 
 fn uvw_of(p: vec3<f32>) -> vec3<f32> {
-    return (p - params.box_min) / (params.box_max - params.box_min);
+    return (p - params.box_min) * params.inv_extent;
 }
 
 fn density_at(p: vec3<f32>) -> f32 {
@@ -117,7 +123,7 @@ fn density_at(p: vec3<f32>) -> f32 {
 
 // Opacity of a segment of world length `len` whose transfer-function opacity is `a` (per Δ₀).
 fn corrected(a: f32, len: f32) -> f32 {
-    return 1.0 - pow(max(1.0 - a, 0.0), len / params.reference_step);
+    return 1.0 - pow(max(1.0 - a, 0.0), len * params.inv_reference_step);
 }
 
 // Transmittance from local point `p` to where the ray toward the light leaves the box.

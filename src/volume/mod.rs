@@ -646,6 +646,9 @@ impl VolumeRenderer {
                 shadow_step,
                 shadow_max_steps: guard(shadow_step),
                 use_depth: use_depth as u32,
+                inv_extent: (hi - lo).recip(),
+                tf_scale: (tf.range[1] - tf.range[0]).recip(),
+                inv_reference_step: settings.reference_step.recip(),
             },
         ))
     }

@@ -10,6 +10,7 @@ mod bench_volume;
 mod bench_voxelize;
 mod chart;
 mod lint;
+mod shader_stats;
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -34,6 +35,15 @@ enum Command {
         /// JSON instead of tables.
         #[arg(long)]
         json: bool,
+    },
+    /// What the Vulkan driver made of each compute entry point (registers, spills, ...), through
+    /// VK_KHR_pipeline_executable_properties.
+    ShaderStats {
+        /// Only stages whose `room::name` contains this.
+        stage: Option<String>,
+        /// Values for `override` constants, NAME=value (repeatable).
+        #[arg(long = "override")]
+        overrides: Vec<String>,
     },
     /// Render every technique to PNG on the default adapter (FIELDKIT_ADAPTER picks another).
     Gallery {
@@ -103,6 +113,15 @@ fn main() -> ExitCode {
     match cli.command {
         Command::Lint => lint::run(&crate_root()),
         Command::Reflect { stage, json } => reflect(&crate_root(), stage.as_deref(), json),
+        Command::ShaderStats { stage, overrides } => {
+            // The checkout it runs in (a release binary sent to another machine), else the one
+            // it was built from.
+            let here = std::env::current_dir()
+                .ok()
+                .filter(|d| d.join("shaders").is_dir() && d.join("build.rs").is_file());
+            let root = here.unwrap_or_else(crate_root);
+            shader_stats::run(&root, stage.as_deref(), &overrides)
+        }
         Command::Gallery { out } => gallery(&out),
         Command::Bench {
             technique,
