@@ -46,8 +46,8 @@ pub struct Patch {
     pub size: f64,
     pub quads: u32,
     /// Edges with a skirt, one bit each: 1 the edge at the smallest z, 2 the largest x, 4 the
-    /// largest z, 8 the smallest x. A skirt hides the crack beside a patch of another vertex
-    /// spacing; two patches of the same size and quads meet without one.
+    /// largest z, 8 the smallest x (higher bits are ignored). A skirt hides the crack beside a
+    /// patch of another vertex spacing; two patches of the same size and quads meet without one.
     pub skirts: u8,
 }
 

@@ -336,3 +336,54 @@ fn stats(root: &Path, filter: Option<&str>, overrides: &[String]) -> Result<(), 
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn overrides_parse_and_bad_ones_are_named() {
+        let ok = parse_overrides(&["SKIP=true".into(), "MODE=2".into(), "X=0.5".into()]).unwrap();
+        assert_eq!(
+            ok,
+            vec![
+                ("SKIP".to_string(), 1.0),
+                ("MODE".to_string(), 2.0),
+                ("X".to_string(), 0.5)
+            ]
+        );
+        let e = parse_overrides(&["MODE".into()]).unwrap_err();
+        assert!(e.contains("\"MODE\""), "{e}");
+        let e = parse_overrides(&["MODE=two".into()]).unwrap_err();
+        assert!(e.contains("\"two\""), "{e}");
+    }
+
+    /// The layout built for the driver has every binding the shader declares, with the
+    /// descriptor type its address space and type call for.
+    #[test]
+    fn bindings_follow_the_module() {
+        let stages = crate::stages(&crate::crate_root()).expect("stages validate");
+        let march = stages
+            .iter()
+            .find(|s| s.file.id() == "volume::volume_march")
+            .expect("volume_march");
+        let b = bindings(&march.module);
+        let ty = |binding: u32| {
+            b.iter()
+                .find(|x| x.0 == 0 && x.1 == binding)
+                .map(|x| x.2)
+                .unwrap_or_else(|| panic!("binding {binding} missing from {b:?}"))
+        };
+        // params, density, linear_clamp, tf, ranges, light_in, scene_depth, colour_out, light_out
+        assert_eq!(ty(0), vk::DescriptorType::UNIFORM_BUFFER);
+        assert_eq!(ty(1), vk::DescriptorType::SAMPLED_IMAGE);
+        assert_eq!(ty(2), vk::DescriptorType::SAMPLER);
+        assert_eq!(ty(3), vk::DescriptorType::STORAGE_BUFFER);
+        assert_eq!(ty(4), vk::DescriptorType::STORAGE_BUFFER);
+        assert_eq!(ty(5), vk::DescriptorType::SAMPLED_IMAGE);
+        assert_eq!(ty(6), vk::DescriptorType::SAMPLED_IMAGE);
+        assert_eq!(ty(7), vk::DescriptorType::STORAGE_IMAGE);
+        assert_eq!(ty(8), vk::DescriptorType::STORAGE_IMAGE);
+        assert_eq!(b.len(), 9);
+    }
+}
