@@ -6,6 +6,10 @@
 //! list; for attributes both halves, without the read-back between them), median of the
 //! timed runs. Writes `voxelize.csv` and `voxelize.png` (time against
 //! the voxel edge relative to the mesh's longest side).
+//!
+//! Surface and solid rows also print each pass's time (`encode_surface_profiled`). With
+//! `FIELDKIT_BENCH_SHUFFLED` set, the split bunny is also timed with its triangles in a
+//! scattered order (neighbours in the list no longer neighbours on the surface).
 
 use std::process::ExitCode;
 
