@@ -168,24 +168,27 @@ fn draw(
     ctx.submit_and_wait("ocean test", enc).unwrap();
 }
 
-/// The pixel centre's ray hitting y = 0: view depth and NDC depth, if it hits ahead.
-fn plane_hit(cam: &OceanCamera, x: u32, y: u32) -> Option<(f64, f64)> {
-    let proj = cam.proj.as_dmat4();
-    let inv = (proj * cam.view).inverse();
+/// Where the ray through the centre of pixel (x, y) of a `w` × `h` image meets the plane y = 0,
+/// if it does between the near and far planes.
+fn plane_point(cam: &OceanCamera, [w, h]: [u32; 2], x: u32, y: u32) -> Option<DVec3> {
+    let inv = (cam.proj.as_dmat4() * cam.view).inverse();
     let ndc = DVec2::new(
-        (x as f64 + 0.5) / W as f64 * 2.0 - 1.0,
-        1.0 - (y as f64 + 0.5) / H as f64 * 2.0,
+        (x as f64 + 0.5) / w as f64 * 2.0 - 1.0,
+        1.0 - (y as f64 + 0.5) / h as f64 * 2.0,
     );
     let un = |z: f64| {
-        let h = inv * DVec4::new(ndc.x, ndc.y, z, 1.0);
-        h.truncate() / h.w
+        let q = inv * DVec4::new(ndc.x, ndc.y, z, 1.0);
+        q.truncate() / q.w
     };
     let (a, b) = (un(0.0), un(1.0));
     let t = a.y / (a.y - b.y);
-    if !(t > 0.0 && t < 1.0) {
-        return None;
-    }
-    let p = a + (b - a) * t;
+    (t > 0.0 && t < 1.0).then(|| a + (b - a) * t)
+}
+
+/// The pixel centre's ray hitting y = 0: view depth and NDC depth, if it hits ahead.
+fn plane_hit(cam: &OceanCamera, x: u32, y: u32) -> Option<(f64, f64)> {
+    let proj = cam.proj.as_dmat4();
+    let p = plane_point(cam, [W, H], x, y)?;
     let v = cam.view * p.extend(1.0);
     let clip = proj * v;
     Some((-v.z, clip.z / clip.w))
@@ -403,7 +406,6 @@ fn skirts_close_the_cracks_between_levels() {
     );
     let renderer =
         OceanRenderer::new(&ctx.device, &ctx.queue, Output::Forward(RGBA32), false).unwrap();
-    let inv = (cam.proj.as_dmat4() * cam.view).inverse();
     // A fine patch (0.125 m spacing) beside a coarse one (0.25 m) sharing the edge x = 8, as a
     // quadtree level change makes them; then the same squares with quad counts that turn it
     // round (0.5 m beside 0.25 m), as `lod::select`'s choice of quads per patch can.
@@ -505,20 +507,9 @@ fn skirts_close_the_cracks_between_levels() {
             let mut count = 0;
             for y in 0..h {
                 for x in 0..w {
-                    let ndc = DVec2::new(
-                        (x as f64 + 0.5) / w as f64 * 2.0 - 1.0,
-                        1.0 - (y as f64 + 0.5) / h as f64 * 2.0,
-                    );
-                    let un = |z: f64| {
-                        let q = inv * DVec4::new(ndc.x, ndc.y, z, 1.0);
-                        q.truncate() / q.w
-                    };
-                    let (a, b) = (un(0.0), un(1.0));
-                    let t = a.y / (a.y - b.y);
-                    if !(t > 0.0 && t < 1.0) {
+                    let Some(p) = plane_point(&cam, [w, h], x, y) else {
                         continue;
-                    }
-                    let p = a + (b - a) * t;
+                    };
                     if inside(p) && px[(y * w + x) as usize].x as f64 == CLEAR {
                         count += 1;
                         // Cracks are at the shared edge (rays through them meet the plane a little
