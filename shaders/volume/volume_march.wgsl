@@ -17,6 +17,13 @@
 // a density that is linear along the segment. There is no separate step cap: the loop ends at the
 // exit, with a bound from the box diagonal only as a guard.
 //
+// Per sample: the ray is carried into texture coordinates once per pixel, so a sample is three
+// fused multiply-adds and one trilinear fetch; the transfer function is stored as one line per
+// interval (no conversion back to float to interpolate); and with the light volume folded into
+// the density (`volume/lit_density`) the light comes with that same fetch. From inside the 256³
+// cloud on the H100 the folded light took the frame from 1.16 to 0.89 ms; the rest of this
+// per-sample work, 0.998 to 0.934 ms unshadowed.
+//
 // Empty-space skipping: in a brick whose largest density the transfer function maps to zero
 // opacity (`volume/bricks`), the march jumps to the segment that holds the brick's exit. The
 // skipped segments' samples all lie in that brick, so each would have added nothing. A ray looks
@@ -37,9 +44,14 @@ struct MarchParams {
     // Δ₀: the step the transfer function's opacities are given for (world units).
     reference_step: f32,
     dims: vec3<u32>,
-    // Voxels per brick side.
-    brick: u32,
     bricks: vec3<u32>,
+    // Bricks per unit texture coordinate (dims / brick) and a brick's extent in texture
+    // coordinates (brick / dims), so a brick lookup has no division.
+    brick_scale: vec3<f32>,
+    brick_size: vec3<f32>,
+    // Density texture coordinate to the light volume's: node i at voxel 2i.
+    light_scale: vec3<f32>,
+    light_offset: vec3<f32>,
     // Towards the light, in local space, scaled so a unit of its parameter is one world unit.
     light_local: vec3<f32>,
     // Lit colour = transfer colour × (ambient + light_colour × transmittance toward the light).
@@ -51,9 +63,10 @@ struct MarchParams {
     // NDC depth of the near and far planes (0 and 1; 1 and 0 for reversed Z).
     near_z: f32,
     far_z: f32,
-    // Density at the first and last transfer-function entry.
-    tf_range: vec2<f32>,
+    // Transfer-function entries, and the map from density to entry position f (entry i at
+    // f = i): f = density × tf_scale + tf_offset.
     tf_count: u32,
+    tf_offset: f32,
     // Densities at or below this get zero opacity from the transfer function.
     skip_below: f32,
     iso: f32,
@@ -70,8 +83,8 @@ struct MarchParams {
     // 1: stop rays at `scene_depth`.
     use_depth: u32,
     // Reciprocals the host takes once, so the per-sample work has no division: of the box's
-    // extent (local point to texture coordinate), of the transfer function's density range,
-    // and of Δ₀.
+    // extent (local point to texture coordinate), of the transfer function's density range
+    // (times the entries less one), and of Δ₀.
     inv_extent: vec3<f32>,
     tf_scale: f32,
     inv_reference_step: f32,
@@ -81,7 +94,8 @@ struct MarchParams {
 // registers: one shader branching on uniforms took 1.79 ms from inside the 256³ cloud on the
 // H100, specialised 1.57. 0 emission-absorption, 1 maximum intensity, 2 first-hit iso-surface.
 override MODE: u32 = 0u;
-// 0 no shadowing, 1 shadow rays, 2 the precomputed light volume.
+// 0 no shadowing, 1 shadow rays, 2 the precomputed light volume folded into the density's green,
+// 3 the light volume's own texture (a second fetch per sample).
 override SHADOW: u32 = 0u;
 // Skip bricks.
 override SKIP: bool = true;
@@ -89,15 +103,20 @@ override SKIP: bool = true;
 override COUNT_SAMPLES: bool = false;
 
 @group(0) @binding(0) var<uniform> params: MarchParams;
+// The density in red; with the light volume (`SHADOW` 2), the lit density of
+// `volume/lit_density`: transmittance toward the light in green, taken with the same fetch.
 @group(0) @binding(1) var density: texture_3d<f32>;
 @group(0) @binding(2) var linear_clamp: sampler;
-// Transfer function: rgb colour, opacity α for a segment of length Δ₀; evenly spaced over
-// `tf_range`, interpolated linearly, clamped at the ends.
+// Transfer function: rgb colour, opacity α for a segment of length Δ₀; evenly spaced entries,
+// interpolated linearly, clamped at the ends. Stored per interval i as two rows, the line
+// through entries i and i + 1 in the entry position f: value = tf[2i] + f · tf[2i + 1]. The
+// sample then needs no integer-to-float conversion and no subtraction to interpolate.
 @group(0) @binding(3) var<storage, read> tf: array<vec4<f32>>;
 @group(0) @binding(4) var<storage, read> ranges: array<vec2<f32>>;
-@group(0) @binding(5) var light_in: texture_3d<f32>;
 // The caller's Depth32Float target, read as unfilterable float (WebGPU allows it; a depth
 // texture type would not translate to GLSL).
+// The light volume's nodes (`light_volume`), for `SHADOW` 3.
+@group(0) @binding(5) var light_in: texture_3d<f32>;
 @group(0) @binding(6) var scene_depth: texture_2d<f32>;
 @group(0) @binding(7) var colour_out: texture_storage_2d<rgba16float, write>;
 @group(0) @binding(8) var light_out: texture_storage_3d<rgba16float, write>;
@@ -106,11 +125,9 @@ const INF: f32 = 3.4e38;
 
 fn transfer(d: f32) -> vec4<f32> {
     let n = params.tf_count;
-    let x = clamp((d - params.tf_range.x) * params.tf_scale, 0.0, 1.0);
-    let f = x * f32(n - 1u);
-    let i = min(u32(f), n - 2u);
-    let w = f - f32(i);
-    return tf[i] * (1.0 - w) + tf[i + 1u] * w;
+    let f = clamp(d * params.tf_scale + params.tf_offset, 0.0, f32(n - 1u));
+    let i = 2u * min(u32(f), n - 2u);
+    return tf[i] + f * tf[i + 1u];
 }
 
 fn uvw_of(p: vec3<f32>) -> vec3<f32> {
@@ -143,13 +160,17 @@ fn toward_light(p: vec3<f32>) -> f32 {
     return t_light;
 }
 
-fn light_at(p: vec3<f32>) -> f32 {
+// Light reaching local point `p`, whose texture coordinate is `uvw`.
+fn light_at(p: vec3<f32>, uvw: vec3<f32>) -> f32 {
     switch SHADOW {
         case 1u: {
             return toward_light(p);
         }
         case 2u: {
-            return textureSampleLevel(light_in, linear_clamp, uvw_of(p), 0.0).r;
+            return textureSampleLevel(density, linear_clamp, uvw, 0.0).g;
+        }
+        case 3u: {
+            return textureSampleLevel(light_in, linear_clamp, uvw * params.light_scale + params.light_offset, 0.0).r;
         }
         default: {
             return 1.0;
@@ -157,20 +178,20 @@ fn light_at(p: vec3<f32>) -> f32 {
     }
 }
 
-// Local exit distance of the ray from the brick holding local point `p`, and the brick's range.
+// The ray's exit parameter from the brick holding texture coordinate `uvw`, and the brick's
+// range. The ray is uo + t·ud in texture coordinates; `inv_ud` is 1 / ud.
 struct Brick {
     exit: f32,
     range: vec2<f32>,
 }
 
-fn brick_at(p: vec3<f32>, o: vec3<f32>, dir: vec3<f32>) -> Brick {
-    let voxel = (params.box_max - params.box_min) / vec3<f32>(params.dims);
-    let b = min(vec3<u32>(max(uvw_of(p), vec3<f32>(0.0)) * vec3<f32>(params.dims)) / params.brick,
-                params.bricks - 1u);
-    let lo = params.box_min + vec3<f32>(b * params.brick) * voxel;
-    let hi = min(lo + f32(params.brick) * voxel, params.box_max);
+fn brick_at(uvw: vec3<f32>, uo: vec3<f32>, inv_ud: vec3<f32>) -> Brick {
+    let b = min(vec3<u32>(max(uvw, vec3<f32>(0.0)) * params.brick_scale), params.bricks - 1u);
+    let lo = vec3<f32>(b) * params.brick_size;
+    let hi = min(lo + params.brick_size, vec3<f32>(1.0));
+    let far = max((lo - uo) * inv_ud, (hi - uo) * inv_ud);
     let i = (b.z * params.bricks.y + b.y) * params.bricks.x + b.x;
-    return Brick(ray_box(o, dir, lo, hi).y, ranges[i]);
+    return Brick(min(min(far.x, far.y), far.z), ranges[i]);
 }
 
 // Interleaved gradient noise (Jimenez 2014), shifted per frame.
@@ -229,9 +250,14 @@ fn march_pixel(pixel: vec2<f32>) -> vec4<f32> {
     if !(t0 < t1) {
         return vec4<f32>(0.0);
     }
+    // The same ray in texture coordinates, where the samples are taken.
+    let uo = uvw_of(o);
+    let ud = dir * params.inv_extent;
     let h = params.step;
     let j = jitter_of(pixel);
-    var k = floor(t0 / h - j);
+    // Segment k of the lattice runs from x = (k + j)·h to x + h; `x` carries its start.
+    var x = floor(t0 / h - j);
+    x = (x + j) * h;
     var colour = vec3<f32>(0.0);
     var transmittance = 1.0;
     var peak = -INF;
@@ -242,28 +268,31 @@ fn march_pixel(pixel: vec2<f32>) -> vec4<f32> {
     var clear = true;
     var samples = 0u;
     for (var n = 0u; n < params.max_steps; n++) {
-        let a = max((k + j) * h, t0);
+        let a = max(x, t0);
         if a >= t1 {
             break;
         }
-        let b = min((k + j + 1.0) * h, t1);
+        let x_next = x + h;
+        let b = min(x_next, t1);
         let t = 0.5 * (a + b);
-        let p = o + t * dir;
+        let uvw = uo + t * ud;
         // Only after a sample that added nothing: inside dense matter the lookup (a dependent
         // load that, per lane, stalls the whole warp) is not made at all.
         if SKIP && clear && t >= brick_end {
-            let brick = brick_at(p, o, dir);
+            let brick = brick_at(uvw, uo, 1.0 / ud);
             brick_end = brick.exit;
             let empty = select(brick.range.y <= params.skip_below, brick.range.y <= peak, MODE == 1u);
             let iso_empty = MODE == 2u && brick.range.y < params.iso;
             if (empty && MODE != 2u) || iso_empty {
                 // Continue with the segment holding the brick's exit (never go back).
-                k = max(k + 1.0, floor(brick.exit / h - j));
+                x = max(x_next, (floor(brick.exit / h - j) + j) * h);
                 below = min(brick.exit, t1);
                 continue;
             }
         }
-        let d = density_at(p);
+        x = x_next;
+        let texel = textureSampleLevel(density, linear_clamp, uvw, 0.0);
+        let d = texel.r;
         samples += 1u;
         if MODE == 1u {
             clear = d <= peak;
@@ -274,27 +303,30 @@ fn march_pixel(pixel: vec2<f32>) -> vec4<f32> {
                 let q = o + th * dir;
                 let n_local = iso_normal(q);
                 let l = normalize(params.light_local);
-                let lit = params.ambient + params.light_colour * max(dot(n_local, l), 0.0) * light_at(q);
+                let lit = params.ambient + params.light_colour * max(dot(n_local, l), 0.0) * light_at(q, uvw_of(q));
                 let c = transfer(params.iso).rgb * lit;
                 return select(vec4<f32>(c, 1.0), vec4<f32>(f32(samples), 0.0, 0.0, 1.0), COUNT_SAMPLES);
             }
             below = t;
         } else {
             let s = transfer(d);
-            let alpha = corrected(s.a, b - a);
-            clear = alpha <= 0.0;
-            if alpha > 0.0 {
-                // Fetched here rather than with the density: issuing it early for every sample
-                // (or for those after an opaque one) measured slower on the H100.
-                let lit = params.ambient + params.light_colour * light_at(p);
-                colour += transmittance * alpha * s.rgb * lit;
-                transmittance *= 1.0 - alpha;
+            // The segment's transmittance (1 − α)^(len / Δ₀): 1 where it adds nothing.
+            let tau = exp2(log2(max(1.0 - s.a, 0.0)) * ((b - a) * params.inv_reference_step));
+            clear = tau >= 1.0;
+            if !clear {
+                // The light volume came with the density; shadow rays are marched from here.
+                var light = texel.g;
+                if SHADOW != 2u {
+                    light = light_at(o + t * dir, uvw);
+                }
+                let lit = params.ambient + params.light_colour * light;
+                colour += (transmittance * (1.0 - tau) * s.rgb) * lit;
+                transmittance *= tau;
                 if transmittance < params.min_transmittance {
                     break;
                 }
             }
         }
-        k += 1.0;
     }
     if COUNT_SAMPLES {
         return vec4<f32>(f32(samples), 0.0, 0.0, 1.0);
@@ -318,14 +350,15 @@ fn march(@builtin(global_invocation_id) id: vec3<u32>) {
     textureStore(colour_out, xy, march_pixel(vec2<f32>(xy) + 0.5));
 }
 
-// The light volume: transmittance toward the light from each of its voxel centres, read back
-// trilinearly by the march instead of a shadow ray per sample.
+// The light volume: transmittance toward the light from nodes on every other density voxel
+// centre, node i on voxel 2i (the last node half a voxel past the box where the density's size
+// is even). `volume/lit_density` folds it into the density at full resolution.
 @compute @workgroup_size(4, 4, 4)
 fn light_volume(@builtin(global_invocation_id) id: vec3<u32>) {
-    let size = textureDimensions(light_out);
-    if any(id >= size) {
+    if any(id >= textureDimensions(light_out)) {
         return;
     }
-    let p = params.box_min + (vec3<f32>(id) + 0.5) / vec3<f32>(size) * (params.box_max - params.box_min);
+    let uvw = (vec3<f32>(2u * id) + 0.5) / vec3<f32>(params.dims);
+    let p = params.box_min + uvw * (params.box_max - params.box_min);
     textureStore(light_out, id, vec4<f32>(toward_light(p), 0.0, 0.0, 1.0));
 }

@@ -20,10 +20,15 @@
 //!     viewport: [1920, 1080],
 //!     reversed_z: false,
 //! };
+//! let settings = MarchSettings::default();
 //! let mut encoder = ctx.encoder("frame");
+//! // Once per volume, and again when the volume, transfer function or light changes.
 //! let bricks = renderer.encode_bricks(&ctx.device, &mut encoder, &volume)?;
-//! if let Some(marched) = renderer.encode_march(&ctx.device, &mut encoder, &volume, &bricks, None,
-//!     &tf, Mat4::IDENTITY, &view, None, &MarchSettings::default())? {
+//! let light = renderer.encode_light(&ctx.device, &mut encoder, &volume, &bricks, &tf,
+//!     Mat4::IDENTITY, &settings)?;
+//! // Every frame.
+//! if let Some(marched) = renderer.encode_march(&ctx.device, &mut encoder, &volume, &bricks,
+//!     Some(&light), &tf, Mat4::IDENTITY, &view, None, &settings)? {
 //!     renderer.encode_composite(&ctx.device, &mut encoder, colour, &marched)?;
 //! }
 //! ctx.submit_and_wait("frame", encoder)?;
@@ -36,7 +41,7 @@ use crate::bind::{ComputePipeline, RenderPipeline, RenderTargets};
 use crate::error::Error;
 use crate::gpu::{Context, uniform_buffer as uniform};
 use crate::metaball::render::{View, box_visible, screen_rect};
-use crate::shaders::volume::{bricks, volume_composite, volume_march};
+use crate::shaders::volume::{bricks, lit_density, volume_composite, volume_march};
 
 const STAGE: &str = volume_march::STAGE;
 
@@ -337,8 +342,9 @@ pub enum Shadow {
     None,
     /// A shadow ray per sample, segments of `step` world units.
     Rays { step: f32 },
-    /// A light volume at half the density's resolution, built by [`VolumeRenderer::encode_light`]
-    /// with shadow rays of `step`, read trilinearly.
+    /// A light volume: transmittance at every other voxel centre, built by
+    /// [`VolumeRenderer::encode_light`] with shadow rays of `step`, read trilinearly. Folded
+    /// into a copy of the density (one fetch per sample for both) up to [`FOLD_MAX_BYTES`].
     LightVolume { step: f32 },
 }
 
@@ -430,15 +436,48 @@ pub struct Bricks {
     pub count: [u32; 3],
 }
 
-/// Transmittance toward the light per voxel of a half-resolution grid.
+/// Transmittance toward the light, built by [`VolumeRenderer::encode_light`] for one volume,
+/// transfer function, light, shadow step and transform.
 pub struct LightVolume {
+    /// Transmittance at every other voxel centre (red, `Rgba16Float`): texel i at the centre
+    /// of density voxel 2i, `dims / 2 + 1` per axis.
     pub texture: wgpu::Texture,
+    /// When folded ([`VolumeRenderer::encode_light_folded`]), what the march samples in place
+    /// of the density: at the density's resolution, the density in red, copied exactly, and the
+    /// trilinear interpolant of `texture` at each voxel centre in green, so one fetch gives
+    /// both. `Rgba8Unorm` for an `R8Unorm` volume (4 bytes a voxel), `Rgba16Float` for
+    /// `R16Float`, `Rg32Float` for `R32Float` (blue and alpha unused: two-channel 8- and 16-bit
+    /// formats are not writable by a shader in WebGPU). `None`: the march fetches `texture` as
+    /// well.
+    pub lit_density: Option<wgpu::Texture>,
     /// What it was built for: a march with anything else is refused, not drawn wrong.
-    built_for: (Vec3, f32, Mat4, TransferFunction),
+    built_for: (Vec3, f32, Mat4, TransferFunction, wgpu::Texture),
 }
 
-/// The march's `MODE` and `SHADOW` overrides for `settings`.
-fn march_variant(settings: &MarchSettings) -> (usize, usize) {
+/// The lit-density format for a density format: the smallest a shader may write.
+fn lit_format(density: wgpu::TextureFormat) -> wgpu::TextureFormat {
+    match density {
+        wgpu::TextureFormat::R8Unorm => wgpu::TextureFormat::Rgba8Unorm,
+        wgpu::TextureFormat::R16Float => wgpu::TextureFormat::Rgba16Float,
+        _ => wgpu::TextureFormat::Rg32Float,
+    }
+}
+
+/// The lit-density pass, one entry point per format.
+struct LitPipelines {
+    unorm8: ComputePipeline<lit_density::lit_unorm8::Entry>,
+    float16: ComputePipeline<lit_density::lit_float16::Entry>,
+    float32: ComputePipeline<lit_density::lit_float32::Entry>,
+}
+
+/// The largest lit density [`VolumeRenderer::encode_light`] folds, in bytes: a bound on memory
+/// (an `R8Unorm` volume folds into 4 bytes a voxel, so 512³ takes 512 MiB), not on speed. On the
+/// H100 folding took the 256³ cloud's frame from inside from 1.16 to 0.89 ms and 512³ from
+/// 2.17 to 1.54 ms, and cost 0.16 ms more to build at 256³ (`cargo xtask bench volume`).
+pub const FOLD_MAX_BYTES: u64 = 512 << 20;
+
+/// The march's `MODE` and `SHADOW` overrides for `settings` with `light`.
+fn march_variant(settings: &MarchSettings, light: Option<&LightVolume>) -> (usize, usize) {
     let mode = match settings.mode {
         Mode::EmissionAbsorption => 0,
         Mode::MaximumIntensity => 1,
@@ -447,7 +486,10 @@ fn march_variant(settings: &MarchSettings) -> (usize, usize) {
     let shadow = match settings.shadow {
         Shadow::None => 0,
         Shadow::Rays { .. } => 1,
-        Shadow::LightVolume { .. } => 2,
+        Shadow::LightVolume { .. } => match light.and_then(|l| l.lit_density.as_ref()) {
+            Some(_) => 2,
+            None => 3,
+        },
     };
     (mode, shadow)
 }
@@ -466,6 +508,7 @@ pub struct VolumeRenderer {
     march: Vec<std::sync::OnceLock<ComputePipeline<volume_march::march::Entry>>>,
     light: ComputePipeline<volume_march::light_volume::Entry>,
     composite: RenderPipeline<volume_composite::fs_main::Entry>,
+    lit: LitPipelines,
     sampler: wgpu::Sampler,
     no_light: wgpu::Texture,
     no_depth: wgpu::Texture,
@@ -485,7 +528,9 @@ impl VolumeRenderer {
                 ..Default::default()
             },
         )?;
-        let tiny = |label, format, usage| {
+        // Bound in place of a light volume's own texture and of the caller's depth when there
+        // are none (the march reads them only when told to).
+        let tiny = |label, format, dimension| {
             device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
                 size: wgpu::Extent3d {
@@ -495,37 +540,40 @@ impl VolumeRenderer {
                 },
                 mip_level_count: 1,
                 sample_count: 1,
-                dimension: if format == wgpu::TextureFormat::Depth32Float {
-                    wgpu::TextureDimension::D2
-                } else {
-                    wgpu::TextureDimension::D3
-                },
+                dimension,
                 format,
-                usage,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING,
                 view_formats: &[],
             })
         };
+        let no_light = tiny(
+            "no light volume",
+            wgpu::TextureFormat::Rgba16Float,
+            wgpu::TextureDimension::D3,
+        );
+        let no_depth = tiny(
+            "no scene depth",
+            wgpu::TextureFormat::Depth32Float,
+            wgpu::TextureDimension::D2,
+        );
         Ok(Self {
             bricks: ComputePipeline::new(device)?,
-            march: (0..36).map(|_| std::sync::OnceLock::new()).collect(),
+            march: (0..48).map(|_| std::sync::OnceLock::new()).collect(),
             light: ComputePipeline::new(device)?,
             composite,
+            lit: LitPipelines {
+                unorm8: ComputePipeline::new(device)?,
+                float16: ComputePipeline::new(device)?,
+                float32: ComputePipeline::new(device)?,
+            },
             sampler: device.create_sampler(&wgpu::SamplerDescriptor {
                 label: Some("volume trilinear"),
                 mag_filter: wgpu::FilterMode::Linear,
                 min_filter: wgpu::FilterMode::Linear,
                 ..Default::default()
             }),
-            no_light: tiny(
-                "no light volume",
-                wgpu::TextureFormat::Rgba16Float,
-                wgpu::TextureUsages::TEXTURE_BINDING,
-            ),
-            no_depth: tiny(
-                "no scene depth",
-                wgpu::TextureFormat::Depth32Float,
-                wgpu::TextureUsages::TEXTURE_BINDING,
-            ),
+            no_light,
+            no_depth,
         })
     }
 
@@ -608,6 +656,9 @@ impl VolumeRenderer {
             Shadow::None => 1.0,
             Shadow::Rays { step } | Shadow::LightVolume { step } => step,
         };
+        // Density to entry position: entry i lies at i.
+        let tf_scale =
+            ((tf.entries.len() - 1) as f64 / (tf.range[1] as f64 - tf.range[0] as f64)) as f32;
         let (near_z, far_z) = if view.reversed_z {
             (1.0, 0.0)
         } else {
@@ -624,8 +675,15 @@ impl VolumeRenderer {
                 box_max: hi,
                 reference_step: settings.reference_step,
                 dims: volume.dims.into(),
-                brick: BRICK,
                 bricks: bricks.count.into(),
+                brick_scale: Vec3::from_array(volume.dims.map(|d| d as f32)) / BRICK as f32,
+                brick_size: BRICK as f32 / Vec3::from_array(volume.dims.map(|d| d as f32)),
+                // Voxel-centre index v = uvw · dims − ½, node coordinate v / 2, light texture
+                // coordinate (v / 2 + ½) / nodes.
+                light_scale: Vec3::from_array(
+                    volume.dims.map(|d| d as f32 / (2 * (d / 2 + 1)) as f32),
+                ),
+                light_offset: Vec3::from_array(volume.dims.map(|d| 0.25 / (d / 2 + 1) as f32)),
                 // Unit world length along the light per unit of its parameter.
                 light_local,
                 light_colour: settings.light_colour,
@@ -635,8 +693,8 @@ impl VolumeRenderer {
                 rect_size: glam::UVec2::new(rect[2] - rect[0], rect[3] - rect[1]),
                 near_z,
                 far_z,
-                tf_range: glam::Vec2::from_array(tf.range),
                 tf_count: tf.entries.len() as u32,
+                tf_offset: (-tf_scale as f64 * tf.range[0] as f64) as f32,
                 skip_below: tf.clear_below().clamp(f32::MIN, f32::MAX),
                 iso,
                 min_transmittance: settings.min_transmittance,
@@ -647,14 +705,15 @@ impl VolumeRenderer {
                 shadow_max_steps: guard(shadow_step),
                 use_depth: use_depth as u32,
                 inv_extent: (hi - lo).recip(),
-                tf_scale: (tf.range[1] - tf.range[0]).recip(),
+                tf_scale,
                 inv_reference_step: settings.reference_step.recip(),
             },
         ))
     }
 
     /// Transmittance toward the light for `settings.shadow == Shadow::LightVolume` (rebuild when
-    /// the volume, transfer function, light or transform changes).
+    /// the volume, transfer function, light or transform changes), folded into a copy of the
+    /// density when that copy takes at most [`FOLD_MAX_BYTES`].
     #[allow(clippy::too_many_arguments)]
     pub fn encode_light(
         &self,
@@ -666,6 +725,37 @@ impl VolumeRenderer {
         local_to_world: Mat4,
         settings: &MarchSettings,
     ) -> Result<LightVolume, Error> {
+        let texel = lit_format(volume.texture.format())
+            .block_copy_size(None)
+            .expect("colour format") as u64;
+        let bytes = volume.dims.iter().map(|&d| d as u64).product::<u64>() * texel;
+        self.encode_light_folded(
+            device,
+            encoder,
+            volume,
+            bricks,
+            tf,
+            local_to_world,
+            settings,
+            bytes <= FOLD_MAX_BYTES,
+        )
+    }
+
+    /// [`Self::encode_light`] with the choice made: `fold` builds [`LightVolume::lit_density`],
+    /// so the march takes density and light in one fetch per sample, at the cost of a copy of
+    /// the density with the light beside it.
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode_light_folded(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        volume: &Volume,
+        bricks: &Bricks,
+        tf: &TransferFunction,
+        local_to_world: Mat4,
+        settings: &MarchSettings,
+        fold: bool,
+    ) -> Result<LightVolume, Error> {
         settings.check()?;
         tf.check()?;
         check_transform(local_to_world)?;
@@ -675,7 +765,8 @@ impl VolumeRenderer {
                 what: "encode_light needs settings.shadow = Shadow::LightVolume".into(),
             });
         };
-        let size = volume.dims.map(|d| d.div_ceil(2));
+        // Nodes on every other voxel centre, one past the last voxel when the size is even.
+        let size = volume.dims.map(|d| d / 2 + 1);
         let texture = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("light volume"),
             size: wgpu::Extent3d {
@@ -687,7 +778,9 @@ impl VolumeRenderer {
             sample_count: 1,
             dimension: wgpu::TextureDimension::D3,
             format: wgpu::TextureFormat::Rgba16Float,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::STORAGE_BINDING,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::STORAGE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
             view_formats: &[],
         });
         // The light pass reads only the volume fields of the view-independent parameters.
@@ -728,10 +821,100 @@ impl VolumeRenderer {
         });
         let groups = ComputePipeline::<volume_march::light_volume::Entry>::groups_for(size);
         self.light.dispatch(&mut pass, &bound, groups);
+        drop(pass);
+        let lit_density = if fold {
+            Some(self.encode_lit_density(device, encoder, volume, &dv, &lv)?)
+        } else {
+            None
+        };
         Ok(LightVolume {
             texture,
-            built_for: (settings.light_dir, step, local_to_world, tf.clone()),
+            lit_density,
+            built_for: (
+                settings.light_dir,
+                step,
+                local_to_world,
+                tf.clone(),
+                volume.texture.clone(),
+            ),
         })
+    }
+
+    /// The lit density of `volume` (`density`) from its light volume's nodes (`light`).
+    fn encode_lit_density(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        volume: &Volume,
+        density: &wgpu::TextureView,
+        light: &wgpu::TextureView,
+    ) -> Result<wgpu::Texture, Error> {
+        let [w, h, d] = volume.dims;
+        let texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("lit density"),
+            size: wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: d,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D3,
+            format: lit_format(volume.texture.format()),
+            usage: wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::STORAGE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let out = texture.create_view(&Default::default());
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(lit_density::STAGE),
+            timestamp_writes: None,
+        });
+        let groups = [w.div_ceil(8), h.div_ceil(8), d];
+        let sampler = (&self.sampler).into();
+        match texture.format() {
+            wgpu::TextureFormat::Rgba8Unorm => {
+                let p = &self.lit.unorm8;
+                let bound = p.bind(
+                    device,
+                    &lit_density::lit_unorm8::Resources {
+                        density: density.into(),
+                        light: light.into(),
+                        linear_clamp: sampler,
+                        lit_out_unorm8: (&out).into(),
+                    },
+                )?;
+                p.dispatch(&mut pass, &bound, groups);
+            }
+            wgpu::TextureFormat::Rgba16Float => {
+                let p = &self.lit.float16;
+                let bound = p.bind(
+                    device,
+                    &lit_density::lit_float16::Resources {
+                        density: density.into(),
+                        light: light.into(),
+                        linear_clamp: sampler,
+                        lit_out_float16: (&out).into(),
+                    },
+                )?;
+                p.dispatch(&mut pass, &bound, groups);
+            }
+            _ => {
+                let p = &self.lit.float32;
+                let bound = p.bind(
+                    device,
+                    &lit_density::lit_float32::Resources {
+                        density: density.into(),
+                        light: light.into(),
+                        linear_clamp: sampler,
+                        lit_out_float32: (&out).into(),
+                    },
+                )?;
+                p.dispatch(&mut pass, &bound, groups);
+            }
+        }
+        Ok(texture)
     }
 
     /// March `volume` under `local_to_world` for `view` into a premultiplied image. Rays stop at
@@ -761,22 +944,29 @@ impl VolumeRenderer {
                 what: "the brick grid was built for a volume of another size".into(),
             });
         }
-        let light_view = match (settings.shadow, light) {
+        // With a folded light volume the march samples the lit density in place of the density;
+        // with one not folded, its texture as well.
+        let (density, light_texture) = match (settings.shadow, light) {
             (Shadow::LightVolume { step }, Some(l)) => {
-                let (dir, built_step, transform, built_tf) = &l.built_for;
+                let (dir, built_step, transform, built_tf, built_volume) = &l.built_for;
                 if *built_step != step
                     || *dir != settings.light_dir
                     || *transform != local_to_world
                     || built_tf != tf
+                    || *built_volume != volume.texture
                 {
                     return Err(Error::Invalid {
                         stage: STAGE,
-                        what: "the light volume was built for another light, shadow step, \
-                               transform or transfer function: rebuild it with encode_light"
+                        what: "the light volume was built for another volume, light, shadow \
+                               step, transform or transfer function: rebuild it with \
+                               encode_light"
                             .into(),
                     });
                 }
-                l.texture.create_view(&Default::default())
+                match &l.lit_density {
+                    Some(lit) => (lit, &self.no_light),
+                    None => (&volume.texture, &l.texture),
+                }
             }
             (Shadow::LightVolume { .. }, None) => {
                 return Err(Error::Invalid {
@@ -784,7 +974,7 @@ impl VolumeRenderer {
                     what: "Shadow::LightVolume needs the light volume from encode_light".into(),
                 });
             }
-            _ => self.no_light.create_view(&Default::default()),
+            _ => (&volume.texture, &self.no_light),
         };
         if let Some(d) = scene_depth {
             let t = d.texture();
@@ -840,13 +1030,14 @@ impl VolumeRenderer {
         });
         let tf_buffer = tf_buffer(device, tf);
         let no_depth = self.no_depth.create_view(&Default::default());
-        let (dv, cv) = (
-            volume.texture.create_view(&Default::default()),
+        let (dv, lv, cv) = (
+            density.create_view(&Default::default()),
+            light_texture.create_view(&Default::default()),
             colour.create_view(&Default::default()),
         );
-        let (mode, shadow) = march_variant(settings);
+        let (mode, shadow) = march_variant(settings, light);
         let march = ComputePipeline::cached(
-            &self.march[((mode * 3 + shadow) * 2 + settings.skip as usize) * 2
+            &self.march[((mode * 4 + shadow) * 2 + settings.skip as usize) * 2
                 + settings.count_samples as usize],
             device,
             &[
@@ -864,7 +1055,7 @@ impl VolumeRenderer {
                 linear_clamp: (&self.sampler).into(),
                 tf: (&tf_buffer).into(),
                 ranges: (&bricks.ranges).into(),
-                light_in: (&light_view).into(),
+                light_in: (&lv).into(),
                 scene_depth: scene_depth.unwrap_or(&no_depth).into(),
                 colour_out: (&cv).into(),
             },
@@ -935,11 +1126,28 @@ impl VolumeRenderer {
     }
 }
 
+/// The transfer function as the march reads it: per interval i, the line through entries i and
+/// i + 1 in the entry position f, as rows `e[i] − i·(e[i+1] − e[i])` and `e[i+1] − e[i]` (taken
+/// in f64), so a sample evaluates `row0 + f·row1`.
+fn tf_rows(tf: &TransferFunction) -> Vec<[f32; 4]> {
+    tf.entries
+        .windows(2)
+        .enumerate()
+        .flat_map(|(i, e)| {
+            let slope = std::array::from_fn(|c| e[1][c] as f64 - e[0][c] as f64);
+            [
+                std::array::from_fn(|c| (e[0][c] as f64 - i as f64 * slope[c]) as f32),
+                slope.map(|v| v as f32),
+            ]
+        })
+        .collect()
+}
+
 fn tf_buffer(device: &wgpu::Device, tf: &TransferFunction) -> wgpu::Buffer {
     use wgpu::util::DeviceExt;
     device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("transfer function"),
-        contents: bytemuck::cast_slice(&tf.entries),
+        contents: bytemuck::cast_slice(&tf_rows(tf)),
         usage: wgpu::BufferUsages::STORAGE,
     })
 }
