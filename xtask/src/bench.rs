@@ -34,6 +34,8 @@ pub struct Args {
     pub mesh: Option<PathBuf>,
     /// `voxelize`: only these modes (empty: all).
     pub modes: Vec<String>,
+    /// `voxelize`: chart this saved `voxelize.csv` instead of measuring.
+    pub replot: Option<PathBuf>,
 }
 
 /// Memory bandwidth the pass figures are compared with (H100 SXM HBM3, rounded down).
@@ -129,11 +131,12 @@ pub(crate) const WARMUP_TIME: std::time::Duration = std::time::Duration::from_mi
 pub(crate) type Timing = (f64, f64, f64, Vec<(String, f64)>);
 
 /// Time `reps` runs of `record` (after at least `warmup` runs and `WARMUP_TIME`), each recording
-/// its passes into a fresh encoder.
+/// its passes into a fresh encoder; with `heater`, run before each submission.
 pub(crate) fn time_runs(
     ctx: &Context,
     warmup: usize,
     reps: usize,
+    heater: Option<&crate::heater::Heater>,
     mut record: impl FnMut(&mut wgpu::CommandEncoder, &mut Profiler),
 ) -> Result<Timing, String> {
     let mut prof = Profiler::new(ctx, 64)
@@ -147,6 +150,9 @@ pub(crate) fn time_runs(
         let mut enc = ctx.encoder("bench");
         record(&mut enc, &mut prof);
         prof.resolve(&mut enc);
+        if let Some(h) = heater {
+            h.run(ctx)?;
+        }
         ctx.submit_and_wait("bench", enc)
             .map_err(|e| e.to_string())?;
         let (passes, total) = prof.read(ctx).map_err(|e| e.to_string())?;
@@ -374,10 +380,11 @@ fn distance(args: &Args) -> Result<(), String> {
         let mut exact_d2: Vec<u64> = Vec::new();
         for (name, opts) in &methods3 {
             bar.set_message(format!("{n}³ {name}"));
-            let (med, min, max, passes) = time_runs(&ctx, args.warmup, args.reps, |enc, prof| {
-                d3.encode_profiled(&ctx.device, enc, &volume, opts, Some(prof))
-                    .expect("encode");
-            })?;
+            let (med, min, max, passes) =
+                time_runs(&ctx, args.warmup, args.reps, None, |enc, prof| {
+                    d3.encode_profiled(&ctx.device, enc, &volume, opts, Some(prof))
+                        .expect("encode");
+                })?;
             let mut enc = ctx.encoder("bench readback");
             let field = d3
                 .encode(&ctx.device, &mut enc, &volume, opts)
@@ -436,10 +443,11 @@ fn distance(args: &Args) -> Result<(), String> {
         // Exact.
         bar.set_message(format!("{n}² exact"));
         let opts = Options3d::default();
-        let (med, min, max, passes) = time_runs(&ctx, args.warmup, args.reps, |enc, prof| {
-            d3.encode_exact_2d(&ctx.device, enc, &tex, &opts, Some(prof))
-                .expect("encode");
-        })?;
+        let (med, min, max, passes) =
+            time_runs(&ctx, args.warmup, args.reps, None, |enc, prof| {
+                d3.encode_exact_2d(&ctx.device, enc, &tex, &opts, Some(prof))
+                    .expect("encode");
+            })?;
         let mut enc = ctx.encoder("bench readback");
         let field = d3
             .encode_exact_2d(&ctx.device, &mut enc, &tex, &opts, None)
@@ -482,10 +490,11 @@ fn distance(args: &Args) -> Result<(), String> {
                 variant: v,
                 ..Options::default()
             };
-            let (med, min, max, passes) = time_runs(&ctx, args.warmup, args.reps, |enc, prof| {
-                jfa2.encode_profiled(&ctx.device, enc, &tex, &opts, Some(prof))
-                    .expect("encode");
-            })?;
+            let (med, min, max, passes) =
+                time_runs(&ctx, args.warmup, args.reps, None, |enc, prof| {
+                    jfa2.encode_profiled(&ctx.device, enc, &tex, &opts, Some(prof))
+                        .expect("encode");
+                })?;
             let mut enc = ctx.encoder("bench readback");
             let field = jfa2
                 .encode(&ctx.device, &mut enc, &tex, &opts)

@@ -58,11 +58,25 @@ impl Stamps {
         ctx: &Context,
         record: impl FnOnce(&mut wgpu::CommandEncoder) -> Result<(), String>,
     ) -> Result<f64, String> {
+        self.time_after(ctx, None, record)
+    }
+
+    /// [`Self::time`] with `heater` run (and waited for) between encoding `record` and
+    /// submitting it, so the timed work starts at full clocks.
+    pub(crate) fn time_after(
+        &self,
+        ctx: &Context,
+        heater: Option<&crate::heater::Heater>,
+        record: impl FnOnce(&mut wgpu::CommandEncoder) -> Result<(), String>,
+    ) -> Result<f64, String> {
         let mut enc = ctx.encoder("bench");
         enc.write_timestamp(&self.set, 0);
         record(&mut enc)?;
         enc.write_timestamp(&self.set, 1);
         enc.resolve_query_set(&self.set, 0..2, &self.buf, 0);
+        if let Some(h) = heater {
+            h.run(ctx)?;
+        }
         ctx.submit_and_wait("bench", enc)
             .map_err(|e| e.to_string())?;
         let b = read_buffer(ctx, &self.buf).map_err(|e| e.to_string())?;
@@ -294,11 +308,12 @@ fn bench(
                 push(name, label.clone(), build_ms, m);
                 // Where the build's time goes: each pass on its own timestamps (the passes'
                 // sum leaves out the gaps between them, which the build time above includes).
-                let (_, _, _, passes) = crate::bench::time_runs(&ctx, warmup, reps, |enc, p| {
-                    balls
-                        .encode_profiled(&ctx.device, enc, &inst, &grid, edge, &s, Some(p))
-                        .expect("the same build ran above");
-                })?;
+                let (_, _, _, passes) =
+                    crate::bench::time_runs(&ctx, warmup, reps, None, |enc, p| {
+                        balls
+                            .encode_profiled(&ctx.device, enc, &inst, &grid, edge, &s, Some(p))
+                            .expect("the same build ran above");
+                    })?;
                 let split = passes
                     .iter()
                     .map(|(n, ms)| format!("{n} {ms:.3}"))

@@ -2,9 +2,11 @@
 //! fBm cloud, 256³ and 512³ (64³ and 128³ with `--quick`), at 1920×1080 (480×270 quick), with
 //! the camera outside the box and inside it; across step length, brick skipping on and off,
 //! jitter on and off, and shadowing by shadow rays against the precomputed light volume.
+//! `--sizes 256,384` times those volume sizes instead.
 //!
 //! Time: GPU timestamps around the march and the composite into an 8-bit target, median of the
-//! timed runs; the brick grid and the light volume are built once per volume and timed apart.
+//! timed runs, each after a 20 ms spin kernel on a hardware adapter so the clocks are up
+//! (`heater`); the brick grid and the light volume are built once per volume and timed apart.
 //! Error: RMS and largest difference of the premultiplied RGBA against a reference march (a
 //! quarter-voxel step, no skipping, no jitter, the same light volume), over every pixel.
 //! Writes `volume.csv` and `volume.png`.
@@ -22,7 +24,7 @@ use glam::{Mat4, Vec3};
 use crate::bench_metaball::{Stamps, median};
 
 pub fn run(args: &crate::bench::Args) -> ExitCode {
-    match bench(args.quick, args.reps, args.warmup, &args.out) {
+    match bench(args.quick, args.reps, args.warmup, &args.sizes, &args.out) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("bench volume: {e}");
@@ -50,9 +52,12 @@ struct Scene<'a> {
     volume: &'a Volume,
     bricks: &'a Bricks,
     light: &'a LightVolume,
+    /// The light volume built the other way (folded into the density or not).
+    other_light: &'a LightVolume,
     tf: &'a TransferFunction,
     view: &'a View,
     target: &'a wgpu::TextureView,
+    heater: Option<&'a crate::heater::Heater>,
 }
 
 impl Scene<'_> {
@@ -60,8 +65,10 @@ impl Scene<'_> {
         &self,
         enc: &mut wgpu::CommandEncoder,
         s: &MarchSettings,
+        other: bool,
     ) -> Result<Option<VolumeMarched>, String> {
-        let light = matches!(s.shadow, Shadow::LightVolume { .. }).then_some(self.light);
+        let light = if other { self.other_light } else { self.light };
+        let light = matches!(s.shadow, Shadow::LightVolume { .. }).then_some(light);
         self.renderer
             .encode_march(
                 &self.ctx.device,
@@ -79,9 +86,11 @@ impl Scene<'_> {
     }
 
     /// The march's premultiplied RGBA.
-    fn image(&self, s: &MarchSettings) -> Result<Vec<[f32; 4]>, String> {
+    fn image(&self, s: &MarchSettings, other: bool) -> Result<Vec<[f32; 4]>, String> {
         let mut enc = self.ctx.encoder("bench volume image");
-        let m = self.march(&mut enc, s)?.ok_or("the volume is off screen")?;
+        let m = self
+            .march(&mut enc, s, other)?
+            .ok_or("the volume is off screen")?;
         self.ctx
             .submit_and_wait("bench volume image", enc)
             .map_err(|e| e.to_string())?;
@@ -96,13 +105,16 @@ impl Scene<'_> {
         &self,
         stamps: &Stamps,
         s: &MarchSettings,
+        other: bool,
         warmup: usize,
         reps: usize,
     ) -> Result<f64, String> {
         let mut times = Vec::new();
         for i in 0..warmup + reps {
-            let ms = stamps.time(self.ctx, |enc| {
-                let m = self.march(enc, s)?.ok_or("the volume is off screen")?;
+            let ms = stamps.time_after(self.ctx, self.heater, |enc| {
+                let m = self
+                    .march(enc, s, other)?
+                    .ok_or("the volume is off screen")?;
                 self.renderer
                     .encode_composite(&self.ctx.device, enc, self.target, &m)
                     .map_err(|e| e.to_string())
@@ -115,12 +127,32 @@ impl Scene<'_> {
     }
 }
 
-fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Result<(), String> {
+fn bench(
+    quick: bool,
+    reps: usize,
+    warmup: usize,
+    only: &[usize],
+    out: &std::path::Path,
+) -> Result<(), String> {
     let ctx = Context::new().map_err(|e| e.to_string())?;
     let adapter = ctx.adapter_name();
     println!("adapter: {adapter}");
     let stamps = Stamps::new(&ctx)?;
-    let sizes: &[u32] = if quick { &[64, 128] } else { &[256, 512] };
+    // Building a 512³ cloud on the CPU leaves the GPU idle for seconds and its clocks low: the
+    // rows after it read up to 3× slow until a heavy row (shadow rays) brought the clocks back.
+    // A 20 ms spin before each timed frame keeps them up (`heater`); not on a software adapter.
+    let heater = if ctx.is_software() {
+        None
+    } else {
+        Some(crate::heater::Heater::new(&ctx, &stamps, 20.0)?)
+    };
+    let sizes: Vec<u32> = if !only.is_empty() {
+        only.iter().map(|&n| n as u32).collect()
+    } else if quick {
+        vec![64, 128]
+    } else {
+        vec![256, 512]
+    };
     let (width, height) = if quick { (480, 270) } else { (1920, 1080) };
     let renderer = VolumeRenderer::new(&ctx.device, wgpu::TextureFormat::Rgba8Unorm)
         .map_err(|e| e.to_string())?;
@@ -154,7 +186,7 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
         "| volume | camera | config | frame ms | RMS err | max err |\n|---|---|---|---|---|---|"
     );
     let mut rows = Vec::new();
-    for &n in sizes {
+    for &n in &sizes {
         let dims = [n; 3];
         let voxel = 1.0 / n as f32;
         let volume = Volume::upload(
@@ -173,7 +205,7 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
             ..MarchSettings::default()
         };
         let mut made = None;
-        let bricks_ms = stamps.time(&ctx, |enc| {
+        let bricks_ms = stamps.time_after(&ctx, heater.as_ref(), |enc| {
             made = Some(
                 renderer
                     .encode_bricks(&ctx.device, enc, &volume)
@@ -182,11 +214,13 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
             Ok(())
         })?;
         let bricks = made.ok_or("no bricks")?;
-        let mut lit = None;
-        let light_ms = stamps.time(&ctx, |enc| {
-            lit = Some(
-                renderer
-                    .encode_light(
+        // The light volume as `encode_light` builds it (folded into the density for sizes up
+        // to FOLD_MAX_BYTES), and the other way, for one row.
+        let build = |fold: Option<bool>| -> Result<(LightVolume, f64), String> {
+            let mut lit = None;
+            let ms = stamps.time_after(&ctx, heater.as_ref(), |enc| {
+                let made = match fold {
+                    None => renderer.encode_light(
                         &ctx.device,
                         enc,
                         &volume,
@@ -194,14 +228,33 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
                         &tf,
                         Mat4::IDENTITY,
                         &base,
-                    )
-                    .map_err(|e| e.to_string())?,
-            );
-            Ok(())
-        })?;
-        let light = lit.ok_or("no light volume")?;
+                    ),
+                    Some(f) => renderer.encode_light_folded(
+                        &ctx.device,
+                        enc,
+                        &volume,
+                        &bricks,
+                        &tf,
+                        Mat4::IDENTITY,
+                        &base,
+                        f,
+                    ),
+                };
+                lit = Some(made.map_err(|e| e.to_string())?);
+                Ok(())
+            })?;
+            Ok((lit.ok_or("no light volume")?, ms))
+        };
+        let (light, light_ms) = build(None)?;
+        let folded = light.lit_density.is_some();
+        let (other_light, other_ms) = build(Some(!folded))?;
+        let (how, other_how) = if folded {
+            ("light folded", "light not folded")
+        } else {
+            ("light not folded", "light folded")
+        };
         println!(
-            "| {n}³ | — | brick grid build {bricks_ms:.3} ms, light volume build {light_ms:.3} ms | | | |"
+            "| {n}³ | — | brick grid build {bricks_ms:.3} ms, light volume build {light_ms:.3} ms ({how}), {other_ms:.3} ms ({other_how}) | | | |"
         );
         for (camera, eye, target) in cameras {
             let view = View {
@@ -215,17 +268,23 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
                 volume: &volume,
                 bricks: &bricks,
                 light: &light,
+                other_light: &other_light,
                 tf: &tf,
                 view: &view,
                 target: &target_view,
+                heater: heater.as_ref(),
             };
-            let reference = scene.image(&MarchSettings {
-                step: 0.25 * voxel,
-                skip: false,
-                jitter: false,
-                ..base
-            })?;
-            let mut configs: Vec<(String, MarchSettings, &'static str)> = Vec::new();
+            let reference = scene.image(
+                &MarchSettings {
+                    step: 0.25 * voxel,
+                    skip: false,
+                    jitter: false,
+                    ..base
+                },
+                false,
+            )?;
+            // (row, settings, shadowing, with the other light volume)
+            let mut configs: Vec<(String, MarchSettings, &'static str, bool)> = Vec::new();
             for k in [0.5f32, 1.0, 2.0] {
                 configs.push((
                     format!("step {k} voxel"),
@@ -233,7 +292,8 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
                         step: k * voxel,
                         ..base
                     },
-                    "light volume",
+                    how,
+                    false,
                 ));
             }
             configs.push((
@@ -242,7 +302,8 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
                     skip: false,
                     ..base
                 },
-                "light volume",
+                how,
+                false,
             ));
             configs.push((
                 "step 1, no jitter".into(),
@@ -250,7 +311,8 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
                     jitter: false,
                     ..base
                 },
-                "light volume",
+                how,
+                false,
             ));
             configs.push((
                 "step 1, shadow rays".into(),
@@ -259,6 +321,7 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
                     ..base
                 },
                 "shadow rays",
+                false,
             ));
             configs.push((
                 "step 1, unshadowed".into(),
@@ -267,18 +330,23 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
                     ..base
                 },
                 "none",
+                false,
             ));
+            configs.push((format!("step 1, {other_how}"), base, other_how, true));
             // Density samples per ray (the march's sample-count output), as the CPU model
             // counted them: plain, with brick skipping, with early termination, with both.
             let mut counts = Vec::new();
             for (skip, min_t) in [(false, 0.0), (true, 0.0), (false, 1e-3), (true, 1e-3)] {
-                let img = scene.image(&MarchSettings {
-                    skip,
-                    min_transmittance: min_t,
-                    jitter: false,
-                    count_samples: true,
-                    ..base
-                })?;
+                let img = scene.image(
+                    &MarchSettings {
+                        skip,
+                        min_transmittance: min_t,
+                        jitter: false,
+                        count_samples: true,
+                        ..base
+                    },
+                    false,
+                )?;
                 counts.push(img.iter().map(|p| p[0] as f64).sum::<f64>() / img.len() as f64);
             }
             println!(
@@ -288,9 +356,9 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
                 counts[0] / counts[2],
                 counts[0] / counts[3]
             );
-            for (name, s, shadow) in configs {
-                let frame_ms = scene.frame_ms(&stamps, &s, warmup, reps)?;
-                let img = scene.image(&s)?;
+            for (name, s, shadow, other) in configs {
+                let frame_ms = scene.frame_ms(&stamps, &s, other, warmup, reps)?;
+                let img = scene.image(&s, other)?;
                 let (mut sum, mut max) = (0.0f64, 0.0f64);
                 for (p, q) in img.iter().zip(&reference) {
                     for c in 0..4 {

@@ -4,10 +4,14 @@
 //! procedural torus of about a million triangles, in grids of 128³ to 1024³ fitted to each
 //! mesh. Time: GPU timestamps around the whole encode (clear, passes, heavy-triangle work
 //! list; for attributes both halves, without the read-back between them), median of the
-//! timed runs. Writes `voxelize.csv` and `voxelize.png` (time against
+//! timed runs. On a hardware adapter each timed submission follows a 20 ms spin kernel
+//! (`heater`): the CPU side of a run leaves the GPU idle long enough for its clocks to fall. Writes `voxelize.csv` and `voxelize.png` (time against
 //! the voxel edge relative to the mesh's longest side).
 //!
-//! Surface and solid rows also print each pass's time (`encode_surface_profiled`). With
+//! `--sizes 512,256,512` times those grid sizes in that order (the split bunny's time depends
+//! on what the process ran before it: see the README). Surface and solid rows also print each
+//! pass's time (`encode_surface_profiled`). With
+//! `--replot voxelize.csv` draws the chart from a saved table without measuring. With
 //! `FIELDKIT_BENCH_SHUFFLED` set, the split bunny is also timed with its triangles in a
 //! scattered order (neighbours in the list no longer neighbours on the surface).
 
@@ -53,10 +57,24 @@ fn gcd(a: usize, b: usize) -> usize {
 const BATCH: usize = 10;
 
 fn bench(args: &crate::bench::Args) -> Result<(), String> {
+    if let Some(csv) = &args.replot {
+        let (adapter, rows) = read_table(csv)?;
+        chart(&args.out, &adapter, &rows)?;
+        println!("wrote {}", args.out.join("voxelize.png").display());
+        return Ok(());
+    }
     let ctx = Context::new().map_err(|e| e.to_string())?;
     let adapter = ctx.adapter_name();
     println!("adapter: {adapter}");
     let stamps = Stamps::new(&ctx)?;
+    // Each run transforms and uploads the mesh on the CPU, leaving the GPU mostly idle and its
+    // clocks falling; a 20 ms spin before each timed submission keeps them up (`heater`). Not on
+    // a software adapter, whose clocks are the CPU's.
+    let heater = if ctx.is_software() {
+        None
+    } else {
+        Some(crate::heater::Heater::new(&ctx, &stamps, 20.0)?)
+    };
     let v = Voxelizer::new(&ctx.device).map_err(|e| e.to_string())?;
     let mut meshes = Vec::new();
     match &args.mesh {
@@ -98,11 +116,14 @@ fn bench(args: &crate::bench::Args) -> Result<(), String> {
         "| mesh | triangles | grid | mode | ms | ms, {BATCH} back to back | voxels |\n|---|---|---|---|---|---|---|"
     );
     let mut rows = Vec::new();
+    // `--sizes` picks sizes and their order (a size may repeat).
+    let sizes: Vec<u32> = if args.sizes.is_empty() {
+        sizes.to_vec()
+    } else {
+        args.sizes.iter().map(|&n| n as u32).collect()
+    };
     for (name, mesh) in &meshes {
-        for &n in sizes {
-            if !args.sizes.is_empty() && !args.sizes.contains(&(n as usize)) {
-                continue;
-            }
+        for &n in &sizes {
             let grid = fieldkit::gallery::fit_grid(mesh, n);
             for mode in ["surface", "raster", "solid", "attributes"] {
                 if !args.modes.is_empty() && !args.modes.iter().any(|m| m == mode) {
@@ -137,19 +158,21 @@ fn bench(args: &crate::bench::Args) -> Result<(), String> {
                 let start = std::time::Instant::now();
                 let mut warm = 0;
                 while warm < args.warmup.max(3) || start.elapsed() < crate::bench::WARMUP_TIME {
-                    stamps.time(&ctx, |enc| encode(enc).map(|_| ()))?;
+                    stamps.time_after(&ctx, heater.as_ref(), |enc| encode(enc).map(|_| ()))?;
                     warm += 1;
                 }
                 let mut times = Vec::new();
                 for _ in 0..args.reps {
-                    times.push(stamps.time(&ctx, |enc| encode(enc).map(|_| ()))?);
+                    times.push(
+                        stamps.time_after(&ctx, heater.as_ref(), |enc| encode(enc).map(|_| ()))?,
+                    );
                 }
                 let ms = median(times);
                 // The same encode BATCH times in one submission: the GPU never idles between
                 // runs, so this is the steady rate, free of clock ramps and submit gaps.
                 let mut batched = Vec::new();
                 for _ in 0..args.reps.div_ceil(BATCH).max(3) {
-                    let total = stamps.time(&ctx, |enc| {
+                    let total = stamps.time_after(&ctx, heater.as_ref(), |enc| {
                         (0..BATCH).try_for_each(|_| encode(enc).map(|_| ()))
                     })?;
                     batched.push(total / BATCH as f64);
@@ -157,8 +180,12 @@ fn bench(args: &crate::bench::Args) -> Result<(), String> {
                 let ms_batched = median(batched);
                 if mode == "surface" || mode == "solid" {
                     // Each pass on its own (the clears between them are not passes).
-                    let (total, _, _, passes) =
-                        crate::bench::time_runs(&ctx, args.warmup, args.reps, |enc, prof| {
+                    let (total, _, _, passes) = crate::bench::time_runs(
+                        &ctx,
+                        args.warmup,
+                        args.reps,
+                        heater.as_ref(),
+                        |enc, prof| {
                             let r = if mode == "surface" {
                                 v.encode_surface_profiled(
                                     &ctx,
@@ -172,7 +199,8 @@ fn bench(args: &crate::bench::Args) -> Result<(), String> {
                                 v.encode_solid_profiled(&ctx, enc, mesh, &grid, true, Some(prof))
                             };
                             r.expect("encode");
-                        })?;
+                        },
+                    )?;
                     let list: Vec<String> = passes
                         .iter()
                         .map(|(n, ms)| format!("{n} {ms:.4}"))
@@ -220,6 +248,12 @@ fn bench(args: &crate::bench::Args) -> Result<(), String> {
             )
         }),
     )?;
+    chart(&args.out, &adapter, &rows)?;
+    println!("wrote {} and voxelize.png", csv.display());
+    Ok(())
+}
+
+fn chart(out: &std::path::Path, adapter: &str, rows: &[Row]) -> Result<(), String> {
     let points: Vec<crate::chart::Point> = rows
         .iter()
         .map(|r| crate::chart::Point {
@@ -235,7 +269,43 @@ fn bench(args: &crate::bench::Args) -> Result<(), String> {
         y: "voxel edge / longest side of the mesh (log)",
         floor: 1e-4,
     };
-    crate::chart::time_vs_error(&args.out.join("voxelize.png"), &axes, &points)?;
-    println!("wrote {} and voxelize.png", csv.display());
-    Ok(())
+    crate::chart::time_vs_error(&out.join("voxelize.png"), &axes, &points)
+}
+
+/// `--replot`: the adapter and rows of a `voxelize.csv`.
+fn read_table(path: &std::path::Path) -> Result<(String, Vec<Row>), String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut adapter = String::new();
+    let mut rows = Vec::new();
+    for (i, line) in text.lines().enumerate().skip(1) {
+        // Fields split at commas outside quotes (the adapter and mesh names hold commas).
+        let mut fields = vec![String::new()];
+        let mut quoted = false;
+        for c in line.chars() {
+            match c {
+                '"' => quoted = !quoted,
+                ',' if !quoted => fields.push(String::new()),
+                _ => fields.last_mut().expect("one field").push(c),
+            }
+        }
+        let bad = || format!("{} line {}: {line}", path.display(), i + 1);
+        let [a, mesh, triangles, n, mode, ms, ms_batched, voxels] = &fields[..] else {
+            return Err(bad());
+        };
+        let mode = ["surface", "raster", "solid", "attributes"]
+            .into_iter()
+            .find(|m| m == mode)
+            .ok_or_else(bad)?;
+        adapter.clone_from(a);
+        rows.push(Row {
+            mesh: mesh.clone(),
+            triangles: triangles.parse().map_err(|_| bad())?,
+            n: n.parse().map_err(|_| bad())?,
+            mode,
+            ms: ms.parse().map_err(|_| bad())?,
+            ms_batched: ms_batched.parse().map_err(|_| bad())?,
+            voxels: voxels.parse().map_err(|_| bad())?,
+        });
+    }
+    Ok((adapter, rows))
 }

@@ -9,6 +9,7 @@ mod bench_ocean;
 mod bench_volume;
 mod bench_voxelize;
 mod chart;
+mod heater;
 mod lint;
 mod shader_stats;
 
@@ -80,7 +81,8 @@ enum Command {
         #[arg(long)]
         column_bands: Option<u32>,
         /// Only these edge lengths (3D edges from the sweep's 3D sizes, 2D from its 2D sizes;
-        /// comma-separated), e.g. `--sizes 512` for one point.
+        /// comma-separated), e.g. `--sizes 512` for one point. `volume` and `voxelize` take
+        /// any sizes, in the order given.
         #[arg(long, value_delimiter = ',')]
         sizes: Vec<usize>,
         /// `voxelize`: the Stanford bunny's `index.js` from `scripts/fetch-bunny.sh`.
@@ -89,6 +91,10 @@ enum Command {
         /// `voxelize`: only these modes (surface, raster, solid, attributes; comma-separated).
         #[arg(long, value_delimiter = ',')]
         modes: Vec<String>,
+        /// `voxelize`: draw `voxelize.png` into `--out` from this saved `voxelize.csv` instead
+        /// of measuring (for a run cut short after its table was saved).
+        #[arg(long)]
+        replot: Option<PathBuf>,
     },
 }
 
@@ -137,6 +143,7 @@ fn main() -> ExitCode {
             sizes,
             mesh,
             modes,
+            replot,
         } => {
             if cfg!(debug_assertions) && std::env::var_os("FIELDKIT_BENCH_NO_REEXEC").is_none() {
                 return rerun_release();
@@ -160,6 +167,7 @@ fn main() -> ExitCode {
                 sizes,
                 mesh,
                 modes,
+                replot,
             };
             match technique {
                 Technique::Distance => bench::run_distance(&args),
