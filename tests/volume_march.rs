@@ -11,7 +11,8 @@ use fieldkit::gpu::{Context, read_buffer, read_texture};
 use fieldkit::harness::{Summary, context};
 use fieldkit::metaball::render::View;
 use fieldkit::volume::{
-    MarchSettings, Mode, Shadow, TransferFunction, Volume, VolumeRenderer, fbm_cloud,
+    Bricks, LightVolume, MarchSettings, Mode, Shadow, TransferFunction, Volume, VolumeRenderer,
+    fbm_cloud, folds,
 };
 use glam::{Mat4, Vec3, Vec4};
 
@@ -77,6 +78,23 @@ impl Rig {
         )
     }
 
+    /// The brick grid and the light volume of `volume` as `encode_light` builds them.
+    fn bricks_and_light(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        volume: &Volume,
+        tf: &TransferFunction,
+        settings: &MarchSettings,
+    ) -> (Bricks, LightVolume) {
+        let device = &self.ctx.device;
+        let bricks = self.renderer.encode_bricks(device, enc, volume).unwrap();
+        let light = self
+            .renderer
+            .encode_light(device, enc, volume, &bricks, tf, Mat4::IDENTITY, settings)
+            .unwrap();
+        (bricks, light)
+    }
+
     /// The marched image (premultiplied rgba per pixel), all zero where the box is off screen.
     fn march(
         &self,
@@ -108,8 +126,8 @@ impl Rig {
             .unwrap();
         let light = match settings.shadow {
             Shadow::LightVolume { .. } => Some(
-                match fold {
-                    None => self.renderer.encode_light(
+                self.renderer
+                    .encode_light_folded(
                         &ctx.device,
                         &mut enc,
                         volume,
@@ -117,19 +135,9 @@ impl Rig {
                         tf,
                         Mat4::IDENTITY,
                         settings,
-                    ),
-                    Some(fold) => self.renderer.encode_light_folded(
-                        &ctx.device,
-                        &mut enc,
-                        volume,
-                        &bricks,
-                        tf,
-                        Mat4::IDENTITY,
-                        settings,
-                        fold,
-                    ),
-                }
-                .unwrap(),
+                        fold.unwrap_or(folds(volume)),
+                    )
+                    .unwrap(),
             ),
             _ => None,
         };
@@ -806,22 +814,7 @@ fn light_volume_and_shadow_rays_agree() {
         ..base
     };
     let mut enc = ctx.encoder("stale light");
-    let bricks = rig
-        .renderer
-        .encode_bricks(&ctx.device, &mut enc, &volume)
-        .unwrap();
-    let light = rig
-        .renderer
-        .encode_light(
-            &ctx.device,
-            &mut enc,
-            &volume,
-            &bricks,
-            &tf,
-            Mat4::IDENTITY,
-            &s,
-        )
-        .unwrap();
+    let (bricks, light) = rig.bricks_and_light(&mut enc, &volume, &tf, &s);
     let other_tf = TransferFunction::constant(Vec3::ONE, 0.2);
     // Another volume of the same size: its lit density would hold the old densities.
     let other_volume = rig.cloud(24, 6);
@@ -885,22 +878,7 @@ fn lit_density_is_the_density_and_the_light_nodes_interpolant() {
         )
         .unwrap();
         let mut enc = ctx.encoder("lit density");
-        let bricks = rig
-            .renderer
-            .encode_bricks(&ctx.device, &mut enc, &volume)
-            .unwrap();
-        let light = rig
-            .renderer
-            .encode_light(
-                &ctx.device,
-                &mut enc,
-                &volume,
-                &bricks,
-                &tf,
-                Mat4::IDENTITY,
-                &s,
-            )
-            .unwrap();
+        let (_, light) = rig.bricks_and_light(&mut enc, &volume, &tf, &s);
         ctx.submit_and_wait("lit density", enc).unwrap();
         let lit_density = light
             .lit_density
@@ -984,22 +962,7 @@ fn lit_density_is_the_density_and_the_light_nodes_interpolant() {
     let dims = [edge.len() as u32, 1, 1];
     let volume = Volume::upload(ctx, &edge, dims, R16Float, Vec3::ONE, Vec3::ZERO).unwrap();
     let mut enc = ctx.encoder("lit density edges");
-    let bricks = rig
-        .renderer
-        .encode_bricks(&ctx.device, &mut enc, &volume)
-        .unwrap();
-    let light = rig
-        .renderer
-        .encode_light(
-            &ctx.device,
-            &mut enc,
-            &volume,
-            &bricks,
-            &tf,
-            Mat4::IDENTITY,
-            &s,
-        )
-        .unwrap();
+    let (_, light) = rig.bricks_and_light(&mut enc, &volume, &tf, &s);
     ctx.submit_and_wait("lit density edges", enc).unwrap();
     let t: Vec<[u16; 4]> = read_texture(ctx, light.lit_density.as_ref().unwrap()).unwrap();
     let got: Vec<u16> = t.iter().map(|p| p[0]).collect();

@@ -476,6 +476,15 @@ struct LitPipelines {
 /// 2.17 to 1.54 ms, and cost 0.16 ms more to build at 256³ (`cargo xtask bench volume`).
 pub const FOLD_MAX_BYTES: u64 = 512 << 20;
 
+/// Whether [`VolumeRenderer::encode_light`] folds the light volume of `volume` into a copy of
+/// its density: when that copy takes at most [`FOLD_MAX_BYTES`].
+pub fn folds(volume: &Volume) -> bool {
+    let texel = lit_format(volume.texture.format())
+        .block_copy_size(None)
+        .expect("colour format") as u64;
+    volume.dims.iter().map(|&d| d as u64).product::<u64>() * texel <= FOLD_MAX_BYTES
+}
+
 /// The march's `MODE` and `SHADOW` overrides for `settings` with `light`.
 fn march_variant(settings: &MarchSettings, light: Option<&LightVolume>) -> (usize, usize) {
     let mode = match settings.mode {
@@ -725,10 +734,6 @@ impl VolumeRenderer {
         local_to_world: Mat4,
         settings: &MarchSettings,
     ) -> Result<LightVolume, Error> {
-        let texel = lit_format(volume.texture.format())
-            .block_copy_size(None)
-            .expect("colour format") as u64;
-        let bytes = volume.dims.iter().map(|&d| d as u64).product::<u64>() * texel;
         self.encode_light_folded(
             device,
             encoder,
@@ -737,7 +742,7 @@ impl VolumeRenderer {
             tf,
             local_to_world,
             settings,
-            bytes <= FOLD_MAX_BYTES,
+            folds(volume),
         )
     }
 
@@ -872,48 +877,29 @@ impl VolumeRenderer {
             timestamp_writes: None,
         });
         let groups = [w.div_ceil(8), h.div_ceil(8), d];
-        let sampler = (&self.sampler).into();
-        match texture.format() {
-            wgpu::TextureFormat::Rgba8Unorm => {
-                let p = &self.lit.unorm8;
-                let bound = p.bind(
+        // One entry point per format, each with its own generated bindings.
+        macro_rules! fold {
+            ($pipeline:expr, $entry:ident, $out:ident) => {{
+                let bound = $pipeline.bind(
                     device,
-                    &lit_density::lit_unorm8::Resources {
+                    &lit_density::$entry::Resources {
                         density: density.into(),
                         light: light.into(),
-                        linear_clamp: sampler,
-                        lit_out_unorm8: (&out).into(),
+                        linear_clamp: (&self.sampler).into(),
+                        $out: (&out).into(),
                     },
                 )?;
-                p.dispatch(&mut pass, &bound, groups);
-            }
-            wgpu::TextureFormat::Rgba16Float => {
-                let p = &self.lit.float16;
-                let bound = p.bind(
-                    device,
-                    &lit_density::lit_float16::Resources {
-                        density: density.into(),
-                        light: light.into(),
-                        linear_clamp: sampler,
-                        lit_out_float16: (&out).into(),
-                    },
-                )?;
-                p.dispatch(&mut pass, &bound, groups);
-            }
-            _ => {
-                let p = &self.lit.float32;
-                let bound = p.bind(
-                    device,
-                    &lit_density::lit_float32::Resources {
-                        density: density.into(),
-                        light: light.into(),
-                        linear_clamp: sampler,
-                        lit_out_float32: (&out).into(),
-                    },
-                )?;
-                p.dispatch(&mut pass, &bound, groups);
-            }
+                $pipeline.dispatch(&mut pass, &bound, groups);
+            }};
         }
+        match texture.format() {
+            wgpu::TextureFormat::Rgba8Unorm => fold!(self.lit.unorm8, lit_unorm8, lit_out_unorm8),
+            wgpu::TextureFormat::Rgba16Float => {
+                fold!(self.lit.float16, lit_float16, lit_out_float16)
+            }
+            _ => fold!(self.lit.float32, lit_float32, lit_out_float32),
+        }
+        drop(pass);
         Ok(texture)
     }
 

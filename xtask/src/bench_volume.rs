@@ -17,7 +17,7 @@ use fieldkit::gpu::{Context, read_texture};
 use fieldkit::metaball::render::View;
 use fieldkit::volume::{
     Bricks, LightVolume, MarchSettings, Shadow, TransferFunction, Volume, VolumeMarched,
-    VolumeRenderer, fbm_cloud,
+    VolumeRenderer, fbm_cloud, folds,
 };
 use glam::{Mat4, Vec3};
 
@@ -214,40 +214,29 @@ fn bench(
             Ok(())
         })?;
         let bricks = made.ok_or("no bricks")?;
-        // The light volume as `encode_light` builds it (folded into the density for sizes up
-        // to FOLD_MAX_BYTES), and the other way, for one row.
-        let build = |fold: Option<bool>| -> Result<(LightVolume, f64), String> {
+        // The light volume as `encode_light` builds it (folded into the density up to
+        // FOLD_MAX_BYTES), and the other way, for one row.
+        let build = |fold: bool| -> Result<(LightVolume, f64), String> {
             let mut lit = None;
             let ms = stamps.time_after(&ctx, heater.as_ref(), |enc| {
-                let made = match fold {
-                    None => renderer.encode_light(
-                        &ctx.device,
-                        enc,
-                        &volume,
-                        &bricks,
-                        &tf,
-                        Mat4::IDENTITY,
-                        &base,
-                    ),
-                    Some(f) => renderer.encode_light_folded(
-                        &ctx.device,
-                        enc,
-                        &volume,
-                        &bricks,
-                        &tf,
-                        Mat4::IDENTITY,
-                        &base,
-                        f,
-                    ),
-                };
+                let made = renderer.encode_light_folded(
+                    &ctx.device,
+                    enc,
+                    &volume,
+                    &bricks,
+                    &tf,
+                    Mat4::IDENTITY,
+                    &base,
+                    fold,
+                );
                 lit = Some(made.map_err(|e| e.to_string())?);
                 Ok(())
             })?;
             Ok((lit.ok_or("no light volume")?, ms))
         };
-        let (light, light_ms) = build(None)?;
-        let folded = light.lit_density.is_some();
-        let (other_light, other_ms) = build(Some(!folded))?;
+        let folded = folds(&volume);
+        let (light, light_ms) = build(folded)?;
+        let (other_light, other_ms) = build(!folded)?;
         let (how, other_how) = if folded {
             ("light folded", "light not folded")
         } else {
