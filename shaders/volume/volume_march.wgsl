@@ -113,10 +113,10 @@ override COUNT_SAMPLES: bool = false;
 // sample then needs no integer-to-float conversion and no subtraction to interpolate.
 @group(0) @binding(3) var<storage, read> tf: array<vec4<f32>>;
 @group(0) @binding(4) var<storage, read> ranges: array<vec2<f32>>;
-// The caller's Depth32Float target, read as unfilterable float (WebGPU allows it; a depth
-// texture type would not translate to GLSL).
 // The light volume's nodes (`light_volume`), for `SHADOW` 3.
 @group(0) @binding(5) var light_in: texture_3d<f32>;
+// The caller's Depth32Float target, read as unfilterable float (WebGPU allows it; a depth
+// texture type would not translate to GLSL).
 @group(0) @binding(6) var scene_depth: texture_2d<f32>;
 @group(0) @binding(7) var colour_out: texture_storage_2d<rgba16float, write>;
 @group(0) @binding(8) var light_out: texture_storage_3d<rgba16float, write>;
@@ -314,7 +314,8 @@ fn march_pixel(pixel: vec2<f32>) -> vec4<f32> {
             let tau = exp2(log2(max(1.0 - s.a, 0.0)) * ((b - a) * params.inv_reference_step));
             clear = tau >= 1.0;
             if !clear {
-                // The light volume came with the density; shadow rays are marched from here.
+                // Folded (`SHADOW` 2), the light came with the density's fetch; otherwise it is
+                // fetched or marched here, only for samples that add something.
                 var light = texel.g;
                 if SHADOW != 2u {
                     light = light_at(o + t * dir, uvw);
