@@ -5,14 +5,14 @@
 //! mesh. Time: GPU timestamps around the whole encode (clear, passes, heavy-triangle work
 //! list; for attributes both halves, without the read-back between them), median of the
 //! timed runs. On a hardware adapter each timed submission follows a 20 ms spin kernel
-//! (`heater`): the CPU side of a run leaves the GPU idle long enough for its clocks to fall. Writes `voxelize.csv` and `voxelize.png` (time against
-//! the voxel edge relative to the mesh's longest side).
+//! (`heater`): the CPU side of a run leaves the GPU idle long enough for its clocks to fall.
+//! Writes `voxelize.csv` and `voxelize.png` (time against the voxel edge relative to the mesh's
+//! longest side).
 //!
-//! `--sizes 512,256,512` times those grid sizes in that order (the split bunny's time depends
-//! on what the process ran before it: see the README). Surface and solid rows also print each
-//! pass's time (`encode_surface_profiled`). With
-//! `--replot voxelize.csv` draws the chart from a saved table without measuring. With
-//! `FIELDKIT_BENCH_SHUFFLED` set, the split bunny is also timed with its triangles in a
+//! `--sizes 512,256,512` times those grid sizes in that order. `--replot voxelize.csv` draws
+//! the chart from a saved table without measuring. Surface and solid rows also print each
+//! pass's time (`encode_surface_profiled`). With `FIELDKIT_BENCH_SHUFFLED` set, the split bunny
+//! is also timed with its triangles in a
 //! scattered order (neighbours in the list no longer neighbours on the surface).
 
 use std::process::ExitCode;
@@ -308,4 +308,52 @@ fn read_table(path: &std::path::Path) -> Result<(String, Vec<Row>), String> {
         });
     }
     Ok((adapter, rows))
+}
+
+#[cfg(test)]
+mod tests {
+    /// `--replot` reads back what the bench writes: quoted adapter and mesh names keep their
+    /// commas, and a malformed line is an error naming it.
+    #[test]
+    fn replot_reads_the_written_table() {
+        let dir = std::env::temp_dir().join(format!("fieldkit-replot-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let csv = dir.join("voxelize.csv");
+        std::fs::write(
+            &csv,
+            "adapter,mesh,triangles,grid,mode,ms,ms_back_to_back,voxels\n\
+             \"GPU (Vulkan, DiscreteGpu)\",\"bunny, split twice\",58784,512,surface,0.110,0.111,841648\n",
+        )
+        .unwrap();
+        let (adapter, rows) = super::read_table(&csv).unwrap();
+        assert_eq!(adapter, "GPU (Vulkan, DiscreteGpu)");
+        assert_eq!(rows.len(), 1);
+        let r = &rows[0];
+        assert_eq!(
+            (
+                r.mesh.as_str(),
+                r.triangles,
+                r.n,
+                r.mode,
+                r.ms,
+                r.ms_batched,
+                r.voxels
+            ),
+            (
+                "bunny, split twice",
+                58784,
+                512,
+                "surface",
+                0.110,
+                0.111,
+                841648
+            )
+        );
+        std::fs::write(&csv, "header\n\"a\",\"b\",1,2,sideways,0.1,0.1,3\n").unwrap();
+        let e = super::read_table(&csv)
+            .err()
+            .expect("an unknown mode is refused");
+        assert!(e.contains("line 2"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }
