@@ -532,10 +532,9 @@ impl<E: Entry> ComputePipeline<E> {
         device: &wgpu::Device,
         resources: &E::Resources<'_>,
     ) -> Result<Bound<E>, Error> {
-        let info = E::INFO;
-        let groups = crate::gpu::scoped(device, info.stage, || {
-            bind_groups::<E>(device, &self.layouts, resources)
-        })??;
+        // fieldkit's own checks (kind, format, size, usage, sample type of every resource)
+        // run in `bind_groups`; no error scope here, so binding never waits on the device.
+        let groups = bind_groups::<E>(device, &self.layouts, resources)?;
         Ok(Bound {
             groups,
             _e: PhantomData,
@@ -633,10 +632,9 @@ impl<E: Entry> RenderPipeline<E> {
         device: &wgpu::Device,
         resources: &E::Resources<'_>,
     ) -> Result<Bound<E>, Error> {
-        let info = E::INFO;
-        let groups = crate::gpu::scoped(device, info.stage, || {
-            bind_groups::<E>(device, &self.layouts, resources)
-        })??;
+        // fieldkit's own checks (kind, format, size, usage, sample type of every resource)
+        // run in `bind_groups`; no error scope here, so binding never waits on the device.
+        let groups = bind_groups::<E>(device, &self.layouts, resources)?;
         Ok(Bound {
             groups,
             _e: PhantomData,

@@ -8,15 +8,17 @@
 pub mod bind;
 pub mod distance;
 pub mod error;
-pub mod gallery;
 pub mod gpu;
+#[cfg(feature = "harness")]
 pub mod harness;
 pub mod metaball;
 pub mod ocean;
 pub mod volume;
+pub mod view;
 pub mod voxelize;
 
 pub use error::{BindingError, Error};
+pub use wgpu;
 
 /// Generated bindings, one module per stage (`shaders::<room>::<stage>`). See [`bind`].
 #[allow(clippy::all, missing_docs)]

@@ -3,6 +3,11 @@
 
 mod common;
 
+// The gallery example's scenes and test pictures (the example is the one place they live).
+#[path = "../examples/gallery.rs"]
+#[allow(dead_code)]
+mod gallery;
+
 use common::*;
 use fieldkit::distance::{FAR, Jfa2d, NO_SEED, Options, Variant, cpu, unpack_seed};
 
@@ -232,7 +237,7 @@ fn signed_distance_matches_reference() {
     let ctx = fieldkit::harness::context();
     let jfa = Jfa2d::new(&ctx.device).unwrap();
     let (w, h) = (120, 72);
-    let mask: Vec<bool> = fieldkit::gallery::shapes_mask(w as u32, h as u32)
+    let mask: Vec<bool> = gallery::shapes_mask(w as u32, h as u32)
         .iter()
         .map(|&m| m != 0)
         .collect();

@@ -41,7 +41,7 @@ const EXT: wgpu::Extent3d = wgpu::Extent3d {
 fn zero_sized_mask() {
     let ctx = context();
     assert!(matches!(
-        upload_mask(&ctx, &[], 0, 5),
+        upload_mask(&ctx.device, &ctx.queue, &[], 0, 5),
         Err(Error::Size {
             what: "width",
             got: 0,
@@ -49,7 +49,7 @@ fn zero_sized_mask() {
         })
     ));
     assert!(matches!(
-        upload_mask(&ctx, &[], 5, 0),
+        upload_mask(&ctx.device, &ctx.queue, &[], 5, 0),
         Err(Error::Size {
             what: "height",
             got: 0,
@@ -61,7 +61,7 @@ fn zero_sized_mask() {
 #[test]
 fn mask_length_mismatch() {
     let ctx = context();
-    let e = upload_mask(&ctx, &[0; 10], 4, 4).unwrap_err();
+    let e = upload_mask(&ctx.device, &ctx.queue, &[0; 10], 4, 4).unwrap_err();
     assert!(
         matches!(&e, Error::Invalid { what, .. } if what.contains("10 bytes")),
         "{e}"
@@ -76,7 +76,7 @@ fn size_past_limits() {
         .limits()
         .max_texture_dimension_2d
         .min(MAX_PACKED_SIDE);
-    let e = upload_mask(&ctx, &[], max + 1, 1).unwrap_err();
+    let e = upload_mask(&ctx.device, &ctx.queue, &[], max + 1, 1).unwrap_err();
     assert!(
         matches!(e, Error::Size { what: "width", got, max: m, .. } if got == (max + 1) as u64 && m == max as u64),
         "{e}"
@@ -130,7 +130,7 @@ fn three_d_seed_texture() {
 #[test]
 fn nan_and_negative_texel_size() {
     let ctx = context();
-    let t = upload_mask(&ctx, &[255; 64], 8, 8).unwrap();
+    let t = upload_mask(&ctx.device, &ctx.queue, &[255; 64], 8, 8).unwrap();
     for bad in [f32::NAN, -1.0, 0.0, f32::INFINITY] {
         let e = encode(
             &ctx,
@@ -152,7 +152,7 @@ fn nan_and_negative_texel_size() {
 fn zero_step_and_mismatched_ping_pong() {
     let ctx = context();
     let jfa = Jfa2d::new(&ctx.device).unwrap();
-    let seeds = upload_mask(&ctx, &[255; 64], 8, 8).unwrap();
+    let seeds = upload_mask(&ctx.device, &ctx.queue, &[255; 64], 8, 8).unwrap();
     let mut enc = ctx.encoder("bad");
     let a = jfa
         .encode_seed(&ctx.device, &mut enc, &seeds, false)
@@ -164,7 +164,7 @@ fn zero_step_and_mismatched_ping_pong() {
         jfa.encode_jump(&ctx.device, &mut enc, &a, &b, 0, None),
         Err(Error::Invalid { .. })
     ));
-    let small = upload_mask(&ctx, &[255; 16], 4, 4).unwrap();
+    let small = upload_mask(&ctx.device, &ctx.queue, &[255; 16], 4, 4).unwrap();
     let c = jfa
         .encode_seed(&ctx.device, &mut enc, &small, false)
         .unwrap();

@@ -3,6 +3,11 @@
 
 mod common;
 
+// The gallery example's scenes and test pictures (the example is the one place they live).
+#[path = "../examples/gallery.rs"]
+#[allow(dead_code)]
+mod gallery;
+
 use common::*;
 use fieldkit::distance::{Jfa2d, Options, Variant, cpu, upload_mask};
 use fieldkit::gpu::read_texture;
@@ -20,7 +25,7 @@ fn seed_stage() {
     let ctx = context();
     let jfa = Jfa2d::new(&ctx.device).unwrap();
     let m = mask();
-    let seeds = upload_mask(&ctx, &to_bytes(&m), W as u32, H as u32).unwrap();
+    let seeds = upload_mask(&ctx.device, &ctx.queue, &to_bytes(&m), W as u32, H as u32).unwrap();
     let mut enc = ctx.encoder("seed");
     let out = jfa
         .encode_seed(&ctx.device, &mut enc, &seeds, false)
@@ -40,7 +45,7 @@ fn one_jump_pass() {
     let ctx = context();
     let jfa = Jfa2d::new(&ctx.device).unwrap();
     let m = mask();
-    let seeds = upload_mask(&ctx, &to_bytes(&m), W as u32, H as u32).unwrap();
+    let seeds = upload_mask(&ctx.device, &ctx.queue, &to_bytes(&m), W as u32, H as u32).unwrap();
     let mut enc = ctx.encoder("jump");
     let a = jfa
         .encode_seed(&ctx.device, &mut enc, &seeds, false)
@@ -111,7 +116,7 @@ fn resolve_stage() {
 fn whole_chain_signed() {
     let ctx = context();
     let jfa = Jfa2d::new(&ctx.device).unwrap();
-    let m: Vec<bool> = fieldkit::gallery::shapes_mask(W as u32 * 2, H as u32 * 2)
+    let m: Vec<bool> = gallery::shapes_mask(W as u32 * 2, H as u32 * 2)
         .iter()
         .map(|&v| v != 0)
         .collect();
@@ -138,7 +143,7 @@ fn visualized_field_matches_reference_image() {
     let ctx = context();
     let jfa = Jfa2d::new(&ctx.device).unwrap();
     let (w, h) = (160u32, 90u32);
-    let seeds = upload_mask(&ctx, &fieldkit::gallery::shapes_mask(w, h), w, h).unwrap();
+    let seeds = upload_mask(&ctx.device, &ctx.queue, &gallery::shapes_mask(w, h), w, h).unwrap();
     let mut enc = ctx.encoder("chain");
     let field = jfa
         .encode(
@@ -152,7 +157,7 @@ fn visualized_field_matches_reference_image() {
         )
         .unwrap();
     ctx.submit_and_wait("chain", enc).unwrap();
-    let rgba = fieldkit::gallery::visualize_distance(&ctx, &field.distance, 4.0, 20.0).unwrap();
+    let rgba = gallery::visualize_distance(&ctx, &field.distance, 4.0, 20.0).unwrap();
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/snapshots");
     // Set on llvmpipe (lavapipe, LLVM 15): the field is exact, so only the colour map's float
     // rounding can differ between adapters; a broken stage moves whole bands (mean >> 1).

@@ -5,7 +5,7 @@
 mod common;
 
 use common::*;
-use fieldkit::distance::volume::{Distance3d, Method, Options3d, unpack_seed3};
+use fieldkit::distance::{Distance3d, Method, Options3d, unpack_seed3};
 use fieldkit::distance::{FAR, Variant, cpu};
 use fieldkit::harness::context;
 

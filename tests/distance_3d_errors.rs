@@ -3,7 +3,7 @@
 
 use fieldkit::Error;
 use fieldkit::distance::Variant;
-use fieldkit::distance::volume::{
+use fieldkit::distance::{
     Distance3d, Grid3, Inside, MAX_SIDE_3D, Method, Options3d, check_size_2d_exact, check_size_3d,
     upload_points, upload_points_with_homes, upload_volume,
 };
@@ -18,7 +18,7 @@ fn zero_sized_grids() {
         ([4, 0, 4], "height"),
         ([4, 4, 0], "depth"),
     ] {
-        let e = upload_volume(&ctx, &[], size).unwrap_err();
+        let e = upload_volume(&ctx.device, &ctx.queue, &[], size).unwrap_err();
         assert!(
             matches!(e, Error::Size { what: w, got: 0, .. } if w == what),
             "{size:?}: {e}"
@@ -94,31 +94,31 @@ fn bad_seed_points() {
         origin: Vec3::new(1.0, 2.0, 3.0),
     };
     let inside = grid.origin + Vec3::splat(2.0);
-    let e = upload_points(&ctx, &grid, &[inside, Vec3::new(f32::NAN, 0.0, 0.0)]).unwrap_err();
+    let e = upload_points(&ctx.device, &ctx.queue, &grid, &[inside, Vec3::new(f32::NAN, 0.0, 0.0)]).unwrap_err();
     assert!(
         matches!(&e, Error::Invalid { what, .. } if what.contains("point 1") && what.contains("not finite")),
         "{e}"
     );
     // The box spans origin .. origin + 4 in each axis.
-    let e = upload_points(&ctx, &grid, &[grid.origin + Vec3::new(4.1, 1.0, 1.0)]).unwrap_err();
+    let e = upload_points(&ctx.device, &ctx.queue, &grid, &[grid.origin + Vec3::new(4.1, 1.0, 1.0)]).unwrap_err();
     assert!(
         matches!(&e, Error::Invalid { what, .. } if what.contains("outside the volume")),
         "{e}"
     );
     assert!(matches!(
-        upload_points(&ctx, &grid, &[]),
+        upload_points(&ctx.device, &ctx.queue, &grid, &[]),
         Err(Error::Size {
             what: "number of seed points",
             got: 0,
             ..
         })
     ));
-    let e = upload_points_with_homes(&ctx, &grid, &[inside], &[[8, 0, 0]]).unwrap_err();
+    let e = upload_points_with_homes(&ctx.device, &ctx.queue, &grid, &[inside], &[[8, 0, 0]]).unwrap_err();
     assert!(
         matches!(&e, Error::Invalid { what, .. } if what.contains("home voxel")),
         "{e}"
     );
-    let e = upload_points_with_homes(&ctx, &grid, &[inside], &[]).unwrap_err();
+    let e = upload_points_with_homes(&ctx.device, &ctx.queue, &grid, &[inside], &[]).unwrap_err();
     assert!(
         matches!(&e, Error::Invalid { what, .. } if what.contains("0 homes for 1 points")),
         "{e}"
@@ -128,7 +128,7 @@ fn bad_seed_points() {
         ..grid
     };
     assert!(matches!(
-        upload_points(&ctx, &bad_grid, &[inside]),
+        upload_points(&ctx.device, &ctx.queue, &bad_grid, &[inside]),
         Err(Error::Invalid { .. })
     ));
 }
@@ -137,7 +137,7 @@ fn bad_seed_points() {
 fn bad_options_and_textures() {
     let ctx = context();
     let d3 = Distance3d::new(&ctx.device).unwrap();
-    let volume = upload_volume(&ctx, &[255; 64], [4, 4, 4]).unwrap();
+    let volume = upload_volume(&ctx.device, &ctx.queue, &[255; 64], [4, 4, 4]).unwrap();
     let mut enc = ctx.encoder("bad");
     let bad = [
         Options3d {
@@ -199,14 +199,14 @@ fn bad_options_and_textures() {
         "{e}"
     );
     // A 2D texture where a volume is expected.
-    let flat = fieldkit::distance::upload_mask(&ctx, &[255; 16], 4, 4).unwrap();
+    let flat = fieldkit::distance::upload_mask(&ctx.device, &ctx.queue, &[255; 16], 4, 4).unwrap();
     assert!(matches!(
         d3.encode(&ctx.device, &mut enc, &flat, &Options3d::default()),
         Err(Error::Invalid { .. })
     ));
     // Sub-voxel seeds with the exact method, and an inside volume of another size.
     let grid = Grid3::new([4, 4, 4]);
-    let pts = upload_points(&ctx, &grid, &[Vec3::splat(1.5)]).unwrap();
+    let pts = upload_points(&ctx.device, &ctx.queue, &grid, &[Vec3::splat(1.5)]).unwrap();
     let e = d3
         .encode_points(
             &ctx.device,
@@ -221,7 +221,7 @@ fn bad_options_and_textures() {
         matches!(&e, Error::Invalid { what, .. } if what.contains("JFA")),
         "{e}"
     );
-    let other = upload_volume(&ctx, &[0; 27], [3, 3, 3]).unwrap();
+    let other = upload_volume(&ctx.device, &ctx.queue, &[0; 27], [3, 3, 3]).unwrap();
     let jfa = Options3d {
         method: Method::Jfa(Variant::JfaPlus2),
         ..Options3d::default()

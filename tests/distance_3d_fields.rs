@@ -4,7 +4,7 @@
 mod common;
 
 use common::*;
-use fieldkit::distance::volume::{
+use fieldkit::distance::{
     Distance3d, Grid3, Inside, Method, Options3d, upload_points, upload_points_with_homes,
     upload_volume,
 };
@@ -163,7 +163,7 @@ fn world_units_band_and_threshold() {
     );
     // A density volume: marked where the value ≥ the threshold, not merely non-zero.
     let density: Vec<u8> = (0..m.len()).map(|i| if m[i] { 200 } else { 100 }).collect();
-    let volume = upload_volume(&ctx, &density, size_u32(size)).unwrap();
+    let volume = upload_volume(&ctx.device, &ctx.queue, &density, size_u32(size)).unwrap();
     let mut enc = ctx.encoder("density");
     let field = d3
         .encode(
@@ -226,9 +226,9 @@ fn analytic_error(
         .collect();
     let homes: Vec<[u32; 3]> = pts.iter().map(|&(v, _)| v).collect();
     let seeds = if with_homes {
-        upload_points_with_homes(&ctx, &grid, &world, &homes)
+        upload_points_with_homes(&ctx.device, &ctx.queue, &grid, &world, &homes)
     } else {
-        upload_points(&ctx, &grid, &world)
+        upload_points(&ctx.device, &ctx.queue, &grid, &world)
     }
     .unwrap();
     let [w, h, d] = size;
@@ -246,7 +246,7 @@ fn analytic_error(
             }
         })
         .collect();
-    let volume = upload_volume(&ctx, &inside, grid.size).unwrap();
+    let volume = upload_volume(&ctx.device, &ctx.queue, &inside, grid.size).unwrap();
     let mut enc = ctx.encoder("points");
     let options = Options3d {
         method: Method::Jfa(Variant::JfaPlus2),
@@ -333,7 +333,7 @@ fn exact_2d_matches_cpu() {
         let m = random_mask(w, h, density, seed);
         let exact = cpu::edt_2d_squared(&m, w, h);
         let signed = cpu::signed_2d(&m, w, h);
-        let tex = upload_mask(&ctx, &to_bytes(&m), w as u32, h as u32).unwrap();
+        let tex = upload_mask(&ctx.device, &ctx.queue, &to_bytes(&m), w as u32, h as u32).unwrap();
         for is_signed in [false, true] {
             let mut enc = ctx.encoder("exact 2d");
             let field = d3

@@ -6,7 +6,7 @@ mod common;
 
 use common::*;
 use fieldkit::distance::Variant;
-use fieldkit::distance::volume::{Distance3d, Inside, Method, Options3d, PointSeeds};
+use fieldkit::distance::{Distance3d, Inside, Method, Options3d, PointSeeds};
 use fieldkit::gpu::{Context, read_buffer, read_texture};
 use fieldkit::harness::context;
 use fieldkit::metaball::{Metaballs, Settings};
@@ -181,7 +181,7 @@ fn line_passes_on_surface_seeds_against_brute_force() {
         ..Settings::default()
     };
     let grid = settings.fit_grid(&voxels, 1.0).unwrap().unwrap();
-    let inst = balls.upload(&ctx, &voxels).unwrap();
+    let inst = balls.upload(&ctx.device, &ctx.queue, &voxels).unwrap();
     let band = settings.band;
     let run = |method: Method| {
         let mut enc = ctx.encoder("surface seeds");
@@ -250,7 +250,7 @@ fn line_passes_need_a_band_and_sub_voxel_seeds() {
         .unwrap_err();
     assert!(e.to_string().contains("needs a band"), "{e}");
     let mask = mask_3d([8, 8, 8], &[[1, 2, 3]]);
-    let volume = fieldkit::distance::volume::upload_volume(&ctx, &to_bytes(&mask), size).unwrap();
+    let volume = fieldkit::distance::upload_volume(&ctx.device, &ctx.queue, &to_bytes(&mask), size).unwrap();
     let e = d3
         .encode(&ctx.device, &mut enc, &volume, &options(Method::Lines, 4.0))
         .unwrap_err();

@@ -5,7 +5,7 @@ mod common;
 
 use common::*;
 use fieldkit::distance::cpu;
-use fieldkit::distance::volume::{
+use fieldkit::distance::{
     Distance3d, Grid3, Inside, Options3d, key_index, upload_points, upload_volume,
 };
 use fieldkit::gpu::{Context, read_buffer, read_texture};
@@ -33,7 +33,7 @@ fn setup() -> (Context, Distance3d, Vec<bool>, wgpu::Texture) {
     let ctx = context();
     let d3 = Distance3d::new(&ctx.device).unwrap();
     let m = mask();
-    let volume = upload_volume(&ctx, &to_bytes(&m), size_u32(SIZE)).unwrap();
+    let volume = upload_volume(&ctx.device, &ctx.queue, &to_bytes(&m), size_u32(SIZE)).unwrap();
     (ctx, d3, m, volume)
 }
 
@@ -259,10 +259,10 @@ fn seed_points_stage() {
         Vec3::new(12.5, 0.6, 8.9),
         Vec3::new(19.9, 12.9, 0.1),
     ];
-    let seeds = upload_points(&ctx, &grid, &pts).unwrap();
+    let seeds = upload_points(&ctx.device, &ctx.queue, &grid, &pts).unwrap();
     let mut enc = ctx.encoder("points");
     let opts = Options3d {
-        method: fieldkit::distance::volume::Method::Jfa(fieldkit::distance::Variant::JfaPlus2),
+        method: fieldkit::distance::Method::Jfa(fieldkit::distance::Variant::JfaPlus2),
         ..Options3d::default()
     };
     let field = d3

@@ -8,14 +8,14 @@ use fieldkit::harness::context;
 #[test]
 fn timer_measures_jfa_passes() {
     let ctx = context();
-    let Some(timer) = Timer::new(&ctx, 2) else {
+    let Some(timer) = Timer::new(&ctx.device, &ctx.queue, 2) else {
         panic!(
             "{} offers no timestamp queries; lavapipe and the H100 both do",
             ctx.adapter_name()
         );
     };
     let jfa = Jfa2d::new(&ctx.device).unwrap();
-    let seeds = upload_mask(&ctx, &vec![0u8; 256 * 256], 256, 256).unwrap();
+    let seeds = upload_mask(&ctx.device, &ctx.queue, &vec![0u8; 256 * 256], 256, 256).unwrap();
     let mut enc = ctx.encoder("timed");
     let a = jfa
         .encode_seed(&ctx.device, &mut enc, &seeds, false)
@@ -43,7 +43,7 @@ fn timer_measures_jfa_passes() {
     .unwrap();
     timer.resolve(&mut enc);
     ctx.submit_and_wait("timed", enc).unwrap();
-    let ms = timer.read_ms(&ctx).unwrap();
+    let ms = timer.read_ms(&ctx.device, &ctx.queue).wait(&ctx).unwrap();
     assert!(
         ms.is_finite() && ms > 0.0,
         "two passes over 256² took {ms} ms"

@@ -5,7 +5,7 @@ mod common;
 
 use common::*;
 use fieldkit::distance::Variant;
-use fieldkit::distance::volume::{Grid3, Method};
+use fieldkit::distance::{Grid3, Method};
 use fieldkit::gpu::{read_buffer, read_texture};
 use fieldkit::harness::context;
 use fieldkit::metaball::{Metaballs, Settings, cpu, fixed_scale, packed_grid};
@@ -31,7 +31,7 @@ fn seed_stages(
 ) -> (Grid3, fieldkit::metaball::SurfaceSeeds) {
     let grid = settings.fit_grid(voxels, 1.0).unwrap().unwrap();
     let balls = Metaballs::new(&ctx.device).unwrap();
-    let inst = balls.upload(ctx, voxels).unwrap();
+    let inst = balls.upload(&ctx.device, &ctx.queue, voxels).unwrap();
     let mut enc = ctx.encoder("seed stages");
     let seeds = balls
         .encode_seeds(&ctx.device, &mut enc, &inst, &grid, 1.0, settings)
@@ -90,7 +90,7 @@ fn fixed_point_scale_keeps_sums_in_u32() {
         origin: Vec3::splat(-1.0),
     };
     let balls = Metaballs::new(&ctx.device).unwrap();
-    let inst = balls.upload(&ctx, &voxels).unwrap();
+    let inst = balls.upload(&ctx.device, &ctx.queue, &voxels).unwrap();
     let mut enc = ctx.encoder("huge");
     let seeds = balls
         .encode_seeds(&ctx.device, &mut enc, &inst, &grid, 1.0, &settings)
@@ -155,7 +155,7 @@ fn seeds_are_the_boundary_voxels_moved_onto_the_surface() {
                 if seed {
                     n_seeds += 1;
                     assert_eq!(
-                        fieldkit::distance::volume::key_index(keys[i]),
+                        fieldkit::distance::key_index(keys[i]),
                         Some(i as u32)
                     );
                     let p = points[i];
@@ -251,9 +251,9 @@ fn bad_input_is_a_typed_error() {
     let balls = Metaballs::new(&ctx.device).unwrap();
     let s = Settings::default();
     let nan = [Vec4::new(f32::NAN, 0.0, 0.0, 1.0)];
-    assert!(err(balls.upload(&ctx, &nan)).contains("voxel 0"));
+    assert!(err(balls.upload(&ctx.device, &ctx.queue, &nan)).contains("voxel 0"));
     let neg = [Vec4::new(0.0, 0.0, 0.0, -1.0)];
-    assert!(err(balls.upload(&ctx, &neg)).contains("scale"));
+    assert!(err(balls.upload(&ctx.device, &ctx.queue, &neg)).contains("scale"));
     assert!(err(s.fit_grid(&three_blobs(), 0.0)).contains("edge"));
     let bad = Settings {
         threshold: f32::NAN,
@@ -272,7 +272,7 @@ fn bad_input_is_a_typed_error() {
     ];
     assert!(err(s.fit_grid(&far, 1.0)).contains("grid width"));
     // A caller-made grid past the seed table.
-    let mut inst = balls.upload(&ctx, &three_blobs()).unwrap();
+    let mut inst = balls.upload(&ctx.device, &ctx.queue, &three_blobs()).unwrap();
     let grid = Grid3 {
         size: [300, 300, 300],
         voxel_size: 0.1,
@@ -282,7 +282,7 @@ fn bad_input_is_a_typed_error() {
     assert!(err(balls.encode(&ctx.device, &mut enc, &inst, &grid, 1.0, &s)).contains("grid cells"));
     // Updating with another count.
     assert!(
-        err(balls.update(&ctx, &mut inst, &packed_grid([2, 2, 2], 1.0))).contains("voxels given")
+        err(balls.update(&ctx.queue, &mut inst, &packed_grid([2, 2, 2], 1.0))).contains("voxels given")
     );
     // Empty and all-zero sets fit no grid: nothing to draw.
     assert!(s.fit_grid(&[], 1.0).unwrap().is_none());
@@ -330,7 +330,7 @@ fn blob_bins_hold_every_blob_that_reaches_them() {
         .collect();
     let grid = s.fit_grid(&voxels, 1.0).unwrap().unwrap();
     let balls = Metaballs::new(&ctx.device).unwrap();
-    let inst = balls.upload(&ctx, &voxels).unwrap();
+    let inst = balls.upload(&ctx.device, &ctx.queue, &voxels).unwrap();
     let mut enc = ctx.encoder("bins");
     let bins = balls
         .encode_bins(&ctx.device, &mut enc, &inst, &grid, 1.0, &s)

@@ -9,9 +9,8 @@ mod common;
 use common::*;
 use fieldkit::gpu::{Context, read_texture};
 use fieldkit::harness::context;
-use fieldkit::metaball::render::{
-    Direct, Output, RaymarchSettings, Raymarcher, Targets, View, box_visible,
-};
+use fieldkit::metaball::render::{Direct, Output, RaymarchSettings, Raymarcher};
+use fieldkit::view::{Targets, View, box_visible};
 use fieldkit::metaball::{BlobBins, MetaballField, Metaballs, Settings, cpu};
 
 use glam::{DVec3, Mat4, Vec3, Vec4};
@@ -558,13 +557,13 @@ fn empty_and_zero_scale_sets() {
     let ctx = context();
     let s = blob_settings();
     let balls = fieldkit::metaball::Metaballs::new(&ctx.device).unwrap();
-    let grid = fieldkit::distance::volume::Grid3 {
+    let grid = fieldkit::distance::Grid3 {
         size: [16, 16, 16],
         voxel_size: 1.0 / 12.0,
         origin: Vec3::splat(-8.0 / 12.0),
     };
     for voxels in [vec![], vec![Vec4::new(0.0, 0.0, 0.0, 0.0)]] {
-        let inst = balls.upload(&ctx, &voxels).unwrap();
+        let inst = balls.upload(&ctx.device, &ctx.queue, &voxels).unwrap();
         let mut enc = ctx.encoder("empty");
         let field = balls
             .encode(&ctx.device, &mut enc, &inst, &grid, 1.0, &s)
@@ -588,7 +587,7 @@ fn empty_and_zero_scale_sets() {
 fn blob_bins(ctx: &Context, voxels: &[Vec4], s: &Settings) -> BlobBins {
     let balls = Metaballs::new(&ctx.device).unwrap();
     let grid = s.fit_grid(voxels, 1.0).unwrap().unwrap();
-    let inst = balls.upload(ctx, voxels).unwrap();
+    let inst = balls.upload(&ctx.device, &ctx.queue, voxels).unwrap();
     let mut enc = ctx.encoder("bins");
     let bins = balls
         .encode_bins(&ctx.device, &mut enc, &inst, &grid, 1.0, s)

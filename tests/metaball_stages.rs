@@ -4,10 +4,15 @@
 
 mod common;
 
+// The gallery example's scenes and test pictures (the example is the one place they live).
+#[path = "../examples/gallery.rs"]
+#[allow(dead_code)]
+mod gallery;
+
 use common::*;
 use fieldkit::distance::Variant;
-use fieldkit::distance::volume::Method;
-use fieldkit::gallery::{MetaballView, metaball_scene};
+use fieldkit::distance::Method;
+use crate::gallery::{MetaballView, metaball_scene};
 use fieldkit::gpu::{Context, read_buffer, read_texture};
 use fieldkit::harness::{Summary, context};
 use fieldkit::metaball::render::Output;
@@ -38,7 +43,7 @@ fn seeds(ctx: &Context) -> (SurfaceSeeds, [usize; 3]) {
     let v = voxels();
     let grid = s.fit_grid(&v, 1.0).unwrap().unwrap();
     let balls = Metaballs::new(&ctx.device).unwrap();
-    let inst = balls.upload(ctx, &v).unwrap();
+    let inst = balls.upload(&ctx.device, &ctx.queue, &v).unwrap();
     let mut enc = ctx.encoder("seeds");
     let out = balls
         .encode_seeds(&ctx.device, &mut enc, &inst, &grid, 1.0, &s)
@@ -98,7 +103,7 @@ fn distance_summary(method: Method) -> String {
     // The seed each voxel ends with, by table index.
     let seeded: Vec<u32> = nearest
         .iter()
-        .map(|&k| fieldkit::distance::volume::key_index(k).unwrap_or(u32::MAX))
+        .map(|&k| fieldkit::distance::key_index(k).unwrap_or(u32::MAX))
         .collect();
     let sdf: Vec<f32> = read_texture(&ctx, &field.sdf).unwrap();
     Summary::ints(&[d, h, w], &seeded)

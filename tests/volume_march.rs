@@ -9,7 +9,7 @@
 
 use fieldkit::gpu::{Context, read_buffer, read_texture};
 use fieldkit::harness::{Summary, context};
-use fieldkit::metaball::render::View;
+use fieldkit::view::View;
 use fieldkit::volume::{
     Bricks, LightVolume, MarchSettings, Mode, Shadow, TransferFunction, Volume, VolumeRenderer,
     fbm_cloud, folds,
@@ -57,7 +57,8 @@ impl Rig {
 
     fn volume(&self, data: &[f32], dims: [u32; 3], spacing: Vec3, origin: Vec3) -> Volume {
         Volume::upload(
-            &self.ctx,
+            &self.ctx.device,
+            &self.ctx.queue,
             data,
             dims,
             wgpu::TextureFormat::R16Float,
@@ -868,9 +869,7 @@ fn lit_density_is_the_density_and_the_light_nodes_interpolant() {
         "the test adapter should filter R32Float"
     );
     for format in [R8Unorm, R16Float, R32Float] {
-        let volume = Volume::upload(
-            ctx,
-            &data,
+        let volume = Volume::upload(&ctx.device, &ctx.queue, &data,
             dims,
             format,
             Vec3::new(0.1, 0.15, 0.2),
@@ -960,7 +959,7 @@ fn lit_density_is_the_density_and_the_light_nodes_interpolant() {
     // finite value.
     let edge = [0.0f32, -0.0, -0.75, 5.96e-8, 6.0e-5, 65504.0, -3.1e-6, 0.1];
     let dims = [edge.len() as u32, 1, 1];
-    let volume = Volume::upload(ctx, &edge, dims, R16Float, Vec3::ONE, Vec3::ZERO).unwrap();
+    let volume = Volume::upload(&ctx.device, &ctx.queue, &edge, dims, R16Float, Vec3::ONE, Vec3::ZERO).unwrap();
     let mut enc = ctx.encoder("lit density edges");
     let (_, light) = rig.bricks_and_light(&mut enc, &volume, &tf, &s);
     ctx.submit_and_wait("lit density edges", enc).unwrap();
@@ -978,7 +977,7 @@ fn bad_input_is_a_typed_error() {
     let rig = Rig::new();
     let ctx = &rig.ctx;
     let upload = |data: &[f32], dims: [u32; 3], format, spacing| {
-        Volume::upload(ctx, data, dims, format, spacing, Vec3::ZERO)
+        Volume::upload(&ctx.device, &ctx.queue, data, dims, format, spacing, Vec3::ZERO)
     };
     let err = |r: Result<Volume, fieldkit::Error>| r.err().expect("should be refused").to_string();
     let max = ctx.device.limits().max_texture_dimension_3d;

@@ -38,8 +38,8 @@ fn painted_sphere() -> Mesh {
 
 fn run(ctx: &Context, mesh: &Mesh, grid: &Grid) -> (Attributes, Vec<VoxelAttributes>) {
     let v = Voxelizer::new(&ctx.device).unwrap();
-    let a = v.attributes(ctx, mesh, grid).unwrap();
-    let read = a.read(ctx).unwrap();
+    let a = ctx.block_on(v.attributes(&ctx.device, &ctx.queue, mesh, grid)).unwrap();
+    let read = a.read(&ctx.device, &ctx.queue).wait(ctx).unwrap();
     (a, read)
 }
 
@@ -96,7 +96,7 @@ fn constant_colour_comes_back_exactly() {
     let colour = [201, 37, 94, 250];
     mesh.colors = vec![colour; mesh.positions.len()];
     let (a, got) = run(&ctx, &mesh, &sphere_grid());
-    let surface = a.surface.read(&ctx).unwrap();
+    let surface = a.surface.read(&ctx.device, &ctx.queue).wait(&ctx).unwrap();
     assert_eq!(got.len(), surface.iter().filter(|&&b| b).count());
     assert_eq!(a.count as usize, got.len());
     assert!(got.len() > 500, "only {} voxels", got.len());
@@ -194,8 +194,8 @@ fn bad_attribute_arrays_get_typed_errors() {
     let grid = sphere_grid();
     let mut mesh = painted_sphere();
     mesh.colors.pop();
-    let err = v
-        .attributes(&ctx, &mesh, &grid)
+    let err = ctx
+        .block_on(v.attributes(&ctx.device, &ctx.queue, &mesh, &grid))
         .err()
         .expect("short colours");
     assert!(
@@ -204,14 +204,14 @@ fn bad_attribute_arrays_get_typed_errors() {
     );
     let mut mesh = painted_sphere();
     mesh.normals[3] = DVec3::new(f64::NAN, 0.0, 1.0);
-    let err = v.attributes(&ctx, &mesh, &grid).err().expect("NaN normal");
+    let err = ctx.block_on(v.attributes(&ctx.device, &ctx.queue, &mesh, &grid)).err().expect("NaN normal");
     assert!(
         matches!(&err, Error::Invalid { what, .. } if what.contains("normal 3")),
         "{err}"
     );
     let empty = Mesh::default();
     assert!(matches!(
-        v.attributes(&ctx, &empty, &grid),
+        ctx.block_on(v.attributes(&ctx.device, &ctx.queue, &empty, &grid)),
         Err(Error::Size { .. })
     ));
 }
@@ -224,8 +224,8 @@ fn attribute_volumes_hold_the_list() {
     let mesh = painted_sphere();
     let grid = sphere_grid();
     let v = Voxelizer::new(&ctx.device).unwrap();
-    let a = v.attributes(&ctx, &mesh, &grid).unwrap();
-    let list = a.read(&ctx).unwrap();
+    let a = ctx.block_on(v.attributes(&ctx.device, &ctx.queue, &mesh, &grid)).unwrap();
+    let list = a.read(&ctx.device, &ctx.queue).wait(&ctx).unwrap();
     let mut enc = ctx.encoder("volumes");
     let volumes = v
         .encode_attribute_volumes(&ctx.device, &mut enc, &a)

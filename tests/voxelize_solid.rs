@@ -12,10 +12,10 @@ fn solid(ctx: &Context, mesh: &Mesh, grid: &Grid, with_surface: bool) -> Vec<boo
     let v = Voxelizer::new(&ctx.device).unwrap();
     let mut enc = ctx.encoder("solid");
     let s = v
-        .encode_solid(ctx, &mut enc, mesh, grid, with_surface)
+        .encode_solid(&ctx.device, &mut enc, mesh, grid, with_surface)
         .unwrap();
     ctx.submit_and_wait("solid", enc).unwrap();
-    s.read(ctx).unwrap()
+    s.read(&ctx.device, &ctx.queue).wait(ctx).unwrap()
 }
 
 fn unit_grid(size: [u32; 3]) -> Grid {
@@ -126,7 +126,7 @@ fn open_meshes_are_refused() {
     sphere.triangles.pop();
     let mut enc = ctx.encoder("open");
     let err = v
-        .encode_solid(&ctx, &mut enc, &sphere, &unit_grid([16, 16, 16]), true)
+        .encode_solid(&ctx.device, &mut enc, &sphere, &unit_grid([16, 16, 16]), true)
         .err()
         .expect("accepted an open mesh");
     assert!(
@@ -138,7 +138,7 @@ fn open_meshes_are_refused() {
     flipped.triangles[3].swap(1, 2);
     let mut enc = ctx.encoder("flipped");
     assert!(
-        v.encode_solid(&ctx, &mut enc, &flipped, &unit_grid([16, 16, 16]), true)
+        v.encode_solid(&ctx.device, &mut enc, &flipped, &unit_grid([16, 16, 16]), true)
             .is_err()
     );
 }
@@ -210,7 +210,7 @@ fn binvox_and_vox_read_back() {
 /// shape; with the surface ORed in it would be fattened by up to a voxel.
 #[test]
 fn voxels_feed_the_distance_stages() {
-    use fieldkit::distance::volume::{Distance3d, Options3d};
+    use fieldkit::distance::{Distance3d, Options3d};
     use fieldkit::gpu::read_texture;
     let ctx = context();
     let v = Voxelizer::new(&ctx.device).unwrap();
@@ -220,7 +220,7 @@ fn voxels_feed_the_distance_stages() {
     let grid = unit_grid([24, 24, 24]);
     let mut enc = ctx.encoder("mesh sdf");
     let voxels = v
-        .encode_solid(&ctx, &mut enc, &Mesh::uv_sphere(c, r, 48, 24), &grid, false)
+        .encode_solid(&ctx.device, &mut enc, &Mesh::uv_sphere(c, r, 48, 24), &grid, false)
         .unwrap();
     let volume = v.encode_volume(&ctx.device, &mut enc, &voxels).unwrap();
     let field = d3

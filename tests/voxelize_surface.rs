@@ -12,9 +12,9 @@ use glam::{DVec3, Vec4};
 fn compare(ctx: &Context, mesh: &Mesh, grid: &Grid) -> (usize, usize, GridMesh) {
     let v = Voxelizer::new(&ctx.device).unwrap();
     let mut enc = ctx.encoder("voxelize");
-    let s = v.encode_surface(ctx, &mut enc, mesh, grid).unwrap();
+    let s = v.encode_surface(&ctx.device, &mut enc, mesh, grid).unwrap();
     ctx.submit_and_wait("voxelize", enc).unwrap();
-    let gpu = s.read(ctx).unwrap();
+    let gpu = s.read(&ctx.device, &ctx.queue).wait(ctx).unwrap();
     let local = mesh.to_grid(grid).unwrap();
     let want = cpu::conservative(&local, grid.size);
     let [nx, ny, _] = grid.size.map(|n| n as usize);
@@ -180,9 +180,9 @@ fn far_from_the_origin_is_the_same_as_at_it() {
     let v = Voxelizer::new(&ctx.device).unwrap();
     let run = |m: &Mesh, grid: &Grid| {
         let mut enc = ctx.encoder("voxelize");
-        let s = v.encode_surface(&ctx, &mut enc, m, grid).unwrap();
+        let s = v.encode_surface(&ctx.device, &mut enc, m, grid).unwrap();
         ctx.submit_and_wait("voxelize", enc).unwrap();
-        s.read(&ctx).unwrap()
+        s.read(&ctx.device, &ctx.queue).wait(&ctx).unwrap()
     };
     let a = run(&near, &unit_grid([16, 16, 16]));
     let b = run(
@@ -213,11 +213,11 @@ fn zero_area_triangles_are_left_out_and_counted() {
     let v = Voxelizer::new(&ctx.device).unwrap();
     let mut enc = ctx.encoder("voxelize");
     let s = v
-        .encode_surface(&ctx, &mut enc, &m, &unit_grid([12, 12, 12]))
+        .encode_surface(&ctx.device, &mut enc, &m, &unit_grid([12, 12, 12]))
         .unwrap();
     ctx.submit_and_wait("voxelize", enc).unwrap();
     assert_eq!(s.degenerate, 2);
-    assert!(s.read(&ctx).unwrap().iter().any(|&o| o));
+    assert!(s.read(&ctx.device, &ctx.queue).wait(&ctx).unwrap().iter().any(|&o| o));
 }
 
 #[test]
@@ -259,7 +259,7 @@ fn bad_input_gets_typed_errors() {
     for (name, m, grid) in cases {
         let mut enc = ctx.encoder("bad");
         let err = v
-            .encode_surface(&ctx, &mut enc, &m, &grid)
+            .encode_surface(&ctx.device, &mut enc, &m, &grid)
             .err()
             .unwrap_or_else(|| panic!("{name}: accepted"));
         assert!(
@@ -344,10 +344,10 @@ fn separation_holds_against_flood_fills() {
         let run = |sep| {
             let mut enc = ctx.encoder("voxelize");
             let s = v
-                .encode_surface_with(&ctx, &mut enc, &mesh, &g, sep)
+                .encode_surface_with(&ctx.device, &mut enc, &mesh, &g, sep)
                 .unwrap();
             ctx.submit_and_wait("voxelize", enc).unwrap();
-            s.read(&ctx).unwrap()
+            s.read(&ctx.device, &ctx.queue).wait(&ctx).unwrap()
         };
         let thick = run(Separation::Conservative);
         let thin = run(Separation::Six);
@@ -416,13 +416,13 @@ fn raster_path_gives_the_compute_voxels() {
         let run = |raster: bool| {
             let mut enc = ctx.encoder("voxelize");
             let s = if raster {
-                v.encode_surface_raster(&ctx, &mut enc, &m, &grid)
+                v.encode_surface_raster(&ctx.device, &mut enc, &m, &grid)
             } else {
-                v.encode_surface(&ctx, &mut enc, &m, &grid)
+                v.encode_surface(&ctx.device, &mut enc, &m, &grid)
             }
             .unwrap();
             ctx.submit_and_wait("voxelize", enc).unwrap();
-            s.read(&ctx).unwrap()
+            s.read(&ctx.device, &ctx.queue).wait(&ctx).unwrap()
         };
         let (compute, raster) = (run(false), run(true));
         let count = |v: &[bool]| v.iter().filter(|&&o| o).count();

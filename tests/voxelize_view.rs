@@ -3,7 +3,7 @@
 //! (or of its averaged colour), lit head-on.
 
 use fieldkit::harness::context;
-use fieldkit::metaball::render::Targets;
+use fieldkit::view::Targets;
 use fieldkit::voxelize::view::{ColourBy, VoxelView};
 use fieldkit::voxelize::{Grid, Mesh, Voxelizer};
 use glam::{DVec3, Vec3};
@@ -28,9 +28,9 @@ fn one_voxel_covers_its_square_in_its_colour() {
         voxel: 1.0,
         size: [3, 3, 3],
     };
-    let voxels = Voxelizer::new(device)
-        .unwrap()
-        .attributes(&ctx, &mesh, &grid)
+    let voxelizer = Voxelizer::new(device).unwrap();
+    let voxels = ctx
+        .block_on(voxelizer.attributes(device, &ctx.queue, &mesh, &grid))
         .unwrap();
     assert_eq!(voxels.count, 1);
     // Looking down −z at the voxel: x and y in [-0.5, 3.5] fill the 32 × 32 target, so the

@@ -1,53 +1,214 @@
-//! Copy buffers and 2D/3D textures back to the CPU.
+//! Copy buffers and 2D/3D textures back to the CPU without blocking.
+//!
+//! [`readback_buffer`] and [`readback_texture`] record a copy into a staging buffer, submit it
+//! and ask wgpu to map the staging buffer. They return a [`Readback`], which is a `Future`: it
+//! completes once the mapping is done, which needs the device to be polled (wgpu polls on its
+//! own on the web; natively, call `device.poll(wgpu::PollType::Poll)` each frame, as a render
+//! loop does anyway). Nothing here waits. [`Readback::try_take`] asks without a waker, for a
+//! frame loop that checks once a frame; the `context` feature adds a blocking `wait`.
 
-use super::Context;
+use std::future::Future;
+use std::pin::Pin;
+use std::sync::{Arc, Mutex};
+use std::task::{Context as TaskContext, Poll, Waker};
+
 use crate::error::Error;
 
-fn map_and_read(ctx: &Context, staging: &wgpu::Buffer) -> Result<Vec<u8>, Error> {
-    let (tx, rx) = std::sync::mpsc::channel();
-    staging.map_async(wgpu::MapMode::Read, .., move |r| {
-        let _ = tx.send(r);
-    });
-    ctx.device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .map_err(|e| Error::Readback(e.to_string()))?;
-    rx.recv()
-        .map_err(|e| Error::Readback(e.to_string()))?
-        .map_err(|e| Error::Readback(e.to_string()))?;
-    let data = staging
-        .get_mapped_range(..)
-        .map_err(|e| Error::Readback(format!("{e:?}")))?
-        .to_vec();
-    staging.unmap();
-    Ok(data)
+type Convert<T> = Box<dyn FnOnce(&[u8]) -> Result<T, Error> + Send>;
+
+#[derive(Default)]
+struct MapState {
+    /// The mapping's outcome, once wgpu called back.
+    done: Option<Result<(), String>>,
+    waker: Option<Waker>,
 }
 
-/// Read a whole buffer (it needs `COPY_SRC` usage).
-pub fn read_buffer(ctx: &Context, buffer: &wgpu::Buffer) -> Result<Vec<u8>, Error> {
-    if !buffer.usage().contains(wgpu::BufferUsages::COPY_SRC) {
-        return Err(Error::Readback(format!(
-            "buffer lacks COPY_SRC usage ({:?})",
-            buffer.usage()
-        )));
+/// Data on its way back from the GPU: a `Future` of `Result<T, Error>`.
+///
+/// ```no_run
+/// # async fn f(device: &wgpu::Device, queue: &wgpu::Queue, buffer: &wgpu::Buffer)
+/// #     -> Result<(), fieldkit::Error> {
+/// let bytes: Vec<u8> = fieldkit::gpu::readback_buffer(device, queue, buffer).await?;
+/// # Ok(()) }
+/// ```
+#[must_use = "a readback does nothing unless polled, awaited or taken"]
+pub struct Readback<T> {
+    staging: Option<wgpu::Buffer>,
+    state: Arc<Mutex<MapState>>,
+    convert: Option<Convert<T>>,
+    /// An outcome known before any mapping (a refused copy, or a value computed on the CPU).
+    early: Option<Result<T, Error>>,
+    submission: Option<wgpu::SubmissionIndex>,
+}
+
+impl<T: 'static> std::fmt::Debug for Readback<T> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Readback")
+            .field("staging", &self.staging)
+            .field("ready", &self.is_ready())
+            .finish()
     }
-    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("fieldkit readback"),
-        size: buffer.size(),
+}
+
+impl<T: 'static> Readback<T> {
+    /// A readback that is already finished with `result` (used for errors found before any copy).
+    pub fn ready(result: Result<T, Error>) -> Self {
+        Self {
+            staging: None,
+            state: Arc::default(),
+            convert: None,
+            early: Some(result),
+            submission: None,
+        }
+    }
+
+    /// Map `staging` (which a submitted copy, `submission`, fills) and turn its bytes into `T`.
+    fn map(
+        staging: wgpu::Buffer,
+        submission: wgpu::SubmissionIndex,
+        convert: impl FnOnce(&[u8]) -> Result<T, Error> + Send + 'static,
+    ) -> Self {
+        let state = Arc::new(Mutex::new(MapState::default()));
+        let sink = state.clone();
+        staging.map_async(wgpu::MapMode::Read, .., move |r| {
+            let mut s = sink.lock().unwrap_or_else(|e| e.into_inner());
+            s.done = Some(r.map_err(|e| e.to_string()));
+            if let Some(w) = s.waker.take() {
+                w.wake();
+            }
+        });
+        Self {
+            staging: Some(staging),
+            state,
+            convert: Some(Box::new(convert)),
+            early: None,
+            submission: Some(submission),
+        }
+    }
+
+    /// Convert the result afterwards (e.g. bytes into typed values).
+    pub fn then<U: 'static>(
+        mut self,
+        f: impl FnOnce(T) -> Result<U, Error> + Send + 'static,
+    ) -> Readback<U> {
+        if let Some(r) = self.early.take() {
+            return Readback::ready(r.and_then(f));
+        }
+        let Some(convert) = self.convert.take() else {
+            return Readback::ready(Err(Error::Readback("the result was already taken".into())));
+        };
+        Readback {
+            staging: self.staging.take(),
+            state: self.state.clone(),
+            convert: Some(Box::new(move |b| convert(b).and_then(f))),
+            early: None,
+            submission: self.submission.take(),
+        }
+    }
+
+    /// The submission that carries the copy (`None` when there was nothing to copy): what a
+    /// caller polls the device for.
+    pub fn submission(&self) -> Option<&wgpu::SubmissionIndex> {
+        self.submission.as_ref()
+    }
+
+    /// Whether [`Readback::try_take`] would return the result now.
+    pub fn is_ready(&self) -> bool {
+        self.early.is_some()
+            || self
+                .state
+                .lock()
+                .map(|s| s.done.is_some())
+                .unwrap_or(true)
+    }
+
+    /// The result if the mapping has finished, else `None` (ask again after the next
+    /// `device.poll`). After it returned `Some`, it returns an error.
+    pub fn try_take(&mut self) -> Option<Result<T, Error>> {
+        if let Some(r) = self.early.take() {
+            return Some(r);
+        }
+        let done = self
+            .state
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .done
+            .take()?;
+        let (Some(staging), Some(convert)) = (self.staging.take(), self.convert.take()) else {
+            return Some(Err(Error::Readback("the result was already taken".into())));
+        };
+        Some(done.map_err(Error::Readback).and_then(|()| {
+            let out = {
+                let view = staging
+                    .get_mapped_range(..)
+                    .map_err(|e| Error::Readback(format!("{e:?}")))?;
+                convert(&view)
+            };
+            staging.unmap();
+            out
+        }))
+    }
+}
+
+impl<T: Unpin + 'static> Future for Readback<T> {
+    type Output = Result<T, Error>;
+
+    fn poll(self: Pin<&mut Self>, cx: &mut TaskContext<'_>) -> Poll<Self::Output> {
+        let this = self.get_mut();
+        if let Some(r) = this.try_take() {
+            return Poll::Ready(r);
+        }
+        let mut s = this.state.lock().unwrap_or_else(|e| e.into_inner());
+        if s.done.is_some() {
+            // Finished between the two looks: come back at once.
+            cx.waker().wake_by_ref();
+        } else {
+            s.waker = Some(cx.waker().clone());
+        }
+        Poll::Pending
+    }
+}
+
+fn staging(device: &wgpu::Device, label: &str, size: u64) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size,
         usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
-    });
-    let mut enc = ctx.encoder("readback");
-    enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, buffer.size());
-    ctx.submit_and_wait("readback", enc)?;
-    map_and_read(ctx, &staging)
+    })
 }
 
-/// Read mip 0 of a 2D or 3D texture into texels of type `T` (e.g. `u32` for `R32Uint`,
-/// `f32` for `R32Float` and `Depth32Float`, `[u8; 4]` for `Rgba8Unorm`), rows tightly packed, x fastest, then y, then z.
-pub fn read_texture<T: bytemuck::Pod>(
-    ctx: &Context,
+/// Read a whole buffer (it needs `COPY_SRC` usage): records and submits one copy.
+pub fn readback_buffer(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    buffer: &wgpu::Buffer,
+) -> Readback<Vec<u8>> {
+    if !buffer.usage().contains(wgpu::BufferUsages::COPY_SRC) {
+        return Readback::ready(Err(Error::Readback(format!(
+            "buffer {:?} lacks COPY_SRC usage ({:?})",
+            buffer,
+            buffer.usage()
+        ))));
+    }
+    let size = buffer.size();
+    let staging = staging(device, "fieldkit readback", size);
+    let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+        label: Some("fieldkit readback"),
+    });
+    enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
+    let submission = queue.submit([enc.finish()]);
+    Readback::map(staging, submission, |b| Ok(b.to_vec()))
+}
+
+/// Read mip 0 of a 2D or 3D texture into texels of type `T` (e.g. `u32` for `R32Uint`, `f32`
+/// for `R32Float` and `Depth32Float`, `[u8; 4]` for `Rgba8Unorm`), rows tightly packed, x
+/// fastest, then y, then z. The texture needs `COPY_SRC` usage.
+pub fn readback_texture<T: bytemuck::Pod + Send>(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
     texture: &wgpu::Texture,
-) -> Result<Vec<T>, Error> {
+) -> Readback<Vec<T>> {
     let format = texture.format();
     // Depth formats are read through their depth aspect (`f32` for `Depth32Float`).
     let aspect = if format.has_depth_aspect() {
@@ -55,32 +216,33 @@ pub fn read_texture<T: bytemuck::Pod>(
     } else {
         wgpu::TextureAspect::All
     };
-    let texel = format
-        .block_copy_size(Some(aspect))
-        .ok_or_else(|| Error::Readback(format!("{format:?} cannot be copied")))?;
+    let Some(texel) = format.block_copy_size(Some(aspect)) else {
+        return Readback::ready(Err(Error::Readback(format!("{format:?} cannot be copied"))));
+    };
     if texel as usize != std::mem::size_of::<T>() {
-        return Err(Error::Readback(format!(
+        return Readback::ready(Err(Error::Readback(format!(
             "{format:?} has {texel}-byte texels, asked for {}-byte values",
             std::mem::size_of::<T>()
-        )));
+        ))));
     }
     if !texture.usage().contains(wgpu::TextureUsages::COPY_SRC) {
-        return Err(Error::Readback(format!(
+        return Readback::ready(Err(Error::Readback(format!(
             "texture lacks COPY_SRC usage ({:?})",
             texture.usage()
-        )));
+        ))));
     }
     let size = texture.size();
     let row = size.width * texel;
     let padded =
         row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
-    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+    let staging = staging(
+        device,
+        "fieldkit texture readback",
+        padded as u64 * size.height as u64 * size.depth_or_array_layers as u64,
+    );
+    let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
         label: Some("fieldkit texture readback"),
-        size: padded as u64 * size.height as u64 * size.depth_or_array_layers as u64,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
     });
-    let mut enc = ctx.encoder("texture readback");
     enc.copy_texture_to_buffer(
         wgpu::TexelCopyTextureInfo {
             aspect,
@@ -96,12 +258,13 @@ pub fn read_texture<T: bytemuck::Pod>(
         },
         size,
     );
-    ctx.submit_and_wait("texture readback", enc)?;
-    let bytes = map_and_read(ctx, &staging)?;
-    let mut out =
-        Vec::with_capacity((size.width * size.height * size.depth_or_array_layers) as usize);
-    for chunk in bytes.chunks(padded as usize) {
-        out.extend_from_slice(bytemuck::cast_slice::<u8, T>(&chunk[..row as usize]));
-    }
-    Ok(out)
+    let submission = queue.submit([enc.finish()]);
+    Readback::map(staging, submission, move |bytes| {
+        let mut out =
+            Vec::with_capacity((size.width * size.height * size.depth_or_array_layers) as usize);
+        for chunk in bytes.chunks(padded as usize) {
+            out.extend_from_slice(bytemuck::cast_slice::<u8, T>(&chunk[..row as usize]));
+        }
+        Ok(out)
+    })
 }

@@ -1,7 +1,6 @@
 //! GPU time of passes from timestamp queries.
 
-use super::Context;
-use crate::error::Error;
+use super::{Readback, readback_buffer};
 
 /// Timestamp pairs around passes. Make one per measurement, hand `compute_pass_writes(i)` to the
 /// i-th pass, then [`Timer::resolve`] and [`Timer::read_ms`].
@@ -14,9 +13,8 @@ pub struct Timer {
 
 impl Timer {
     /// `None` when the adapter has no timestamp queries.
-    pub fn new(ctx: &Context, passes: u32) -> Option<Self> {
-        if !ctx
-            .device
+    pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, passes: u32) -> Option<Self> {
+        if !device
             .features()
             .contains(wgpu::Features::TIMESTAMP_QUERY)
             || passes == 0
@@ -24,12 +22,12 @@ impl Timer {
             return None;
         }
         let count = passes * 2;
-        let set = ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
+        let set = device.create_query_set(&wgpu::QuerySetDescriptor {
             label: Some("fieldkit timer"),
             ty: wgpu::QueryType::Timestamp,
             count,
         });
-        let resolve = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        let resolve = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("fieldkit timer resolve"),
             size: count as u64 * 8,
             usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
@@ -39,7 +37,7 @@ impl Timer {
             set,
             resolve,
             count,
-            period_ns: ctx.queue.get_timestamp_period(),
+            period_ns: queue.get_timestamp_period(),
         })
     }
 
@@ -52,6 +50,7 @@ impl Timer {
         }
     }
 
+    /// Timestamp writes for render pass `i` (start and end).
     pub fn render_pass_writes(&self, i: u32) -> wgpu::RenderPassTimestampWrites<'_> {
         wgpu::RenderPassTimestampWrites {
             query_set: &self.set,
@@ -60,17 +59,22 @@ impl Timer {
         }
     }
 
+    /// Resolve every timestamp into the buffer [`Timer::read_ms`] reads; call once, after the
+    /// last pass, before submitting.
     pub fn resolve(&self, encoder: &mut wgpu::CommandEncoder) {
         encoder.resolve_query_set(&self.set, 0..self.count, &self.resolve, 0);
     }
 
-    /// Milliseconds from the start of the first pass to the end of the last one.
-    pub fn read_ms(&self, ctx: &Context) -> Result<f64, Error> {
-        let bytes = super::read_buffer(ctx, &self.resolve)?;
-        let ticks: &[u64] = bytemuck::cast_slice(&bytes);
-        let first = ticks[0];
-        let last = ticks[ticks.len() - 1];
-        Ok(last.saturating_sub(first) as f64 * self.period_ns as f64 / 1e6)
+    /// Milliseconds from the start of the first pass to the end of the last one, once the
+    /// submission that resolved them has finished.
+    pub fn read_ms(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Readback<f64> {
+        let period = self.period_ns as f64;
+        readback_buffer(device, queue, &self.resolve).then(move |bytes| {
+            let ticks: &[u64] = bytemuck::cast_slice(&bytes);
+            let first = ticks[0];
+            let last = ticks[ticks.len() - 1];
+            Ok(last.saturating_sub(first) as f64 * period / 1e6)
+        })
     }
 }
 
@@ -87,9 +91,9 @@ pub struct Profiler {
 
 impl Profiler {
     /// `None` when the adapter has no timestamp queries.
-    pub fn new(ctx: &Context, capacity: u32) -> Option<Self> {
+    pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, capacity: u32) -> Option<Self> {
         Some(Self {
-            timer: Timer::new(ctx, capacity)?,
+            timer: Timer::new(device, queue, capacity)?,
             capacity,
             names: Vec::new(),
         })
@@ -118,21 +122,27 @@ impl Profiler {
 
     /// After the submission finished: (name, milliseconds) per pass, and the total from the first
     /// pass's start to the last one's end (gaps between passes included). Clears the names.
-    pub fn read(&mut self, ctx: &Context) -> Result<(Vec<(String, f64)>, f64), Error> {
-        let bytes = super::read_buffer(ctx, &self.timer.resolve)?;
-        let ticks: &[u64] = bytemuck::cast_slice(&bytes);
-        let ms = |a: u64, b: u64| b.saturating_sub(a) as f64 * self.timer.period_ns as f64 / 1e6;
+    pub fn read(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Readback<(Vec<(String, f64)>, f64)> {
+        let period = self.timer.period_ns as f64;
         let names = std::mem::take(&mut self.names);
-        let passes = names
-            .into_iter()
-            .enumerate()
-            .map(|(i, n)| (n, ms(ticks[2 * i], ticks[2 * i + 1])))
-            .collect::<Vec<_>>();
-        let total = if passes.is_empty() {
-            0.0
-        } else {
-            ms(ticks[0], ticks[2 * passes.len() - 1])
-        };
-        Ok((passes, total))
+        readback_buffer(device, queue, &self.timer.resolve).then(move |bytes| {
+            let ticks: &[u64] = bytemuck::cast_slice(&bytes);
+            let ms = |a: u64, b: u64| b.saturating_sub(a) as f64 * period / 1e6;
+            let passes = names
+                .into_iter()
+                .enumerate()
+                .map(|(i, n)| (n, ms(ticks[2 * i], ticks[2 * i + 1])))
+                .collect::<Vec<_>>();
+            let total = if passes.is_empty() {
+                0.0
+            } else {
+                ms(ticks[0], ticks[2 * passes.len() - 1])
+            };
+            Ok((passes, total))
+        })
     }
 }

@@ -48,7 +48,7 @@ pub fn splat_fixed(
     voxels: &[Vec4],
     edge: f32,
     settings: &Settings,
-    grid: &crate::distance::volume::Grid3,
+    grid: &crate::distance::Grid3,
     scale: f32,
 ) -> (Vec<u64>, Vec<u32>) {
     let [w, h, d] = grid.size.map(|s| s as usize);

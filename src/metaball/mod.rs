@@ -6,7 +6,7 @@
 //! use fieldkit::metaball::{Metaballs, Settings, packed_grid};
 //! let voxels = packed_grid([8, 8, 8], 1.0); // 512 voxels of edge 1, centred on the origin
 //! let balls = Metaballs::new(&ctx.device)?;
-//! let instances = balls.upload(ctx, &voxels)?;
+//! let instances = balls.upload(&ctx.device, &ctx.queue, &voxels)?;
 //! let settings = Settings::default();
 //! let Some(grid) = settings.fit_grid(&voxels, 1.0)? else { return Ok(()) }; // empty set
 //! let mut encoder = ctx.encoder("metaballs");
@@ -22,9 +22,9 @@ pub mod render;
 use glam::{Vec3, Vec4};
 
 use crate::bind::ComputePipeline;
-use crate::distance::volume::{Distance3d, Grid3, Inside, MAX_POINTS, Method, Options3d, Prof};
+use crate::distance::{Distance3d, Grid3, Inside, MAX_POINTS, Method, Options3d, Prof};
 use crate::error::Error;
-use crate::gpu::{Context, Profiler, uniform_buffer as uniform};
+use crate::gpu::{Profiler, uniform_buffer as uniform};
 use crate::shaders::metaball::{bin_blobs, march_field, splat, surface_seeds};
 
 const STAGE: &str = "metaball";
@@ -128,7 +128,7 @@ impl Settings {
         let hi = hi + cell;
         let cells = ((hi - lo) / cell).ceil();
         let size = [cells.x as u64, cells.y as u64, cells.z as u64];
-        let max = crate::distance::volume::MAX_SIDE_3D;
+        let max = crate::distance::MAX_SIDE_3D;
         for (i, what) in ["grid width", "grid height", "grid depth"]
             .into_iter()
             .enumerate()
@@ -377,7 +377,8 @@ impl Metaballs {
 
     /// Upload a voxel set (xyz: centre, w: scale). NaN or infinite centres, and negative or
     /// non-finite scales, are refused.
-    pub fn upload(&self, ctx: &Context, voxels: &[Vec4]) -> Result<Instances, Error> {
+    pub fn upload(&self, device: &wgpu::Device,
+        queue: &wgpu::Queue, voxels: &[Vec4]) -> Result<Instances, Error> {
         check_voxels(voxels, 1.0)?;
         if voxels.len() > u32::MAX as usize {
             return Err(Error::Size {
@@ -387,7 +388,7 @@ impl Metaballs {
                 max: u32::MAX as u64,
             });
         }
-        let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("metaball instances"),
             size: (voxels.len().max(1) * 16) as u64,
             usage: wgpu::BufferUsages::STORAGE
@@ -395,7 +396,7 @@ impl Metaballs {
                 | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        ctx.queue
+        queue
             .write_buffer(&buffer, 0, bytemuck::cast_slice(voxels));
         Ok(Instances {
             buffer,
@@ -407,7 +408,7 @@ impl Metaballs {
     /// Re-upload changed voxels in place (same count): the per-frame path of an animation.
     pub fn update(
         &self,
-        ctx: &Context,
+        queue: &wgpu::Queue,
         instances: &mut Instances,
         voxels: &[Vec4],
     ) -> Result<(), Error> {
@@ -422,7 +423,7 @@ impl Metaballs {
                 ),
             });
         }
-        ctx.queue
+        queue
             .write_buffer(&instances.buffer, 0, bytemuck::cast_slice(voxels));
         instances.max_scale = max_scale(voxels);
         Ok(())
@@ -695,7 +696,7 @@ impl Metaballs {
         prof: Prof,
     ) -> Result<SurfaceSeeds, Error> {
         check_inputs(settings, edge, grid, STAGE)?;
-        crate::distance::volume::check_size_3d(device, grid.size)?;
+        crate::distance::check_size_3d(device, grid.size)?;
         let cells: u64 = grid.size.iter().map(|&s| s as u64).product();
         if cells > MAX_POINTS as u64 + 1 {
             return Err(Error::Size {

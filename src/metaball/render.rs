@@ -4,7 +4,8 @@
 //! ```no_run
 //! # fn f(ctx: &fieldkit::gpu::Context, field: &fieldkit::metaball::MetaballField,
 //! #      colour: &wgpu::TextureView, depth: &wgpu::TextureView) -> Result<(), fieldkit::Error> {
-//! use fieldkit::metaball::render::{Raymarcher, RaymarchSettings, View};
+//! use fieldkit::metaball::render::{Raymarcher, RaymarchSettings};
+//! use fieldkit::view::View;
 //! use glam::{Mat4, Vec3};
 //! let proj = glam::camera::rh::proj::directx::perspective(0.8, 16.0 / 9.0, 0.1, 100.0);
 //! let view = View {
@@ -28,37 +29,11 @@
 use glam::{Mat4, Vec3, Vec4};
 
 use super::{BlobBins, Instances, MetaballField};
+use crate::view::{View, box_visible, depth_state, load_pass, screen_rect};
 use crate::bind::{ComputePipeline, RenderPipeline, RenderTargets};
 use crate::error::Error;
 use crate::gpu::uniform_buffer as uniform;
 use crate::shaders::raymarch::{blob_trace, composite, sdf_raymarch, voxel_cubes};
-
-/// A camera: view-projection (world → clip, depth 0..1 or reversed 1..0) and target size.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct View {
-    pub view_proj: Mat4,
-    pub viewport: [u32; 2],
-    /// Reversed Z: the near plane at depth 1, far at 0 (depth test `Greater`).
-    pub reversed_z: bool,
-}
-
-impl View {
-    fn check(&self, stage: &'static str) -> Result<(), Error> {
-        if !self.view_proj.is_finite() || self.view_proj.determinant() == 0.0 {
-            return Err(Error::Invalid {
-                stage,
-                what: "view_proj must be finite and invertible".into(),
-            });
-        }
-        if self.viewport[0] == 0 || self.viewport[1] == 0 {
-            return Err(Error::Invalid {
-                stage,
-                what: format!("viewport {:?} has a zero side", self.viewport),
-            });
-        }
-        Ok(())
-    }
-}
 
 /// What the raymarcher writes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -141,129 +116,6 @@ impl RaymarchSettings {
     }
 }
 
-/// A render pass over the caller's targets that keeps what they hold.
-pub(crate) fn load_pass<'e>(
-    encoder: &'e mut wgpu::CommandEncoder,
-    label: &str,
-    colour: &wgpu::TextureView,
-    depth: &wgpu::TextureView,
-) -> wgpu::RenderPass<'e> {
-    fn load<T>() -> wgpu::Operations<T> {
-        wgpu::Operations {
-            load: wgpu::LoadOp::Load,
-            store: wgpu::StoreOp::Store,
-        }
-    }
-    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-        label: Some(label),
-        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-            view: colour,
-            depth_slice: None,
-            resolve_target: None,
-            ops: load(),
-        })],
-        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-            view: depth,
-            depth_ops: Some(load()),
-            stencil_ops: None,
-        }),
-        ..Default::default()
-    })
-}
-
-/// Colour and depth targets of one size, readable back (`COPY_SRC`) and sampled
-/// (`TEXTURE_BINDING`): what a test, the gallery or a benchmark draws into.
-pub struct Targets {
-    pub colour: wgpu::Texture,
-    pub depth: wgpu::Texture,
-    pub colour_view: wgpu::TextureView,
-    pub depth_view: wgpu::TextureView,
-}
-
-impl Targets {
-    pub fn new(
-        device: &wgpu::Device,
-        [width, height]: [u32; 2],
-        colour: wgpu::TextureFormat,
-        depth: wgpu::TextureFormat,
-    ) -> Self {
-        let make = |format, label| {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size: wgpu::Extent3d {
-                    width,
-                    height,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                // Read back by tests, sampled by later stages (the ocean's fade reads the depth).
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-                    | wgpu::TextureUsages::COPY_SRC
-                    | wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            })
-        };
-        let colour = make(colour, "fieldkit colour target");
-        let depth = make(depth, "fieldkit depth target");
-        Self {
-            colour_view: colour.create_view(&Default::default()),
-            depth_view: depth.create_view(&Default::default()),
-            colour,
-            depth,
-        }
-    }
-
-    /// Clear both targets.
-    pub fn clear(&self, encoder: &mut wgpu::CommandEncoder, colour: wgpu::Color, depth: f32) {
-        encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("fieldkit clear"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &self.colour_view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(colour),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &self.depth_view,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(depth),
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
-            ..Default::default()
-        });
-    }
-}
-
-/// Depth test and write against the caller's depth target, which must have a depth aspect.
-pub(crate) fn depth_state(
-    stage: &'static str,
-    format: wgpu::TextureFormat,
-    compare: wgpu::CompareFunction,
-) -> Result<wgpu::DepthStencilState, Error> {
-    if !format.is_depth_stencil_format() || !format.has_depth_aspect() {
-        return Err(Error::Format {
-            stage,
-            format,
-            supported: "a depth format (Depth32Float, Depth24Plus, ...)",
-        });
-    }
-    Ok(wgpu::DepthStencilState {
-        format,
-        depth_write_enabled: Some(true),
-        depth_compare: Some(compare),
-        stencil: Default::default(),
-        bias: Default::default(),
-    })
-}
-
 /// A rigid transform (rotation and translation) within a tolerance.
 fn check_rigid(m: Mat4, stage: &'static str) -> Result<(), Error> {
     let r = glam::Mat3::from_mat4(m);
@@ -280,70 +132,6 @@ fn check_rigid(m: Mat4, stage: &'static str) -> Result<(), Error> {
         });
     }
     Ok(())
-}
-
-/// Whether a local box under `local_to_world` can be on screen: false when all 8 corners lie
-/// outside one clip plane (the host-side frustum test before drawing).
-pub fn box_visible(view_proj: Mat4, local_to_world: Mat4, lo: Vec3, hi: Vec3) -> bool {
-    let m = view_proj * local_to_world;
-    let corners: Vec<Vec4> = (0..8)
-        .map(|i| {
-            let c = Vec3::new(
-                if i & 1 == 0 { lo.x } else { hi.x },
-                if i & 2 == 0 { lo.y } else { hi.y },
-                if i & 4 == 0 { lo.z } else { hi.z },
-            );
-            m * c.extend(1.0)
-        })
-        .collect();
-    // Planes: -w ≤ x ≤ w, -w ≤ y ≤ w, 0 ≤ z ≤ w (either depth convention keeps z in [0, w]).
-    let planes: [fn(Vec4) -> f32; 6] = [
-        |c| c.w + c.x,
-        |c| c.w - c.x,
-        |c| c.w + c.y,
-        |c| c.w - c.y,
-        |c| c.z,
-        |c| c.w - c.z,
-    ];
-    planes
-        .iter()
-        .all(|plane| corners.iter().any(|&c| plane(c) >= 0.0))
-}
-
-/// Pixels `[x0, y0]` to `[x1, y1)` of the viewport that the box under `local_to_world` can cover:
-/// the bounding rectangle of its projected corners, or the whole viewport when a corner lies
-/// behind the eye (then its projection says nothing). Empty when the box is off screen.
-pub fn screen_rect(view: &View, local_to_world: Mat4, lo: Vec3, hi: Vec3) -> [u32; 4] {
-    let m = view.view_proj * local_to_world;
-    let [w, h] = view.viewport;
-    let (mut min, mut max) = (
-        glam::Vec2::splat(f32::INFINITY),
-        glam::Vec2::splat(f32::NEG_INFINITY),
-    );
-    for i in 0..8 {
-        let c = Vec3::new(
-            if i & 1 == 0 { lo.x } else { hi.x },
-            if i & 2 == 0 { lo.y } else { hi.y },
-            if i & 4 == 0 { lo.z } else { hi.z },
-        );
-        let clip = m * c.extend(1.0);
-        if clip.w <= 1e-6 * clip.truncate().abs().max_element().max(1.0) {
-            return [0, 0, w, h];
-        }
-        let ndc = glam::Vec2::new(clip.x, clip.y) / clip.w;
-        let px = glam::Vec2::new(
-            (ndc.x + 1.0) * 0.5 * w as f32,
-            (1.0 - ndc.y) * 0.5 * h as f32,
-        );
-        min = min.min(px);
-        max = max.max(px);
-    }
-    // A pixel whose centre the projection only just misses still counts: one pixel of margin.
-    let x0 = (min.x.floor() - 1.0).clamp(0.0, w as f32) as u32;
-    let y0 = (min.y.floor() - 1.0).clamp(0.0, h as f32) as u32;
-    let x1 = (max.x.ceil() + 1.0).clamp(0.0, w as f32) as u32;
-    let y1 = (max.y.ceil() + 1.0).clamp(0.0, h as f32) as u32;
-    [x0, y0, x1.max(x0), y1.max(y0)]
 }
 
 /// The march's output for one viewport size, kept between frames.

@@ -6,11 +6,11 @@
 //!
 //! ```no_run
 //! # fn f(ctx: &fieldkit::gpu::Context, colour: &wgpu::TextureView) -> Result<(), fieldkit::Error> {
-//! use fieldkit::metaball::render::View;
+//! use fieldkit::view::View;
 //! use fieldkit::volume::{MarchSettings, TransferFunction, Volume, VolumeRenderer, fbm_cloud};
 //! use glam::{Mat4, Vec3};
 //! let dims = [64, 64, 64];
-//! let volume = Volume::upload(ctx, &fbm_cloud(dims, 7), dims, wgpu::TextureFormat::R8Unorm,
+//! let volume = Volume::upload(&ctx.device, &ctx.queue, &fbm_cloud(dims, 7), dims, wgpu::TextureFormat::R8Unorm,
 //!     Vec3::splat(1.0 / 64.0), Vec3::splat(-0.5))?;
 //! let renderer = VolumeRenderer::new(&ctx.device, wgpu::TextureFormat::Rgba8Unorm)?;
 //! let tf = TransferFunction::cloud();
@@ -39,8 +39,8 @@ use glam::{Mat4, Vec3};
 
 use crate::bind::{ComputePipeline, RenderPipeline, RenderTargets};
 use crate::error::Error;
-use crate::gpu::{Context, uniform_buffer as uniform};
-use crate::metaball::render::{View, box_visible, screen_rect};
+use crate::gpu::uniform_buffer as uniform;
+use crate::view::{View, box_visible, screen_rect};
 use crate::shaders::volume::{bricks, lit_density, volume_composite, volume_march};
 
 const STAGE: &str = volume_march::STAGE;
@@ -109,15 +109,16 @@ impl Volume {
     /// Upload `data` (x fastest, values as the format stores them: 0..1 for R8Unorm) in
     /// `format`.
     pub fn upload(
-        ctx: &Context,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
         data: &[f32],
         dims: [u32; 3],
         format: wgpu::TextureFormat,
         spacing: Vec3,
         origin: Vec3,
     ) -> Result<Self, Error> {
-        check_format(&ctx.device, format)?;
-        let max = ctx.device.limits().max_texture_dimension_3d;
+        check_format(device, format)?;
+        let max = device.limits().max_texture_dimension_3d;
         for (axis, &d) in dims.iter().enumerate() {
             if d == 0 || d > max {
                 return Err(Error::Size {
@@ -156,8 +157,8 @@ impl Volume {
             ),
             _ => (bytemuck::cast_slice(data).to_vec(), 4),
         };
-        let texture = crate::gpu::scoped(&ctx.device, STAGE, || {
-            let t = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        let texture = crate::gpu::scoped(device, STAGE, || {
+            let t = device.create_texture(&wgpu::TextureDescriptor {
                 label: Some("density volume"),
                 size: wgpu::Extent3d {
                     width: dims[0],
@@ -171,7 +172,7 @@ impl Volume {
                 usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
                 view_formats: &[],
             });
-            ctx.queue.write_texture(
+            queue.write_texture(
                 t.as_image_copy(),
                 &bytes,
                 wgpu::TexelCopyBufferLayout {
@@ -183,7 +184,7 @@ impl Volume {
             );
             t
         })?;
-        Self::new(&ctx.device, texture, origin, spacing)
+        Self::new(device, texture, origin, spacing)
     }
 
     /// Local-space box of the volume.

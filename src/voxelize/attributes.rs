@@ -18,7 +18,7 @@ use super::{
 };
 use crate::bind::ComputePipeline;
 use crate::error::Error;
-use crate::gpu::{Context, read_buffer, uniform_buffer as uniform};
+use crate::gpu::{Readback, readback_buffer, uniform_buffer as uniform};
 use crate::shaders::voxelize::attribute_volume::{self as volume_stage, AttributeVolumeParams};
 use crate::shaders::voxelize::attributes::{self as stage, AttributeParams};
 use crate::shaders::voxelize::compact::{self as compact, CompactParams};
@@ -69,9 +69,9 @@ pub struct PendingAttributes {
 
 impl PendingAttributes {
     /// Occupied voxels, read back once the encoder that recorded this has been submitted.
-    pub fn occupied(&self, ctx: &Context) -> Result<u32, Error> {
-        let bytes = read_buffer(ctx, &self.total)?;
-        Ok(bytemuck::pod_read_unaligned(&bytes[..4]))
+    pub fn occupied(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Readback<u32> {
+        readback_buffer(device, queue, &self.total)
+            .then(|bytes| Ok(bytemuck::pod_read_unaligned(&bytes[..4])))
     }
 }
 
@@ -118,19 +118,21 @@ fn decode_normal(packed: u32) -> Option<Vec3> {
 
 impl Attributes {
     /// Every occupied voxel's averages, in voxel order.
-    pub fn read(&self, ctx: &Context) -> Result<Vec<VoxelAttributes>, Error> {
-        let bytes = read_buffer(ctx, &self.voxels)?;
-        let words: &[[u32; 4]] = bytemuck::cast_slice(&bytes);
+    pub fn read(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Readback<Vec<VoxelAttributes>> {
         let [nx, ny, _] = self.surface.size;
-        Ok(words[..self.count as usize]
-            .iter()
-            .map(|&[i, colour, normal, triangles]| VoxelAttributes {
-                voxel: [i % nx, i / nx % ny, i / (nx * ny)],
-                color: colour.to_le_bytes(),
-                normal: decode_normal(normal),
-                triangles,
-            })
-            .collect())
+        let count = self.count as usize;
+        readback_buffer(device, queue, &self.voxels).then(move |bytes| {
+            let words: &[[u32; 4]] = bytemuck::cast_slice(&bytes);
+            Ok(words[..count]
+                .iter()
+                .map(|&[i, colour, normal, triangles]| VoxelAttributes {
+                    voxel: [i % nx, i / nx % ny, i / (nx * ny)],
+                    color: colour.to_le_bytes(),
+                    normal: decode_normal(normal),
+                    triangles,
+                })
+                .collect())
+        })
     }
 }
 
@@ -177,7 +179,10 @@ fn corners(mesh: &Mesh, local: &GridMesh) -> Result<Vec<[u32; 4]>, Error> {
 impl Voxelizer {
     /// Conservative surface voxels of `mesh` with each voxel's colour and normal averaged
     /// over the triangles that touch it. Submits twice: the number of occupied voxels is read
-    /// back in between to size the compact list.
+    /// back in between to size the compact list, so the future finishes only as the device is
+    /// polled (a frame loop's `device.poll`, or [`Context::block_on`](crate::gpu::Context::block_on)).
+    /// To keep the read-back out of a frame, record the two halves yourself
+    /// ([`Voxelizer::encode_attributes`], [`Voxelizer::encode_resolve_attributes`]).
     ///
     /// ```
     /// # fn f(ctx: &fieldkit::gpu::Context) -> Result<(), fieldkit::Error> {
@@ -186,18 +191,29 @@ impl Voxelizer {
     /// let mut mesh = Mesh::uv_sphere(DVec3::ZERO, 1.0, 24, 12);
     /// mesh.colors = vec![[200, 40, 90, 255]; mesh.positions.len()];
     /// let grid = Grid { origin: DVec3::splat(-1.25), voxel: 2.5 / 32.0, size: [32, 32, 32] };
-    /// let voxels = Voxelizer::new(&ctx.device)?.attributes(ctx, &mesh, &grid)?.read(ctx)?;
+    /// let voxelizer = Voxelizer::new(&ctx.device)?;
+    /// let attributes = ctx.block_on(voxelizer.attributes(&ctx.device, &ctx.queue, &mesh, &grid))?;
+    /// let voxels = attributes.read(&ctx.device, &ctx.queue).wait(ctx)?;
     /// assert!(voxels.iter().all(|v| v.color == [200, 40, 90, 255]));
     /// # Ok(()) }
     /// ```
-    pub fn attributes(&self, ctx: &Context, mesh: &Mesh, grid: &Grid) -> Result<Attributes, Error> {
-        let mut encoder = ctx.encoder("voxelize attributes");
-        let pending = self.encode_attributes(ctx, &mut encoder, mesh, grid)?;
-        ctx.submit_and_wait("voxelize attributes", encoder)?;
-        let occupied = pending.occupied(ctx)?;
-        let mut encoder = ctx.encoder("voxelize attributes resolve");
-        let attributes = self.encode_resolve_attributes(ctx, &mut encoder, pending, occupied)?;
-        ctx.submit_and_wait("voxelize attributes resolve", encoder)?;
+    pub async fn attributes(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        mesh: &Mesh,
+        grid: &Grid,
+    ) -> Result<Attributes, Error> {
+        let encoder = |label| {
+            device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) })
+        };
+        let mut first = encoder("voxelize attributes");
+        let pending = self.encode_attributes(device, &mut first, mesh, grid)?;
+        queue.submit([first.finish()]);
+        let occupied = pending.occupied(device, queue).await?;
+        let mut second = encoder("voxelize attributes resolve");
+        let attributes = self.encode_resolve_attributes(device, &mut second, pending, occupied)?;
+        queue.submit([second.finish()]);
         Ok(attributes)
     }
 
@@ -266,15 +282,14 @@ impl Voxelizer {
     /// dense index of every occupied voxel.
     pub fn encode_attributes(
         &self,
-        ctx: &Context,
+        device: &wgpu::Device,
         encoder: &mut wgpu::CommandEncoder,
         mesh: &Mesh,
         grid: &Grid,
     ) -> Result<PendingAttributes, Error> {
         let local = mesh.to_grid(grid)?;
         let corner_data = corners(mesh, &local)?;
-        let device = &ctx.device;
-        let (occupancy, triangles) = self.bitset(ctx, encoder, &local, grid)?;
+        let (occupancy, triangles) = self.bitset(device, encoder, &local, grid)?;
         let heavy = self.surface_into(
             device,
             encoder,
@@ -384,12 +399,11 @@ impl Voxelizer {
     /// [`PendingAttributes::occupied`] read): the sums, then the averages.
     pub fn encode_resolve_attributes(
         &self,
-        ctx: &Context,
+        device: &wgpu::Device,
         encoder: &mut wgpu::CommandEncoder,
         pending: PendingAttributes,
         occupied: u32,
     ) -> Result<Attributes, Error> {
-        let device = &ctx.device;
         let limit = device.limits().max_storage_buffer_binding_size;
         let sum_bytes = occupied as u64 * SUMS * 4;
         if sum_bytes > limit {

@@ -13,9 +13,9 @@
 //! let grid = Grid { origin: DVec3::splat(-1.5), voxel: 3.0 / 32.0, size: [32, 32, 32] };
 //! let v = Voxelizer::new(&ctx.device)?;
 //! let mut encoder = ctx.encoder("voxelize");
-//! let surface = v.encode_surface(ctx, &mut encoder, &mesh, &grid)?;
+//! let surface = v.encode_surface(&ctx.device, &mut encoder, &mesh, &grid)?;
 //! ctx.submit_and_wait("voxelize", encoder)?;
-//! let occupied = surface.read(ctx)?; // one bool per voxel, x fastest
+//! let occupied = surface.read(&ctx.device, &ctx.queue).wait(ctx)?; // one bool per voxel, x fastest
 //! # let _ = occupied; Ok(()) }
 //! ```
 
@@ -31,7 +31,7 @@ use glam::{DVec3, Vec4};
 
 use crate::bind::ComputePipeline;
 use crate::error::Error;
-use crate::gpu::{Context, Prof, Profiler, read_buffer, uniform_buffer as uniform};
+use crate::gpu::{Prof, Profiler, Readback, readback_buffer, uniform_buffer as uniform};
 use crate::shaders::voxelize::occupancy_volume::{self as volume_stage, VolumeParams};
 use crate::shaders::voxelize::raster::{self as raster_stage, RasterParams};
 use crate::shaders::voxelize::solid::{self as solid_stage, SolidParams};
@@ -74,6 +74,47 @@ impl Grid {
     /// Voxels in the grid.
     pub fn voxels(&self) -> u64 {
         self.size.iter().map(|&n| n as u64).product()
+    }
+
+    /// A cube-voxel grid of about `n` voxels along the mesh's longest side, fitted to its
+    /// bounds with one voxel of margin on each side (so `n ≥ 3`). An empty mesh, a non-finite
+    /// position or a mesh with no extent is refused.
+    pub fn fit(mesh: &Mesh, n: u32) -> Result<Grid, Error> {
+        if mesh.positions.is_empty() {
+            return Err(invalid("cannot fit a grid to an empty mesh".into()));
+        }
+        if let Some(i) = mesh.positions.iter().position(|p| !p.is_finite()) {
+            return Err(invalid(format!("vertex {i} is {}", mesh.positions[i])));
+        }
+        if n < 3 {
+            return Err(Error::Size {
+                stage: STAGE,
+                what: "voxels along the longest side (at least 3: one of margin each side)",
+                got: n as u64,
+                max: u32::MAX as u64,
+            });
+        }
+        let lo = mesh
+            .positions
+            .iter()
+            .fold(DVec3::splat(f64::MAX), |a, &p| a.min(p));
+        let hi = mesh
+            .positions
+            .iter()
+            .fold(DVec3::splat(f64::MIN), |a, &p| a.max(p));
+        let extent = (hi - lo).max_element();
+        if extent <= 0.0 {
+            return Err(invalid(format!(
+                "the mesh has no extent (every vertex at {lo})"
+            )));
+        }
+        let voxel = extent / (n - 2) as f64;
+        let size = ((hi - lo) / voxel).ceil().as_uvec3() + 2;
+        Ok(Grid {
+            origin: lo - DVec3::splat(voxel),
+            voxel,
+            size: size.min(glam::UVec3::splat(n)).max(glam::UVec3::ONE).to_array(),
+        })
     }
 }
 
@@ -372,12 +413,14 @@ pub struct Surface {
 }
 
 impl Surface {
-    /// One bool per voxel, x fastest.
-    pub fn read(&self, ctx: &Context) -> Result<Vec<bool>, Error> {
-        let bytes = read_buffer(ctx, &self.occupancy)?;
-        let words: &[u32] = bytemuck::cast_slice(&bytes);
+    /// One bool per voxel, x fastest, once the encoder that recorded this surface has been
+    /// submitted (see [`Readback`] for how to wait or poll).
+    pub fn read(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Readback<Vec<bool>> {
         let n = self.size.iter().map(|&s| s as usize).product::<usize>();
-        Ok((0..n).map(|i| words[i / 32] >> (i % 32) & 1 == 1).collect())
+        readback_buffer(device, queue, &self.occupancy).then(move |bytes| {
+            let words: &[u32] = bytemuck::cast_slice(&bytes);
+            Ok((0..n).map(|i| words[i / 32] >> (i % 32) & 1 == 1).collect())
+        })
     }
 }
 
@@ -525,19 +568,19 @@ impl Voxelizer {
     /// not defined). `with_surface: false` gives the parity fill alone.
     pub fn encode_solid(
         &self,
-        ctx: &Context,
+        device: &wgpu::Device,
         encoder: &mut wgpu::CommandEncoder,
         mesh: &Mesh,
         grid: &Grid,
         with_surface: bool,
     ) -> Result<Surface, Error> {
-        self.encode_solid_profiled(ctx, encoder, mesh, grid, with_surface, None)
+        self.encode_solid_profiled(device, encoder, mesh, grid, with_surface, None)
     }
 
     /// [`Self::encode_solid`] with each pass timed by `profiler`.
     pub fn encode_solid_profiled(
         &self,
-        ctx: &Context,
+        device: &wgpu::Device,
         encoder: &mut wgpu::CommandEncoder,
         mesh: &Mesh,
         grid: &Grid,
@@ -552,8 +595,8 @@ impl Voxelizer {
             )));
         }
         let local = mesh.to_grid(grid)?;
-        let (occupancy, triangles) = self.bitset(ctx, encoder, &local, grid)?;
-        let device = &ctx.device;
+        let (occupancy, triangles) = self.bitset(device, encoder, &local, grid)?;
+        let device = device;
         let count = (local.vertices.len() / 3) as u32;
         for (first, n) in batches(count) {
             let params = uniform(
@@ -645,12 +688,12 @@ impl Voxelizer {
     /// A cleared bitset for `grid` and the triangle buffer of `local`.
     fn bitset(
         &self,
-        ctx: &Context,
+        device: &wgpu::Device,
         encoder: &mut wgpu::CommandEncoder,
         local: &GridMesh,
         grid: &Grid,
     ) -> Result<(wgpu::Buffer, wgpu::Buffer), Error> {
-        let device = &ctx.device;
+        let device = device;
         let voxels = grid.voxels();
         let words = voxels.div_ceil(32).max(1);
         let limit = device.limits().max_storage_buffer_binding_size;
@@ -818,12 +861,12 @@ impl Voxelizer {
     /// Kept to compare with the compute path; the voxels are the same.
     pub fn encode_surface_raster(
         &self,
-        ctx: &Context,
+        device: &wgpu::Device,
         encoder: &mut wgpu::CommandEncoder,
         mesh: &Mesh,
         grid: &Grid,
     ) -> Result<Surface, Error> {
-        let device = &ctx.device;
+        let device = device;
         let side = grid.size.into_iter().max().unwrap_or(1);
         let max = device.limits().max_texture_dimension_2d;
         if side > max {
@@ -835,7 +878,7 @@ impl Voxelizer {
             });
         }
         let local = mesh.to_grid(grid)?;
-        let (occupancy, triangles) = self.bitset(ctx, encoder, &local, grid)?;
+        let (occupancy, triangles) = self.bitset(device, encoder, &local, grid)?;
         let format = wgpu::TextureFormat::R8Unorm;
         let pipeline = if let Some(p) = self.raster.get() {
             p
@@ -917,30 +960,30 @@ impl Voxelizer {
     /// touches.
     pub fn encode_surface(
         &self,
-        ctx: &Context,
+        device: &wgpu::Device,
         encoder: &mut wgpu::CommandEncoder,
         mesh: &Mesh,
         grid: &Grid,
     ) -> Result<Surface, Error> {
-        self.encode_surface_with(ctx, encoder, mesh, grid, Separation::Conservative)
+        self.encode_surface_with(device, encoder, mesh, grid, Separation::Conservative)
     }
 
     /// Surface voxels of `mesh` in `grid`, as thick as `separation` says.
     pub fn encode_surface_with(
         &self,
-        ctx: &Context,
+        device: &wgpu::Device,
         encoder: &mut wgpu::CommandEncoder,
         mesh: &Mesh,
         grid: &Grid,
         separation: Separation,
     ) -> Result<Surface, Error> {
-        self.encode_surface_profiled(ctx, encoder, mesh, grid, separation, None)
+        self.encode_surface_profiled(device, encoder, mesh, grid, separation, None)
     }
 
     /// [`Self::encode_surface_with`] with each pass timed by `profiler`.
     pub fn encode_surface_profiled(
         &self,
-        ctx: &Context,
+        device: &wgpu::Device,
         encoder: &mut wgpu::CommandEncoder,
         mesh: &Mesh,
         grid: &Grid,
@@ -948,13 +991,13 @@ impl Voxelizer {
         mut profiler: Option<&mut Profiler>,
     ) -> Result<Surface, Error> {
         let local = mesh.to_grid(grid)?;
-        let (occupancy, triangles) = self.bitset(ctx, encoder, &local, grid)?;
+        let (occupancy, triangles) = self.bitset(device, encoder, &local, grid)?;
         let pipelines = match separation {
             Separation::Conservative => &self.surface,
             Separation::Six => &self.surface_six,
         };
         let _ = self.surface_into(
-            &ctx.device,
+            device,
             encoder,
             pipelines,
             &occupancy,

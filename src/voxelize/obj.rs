@@ -1,8 +1,12 @@
-//! Wavefront OBJ input through `tobj`: positions, per-vertex colours (`v x y z r g b`) and
-//! normals, polygons triangulated as fans.
+//! Wavefront OBJ input through `tobj` (feature `obj`): positions, per-vertex colours
+//! (`v x y z r g b`) and normals, polygons triangulated as fans. Also the npm `bunny` package's
+//! positions/cells form.
 
+#[cfg(feature = "obj")]
 use std::collections::HashMap;
+#[cfg(feature = "obj")]
 use std::io::BufRead;
+#[cfg(feature = "obj")]
 use std::path::Path;
 
 use glam::DVec3;
@@ -10,6 +14,7 @@ use glam::DVec3;
 use super::{Mesh, invalid};
 use crate::error::Error;
 
+#[cfg(feature = "obj")]
 impl Mesh {
     /// Read a mesh from OBJ text. Every object and group goes into one mesh; vertices with
     /// bit-identical positions are welded, so a closed surface split into groups stays closed
@@ -36,6 +41,7 @@ impl Mesh {
     }
 }
 
+#[cfg(feature = "obj")]
 fn read_obj(reader: &mut impl BufRead) -> Result<Mesh, tobj::LoadError> {
     let options = tobj::LoadOptions {
         triangulate: true,

@@ -7,7 +7,7 @@ use super::{Attributes, Grid, invalid};
 use crate::bind::{RenderPipeline, RenderTargets};
 use crate::error::Error;
 use crate::gpu::uniform_buffer as uniform;
-use crate::metaball::render::{depth_state, load_pass};
+use crate::view::{depth_state, load_pass};
 use crate::shaders::voxelize::voxel_view::{self as stage, ViewParams};
 
 /// What the cubes are coloured by.

@@ -30,7 +30,7 @@ pub fn run_jfa(
     h: usize,
     options: Options,
 ) -> (Vec<u32>, Vec<f32>) {
-    let seeds = upload_mask(ctx, &to_bytes(mask), w as u32, h as u32).expect("upload");
+    let seeds = upload_mask(&ctx.device, &ctx.queue, &to_bytes(mask), w as u32, h as u32).expect("upload");
     let mut enc = ctx.encoder("test");
     let field = jfa
         .encode(&ctx.device, &mut enc, &seeds, &options)
@@ -69,13 +69,13 @@ pub fn size_u32(size: [usize; 3]) -> [u32; 3] {
 /// Run a 3D distance computation on a mask; returns (nearest, nearest outside, distance).
 pub fn run_3d(
     ctx: &Context,
-    d3: &fieldkit::distance::volume::Distance3d,
+    d3: &fieldkit::distance::Distance3d,
     mask: &[bool],
     size: [usize; 3],
-    options: &fieldkit::distance::volume::Options3d,
+    options: &fieldkit::distance::Options3d,
 ) -> (Vec<u32>, Option<Vec<u32>>, Vec<f32>) {
     use fieldkit::gpu::read_buffer;
-    let volume = fieldkit::distance::volume::upload_volume(ctx, &to_bytes(mask), size_u32(size))
+    let volume = fieldkit::distance::upload_volume(&ctx.device, &ctx.queue, &to_bytes(mask), size_u32(size))
         .expect("upload");
     let mut enc = ctx.encoder("test");
     let field = d3
@@ -104,7 +104,7 @@ pub fn metaball_field(
         .fit_grid(voxels, edge)
         .unwrap()
         .expect("a non-empty voxel set");
-    let inst = balls.upload(ctx, voxels).unwrap();
+    let inst = balls.upload(&ctx.device, &ctx.queue, voxels).unwrap();
     let mut enc = ctx.encoder("metaball test");
     let field = balls
         .encode(&ctx.device, &mut enc, &inst, &grid, edge, settings)

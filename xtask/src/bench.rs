@@ -10,7 +10,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use fieldkit::distance::volume::{Distance3d, Method, Options3d, upload_volume};
+use fieldkit::distance::{Distance3d, Method, Options3d, upload_volume};
 use fieldkit::distance::{Jfa2d, Options, Variant, cpu, upload_mask};
 use fieldkit::gpu::{Context, Profiler, read_buffer, read_texture};
 
@@ -139,7 +139,7 @@ pub(crate) fn time_runs(
     heater: Option<&crate::heater::Heater>,
     mut record: impl FnMut(&mut wgpu::CommandEncoder, &mut Profiler),
 ) -> Result<Timing, String> {
-    let mut prof = Profiler::new(ctx, 64)
+    let mut prof = Profiler::new(&ctx.device, &ctx.queue, 64)
         .ok_or("the adapter has no timestamp queries; the benchmark needs them")?;
     let mut totals = Vec::new();
     let mut per_pass: Vec<(String, Vec<f64>)> = Vec::new();
@@ -155,7 +155,7 @@ pub(crate) fn time_runs(
         }
         ctx.submit_and_wait("bench", enc)
             .map_err(|e| e.to_string())?;
-        let (passes, total) = prof.read(ctx).map_err(|e| e.to_string())?;
+        let (passes, total) = prof.read(&ctx.device, &ctx.queue).wait(ctx).map_err(|e| e.to_string())?;
         if warm < warmup || start.elapsed() < WARMUP_TIME {
             warm += 1;
             continue;
@@ -334,7 +334,11 @@ fn distance(args: &Args) -> Result<(), String> {
         }
     }
     let ctx = Context::new().map_err(|e| e.to_string())?;
-    let info = ctx.adapter.get_info();
+    let info = ctx
+        .adapter
+        .as_ref()
+        .expect("Context::new opens an adapter")
+        .get_info();
     let adapter = format!("{} ({:?}, {})", info.name, info.backend, info.driver_info);
     println!("adapter: {adapter}");
     let mut d3 = Distance3d::new(&ctx.device).map_err(|e| e.to_string())?;
@@ -375,7 +379,7 @@ fn distance(args: &Args) -> Result<(), String> {
         let size = [n, n, n];
         let cells = (n * n * n) as u64;
         let mask = mask3(n);
-        let volume = upload_volume(&ctx, &mask, [n as u32; 3]).map_err(|e| e.to_string())?;
+        let volume = upload_volume(&ctx.device, &ctx.queue, &mask, [n as u32; 3]).map_err(|e| e.to_string())?;
         let peer = peers3.remove(&n);
         let mut exact_d2: Vec<u64> = Vec::new();
         for (name, opts) in &methods3 {
@@ -438,7 +442,7 @@ fn distance(args: &Args) -> Result<(), String> {
         let size = [n, n, 1];
         let cells = (n * n) as u64;
         let mask = mask2(n);
-        let tex = upload_mask(&ctx, &mask, n as u32, n as u32).map_err(|e| e.to_string())?;
+        let tex = upload_mask(&ctx.device, &ctx.queue, &mask, n as u32, n as u32).map_err(|e| e.to_string())?;
         let peer = peers2.remove(&n);
         // Exact.
         bar.set_message(format!("{n}² exact"));

@@ -14,9 +14,10 @@ use std::io::Write;
 use std::process::ExitCode;
 
 use fieldkit::distance::Variant;
-use fieldkit::distance::volume::{Grid3, Method};
+use fieldkit::distance::{Grid3, Method};
 use fieldkit::gpu::{Context, read_buffer, read_texture};
-use fieldkit::metaball::render::{Direct, Output, RaymarchSettings, Raymarcher, Targets, View};
+use fieldkit::metaball::render::{Direct, Output, RaymarchSettings, Raymarcher};
+use fieldkit::view::{Targets, View};
 use fieldkit::metaball::{BlobBins, MetaballField, Metaballs, Settings, animate, cpu, packed_grid};
 use glam::{DVec3, Mat4, Vec3, Vec4};
 
@@ -209,7 +210,7 @@ fn bench(
             .fit_grid(&voxels, edge)
             .map_err(|e| e.to_string())?
             .ok_or("empty set")?;
-        let inst = balls.upload(&ctx, &voxels).map_err(|e| e.to_string())?;
+        let inst = balls.upload(&ctx.device, &ctx.queue, &voxels).map_err(|e| e.to_string())?;
         let extent = Vec3::from_array(fitted.size.map(|s| s as f32)) * fitted.voxel_size;
         let centre = fitted.origin + extent * 0.5;
         let proj = glam::camera::rh::proj::directx::perspective(

@@ -14,7 +14,7 @@
 use std::process::ExitCode;
 
 use fieldkit::gpu::{Context, read_texture};
-use fieldkit::metaball::render::View;
+use fieldkit::view::View;
 use fieldkit::volume::{
     Bricks, LightVolume, MarchSettings, Shadow, TransferFunction, Volume, VolumeMarched,
     VolumeRenderer, fbm_cloud, folds,
@@ -189,9 +189,7 @@ fn bench(
     for &n in &sizes {
         let dims = [n; 3];
         let voxel = 1.0 / n as f32;
-        let volume = Volume::upload(
-            &ctx,
-            &fbm_cloud(dims, 7),
+        let volume = Volume::upload(&ctx.device, &ctx.queue, &fbm_cloud(dims, 7),
             dims,
             wgpu::TextureFormat::R8Unorm,
             Vec3::splat(voxel),

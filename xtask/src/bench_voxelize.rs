@@ -124,14 +124,14 @@ fn bench(args: &crate::bench::Args) -> Result<(), String> {
     };
     for (name, mesh) in &meshes {
         for &n in &sizes {
-            let grid = fieldkit::gallery::fit_grid(mesh, n);
+            let grid = fieldkit::voxelize::Grid::fit(mesh, n).map_err(|e| e.to_string())?;
             for mode in ["surface", "raster", "solid", "attributes"] {
                 if !args.modes.is_empty() && !args.modes.iter().any(|m| m == mode) {
                     continue;
                 }
                 // The attribute list is sized from the occupied count, read once here.
                 let occupied = if mode == "attributes" {
-                    match v.attributes(&ctx, mesh, &grid) {
+                    match ctx.block_on(v.attributes(&ctx.device, &ctx.queue, mesh, &grid)) {
                         Ok(a) => a.count,
                         Err(e) => {
                             println!("| {name} | {:?} | {mode} | skipped: {e} |", grid.size);
@@ -143,11 +143,11 @@ fn bench(args: &crate::bench::Args) -> Result<(), String> {
                 };
                 let encode = |enc: &mut wgpu::CommandEncoder| -> Result<Surface, String> {
                     match mode {
-                        "surface" => v.encode_surface(&ctx, enc, mesh, &grid),
-                        "raster" => v.encode_surface_raster(&ctx, enc, mesh, &grid),
-                        "solid" => v.encode_solid(&ctx, enc, mesh, &grid, true),
-                        _ => v.encode_attributes(&ctx, enc, mesh, &grid).and_then(|p| {
-                            v.encode_resolve_attributes(&ctx, enc, p, occupied)
+                        "surface" => v.encode_surface(&ctx.device, enc, mesh, &grid),
+                        "raster" => v.encode_surface_raster(&ctx.device, enc, mesh, &grid),
+                        "solid" => v.encode_solid(&ctx.device, enc, mesh, &grid, true),
+                        _ => v.encode_attributes(&ctx.device, enc, mesh, &grid).and_then(|p| {
+                            v.encode_resolve_attributes(&ctx.device, enc, p, occupied)
                                 .map(|a| a.surface)
                         }),
                     }
@@ -187,8 +187,7 @@ fn bench(args: &crate::bench::Args) -> Result<(), String> {
                         heater.as_ref(),
                         |enc, prof| {
                             let r = if mode == "surface" {
-                                v.encode_surface_profiled(
-                                    &ctx,
+                                v.encode_surface_profiled(&ctx.device,
                                     enc,
                                     mesh,
                                     &grid,
@@ -196,7 +195,7 @@ fn bench(args: &crate::bench::Args) -> Result<(), String> {
                                     Some(prof),
                                 )
                             } else {
-                                v.encode_solid_profiled(&ctx, enc, mesh, &grid, true, Some(prof))
+                                v.encode_solid_profiled(&ctx.device, enc, mesh, &grid, true, Some(prof))
                             };
                             r.expect("encode");
                         },
@@ -215,7 +214,7 @@ fn bench(args: &crate::bench::Args) -> Result<(), String> {
                 ctx.submit_and_wait("count", enc)
                     .map_err(|e| e.to_string())?;
                 let voxels = s
-                    .read(&ctx)
+                    .read(&ctx.device, &ctx.queue).wait(&ctx)
                     .map_err(|e| e.to_string())?
                     .iter()
                     .filter(|&&o| o)

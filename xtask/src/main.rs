@@ -246,57 +246,18 @@ fn reflect_text(stages: &[toolchain::Stage], filter: Option<&str>, json: bool) -
     }
 }
 
-/// The Stanford bunny from the npm package `bunny`: `target/bunny/index.js`, fetched by
-/// `scripts/fetch-bunny.sh` when missing. `None` (and a note saying why) when it cannot be had.
-fn bunny() -> Option<fieldkit::voxelize::Mesh> {
-    let root = crate_root();
-    let path = root.join("target/bunny/index.js");
-    if !path.exists() {
-        eprintln!("fetching the bunny: scripts/fetch-bunny.sh (npm pack bunny@1.0.1)");
-        let fetched = std::process::Command::new("bash")
-            .arg(root.join("scripts/fetch-bunny.sh"))
-            .stdout(std::process::Stdio::null())
-            .status();
-        if !matches!(fetched, Ok(s) if s.success()) {
-            eprintln!(
-                "note: could not fetch the bunny (needs npm and the npm registry); the \
-                 voxelization scenes use a torus instead"
-            );
-            return None;
-        }
-    }
-    let text = std::fs::read_to_string(&path).ok()?;
-    match fieldkit::voxelize::Mesh::from_positions_cells(&text) {
-        Ok(m) => Some(m),
-        Err(e) => {
-            eprintln!(
-                "note: {}: {e}; the voxelization scenes use a torus instead",
-                path.display()
-            );
-            None
-        }
-    }
-}
-
+/// The gallery is an example (`examples/gallery.rs`); this runs it in release mode.
 fn gallery(out: &Path) -> ExitCode {
-    let ctx = match fieldkit::gpu::Context::new() {
-        Ok(c) => c,
+    let status = std::process::Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
+        .current_dir(crate_root())
+        .args(["run", "--release", "--example", "gallery", "--"])
+        .arg(out)
+        .status();
+    match status {
+        Ok(s) if s.success() => ExitCode::SUCCESS,
+        Ok(_) => ExitCode::FAILURE,
         Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::FAILURE;
-        }
-    };
-    eprintln!("adapter: {}", ctx.adapter_name());
-    let bunny = bunny();
-    match fieldkit::gallery::run(&ctx, out, bunny.as_ref(), |step| eprintln!("  {step}")) {
-        Ok(files) => {
-            for f in files {
-                println!("{}", f.display());
-            }
-            ExitCode::SUCCESS
-        }
-        Err(e) => {
-            eprintln!("error: {e}");
+            eprintln!("error: cannot run cargo: {e}");
             ExitCode::FAILURE
         }
     }

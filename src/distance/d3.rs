@@ -1,4 +1,4 @@
-//! 3D distance fields (and the exact transform in 2D): an exact Euclidean distance transform,
+//! 3D distance fields (and the exact transform in 2D, which [`super::Distance2d`] runs): an exact Euclidean distance transform,
 //! the JFA family, sub-voxel seeds, and resolve to unsigned or signed distance in world units.
 //!
 //! Seeds and nearest-seed fields are storage buffers, x fastest, one `u32` per voxel: a packed
@@ -7,14 +7,14 @@
 //!
 //! ```no_run
 //! # fn main() -> Result<(), fieldkit::Error> {
-//! use fieldkit::distance::volume::{Distance3d, Method, Options3d, upload_volume};
+//! use fieldkit::distance::{Distance3d, Method, Options3d, upload_volume};
 //! let ctx = fieldkit::gpu::Context::new()?;
 //! let distance = Distance3d::new(&ctx.device)?;
 //! // A 32×24×16 occupancy volume with one occupied voxel.
 //! let size = [32, 24, 16];
 //! let mut mask = vec![0u8; 32 * 24 * 16];
 //! mask[(8 * 24 + 12) * 32 + 5] = 255;
-//! let volume = upload_volume(&ctx, &mask, size)?;
+//! let volume = upload_volume(&ctx.device, &ctx.queue, &mask, size)?;
 //! let mut encoder = ctx.encoder("distance");
 //! let options = Options3d { method: Method::Exact, signed: true, ..Options3d::default() };
 //! let field = distance.encode(&ctx.device, &mut encoder, &volume, &options)?;
@@ -28,12 +28,12 @@ use glam::Vec3;
 use super::Variant;
 use crate::bind::{ComputePipeline, Entry};
 use crate::error::Error;
-use crate::gpu::{Context, Profiler, uniform_buffer as uniform};
+use crate::gpu::{Profiler, uniform_buffer as uniform};
 use crate::shaders::distance::{
     edt_columns, edt_rows, field_resolve, jfa3_seed, jfa3_seed_points, jfa3_step, point_lines,
 };
 
-const STAGE: &str = "distance::volume";
+const STAGE: &str = "distance::d3";
 
 /// Largest sides the 3D packing can name: x and y in 11 bits, z in 10 (each coordinate + 1).
 pub const MAX_SIDE_3D: [u32; 3] = [2046, 2046, 1022];
@@ -481,8 +481,9 @@ fn check_volume(device: &wgpu::Device, volume: &wgpu::Texture) -> Result<[u32; 3
 
 /// Upload a CPU volume (`x` fastest, then `y`, then `z`; one byte per voxel) as an `R8Unorm`
 /// 3D texture. Non-zero bytes are marked under [`Inside::Mask`].
-pub fn upload_volume(ctx: &Context, data: &[u8], size: [u32; 3]) -> Result<wgpu::Texture, Error> {
-    check_size_3d(&ctx.device, size)?;
+pub fn upload_volume(device: &wgpu::Device,
+        queue: &wgpu::Queue, data: &[u8], size: [u32; 3]) -> Result<wgpu::Texture, Error> {
+    check_size_3d(device, size)?;
     if data.len() as u64 != voxels(size) {
         return Err(Error::Invalid {
             stage: STAGE,
@@ -493,8 +494,8 @@ pub fn upload_volume(ctx: &Context, data: &[u8], size: [u32; 3]) -> Result<wgpu:
             ),
         });
     }
-    crate::gpu::scoped(&ctx.device, STAGE, || {
-        let t = ctx.device.create_texture(&wgpu::TextureDescriptor {
+    crate::gpu::scoped(device, STAGE, || {
+        let t = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("volume"),
             size: wgpu::Extent3d {
                 width: size[0],
@@ -510,7 +511,7 @@ pub fn upload_volume(ctx: &Context, data: &[u8], size: [u32; 3]) -> Result<wgpu:
                 | wgpu::TextureUsages::COPY_SRC,
             view_formats: &[],
         });
-        ctx.queue.write_texture(
+        queue.write_texture(
             t.as_image_copy(),
             data,
             wgpu::TexelCopyBufferLayout {
@@ -528,14 +529,16 @@ pub fn upload_volume(ctx: &Context, data: &[u8], size: [u32; 3]) -> Result<wgpu:
 /// point must be finite and inside the grid's box; at most [`MAX_POINTS`]. Where several points
 /// share a voxel only the one nearest its centre is kept: give homes
 /// ([`upload_points_with_homes`]) when points come one per voxel, as from surface extraction.
-pub fn upload_points(ctx: &Context, grid: &Grid3, points: &[Vec3]) -> Result<PointSeeds, Error> {
-    upload_points_inner(ctx, grid, points, None)
+pub fn upload_points(device: &wgpu::Device,
+        queue: &wgpu::Queue, grid: &Grid3, points: &[Vec3]) -> Result<PointSeeds, Error> {
+    upload_points_inner(device, queue, grid, points, None)
 }
 
 /// Upload sub-voxel seeds with the voxel each one seeds (typically the voxel that produced it,
 /// holding the closest surface point to its centre). Homes must lie inside the grid.
 pub fn upload_points_with_homes(
-    ctx: &Context,
+    device: &wgpu::Device,
+        queue: &wgpu::Queue,
     grid: &Grid3,
     points: &[Vec3],
     homes: &[[u32; 3]],
@@ -546,16 +549,17 @@ pub fn upload_points_with_homes(
             what: format!("{} homes for {} points", homes.len(), points.len()),
         });
     }
-    upload_points_inner(ctx, grid, points, Some(homes))
+    upload_points_inner(device, queue, grid, points, Some(homes))
 }
 
 fn upload_points_inner(
-    ctx: &Context,
+    device: &wgpu::Device,
+        queue: &wgpu::Queue,
     grid: &Grid3,
     points: &[Vec3],
     homes: Option<&[[u32; 3]]>,
 ) -> Result<PointSeeds, Error> {
-    check_size_3d(&ctx.device, grid.size)?;
+    check_size_3d(device, grid.size)?;
     if !(grid.voxel_size.is_finite() && grid.voxel_size > 0.0 && grid.origin.is_finite()) {
         return Err(Error::Invalid {
             stage: STAGE,
@@ -616,14 +620,17 @@ fn upload_points_inner(
             Some(packed)
         }
     };
-    use wgpu::util::DeviceExt;
     let storage = |label: &str, contents: &[u8]| {
-        ctx.device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents,
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            })
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: contents.len() as u64,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        queue.write_buffer(&buffer, 0, contents);
+        buffer
     };
     let buffer = storage("seed points", bytemuck::cast_slice(&data));
     let homes = packed_homes.map(|h| storage("seed point homes", bytemuck::cast_slice(&h)));
@@ -641,7 +648,7 @@ impl Distance3d {
     ///
     /// ```no_run
     /// # fn f(device: &wgpu::Device) -> Result<(), fieldkit::Error> {
-    /// let mut d = fieldkit::distance::volume::Distance3d::new(device)?;
+    /// let mut d = fieldkit::distance::Distance3d::new(device)?;
     /// d.set_column_bands(Some(1))?;
     /// assert!(d.set_column_bands(Some(3)).is_err());
     /// # Ok(()) }

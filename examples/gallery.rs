@@ -1,12 +1,21 @@
-//! The gallery: every technique rendered to PNG on the default adapter (`cargo xtask gallery`).
+//! The gallery: every technique rendered to PNG (and one GIF) on the default adapter.
+//!
+//! ```sh
+//! cargo run --release --example gallery            # into ./gallery
+//! cargo run --release --example gallery -- OUT_DIR
+//! ```
+//!
+//! `FIELDKIT_ADAPTER=<part of a name>` picks the adapter. The voxelization scenes use the
+//! Stanford bunny from the npm package `bunny` (`scripts/fetch-bunny.sh`, run on first use);
+//! without npm they voxelize a torus and say so.
 
 use std::path::{Path, PathBuf};
 
-use crate::bind::{RenderPipeline, RenderTargets};
-use crate::distance::{Jfa2d, Options, Variant};
-use crate::error::Error;
-use crate::gpu::{Context, read_texture};
-use crate::shaders::distance::visualize;
+use fieldkit::bind::{RenderPipeline, RenderTargets};
+use fieldkit::distance::{Distance2d, Options2d};
+use fieldkit::Error;
+use fieldkit::gpu::{Context, read_texture};
+use fieldkit::shaders::distance::visualize;
 
 /// 5×7 glyphs for the letters of "FIELDKIT", one row per byte, high bit left.
 const GLYPHS: &[(char, [u8; 7])] = &[
@@ -141,7 +150,7 @@ pub fn visualize_distance(
         usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
         view_formats: &[],
     });
-    let params = crate::gpu::uniform_buffer(
+    let params = fieldkit::gpu::uniform_buffer(
         device,
         "view params",
         &visualize::ViewParams { spacing, range },
@@ -185,9 +194,9 @@ pub enum MetaballView {
     /// The debug cubes, one per voxel.
     Cubes,
     /// The raymarched surface, in one of the raymarcher's outputs.
-    Surface(crate::metaball::render::Output),
+    Surface(fieldkit::metaball::render::Output),
     /// The field traced directly from blob bins (no SDF texture).
-    Direct(crate::metaball::render::Direct),
+    Direct(fieldkit::metaball::render::Direct),
 }
 
 /// The gallery's metaball scene: a packed 5×4×3 voxel set, animated to time `t` (seconds), seen
@@ -199,8 +208,9 @@ pub fn metaball_scene(
     t: f32,
     what: MetaballView,
 ) -> Result<Vec<u8>, Error> {
-    use crate::metaball::render::{CubeStyle, Cubes, RaymarchSettings, Raymarcher, Targets, View};
-    use crate::metaball::{Metaballs, Settings, animate, packed_grid};
+    use fieldkit::metaball::render::{CubeStyle, Cubes, RaymarchSettings, Raymarcher};
+    use fieldkit::view::{Targets, View};
+    use fieldkit::metaball::{Metaballs, Settings, animate, packed_grid};
     use glam::{Mat4, Vec3};
     let device = &ctx.device;
     let edge = 1.0;
@@ -208,7 +218,7 @@ pub fn metaball_scene(
     let voxels = animate(&base, edge, t, 0.5, 0.15);
     let settings = Settings::default();
     let balls = Metaballs::new(device)?;
-    let instances = balls.upload(ctx, &voxels)?;
+    let instances = balls.upload(&ctx.device, &ctx.queue, &voxels)?;
     let colour_format = wgpu::TextureFormat::Rgba8Unorm;
     let depth_format = wgpu::TextureFormat::Depth32Float;
     let targets = Targets::new(device, [width, height], colour_format, depth_format);
@@ -296,10 +306,10 @@ pub fn metaball_scene(
 /// Render every scene into `out_dir`; returns the files written. `bunny` is the mesh the
 /// voxelization scenes use (the npm package `bunny`, which `cargo xtask gallery` fetches);
 /// without it they voxelize a torus.
-pub fn run(
+fn run(
     ctx: &Context,
     out_dir: &Path,
-    bunny: Option<&crate::voxelize::Mesh>,
+    bunny: Option<&fieldkit::voxelize::Mesh>,
     mut progress: impl FnMut(&str),
 ) -> Result<Vec<PathBuf>, Error> {
     std::fs::create_dir_all(out_dir).map_err(|e| Error::Invalid {
@@ -324,20 +334,19 @@ pub fn run(
         Ok(())
     };
 
-    progress("distance: 2D signed distance of shapes and text (JFA+2)");
+    progress("distance: 2D signed distance of shapes and text (exact)");
     let (w, h) = (640, 360);
     let mask = shapes_mask(w, h);
-    let seeds = crate::distance::upload_mask(ctx, &mask, w, h)?;
-    let jfa = Jfa2d::new(&ctx.device)?;
+    let seeds = fieldkit::distance::upload_mask(&ctx.device, &ctx.queue, &mask, w, h)?;
+    let distance = Distance2d::new(&ctx.device)?;
     let mut enc = ctx.encoder("gallery distance");
-    let field = jfa.encode(
+    let field = distance.encode(
         &ctx.device,
         &mut enc,
         &seeds,
-        &Options {
-            variant: Variant::JfaPlus2,
+        &Options2d {
             signed: true,
-            texel_size: 1.0,
+            ..Options2d::default()
         },
     )?;
     ctx.submit_and_wait("gallery distance", enc)?;
@@ -346,7 +355,7 @@ pub fn run(
     let mask_rgba: Vec<u8> = mask.iter().flat_map(|&m| [m, m, m, 255]).collect();
     save("distance_2d_mask.png", &mask_rgba, w, h, &mut written)?;
 
-    use crate::metaball::render::Output;
+    use fieldkit::metaball::render::Output;
     let (w, h) = (640, 400);
     for (name, what, label) in [
         (
@@ -371,7 +380,7 @@ pub fn run(
         ),
         (
             "metaball_segment.png",
-            MetaballView::Direct(crate::metaball::render::Direct::Segment),
+            MetaballView::Direct(fieldkit::metaball::render::Direct::Segment),
             "metaball: segment tracing of the field itself",
         ),
     ] {
@@ -428,7 +437,7 @@ pub fn run(
     let (mesh, what) = match bunny {
         Some(b) => (b, "the Stanford bunny"),
         None => {
-            torus = crate::voxelize::Mesh::torus(glam::DVec3::ZERO, 1.0, 0.4, 96, 48);
+            torus = fieldkit::voxelize::Mesh::torus(glam::DVec3::ZERO, 1.0, 0.4, 96, 48);
             (&torus, "a torus (no bunny given)")
         }
     };
@@ -450,12 +459,10 @@ pub fn cloud_scene(
     eye: glam::Vec3,
     target: glam::Vec3,
 ) -> Result<Vec<u8>, Error> {
-    use crate::metaball::render::View;
-    use crate::volume::{MarchSettings, TransferFunction, Volume, VolumeRenderer, fbm_cloud};
+    use fieldkit::view::View;
+    use fieldkit::volume::{MarchSettings, TransferFunction, Volume, VolumeRenderer, fbm_cloud};
     let dims = [96; 3];
-    let volume = Volume::upload(
-        ctx,
-        &fbm_cloud(dims, 7),
+    let volume = Volume::upload(&ctx.device, &ctx.queue, &fbm_cloud(dims, 7),
         dims,
         wgpu::TextureFormat::R8Unorm,
         glam::Vec3::splat(1.0 / 96.0),
@@ -544,10 +551,11 @@ pub fn cloud_scene(
 /// G-buffer targets in a 2 × 2 grid (scene colour, normal; material, base colour) instead of the
 /// forward-shaded image; each quarter is `w/2 × h/2`.
 pub fn ocean_scene(ctx: &Context, w: u32, h: u32, gbuffer: bool) -> Result<Vec<u8>, Error> {
-    use crate::metaball::render::{RaymarchSettings, Raymarcher, Targets, View};
-    use crate::metaball::{Metaballs, Settings, packed_grid};
-    use crate::ocean::render::{Look, OceanCamera, OceanRenderer, Output, Patch};
-    use crate::ocean::{Wave, Waves};
+    use fieldkit::metaball::render::{RaymarchSettings, Raymarcher};
+    use fieldkit::view::{Targets, View};
+    use fieldkit::metaball::{Metaballs, Settings, packed_grid};
+    use fieldkit::ocean::render::{Look, OceanCamera, OceanRenderer, Output, Patch};
+    use fieldkit::ocean::{Wave, Waves};
     use glam::{DVec2, DVec3, Mat4, Vec2, Vec3};
     let device = &ctx.device;
     let (tw, th) = if gbuffer { (w / 2, h / 2) } else { (w, h) };
@@ -566,7 +574,7 @@ pub fn ocean_scene(ctx: &Context, w: u32, h: u32, gbuffer: bool) -> Result<Vec<u
         })
         .collect();
     let balls = Metaballs::new(device)?;
-    let instances = balls.upload(ctx, &voxels)?;
+    let instances = balls.upload(&ctx.device, &ctx.queue, &voxels)?;
     let settings = Settings::default();
     let eye = DVec3::new(-5.0, 8.0, 30.0);
     let proj = glam::camera::rh::proj::directx::perspective(0.8, tw as f32 / th as f32, 0.1, 500.0);
@@ -718,43 +726,23 @@ fn save_gif(path: &Path, frames: &[Vec<u8>], w: u32, h: u32, frame_ms: f32) -> R
     Ok(())
 }
 
-/// A grid of about `n` voxels along the mesh's longest side, fitted to its bounds with a voxel
-/// of margin.
-pub fn fit_grid(mesh: &crate::voxelize::Mesh, n: u32) -> crate::voxelize::Grid {
-    use glam::DVec3;
-    let lo = mesh
-        .positions
-        .iter()
-        .fold(DVec3::splat(f64::MAX), |a, &p| a.min(p));
-    let hi = mesh
-        .positions
-        .iter()
-        .fold(DVec3::splat(f64::MIN), |a, &p| a.max(p));
-    let voxel = (hi - lo).max_element() / (n.max(3) - 2) as f64;
-    let size = ((hi - lo) / voxel).ceil().as_uvec3() + 2;
-    crate::voxelize::Grid {
-        origin: lo - DVec3::splat(voxel),
-        voxel,
-        size: size.min(glam::UVec3::splat(n.max(3))).to_array(),
-    }
-}
-
 /// `mesh` voxelized in a grid of `n` along its longest side, drawn as cubes coloured by each
 /// voxel's averaged normal, into RGBA8 pixels.
 pub fn voxelize_scene(
     ctx: &Context,
-    mesh: &crate::voxelize::Mesh,
+    mesh: &fieldkit::voxelize::Mesh,
     n: u32,
     w: u32,
     h: u32,
 ) -> Result<Vec<u8>, Error> {
-    use crate::metaball::render::Targets;
-    use crate::voxelize::Voxelizer;
-    use crate::voxelize::view::{ColourBy, VoxelView};
+    use fieldkit::view::Targets;
+    use fieldkit::voxelize::Voxelizer;
+    use fieldkit::voxelize::view::{ColourBy, VoxelView};
     use glam::Vec3;
     let device = &ctx.device;
-    let grid = fit_grid(mesh, n);
-    let voxels = Voxelizer::new(device)?.attributes(ctx, mesh, &grid)?;
+    let grid = fieldkit::voxelize::Grid::fit(mesh, n)?;
+    let voxels =
+        ctx.block_on(Voxelizer::new(device)?.attributes(device, &ctx.queue, mesh, &grid))?;
     let colour_format = wgpu::TextureFormat::Rgba8Unorm;
     let depth_format = wgpu::TextureFormat::Depth32Float;
     let targets = Targets::new(device, [w, h], colour_format, depth_format);
@@ -803,17 +791,17 @@ pub fn voxelize_scene(
 /// height.
 pub fn voxelize_distance_slice(
     ctx: &Context,
-    mesh: &crate::voxelize::Mesh,
+    mesh: &fieldkit::voxelize::Mesh,
     n: u32,
     zoom: u32,
 ) -> Result<(Vec<u8>, u32, u32), Error> {
-    use crate::distance::volume::{Distance3d, Options3d};
-    use crate::voxelize::Voxelizer;
+    use fieldkit::distance::{Distance3d, Options3d};
+    use fieldkit::voxelize::Voxelizer;
     let device = &ctx.device;
-    let grid = fit_grid(mesh, n);
+    let grid = fieldkit::voxelize::Grid::fit(mesh, n)?;
     let v = Voxelizer::new(device)?;
     let mut enc = ctx.encoder("gallery mesh distance");
-    let solid = v.encode_solid(ctx, &mut enc, mesh, &grid, false)?;
+    let solid = v.encode_solid(&ctx.device, &mut enc, mesh, &grid, false)?;
     let volume = v.encode_volume(device, &mut enc, &solid)?;
     let field = Distance3d::new(device)?.encode(
         device,
@@ -865,6 +853,62 @@ pub fn voxelize_distance_slice(
         }
     }
     Ok((out, w, h))
+}
+
+/// The Stanford bunny from the npm package `bunny`: `target/bunny/index.js`, fetched by
+/// `scripts/fetch-bunny.sh` when missing. `None` (and a note saying why) when it cannot be had.
+fn bunny() -> Option<fieldkit::voxelize::Mesh> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let path = root.join("target/bunny/index.js");
+    if !path.exists() {
+        eprintln!("fetching the bunny: scripts/fetch-bunny.sh (npm pack bunny@1.0.1)");
+        let fetched = std::process::Command::new("bash")
+            .arg(root.join("scripts/fetch-bunny.sh"))
+            .stdout(std::process::Stdio::null())
+            .status();
+        if !matches!(fetched, Ok(s) if s.success()) {
+            eprintln!(
+                "note: could not fetch the bunny (needs npm and the npm registry); the \
+                 voxelization scenes use a torus instead"
+            );
+            return None;
+        }
+    }
+    let text = std::fs::read_to_string(&path).ok()?;
+    match fieldkit::voxelize::Mesh::from_positions_cells(&text) {
+        Ok(m) => Some(m),
+        Err(e) => {
+            eprintln!(
+                "note: {}: {e}; the voxelization scenes use a torus instead",
+                path.display()
+            );
+            None
+        }
+    }
+}
+
+fn main() -> std::process::ExitCode {
+    let out = std::env::args_os()
+        .nth(1)
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from("gallery"));
+    let result = Context::new().and_then(|ctx| {
+        eprintln!("adapter: {}", ctx.adapter_name());
+        let bunny = bunny();
+        run(&ctx, &out, bunny.as_ref(), |step| eprintln!("  {step}"))
+    });
+    match result {
+        Ok(files) => {
+            for f in files {
+                println!("{}", f.display());
+            }
+            std::process::ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            std::process::ExitCode::FAILURE
+        }
+    }
 }
 
 #[cfg(test)]

@@ -1,0 +1,572 @@
+//! 2D distance by jump flooding (JFA) from a seed texture, with the variants that trade speed
+//! for accuracy, resolved to unsigned or signed distance. [`super::Distance2d`] is the 2D API
+//! (exact by default); [`Jfa2d`] runs JFA alone and each of its stages on its own.
+
+use crate::bind::{ComputePipeline, Entry};
+use crate::error::Error;
+use crate::gpu::Profiler;
+use crate::shaders::distance::{jfa_resolve, jfa_seed, jfa_step};
+
+const STAGE: &str = "distance::jfa";
+
+/// Largest side the 16-bit-per-axis seed packing can name (x + 1 must fit in 16 bits).
+pub const MAX_PACKED_SIDE: u32 = 0xfffe;
+
+/// Packed "no seed" (see `shaders/shared/seed.wesl`).
+pub const NO_SEED: u32 = 0;
+
+/// Distance written where no seed exists (largest finite f32; `-FAR` inside a full mask).
+pub const FAR: f32 = f32::MAX;
+
+/// Seed texture formats the seed stage reads (red channel non-zero = seed).
+pub const SEED_FORMATS: &[wgpu::TextureFormat] = &[
+    wgpu::TextureFormat::R8Unorm,
+    wgpu::TextureFormat::R16Float,
+    wgpu::TextureFormat::R32Float,
+    wgpu::TextureFormat::Rgba8Unorm,
+];
+
+/// Pack a seed position as the shaders do.
+pub fn pack_seed(x: u32, y: u32) -> u32 {
+    (x + 1) | ((y + 1) << 16)
+}
+
+/// Unpack a seed; `None` for [`NO_SEED`].
+pub fn unpack_seed(s: u32) -> Option<(u32, u32)> {
+    (s != NO_SEED).then(|| ((s & 0xffff) - 1, (s >> 16) - 1))
+}
+
+/// Which passes run: plain JFA, or with extra passes of step 1 or 2 that repair its errors.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum Variant {
+    /// Steps N/2, N/4, …, 1 (N the next power of two at or above the largest side).
+    Jfa,
+    /// JFA, then one pass of step 1.
+    JfaPlus1,
+    /// JFA, then passes of step 2 and 1 (Rong & Tan's most accurate cheap variant).
+    #[default]
+    JfaPlus2,
+    /// One pass of step 1 first, then JFA.
+    OnePlusJfa,
+    /// Step 1, JFA, then steps 2 and 1.
+    OnePlusJfaPlus2,
+}
+
+impl Variant {
+    pub const ALL: [Variant; 5] = [
+        Variant::Jfa,
+        Variant::JfaPlus1,
+        Variant::JfaPlus2,
+        Variant::OnePlusJfa,
+        Variant::OnePlusJfaPlus2,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Variant::Jfa => "JFA",
+            Variant::JfaPlus1 => "JFA+1",
+            Variant::JfaPlus2 => "JFA+2",
+            Variant::OnePlusJfa => "1+JFA",
+            Variant::OnePlusJfaPlus2 => "1+JFA+2",
+        }
+    }
+
+    /// Step lengths of every pass, in order, for a grid whose largest side is `max_side`.
+    pub fn steps(self, max_side: u32) -> Vec<u32> {
+        let mut jfa = Vec::new();
+        // The first step is half the next power of two at or above the largest side: the steps then
+        // sum to at least max_side - 1, so every texel can reach every other.
+        let mut step = max_side.max(1).next_power_of_two() / 2;
+        while step >= 1 {
+            jfa.push(step);
+            step /= 2;
+        }
+        match self {
+            Variant::Jfa => jfa,
+            Variant::JfaPlus1 => [jfa, vec![1]].concat(),
+            Variant::JfaPlus2 => [jfa, vec![2, 1]].concat(),
+            Variant::OnePlusJfa => [vec![1], jfa].concat(),
+            Variant::OnePlusJfaPlus2 => [vec![1], jfa, vec![2, 1]].concat(),
+        }
+    }
+}
+
+/// What [`Jfa2d::encode`] computes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Options {
+    pub variant: Variant,
+    /// Treat the seed texture as a mask (non-zero inside) and produce signed distance,
+    /// negative inside.
+    pub signed: bool,
+    /// World units per texel; distances are multiplied by it.
+    pub texel_size: f32,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self {
+            variant: Variant::default(),
+            signed: false,
+            texel_size: 1.0,
+        }
+    }
+}
+
+/// The result of a 2D distance computation, on the GPU.
+pub struct Field2d {
+    pub width: u32,
+    pub height: u32,
+    /// `R32Uint`: nearest seed per texel, packed ([`unpack_seed`]). For a signed field, the
+    /// nearest *inside* texel.
+    pub nearest: wgpu::Texture,
+    /// `R32Uint`: for a signed field, the nearest *outside* texel.
+    pub nearest_outside: Option<wgpu::Texture>,
+    /// `R32Float`: distance to the nearest seed (signed: negative inside), times `texel_size`.
+    pub distance: wgpu::Texture,
+}
+
+/// The 2D JFA pipelines. Create once, encode many times.
+pub struct Jfa2d {
+    seed: ComputePipeline<jfa_seed::seed::Entry>,
+    jump: ComputePipeline<jfa_step::jump::Entry>,
+    resolve_unsigned: ComputePipeline<jfa_resolve::resolve_unsigned::Entry>,
+    resolve_signed: ComputePipeline<jfa_resolve::resolve_signed::Entry>,
+}
+
+fn texture(
+    device: &wgpu::Device,
+    label: &str,
+    w: u32,
+    h: u32,
+    format: wgpu::TextureFormat,
+) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::STORAGE_BINDING
+            | wgpu::TextureUsages::COPY_SRC
+            | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    })
+}
+
+use crate::gpu::uniform_buffer as uniform;
+
+fn view(t: &wgpu::Texture) -> wgpu::TextureView {
+    t.create_view(&Default::default())
+}
+
+fn dispatch<E: Entry>(
+    encoder: &mut wgpu::CommandEncoder,
+    pipeline: &ComputePipeline<E>,
+    bound: &crate::bind::Bound<E>,
+    w: u32,
+    h: u32,
+    timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
+) {
+    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+        label: Some(E::INFO.stage),
+        timestamp_writes,
+    });
+    pipeline.dispatch(
+        &mut pass,
+        bound,
+        ComputePipeline::<E>::groups_for([w, h, 1]),
+    );
+}
+
+/// Check a seed texture: 2D, non-empty, a supported format, within the packing range.
+pub fn check_seed_texture(
+    device: &wgpu::Device,
+    seeds: &wgpu::Texture,
+) -> Result<(u32, u32), Error> {
+    if seeds.dimension() != wgpu::TextureDimension::D2 || seeds.depth_or_array_layers() != 1 {
+        return Err(Error::Invalid {
+            stage: STAGE,
+            what: format!(
+                "the seed texture must be a single 2D texture, got {:?} × {} layers",
+                seeds.dimension(),
+                seeds.depth_or_array_layers()
+            ),
+        });
+    }
+    if !SEED_FORMATS.contains(&seeds.format()) {
+        return Err(Error::Format {
+            stage: STAGE,
+            format: seeds.format(),
+            supported: "R8Unorm, R16Float, R32Float, Rgba8Unorm",
+        });
+    }
+    check_size(device, seeds.width(), seeds.height())?;
+    Ok((seeds.width(), seeds.height()))
+}
+
+/// Check a grid size against the device and the seed packing.
+pub fn check_size(device: &wgpu::Device, w: u32, h: u32) -> Result<(), Error> {
+    let max = device
+        .limits()
+        .max_texture_dimension_2d
+        .min(MAX_PACKED_SIDE) as u64;
+    for (what, got) in [("width", w), ("height", h)] {
+        if got == 0 || got as u64 > max {
+            return Err(Error::Size {
+                stage: STAGE,
+                what,
+                got: got as u64,
+                max,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Upload a CPU mask (`width × height` bytes, row-major, non-zero = seed) as an `R8Unorm` texture.
+pub fn upload_mask(
+    device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    mask: &[u8],
+    width: u32,
+    height: u32,
+) -> Result<wgpu::Texture, Error> {
+    check_size(device, width, height)?;
+    if mask.len() as u64 != width as u64 * height as u64 {
+        return Err(Error::Invalid {
+            stage: STAGE,
+            what: format!(
+                "mask has {} bytes, {width}×{height} needs {}",
+                mask.len(),
+                width as u64 * height as u64
+            ),
+        });
+    }
+    let t = crate::gpu::scoped(device, STAGE, || {
+        let t = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("seed mask"),
+            size: wgpu::Extent3d {
+                width,
+                height,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::R8Unorm,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_DST
+                | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        queue.write_texture(
+            t.as_image_copy(),
+            mask,
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(width),
+                rows_per_image: Some(height),
+            },
+            t.size(),
+        );
+        t
+    })?;
+    Ok(t)
+}
+
+impl Jfa2d {
+    pub fn new(device: &wgpu::Device) -> Result<Self, Error> {
+        Ok(Self {
+            seed: ComputePipeline::new(device)?,
+            jump: ComputePipeline::new(device)?,
+            resolve_unsigned: ComputePipeline::new(device)?,
+            resolve_signed: ComputePipeline::new(device)?,
+        })
+    }
+
+    /// Seed stage alone: a new `R32Uint` texture of packed seeds.
+    pub fn encode_seed(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        seeds: &wgpu::Texture,
+        invert: bool,
+    ) -> Result<wgpu::Texture, Error> {
+        self.seed_timed(device, encoder, seeds, invert, None)
+    }
+
+    fn seed_timed(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        seeds: &wgpu::Texture,
+        invert: bool,
+        timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
+    ) -> Result<wgpu::Texture, Error> {
+        let (w, h) = check_seed_texture(device, seeds)?;
+        let out = texture(device, "jfa nearest", w, h, wgpu::TextureFormat::R32Uint);
+        let params = uniform(
+            device,
+            "jfa seed params",
+            &jfa_seed::SeedParams {
+                size: glam::uvec2(w, h),
+                invert: invert as u32,
+            },
+        );
+        let (sv, ov) = (view(seeds), view(&out));
+        let bound = self.seed.bind(
+            device,
+            &jfa_seed::seed::Resources {
+                params: (&params).into(),
+                seeds: (&sv).into(),
+                nearest: (&ov).into(),
+            },
+        )?;
+        dispatch(encoder, &self.seed, &bound, w, h, timestamp_writes);
+        Ok(out)
+    }
+
+    /// One jump pass alone, from `src` into `dst` (both `R32Uint`, same size).
+    pub fn encode_jump(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        src: &wgpu::Texture,
+        dst: &wgpu::Texture,
+        step: u32,
+        timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
+    ) -> Result<(), Error> {
+        let (w, h) = (src.width(), src.height());
+        check_size(device, w, h)?;
+        if step == 0 {
+            return Err(Error::Invalid {
+                stage: jfa_step::STAGE,
+                what: "step 0".into(),
+            });
+        }
+        if dst.size() != src.size() {
+            return Err(Error::Invalid {
+                stage: jfa_step::STAGE,
+                what: format!("src is {:?}, dst is {:?}", src.size(), dst.size()),
+            });
+        }
+        let params = uniform(
+            device,
+            "jfa jump params",
+            &jfa_step::JumpParams {
+                size: glam::uvec2(w, h),
+                step,
+            },
+        );
+        let (sv, dv) = (view(src), view(dst));
+        let bound = self.jump.bind(
+            device,
+            &jfa_step::jump::Resources {
+                params: (&params).into(),
+                src: (&sv).into(),
+                dst: (&dv).into(),
+            },
+        )?;
+        dispatch(encoder, &self.jump, &bound, w, h, timestamp_writes);
+        Ok(())
+    }
+
+    /// Run the passes of `steps` over `nearest`, ping-ponging with a second texture; returns the
+    /// texture holding the result.
+    pub fn encode_flood(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        nearest: wgpu::Texture,
+        steps: &[u32],
+    ) -> Result<wgpu::Texture, Error> {
+        self.flood_timed(device, encoder, nearest, steps, &mut None)
+    }
+
+    fn flood_timed(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        nearest: wgpu::Texture,
+        steps: &[u32],
+        prof: &mut Option<&mut Profiler>,
+    ) -> Result<wgpu::Texture, Error> {
+        let other = texture(
+            device,
+            "jfa ping-pong",
+            nearest.width(),
+            nearest.height(),
+            wgpu::TextureFormat::R32Uint,
+        );
+        let (mut a, mut b) = (nearest, other);
+        for &step in steps {
+            self.encode_jump(
+                device,
+                encoder,
+                &a,
+                &b,
+                step,
+                prof.as_mut().and_then(|p| p.next(format!("jump {step}"))),
+            )?;
+            std::mem::swap(&mut a, &mut b);
+        }
+        Ok(a)
+    }
+
+    /// Resolve stage alone: distance from nearest-seed texture(s).
+    pub fn encode_resolve(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        nearest: &wgpu::Texture,
+        nearest_outside: Option<&wgpu::Texture>,
+        texel_size: f32,
+    ) -> Result<wgpu::Texture, Error> {
+        self.resolve_timed(device, encoder, nearest, nearest_outside, texel_size, None)
+    }
+
+    fn resolve_timed(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        nearest: &wgpu::Texture,
+        nearest_outside: Option<&wgpu::Texture>,
+        texel_size: f32,
+        timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
+    ) -> Result<wgpu::Texture, Error> {
+        if !(texel_size.is_finite() && texel_size > 0.0) {
+            return Err(Error::Invalid {
+                stage: jfa_resolve::STAGE,
+                what: format!("texel_size must be finite and positive, got {texel_size}"),
+            });
+        }
+        let (w, h) = (nearest.width(), nearest.height());
+        check_size(device, w, h)?;
+        let out = texture(device, "jfa distance", w, h, wgpu::TextureFormat::R32Float);
+        let params = uniform(
+            device,
+            "jfa resolve params",
+            &jfa_resolve::ResolveParams {
+                size: glam::uvec2(w, h),
+                texel_size,
+            },
+        );
+        let (nv, dv) = (view(nearest), view(&out));
+        match nearest_outside {
+            None => {
+                let bound = self.resolve_unsigned.bind(
+                    device,
+                    &jfa_resolve::resolve_unsigned::Resources {
+                        params: (&params).into(),
+                        nearest: (&nv).into(),
+                        distance: (&dv).into(),
+                    },
+                )?;
+                dispatch(
+                    encoder,
+                    &self.resolve_unsigned,
+                    &bound,
+                    w,
+                    h,
+                    timestamp_writes,
+                );
+            }
+            Some(o) => {
+                let ov = view(o);
+                let bound = self.resolve_signed.bind(
+                    device,
+                    &jfa_resolve::resolve_signed::Resources {
+                        params: (&params).into(),
+                        nearest: (&nv).into(),
+                        nearest_outside: (&ov).into(),
+                        distance: (&dv).into(),
+                    },
+                )?;
+                dispatch(
+                    encoder,
+                    &self.resolve_signed,
+                    &bound,
+                    w,
+                    h,
+                    timestamp_writes,
+                );
+            }
+        }
+        Ok(out)
+    }
+
+    /// The whole chain: seed → JFA passes → resolve, recorded into `encoder`.
+    pub fn encode(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        seeds: &wgpu::Texture,
+        options: &Options,
+    ) -> Result<Field2d, Error> {
+        self.encode_profiled(device, encoder, seeds, options, None)
+    }
+
+    /// [`Self::encode`] with each pass timed by `profiler`.
+    pub fn encode_profiled(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        seeds: &wgpu::Texture,
+        options: &Options,
+        mut profiler: Option<&mut Profiler>,
+    ) -> Result<Field2d, Error> {
+        let prof = &mut profiler;
+        let (w, h) = check_seed_texture(device, seeds)?;
+        if !(options.texel_size.is_finite() && options.texel_size > 0.0) {
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: format!(
+                    "texel_size must be finite and positive, got {}",
+                    options.texel_size
+                ),
+            });
+        }
+        let steps = options.variant.steps(w.max(h));
+        let inside = self.seed_timed(
+            device,
+            encoder,
+            seeds,
+            false,
+            prof.as_mut().and_then(|p| p.next("seed")),
+        )?;
+        let nearest = self.flood_timed(device, encoder, inside, &steps, prof)?;
+        let nearest_outside = if options.signed {
+            let outside = self.seed_timed(
+                device,
+                encoder,
+                seeds,
+                true,
+                prof.as_mut().and_then(|p| p.next("seed")),
+            )?;
+            Some(self.flood_timed(device, encoder, outside, &steps, prof)?)
+        } else {
+            None
+        };
+        let distance = self.resolve_timed(
+            device,
+            encoder,
+            &nearest,
+            nearest_outside.as_ref(),
+            options.texel_size,
+            prof.as_mut().and_then(|p| p.next("resolve")),
+        )?;
+        Ok(Field2d {
+            width: w,
+            height: h,
+            nearest,
+            nearest_outside,
+            distance,
+        })
+    }
+}
