@@ -15,83 +15,15 @@ use std::process::ExitCode;
 
 use fieldkit::distance::Variant;
 use fieldkit::distance::{Grid3, Method};
-use fieldkit::gpu::{Context, read_buffer, read_texture};
+use fieldkit::gpu::{Context, read_texture};
 use fieldkit::metaball::render::{Direct, Output, RaymarchSettings, Raymarcher};
 use fieldkit::view::{Targets, View};
 use fieldkit::metaball::{BlobBins, MetaballField, Metaballs, Settings, animate, cpu, packed_grid};
 use glam::{DVec3, Mat4, Vec3, Vec4};
 
-pub(crate) struct Stamps {
-    set: wgpu::QuerySet,
-    buf: wgpu::Buffer,
-    period: f64,
-}
+use crate::measure::{Stamps, median};
 
-impl Stamps {
-    pub(crate) fn new(ctx: &Context) -> Result<Self, String> {
-        let need =
-            wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
-        if !ctx.device.features().contains(need) {
-            return Err(format!(
-                "{} has no timestamp queries inside encoders",
-                ctx.adapter_name()
-            ));
-        }
-        Ok(Self {
-            set: ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
-                label: Some("bench stamps"),
-                ty: wgpu::QueryType::Timestamp,
-                count: 2,
-            }),
-            buf: ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("bench stamps"),
-                size: 16,
-                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            }),
-            period: ctx.queue.get_timestamp_period() as f64,
-        })
-    }
-
-    /// Run `record` between two timestamps; returns milliseconds.
-    pub(crate) fn time(
-        &self,
-        ctx: &Context,
-        record: impl FnOnce(&mut wgpu::CommandEncoder) -> Result<(), String>,
-    ) -> Result<f64, String> {
-        self.time_after(ctx, None, record)
-    }
-
-    /// [`Self::time`] with `heater` run (and waited for) between encoding `record` and
-    /// submitting it, so the timed work starts at full clocks.
-    pub(crate) fn time_after(
-        &self,
-        ctx: &Context,
-        heater: Option<&crate::heater::Heater>,
-        record: impl FnOnce(&mut wgpu::CommandEncoder) -> Result<(), String>,
-    ) -> Result<f64, String> {
-        let mut enc = ctx.encoder("bench");
-        enc.write_timestamp(&self.set, 0);
-        record(&mut enc)?;
-        enc.write_timestamp(&self.set, 1);
-        enc.resolve_query_set(&self.set, 0..2, &self.buf, 0);
-        if let Some(h) = heater {
-            h.run(ctx)?;
-        }
-        ctx.submit_and_wait("bench", enc)
-            .map_err(|e| e.to_string())?;
-        let b = read_buffer(ctx, &self.buf).map_err(|e| e.to_string())?;
-        let t: &[u64] = bytemuck::cast_slice(&b);
-        Ok(t[1].saturating_sub(t[0]) as f64 * self.period / 1e6)
-    }
-}
-
-pub(crate) fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(|a, b| a.total_cmp(b));
-    v[v.len() / 2]
-}
-
-pub fn run(args: &crate::bench::Args) -> ExitCode {
+pub fn run(args: &crate::measure::Args) -> ExitCode {
     match bench(args.quick, args.reps, args.warmup, args.band, &args.out) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
@@ -310,7 +242,7 @@ fn bench(
                 // Where the build's time goes: each pass on its own timestamps (the passes'
                 // sum leaves out the gaps between them, which the build time above includes).
                 let (_, _, _, passes) =
-                    crate::bench::time_runs(&ctx, warmup, reps, None, |enc, p| {
+                    crate::measure::time_runs(&ctx, warmup, reps, None, |enc, p| {
                         balls
                             .encode_profiled(&ctx.device, enc, &inst, &grid, edge, &s, Some(p))
                             .expect("the same build ran above");

@@ -14,9 +14,9 @@ use fieldkit::ocean::lod::{LodSettings, select, writeup_patches};
 use fieldkit::ocean::render::{Look, OceanCamera, OceanRenderer, Output, PATCH_QUADS, Patch};
 use glam::{DVec2, DVec3};
 
-use crate::bench_metaball::{Stamps, median};
+use crate::measure::{Stamps, median};
 
-pub fn run(args: &crate::bench::Args) -> ExitCode {
+pub fn run(args: &crate::measure::Args) -> ExitCode {
     match bench(args.quick, args.reps, args.warmup, &args.out) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
@@ -103,7 +103,7 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
                     )
                     .map_err(|e| e.to_string())
             })?;
-            if i > warmup.max(3) && start.elapsed() >= crate::bench::WARMUP_TIME {
+            if i > warmup.max(3) && start.elapsed() >= crate::measure::WARMUP_TIME {
                 times.push(ms);
             }
         }
@@ -275,7 +275,7 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
         warmup,
         reps,
     )?;
-    crate::bench::write_table(
+    crate::measure::write_table(
         out,
         "ocean_floor.csv",
         "adapter,resolution,triangles,px_per_triangle,frame_ms,ns_per_triangle",
@@ -287,7 +287,7 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
             )
         }),
     )?;
-    let csv = crate::bench::write_table(
+    let csv = crate::measure::write_table(
         out,
         "ocean.csv",
         "adapter,resolution,layout,patches,triangles,max_error_px,frame_ms",
@@ -437,7 +437,7 @@ struct P { n: u32 }
                 pass.draw(0..n * n * 6, 0..1);
                 Ok(())
             })?;
-            if i > warmup.max(3) && start.elapsed() >= crate::bench::WARMUP_TIME {
+            if i > warmup.max(3) && start.elapsed() >= crate::measure::WARMUP_TIME {
                 times.push(ms);
             }
         }

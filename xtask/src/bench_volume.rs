@@ -21,9 +21,9 @@ use fieldkit::volume::{
 };
 use glam::{Mat4, Vec3};
 
-use crate::bench_metaball::{Stamps, median};
+use crate::measure::{Stamps, median};
 
-pub fn run(args: &crate::bench::Args) -> ExitCode {
+pub fn run(args: &crate::measure::Args) -> ExitCode {
     match bench(args.quick, args.reps, args.warmup, &args.sizes, &args.out) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
@@ -144,7 +144,7 @@ fn bench(
     let heater = if ctx.is_software() {
         None
     } else {
-        Some(crate::heater::Heater::new(&ctx, &stamps, 20.0)?)
+        Some(crate::heater::Heater::new(&ctx, 20.0)?)
     };
     let sizes: Vec<u32> = if !only.is_empty() {
         only.iter().map(|&n| n as u32).collect()
@@ -371,7 +371,7 @@ fn bench(
             }
         }
     }
-    let csv = crate::bench::write_table(
+    let csv = crate::measure::write_table(
         out,
         "volume.csv",
         "adapter,volume,resolution,camera,config,step_voxels,skip,jitter,shadow,frame_ms,rms_err,max_err",

@@ -21,9 +21,9 @@ use fieldkit::gpu::Context;
 use fieldkit::voxelize::{Mesh, Surface, Voxelizer};
 use glam::DVec3;
 
-use crate::bench_metaball::{Stamps, median};
+use crate::measure::{Stamps, median};
 
-pub fn run(args: &crate::bench::Args) -> ExitCode {
+pub fn run(args: &crate::measure::Args) -> ExitCode {
     match bench(args) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
@@ -56,7 +56,7 @@ fn gcd(a: usize, b: usize) -> usize {
 /// Encodes per submission for the back-to-back figure.
 const BATCH: usize = 10;
 
-fn bench(args: &crate::bench::Args) -> Result<(), String> {
+fn bench(args: &crate::measure::Args) -> Result<(), String> {
     if let Some(csv) = &args.replot {
         let (adapter, rows) = read_table(csv)?;
         chart(&args.out, &adapter, &rows)?;
@@ -73,7 +73,7 @@ fn bench(args: &crate::bench::Args) -> Result<(), String> {
     let heater = if ctx.is_software() {
         None
     } else {
-        Some(crate::heater::Heater::new(&ctx, &stamps, 20.0)?)
+        Some(crate::heater::Heater::new(&ctx, 20.0)?)
     };
     let v = Voxelizer::new(&ctx.device).map_err(|e| e.to_string())?;
     let mut meshes = Vec::new();
@@ -157,7 +157,7 @@ fn bench(args: &crate::bench::Args) -> Result<(), String> {
                 // after a few runs while the clocks are still low.
                 let start = std::time::Instant::now();
                 let mut warm = 0;
-                while warm < args.warmup.max(3) || start.elapsed() < crate::bench::WARMUP_TIME {
+                while warm < args.warmup.max(3) || start.elapsed() < crate::measure::WARMUP_TIME {
                     stamps.time_after(&ctx, heater.as_ref(), |enc| encode(enc).map(|_| ()))?;
                     warm += 1;
                 }
@@ -180,7 +180,7 @@ fn bench(args: &crate::bench::Args) -> Result<(), String> {
                 let ms_batched = median(batched);
                 if mode == "surface" || mode == "solid" {
                     // Each pass on its own (the clears between them are not passes).
-                    let (total, _, _, passes) = crate::bench::time_runs(
+                    let (total, _, _, passes) = crate::measure::time_runs(
                         &ctx,
                         args.warmup,
                         args.reps,
@@ -236,7 +236,7 @@ fn bench(args: &crate::bench::Args) -> Result<(), String> {
             }
         }
     }
-    let csv = crate::bench::write_table(
+    let csv = crate::measure::write_table(
         &args.out,
         "voxelize.csv",
         "adapter,mesh,triangles,grid,mode,ms,ms_back_to_back,voxels",

@@ -8,7 +8,7 @@
 //! submitted, so the timed work starts on a GPU that has just been busy. It is outside the
 //! timestamps and does not share the GPU with the timed work.
 
-use fieldkit::gpu::Context;
+use fieldkit::gpu::{Context, Timer};
 
 /// A bench utility, not a library stage, so it lives here rather than in `shaders/`.
 const SPIN: &str = r#"
@@ -36,11 +36,7 @@ pub(crate) struct Heater {
 
 impl Heater {
     /// A heater whose run takes about `ms` milliseconds of GPU time at full clocks.
-    pub(crate) fn new(
-        ctx: &Context,
-        stamps: &crate::bench_metaball::Stamps,
-        ms: f64,
-    ) -> Result<Self, String> {
+    pub(crate) fn new(ctx: &Context, ms: f64) -> Result<Self, String> {
         let device = &ctx.device;
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("bench heater"),
@@ -77,10 +73,17 @@ impl Heater {
         // Calibrate on a warm GPU: the last of a few timed runs, scaled to `ms`.
         let mut took = 0.0;
         for _ in 0..5 {
-            took = stamps.time(ctx, |enc| {
-                heater.record(enc);
-                Ok(())
-            })?;
+            let timer = Timer::new(&ctx.device, &ctx.queue, 1)
+                .ok_or("the heater is calibrated with timestamp queries; the adapter has none")?;
+            let mut enc = ctx.encoder("bench heater calibration");
+            heater.record(&mut enc, Some(timer.compute_pass_writes(0)));
+            timer.resolve(&mut enc);
+            ctx.submit_and_wait("bench heater", enc)
+                .map_err(|e| e.to_string())?;
+            took = timer
+                .read_ms(&ctx.device, &ctx.queue)
+                .wait(ctx)
+                .map_err(|e| e.to_string())?;
         }
         let want = (CALIBRATE as f64 * ms / took.max(1e-3))
             .ceil()
@@ -90,10 +93,14 @@ impl Heater {
         Ok(heater)
     }
 
-    fn record(&self, enc: &mut wgpu::CommandEncoder) {
+    fn record(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
+    ) {
         let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("bench heater"),
-            timestamp_writes: None,
+            timestamp_writes,
         });
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &self.bind, &[]);
@@ -103,7 +110,7 @@ impl Heater {
     /// Run the spin kernel and wait for it.
     pub(crate) fn run(&self, ctx: &Context) -> Result<(), String> {
         let mut enc = ctx.encoder("bench heater");
-        self.record(&mut enc);
+        self.record(&mut enc, None);
         ctx.submit_and_wait("bench heater", enc)
             .map_err(|e| e.to_string())
     }

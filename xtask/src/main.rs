@@ -3,7 +3,8 @@
 #[path = "../../src/toolchain/mod.rs"]
 mod toolchain;
 
-mod bench;
+mod bench_bind;
+mod bench_distance;
 mod bench_metaball;
 mod bench_ocean;
 mod bench_volume;
@@ -11,6 +12,7 @@ mod bench_voxelize;
 mod chart;
 mod heater;
 mod lint;
+mod measure;
 mod shader_stats;
 
 use std::path::{Path, PathBuf};
@@ -100,6 +102,8 @@ enum Command {
 
 #[derive(Clone, Copy, clap::ValueEnum)]
 enum Technique {
+    /// The CPU cost of binding a stage's resources (not a technique; `--reps` runs of 1000).
+    Bind,
     Distance,
     Metaball,
     Volume,
@@ -154,7 +158,7 @@ fn main() -> ExitCode {
                 );
                 return ExitCode::FAILURE;
             }
-            let args = bench::Args {
+            let args = measure::Args {
                 quick,
                 reps,
                 warmup,
@@ -170,7 +174,8 @@ fn main() -> ExitCode {
                 replot,
             };
             match technique {
-                Technique::Distance => bench::run_distance(&args),
+                Technique::Bind => bench_bind::run(&args),
+                Technique::Distance => bench_distance::run(&args),
                 Technique::Metaball => bench_metaball::run(&args),
                 Technique::Volume => bench_volume::run(&args),
                 Technique::Ocean => bench_ocean::run(&args),

@@ -7,36 +7,14 @@
 //! peer's distances, or the CPU reference in `--quick` mode).
 
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::ExitCode;
 
 use fieldkit::distance::{Distance3d, Method, Options3d, upload_volume};
 use fieldkit::distance::{Jfa2d, Options, Variant, cpu, upload_mask};
-use fieldkit::gpu::{Context, Profiler, read_buffer, read_texture};
+use fieldkit::gpu::{Context, read_buffer, read_texture};
 
-pub struct Args {
-    pub quick: bool,
-    pub reps: usize,
-    pub warmup: usize,
-    pub density: f64,
-    pub out: PathBuf,
-    /// Command line of the peer script, e.g. `python3 .gpu/peers/edt_cupyx.py`.
-    pub peer: Option<String>,
-    /// Narrow band (voxels) for the banded JFA entry.
-    pub band: f32,
-    /// Only the exact transform (and the peer): for quick comparisons.
-    pub exact_only: bool,
-    /// Bands per column of the exact transform; `None` lets the library choose.
-    pub column_bands: Option<u32>,
-    /// Only these sizes of the sweep (empty: all).
-    pub sizes: Vec<usize>,
-    /// `voxelize`: the bunny's `index.js` (`scripts/fetch-bunny.sh`).
-    pub mesh: Option<PathBuf>,
-    /// `voxelize`: only these modes (empty: all).
-    pub modes: Vec<String>,
-    /// `voxelize`: chart this saved `voxelize.csv` instead of measuring.
-    pub replot: Option<PathBuf>,
-}
+use crate::measure::{Args, time_runs};
 
 /// Memory bandwidth the pass figures are compared with (H100 SXM HBM3, rounded down).
 const PEAK_BYTES_PER_S: f64 = 3.0e12;
@@ -71,10 +49,6 @@ fn random_mask(n: usize, density: f64, salt: u64) -> Vec<u8> {
         .collect()
 }
 
-fn median(v: &mut [f64]) -> f64 {
-    v.sort_by(|a, b| a.total_cmp(b));
-    v[v.len() / 2]
-}
 
 /// Bytes a pass must move at least (reads + writes of the fields it touches, per cell), used for
 /// the bandwidth figure. Neighbour reads of JFA that hit the cache are not counted.
@@ -105,87 +79,6 @@ fn pass_bytes(name: &str, cells: u64, dims: u32) -> f64 {
 
 /// Write `name` under `dir` (created if missing): the `header` line, then one line per row.
 /// Returns the file's path.
-pub(crate) fn write_table(
-    dir: &std::path::Path,
-    name: &str,
-    header: &str,
-    lines: impl IntoIterator<Item = String>,
-) -> Result<PathBuf, String> {
-    std::fs::create_dir_all(dir).map_err(|e| e.to_string())?;
-    let path = dir.join(name);
-    let mut text = format!("{header}\n");
-    for line in lines {
-        text.push_str(&line);
-        text.push('\n');
-    }
-    std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
-    Ok(path)
-}
-
-/// Least wall time of warm-up before the timed runs. GPU clocks fall while the CPU checks the
-/// previous point: on the H100, 2048² exact measured 1.19 ms after three warm-up runs that
-/// followed the 512³ sweep, and 0.26 ms once warmed up for longer.
-pub(crate) const WARMUP_TIME: std::time::Duration = std::time::Duration::from_millis(500);
-
-/// Median, fastest and slowest total ms, and each pass's median ms.
-pub(crate) type Timing = (f64, f64, f64, Vec<(String, f64)>);
-
-/// Time `reps` runs of `record` (after at least `warmup` runs and `WARMUP_TIME`), each recording
-/// its passes into a fresh encoder; with `heater`, run before each submission.
-pub(crate) fn time_runs(
-    ctx: &Context,
-    warmup: usize,
-    reps: usize,
-    heater: Option<&crate::heater::Heater>,
-    mut record: impl FnMut(&mut wgpu::CommandEncoder, &mut Profiler),
-) -> Result<Timing, String> {
-    let mut prof = Profiler::new(&ctx.device, &ctx.queue, 64)
-        .ok_or("the adapter has no timestamp queries; the benchmark needs them")?;
-    let mut totals = Vec::new();
-    let mut per_pass: Vec<(String, Vec<f64>)> = Vec::new();
-    let start = std::time::Instant::now();
-    let mut warm = 0;
-    let mut timed = 0;
-    while timed < reps {
-        let mut enc = ctx.encoder("bench");
-        record(&mut enc, &mut prof);
-        prof.resolve(&mut enc);
-        if let Some(h) = heater {
-            h.run(ctx)?;
-        }
-        ctx.submit_and_wait("bench", enc)
-            .map_err(|e| e.to_string())?;
-        let (passes, total) = prof.read(&ctx.device, &ctx.queue).wait(ctx).map_err(|e| e.to_string())?;
-        if warm < warmup || start.elapsed() < WARMUP_TIME {
-            warm += 1;
-            continue;
-        }
-        timed += 1;
-        totals.push(total);
-        if per_pass.is_empty() {
-            per_pass = passes
-                .iter()
-                .map(|(n, _)| (n.clone(), Vec::new()))
-                .collect();
-        }
-        for (slot, (_, ms)) in per_pass.iter_mut().zip(&passes) {
-            slot.1.push(*ms);
-        }
-    }
-    let min = totals.iter().cloned().fold(f64::INFINITY, f64::min);
-    let max = totals.iter().cloned().fold(0.0, f64::max);
-    let med = median(&mut totals);
-    Ok((
-        med,
-        min,
-        max,
-        per_pass
-            .into_iter()
-            .map(|(n, mut v)| (n, median(&mut v)))
-            .collect(),
-    ))
-}
-
 /// Squared distance per cell from packed seeds (3D 11/11/10 or 2D 16/16); u64::MAX for none.
 fn d2_of(nearest: &[u32], size: [usize; 3], dims: u32) -> Vec<u64> {
     let (w, h) = (size[0], size[1]);
@@ -288,7 +181,7 @@ fn words(ctx: &Context, b: &wgpu::Buffer) -> Result<Vec<u32>, String> {
     Ok(bytemuck::cast_slice::<u8, u32>(&read_buffer(ctx, b).map_err(|e| e.to_string())?).to_vec())
 }
 
-pub fn run_distance(args: &Args) -> ExitCode {
+pub fn run(args: &Args) -> ExitCode {
     match distance(args) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

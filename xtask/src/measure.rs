@@ -1,0 +1,188 @@
+//! How the benchmarks measure: the command-line settings they share, GPU timestamps around a
+//! recorded run ([`Stamps`]), timed runs after a warm-up with per-pass times ([`time_runs`]),
+//! the heater that keeps clocks up between them, medians and CSV tables. Every `bench_*`
+//! module builds on this one and on none of the others.
+
+use std::path::PathBuf;
+
+use fieldkit::gpu::{Context, Profiler, read_buffer};
+
+use crate::heater::Heater;
+
+/// Settings of `cargo xtask bench`, shared by every technique.
+pub struct Args {
+    pub quick: bool,
+    pub reps: usize,
+    pub warmup: usize,
+    pub density: f64,
+    pub out: PathBuf,
+    /// Command line of the peer script, e.g. `python3 .gpu/peers/edt_cupyx.py`.
+    pub peer: Option<String>,
+    /// Narrow band (voxels) for the banded JFA entry.
+    pub band: f32,
+    /// Only the exact transform (and the peer): for quick comparisons.
+    pub exact_only: bool,
+    /// Bands per column of the exact transform; `None` lets the library choose.
+    pub column_bands: Option<u32>,
+    /// Only these sizes of the sweep (empty: all).
+    pub sizes: Vec<usize>,
+    /// `voxelize`: the bunny's `index.js` (`scripts/fetch-bunny.sh`).
+    pub mesh: Option<PathBuf>,
+    /// `voxelize`: only these modes (empty: all).
+    pub modes: Vec<String>,
+    /// `voxelize`: chart this saved `voxelize.csv` instead of measuring.
+    pub replot: Option<PathBuf>,
+}
+
+/// Write `header` and `lines` to `dir/name`; returns the path.
+pub(crate) fn write_table(
+    dir: &std::path::Path,
+    name: &str,
+    header: &str,
+    lines: impl IntoIterator<Item = String>,
+) -> Result<PathBuf, String> {
+    std::fs::create_dir_all(dir).map_err(|e| e.to_string())?;
+    let path = dir.join(name);
+    let mut text = format!("{header}\n");
+    for line in lines {
+        text.push_str(&line);
+        text.push('\n');
+    }
+    std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok(path)
+}
+
+/// Least wall time of warm-up before the timed runs. GPU clocks fall while the CPU checks the
+/// previous point: on the H100, 2048² exact measured 1.19 ms after three warm-up runs that
+/// followed the 512³ sweep, and 0.26 ms once warmed up for longer.
+pub(crate) const WARMUP_TIME: std::time::Duration = std::time::Duration::from_millis(500);
+
+/// Median, fastest and slowest total ms, and each pass's median ms.
+pub(crate) type Timing = (f64, f64, f64, Vec<(String, f64)>);
+
+/// Time `reps` runs of `record` (after at least `warmup` runs and `WARMUP_TIME`), each recording
+/// its passes into a fresh encoder; with `heater`, run before each submission.
+pub(crate) fn time_runs(
+    ctx: &Context,
+    warmup: usize,
+    reps: usize,
+    heater: Option<&Heater>,
+    mut record: impl FnMut(&mut wgpu::CommandEncoder, &mut Profiler),
+) -> Result<Timing, String> {
+    let mut prof = Profiler::new(&ctx.device, &ctx.queue, 64)
+        .ok_or("the adapter has no timestamp queries; the benchmark needs them")?;
+    let mut totals = Vec::new();
+    let mut per_pass: Vec<(String, Vec<f64>)> = Vec::new();
+    let start = std::time::Instant::now();
+    let mut warm = 0;
+    let mut timed = 0;
+    while timed < reps {
+        let mut enc = ctx.encoder("bench");
+        record(&mut enc, &mut prof);
+        prof.resolve(&mut enc);
+        if let Some(h) = heater {
+            h.run(ctx)?;
+        }
+        ctx.submit_and_wait("bench", enc)
+            .map_err(|e| e.to_string())?;
+        let (passes, total) = prof.read(&ctx.device, &ctx.queue).wait(ctx).map_err(|e| e.to_string())?;
+        if warm < warmup || start.elapsed() < WARMUP_TIME {
+            warm += 1;
+            continue;
+        }
+        timed += 1;
+        totals.push(total);
+        if per_pass.is_empty() {
+            per_pass = passes
+                .iter()
+                .map(|(n, _)| (n.clone(), Vec::new()))
+                .collect();
+        }
+        for (slot, (_, ms)) in per_pass.iter_mut().zip(&passes) {
+            slot.1.push(*ms);
+        }
+    }
+    let min = totals.iter().cloned().fold(f64::INFINITY, f64::min);
+    let max = totals.iter().cloned().fold(0.0, f64::max);
+    let med = median(totals.clone());
+    Ok((
+        med,
+        min,
+        max,
+        per_pass
+            .into_iter()
+            .map(|(n, v)| (n, median(v)))
+            .collect(),
+    ))
+}
+
+pub(crate) struct Stamps {
+    set: wgpu::QuerySet,
+    buf: wgpu::Buffer,
+    period: f64,
+}
+
+impl Stamps {
+    pub(crate) fn new(ctx: &Context) -> Result<Self, String> {
+        let need =
+            wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
+        if !ctx.device.features().contains(need) {
+            return Err(format!(
+                "{} has no timestamp queries inside encoders",
+                ctx.adapter_name()
+            ));
+        }
+        Ok(Self {
+            set: ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("bench stamps"),
+                ty: wgpu::QueryType::Timestamp,
+                count: 2,
+            }),
+            buf: ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("bench stamps"),
+                size: 16,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            }),
+            period: ctx.queue.get_timestamp_period() as f64,
+        })
+    }
+
+    /// Run `record` between two timestamps; returns milliseconds.
+    pub(crate) fn time(
+        &self,
+        ctx: &Context,
+        record: impl FnOnce(&mut wgpu::CommandEncoder) -> Result<(), String>,
+    ) -> Result<f64, String> {
+        self.time_after(ctx, None, record)
+    }
+
+    /// [`Self::time`] with `heater` run (and waited for) between encoding `record` and
+    /// submitting it, so the timed work starts at full clocks.
+    pub(crate) fn time_after(
+        &self,
+        ctx: &Context,
+        heater: Option<&Heater>,
+        record: impl FnOnce(&mut wgpu::CommandEncoder) -> Result<(), String>,
+    ) -> Result<f64, String> {
+        let mut enc = ctx.encoder("bench");
+        enc.write_timestamp(&self.set, 0);
+        record(&mut enc)?;
+        enc.write_timestamp(&self.set, 1);
+        enc.resolve_query_set(&self.set, 0..2, &self.buf, 0);
+        if let Some(h) = heater {
+            h.run(ctx)?;
+        }
+        ctx.submit_and_wait("bench", enc)
+            .map_err(|e| e.to_string())?;
+        let b = read_buffer(ctx, &self.buf).map_err(|e| e.to_string())?;
+        let t: &[u64] = bytemuck::cast_slice(&b);
+        Ok(t[1].saturating_sub(t[0]) as f64 * self.period / 1e6)
+    }
+}
+
+pub(crate) fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(|a, b| a.total_cmp(b));
+    v[v.len() / 2]
+}
+
