@@ -22,39 +22,55 @@ use crate::error::{BindingError, Error};
 /// One `@group/@binding` of an entry point, as the shader declares and uses it.
 #[derive(Debug, Clone, Copy)]
 pub struct Slot {
+    /// Its `@group`.
     pub group: u32,
+    /// Its `@binding`.
     pub binding: u32,
+    /// The variable's name in the shader.
     pub name: &'static str,
     /// WGSL spelling of the bound type.
     pub wgsl: &'static str,
     /// Stages that really use it.
     pub visibility: wgpu::ShaderStages,
+    /// The binding type the layout declares (from real use: access, sample type, size).
     pub ty: wgpu::BindingType,
 }
 
 /// Scalar class of a fragment output: which colour target formats it can write.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ScalarClass {
+    /// `f32` outputs: float and normalized formats.
     Float,
+    /// `u32` outputs: unsigned integer formats.
     Uint,
+    /// `i32` outputs: signed integer formats.
     Sint,
 }
 
 #[derive(Debug, Clone, Copy)]
+/// One fragment output: its location and what kind of values it writes.
 pub struct TargetKind {
+    /// Its `@location`.
     pub location: u32,
+    /// What it writes.
     pub scalar: ScalarClass,
 }
 
 #[derive(Debug, Clone, Copy)]
+/// What kind of pipeline an entry point makes.
 pub enum EntryKind {
+    /// A compute entry point.
     Compute {
+        /// Its `@workgroup_size`.
         workgroup_size: [u32; 3],
     },
+    /// A fragment entry point with the vertex entry point it pairs with.
     Render {
         /// The vertex entry point paired with the fragment entry point.
         vertex: &'static str,
+        /// Vertex buffer layouts from the vertex stage's inputs.
         vertex_buffers: &'static [Option<wgpu::VertexBufferLayout<'static>>],
+        /// The fragment outputs.
         targets: &'static [TargetKind],
     },
 }
@@ -64,12 +80,17 @@ pub enum EntryKind {
 pub struct EntryInfo {
     /// `room::stage`.
     pub stage: &'static str,
+    /// The shader file, relative to the crate.
     pub path: &'static str,
     /// Compute entry point, or the fragment entry point of a render pipeline.
     pub entry_point: &'static str,
+    /// The linked WGSL the pipeline is created from.
     pub source: &'static str,
+    /// Compute or render.
     pub kind: EntryKind,
+    /// Every binding the entry point uses, ascending.
     pub slots: &'static [Slot],
+    /// Names of the module's `override` constants.
     pub overrides: &'static [&'static str],
 }
 
@@ -170,7 +191,9 @@ impl EntryInfo {
 
 /// A generated entry point: its interface table and its parameter struct.
 pub trait Entry: 'static {
+    /// The entry point's parameter struct: one typed field per binding.
     type Resources<'a>;
+    /// The entry point's interface table.
     const INFO: &'static EntryInfo;
     /// The resources in slot order.
     fn resources<'a>(r: &Self::Resources<'a>) -> Vec<Resource<'a>>;
@@ -178,13 +201,19 @@ pub trait Entry: 'static {
 
 /// A resource handed to a slot, before it is checked against the slot.
 pub enum Resource<'a> {
+    /// A uniform or storage buffer range.
     Buffer(wgpu::BufferBinding<'a>),
+    /// A sampled texture view.
     Texture(&'a wgpu::TextureView),
+    /// A storage texture view.
     StorageTexture(&'a wgpu::TextureView),
+    /// A sampler.
     Sampler(&'a wgpu::Sampler),
 }
 
+/// What a generated parameter struct's fields turn into for binding.
 pub trait IntoResource<'a> {
+    /// The resource to bind.
     fn resource(&self) -> Resource<'a>;
 }
 
@@ -192,6 +221,7 @@ macro_rules! buffer_wrapper {
     ($(#[$doc:meta])* $name:ident) => {
         $(#[$doc])*
         pub struct $name<'a, T: ?Sized> {
+            /// The buffer range bound.
             pub binding: wgpu::BufferBinding<'a>,
             _t: PhantomData<fn() -> Box<T>>,
         }
@@ -467,11 +497,13 @@ pub struct Bound<E> {
 }
 
 impl<E: Entry> Bound<E> {
+    /// Set every bind group on a compute pass.
     pub fn set_compute(&self, pass: &mut wgpu::ComputePass<'_>) {
         for (g, group) in &self.groups {
             pass.set_bind_group(*g, group, &[]);
         }
     }
+    /// Set every bind group on a render pass.
     pub fn set_render(&self, pass: &mut wgpu::RenderPass<'_>) {
         for (g, group) in &self.groups {
             pass.set_bind_group(*g, group, &[]);
@@ -488,6 +520,7 @@ fn module(device: &wgpu::Device, info: &EntryInfo) -> wgpu::ShaderModule {
 
 /// A compute pipeline for a generated entry point `E`.
 pub struct ComputePipeline<E> {
+    /// The wgpu pipeline.
     pub pipeline: wgpu::ComputePipeline,
     layouts: Vec<(u32, wgpu::BindGroupLayout)>,
     _e: PhantomData<E>,
@@ -564,13 +597,17 @@ impl<E: Entry> ComputePipeline<E> {
 pub struct RenderTargets<'a> {
     /// One per fragment output, in location order.
     pub color: &'a [Option<wgpu::ColorTargetState>],
+    /// Depth (and stencil) test and write, if the pass has a depth target.
     pub depth_stencil: Option<wgpu::DepthStencilState>,
+    /// Topology, culling and polygon mode.
     pub primitive: wgpu::PrimitiveState,
+    /// Sample count and mask.
     pub multisample: wgpu::MultisampleState,
 }
 
 /// A render pipeline for a generated vertex + fragment entry pair `E`.
 pub struct RenderPipeline<E> {
+    /// The wgpu pipeline.
     pub pipeline: wgpu::RenderPipeline,
     layouts: Vec<(u32, wgpu::BindGroupLayout)>,
     _e: PhantomData<E>,
@@ -627,6 +664,7 @@ impl<E: Entry> RenderPipeline<E> {
         })
     }
 
+    /// Check every resource against the shader's slots and make the bind groups.
     pub fn bind(
         &self,
         device: &wgpu::Device,

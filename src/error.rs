@@ -6,14 +6,21 @@
     "stage {stage}, entry point `{entry_point}`, binding `{binding}` (@group({group}) @binding({index})): {problem}"
 )]
 pub struct BindingError {
+    /// The stage (`room::name`).
     pub stage: &'static str,
+    /// The entry point whose resources were bound.
     pub entry_point: &'static str,
+    /// The shader's name for the binding.
     pub binding: &'static str,
+    /// Its `@group`.
     pub group: u32,
+    /// Its `@binding`.
     pub index: u32,
+    /// What is wrong with the resource given.
     pub problem: String,
 }
 
+/// Every error fieldkit returns. Each names the stage and what was wrong.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum Error {
     /// No adapter was found; the message says how to get one.
@@ -21,30 +28,53 @@ pub enum Error {
         "no GPU adapter found ({detail}). Install a Vulkan driver: on Debian/Ubuntu \
          `apt-get install mesa-vulkan-drivers` gives the software rasteriser lavapipe (llvmpipe)"
     )]
-    NoAdapter { detail: String },
+    NoAdapter {
+        /// Which adapters were looked for and found.
+        detail: String,
+    },
     /// The adapter refused the device.
     #[error("could not open a device on {adapter}: {detail}")]
-    Device { adapter: String, detail: String },
+    Device {
+        /// The adapter asked.
+        adapter: String,
+        /// What it said.
+        detail: String,
+    },
+    /// A resource that does not fit the slot the shader declares.
     #[error(transparent)]
     Binding(#[from] BindingError),
     /// A wgpu validation or out-of-memory error, captured by an error scope.
     #[error("stage {stage}: wgpu reported: {message}")]
     Wgpu {
+        /// The stage that was being created or run.
         stage: &'static str,
+        /// wgpu's message.
         message: String,
     },
     /// The device was lost while a stage ran.
     #[error("device lost while running {stage}")]
-    DeviceLost { stage: &'static str },
+    DeviceLost {
+        /// The stage that was running.
+        stage: &'static str,
+    },
     /// A parameter is NaN, negative, zero where it must not be, or otherwise unusable.
     #[error("stage {stage}: invalid input: {what}")]
-    Invalid { stage: &'static str, what: String },
+    Invalid {
+        /// The stage refusing it.
+        stage: &'static str,
+        /// Which parameter, and why.
+        what: String,
+    },
     /// A size is zero or past what the device (or the encoding) supports.
     #[error("stage {stage}: {what} is {got}, must be between 1 and {max}")]
     Size {
+        /// The stage refusing it.
         stage: &'static str,
+        /// Which size.
         what: &'static str,
+        /// The size given.
         got: u64,
+        /// The largest allowed.
         max: u64,
     },
     /// A texture of a format the stage does not read.
@@ -52,8 +82,11 @@ pub enum Error {
         "stage {stage}: texture format {format:?} is not supported here (use one of {supported})"
     )]
     Format {
+        /// The stage refusing it.
         stage: &'static str,
+        /// The format given.
         format: wgpu::TextureFormat,
+        /// The formats it takes.
         supported: &'static str,
     },
     /// Mapping a buffer for readback failed.

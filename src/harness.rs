@@ -99,18 +99,23 @@ pub struct Tolerance {
     pub mean: f32,
     /// Fraction of pixels allowed to differ by more than `pixel` in any channel.
     pub outlier_fraction: f32,
+    /// Largest per-channel difference (0–255) a pixel may have without counting as an outlier.
     pub pixel: u8,
 }
 
 impl Tolerance {
+    /// Cap on [`Tolerance::mean`]: no test may loosen past it.
     pub const MAX_MEAN: f32 = 4.0;
+    /// Cap on [`Tolerance::outlier_fraction`].
     pub const MAX_OUTLIERS: f32 = 0.02;
 }
 
 /// Result of an image comparison.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ImageDiff {
+    /// Mean absolute difference per channel (0–255) measured.
     pub mean: f32,
+    /// Fraction of pixels measured past [`Tolerance::pixel`].
     pub outlier_fraction: f32,
 }
 

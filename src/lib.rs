@@ -5,6 +5,8 @@
 //! bindings are generated into [`shaders`]. Technique modules (like [`distance`]) compose stages
 //! into passes recorded into your own `wgpu::CommandEncoder`.
 
+#![warn(missing_docs)]
+
 pub mod bind;
 pub mod distance;
 pub mod error;

@@ -53,6 +53,7 @@ pub enum Variant {
 }
 
 impl Variant {
+    /// Every variant, fewest passes first.
     pub const ALL: [Variant; 5] = [
         Variant::Jfa,
         Variant::JfaPlus1,
@@ -61,6 +62,7 @@ impl Variant {
         Variant::OnePlusJfaPlus2,
     ];
 
+    /// The variant's name as the README's table writes it.
     pub fn name(self) -> &'static str {
         match self {
             Variant::Jfa => "JFA",
@@ -94,6 +96,7 @@ impl Variant {
 /// What [`Jfa2d::encode`] computes.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Options {
+    /// Which passes run.
     pub variant: Variant,
     /// Treat the seed texture as a mask (non-zero inside) and produce signed distance,
     /// negative inside.
@@ -114,7 +117,9 @@ impl Default for Options {
 
 /// The result of a 2D distance computation, on the GPU.
 pub struct Field2d {
+    /// Width in texels.
     pub width: u32,
+    /// Height in texels.
     pub height: u32,
     /// `R32Uint`: nearest seed per texel, packed ([`unpack_seed`]). For a signed field, the
     /// nearest *inside* texel.
@@ -281,6 +286,7 @@ pub fn upload_mask(
 }
 
 impl Jfa2d {
+    /// Create the JFA pipelines.
     pub fn new(device: &wgpu::Device) -> Result<Self, Error> {
         Ok(Self {
             seed: ComputePipeline::new(device)?,

@@ -109,13 +109,16 @@ pub fn key_index(key: u32) -> Option<u32> {
 /// `origin + (i + ½, j + ½, k + ½) · voxel_size`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Grid3 {
+    /// Voxels per axis.
     pub size: [u32; 3],
+    /// World units per voxel.
     pub voxel_size: f32,
     /// The volume's minimum corner.
     pub origin: Vec3,
 }
 
 impl Grid3 {
+    /// A grid of `size` unit voxels at the origin.
     pub fn new(size: [u32; 3]) -> Self {
         Self {
             size,
@@ -172,6 +175,7 @@ pub enum Method {
 }
 
 impl Method {
+    /// The method's name as the benchmark tables write it.
     pub fn name(self) -> String {
         match self {
             Method::Exact => "exact".into(),
@@ -182,10 +186,13 @@ impl Method {
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
+/// What [`Distance3d`] computes.
 pub struct Options3d {
+    /// Exact (default), JFA or the line passes.
     pub method: Method,
     /// Signed distance, negative inside (marked voxels).
     pub signed: bool,
+    /// Which voxels are marked.
     pub inside: Inside,
     /// World units per voxel.
     pub voxel_size: f32,
@@ -284,14 +291,18 @@ impl Options3d {
 /// optionally, each point's home voxel (`u32`, packed as [`pack_seed3`]).
 #[derive(Debug)]
 pub struct PointSeeds {
+    /// `vec4<f32>` per point, xyz in voxel coordinates.
     pub buffer: wgpu::Buffer,
+    /// Each point's home voxel, packed, if given.
     pub homes: Option<wgpu::Buffer>,
+    /// Number of points.
     pub count: u32,
 }
 
 /// A 3D distance field on the GPU.
 #[derive(Debug)]
 pub struct Field3d {
+    /// Voxels per axis.
     pub size: [u32; 3],
     /// Nearest seed per voxel: packed ([`unpack_seed3`]), or a key into `points` ([`key_index`]).
     /// For a signed field of integer seeds, the nearest *inside* voxel.
@@ -306,9 +317,13 @@ pub struct Field3d {
 /// A 2D field from the exact transform (nearest seeds in a buffer, packed 16/16 bits).
 #[derive(Debug)]
 pub struct FieldBuf2d {
+    /// Width in texels.
     pub width: u32,
+    /// Height in texels.
     pub height: u32,
+    /// Nearest seed per texel, packed 16/16 bits ([`super::pack_seed`]), x fastest.
     pub nearest: wgpu::Buffer,
+    /// Signed fields: nearest outside texel.
     pub nearest_outside: Option<wgpu::Buffer>,
     /// `R32Float` 2D texture.
     pub distance: wgpu::Texture,
@@ -666,6 +681,7 @@ impl Distance3d {
         Ok(())
     }
 
+    /// Create every 3D pipeline (and the 2D exact transform's).
     pub fn new(device: &wgpu::Device) -> Result<Self, Error> {
         Ok(Self {
             seed: ComputePipeline::new(device)?,

@@ -1,6 +1,6 @@
 //! What every stage needs from the GPU beyond wgpu itself: readback that does not block
 //! ([`Readback`]), pass timing from timestamp queries ([`Timer`], [`Profiler`]) and uniform
-//! buffers laid out by encase. With the `context` feature, also a headless [`Context`] of
+//! buffers laid out by encase. With the `context` feature, also a headless `Context` of
 //! fieldkit's choosing with blocking helpers, for tests, demos and benches; nothing a renderer
 //! calls needs it.
 

@@ -278,7 +278,9 @@ fn check_voxels(voxels: &[Vec4], edge: f32) -> Result<(), Error> {
 /// Instances on the GPU: one vec4 (centre, scale) each, for the splat and the debug cubes.
 #[derive(Debug)]
 pub struct Instances {
+    /// `vec4<f32>` per instance.
     pub buffer: wgpu::Buffer,
+    /// Number of instances.
     pub count: u32,
     /// The largest scale uploaded: it sizes the bins of direct tracing.
     pub max_scale: f32,
@@ -287,9 +289,11 @@ pub struct Instances {
 /// Everything a metaball field keeps on the GPU.
 #[derive(Debug)]
 pub struct MetaballField {
+    /// The grid the field lives on.
     pub grid: Grid3,
     /// Fixed-point density sums (u32 per voxel) and the scale they use.
     pub density_fixed: wgpu::Buffer,
+    /// Density = fixed / `fixed_scale`.
     pub fixed_scale: f32,
     /// Density as `R32Float`.
     pub density: wgpu::Texture,
@@ -301,6 +305,7 @@ pub struct MetaballField {
     pub sdf: wgpu::Texture,
     /// The clamp of `sdf`, local units.
     pub band: f32,
+    /// The iso-level of the surface.
     pub threshold: f32,
     /// What the raymarch reads: distance in cells (r) and density (g) as `Rgba16Float`, one
     /// filtered fetch for both.
@@ -314,7 +319,9 @@ pub struct BlobBins {
     /// Local-space corner of the bins' box, and the bin edge (at least the largest support
     /// radius).
     pub origin: Vec3,
+    /// Edge of a bin, local units.
     pub bin_size: f32,
+    /// Bins per axis.
     pub bins: [u32; 3],
     /// Per bin, its first entry in `items`, and the total at the end (`u32`).
     pub starts: wgpu::Buffer,
@@ -324,6 +331,7 @@ pub struct BlobBins {
     pub stats: wgpu::Buffer,
     /// The cell of the grid the bins were fitted to: tolerances are in these units.
     pub cell: f32,
+    /// The iso-level of the surface.
     pub threshold: f32,
 }
 
@@ -340,8 +348,11 @@ pub const MAX_BINS: u32 = 1 << 21;
 /// Output of the splat and surface-seed stages.
 #[derive(Debug)]
 pub struct SurfaceSeeds {
+    /// Fixed-point density sums, `u32` per voxel.
     pub density_fixed: wgpu::Buffer,
+    /// Density = fixed / `fixed_scale`.
     pub fixed_scale: f32,
+    /// The density as an `R32Float` 3D texture.
     pub density: wgpu::Texture,
     /// Seed key per voxel: `point_key(voxel index, offset)`, 0 for none.
     pub keys: wgpu::Buffer,
@@ -362,6 +373,7 @@ pub struct Metaballs {
 }
 
 impl Metaballs {
+    /// Create every metaball pipeline.
     pub fn new(device: &wgpu::Device) -> Result<Self, Error> {
         Ok(Self {
             splat: ComputePipeline::new(device)?,

@@ -52,6 +52,7 @@ pub enum Output {
     Sdf,
 }
 
+/// How the SDF raymarch shades and what it writes.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RaymarchSettings {
     /// Steps per ray before giving up (the pixel is then left as it was).
@@ -62,9 +63,13 @@ pub struct RaymarchSettings {
     pub safety: f32,
     /// World-space direction towards the light.
     pub light_dir: Vec3,
+    /// Surface colour.
     pub base_colour: Vec3,
+    /// Colour of the rim (Fresnel-like) term.
     pub rim_colour: Vec3,
+    /// Ambient light, 0–1.
     pub ambient: f32,
+    /// What the pass writes: shaded colour or a debug view.
     pub output: Output,
 }
 
@@ -637,6 +642,7 @@ pub struct CubeStyle {
     pub depth_compare: wgpu::CompareFunction,
     /// Edges only; needs the adapter's `POLYGON_MODE_LINE`.
     pub wireframe: bool,
+    /// Cube colour (RGBA, linear).
     pub colour: Vec4,
     /// Cube edge × the voxel's scale; off draws every cube one edge long.
     pub scale_size: bool,
@@ -661,6 +667,7 @@ pub struct Cubes {
 }
 
 impl Cubes {
+    /// The cube pipeline for the given targets; `style` fixes culling, depth and wireframe.
     pub fn new(
         device: &wgpu::Device,
         colour: wgpu::TextureFormat,

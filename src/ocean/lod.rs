@@ -52,6 +52,7 @@ impl Default for LodSettings {
 /// The patches chosen (nearest first), and what they cost and miss.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Selection {
+    /// The patches to draw.
     pub patches: Vec<Patch>,
     /// Largest projected height error of a drawn patch (pixels).
     pub max_error_px: f64,
@@ -346,6 +347,7 @@ pub fn select(
 /// view.
 #[derive(Clone, Debug, PartialEq)]
 pub struct WriteupLayout {
+    /// The write-up's fixed rings of patches.
     pub patches: Vec<Patch>,
     /// How many of them are in view (the others a renderer would cull).
     pub visible: usize,
@@ -353,6 +355,7 @@ pub struct WriteupLayout {
     pub max_error_px: f64,
 }
 
+/// The write-up's layout: fixed rings of patches around the camera (for comparison).
 pub fn writeup_patches(
     waves: &Waves,
     look: &Look,

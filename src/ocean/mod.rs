@@ -64,7 +64,9 @@ pub struct Wave {
 /// The steepness a set asked for and the one it got (see [`Waves::new_clamped`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SteepnessClamped {
+    /// The steepness asked for.
     pub requested: f32,
+    /// The steepness used.
     pub used: f32,
 }
 
@@ -79,9 +81,13 @@ pub struct Waves {
 /// the unit normal T × B.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Surface {
+    /// The displaced point.
     pub position: DVec3,
+    /// ∂P/∂x.
     pub binormal: DVec3,
+    /// ∂P/∂z.
     pub tangent: DVec3,
+    /// The unit normal.
     pub normal: DVec3,
 }
 
@@ -169,10 +175,12 @@ impl Waves {
         }
     }
 
+    /// The waves.
     pub fn waves(&self) -> &[Wave] {
         &self.waves
     }
 
+    /// The global steepness, 0–1.
     pub fn steepness(&self) -> f32 {
         self.steepness
     }
@@ -312,6 +320,7 @@ fn check_waves(waves: &[Wave]) -> Result<(), Error> {
 pub struct SharedWaves(Arc<RwLock<Waves>>);
 
 impl SharedWaves {
+    /// Share `waves`.
     pub fn new(waves: Waves) -> Self {
         Self(Arc::new(RwLock::new(waves)))
     }
@@ -323,6 +332,7 @@ impl SharedWaves {
         *self.0.write().unwrap_or_else(|e| e.into_inner()) = waves;
     }
 
+    /// A copy of the current waves.
     pub fn snapshot(&self) -> Waves {
         self.0.read().unwrap_or_else(|e| e.into_inner()).clone()
     }
@@ -336,6 +346,7 @@ pub struct WaveGrid {
 
 /// A displaced grid on the GPU.
 pub struct DisplacedGrid {
+    /// Vertices per side (x, z).
     pub size: [u32; 2],
     /// `vec4<f32>` per point: position relative to the origin, w = 1.
     pub positions: wgpu::Buffer,
@@ -344,6 +355,7 @@ pub struct DisplacedGrid {
 }
 
 impl WaveGrid {
+    /// Create the displacement pipeline.
     pub fn new(device: &wgpu::Device) -> Result<Self, Error> {
         Ok(Self {
             pipeline: ComputePipeline::new(device)?,

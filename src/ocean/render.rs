@@ -42,8 +42,11 @@ pub enum Output {
 /// its error), and which of its edges hang a skirt.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Patch {
+    /// World corner (x, z) at the smallest x and z, metres.
     pub corner: DVec2,
+    /// Side, metres.
     pub size: f64,
+    /// Grid quads per side.
     pub quads: u32,
     /// Edges with a skirt, one bit each: 1 the edge at the smallest z, 2 the largest x, 4 the
     /// largest z, 8 the smallest x (higher bits are ignored). A skirt hides the crack beside a
@@ -94,14 +97,21 @@ pub struct Layer {
 /// Colours, light and the detail layers.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Look {
+    /// Height-map detail layers (at most [`MAX_LAYERS`]).
     pub height_layers: Vec<Layer>,
+    /// Normal-map detail layers (at most [`MAX_LAYERS`]).
     pub normal_layers: Vec<Layer>,
     /// Towards the sun (normalised on use).
     pub sun_direction: Vec3,
+    /// Sun colour (linear RGB).
     pub sun_colour: Vec3,
+    /// Colour of deep water.
     pub deep_colour: Vec3,
+    /// Colour of shallow water.
     pub shallow_colour: Vec3,
+    /// Colour reflected from the sky.
     pub sky_colour: Vec3,
+    /// Surface roughness, 0–1.
     pub roughness: f32,
     /// Metres of water over which the colour fades from shallow to deep.
     pub fade_distance: f32,
@@ -182,6 +192,7 @@ impl OceanCamera {
     }
 }
 
+/// The ocean's pipelines and detail textures. Create once, encode every frame.
 pub struct OceanRenderer {
     output: Output,
     reversed_z: bool,
@@ -456,6 +467,7 @@ impl OceanRenderer {
         })
     }
 
+    /// Where this renderer's fragments go.
     pub fn output(&self) -> Output {
         self.output
     }

@@ -50,7 +50,9 @@ pub const BRICK: u32 = 8;
 
 /// A density volume: a 3D texture and where its voxels sit in local space.
 pub struct Volume {
+    /// The density, a 3D texture (R8Unorm, R16Float or R32Float).
     pub texture: wgpu::Texture,
+    /// Voxels per axis.
     pub dims: [u32; 3],
     /// Local-space corner of voxel (0, 0, 0); the box runs to `origin + dims × spacing`.
     pub origin: Vec3,
@@ -227,7 +229,9 @@ fn check_format(device: &wgpu::Device, format: wgpu::TextureFormat) -> Result<()
 /// spaced entries over `range`, interpolated linearly and clamped at the ends.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TransferFunction {
+    /// RGBA entries, evenly spaced over `range`; alpha is opacity per `reference_step`.
     pub entries: Vec<[f32; 4]>,
+    /// The densities the first and last entries are for.
     pub range: [f32; 2],
 }
 
@@ -333,7 +337,10 @@ pub enum Mode {
     /// The largest density along the ray, through the transfer function.
     MaximumIntensity,
     /// The first point where the density reaches `iso`, refined by bisection and lit.
-    IsoSurface { iso: f32 },
+    IsoSurface {
+        /// The density of the surface.
+        iso: f32,
+    },
 }
 
 /// Shadowing toward the light.
@@ -342,27 +349,39 @@ pub enum Shadow {
     /// Unshadowed light.
     None,
     /// A shadow ray per sample, segments of `step` world units.
-    Rays { step: f32 },
+    Rays {
+        /// Segment length, world units.
+        step: f32,
+    },
     /// A light volume: transmittance at every other voxel centre, built by
     /// [`VolumeRenderer::encode_light`] with shadow rays of `step`, read trilinearly. Folded
     /// into a copy of the density (one fetch per sample for both) up to [`FOLD_MAX_BYTES`].
-    LightVolume { step: f32 },
+    LightVolume {
+        /// Segment length of the rays that build it, world units.
+        step: f32,
+    },
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
+/// How the volume is marched and lit.
 pub struct MarchSettings {
     /// Segment length Δs, world units.
     pub step: f32,
     /// Δ₀, the segment length the transfer function's opacities are for, world units.
     pub reference_step: f32,
+    /// Emission-absorption, maximum intensity or iso-surface.
     pub mode: Mode,
+    /// How single scattering finds the light.
     pub shadow: Shadow,
     /// World direction towards the light.
     pub light_dir: Vec3,
+    /// Light colour (linear RGB).
     pub light_colour: Vec3,
+    /// Light that reaches every sample unshadowed.
     pub ambient: f32,
     /// Jitter each pixel's lattice (interleaved gradient noise, shifted by `frame`).
     pub jitter: bool,
+    /// Frame number for the jitter pattern.
     pub frame: u32,
     /// Skip bricks the transfer function leaves clear.
     pub skip: bool,
@@ -433,7 +452,9 @@ impl MarchSettings {
 
 /// The min-max brick grid of one volume ([`VolumeRenderer::encode_bricks`]).
 pub struct Bricks {
+    /// Min and max density per brick.
     pub ranges: wgpu::Buffer,
+    /// Bricks per axis.
     pub count: [u32; 3],
 }
 
@@ -508,9 +529,11 @@ fn march_variant(settings: &MarchSettings, light: Option<&LightVolume>) -> (usiz
 pub struct VolumeMarched {
     /// Pixels marched: `[x0, y0, x1, y1)`.
     pub rect: [u32; 4],
+    /// Premultiplied colour and transmittance of the marched rectangle.
     pub colour: wgpu::Texture,
 }
 
+/// The volume pipelines. Create once, encode every frame.
 pub struct VolumeRenderer {
     bricks: ComputePipeline<bricks::bricks::Entry>,
     /// One march pipeline per mode × shadow × skip × sample count (`march_index`), made on

@@ -91,6 +91,7 @@ pub struct Attributes {
 /// One occupied voxel's averages, as [`Attributes::read`] decodes them.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct VoxelAttributes {
+    /// Its voxel coordinates.
     pub voxel: [u32; 3],
     /// Mean colour, rounded to the nearest 8-bit level.
     pub color: [u8; 4],
@@ -180,7 +181,7 @@ impl Voxelizer {
     /// Conservative surface voxels of `mesh` with each voxel's colour and normal averaged
     /// over the triangles that touch it. Submits twice: the number of occupied voxels is read
     /// back in between to size the compact list, so the future finishes only as the device is
-    /// polled (a frame loop's `device.poll`, or [`Context::block_on`](crate::gpu::Context::block_on)).
+    /// polled (a frame loop's `device.poll`, or `fieldkit::gpu::Context::block_on` with the `context` feature).
     /// To keep the read-back out of a frame, record the two halves yourself
     /// ([`Voxelizer::encode_attributes`], [`Voxelizer::encode_resolve_attributes`]).
     ///

@@ -69,8 +69,11 @@ pub fn conservative(mesh: &GridMesh, size: [u32; 3]) -> Vec<bool> {
 /// number of triangles.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct AttributeSum {
+    /// Summed colour, 0–1 per channel.
     pub color: [f64; 4],
+    /// Summed normal.
     pub normal: DVec3,
+    /// Triangles touching the voxel.
     pub triangles: u32,
 }
 

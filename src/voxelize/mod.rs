@@ -52,7 +52,9 @@ pub const SLACK: f32 = 4.0 * f32::EPSILON;
 /// A triangle mesh in world units.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Mesh {
+    /// Vertex positions.
     pub positions: Vec<DVec3>,
+    /// Counter-clockwise triangles (outward normals), indices into `positions`.
     pub triangles: Vec<[u32; 3]>,
     /// Per-vertex RGBA8 colours, or empty (white) when the mesh has none.
     pub colors: Vec<[u8; 4]>,
@@ -65,8 +67,11 @@ pub struct Mesh {
 /// the number of voxels per axis.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Grid {
+    /// World position of the grid's lowest corner.
     pub origin: DVec3,
+    /// Edge of a voxel, world units.
     pub voxel: f64,
+    /// Voxels per axis.
     pub size: [u32; 3],
 }
 
@@ -405,6 +410,7 @@ pub fn heavy_chunk_bound(local: &GridMesh, size: [u32; 3]) -> u32 {
 
 /// Surface voxels on the GPU: one bit per voxel.
 pub struct Surface {
+    /// Voxels per axis.
     pub size: [u32; 3],
     /// `u32` words; voxel i = (z · ny + y) · nx + x is bit i % 32 of word i / 32.
     pub occupancy: wgpu::Buffer,
@@ -460,6 +466,7 @@ pub const CHUNK: u32 = 4;
 /// shader's `LIGHT`).
 pub const LIGHT: u32 = 16;
 
+/// The voxelization pipelines. Create once, encode many times.
 pub struct Voxelizer {
     surface: SurfacePipelines,
     surface_six: SurfacePipelines,
@@ -551,6 +558,7 @@ struct HeavyWork {
 }
 
 impl Voxelizer {
+    /// Create the surface, solid and volume pipelines (the rest on first use).
     pub fn new(device: &wgpu::Device) -> Result<Self, Error> {
         Ok(Self {
             surface: SurfacePipelines::new(device, false)?,
