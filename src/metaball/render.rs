@@ -33,7 +33,7 @@ use crate::view::{View, box_visible, depth_state, load_pass, screen_rect};
 use crate::bind::{ComputePipeline, RenderPipeline, RenderTargets};
 use crate::error::Error;
 use crate::gpu::uniform_buffer as uniform;
-use crate::shaders::raymarch::{blob_trace, composite, sdf_raymarch, voxel_cubes};
+use crate::shaders::metaball::{blob_trace, composite, sdf_raymarch, voxel_cubes};
 
 /// What the raymarcher writes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
