@@ -133,6 +133,7 @@ impl Scene {
     }
 
     /// Record one frame at `time` seconds into `colour` and `depth` (both `size`).
+    #[allow(clippy::too_many_arguments)]
     pub fn encode(
         &mut self,
         device: &wgpu::Device,

@@ -604,7 +604,6 @@ impl Voxelizer {
         }
         let local = mesh.to_grid(grid)?;
         let (occupancy, triangles) = self.bitset(device, encoder, &local, grid)?;
-        let device = device;
         let count = (local.vertices.len() / 3) as u32;
         for (first, n) in batches(count) {
             let params = uniform(
@@ -701,7 +700,6 @@ impl Voxelizer {
         local: &GridMesh,
         grid: &Grid,
     ) -> Result<(wgpu::Buffer, wgpu::Buffer), Error> {
-        let device = device;
         let voxels = grid.voxels();
         let words = voxels.div_ceil(32).max(1);
         let limit = device.limits().max_storage_buffer_binding_size;
@@ -874,7 +872,6 @@ impl Voxelizer {
         mesh: &Mesh,
         grid: &Grid,
     ) -> Result<Surface, Error> {
-        let device = device;
         let side = grid.size.into_iter().max().unwrap_or(1);
         let max = device.limits().max_texture_dimension_2d;
         if side > max {
