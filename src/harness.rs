@@ -1,23 +1,9 @@
-//! The per-stage test harness: a shared context for tests, compact deterministic summaries of a
-//! stage's output for insta snapshots, and image comparison against a reference PNG with a
+//! The per-stage test harness: compact deterministic summaries of a stage's output for insta snapshots, and image comparison against a reference PNG with a
 //! tolerance (writing the actual and a difference image when it fails).
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use std::sync::OnceLock;
 
-use crate::error::Error;
-use crate::gpu::Context;
-
-/// The default adapter, opened once per test binary. Panics (failing the test) with the
-/// instruction for getting an adapter when there is none: GPU tests never skip silently.
-pub fn context() -> Context {
-    static CTX: OnceLock<Result<Context, Error>> = OnceLock::new();
-    match CTX.get_or_init(Context::new) {
-        Ok(c) => c.clone(),
-        Err(e) => panic!("this test needs a GPU adapter: {e}"),
-    }
-}
 
 /// FNV-1a, 64-bit: a stable hash for summaries (std's hasher may change between releases).
 pub fn fnv1a(bytes: impl IntoIterator<Item = u8>) -> u64 {

@@ -9,6 +9,7 @@ mod common;
 mod gallery;
 
 use common::*;
+use fieldkit::gpu::Context;
 use fieldkit::distance::{FAR, Jfa2d, NO_SEED, Options, Variant, cpu, unpack_seed};
 
 /// One test configuration.
@@ -151,7 +152,7 @@ fn score(case: &Case, nearest: &[u32], dist: &[f32], exact: &[u64]) -> Errors {
 
 #[test]
 fn jfa_variants_against_exact_transform() {
-    let ctx = fieldkit::harness::context();
+    let ctx = Context::shared();
     let jfa = Jfa2d::new(&ctx.device).unwrap();
     let cases = cases();
     let mut table = Vec::new();
@@ -225,7 +226,7 @@ fn jfa_variants_against_exact_transform() {
 
 #[test]
 fn no_seeds_gives_no_seed_and_far_everywhere() {
-    let ctx = fieldkit::harness::context();
+    let ctx = Context::shared();
     let jfa = Jfa2d::new(&ctx.device).unwrap();
     let (nearest, dist) = run_jfa(&ctx, &jfa, &[false; 30 * 20], 30, 20, Options::default());
     assert!(nearest.iter().all(|&s| s == NO_SEED));
@@ -234,7 +235,7 @@ fn no_seeds_gives_no_seed_and_far_everywhere() {
 
 #[test]
 fn signed_distance_matches_reference() {
-    let ctx = fieldkit::harness::context();
+    let ctx = Context::shared();
     let jfa = Jfa2d::new(&ctx.device).unwrap();
     let (w, h) = (120, 72);
     let mask: Vec<bool> = gallery::shapes_mask(w as u32, h as u32)
@@ -267,7 +268,7 @@ fn signed_distance_matches_reference() {
 
 #[test]
 fn full_mask_signed_is_minus_far() {
-    let ctx = fieldkit::harness::context();
+    let ctx = Context::shared();
     let jfa = Jfa2d::new(&ctx.device).unwrap();
     let (_, dist) = run_jfa(
         &ctx,

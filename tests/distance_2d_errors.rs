@@ -4,7 +4,6 @@
 use fieldkit::Error;
 use fieldkit::distance::{Jfa2d, MAX_PACKED_SIDE, Options, upload_mask};
 use fieldkit::gpu::Context;
-use fieldkit::harness::context;
 
 fn seed_texture(
     ctx: &Context,
@@ -39,7 +38,7 @@ const EXT: wgpu::Extent3d = wgpu::Extent3d {
 
 #[test]
 fn zero_sized_mask() {
-    let ctx = context();
+    let ctx = Context::shared();
     assert!(matches!(
         upload_mask(&ctx.device, &ctx.queue, &[], 0, 5),
         Err(Error::Size {
@@ -60,7 +59,7 @@ fn zero_sized_mask() {
 
 #[test]
 fn mask_length_mismatch() {
-    let ctx = context();
+    let ctx = Context::shared();
     let e = upload_mask(&ctx.device, &ctx.queue, &[0; 10], 4, 4).unwrap_err();
     assert!(
         matches!(&e, Error::Invalid { what, .. } if what.contains("10 bytes")),
@@ -70,7 +69,7 @@ fn mask_length_mismatch() {
 
 #[test]
 fn size_past_limits() {
-    let ctx = context();
+    let ctx = Context::shared();
     let max = ctx
         .device
         .limits()
@@ -85,7 +84,7 @@ fn size_past_limits() {
 
 #[test]
 fn unsupported_seed_format() {
-    let ctx = context();
+    let ctx = Context::shared();
     let t = seed_texture(
         &ctx,
         wgpu::TextureFormat::R32Uint,
@@ -111,7 +110,7 @@ fn unsupported_seed_format() {
 
 #[test]
 fn three_d_seed_texture() {
-    let ctx = context();
+    let ctx = Context::shared();
     let t = seed_texture(
         &ctx,
         wgpu::TextureFormat::R8Unorm,
@@ -129,7 +128,7 @@ fn three_d_seed_texture() {
 
 #[test]
 fn nan_and_negative_texel_size() {
-    let ctx = context();
+    let ctx = Context::shared();
     let t = upload_mask(&ctx.device, &ctx.queue, &[255; 64], 8, 8).unwrap();
     for bad in [f32::NAN, -1.0, 0.0, f32::INFINITY] {
         let e = encode(
@@ -150,7 +149,7 @@ fn nan_and_negative_texel_size() {
 
 #[test]
 fn zero_step_and_mismatched_ping_pong() {
-    let ctx = context();
+    let ctx = Context::shared();
     let jfa = Jfa2d::new(&ctx.device).unwrap();
     let seeds = upload_mask(&ctx.device, &ctx.queue, &[255; 64], 8, 8).unwrap();
     let mut enc = ctx.encoder("bad");

@@ -8,9 +8,9 @@
 mod common;
 
 use common::*;
+use fieldkit::gpu::Context;
 use fieldkit::distance::{Distance2d, Method2d, Options2d, Variant, cpu, upload_mask};
 use fieldkit::gpu::read_texture;
-use fieldkit::harness::context;
 
 struct Trap {
     w: usize,
@@ -43,7 +43,7 @@ fn wrong(nearest: &[u32], exact: &[u64], w: usize) -> (usize, f64) {
 
 #[test]
 fn jfa_plus_2_fails_on_sparse_non_square_sets_and_exact_does_not() {
-    let ctx = context();
+    let ctx = Context::shared();
     let distance = Distance2d::new(&ctx.device).unwrap();
     for trap in TRAPS {
         let (w, h) = (trap.w, trap.h);

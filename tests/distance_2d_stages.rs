@@ -9,9 +9,10 @@ mod common;
 mod gallery;
 
 use common::*;
+use fieldkit::gpu::Context;
 use fieldkit::distance::{Jfa2d, Options, Variant, cpu, upload_mask};
 use fieldkit::gpu::read_texture;
-use fieldkit::harness::{Summary, Tolerance, compare_image, context};
+use fieldkit::harness::{Summary, Tolerance, compare_image};
 
 const W: usize = 40;
 const H: usize = 24;
@@ -22,7 +23,7 @@ fn mask() -> Vec<bool> {
 
 #[test]
 fn seed_stage() {
-    let ctx = context();
+    let ctx = Context::shared();
     let jfa = Jfa2d::new(&ctx.device).unwrap();
     let m = mask();
     let seeds = upload_mask(&ctx.device, &ctx.queue, &to_bytes(&m), W as u32, H as u32).unwrap();
@@ -42,7 +43,7 @@ fn seed_stage() {
 
 #[test]
 fn one_jump_pass() {
-    let ctx = context();
+    let ctx = Context::shared();
     let jfa = Jfa2d::new(&ctx.device).unwrap();
     let m = mask();
     let seeds = upload_mask(&ctx.device, &ctx.queue, &to_bytes(&m), W as u32, H as u32).unwrap();
@@ -63,7 +64,7 @@ fn one_jump_pass() {
 
 #[test]
 fn resolve_stage() {
-    let ctx = context();
+    let ctx = Context::shared();
     let jfa = Jfa2d::new(&ctx.device).unwrap();
     let m = mask();
     // Resolve alone, from a nearest-seed texture made on the CPU.
@@ -114,7 +115,7 @@ fn resolve_stage() {
 
 #[test]
 fn whole_chain_signed() {
-    let ctx = context();
+    let ctx = Context::shared();
     let jfa = Jfa2d::new(&ctx.device).unwrap();
     let m: Vec<bool> = gallery::shapes_mask(W as u32 * 2, H as u32 * 2)
         .iter()
@@ -140,7 +141,7 @@ fn whole_chain_signed() {
 
 #[test]
 fn visualized_field_matches_reference_image() {
-    let ctx = context();
+    let ctx = Context::shared();
     let jfa = Jfa2d::new(&ctx.device).unwrap();
     let (w, h) = (160u32, 90u32);
     let seeds = upload_mask(&ctx.device, &ctx.queue, &gallery::shapes_mask(w, h), w, h).unwrap();

@@ -5,9 +5,9 @@
 mod common;
 
 use common::*;
+use fieldkit::gpu::Context;
 use fieldkit::distance::{Distance3d, Method, Options3d, unpack_seed3};
 use fieldkit::distance::{FAR, Variant, cpu};
-use fieldkit::harness::context;
 
 struct Case {
     name: &'static str,
@@ -176,7 +176,7 @@ fn methods() -> Vec<Method> {
 
 #[test]
 fn exact_and_jfa_against_the_cpu_transform() {
-    let ctx = context();
+    let ctx = Context::shared();
     let d3 = Distance3d::new(&ctx.device).unwrap();
     let mut totals: Vec<(Method, Errors)> = methods()
         .into_iter()
@@ -268,7 +268,7 @@ fn exact_and_jfa_against_the_cpu_transform() {
 /// other count must be exact too.
 #[test]
 fn every_column_band_count_is_exact() {
-    let ctx = context();
+    let ctx = Context::shared();
     let mut d3 = Distance3d::new(&ctx.device).unwrap();
     for bands in [1, 2, 4, 8, 16, 32] {
         d3.set_column_bands(Some(bands)).unwrap();

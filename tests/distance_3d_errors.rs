@@ -1,18 +1,18 @@
 //! Bad input to the 3D distance stages: each a typed error naming the problem, never a panic,
 //! a wgpu validation error or a lost device.
 
+use fieldkit::gpu::Context;
 use fieldkit::Error;
 use fieldkit::distance::Variant;
 use fieldkit::distance::{
     Distance3d, Grid3, Inside, MAX_SIDE_3D, Method, Options3d, check_size_2d_exact, check_size_3d,
     upload_points, upload_points_with_homes, upload_volume,
 };
-use fieldkit::harness::context;
 use glam::Vec3;
 
 #[test]
 fn zero_sized_grids() {
-    let ctx = context();
+    let ctx = Context::shared();
     for (size, what) in [
         ([0, 4, 4], "width"),
         ([4, 0, 4], "height"),
@@ -32,7 +32,7 @@ fn zero_sized_grids() {
 
 #[test]
 fn past_the_packing_range() {
-    let ctx = context();
+    let ctx = Context::shared();
     // x and y have 11 bits, z 10: 2047 across (or 1023 deep) cannot be named.
     let tex = ctx.device.limits().max_texture_dimension_3d;
     for (axis, what) in [(0, "width"), (1, "height"), (2, "depth")] {
@@ -61,7 +61,7 @@ fn past_the_packing_range() {
 
 #[test]
 fn past_the_device_buffer_limit() {
-    let ctx = context();
+    let ctx = Context::shared();
     // Within the packing, but 2046 × 2046 × 1022 × 4 bytes ≈ 17 GB exceeds every device's
     // storage binding limit: refused before anything is allocated.
     let e = check_size_3d(
@@ -87,7 +87,7 @@ fn past_the_device_buffer_limit() {
 
 #[test]
 fn bad_seed_points() {
-    let ctx = context();
+    let ctx = Context::shared();
     let grid = Grid3 {
         size: [8, 8, 8],
         voxel_size: 0.5,
@@ -135,7 +135,7 @@ fn bad_seed_points() {
 
 #[test]
 fn bad_options_and_textures() {
-    let ctx = context();
+    let ctx = Context::shared();
     let d3 = Distance3d::new(&ctx.device).unwrap();
     let volume = upload_volume(&ctx.device, &ctx.queue, &[255; 64], [4, 4, 4]).unwrap();
     let mut enc = ctx.encoder("bad");

@@ -4,13 +4,13 @@
 mod common;
 
 use common::*;
+use fieldkit::gpu::Context;
 use fieldkit::distance::{
     Distance3d, Grid3, Inside, Method, Options3d, upload_points, upload_points_with_homes,
     upload_volume,
 };
 use fieldkit::distance::{Variant, cpu, upload_mask};
 use fieldkit::gpu::{read_buffer, read_texture};
-use fieldkit::harness::context;
 use glam::Vec3;
 
 fn shape_mask(size: [usize; 3]) -> Vec<bool> {
@@ -26,7 +26,7 @@ fn shape_mask(size: [usize; 3]) -> Vec<bool> {
 
 #[test]
 fn signed_matches_cpu_for_exact_and_jfa_plus_2() {
-    let ctx = context();
+    let ctx = Context::shared();
     let d3 = Distance3d::new(&ctx.device).unwrap();
     let size = [26, 19, 14];
     let m = shape_mask(size);
@@ -62,7 +62,7 @@ fn signed_matches_cpu_for_exact_and_jfa_plus_2() {
 /// the CPU transform.
 #[test]
 fn exact_resolves_in_whichever_pass_is_last() {
-    let ctx = context();
+    let ctx = Context::shared();
     let d3 = Distance3d::new(&ctx.device).unwrap();
     for size in [[23, 1, 1], [17, 11, 1], [9, 1, 13]] {
         let m = random_mask_3d(size, 0.15, 7);
@@ -98,7 +98,7 @@ fn exact_resolves_in_whichever_pass_is_last() {
 
 #[test]
 fn world_units_band_and_threshold() {
-    let ctx = context();
+    let ctx = Context::shared();
     let d3 = Distance3d::new(&ctx.device).unwrap();
     let size = [20, 17, 12];
     let m = random_mask_3d(size, 0.004, 31);
@@ -211,7 +211,7 @@ fn analytic_error(
     voxel_size: f32,
     with_homes: bool,
 ) -> (f64, f64) {
-    let ctx = context();
+    let ctx = Context::shared();
     let d3 = Distance3d::new(&ctx.device).unwrap();
     // Grid placed in the world away from the origin, to exercise the world → voxel mapping.
     let grid = Grid3 {
@@ -322,7 +322,7 @@ fn sub_voxel_seeds_on_a_torus() {
 
 #[test]
 fn exact_2d_matches_cpu() {
-    let ctx = context();
+    let ctx = Context::shared();
     let d3 = Distance3d::new(&ctx.device).unwrap();
     for (w, h, density, seed) in [
         (97usize, 61usize, 0.01, 1u64),

@@ -8,7 +8,6 @@ use common::*;
 use fieldkit::distance::Variant;
 use fieldkit::distance::{Distance3d, Inside, Method, Options3d, PointSeeds};
 use fieldkit::gpu::{Context, read_buffer, read_texture};
-use fieldkit::harness::context;
 use fieldkit::metaball::{Metaballs, Settings};
 use glam::{Vec3, Vec4};
 use wgpu::util::DeviceExt;
@@ -112,7 +111,7 @@ fn options(method: Method, band: f32) -> Options3d {
 
 #[test]
 fn line_passes_are_exact_for_seeds_at_voxel_centres() {
-    let ctx = context();
+    let ctx = Context::shared();
     let d3 = Distance3d::new(&ctx.device).unwrap();
     let size = [24u32, 17, 13];
     let band = 5.0;
@@ -167,7 +166,7 @@ fn line_passes_are_exact_for_seeds_at_voxel_centres() {
 
 #[test]
 fn line_passes_on_surface_seeds_against_brute_force() {
-    let ctx = context();
+    let ctx = Context::shared();
     let d3 = Distance3d::new(&ctx.device).unwrap();
     let balls = Metaballs::new(&ctx.device).unwrap();
     // Three overlapping blobs, one thin neck between the first two.
@@ -235,7 +234,7 @@ fn line_passes_on_surface_seeds_against_brute_force() {
 
 #[test]
 fn line_passes_need_a_band_and_sub_voxel_seeds() {
-    let ctx = context();
+    let ctx = Context::shared();
     let d3 = Distance3d::new(&ctx.device).unwrap();
     let size = [8u32, 8, 8];
     let table = [Vec4::new(3.0, 4.0, 2.0, 1.0)];

@@ -9,7 +9,7 @@ use fieldkit::distance::{
     Distance3d, Grid3, Inside, Options3d, key_index, upload_points, upload_volume,
 };
 use fieldkit::gpu::{Context, read_buffer, read_texture};
-use fieldkit::harness::{Summary, context};
+use fieldkit::harness::Summary;
 use glam::Vec3;
 
 const SIZE: [usize; 3] = [20, 13, 9];
@@ -30,7 +30,7 @@ fn d2s(nearest: &[u32]) -> Vec<u32> {
 }
 
 fn setup() -> (Context, Distance3d, Vec<bool>, wgpu::Texture) {
-    let ctx = context();
+    let ctx = Context::shared();
     let d3 = Distance3d::new(&ctx.device).unwrap();
     let m = mask();
     let volume = upload_volume(&ctx.device, &ctx.queue, &to_bytes(&m), size_u32(SIZE)).unwrap();
@@ -249,7 +249,7 @@ fn resolve_stage() {
 
 #[test]
 fn seed_points_stage() {
-    let ctx = context();
+    let ctx = Context::shared();
     let d3 = Distance3d::new(&ctx.device).unwrap();
     let grid = Grid3::new(size_u32(SIZE));
     // Two points share voxel (3, 4, 5): the one nearer its centre (index 1) must win.

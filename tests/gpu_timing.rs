@@ -1,13 +1,13 @@
 //! Timestamp queries through `gpu::Timer`: the mechanism the benchmarks use. This checks that
 //! timing works and orders its numbers sensibly; it does not judge speed (that is `xtask bench`).
 
+use fieldkit::gpu::Context;
 use fieldkit::distance::{Jfa2d, upload_mask};
 use fieldkit::gpu::Timer;
-use fieldkit::harness::context;
 
 #[test]
 fn timer_measures_jfa_passes() {
-    let ctx = context();
+    let ctx = Context::shared();
     let Some(timer) = Timer::new(&ctx.device, &ctx.queue, 2) else {
         panic!(
             "{} offers no timestamp queries; lavapipe and the H100 both do",

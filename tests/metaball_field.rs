@@ -4,10 +4,10 @@
 mod common;
 
 use common::*;
+use fieldkit::gpu::Context;
 use fieldkit::distance::Variant;
 use fieldkit::distance::{Grid3, Method};
 use fieldkit::gpu::{read_buffer, read_texture};
-use fieldkit::harness::context;
 use fieldkit::metaball::{Metaballs, Settings, cpu, fixed_scale, packed_grid};
 use glam::{Vec3, Vec4};
 
@@ -42,7 +42,7 @@ fn seed_stages(
 
 #[test]
 fn splat_matches_the_cpu_sums() {
-    let ctx = context();
+    let ctx = Context::shared();
     let voxels = three_blobs();
     let settings = Settings {
         cells_per_edge: 6.0,
@@ -81,7 +81,7 @@ fn fixed_point_scale_keeps_sums_in_u32() {
     assert!(s < 10000.0 && s * 1.0e6 <= u32::MAX as f32, "{s}");
     // A huge scale covers the whole grid with density ≈ 1 per instance: the sum saturates at
     // count × scale, not wrapping.
-    let ctx = context();
+    let ctx = Context::shared();
     let voxels = vec![Vec4::new(0.0, 0.0, 0.0, 1.0), Vec4::new(0.2, 0.0, 0.0, 1e4)];
     let settings = Settings::default();
     let grid = Grid3 {
@@ -110,7 +110,7 @@ fn fixed_point_scale_keeps_sums_in_u32() {
 
 #[test]
 fn seeds_are_the_boundary_voxels_moved_onto_the_surface() {
-    let ctx = context();
+    let ctx = Context::shared();
     let voxels = three_blobs();
     let settings = Settings {
         cells_per_edge: 6.0,
@@ -206,7 +206,7 @@ fn sdf_of_one_blob_is_its_sphere() {
 
 /// Largest and RMS error (cells) of one blob's SDF against its sphere, within the band.
 fn one_blob_error(settings: &Settings) -> (f64, f64) {
-    let ctx = context();
+    let ctx = Context::shared();
     let voxels = vec![Vec4::new(0.013, -0.021, 0.034, 1.0)];
     let field = metaball_field(&ctx, &voxels, 1.0, settings);
     let sdf: Vec<f32> = read_texture(&ctx, &field.sdf).unwrap();
@@ -247,7 +247,7 @@ fn err<T>(r: Result<T, fieldkit::Error>) -> String {
 
 #[test]
 fn bad_input_is_a_typed_error() {
-    let ctx = context();
+    let ctx = Context::shared();
     let balls = Metaballs::new(&ctx.device).unwrap();
     let s = Settings::default();
     let nan = [Vec4::new(f32::NAN, 0.0, 0.0, 1.0)];
@@ -308,7 +308,7 @@ fn packed_grid_is_centred() {
 /// whose support box misses the bin, and the global bound is the largest bin sum of 1.717/R.
 #[test]
 fn blob_bins_hold_every_blob_that_reaches_them() {
-    let ctx = context();
+    let ctx = Context::shared();
     let s = Settings::default();
     // Scales from 0 (skipped) to 1.3, centres off the lattice.
     let voxels: Vec<Vec4> = packed_grid([4, 3, 3], 1.0)

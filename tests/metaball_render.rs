@@ -8,7 +8,6 @@ mod common;
 
 use common::*;
 use fieldkit::gpu::{Context, read_texture};
-use fieldkit::harness::context;
 use fieldkit::metaball::render::{Direct, Output, RaymarchSettings, Raymarcher};
 use fieldkit::view::{Targets, View, box_visible};
 use fieldkit::metaball::{BlobBins, MetaballField, Metaballs, Settings, cpu};
@@ -211,7 +210,7 @@ fn blob_settings() -> Settings {
 
 #[test]
 fn one_blob_is_a_sphere() {
-    let ctx = context();
+    let ctx = Context::shared();
     let voxels = vec![Vec4::new(0.02, -0.03, 0.01, 1.0)];
     let s = blob_settings();
     let field = metaball_field(&ctx, &voxels, 1.0, &s);
@@ -247,7 +246,7 @@ fn one_blob_is_a_sphere() {
 /// against f64 bisection on the analytic field.
 #[test]
 fn several_blobs_and_a_thin_neck() {
-    let ctx = context();
+    let ctx = Context::shared();
     let voxels = vec![
         Vec4::new(-0.6, 0.0, 0.0, 1.0),
         Vec4::new(0.6, 0.0, 0.0, 1.0),
@@ -297,7 +296,7 @@ fn count(shot: &Shot) -> usize {
 /// the blob hides it, one behind it does not; the same with reversed Z.
 #[test]
 fn depth_composites_with_the_scene_standard_and_reversed() {
-    let ctx = context();
+    let ctx = Context::shared();
     let (_, field) = one_blob(&ctx);
     for reversed in [false, true] {
         let view = camera(Vec3::new(0.0, 0.0, 2.5), Vec3::ZERO, reversed);
@@ -343,7 +342,7 @@ fn depth_composites_with_the_scene_standard_and_reversed() {
 /// Cameras inside the box, inside the blob, and a box cut by the near plane.
 #[test]
 fn cameras_inside_and_the_near_plane() {
-    let ctx = context();
+    let ctx = Context::shared();
     let (voxels, field) = one_blob(&ctx);
     let s = blob_settings();
     // Inside the box, outside the blob: rays start at the near plane, inside the box.
@@ -387,7 +386,7 @@ fn cameras_inside_and_the_near_plane() {
 /// left as they were (not drawn at a wrong depth). The Steps view shows the count.
 #[test]
 fn step_cap_leaves_pixels_undrawn() {
-    let ctx = context();
+    let ctx = Context::shared();
     let (_, field) = one_blob(&ctx);
     let view = camera(Vec3::new(0.0, 0.0, 2.5), Vec3::ZERO, false);
     let full = count(&shoot(&ctx, &field, &view, Mat4::IDENTITY, &normals(), 1.0));
@@ -418,7 +417,7 @@ fn step_cap_leaves_pixels_undrawn() {
 /// a non-rigid placement is refused.
 #[test]
 fn placement_culling_and_bad_views() {
-    let ctx = context();
+    let ctx = Context::shared();
     let (_, field) = one_blob(&ctx);
     let view = camera(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, false);
     let place = Mat4::from_rotation_y(0.7) * Mat4::from_translation(Vec3::new(0.6, 0.0, 0.0));
@@ -554,7 +553,7 @@ fn placement_culling_and_bad_views() {
 /// everywhere (no seeds), which the raymarcher crosses without drawing.
 #[test]
 fn empty_and_zero_scale_sets() {
-    let ctx = context();
+    let ctx = Context::shared();
     let s = blob_settings();
     let balls = fieldkit::metaball::Metaballs::new(&ctx.device).unwrap();
     let grid = fieldkit::distance::Grid3 {
@@ -619,7 +618,7 @@ fn mean_steps(shot: &Shot, max_steps: u32) -> f64 {
 /// f64 bisection, to the bisection's precision rather than a grid's.
 #[test]
 fn direct_tracing_matches_the_analytic_field() {
-    let ctx = context();
+    let ctx = Context::shared();
     let s = blob_settings();
     let settings = RaymarchSettings {
         max_steps: 4000,
@@ -680,7 +679,7 @@ fn direct_tracing_matches_the_analytic_field() {
 /// slopes) forces small steps everywhere, the per-segment bound does not.
 #[test]
 fn segment_tracing_takes_fewer_steps_than_the_global_bound() {
-    let ctx = context();
+    let ctx = Context::shared();
     let s = blob_settings();
     let voxels = fieldkit::metaball::packed_grid([3, 3, 3], 1.0);
     let bins = blob_bins(&ctx, &voxels, &s);
@@ -717,7 +716,7 @@ fn segment_tracing_takes_fewer_steps_than_the_global_bound() {
 /// the surface. The direct tracer is held to the exact rim.
 #[test]
 fn grazing_rays_at_the_silhouette() {
-    let ctx = context();
+    let ctx = Context::shared();
     let s = blob_settings();
     let voxels = vec![Vec4::new(0.013, -0.021, 0.008, 1.0)];
     let field = metaball_field(&ctx, &voxels, 1.0, &s);
@@ -788,7 +787,7 @@ fn grazing_rays_at_the_silhouette() {
 /// still composites.
 #[test]
 fn composite_refuses_a_stale_march_and_a_wrong_target() {
-    let ctx = context();
+    let ctx = Context::shared();
     let (_, field) = one_blob(&ctx);
     let view = camera(Vec3::new(0.3, 0.4, 2.5), Vec3::ZERO, false);
     let marcher = Raymarcher::new(

@@ -14,7 +14,7 @@ use fieldkit::distance::Variant;
 use fieldkit::distance::Method;
 use crate::gallery::{MetaballView, metaball_scene};
 use fieldkit::gpu::{Context, read_buffer, read_texture};
-use fieldkit::harness::{Summary, context};
+use fieldkit::harness::Summary;
 use fieldkit::metaball::render::Output;
 use fieldkit::metaball::{Metaballs, Settings, SurfaceSeeds};
 use glam::Vec4;
@@ -55,7 +55,7 @@ fn seeds(ctx: &Context) -> (SurfaceSeeds, [usize; 3]) {
 
 #[test]
 fn splat_stage() {
-    let ctx = context();
+    let ctx = Context::shared();
     let (out, shape) = seeds(&ctx);
     let fixed = words(&ctx, &out.density_fixed);
     let dens: Vec<f32> = fixed.iter().map(|&f| f as f32 / out.fixed_scale).collect();
@@ -64,7 +64,7 @@ fn splat_stage() {
 
 #[test]
 fn seed_stage() {
-    let ctx = context();
+    let ctx = Context::shared();
     let (out, shape) = seeds(&ctx);
     let keys = words(&ctx, &out.keys);
     let is_seed: Vec<u32> = keys.iter().map(|&k| (k != 0) as u32).collect();
@@ -92,7 +92,7 @@ fn line_passes_and_sdf_stages() {
 
 /// The nearest seed (by table index) and the SDF after the distance stage with `method`.
 fn distance_summary(method: Method) -> String {
-    let ctx = context();
+    let ctx = Context::shared();
     let s = Settings {
         method,
         ..settings()
@@ -129,7 +129,7 @@ fn image_summary(rgba: &[u8], w: usize, h: usize) -> String {
 
 #[test]
 fn raymarch_and_cube_images() {
-    let ctx = context();
+    let ctx = Context::shared();
     let (w, h) = (160, 100);
     let surface = metaball_scene(&ctx, w, h, 0.0, MetaballView::Surface(Output::Shaded)).unwrap();
     let cubes = metaball_scene(&ctx, w, h, 0.0, MetaballView::Cubes).unwrap();

@@ -6,7 +6,7 @@
 
 use fieldkit::Error;
 use fieldkit::gpu::{Context, read_texture};
-use fieldkit::harness::{Summary, context};
+use fieldkit::harness::Summary;
 use fieldkit::ocean::render::{ALL_SKIRTS, Look, OceanCamera, OceanRenderer, Output, Patch};
 use fieldkit::ocean::{Wave, Waves};
 use glam::{DVec2, DVec3, DVec4, Vec2, Vec3, Vec4};
@@ -218,7 +218,7 @@ fn calm_look() -> Look {
 /// scene's depth and the clear colour stay.
 #[test]
 fn depth_fade_and_depth_write_in_one_pass() {
-    let ctx = context();
+    let ctx = Context::shared();
     let calm = Waves::new(vec![wave(1.0, 0.0, 1e-4, 50.0, 0.0)], 0.0).unwrap();
     let renderer =
         OceanRenderer::new(&ctx.device, &ctx.queue, Output::GBuffer([RGBA32; 4]), false).unwrap();
@@ -281,7 +281,7 @@ fn depth_fade_and_depth_write_in_one_pass() {
 /// (found with the CPU query), with no detail layers.
 #[test]
 fn gbuffer_normal_is_the_wave_normal() {
-    let ctx = context();
+    let ctx = Context::shared();
     let waves = sea();
     let renderer =
         OceanRenderer::new(&ctx.device, &ctx.queue, Output::GBuffer([RGBA32; 4]), false).unwrap();
@@ -330,7 +330,7 @@ fn gbuffer_normal_is_the_wave_normal() {
 
 #[test]
 fn forward_and_gbuffer_snapshots() {
-    let ctx = context();
+    let ctx = Context::shared();
     let waves = sea();
     let forward =
         OceanRenderer::new(&ctx.device, &ctx.queue, Output::Forward(RGBA32), false).unwrap();
@@ -383,7 +383,7 @@ fn forward_and_gbuffer_snapshots() {
 /// water's mean plane inside the patches keep the clear colour); with skirts none do.
 #[test]
 fn skirts_close_the_cracks_between_levels() {
-    let ctx = context();
+    let ctx = Context::shared();
     // A short wave along the shared edge: the coarse edge is off by up to 6 cm between vertices.
     let waves = Waves::new(vec![wave(0.0, 1.0, 0.2, 1.0, 0.0)], 0.0).unwrap();
     let (w, h) = (256u32, 192u32);
@@ -568,7 +568,7 @@ type Case<'a> = (
 
 #[test]
 fn bad_input_gets_typed_errors() {
-    let ctx = context();
+    let ctx = Context::shared();
     let waves = sea();
     let cam = camera();
     let renderer =

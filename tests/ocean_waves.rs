@@ -7,7 +7,7 @@
 
 use fieldkit::Error;
 use fieldkit::gpu::{Context, read_buffer};
-use fieldkit::harness::{Summary, context};
+use fieldkit::harness::Summary;
 use fieldkit::ocean::{MAX_WAVES, SharedWaves, Wave, WaveGrid, Waves};
 use glam::{DVec2, DVec3, Vec2, Vec4};
 
@@ -80,7 +80,7 @@ fn worst_against_reference(
 
 #[test]
 fn gpu_matches_the_f64_reference_near_and_far() {
-    let ctx = context();
+    let ctx = Context::shared();
     let waves = Waves::new(sea(), 0.75).unwrap();
     let (start, spacing, size) = (Vec2::new(-40.0, -30.0), Vec2::new(1.3, 1.1), [64, 56]);
     // Near the origin, early.
@@ -100,7 +100,7 @@ fn gpu_matches_the_f64_reference_near_and_far() {
 /// millimetres asked for (llvmpipe: 0.014 m, against 6e-6 m above).
 #[test]
 fn world_coordinates_in_f32_lose_the_far_sea() {
-    let ctx = context();
+    let ctx = Context::shared();
     let waves = Waves::new(sea(), 0.75).unwrap();
     let far = Vec2::new(1.0e5, -7.3e4);
     let (dp, _) = worst_against_reference(
@@ -120,7 +120,7 @@ fn world_coordinates_in_f32_lose_the_far_sea() {
 /// 1 − Q at the crest: a cusp (0) at Q = 1, rounded crests below.
 #[test]
 fn single_wave_is_a_trochoid_with_a_cusp_at_q_one() {
-    let ctx = context();
+    let ctx = Context::shared();
     let (a, l) = (0.5f32, 8.0f32);
     for q in [1.0f32, 0.8, 0.4] {
         let waves = Waves::new(vec![wave(1.0, 0.0, a, l, 0.0)], q).unwrap();
@@ -163,7 +163,7 @@ fn single_wave_is_a_trochoid_with_a_cusp_at_q_one() {
 /// Aligned waves: the horizontal Jacobian B.x·T.z − B.z·T.x = 1 − Σ Qᵢ Aᵢ wᵢ sin θᵢ ≥ 1 − Q.
 #[test]
 fn aligned_waves_keep_the_jacobian_above_one_minus_q() {
-    let ctx = context();
+    let ctx = Context::shared();
     let q = 0.9;
     let waves = Waves::new(
         vec![
@@ -222,7 +222,7 @@ fn steepness_past_one_is_refused_or_clamped() {
 /// and change sign after L/2.
 #[test]
 fn regression_pi_in_the_frequency() {
-    let ctx = context();
+    let ctx = Context::shared();
     let l = 10.0f32;
     let waves = Waves::new(vec![wave(1.0, 0.0, 1.0, l, 0.0)], 0.0).unwrap();
     let (pos, _) = gpu_grid(
@@ -248,7 +248,7 @@ fn regression_pi_in_the_frequency() {
 /// A port that wrote φ = 2S/L moves crests at S/π: a crest must travel S·Δt in Δt.
 #[test]
 fn regression_pi_in_the_phase_speed() {
-    let ctx = context();
+    let ctx = Context::shared();
     let (l, s) = (12.0f32, 3.0f32);
     let waves = Waves::new(vec![wave(1.0, 0.0, 1.0, l, s)], 0.0).unwrap();
     let at = |t: f64, x: f32| {
@@ -278,7 +278,7 @@ fn regression_pi_in_the_phase_speed() {
 /// one wave must move points sideways by exactly Q/w, whatever its amplitude.
 #[test]
 fn regression_steepness_precedence() {
-    let ctx = context();
+    let ctx = Context::shared();
     let (l, q) = (12.0f32, 0.8f32);
     for a in [0.5f32, 2.0] {
         let waves = Waves::new(vec![wave(1.0, 0.0, a, l, 0.0)], q).unwrap();
@@ -308,7 +308,7 @@ fn regression_steepness_precedence() {
 /// must stay within Σ Qᵢ Aᵢ of where they started, with many waves and far from the origin.
 #[test]
 fn regression_position_added_once() {
-    let ctx = context();
+    let ctx = Context::shared();
     let waves = Waves::new(sea(), 0.6).unwrap();
     let spacing = Vec2::splat(3.0);
     let (pos, _) = gpu_grid(
@@ -336,7 +336,7 @@ fn regression_position_added_once() {
 /// normal there.
 #[test]
 fn cpu_query_agrees_with_the_gpu() {
-    let ctx = context();
+    let ctx = Context::shared();
     let waves = Waves::new(sea(), 0.9).unwrap();
     let origin = DVec2::new(250.0, -80.0);
     let (pos, nrm) = gpu_grid(
@@ -460,7 +460,7 @@ fn bad_input_gets_typed_errors() {
         );
     }
     // Grids: zero or oversized sides, non-finite placement.
-    let ctx = context();
+    let ctx = Context::shared();
     let grid = WaveGrid::new(&ctx.device).unwrap();
     let set = Waves::new(vec![good], 0.5).unwrap().gpu(DVec2::ZERO, 0.0);
     for (name, start, size) in [
@@ -482,7 +482,7 @@ fn bad_input_gets_typed_errors() {
 
 #[test]
 fn displaced_grid_snapshot() {
-    let ctx = context();
+    let ctx = Context::shared();
     let waves = Waves::new(sea(), 0.75).unwrap();
     let size = [32, 24];
     let (pos, nrm) = gpu_grid(

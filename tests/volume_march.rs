@@ -8,7 +8,7 @@
 //! trilinear filter.
 
 use fieldkit::gpu::{Context, read_buffer, read_texture};
-use fieldkit::harness::{Summary, context};
+use fieldkit::harness::Summary;
 use fieldkit::view::View;
 use fieldkit::volume::{
     Bricks, LightVolume, MarchSettings, Mode, Shadow, TransferFunction, Volume, VolumeRenderer,
@@ -50,7 +50,7 @@ struct Rig {
 
 impl Rig {
     fn new() -> Self {
-        let ctx = context();
+        let ctx = Context::shared();
         let renderer = VolumeRenderer::new(&ctx.device, wgpu::TextureFormat::Rgba8Unorm).unwrap();
         Self { ctx, renderer }
     }

@@ -5,7 +5,6 @@
 
 use fieldkit::Error;
 use fieldkit::gpu::{Context, read_buffer};
-use fieldkit::harness::context;
 use fieldkit::voxelize::{Attributes, Grid, Mesh, VoxelAttributes, Voxelizer, cpu};
 use glam::DVec3;
 
@@ -91,7 +90,7 @@ fn check_against_reference(
 
 #[test]
 fn constant_colour_comes_back_exactly() {
-    let ctx = context();
+    let ctx = Context::shared();
     let mut mesh = Mesh::uv_sphere(DVec3::ZERO, 1.0, 24, 12);
     let colour = [201, 37, 94, 250];
     mesh.colors = vec![colour; mesh.positions.len()];
@@ -107,7 +106,7 @@ fn constant_colour_comes_back_exactly() {
 
 #[test]
 fn colours_normals_and_counts_match_the_reference() {
-    let ctx = context();
+    let ctx = Context::shared();
     let mesh = painted_sphere();
     let grid = sphere_grid();
     let (_, got) = run(&ctx, &mesh, &grid);
@@ -125,7 +124,7 @@ fn colours_normals_and_counts_match_the_reference() {
 /// pass must walk the same list and count each of their voxels once.
 #[test]
 fn heavy_triangles_count_once() {
-    let ctx = context();
+    let ctx = Context::shared();
     let (lo, hi) = (DVec3::new(1.3, 2.2, 1.7), DVec3::new(21.6, 19.4, 22.1));
     let mesh = Mesh {
         colors: (0..8)
@@ -150,7 +149,7 @@ fn heavy_triangles_count_once() {
 /// A sheet drawn twice with opposite windings: its normals cancel, and the voxels say so.
 #[test]
 fn cancelling_normals_are_reported() {
-    let ctx = context();
+    let ctx = Context::shared();
     let p = vec![
         DVec3::new(1.2, 1.3, 3.5),
         DVec3::new(6.7, 1.1, 3.5),
@@ -176,7 +175,7 @@ fn cancelling_normals_are_reported() {
 
 #[test]
 fn two_runs_give_identical_bytes() {
-    let ctx = context();
+    let ctx = Context::shared();
     let mesh = painted_sphere();
     let grid = sphere_grid();
     let (a, _) = run(&ctx, &mesh, &grid);
@@ -189,7 +188,7 @@ fn two_runs_give_identical_bytes() {
 
 #[test]
 fn bad_attribute_arrays_get_typed_errors() {
-    let ctx = context();
+    let ctx = Context::shared();
     let v = Voxelizer::new(&ctx.device).unwrap();
     let grid = sphere_grid();
     let mut mesh = painted_sphere();
@@ -220,7 +219,7 @@ fn bad_attribute_arrays_get_typed_errors() {
 /// colour exactly and its normal to snorm8 precision, zero everywhere else.
 #[test]
 fn attribute_volumes_hold_the_list() {
-    let ctx = context();
+    let ctx = Context::shared();
     let mesh = painted_sphere();
     let grid = sphere_grid();
     let v = Voxelizer::new(&ctx.device).unwrap();

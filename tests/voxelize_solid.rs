@@ -4,7 +4,6 @@
 
 use fieldkit::Error;
 use fieldkit::gpu::Context;
-use fieldkit::harness::context;
 use fieldkit::voxelize::{Grid, Mesh, Voxelizer};
 use glam::DVec3;
 
@@ -73,7 +72,7 @@ fn check(
 
 #[test]
 fn sphere_and_torus_against_analytic_insides() {
-    let ctx = context();
+    let ctx = Context::shared();
     let c = DVec3::new(16.3, 15.7, 16.1);
     let r = 11.37;
     // A 48 × 24 UV sphere is within r (1 − cos(π/24)) ≈ 0.1 of the sphere.
@@ -106,7 +105,7 @@ fn sphere_and_torus_against_analytic_insides() {
 /// keeps it.
 #[test]
 fn thin_parts_survive_through_the_surface() {
-    let ctx = context();
+    let ctx = Context::shared();
     let (lo, hi) = (DVec3::new(2.2, 2.3, 5.05), DVec3::new(9.7, 9.6, 5.25));
     let box_mesh = Mesh::cuboid(lo, hi);
     assert!(box_mesh.open_edge().is_none() && box_mesh.volume() > 0.0);
@@ -120,7 +119,7 @@ fn thin_parts_survive_through_the_surface() {
 
 #[test]
 fn open_meshes_are_refused() {
-    let ctx = context();
+    let ctx = Context::shared();
     let v = Voxelizer::new(&ctx.device).unwrap();
     let mut sphere = Mesh::uv_sphere(DVec3::splat(8.0), 5.0, 16, 8);
     sphere.triangles.pop();
@@ -147,7 +146,7 @@ fn open_meshes_are_refused() {
 #[test]
 fn binvox_and_vox_read_back() {
     use fieldkit::voxelize::export::{binvox, vox};
-    let ctx = context();
+    let ctx = Context::shared();
     let grid = Grid {
         origin: DVec3::new(-1.0, 2.0, 0.5),
         voxel: 0.25,
@@ -212,7 +211,7 @@ fn binvox_and_vox_read_back() {
 fn voxels_feed_the_distance_stages() {
     use fieldkit::distance::{Distance3d, Options3d};
     use fieldkit::gpu::read_texture;
-    let ctx = context();
+    let ctx = Context::shared();
     let v = Voxelizer::new(&ctx.device).unwrap();
     let d3 = Distance3d::new(&ctx.device).unwrap();
     let c = DVec3::new(12.3, 11.8, 12.6);

@@ -3,7 +3,6 @@
 
 use fieldkit::Error;
 use fieldkit::gpu::Context;
-use fieldkit::harness::context;
 use fieldkit::voxelize::{Grid, GridMesh, Mesh, Separation, Voxelizer, cpu};
 use glam::{DVec3, Vec4};
 
@@ -61,7 +60,7 @@ fn unit_grid(size: [u32; 3]) -> Grid {
 
 #[test]
 fn sphere_matches_the_sat_reference() {
-    let ctx = context();
+    let ctx = Context::shared();
     let sphere = Mesh::uv_sphere(DVec3::new(16.3, 15.7, 16.1), 11.37, 48, 24);
     let (misses, extras, local) = compare(&ctx, &sphere, &unit_grid([32, 32, 32]));
     println!(
@@ -137,7 +136,7 @@ fn failure_cases() -> Vec<(&'static str, Mesh, Grid)> {
 /// Failure modes: no voxel the SAT finds may be missed.
 #[test]
 fn failure_modes_miss_nothing() {
-    let ctx = context();
+    let ctx = Context::shared();
     for (name, m, grid) in failure_cases() {
         let (misses, extras, local) = compare(&ctx, &m, &grid);
         println!("{name}: {misses} missed, {extras} extra");
@@ -169,7 +168,7 @@ fn failure_modes_miss_nothing() {
 /// origin.
 #[test]
 fn far_from_the_origin_is_the_same_as_at_it() {
-    let ctx = context();
+    let ctx = Context::shared();
     let far = DVec3::new(1.0e5, -3.0e4, 7.0e4);
     let near = Mesh::uv_sphere(DVec3::new(8.3, 7.9, 8.2), 5.4, 24, 12);
     let moved = Mesh {
@@ -199,7 +198,7 @@ fn far_from_the_origin_is_the_same_as_at_it() {
 
 #[test]
 fn zero_area_triangles_are_left_out_and_counted() {
-    let ctx = context();
+    let ctx = Context::shared();
     let d = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
     let m = mesh(
         vec![
@@ -222,7 +221,7 @@ fn zero_area_triangles_are_left_out_and_counted() {
 
 #[test]
 fn bad_input_gets_typed_errors() {
-    let ctx = context();
+    let ctx = Context::shared();
     let v = Voxelizer::new(&ctx.device).unwrap();
     let tri = |p: Vec<DVec3>| mesh(p, vec![[0, 1, 2]]);
     let ok = vec![DVec3::ZERO, DVec3::X, DVec3::Y];
@@ -319,7 +318,7 @@ type SignedDistance = Box<dyn Fn(DVec3) -> f64>;
 /// they are not made for).
 #[test]
 fn separation_holds_against_flood_fills() {
-    let ctx = context();
+    let ctx = Context::shared();
     let v = Voxelizer::new(&ctx.device).unwrap();
     let g = unit_grid([32, 32, 32]);
     let sphere_c = DVec3::new(16.3, 15.7, 16.1);
@@ -399,7 +398,7 @@ fn separation_holds_against_flood_fills() {
 /// missing voxel.
 #[test]
 fn raster_path_gives_the_compute_voxels() {
-    let ctx = context();
+    let ctx = Context::shared();
     let v = Voxelizer::new(&ctx.device).unwrap();
     let mut cases = failure_cases();
     cases.push((

@@ -2,7 +2,7 @@
 //! orthographic camera covers exactly its square of pixels, in the colour of its averaged normal
 //! (or of its averaged colour), lit head-on.
 
-use fieldkit::harness::context;
+use fieldkit::gpu::Context;
 use fieldkit::view::Targets;
 use fieldkit::voxelize::view::{ColourBy, VoxelView};
 use fieldkit::voxelize::{Grid, Mesh, Voxelizer};
@@ -10,7 +10,7 @@ use glam::{DVec3, Vec3};
 
 #[test]
 fn one_voxel_covers_its_square_in_its_colour() {
-    let ctx = context();
+    let ctx = Context::shared();
     let device = &ctx.device;
     // A triangle facing +z strictly inside voxel (1, 1, 1) of a 3³ grid: that voxel alone.
     let mesh = Mesh {

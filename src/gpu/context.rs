@@ -43,6 +43,17 @@ impl Context {
         pollster::block_on(Self::new_async(std::env::var(ADAPTER_ENV).ok().as_deref()))
     }
 
+    /// The default adapter ([`Context::new`]), opened once per process and shared: what tests
+    /// and demos use. Panics, saying how to get an adapter, when there is none: GPU tests fail
+    /// rather than skip.
+    pub fn shared() -> Self {
+        static CTX: std::sync::OnceLock<Result<Context, Error>> = std::sync::OnceLock::new();
+        match CTX.get_or_init(Context::new) {
+            Ok(c) => c.clone(),
+            Err(e) => panic!("this needs a GPU adapter: {e}"),
+        }
+    }
+
     /// wgpu's noop backend: accepts every call and runs nothing. Enough to prove that pipelines
     /// and layouts are valid without a GPU.
     pub fn noop() -> Result<Self, Error> {

@@ -115,6 +115,7 @@ impl<T: 'static> Readback<T> {
     /// Whether [`Readback::try_take`] would return the result now.
     pub fn is_ready(&self) -> bool {
         self.early.is_some()
+            || self.convert.is_none()
             || self
                 .state
                 .lock()
@@ -127,6 +128,10 @@ impl<T: 'static> Readback<T> {
     pub fn try_take(&mut self) -> Option<Result<T, Error>> {
         if let Some(r) = self.early.take() {
             return Some(r);
+        }
+        if self.convert.is_none() {
+            // Taken before (or an early result taken): say so rather than wait forever.
+            return Some(Err(Error::Readback("the result was already taken".into())));
         }
         let done = self
             .state

@@ -1,0 +1,80 @@
+//! Bad input to the drop-in API gets a typed error naming what was wrong: fitting a grid to an
+//! unusable mesh, a 2D distance with a bad texel size, reading back a buffer that cannot be
+//! copied, taking a readback twice.
+
+use fieldkit::Error;
+use fieldkit::distance::{Distance2d, Method2d, Options2d, Variant, upload_mask};
+use fieldkit::gpu::{Context, readback_buffer};
+use fieldkit::voxelize::{Grid, Mesh};
+use glam::DVec3;
+
+#[test]
+fn grid_fit_refuses_meshes_it_cannot_fit() {
+    let invalid = |r: Result<Grid, Error>, needle: &str| match r {
+        Err(Error::Invalid { what, .. }) => assert!(what.contains(needle), "{what}"),
+        other => panic!("expected an Invalid error naming {needle:?}, got {other:?}"),
+    };
+    invalid(Grid::fit(&Mesh::default(), 32), "empty mesh");
+    let mut nan = Mesh::cuboid(DVec3::ZERO, DVec3::ONE);
+    nan.positions[3].y = f64::NAN;
+    invalid(Grid::fit(&nan, 32), "vertex 3");
+    let mut flat = Mesh::cuboid(DVec3::ZERO, DVec3::ONE);
+    flat.positions.iter_mut().for_each(|p| *p = DVec3::splat(2.0));
+    invalid(Grid::fit(&flat, 32), "no extent");
+    assert!(matches!(
+        Grid::fit(&Mesh::cuboid(DVec3::ZERO, DVec3::ONE), 2),
+        Err(Error::Size { got: 2, .. })
+    ));
+    // A fitted grid holds the mesh with a voxel of margin and at most n voxels a side.
+    let mesh = Mesh::cuboid(DVec3::new(-1.0, 0.0, 2.0), DVec3::new(3.0, 1.0, 2.5));
+    let g = Grid::fit(&mesh, 20).unwrap();
+    assert_eq!(g.size[0], 20);
+    assert!(g.size.iter().all(|&s| (1..=20).contains(&s)), "{:?}", g.size);
+    let hi = g.origin + DVec3::from(g.size.map(f64::from)) * g.voxel;
+    for p in &mesh.positions {
+        assert!((p.cmpge(g.origin + g.voxel * 0.999) & p.cmple(hi - g.voxel * 0.999)).all(), "{p} in {g:?}");
+    }
+}
+
+#[test]
+fn distance_2d_refuses_bad_texel_sizes_for_both_methods() {
+    let ctx = Context::shared();
+    let distance = Distance2d::new(&ctx.device).unwrap();
+    let mask = upload_mask(&ctx.device, &ctx.queue, &[255, 0, 0, 0], 2, 2).unwrap();
+    for method in [Method2d::Exact, Method2d::Jfa(Variant::JfaPlus2)] {
+        for texel_size in [f32::NAN, 0.0, -1.0, f32::INFINITY] {
+            let mut enc = ctx.encoder("bad texel size");
+            let err = distance
+                .encode(&ctx.device, &mut enc, &mask, &Options2d { method, signed: false, texel_size })
+                .err()
+                .unwrap_or_else(|| panic!("{method:?} accepted texel_size {texel_size}"));
+            assert!(matches!(&err, Error::Invalid { what, .. } if what.contains("texel_size")), "{err}");
+        }
+    }
+}
+
+#[test]
+fn readbacks_say_what_is_wrong() {
+    let ctx = Context::shared();
+    let no_copy = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("storage only"),
+        size: 16,
+        usage: wgpu::BufferUsages::STORAGE,
+        mapped_at_creation: false,
+    });
+    let err = readback_buffer(&ctx.device, &ctx.queue, &no_copy).wait(&ctx).unwrap_err();
+    assert!(matches!(&err, Error::Readback(m) if m.contains("COPY_SRC")), "{err}");
+
+    let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("copyable"),
+        size: 8,
+        usage: wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    ctx.queue.write_buffer(&buffer, 0, &[1, 2, 3, 4, 5, 6, 7, 8]);
+    let mut readback = readback_buffer(&ctx.device, &ctx.queue, &buffer);
+    ctx.device.poll(wgpu::PollType::wait_indefinitely()).unwrap();
+    let first = readback.try_take().expect("mapped after the poll");
+    assert_eq!(first.unwrap(), vec![1, 2, 3, 4, 5, 6, 7, 8]);
+    assert!(matches!(readback.try_take(), Some(Err(Error::Readback(_)))));
+}
