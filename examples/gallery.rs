@@ -11,9 +11,9 @@
 
 use std::path::{Path, PathBuf};
 
+use fieldkit::Error;
 use fieldkit::bind::{RenderPipeline, RenderTargets};
 use fieldkit::distance::{Distance2d, Options2d};
-use fieldkit::Error;
 use fieldkit::gpu::{Context, read_texture};
 use fieldkit::shaders::distance::visualize;
 
@@ -209,8 +209,8 @@ pub fn metaball_scene(
     what: MetaballView,
 ) -> Result<Vec<u8>, Error> {
     use fieldkit::metaball::render::{CubeStyle, Cubes, RaymarchSettings, Raymarcher};
-    use fieldkit::view::{Targets, View};
     use fieldkit::metaball::{Metaballs, Settings, animate, packed_grid};
+    use fieldkit::view::{Targets, View};
     use glam::{Mat4, Vec3};
     let device = &ctx.device;
     let edge = 1.0;
@@ -462,7 +462,10 @@ pub fn cloud_scene(
     use fieldkit::view::View;
     use fieldkit::volume::{MarchSettings, TransferFunction, Volume, VolumeRenderer, fbm_cloud};
     let dims = [96; 3];
-    let volume = Volume::upload(&ctx.device, &ctx.queue, &fbm_cloud(dims, 7),
+    let volume = Volume::upload(
+        &ctx.device,
+        &ctx.queue,
+        &fbm_cloud(dims, 7),
         dims,
         wgpu::TextureFormat::R8Unorm,
         glam::Vec3::splat(1.0 / 96.0),
@@ -552,10 +555,10 @@ pub fn cloud_scene(
 /// forward-shaded image; each quarter is `w/2 × h/2`.
 pub fn ocean_scene(ctx: &Context, w: u32, h: u32, gbuffer: bool) -> Result<Vec<u8>, Error> {
     use fieldkit::metaball::render::{RaymarchSettings, Raymarcher};
-    use fieldkit::view::{Targets, View};
     use fieldkit::metaball::{Metaballs, Settings, packed_grid};
     use fieldkit::ocean::render::{Look, OceanCamera, OceanRenderer, Output, Patch};
     use fieldkit::ocean::{Wave, Waves};
+    use fieldkit::view::{Targets, View};
     use glam::{DVec2, DVec3, Mat4, Vec2, Vec3};
     let device = &ctx.device;
     let (tw, th) = if gbuffer { (w / 2, h / 2) } else { (w, h) };

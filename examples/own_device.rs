@@ -148,7 +148,10 @@ pub fn run(device: &wgpu::Device, queue: &wgpu::Queue, adapter: String) -> Resul
         },
     )?;
     queue.submit([enc.finish()]);
-    let distance_2d = wait(device, readback_texture::<f32>(device, queue, &field.distance))?;
+    let distance_2d = wait(
+        device,
+        readback_texture::<f32>(device, queue, &field.distance),
+    )?;
 
     // Voxelize → 3D signed distance.
     let torus = Mesh::torus(DVec3::ZERO, 1.0, 0.4, 48, 24);
@@ -170,7 +173,10 @@ pub fn run(device: &wgpu::Device, queue: &wgpu::Queue, adapter: String) -> Resul
     )?;
     queue.submit([enc.finish()]);
     let solid_bits = wait(device, solid.read(device, queue))?;
-    let sdf = wait(device, readback_texture::<f32>(device, queue, &sdf.distance))?;
+    let sdf = wait(
+        device,
+        readback_texture::<f32>(device, queue, &sdf.distance),
+    )?;
 
     // One frame: island, sea and cloud against one depth buffer.
     let (colour, depth) = frame(device, queue, true)?;
@@ -257,7 +263,10 @@ fn frame(
     };
     let patches: Vec<Patch> = (0..100)
         .map(|k| {
-            let corner = DVec2::new(-160.0 + 32.0 * (k % 10) as f64, -160.0 + 32.0 * (k / 10) as f64);
+            let corner = DVec2::new(
+                -160.0 + 32.0 * (k % 10) as f64,
+                -160.0 + 32.0 * (k / 10) as f64,
+            );
             Patch::new(corner, 32.0)
         })
         .collect();
@@ -294,8 +303,15 @@ fn frame(
             ..MarchSettings::default()
         };
         let bricks = renderer.encode_bricks(device, &mut enc, &volume)?;
-        let light =
-            renderer.encode_light(device, &mut enc, &volume, &bricks, &tf, Mat4::IDENTITY, &march)?;
+        let light = renderer.encode_light(
+            device,
+            &mut enc,
+            &volume,
+            &bricks,
+            &tf,
+            Mat4::IDENTITY,
+            &march,
+        )?;
         if let Some(marched) = renderer.encode_march(
             device,
             &mut enc,
@@ -312,15 +328,25 @@ fn frame(
         }
     }
     queue.submit([enc.finish()]);
-    let colour = wait(device, readback_texture::<[u8; 4]>(device, queue, &targets.colour))?;
-    let depth = wait(device, readback_texture::<f32>(device, queue, &targets.depth))?;
+    let colour = wait(
+        device,
+        readback_texture::<[u8; 4]>(device, queue, &targets.colour),
+    )?;
+    let depth = wait(
+        device,
+        readback_texture::<f32>(device, queue, &targets.depth),
+    )?;
     Ok((colour, depth))
 }
 
 /// Blue outside, orange inside, darker bands every `period` units.
 fn colour_map(d: f32, period: f32) -> [u8; 4] {
     let band = 0.75 + 0.25 * (d.abs() / period * std::f32::consts::TAU).cos();
-    let base = if d < 0.0 { [1.0, 0.55, 0.2] } else { [0.3, 0.55, 1.0] };
+    let base = if d < 0.0 {
+        [1.0, 0.55, 0.2]
+    } else {
+        [0.3, 0.55, 1.0]
+    };
     let fade = (1.0 - (d.abs() / (period * 6.0)).min(1.0) * 0.6) * band;
     [
         (base[0] * fade * 255.0) as u8,
@@ -360,7 +386,9 @@ pub fn picture(report: &Report) -> (Vec<u8>, u32, u32) {
 }
 
 fn main() -> std::process::ExitCode {
-    let out = std::env::args().nth(1).unwrap_or_else(|| "own_device.png".into());
+    let out = std::env::args()
+        .nth(1)
+        .unwrap_or_else(|| "own_device.png".into());
     let (device, queue, adapter) = match open_device() {
         Ok(d) => d,
         Err(e) => {
@@ -372,8 +400,7 @@ fn main() -> std::process::ExitCode {
     match run(&device, &queue, adapter) {
         Ok(report) => {
             let (rgba, w, h) = picture(&report);
-            if let Err(e) = image::save_buffer(&out, &rgba, w, h, image::ExtendedColorType::Rgba8)
-            {
+            if let Err(e) = image::save_buffer(&out, &rgba, w, h, image::ExtendedColorType::Rgba8) {
                 eprintln!("error: {out}: {e}");
                 return std::process::ExitCode::FAILURE;
             }

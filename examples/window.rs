@@ -152,7 +152,8 @@ impl Scene {
         );
         let eye = Vec3::new(4.0, 3.0, 7.0);
         let view = View {
-            view_proj: proj * glam::camera::rh::view::look_at_mat4(eye, Vec3::new(0.0, -0.5, 0.0), Vec3::Y),
+            view_proj: proj
+                * glam::camera::rh::view::look_at_mat4(eye, Vec3::new(0.0, -0.5, 0.0), Vec3::Y),
             viewport: size,
             reversed_z: false,
         };
@@ -194,9 +195,14 @@ impl Scene {
         let voxels = animate(&self.base, EDGE, time, 0.5, 0.15);
         self.balls.update(queue, &mut self.instances, &voxels)?;
         if let Some(grid) = self.settings.fit_grid(&voxels, EDGE)? {
-            let field =
-                self.balls
-                    .encode(device, encoder, &self.instances, &grid, EDGE, &self.settings)?;
+            let field = self.balls.encode(
+                device,
+                encoder,
+                &self.instances,
+                &grid,
+                EDGE,
+                &self.settings,
+            )?;
             self.marcher.encode(
                 device,
                 encoder,
@@ -232,7 +238,11 @@ fn depth_target(device: &wgpu::Device, [width, height]: [u32; 2]) -> wgpu::Textu
 }
 
 /// Copy mip 0 of a 2D RGBA8 or BGRA8 `texture` (with `COPY_SRC`) into RGBA8 rows, blocking.
-fn read_rgba(device: &wgpu::Device, queue: &wgpu::Queue, texture: &wgpu::Texture) -> Result<Vec<u8>, Error> {
+fn read_rgba(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    texture: &wgpu::Texture,
+) -> Result<Vec<u8>, Error> {
     let bgra = matches!(
         texture.format(),
         wgpu::TextureFormat::Bgra8Unorm | wgpu::TextureFormat::Bgra8UnormSrgb
@@ -304,7 +314,12 @@ pub fn pick_format(formats: &[wgpu::TextureFormat]) -> Option<wgpu::TextureForma
     formats
         .iter()
         .copied()
-        .find(|f| matches!(f, wgpu::TextureFormat::Bgra8Unorm | wgpu::TextureFormat::Rgba8Unorm))
+        .find(|f| {
+            matches!(
+                f,
+                wgpu::TextureFormat::Bgra8Unorm | wgpu::TextureFormat::Rgba8Unorm
+            )
+        })
         .or_else(|| formats.first().copied())
 }
 
@@ -323,7 +338,11 @@ impl App {
             .with_title("fieldkit: metaballs over the application's scene")
             .with_inner_size(winit::dpi::PhysicalSize::new(SIZE[0], SIZE[1]))
             .with_resizable(self.frames.is_none());
-        let window = Arc::new(event_loop.create_window(attributes).map_err(|e| e.to_string())?);
+        let window = Arc::new(
+            event_loop
+                .create_window(attributes)
+                .map_err(|e| e.to_string())?,
+        );
         let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
             backends: wgpu::Backends::from_env().unwrap_or(wgpu::Backends::PRIMARY),
             ..wgpu::InstanceDescriptor::new_without_display_handle()
@@ -380,7 +399,8 @@ impl App {
             return Ok(false);
         };
         let texture = match gpu.surface.get_current_texture() {
-            wgpu::CurrentSurfaceTexture::Success(t) | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
+            wgpu::CurrentSurfaceTexture::Success(t)
+            | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
             other => {
                 // Outdated or lost: configure again and draw next time.
                 eprintln!("surface: {other:?}; reconfiguring");
@@ -396,16 +416,35 @@ impl App {
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         let size = [gpu.config.width, gpu.config.height];
         gpu.scene
-            .encode(&gpu.device, &gpu.queue, &mut encoder, &view, &gpu.depth, size, time)
+            .encode(
+                &gpu.device,
+                &gpu.queue,
+                &mut encoder,
+                &view,
+                &gpu.depth,
+                size,
+                time,
+            )
             .map_err(|e| e.to_string())?;
         gpu.queue.submit([encoder.finish()]);
         self.drawn += 1;
         let last = self.frames.is_some_and(|n| self.drawn >= n);
         if last && let Some(path) = &self.screenshot {
-            let rgba = read_rgba(&gpu.device, &gpu.queue, &texture.texture).map_err(|e| e.to_string())?;
-            image::save_buffer(path, &rgba, size[0], size[1], image::ExtendedColorType::Rgba8)
-                .map_err(|e| format!("{path}: {e}"))?;
-            eprintln!("screenshot of frame {} ({:?}): {path}", self.drawn - 1, gpu.config.format);
+            let rgba =
+                read_rgba(&gpu.device, &gpu.queue, &texture.texture).map_err(|e| e.to_string())?;
+            image::save_buffer(
+                path,
+                &rgba,
+                size[0],
+                size[1],
+                image::ExtendedColorType::Rgba8,
+            )
+            .map_err(|e| format!("{path}: {e}"))?;
+            eprintln!(
+                "screenshot of frame {} ({:?}): {path}",
+                self.drawn - 1,
+                gpu.config.format
+            );
         }
         gpu.window.pre_present_notify();
         gpu.queue.present(texture);

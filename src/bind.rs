@@ -438,11 +438,13 @@ fn check(slot: &Slot, res: &Resource<'_>, device: &wgpu::Device) -> Result<(), S
     }
 }
 
+/// fieldkit's own checks of every resource (kind, format, size, usage, sample type), then the
+/// bind groups. No error scope: binding never waits on the device.
 fn bind_groups<E: Entry>(
     device: &wgpu::Device,
     layouts: &[(u32, wgpu::BindGroupLayout)],
     resources: &E::Resources<'_>,
-) -> Result<Vec<(u32, wgpu::BindGroup)>, Error> {
+) -> Result<Bound<E>, Error> {
     let info = E::INFO;
     let res = E::resources(resources);
     for (slot, r) in info.slots.iter().zip(&res) {
@@ -487,7 +489,10 @@ fn bind_groups<E: Entry>(
             )
         })
         .collect();
-    Ok(groups)
+    Ok(Bound {
+        groups,
+        _e: PhantomData,
+    })
 }
 
 /// Bind groups for one dispatch or draw, made by [`ComputePipeline::bind`] / [`RenderPipeline::bind`].
@@ -565,13 +570,7 @@ impl<E: Entry> ComputePipeline<E> {
         device: &wgpu::Device,
         resources: &E::Resources<'_>,
     ) -> Result<Bound<E>, Error> {
-        // fieldkit's own checks (kind, format, size, usage, sample type of every resource)
-        // run in `bind_groups`; no error scope here, so binding never waits on the device.
-        let groups = bind_groups::<E>(device, &self.layouts, resources)?;
-        Ok(Bound {
-            groups,
-            _e: PhantomData,
-        })
+        bind_groups(device, &self.layouts, resources)
     }
 
     /// Record one dispatch of `groups` workgroups into `pass`.
@@ -579,6 +578,23 @@ impl<E: Entry> ComputePipeline<E> {
         pass.set_pipeline(&self.pipeline);
         bound.set_compute(pass);
         pass.dispatch_workgroups(groups[0], groups[1], groups[2]);
+    }
+
+    /// Bind `resources` and record one dispatch of `groups` workgroups in a compute pass of its
+    /// own, timed under `name` when `rec` carries a profiler.
+    pub fn record(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl crate::gpu::Record,
+        resources: &E::Resources<'_>,
+        groups: [u32; 3],
+        name: &str,
+    ) -> Result<(), Error> {
+        let bound = self.bind(device, resources)?;
+        let mut rec = rec.recorder();
+        let mut pass = rec.compute_pass(E::INFO.stage, name);
+        self.dispatch(&mut pass, &bound, groups);
+        Ok(())
     }
 
     /// Workgroups needed to cover `extent` invocations on each axis.
@@ -670,13 +686,7 @@ impl<E: Entry> RenderPipeline<E> {
         device: &wgpu::Device,
         resources: &E::Resources<'_>,
     ) -> Result<Bound<E>, Error> {
-        // fieldkit's own checks (kind, format, size, usage, sample type of every resource)
-        // run in `bind_groups`; no error scope here, so binding never waits on the device.
-        let groups = bind_groups::<E>(device, &self.layouts, resources)?;
-        Ok(Bound {
-            groups,
-            _e: PhantomData,
-        })
+        bind_groups(device, &self.layouts, resources)
     }
 }
 

@@ -15,8 +15,8 @@ pub mod gpu;
 pub mod harness;
 pub mod metaball;
 pub mod ocean;
-pub mod volume;
 pub mod view;
+pub mod volume;
 pub mod voxelize;
 
 pub use error::{BindingError, Error};

@@ -72,18 +72,14 @@ fn a_user_crate_builds_on_both_editions_within_the_dependency_budget() {
             .current_dir(&dir)
             .env("CARGO_TARGET_DIR", &target)
             .args(["check", "--quiet"]);
-        run(check, &format!("cargo check of an edition-{edition} crate using fieldkit"));
+        run(
+            check,
+            &format!("cargo check of an edition-{edition} crate using fieldkit"),
+        );
 
         let mut tree = cargo();
-        tree.current_dir(&dir).args([
-            "tree",
-            "-e",
-            "normal",
-            "--prefix",
-            "none",
-            "-p",
-            "fieldkit",
-        ]);
+        tree.current_dir(&dir)
+            .args(["tree", "-e", "normal", "--prefix", "none", "-p", "fieldkit"]);
         let listed = run(tree, "cargo tree");
         let mut crates: Vec<&str> = listed
             .lines()
@@ -92,7 +88,10 @@ fn a_user_crate_builds_on_both_editions_within_the_dependency_budget() {
             .collect();
         crates.sort_unstable();
         crates.dedup();
-        eprintln!("edition {edition}: {} crates in fieldkit's runtime tree", crates.len());
+        eprintln!(
+            "edition {edition}: {} crates in fieldkit's runtime tree",
+            crates.len()
+        );
         // No shader compiler of fieldkit's own at run time (wgpu brings its naga), and the
         // optional helpers stay off by default.
         let mut direct = cargo();

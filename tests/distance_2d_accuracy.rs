@@ -9,8 +9,8 @@ mod common;
 mod gallery;
 
 use common::*;
-use fieldkit::gpu::Context;
 use fieldkit::distance::{FAR, Jfa2d, NO_SEED, Options, Variant, cpu, unpack_seed};
+use fieldkit::gpu::Context;
 
 /// One test configuration.
 struct Case {

@@ -160,7 +160,7 @@ fn zero_step_and_mismatched_ping_pong() {
         .encode_seed(&ctx.device, &mut enc, &seeds, false)
         .unwrap();
     assert!(matches!(
-        jfa.encode_jump(&ctx.device, &mut enc, &a, &b, 0, None),
+        jfa.encode_jump(&ctx.device, &mut enc, &a, &b, 0),
         Err(Error::Invalid { .. })
     ));
     let small = upload_mask(&ctx.device, &ctx.queue, &[255; 16], 4, 4).unwrap();
@@ -168,7 +168,7 @@ fn zero_step_and_mismatched_ping_pong() {
         .encode_seed(&ctx.device, &mut enc, &small, false)
         .unwrap();
     assert!(matches!(
-        jfa.encode_jump(&ctx.device, &mut enc, &a, &c, 1, None),
+        jfa.encode_jump(&ctx.device, &mut enc, &a, &c, 1),
         Err(Error::Invalid { .. })
     ));
     // Nothing bad reached wgpu: the encoder still submits cleanly.

@@ -8,8 +8,8 @@
 mod common;
 
 use common::*;
-use fieldkit::gpu::Context;
 use fieldkit::distance::{Distance2d, Method2d, Options2d, Variant, cpu, upload_mask};
+use fieldkit::gpu::Context;
 use fieldkit::gpu::read_texture;
 
 struct Trap {
@@ -21,8 +21,18 @@ struct Trap {
 }
 
 const TRAPS: &[Trap] = &[
-    Trap { w: 37, h: 101, seeds: &[(15, 29), (31, 13), (2, 62), (32, 99)], wrong: 77 },
-    Trap { w: 64, h: 23, seeds: &[(34, 6), (50, 22), (5, 6)], wrong: 34 },
+    Trap {
+        w: 37,
+        h: 101,
+        seeds: &[(15, 29), (31, 13), (2, 62), (32, 99)],
+        wrong: 77,
+    },
+    Trap {
+        w: 64,
+        h: 23,
+        seeds: &[(34, 6), (50, 22), (5, 6)],
+        wrong: 34,
+    },
 ];
 
 /// Texels whose seed is farther than the nearest, and the largest excess (texels).
@@ -53,21 +63,49 @@ fn jfa_plus_2_fails_on_sparse_non_square_sets_and_exact_does_not() {
         }
         let exact = cpu::edt_2d_squared(&mask, w, h);
         let model = cpu::jfa_2d(&mask, w, h, &Variant::JfaPlus2.steps(w.max(h) as u32));
-        assert_eq!(wrong(&model, &exact, w).0, trap.wrong, "the CPU model on {w}×{h}");
-        let seeds = upload_mask(&ctx.device, &ctx.queue, &to_bytes(&mask), w as u32, h as u32).unwrap();
+        assert_eq!(
+            wrong(&model, &exact, w).0,
+            trap.wrong,
+            "the CPU model on {w}×{h}"
+        );
+        let seeds = upload_mask(
+            &ctx.device,
+            &ctx.queue,
+            &to_bytes(&mask),
+            w as u32,
+            h as u32,
+        )
+        .unwrap();
         for method in [Method2d::Jfa(Variant::JfaPlus2), Method2d::Exact] {
             let mut enc = ctx.encoder("trap");
             let field = distance
-                .encode(&ctx.device, &mut enc, &seeds, &Options2d { method, ..Options2d::default() })
+                .encode(
+                    &ctx.device,
+                    &mut enc,
+                    &seeds,
+                    &Options2d {
+                        method,
+                        ..Options2d::default()
+                    },
+                )
                 .unwrap();
             ctx.submit_and_wait("trap", enc).unwrap();
-            let nearest = field.read_nearest(&ctx.device, &ctx.queue).wait(&ctx).unwrap();
+            let nearest = field
+                .read_nearest(&ctx.device, &ctx.queue)
+                .wait(&ctx)
+                .unwrap();
             let (n, worst) = wrong(&nearest, &exact, w);
-            eprintln!("{w}×{h}, {} seeds, {method:?}: {n} wrong, up to {worst:.2} texels", trap.seeds.len());
+            eprintln!(
+                "{w}×{h}, {} seeds, {method:?}: {n} wrong, up to {worst:.2} texels",
+                trap.seeds.len()
+            );
             match method {
                 Method2d::Exact => assert_eq!(n, 0, "the exact transform on {w}×{h}"),
                 Method2d::Jfa(_) => {
-                    assert_eq!(nearest, model, "GPU JFA+2 picks the CPU model's seeds on {w}×{h}");
+                    assert_eq!(
+                        nearest, model,
+                        "GPU JFA+2 picks the CPU model's seeds on {w}×{h}"
+                    );
                     assert_eq!(n, trap.wrong);
                     assert!(worst > 2.0, "JFA+2 is off by {worst} texels on {w}×{h}");
                 }

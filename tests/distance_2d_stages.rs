@@ -9,8 +9,8 @@ mod common;
 mod gallery;
 
 use common::*;
-use fieldkit::gpu::Context;
 use fieldkit::distance::{Jfa2d, Options, Variant, cpu, upload_mask};
+use fieldkit::gpu::Context;
 use fieldkit::gpu::read_texture;
 use fieldkit::harness::{Summary, Tolerance, compare_image};
 
@@ -54,8 +54,7 @@ fn one_jump_pass() {
     let b = jfa
         .encode_seed(&ctx.device, &mut enc, &seeds, false)
         .unwrap();
-    jfa.encode_jump(&ctx.device, &mut enc, &a, &b, 4, None)
-        .unwrap();
+    jfa.encode_jump(&ctx.device, &mut enc, &a, &b, 4).unwrap();
     ctx.submit_and_wait("jump", enc).unwrap();
     let nearest: Vec<u32> = read_texture(&ctx, &b).unwrap();
     assert_eq!(nearest, cpu::jfa_2d(&m, W, H, &[4]));

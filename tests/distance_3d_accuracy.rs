@@ -5,9 +5,9 @@
 mod common;
 
 use common::*;
-use fieldkit::gpu::Context;
 use fieldkit::distance::{Distance3d, Method, Options3d, unpack_seed3};
 use fieldkit::distance::{FAR, Variant, cpu};
+use fieldkit::gpu::Context;
 
 struct Case {
     name: &'static str,

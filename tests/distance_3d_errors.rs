@@ -1,13 +1,13 @@
 //! Bad input to the 3D distance stages: each a typed error naming the problem, never a panic,
 //! a wgpu validation error or a lost device.
 
-use fieldkit::gpu::Context;
 use fieldkit::Error;
 use fieldkit::distance::Variant;
 use fieldkit::distance::{
     Distance3d, Grid3, Inside, MAX_SIDE_3D, Method, Options3d, check_size_2d_exact, check_size_3d,
     upload_points, upload_points_with_homes, upload_volume,
 };
+use fieldkit::gpu::Context;
 use glam::Vec3;
 
 #[test]
@@ -94,13 +94,25 @@ fn bad_seed_points() {
         origin: Vec3::new(1.0, 2.0, 3.0),
     };
     let inside = grid.origin + Vec3::splat(2.0);
-    let e = upload_points(&ctx.device, &ctx.queue, &grid, &[inside, Vec3::new(f32::NAN, 0.0, 0.0)]).unwrap_err();
+    let e = upload_points(
+        &ctx.device,
+        &ctx.queue,
+        &grid,
+        &[inside, Vec3::new(f32::NAN, 0.0, 0.0)],
+    )
+    .unwrap_err();
     assert!(
         matches!(&e, Error::Invalid { what, .. } if what.contains("point 1") && what.contains("not finite")),
         "{e}"
     );
     // The box spans origin .. origin + 4 in each axis.
-    let e = upload_points(&ctx.device, &ctx.queue, &grid, &[grid.origin + Vec3::new(4.1, 1.0, 1.0)]).unwrap_err();
+    let e = upload_points(
+        &ctx.device,
+        &ctx.queue,
+        &grid,
+        &[grid.origin + Vec3::new(4.1, 1.0, 1.0)],
+    )
+    .unwrap_err();
     assert!(
         matches!(&e, Error::Invalid { what, .. } if what.contains("outside the volume")),
         "{e}"
@@ -113,7 +125,8 @@ fn bad_seed_points() {
             ..
         })
     ));
-    let e = upload_points_with_homes(&ctx.device, &ctx.queue, &grid, &[inside], &[[8, 0, 0]]).unwrap_err();
+    let e = upload_points_with_homes(&ctx.device, &ctx.queue, &grid, &[inside], &[[8, 0, 0]])
+        .unwrap_err();
     assert!(
         matches!(&e, Error::Invalid { what, .. } if what.contains("home voxel")),
         "{e}"
@@ -240,27 +253,11 @@ fn bad_options_and_textures() {
         })
     };
     assert!(matches!(
-        d3.encode_column_pass(
-            &ctx.device,
-            &mut enc,
-            &buf(256),
-            &buf(256),
-            [4, 4, 4],
-            0,
-            &mut None
-        ),
+        d3.encode_column_pass(&ctx.device, &mut enc, &buf(256), &buf(256), [4, 4, 4], 0),
         Err(Error::Invalid { .. })
     ));
     assert!(matches!(
-        d3.encode_column_pass(
-            &ctx.device,
-            &mut enc,
-            &buf(256),
-            &buf(128),
-            [4, 4, 4],
-            1,
-            &mut None
-        ),
+        d3.encode_column_pass(&ctx.device, &mut enc, &buf(256), &buf(128), [4, 4, 4], 1),
         Err(Error::Invalid { .. })
     ));
     // Nothing bad reached wgpu: the encoder still submits cleanly.

@@ -4,12 +4,12 @@
 mod common;
 
 use common::*;
-use fieldkit::gpu::Context;
 use fieldkit::distance::{
     Distance3d, Grid3, Inside, Method, Options3d, upload_points, upload_points_with_homes,
     upload_volume,
 };
 use fieldkit::distance::{Variant, cpu, upload_mask};
+use fieldkit::gpu::Context;
 use fieldkit::gpu::{read_buffer, read_texture};
 use glam::Vec3;
 
@@ -345,7 +345,6 @@ fn exact_2d_matches_cpu() {
                         signed: is_signed,
                         ..Options3d::default()
                     },
-                    None,
                 )
                 .unwrap();
             ctx.submit_and_wait("exact 2d", enc).unwrap();

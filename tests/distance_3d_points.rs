@@ -249,7 +249,8 @@ fn line_passes_need_a_band_and_sub_voxel_seeds() {
         .unwrap_err();
     assert!(e.to_string().contains("needs a band"), "{e}");
     let mask = mask_3d([8, 8, 8], &[[1, 2, 3]]);
-    let volume = fieldkit::distance::upload_volume(&ctx.device, &ctx.queue, &to_bytes(&mask), size).unwrap();
+    let volume =
+        fieldkit::distance::upload_volume(&ctx.device, &ctx.queue, &to_bytes(&mask), size).unwrap();
     let e = d3
         .encode(&ctx.device, &mut enc, &volume, &options(Method::Lines, 4.0))
         .unwrap_err();

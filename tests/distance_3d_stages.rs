@@ -42,14 +42,7 @@ fn seed_stage() {
     let (ctx, d3, m, volume) = setup();
     let mut enc = ctx.encoder("seed");
     let out = d3
-        .encode_seed(
-            &ctx.device,
-            &mut enc,
-            &volume,
-            Inside::Mask,
-            false,
-            &mut None,
-        )
+        .encode_seed(&ctx.device, &mut enc, &volume, Inside::Mask, false)
         .unwrap();
     ctx.submit_and_wait("seed", enc).unwrap();
     let nearest = words(&ctx, &out);
@@ -66,24 +59,10 @@ fn one_jump_pass() {
     let (ctx, d3, m, volume) = setup();
     let mut enc = ctx.encoder("jump");
     let seeds = d3
-        .encode_seed(
-            &ctx.device,
-            &mut enc,
-            &volume,
-            Inside::Mask,
-            false,
-            &mut None,
-        )
+        .encode_seed(&ctx.device, &mut enc, &volume, Inside::Mask, false)
         .unwrap();
     let out = d3
-        .encode_flood(
-            &ctx.device,
-            &mut enc,
-            seeds,
-            size_u32(SIZE),
-            &[4],
-            &mut None,
-        )
+        .encode_flood(&ctx.device, &mut enc, seeds, size_u32(SIZE), &[4])
         .unwrap();
     ctx.submit_and_wait("jump", enc).unwrap();
     let nearest = words(&ctx, &out);
@@ -97,14 +76,7 @@ fn exact_rows_then_columns() {
     let [w, h, d] = SIZE;
     let mut enc = ctx.encoder("rows");
     let nearest = d3
-        .encode_rows(
-            &ctx.device,
-            &mut enc,
-            &volume,
-            Inside::Mask,
-            false,
-            &mut None,
-        )
+        .encode_rows(&ctx.device, &mut enc, &volume, Inside::Mask, false)
         .unwrap();
     ctx.submit_and_wait("rows", enc).unwrap();
     let rows = words(&ctx, &nearest);
@@ -124,16 +96,8 @@ fn exact_rows_then_columns() {
         mapped_at_creation: false,
     });
     let mut enc = ctx.encoder("columns y");
-    d3.encode_column_pass(
-        &ctx.device,
-        &mut enc,
-        &nearest,
-        &stack,
-        size_u32(SIZE),
-        1,
-        &mut None,
-    )
-    .unwrap();
+    d3.encode_column_pass(&ctx.device, &mut enc, &nearest, &stack, size_u32(SIZE), 1)
+        .unwrap();
     ctx.submit_and_wait("columns y", enc).unwrap();
     let after_y = words(&ctx, &nearest);
     // After the y pass each voxel holds its nearest seed within its own z slice.
@@ -147,16 +111,8 @@ fn exact_rows_then_columns() {
         }
     }
     let mut enc = ctx.encoder("columns z");
-    d3.encode_column_pass(
-        &ctx.device,
-        &mut enc,
-        &nearest,
-        &stack,
-        size_u32(SIZE),
-        2,
-        &mut None,
-    )
-    .unwrap();
+    d3.encode_column_pass(&ctx.device, &mut enc, &nearest, &stack, size_u32(SIZE), 2)
+        .unwrap();
     ctx.submit_and_wait("columns z", enc).unwrap();
     let after_z = words(&ctx, &nearest);
     let exact: Vec<u32> = cpu::edt_3d_squared(&m, SIZE)
@@ -177,39 +133,17 @@ fn resolve_stage() {
     let (ctx, d3, m, volume) = setup();
     let mut enc = ctx.encoder("resolve");
     let inside = d3
-        .encode_exact(
-            &ctx.device,
-            &mut enc,
-            &volume,
-            Inside::Mask,
-            false,
-            &mut None,
-        )
+        .encode_exact(&ctx.device, &mut enc, &volume, Inside::Mask, false)
         .unwrap();
     let outside = d3
-        .encode_exact(
-            &ctx.device,
-            &mut enc,
-            &volume,
-            Inside::Mask,
-            true,
-            &mut None,
-        )
+        .encode_exact(&ctx.device, &mut enc, &volume, Inside::Mask, true)
         .unwrap();
     let opts = Options3d {
         voxel_size: 0.5,
         ..Options3d::default()
     };
     let unsigned = d3
-        .encode_resolve(
-            &ctx.device,
-            &mut enc,
-            size_u32(SIZE),
-            &inside,
-            None,
-            &opts,
-            &mut None,
-        )
+        .encode_resolve(&ctx.device, &mut enc, size_u32(SIZE), &inside, None, &opts)
         .unwrap();
     let signed = d3
         .encode_resolve(
@@ -219,7 +153,6 @@ fn resolve_stage() {
             &inside,
             Some(&outside),
             &opts,
-            &mut None,
         )
         .unwrap();
     ctx.submit_and_wait("resolve", enc).unwrap();

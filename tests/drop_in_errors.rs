@@ -19,7 +19,9 @@ fn grid_fit_refuses_meshes_it_cannot_fit() {
     nan.positions[3].y = f64::NAN;
     invalid(Grid::fit(&nan, 32), "vertex 3");
     let mut flat = Mesh::cuboid(DVec3::ZERO, DVec3::ONE);
-    flat.positions.iter_mut().for_each(|p| *p = DVec3::splat(2.0));
+    flat.positions
+        .iter_mut()
+        .for_each(|p| *p = DVec3::splat(2.0));
     invalid(Grid::fit(&flat, 32), "no extent");
     assert!(matches!(
         Grid::fit(&Mesh::cuboid(DVec3::ZERO, DVec3::ONE), 2),
@@ -29,10 +31,17 @@ fn grid_fit_refuses_meshes_it_cannot_fit() {
     let mesh = Mesh::cuboid(DVec3::new(-1.0, 0.0, 2.0), DVec3::new(3.0, 1.0, 2.5));
     let g = Grid::fit(&mesh, 20).unwrap();
     assert_eq!(g.size[0], 20);
-    assert!(g.size.iter().all(|&s| (1..=20).contains(&s)), "{:?}", g.size);
+    assert!(
+        g.size.iter().all(|&s| (1..=20).contains(&s)),
+        "{:?}",
+        g.size
+    );
     let hi = g.origin + DVec3::from(g.size.map(f64::from)) * g.voxel;
     for p in &mesh.positions {
-        assert!((p.cmpge(g.origin + g.voxel * 0.999) & p.cmple(hi - g.voxel * 0.999)).all(), "{p} in {g:?}");
+        assert!(
+            (p.cmpge(g.origin + g.voxel * 0.999) & p.cmple(hi - g.voxel * 0.999)).all(),
+            "{p} in {g:?}"
+        );
     }
 }
 
@@ -45,10 +54,22 @@ fn distance_2d_refuses_bad_texel_sizes_for_both_methods() {
         for texel_size in [f32::NAN, 0.0, -1.0, f32::INFINITY] {
             let mut enc = ctx.encoder("bad texel size");
             let err = distance
-                .encode(&ctx.device, &mut enc, &mask, &Options2d { method, signed: false, texel_size })
+                .encode(
+                    &ctx.device,
+                    &mut enc,
+                    &mask,
+                    &Options2d {
+                        method,
+                        signed: false,
+                        texel_size,
+                    },
+                )
                 .err()
                 .unwrap_or_else(|| panic!("{method:?} accepted texel_size {texel_size}"));
-            assert!(matches!(&err, Error::Invalid { what, .. } if what.contains("texel_size")), "{err}");
+            assert!(
+                matches!(&err, Error::Invalid { what, .. } if what.contains("texel_size")),
+                "{err}"
+            );
         }
     }
 }
@@ -62,8 +83,13 @@ fn readbacks_say_what_is_wrong() {
         usage: wgpu::BufferUsages::STORAGE,
         mapped_at_creation: false,
     });
-    let err = readback_buffer(&ctx.device, &ctx.queue, &no_copy).wait(&ctx).unwrap_err();
-    assert!(matches!(&err, Error::Readback(m) if m.contains("COPY_SRC")), "{err}");
+    let err = readback_buffer(&ctx.device, &ctx.queue, &no_copy)
+        .wait(&ctx)
+        .unwrap_err();
+    assert!(
+        matches!(&err, Error::Readback(m) if m.contains("COPY_SRC")),
+        "{err}"
+    );
 
     let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("copyable"),
@@ -71,9 +97,12 @@ fn readbacks_say_what_is_wrong() {
         usage: wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
-    ctx.queue.write_buffer(&buffer, 0, &[1, 2, 3, 4, 5, 6, 7, 8]);
+    ctx.queue
+        .write_buffer(&buffer, 0, &[1, 2, 3, 4, 5, 6, 7, 8]);
     let mut readback = readback_buffer(&ctx.device, &ctx.queue, &buffer);
-    ctx.device.poll(wgpu::PollType::wait_indefinitely()).unwrap();
+    ctx.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .unwrap();
     let first = readback.try_take().expect("mapped after the poll");
     assert_eq!(first.unwrap(), vec![1, 2, 3, 4, 5, 6, 7, 8]);
     assert!(matches!(readback.try_take(), Some(Err(Error::Readback(_)))));

@@ -9,8 +9,8 @@ mod own_device;
 use fieldkit::distance::cpu;
 
 fn report() -> own_device::Report {
-    let (device, queue, adapter) = own_device::open_device()
-        .unwrap_or_else(|e| panic!("this test needs a GPU adapter: {e}"));
+    let (device, queue, adapter) =
+        own_device::open_device().unwrap_or_else(|e| panic!("this test needs a GPU adapter: {e}"));
     own_device::run(&device, &queue, adapter).expect("every technique runs on default limits")
 }
 
@@ -27,10 +27,16 @@ fn own_device_runs_every_technique_and_matches_the_references() {
     let mut worst = 0.0f64;
     for (i, (&got, &want)) in r.distance_2d.iter().zip(&want).enumerate() {
         let err = (got as f64 - want).abs();
-        assert!(err <= 1e-5 * want.abs().max(1.0), "texel {i}: {got} against {want}");
+        assert!(
+            err <= 1e-5 * want.abs().max(1.0),
+            "texel {i}: {got} against {want}"
+        );
         worst = worst.max(err);
     }
-    eprintln!("2D exact: worst |error| {worst:.2e} over {} texels", want.len());
+    eprintln!(
+        "2D exact: worst |error| {worst:.2e} over {} texels",
+        want.len()
+    );
 
     // Voxelize → SDF: the exact 3D transform of the solid voxels the GPU made, against the
     // CPU's transform of the same voxels; and the voxels themselves are a torus: the voxel at
@@ -50,13 +56,19 @@ fn own_device_runs_every_technique_and_matches_the_references() {
         let v = ((p - r.grid.origin) / voxel).floor().as_uvec3();
         ((v.z as usize * size[1]) + v.y as usize) * size[0] + v.x as usize
     };
-    assert!(r.solid[index(glam::DVec3::new(1.0, 0.0, 0.0))], "the ring is solid");
+    assert!(
+        r.solid[index(glam::DVec3::new(1.0, 0.0, 0.0))],
+        "the ring is solid"
+    );
     assert!(!r.solid[index(glam::DVec3::ZERO)], "the hole is empty");
     // The hole's centre is 0.6 from the torus. Its voxel's centre lies within half a voxel
     // diagonal of it, the conservative surface voxels reach up to another half diagonal past
     // the surface, and the resolve takes half a voxel off.
     let hole = r.sdf[index(glam::DVec3::ZERO)] as f64;
-    let (lo, hi) = (0.6 - 3f64.sqrt() * voxel - voxel / 2.0, 0.6 + 3f64.sqrt() / 2.0 * voxel);
+    let (lo, hi) = (
+        0.6 - 3f64.sqrt() * voxel - voxel / 2.0,
+        0.6 + 3f64.sqrt() / 2.0 * voxel,
+    );
     assert!(
         (lo..hi).contains(&hole),
         "the hole's centre is 0.6 from the surface: got {hole}, want {lo:.3}..{hi:.3}"
@@ -66,16 +78,25 @@ fn own_device_runs_every_technique_and_matches_the_references() {
     // frame, the sky stays at the clear depth in the top rows), and the cloud changed pixels
     // above the island without touching the depth buffer.
     let [fw, fh] = own_device::FRAME;
-    let row_covered = |y: u32| (0..fw).filter(|&x| r.depth[(y * fw + x) as usize] < 1.0).count();
+    let row_covered = |y: u32| {
+        (0..fw)
+            .filter(|&x| r.depth[(y * fw + x) as usize] < 1.0)
+            .count()
+    };
     assert_eq!(row_covered(0), 0, "the top row is sky");
     for y in fh / 2..fh {
-        assert_eq!(row_covered(y), fw as usize, "row {y} is covered by the sea or the island");
+        assert_eq!(
+            row_covered(y),
+            fw as usize,
+            "row {y} is covered by the sea or the island"
+        );
     }
     // Every pixel the cloud changed lies in its box's screen rectangle, and it changed a fair
     // part of that rectangle (llvmpipe: 2601 of the rectangle's 8176 pixels; the box's corners
     // project wider than the cloud inside, so a fifth is the least an adapter may show).
     let (camera_view, (lo, hi)) = (own_device::camera().1, own_device::CLOUD);
-    let [x0, y0, x1, y1] = fieldkit::view::screen_rect(&camera_view, glam::Mat4::IDENTITY, lo, lo + hi);
+    let [x0, y0, x1, y1] =
+        fieldkit::view::screen_rect(&camera_view, glam::Mat4::IDENTITY, lo, lo + hi);
     let mut inside = 0;
     for (i, (a, b)) in r.colour.iter().zip(&r.colour_without_cloud).enumerate() {
         if a != b {
@@ -90,5 +111,8 @@ fn own_device_runs_every_technique_and_matches_the_references() {
     }
     let area = ((x1 - x0) * (y1 - y0)) as usize;
     eprintln!("the cloud changed {inside} of its rectangle's {area} pixels");
-    assert!(inside * 5 > area, "the cloud changed {inside} of {area} pixels");
+    assert!(
+        inside * 5 > area,
+        "the cloud changed {inside} of {area} pixels"
+    );
 }

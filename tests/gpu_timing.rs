@@ -1,14 +1,16 @@
-//! Timestamp queries through `gpu::Timer`: the mechanism the benchmarks use. This checks that
-//! timing works and orders its numbers sensibly; it does not judge speed (that is `xtask bench`).
+//! Timestamp queries through `gpu::Profiler` (built on `gpu::Timer`): the mechanism the
+//! benchmarks use, reached through the same `encode*` functions a renderer calls, with
+//! `Profiler::record` in place of the bare encoder. This checks that timing works, names the
+//! passes it timed and orders its numbers sensibly; it does not judge speed (that is
+//! `xtask bench`).
 
-use fieldkit::gpu::Context;
 use fieldkit::distance::{Jfa2d, upload_mask};
-use fieldkit::gpu::Timer;
+use fieldkit::gpu::{Context, Profiler};
 
 #[test]
-fn timer_measures_jfa_passes() {
+fn profiler_times_the_passes_recorded_through_it() {
     let ctx = Context::shared();
-    let Some(timer) = Timer::new(&ctx.device, &ctx.queue, 2) else {
+    let Some(mut profiler) = Profiler::new(&ctx.device, &ctx.queue, 2) else {
         panic!(
             "{} offers no timestamp queries; lavapipe and the H100 both do",
             ctx.adapter_name()
@@ -17,35 +19,31 @@ fn timer_measures_jfa_passes() {
     let jfa = Jfa2d::new(&ctx.device).unwrap();
     let seeds = upload_mask(&ctx.device, &ctx.queue, &vec![0u8; 256 * 256], 256, 256).unwrap();
     let mut enc = ctx.encoder("timed");
+    // Recorded into the bare encoder: not timed.
     let a = jfa
         .encode_seed(&ctx.device, &mut enc, &seeds, false)
         .unwrap();
     let b = jfa
         .encode_seed(&ctx.device, &mut enc, &seeds, false)
         .unwrap();
-    jfa.encode_jump(
-        &ctx.device,
-        &mut enc,
-        &a,
-        &b,
-        64,
-        Some(timer.compute_pass_writes(0)),
-    )
-    .unwrap();
-    jfa.encode_jump(
-        &ctx.device,
-        &mut enc,
-        &b,
-        &a,
-        32,
-        Some(timer.compute_pass_writes(1)),
-    )
-    .unwrap();
-    timer.resolve(&mut enc);
+    {
+        let mut rec = profiler.record(&mut enc);
+        jfa.encode_jump(&ctx.device, &mut rec, &a, &b, 64).unwrap();
+        jfa.encode_jump(&ctx.device, &mut rec, &b, &a, 32).unwrap();
+        // Past the profiler's capacity: recorded, not timed.
+        jfa.encode_jump(&ctx.device, &mut rec, &a, &b, 16).unwrap();
+    }
+    profiler.resolve(&mut enc);
     ctx.submit_and_wait("timed", enc).unwrap();
-    let ms = timer.read_ms(&ctx.device, &ctx.queue).wait(&ctx).unwrap();
+    let (passes, total) = profiler.read(&ctx.device, &ctx.queue).wait(&ctx).unwrap();
+    let names: Vec<&str> = passes.iter().map(|(n, _)| n.as_str()).collect();
+    assert_eq!(names, ["jump 64", "jump 32"]);
+    for (name, ms) in &passes {
+        assert!(ms.is_finite() && *ms >= 0.0, "{name} took {ms} ms");
+    }
+    let sum: f64 = passes.iter().map(|(_, ms)| ms).sum();
     assert!(
-        ms.is_finite() && ms > 0.0,
-        "two passes over 256² took {ms} ms"
+        total.is_finite() && total > 0.0 && total >= sum * 0.999,
+        "two passes over 256² took {total} ms in all, {sum} ms summed"
     );
 }

@@ -4,9 +4,9 @@
 mod common;
 
 use common::*;
-use fieldkit::gpu::Context;
 use fieldkit::distance::Variant;
 use fieldkit::distance::{Grid3, Method};
+use fieldkit::gpu::Context;
 use fieldkit::gpu::{read_buffer, read_texture};
 use fieldkit::metaball::{Metaballs, Settings, cpu, fixed_scale, packed_grid};
 use glam::{Vec3, Vec4};
@@ -154,10 +154,7 @@ fn seeds_are_the_boundary_voxels_moved_onto_the_surface() {
                 assert_eq!(keys[i] != 0, seed, "voxel ({x},{y},{z})");
                 if seed {
                     n_seeds += 1;
-                    assert_eq!(
-                        fieldkit::distance::key_index(keys[i]),
-                        Some(i as u32)
-                    );
+                    assert_eq!(fieldkit::distance::key_index(keys[i]), Some(i as u32));
                     let p = points[i];
                     let off = Vec3::new(p[0] - x as f32, p[1] - y as f32, p[2] - z as f32);
                     assert!(off.length() <= 0.8661, "offset {off} of voxel {i}");
@@ -272,7 +269,9 @@ fn bad_input_is_a_typed_error() {
     ];
     assert!(err(s.fit_grid(&far, 1.0)).contains("grid width"));
     // A caller-made grid past the seed table.
-    let mut inst = balls.upload(&ctx.device, &ctx.queue, &three_blobs()).unwrap();
+    let mut inst = balls
+        .upload(&ctx.device, &ctx.queue, &three_blobs())
+        .unwrap();
     let grid = Grid3 {
         size: [300, 300, 300],
         voxel_size: 0.1,
@@ -282,7 +281,8 @@ fn bad_input_is_a_typed_error() {
     assert!(err(balls.encode(&ctx.device, &mut enc, &inst, &grid, 1.0, &s)).contains("grid cells"));
     // Updating with another count.
     assert!(
-        err(balls.update(&ctx.queue, &mut inst, &packed_grid([2, 2, 2], 1.0))).contains("voxels given")
+        err(balls.update(&ctx.queue, &mut inst, &packed_grid([2, 2, 2], 1.0)))
+            .contains("voxels given")
     );
     // Empty and all-zero sets fit no grid: nothing to draw.
     assert!(s.fit_grid(&[], 1.0).unwrap().is_none());

@@ -9,8 +9,8 @@ mod common;
 use common::*;
 use fieldkit::gpu::{Context, read_texture};
 use fieldkit::metaball::render::{Direct, Output, RaymarchSettings, Raymarcher};
-use fieldkit::view::{Targets, View, box_visible};
 use fieldkit::metaball::{BlobBins, MetaballField, Metaballs, Settings, cpu};
+use fieldkit::view::{Targets, View, box_visible};
 
 use glam::{DVec3, Mat4, Vec3, Vec4};
 

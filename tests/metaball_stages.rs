@@ -9,10 +9,10 @@ mod common;
 #[allow(dead_code)]
 mod gallery;
 
-use common::*;
-use fieldkit::distance::Variant;
-use fieldkit::distance::Method;
 use crate::gallery::{MetaballView, metaball_scene};
+use common::*;
+use fieldkit::distance::Method;
+use fieldkit::distance::Variant;
 use fieldkit::gpu::{Context, read_buffer, read_texture};
 use fieldkit::harness::Summary;
 use fieldkit::metaball::render::Output;

@@ -869,7 +869,10 @@ fn lit_density_is_the_density_and_the_light_nodes_interpolant() {
         "the test adapter should filter R32Float"
     );
     for format in [R8Unorm, R16Float, R32Float] {
-        let volume = Volume::upload(&ctx.device, &ctx.queue, &data,
+        let volume = Volume::upload(
+            &ctx.device,
+            &ctx.queue,
+            &data,
             dims,
             format,
             Vec3::new(0.1, 0.15, 0.2),
@@ -959,7 +962,16 @@ fn lit_density_is_the_density_and_the_light_nodes_interpolant() {
     // finite value.
     let edge = [0.0f32, -0.0, -0.75, 5.96e-8, 6.0e-5, 65504.0, -3.1e-6, 0.1];
     let dims = [edge.len() as u32, 1, 1];
-    let volume = Volume::upload(&ctx.device, &ctx.queue, &edge, dims, R16Float, Vec3::ONE, Vec3::ZERO).unwrap();
+    let volume = Volume::upload(
+        &ctx.device,
+        &ctx.queue,
+        &edge,
+        dims,
+        R16Float,
+        Vec3::ONE,
+        Vec3::ZERO,
+    )
+    .unwrap();
     let mut enc = ctx.encoder("lit density edges");
     let (_, light) = rig.bricks_and_light(&mut enc, &volume, &tf, &s);
     ctx.submit_and_wait("lit density edges", enc).unwrap();
@@ -977,7 +989,15 @@ fn bad_input_is_a_typed_error() {
     let rig = Rig::new();
     let ctx = &rig.ctx;
     let upload = |data: &[f32], dims: [u32; 3], format, spacing| {
-        Volume::upload(&ctx.device, &ctx.queue, data, dims, format, spacing, Vec3::ZERO)
+        Volume::upload(
+            &ctx.device,
+            &ctx.queue,
+            data,
+            dims,
+            format,
+            spacing,
+            Vec3::ZERO,
+        )
     };
     let err = |r: Result<Volume, fieldkit::Error>| r.err().expect("should be refused").to_string();
     let max = ctx.device.limits().max_texture_dimension_3d;

@@ -37,7 +37,9 @@ fn painted_sphere() -> Mesh {
 
 fn run(ctx: &Context, mesh: &Mesh, grid: &Grid) -> (Attributes, Vec<VoxelAttributes>) {
     let v = Voxelizer::new(&ctx.device).unwrap();
-    let a = ctx.block_on(v.attributes(&ctx.device, &ctx.queue, mesh, grid)).unwrap();
+    let a = ctx
+        .block_on(v.attributes(&ctx.device, &ctx.queue, mesh, grid))
+        .unwrap();
     let read = a.read(&ctx.device, &ctx.queue).wait(ctx).unwrap();
     (a, read)
 }
@@ -203,7 +205,10 @@ fn bad_attribute_arrays_get_typed_errors() {
     );
     let mut mesh = painted_sphere();
     mesh.normals[3] = DVec3::new(f64::NAN, 0.0, 1.0);
-    let err = ctx.block_on(v.attributes(&ctx.device, &ctx.queue, &mesh, &grid)).err().expect("NaN normal");
+    let err = ctx
+        .block_on(v.attributes(&ctx.device, &ctx.queue, &mesh, &grid))
+        .err()
+        .expect("NaN normal");
     assert!(
         matches!(&err, Error::Invalid { what, .. } if what.contains("normal 3")),
         "{err}"
@@ -223,7 +228,9 @@ fn attribute_volumes_hold_the_list() {
     let mesh = painted_sphere();
     let grid = sphere_grid();
     let v = Voxelizer::new(&ctx.device).unwrap();
-    let a = ctx.block_on(v.attributes(&ctx.device, &ctx.queue, &mesh, &grid)).unwrap();
+    let a = ctx
+        .block_on(v.attributes(&ctx.device, &ctx.queue, &mesh, &grid))
+        .unwrap();
     let list = a.read(&ctx.device, &ctx.queue).wait(&ctx).unwrap();
     let mut enc = ctx.encoder("volumes");
     let volumes = v

@@ -125,7 +125,13 @@ fn open_meshes_are_refused() {
     sphere.triangles.pop();
     let mut enc = ctx.encoder("open");
     let err = v
-        .encode_solid(&ctx.device, &mut enc, &sphere, &unit_grid([16, 16, 16]), true)
+        .encode_solid(
+            &ctx.device,
+            &mut enc,
+            &sphere,
+            &unit_grid([16, 16, 16]),
+            true,
+        )
         .err()
         .expect("accepted an open mesh");
     assert!(
@@ -137,8 +143,14 @@ fn open_meshes_are_refused() {
     flipped.triangles[3].swap(1, 2);
     let mut enc = ctx.encoder("flipped");
     assert!(
-        v.encode_solid(&ctx.device, &mut enc, &flipped, &unit_grid([16, 16, 16]), true)
-            .is_err()
+        v.encode_solid(
+            &ctx.device,
+            &mut enc,
+            &flipped,
+            &unit_grid([16, 16, 16]),
+            true
+        )
+        .is_err()
     );
 }
 
@@ -219,7 +231,13 @@ fn voxels_feed_the_distance_stages() {
     let grid = unit_grid([24, 24, 24]);
     let mut enc = ctx.encoder("mesh sdf");
     let voxels = v
-        .encode_solid(&ctx.device, &mut enc, &Mesh::uv_sphere(c, r, 48, 24), &grid, false)
+        .encode_solid(
+            &ctx.device,
+            &mut enc,
+            &Mesh::uv_sphere(c, r, 48, 24),
+            &grid,
+            false,
+        )
         .unwrap();
     let volume = v.encode_volume(&ctx.device, &mut enc, &voxels).unwrap();
     let field = d3

@@ -216,7 +216,13 @@ fn zero_area_triangles_are_left_out_and_counted() {
         .unwrap();
     ctx.submit_and_wait("voxelize", enc).unwrap();
     assert_eq!(s.degenerate, 2);
-    assert!(s.read(&ctx.device, &ctx.queue).wait(&ctx).unwrap().iter().any(|&o| o));
+    assert!(
+        s.read(&ctx.device, &ctx.queue)
+            .wait(&ctx)
+            .unwrap()
+            .iter()
+            .any(|&o| o)
+    );
 }
 
 #[test]

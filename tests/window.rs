@@ -53,7 +53,11 @@ fn window_screenshot_matches_the_offscreen_frame() {
             ..wgpu::InstanceDescriptor::new_without_display_handle()
         });
         let adapter = pollster::block_on(instance.request_adapter(&Default::default()))
-            .unwrap_or_else(|e| panic!("this test needs a GPU adapter (apt-get install -y mesa-vulkan-drivers): {e}"));
+            .unwrap_or_else(|e| {
+                panic!(
+                    "this test needs a GPU adapter (apt-get install -y mesa-vulkan-drivers): {e}"
+                )
+            });
         pollster::block_on(adapter.request_device(&Default::default())).expect("a device")
     };
     let want = window::render_offscreen(
@@ -81,9 +85,14 @@ fn window_screenshot_matches_the_offscreen_frame() {
     }
     let pixels = want.len() / 4;
     let mean = sum as f64 / pixels as f64;
-    eprintln!("screenshot against offscreen: mean {mean:.4}, worst {worst}, {off} pixels off by more than 2");
+    eprintln!(
+        "screenshot against offscreen: mean {mean:.4}, worst {worst}, {off} pixels off by more than 2"
+    );
     assert!(mean <= 0.05, "mean difference {mean}");
-    assert!(off <= pixels / 1000, "{off} of {pixels} pixels differ by more than 2 levels");
+    assert!(
+        off <= pixels / 1000,
+        "{off} of {pixels} pixels differ by more than 2 levels"
+    );
 
     // The frame is not trivially equal: the floor and the surface are both in it.
     let distinct: std::collections::HashSet<&[u8]> = want.chunks(4).collect();

@@ -4,7 +4,7 @@
 
 use crate::bind::{ComputePipeline, Entry};
 use crate::error::Error;
-use crate::gpu::Profiler;
+use crate::gpu::Record;
 use crate::shaders::distance::{jfa_resolve, jfa_seed, jfa_step};
 
 const STAGE: &str = "distance::jfa";
@@ -170,23 +170,8 @@ fn view(t: &wgpu::Texture) -> wgpu::TextureView {
     t.create_view(&Default::default())
 }
 
-fn dispatch<E: Entry>(
-    encoder: &mut wgpu::CommandEncoder,
-    pipeline: &ComputePipeline<E>,
-    bound: &crate::bind::Bound<E>,
-    w: u32,
-    h: u32,
-    timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
-) {
-    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-        label: Some(E::INFO.stage),
-        timestamp_writes,
-    });
-    pipeline.dispatch(
-        &mut pass,
-        bound,
-        ComputePipeline::<E>::groups_for([w, h, 1]),
-    );
+fn groups<E: Entry>(w: u32, h: u32) -> [u32; 3] {
+    ComputePipeline::<E>::groups_for([w, h, 1])
 }
 
 /// Check a seed texture: 2D, non-empty, a supported format, within the packing range.
@@ -237,7 +222,7 @@ pub fn check_size(device: &wgpu::Device, w: u32, h: u32) -> Result<(), Error> {
 /// Upload a CPU mask (`width × height` bytes, row-major, non-zero = seed) as an `R8Unorm` texture.
 pub fn upload_mask(
     device: &wgpu::Device,
-        queue: &wgpu::Queue,
+    queue: &wgpu::Queue,
     mask: &[u8],
     width: u32,
     height: u32,
@@ -300,20 +285,9 @@ impl Jfa2d {
     pub fn encode_seed(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         seeds: &wgpu::Texture,
         invert: bool,
-    ) -> Result<wgpu::Texture, Error> {
-        self.seed_timed(device, encoder, seeds, invert, None)
-    }
-
-    fn seed_timed(
-        &self,
-        device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
-        seeds: &wgpu::Texture,
-        invert: bool,
-        timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
     ) -> Result<wgpu::Texture, Error> {
         let (w, h) = check_seed_texture(device, seeds)?;
         let out = texture(device, "jfa nearest", w, h, wgpu::TextureFormat::R32Uint);
@@ -326,15 +300,17 @@ impl Jfa2d {
             },
         );
         let (sv, ov) = (view(seeds), view(&out));
-        let bound = self.seed.bind(
+        self.seed.record(
             device,
+            rec,
             &jfa_seed::seed::Resources {
                 params: (&params).into(),
                 seeds: (&sv).into(),
                 nearest: (&ov).into(),
             },
+            groups::<jfa_seed::seed::Entry>(w, h),
+            "seed",
         )?;
-        dispatch(encoder, &self.seed, &bound, w, h, timestamp_writes);
         Ok(out)
     }
 
@@ -342,11 +318,10 @@ impl Jfa2d {
     pub fn encode_jump(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         src: &wgpu::Texture,
         dst: &wgpu::Texture,
         step: u32,
-        timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
     ) -> Result<(), Error> {
         let (w, h) = (src.width(), src.height());
         check_size(device, w, h)?;
@@ -371,16 +346,17 @@ impl Jfa2d {
             },
         );
         let (sv, dv) = (view(src), view(dst));
-        let bound = self.jump.bind(
+        self.jump.record(
             device,
+            rec,
             &jfa_step::jump::Resources {
                 params: (&params).into(),
                 src: (&sv).into(),
                 dst: (&dv).into(),
             },
-        )?;
-        dispatch(encoder, &self.jump, &bound, w, h, timestamp_writes);
-        Ok(())
+            groups::<jfa_step::jump::Entry>(w, h),
+            &format!("jump {step}"),
+        )
     }
 
     /// Run the passes of `steps` over `nearest`, ping-ponging with a second texture; returns the
@@ -388,20 +364,9 @@ impl Jfa2d {
     pub fn encode_flood(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         nearest: wgpu::Texture,
         steps: &[u32],
-    ) -> Result<wgpu::Texture, Error> {
-        self.flood_timed(device, encoder, nearest, steps, &mut None)
-    }
-
-    fn flood_timed(
-        &self,
-        device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
-        nearest: wgpu::Texture,
-        steps: &[u32],
-        prof: &mut Option<&mut Profiler>,
     ) -> Result<wgpu::Texture, Error> {
         let other = texture(
             device,
@@ -412,14 +377,7 @@ impl Jfa2d {
         );
         let (mut a, mut b) = (nearest, other);
         for &step in steps {
-            self.encode_jump(
-                device,
-                encoder,
-                &a,
-                &b,
-                step,
-                prof.as_mut().and_then(|p| p.next(format!("jump {step}"))),
-            )?;
+            self.encode_jump(device, rec, &a, &b, step)?;
             std::mem::swap(&mut a, &mut b);
         }
         Ok(a)
@@ -429,22 +387,10 @@ impl Jfa2d {
     pub fn encode_resolve(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         nearest: &wgpu::Texture,
         nearest_outside: Option<&wgpu::Texture>,
         texel_size: f32,
-    ) -> Result<wgpu::Texture, Error> {
-        self.resolve_timed(device, encoder, nearest, nearest_outside, texel_size, None)
-    }
-
-    fn resolve_timed(
-        &self,
-        device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
-        nearest: &wgpu::Texture,
-        nearest_outside: Option<&wgpu::Texture>,
-        texel_size: f32,
-        timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
     ) -> Result<wgpu::Texture, Error> {
         if !(texel_size.is_finite() && texel_size > 0.0) {
             return Err(Error::Invalid {
@@ -464,70 +410,47 @@ impl Jfa2d {
             },
         );
         let (nv, dv) = (view(nearest), view(&out));
+        let groups = groups::<jfa_resolve::resolve_unsigned::Entry>(w, h);
         match nearest_outside {
-            None => {
-                let bound = self.resolve_unsigned.bind(
-                    device,
-                    &jfa_resolve::resolve_unsigned::Resources {
-                        params: (&params).into(),
-                        nearest: (&nv).into(),
-                        distance: (&dv).into(),
-                    },
-                )?;
-                dispatch(
-                    encoder,
-                    &self.resolve_unsigned,
-                    &bound,
-                    w,
-                    h,
-                    timestamp_writes,
-                );
-            }
+            None => self.resolve_unsigned.record(
+                device,
+                rec,
+                &jfa_resolve::resolve_unsigned::Resources {
+                    params: (&params).into(),
+                    nearest: (&nv).into(),
+                    distance: (&dv).into(),
+                },
+                groups,
+                "resolve",
+            )?,
             Some(o) => {
                 let ov = view(o);
-                let bound = self.resolve_signed.bind(
+                self.resolve_signed.record(
                     device,
+                    rec,
                     &jfa_resolve::resolve_signed::Resources {
                         params: (&params).into(),
                         nearest: (&nv).into(),
                         nearest_outside: (&ov).into(),
                         distance: (&dv).into(),
                     },
-                )?;
-                dispatch(
-                    encoder,
-                    &self.resolve_signed,
-                    &bound,
-                    w,
-                    h,
-                    timestamp_writes,
-                );
+                    groups,
+                    "resolve",
+                )?
             }
         }
         Ok(out)
     }
 
-    /// The whole chain: seed → JFA passes → resolve, recorded into `encoder`.
+    /// The whole chain: seed → JFA passes → resolve, recorded into `rec` (a command encoder, or
+    /// [`crate::gpu::Profiler::record`] to time each pass).
     pub fn encode(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         seeds: &wgpu::Texture,
         options: &Options,
     ) -> Result<Field2d, Error> {
-        self.encode_profiled(device, encoder, seeds, options, None)
-    }
-
-    /// [`Self::encode`] with each pass timed by `profiler`.
-    pub fn encode_profiled(
-        &self,
-        device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
-        seeds: &wgpu::Texture,
-        options: &Options,
-        mut profiler: Option<&mut Profiler>,
-    ) -> Result<Field2d, Error> {
-        let prof = &mut profiler;
         let (w, h) = check_seed_texture(device, seeds)?;
         if !(options.texel_size.is_finite() && options.texel_size > 0.0) {
             return Err(Error::Invalid {
@@ -539,33 +462,20 @@ impl Jfa2d {
             });
         }
         let steps = options.variant.steps(w.max(h));
-        let inside = self.seed_timed(
-            device,
-            encoder,
-            seeds,
-            false,
-            prof.as_mut().and_then(|p| p.next("seed")),
-        )?;
-        let nearest = self.flood_timed(device, encoder, inside, &steps, prof)?;
+        let inside = self.encode_seed(device, rec, seeds, false)?;
+        let nearest = self.encode_flood(device, rec, inside, &steps)?;
         let nearest_outside = if options.signed {
-            let outside = self.seed_timed(
-                device,
-                encoder,
-                seeds,
-                true,
-                prof.as_mut().and_then(|p| p.next("seed")),
-            )?;
-            Some(self.flood_timed(device, encoder, outside, &steps, prof)?)
+            let outside = self.encode_seed(device, rec, seeds, true)?;
+            Some(self.encode_flood(device, rec, outside, &steps)?)
         } else {
             None
         };
-        let distance = self.resolve_timed(
+        let distance = self.encode_resolve(
             device,
-            encoder,
+            rec,
             &nearest,
             nearest_outside.as_ref(),
             options.texel_size,
-            prof.as_mut().and_then(|p| p.next("resolve")),
         )?;
         Ok(Field2d {
             width: w,

@@ -26,9 +26,9 @@
 use glam::Vec3;
 
 use super::Variant;
-use crate::bind::{ComputePipeline, Entry};
+use crate::bind::ComputePipeline;
 use crate::error::Error;
-use crate::gpu::{Profiler, uniform_buffer as uniform};
+use crate::gpu::{Record, Recorder, uniform_buffer as uniform};
 use crate::shaders::distance::{
     edt_columns, edt_rows, field_resolve, jfa3_seed, jfa3_seed_points, jfa3_step, point_lines,
 };
@@ -358,24 +358,6 @@ pub struct Distance3d {
     resolve_signed_2d: ComputePipeline<field_resolve::resolve_signed_2d::Entry>,
 }
 
-pub use crate::gpu::Prof;
-
-fn pass<E: Entry>(
-    encoder: &mut wgpu::CommandEncoder,
-    pipeline: &ComputePipeline<E>,
-    bound: &crate::bind::Bound<E>,
-    groups: [u32; 3],
-    name: &str,
-    prof: Prof,
-) {
-    let timestamp_writes = prof.as_mut().and_then(|p| p.next(name));
-    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-        label: Some(E::INFO.stage),
-        timestamp_writes,
-    });
-    pipeline.dispatch(&mut pass, bound, groups);
-}
-
 fn voxels(size: [u32; 3]) -> u64 {
     size.iter().map(|&s| s as u64).product()
 }
@@ -496,8 +478,12 @@ fn check_volume(device: &wgpu::Device, volume: &wgpu::Texture) -> Result<[u32; 3
 
 /// Upload a CPU volume (`x` fastest, then `y`, then `z`; one byte per voxel) as an `R8Unorm`
 /// 3D texture. Non-zero bytes are marked under [`Inside::Mask`].
-pub fn upload_volume(device: &wgpu::Device,
-        queue: &wgpu::Queue, data: &[u8], size: [u32; 3]) -> Result<wgpu::Texture, Error> {
+pub fn upload_volume(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    data: &[u8],
+    size: [u32; 3],
+) -> Result<wgpu::Texture, Error> {
     check_size_3d(device, size)?;
     if data.len() as u64 != voxels(size) {
         return Err(Error::Invalid {
@@ -544,8 +530,12 @@ pub fn upload_volume(device: &wgpu::Device,
 /// point must be finite and inside the grid's box; at most [`MAX_POINTS`]. Where several points
 /// share a voxel only the one nearest its centre is kept: give homes
 /// ([`upload_points_with_homes`]) when points come one per voxel, as from surface extraction.
-pub fn upload_points(device: &wgpu::Device,
-        queue: &wgpu::Queue, grid: &Grid3, points: &[Vec3]) -> Result<PointSeeds, Error> {
+pub fn upload_points(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    grid: &Grid3,
+    points: &[Vec3],
+) -> Result<PointSeeds, Error> {
     upload_points_inner(device, queue, grid, points, None)
 }
 
@@ -553,7 +543,7 @@ pub fn upload_points(device: &wgpu::Device,
 /// holding the closest surface point to its centre). Homes must lie inside the grid.
 pub fn upload_points_with_homes(
     device: &wgpu::Device,
-        queue: &wgpu::Queue,
+    queue: &wgpu::Queue,
     grid: &Grid3,
     points: &[Vec3],
     homes: &[[u32; 3]],
@@ -569,7 +559,7 @@ pub fn upload_points_with_homes(
 
 fn upload_points_inner(
     device: &wgpu::Device,
-        queue: &wgpu::Queue,
+    queue: &wgpu::Queue,
     grid: &Grid3,
     points: &[Vec3],
     homes: Option<&[[u32; 3]]>,
@@ -711,33 +701,16 @@ impl Distance3d {
     pub fn encode(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         volume: &wgpu::Texture,
         options: &Options3d,
-    ) -> Result<Field3d, Error> {
-        self.encode_profiled(device, encoder, volume, options, None)
-    }
-
-    /// [`Self::encode`] with each pass timed by `profiler`.
-    pub fn encode_profiled(
-        &self,
-        device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
-        volume: &wgpu::Texture,
-        options: &Options3d,
-        mut profiler: Option<&mut Profiler>,
     ) -> Result<Field3d, Error> {
         options.check()?;
         let size = check_volume(device, volume)?;
-        let prof = &mut profiler;
-        let flood = |encoder: &mut wgpu::CommandEncoder,
-                     invert: bool,
-                     prof: Prof|
-         -> Result<wgpu::Buffer, Error> {
+        let rec = &mut rec.recorder();
+        let flood = |rec: &mut Recorder<'_>, invert: bool| -> Result<wgpu::Buffer, Error> {
             match options.method {
-                Method::Exact => {
-                    self.encode_exact(device, encoder, volume, options.inside, invert, prof)
-                }
+                Method::Exact => self.encode_exact(device, rec, volume, options.inside, invert),
                 Method::Lines => Err(Error::Invalid {
                     stage: STAGE,
                     what: "the line passes are for sub-voxel seeds; integer seeds take the exact \
@@ -745,15 +718,13 @@ impl Distance3d {
                         .into(),
                 }),
                 Method::Jfa(variant) => {
-                    let seeds =
-                        self.encode_seed(device, encoder, volume, options.inside, invert, prof)?;
+                    let seeds = self.encode_seed(device, rec, volume, options.inside, invert)?;
                     self.encode_flood(
                         device,
-                        encoder,
+                        rec,
                         seeds,
                         size,
                         &options.steps(variant, size.into_iter().max().unwrap()),
-                        prof,
                     )
                 }
             }
@@ -771,22 +742,20 @@ impl Distance3d {
             };
             let nearest = self.encode_exact_fused(
                 device,
-                encoder,
+                rec,
                 volume,
                 options.inside,
                 false,
                 (!options.signed).then(|| resolve(None)),
-                prof,
             )?;
             let nearest_outside = if options.signed {
                 Some(self.encode_exact_fused(
                     device,
-                    encoder,
+                    rec,
                     volume,
                     options.inside,
                     true,
                     Some(resolve(Some(&nearest))),
-                    prof,
                 )?)
             } else {
                 None
@@ -798,20 +767,19 @@ impl Distance3d {
                 distance,
             });
         }
-        let nearest = flood(encoder, false, prof)?;
+        let nearest = flood(rec, false)?;
         let nearest_outside = if options.signed {
-            Some(flood(encoder, true, prof)?)
+            Some(flood(rec, true)?)
         } else {
             None
         };
         let distance = self.encode_resolve(
             device,
-            encoder,
+            rec,
             size,
             &nearest,
             nearest_outside.as_ref(),
             options,
-            prof,
         )?;
         Ok(Field3d {
             size,
@@ -827,7 +795,7 @@ impl Distance3d {
     pub fn encode_points(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         points: &PointSeeds,
         size: [u32; 3],
         inside: Option<&wgpu::Texture>,
@@ -856,9 +824,8 @@ impl Distance3d {
                 });
             }
         }
-        let prof = &mut None;
         let seeds = field_buffer(device, "nearest seed", size);
-        encoder.clear_buffer(&seeds, 0, None);
+        rec.recorder().encoder.clear_buffer(&seeds, 0, None);
         if let Some(h) = &points.homes
             && h.size() < points.count as u64 * 4
         {
@@ -894,32 +861,19 @@ impl Distance3d {
                 &no_homes
             }
         };
-        let bound = self.seed_points.bind(
+        self.seed_points.record(
             device,
+            rec,
             &jfa3_seed_points::seed_points::Resources {
                 params: (&params).into(),
                 points: (&points.buffer).into(),
                 nearest: (&seeds).into(),
                 homes: homes.into(),
             },
-        )?;
-        pass(
-            encoder,
-            &self.seed_points,
-            &bound,
             [points.count.div_ceil(64), 1, 1],
             "seed points",
-            prof,
-        );
-        self.encode_keyed_points(
-            device,
-            encoder,
-            seeds,
-            &points.buffer,
-            size,
-            inside,
-            options,
-        )
+        )?;
+        self.encode_keyed_points(device, rec, seeds, &points.buffer, size, inside, options)
     }
 
     /// Flood and resolve a field of seed keys that a caller's stage wrote itself: `keys` holds,
@@ -930,30 +884,12 @@ impl Distance3d {
     pub fn encode_keyed_points(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         keys: wgpu::Buffer,
         points: &wgpu::Buffer,
         size: [u32; 3],
         inside: Option<&wgpu::Texture>,
         options: &Options3d,
-    ) -> Result<Field3d, Error> {
-        self.encode_keyed_points_profiled(
-            device, encoder, keys, points, size, inside, options, None,
-        )
-    }
-
-    /// [`Self::encode_keyed_points`] with each pass timed by `profiler`.
-    #[allow(clippy::too_many_arguments)]
-    pub fn encode_keyed_points_profiled(
-        &self,
-        device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
-        keys: wgpu::Buffer,
-        points: &wgpu::Buffer,
-        size: [u32; 3],
-        inside: Option<&wgpu::Texture>,
-        options: &Options3d,
-        mut profiler: Option<&mut Profiler>,
     ) -> Result<Field3d, Error> {
         options.check()?;
         check_size_3d(device, size)?;
@@ -977,17 +913,15 @@ impl Distance3d {
                 });
             }
         }
-        let prof = &mut profiler;
         let nearest = match (options.method, options.band) {
             (Method::Jfa(variant), _) => {
                 let steps = options.steps(variant, size.into_iter().max().unwrap());
-                self.encode_flood_inner(device, encoder, keys, size, &steps, Some(points), prof)?
+                self.encode_flood_inner(device, rec, keys, size, &steps, Some(points))?
             }
             // The line passes resolve in their last pass.
             (Method::Lines, Some(band)) => {
-                let (nearest, distance) = self.encode_lines(
-                    device, encoder, keys, points, size, inside, options, band, prof,
-                )?;
+                let (nearest, distance) =
+                    self.encode_lines(device, rec, keys, points, size, inside, options, band)?;
                 return Ok(Field3d {
                     size,
                     nearest,
@@ -1009,28 +943,24 @@ impl Distance3d {
         let groups = ComputePipeline::<field_resolve::resolve_points::Entry>::groups_for(size);
         match inside {
             None => {
-                let bound = self.resolve_points.bind(
+                self.resolve_points.record(
                     device,
+                    rec,
                     &field_resolve::resolve_points::Resources {
                         params: (&params).into(),
                         nearest: (&nearest).into(),
                         points: (&points.buffer).into(),
                         distance: (&dv).into(),
                     },
-                )?;
-                pass(
-                    encoder,
-                    &self.resolve_points,
-                    &bound,
                     groups,
                     "resolve",
-                    prof,
-                );
+                )?;
             }
             Some(v) => {
                 let vv = view(v);
-                let bound = self.resolve_points_signed.bind(
+                self.resolve_points_signed.record(
                     device,
+                    rec,
                     &field_resolve::resolve_points_signed::Resources {
                         params: (&params).into(),
                         nearest: (&nearest).into(),
@@ -1038,15 +968,9 @@ impl Distance3d {
                         volume: (&vv).into(),
                         distance: (&dv).into(),
                     },
-                )?;
-                pass(
-                    encoder,
-                    &self.resolve_points_signed,
-                    &bound,
                     groups,
                     "resolve",
-                    prof,
-                );
+                )?;
             }
         }
         Ok(Field3d {
@@ -1062,11 +986,10 @@ impl Distance3d {
     pub fn encode_seed(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         volume: &wgpu::Texture,
         inside: Inside,
         invert: bool,
-        prof: Prof,
     ) -> Result<wgpu::Buffer, Error> {
         let size = check_volume(device, volume)?;
         let out = field_buffer(device, "nearest seed", size);
@@ -1080,22 +1003,17 @@ impl Distance3d {
             },
         );
         let vv = view(volume);
-        let bound = self.seed.bind(
+        self.seed.record(
             device,
+            rec,
             &jfa3_seed::seed::Resources {
                 params: (&params).into(),
                 volume: (&vv).into(),
                 nearest: (&out).into(),
             },
-        )?;
-        pass(
-            encoder,
-            &self.seed,
-            &bound,
             ComputePipeline::<jfa3_seed::seed::Entry>::groups_for(size),
             "seed",
-            prof,
-        );
+        )?;
         Ok(out)
     }
 
@@ -1104,13 +1022,12 @@ impl Distance3d {
     pub fn encode_flood(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         nearest: wgpu::Buffer,
         size: [u32; 3],
         steps: &[u32],
-        prof: Prof,
     ) -> Result<wgpu::Buffer, Error> {
-        self.encode_flood_inner(device, encoder, nearest, size, steps, None, prof)
+        self.encode_flood_inner(device, rec, nearest, size, steps, None)
     }
 
     /// The line passes over seed keys (`point_lines.wgsl`): x from the keys and their points,
@@ -1120,14 +1037,13 @@ impl Distance3d {
     fn encode_lines(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         keys: wgpu::Buffer,
         points: &wgpu::Buffer,
         size: [u32; 3],
         inside: Option<&wgpu::Texture>,
         options: &Options3d,
         band: f32,
-        prof: Prof,
     ) -> Result<(wgpu::Buffer, wgpu::Texture), Error> {
         // Each voxel carries an 8-byte candidate between passes.
         check_bytes(&device.limits(), voxels(size) * 8)?;
@@ -1156,35 +1072,38 @@ impl Distance3d {
                 threshold: options.inside.threshold(),
             },
         );
-        let bound = self.lines_x.bind(
+        self.lines_x.record(
             device,
+            rec,
             &point_lines::lines_x::Resources {
                 params: (&params).into(),
                 keys: (&keys).into(),
                 points: points.into(),
                 dst: (&a).into(),
             },
+            ComputePipeline::<point_lines::lines_x::Entry>::groups_for(size),
+            "lines x",
         )?;
-        let groups = ComputePipeline::<point_lines::lines_x::Entry>::groups_for(size);
-        pass(encoder, &self.lines_x, &bound, groups, "lines x", prof);
-        let bound = self.lines_y.bind(
+        self.lines_y.record(
             device,
+            rec,
             &point_lines::lines_y::Resources {
                 params: (&params).into(),
                 src: (&a).into(),
                 dst: (&b).into(),
             },
+            ComputePipeline::<point_lines::lines_y::Entry>::groups_for(size),
+            "lines y",
         )?;
-        let groups = ComputePipeline::<point_lines::lines_y::Entry>::groups_for(size);
-        pass(encoder, &self.lines_y, &bound, groups, "lines y", prof);
         let nearest = field_buffer(device, "nearest seed", size);
         let distance = distance_texture(device, size, wgpu::TextureDimension::D3);
         let dv = view(&distance);
         let groups = ComputePipeline::<point_lines::lines_z::Entry>::groups_for(size);
         match inside {
             None => {
-                let bound = self.lines_z.bind(
+                self.lines_z.record(
                     device,
+                    rec,
                     &point_lines::lines_z::Resources {
                         params: (&params).into(),
                         keys: (&keys).into(),
@@ -1193,20 +1112,15 @@ impl Distance3d {
                         nearest: (&nearest).into(),
                         distance: (&dv).into(),
                     },
-                )?;
-                pass(
-                    encoder,
-                    &self.lines_z,
-                    &bound,
                     groups,
                     "lines z + resolve",
-                    prof,
-                );
+                )?;
             }
             Some(v) => {
                 let vv = view(v);
-                let bound = self.lines_z_signed.bind(
+                self.lines_z_signed.record(
                     device,
+                    rec,
                     &point_lines::lines_z_signed::Resources {
                         params: (&params).into(),
                         keys: (&keys).into(),
@@ -1216,15 +1130,9 @@ impl Distance3d {
                         volume: (&vv).into(),
                         distance: (&dv).into(),
                     },
-                )?;
-                pass(
-                    encoder,
-                    &self.lines_z_signed,
-                    &bound,
                     groups,
                     "lines z + resolve",
-                    prof,
-                );
+                )?;
             }
         }
         Ok((nearest, distance))
@@ -1234,12 +1142,11 @@ impl Distance3d {
     fn encode_flood_inner(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         nearest: wgpu::Buffer,
         size: [u32; 3],
         steps: &[u32],
         points: Option<&wgpu::Buffer>,
-        prof: Prof,
     ) -> Result<wgpu::Buffer, Error> {
         check_size_3d(device, size)?;
         if nearest.size() != voxels(size) * 4 {
@@ -1272,41 +1179,31 @@ impl Distance3d {
             );
             match points {
                 None => {
-                    let bound = self.jump.bind(
+                    self.jump.record(
                         device,
+                        rec,
                         &jfa3_step::jump::Resources {
                             params: (&params).into(),
                             src: (&a).into(),
                             dst: (&b).into(),
                         },
-                    )?;
-                    pass(
-                        encoder,
-                        &self.jump,
-                        &bound,
                         groups,
                         &format!("jump {step}"),
-                        prof,
-                    );
+                    )?;
                 }
                 Some(pts) => {
-                    let bound = self.jump_points.bind(
+                    self.jump_points.record(
                         device,
+                        rec,
                         &jfa3_step::jump_points::Resources {
                             params: (&params).into(),
                             src: (&a).into(),
                             dst: (&b).into(),
                             points: pts.into(),
                         },
-                    )?;
-                    pass(
-                        encoder,
-                        &self.jump_points,
-                        &bound,
                         groups,
                         &format!("jump {step}"),
-                        prof,
-                    );
+                    )?;
                 }
             }
             std::mem::swap(&mut a, &mut b);
@@ -1319,13 +1216,12 @@ impl Distance3d {
     pub fn encode_exact(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         volume: &wgpu::Texture,
         inside: Inside,
         invert: bool,
-        prof: Prof,
     ) -> Result<wgpu::Buffer, Error> {
-        self.encode_exact_fused(device, encoder, volume, inside, invert, None, prof)
+        self.encode_exact_fused(device, rec, volume, inside, invert, None)
     }
 
     /// [`Self::encode_exact`], resolving into `fuse` in its last pass when given.
@@ -1333,15 +1229,14 @@ impl Distance3d {
     fn encode_exact_fused(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         volume: &wgpu::Texture,
         inside: Inside,
         invert: bool,
         fuse: Option<Fuse>,
-        prof: Prof,
     ) -> Result<wgpu::Buffer, Error> {
         let size = check_volume(device, volume)?;
-        let nearest = self.encode_rows(device, encoder, volume, inside, invert, prof)?;
+        let nearest = self.encode_rows(device, rec, volume, inside, invert)?;
         let stack = field_buffer(device, "edt envelope stack", size);
         let axes: Vec<u32> = [1u32, 2]
             .into_iter()
@@ -1353,7 +1248,7 @@ impl Distance3d {
             let f = if last { fuse.take() } else { None };
             self.encode_columns(
                 device,
-                encoder,
+                rec,
                 false,
                 &nearest,
                 &stack,
@@ -1361,12 +1256,11 @@ impl Distance3d {
                 axis,
                 size[3 - axis as usize],
                 f,
-                prof,
             )?;
         }
         if let Some(f) = fuse {
             // A single row (no column pass ran): resolve on its own.
-            self.resolve_into(device, encoder, size, &nearest, f, prof)?;
+            self.resolve_into(device, rec, size, &nearest, f)?;
         }
         Ok(nearest)
     }
@@ -1375,11 +1269,10 @@ impl Distance3d {
     fn resolve_into(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         size: [u32; 3],
         nearest: &wgpu::Buffer,
         fuse: Fuse,
-        prof: Prof,
     ) -> Result<(), Error> {
         let params = uniform(
             device,
@@ -1394,41 +1287,31 @@ impl Distance3d {
         let groups = ComputePipeline::<field_resolve::resolve_unsigned::Entry>::groups_for(size);
         match fuse.inside_field {
             None => {
-                let bound = self.resolve_unsigned.bind(
+                self.resolve_unsigned.record(
                     device,
+                    rec,
                     &field_resolve::resolve_unsigned::Resources {
                         params: (&params).into(),
                         nearest: nearest.into(),
                         distance: fuse.distance.into(),
                     },
-                )?;
-                pass(
-                    encoder,
-                    &self.resolve_unsigned,
-                    &bound,
                     groups,
                     "resolve",
-                    prof,
-                );
+                )?;
             }
             Some(inside) => {
-                let bound = self.resolve_signed.bind(
+                self.resolve_signed.record(
                     device,
+                    rec,
                     &field_resolve::resolve_signed::Resources {
                         params: (&params).into(),
                         nearest: inside.into(),
                         nearest_outside: nearest.into(),
                         distance: fuse.distance.into(),
                     },
-                )?;
-                pass(
-                    encoder,
-                    &self.resolve_signed,
-                    &bound,
                     groups,
                     "resolve",
-                    prof,
-                );
+                )?;
             }
         }
         Ok(())
@@ -1438,11 +1321,10 @@ impl Distance3d {
     pub fn encode_rows(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         volume: &wgpu::Texture,
         inside: Inside,
         invert: bool,
-        prof: Prof,
     ) -> Result<wgpu::Buffer, Error> {
         let size = check_volume(device, volume)?;
         let nearest = field_buffer(device, "nearest seed", size);
@@ -1462,22 +1344,17 @@ impl Distance3d {
             device,
             &[("ROWS", per_group as f64)],
         )?;
-        let bound = rows.bind(
+        rows.record(
             device,
+            rec,
             &edt_rows::rows::Resources {
                 params: (&params).into(),
                 volume: (&vv).into(),
                 nearest: (&nearest).into(),
             },
-        )?;
-        pass(
-            encoder,
-            rows,
-            &bound,
             [size[1].div_ceil(per_group), size[2], 1],
             "rows (x)",
-            prof,
-        );
+        )?;
         Ok(nearest)
     }
 
@@ -1487,12 +1364,11 @@ impl Distance3d {
     pub fn encode_column_pass(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         nearest: &wgpu::Buffer,
         stack: &wgpu::Buffer,
         size: [u32; 3],
         axis: u32,
-        prof: Prof,
     ) -> Result<(), Error> {
         check_size_3d(device, size)?;
         if !(axis == 1 || axis == 2) {
@@ -1514,16 +1390,14 @@ impl Distance3d {
             }
         }
         let others = if axis == 1 { size[2] } else { size[1] };
-        self.encode_columns(
-            device, encoder, false, nearest, stack, size, axis, others, None, prof,
-        )
+        self.encode_columns(device, rec, false, nearest, stack, size, axis, others, None)
     }
 
     #[allow(clippy::too_many_arguments)]
     fn encode_columns(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         pack_2d: bool,
         nearest: &wgpu::Buffer,
         stack: &wgpu::Buffer,
@@ -1531,7 +1405,6 @@ impl Distance3d {
         axis: u32,
         others: u32,
         fuse: Option<Fuse>,
-        prof: Prof,
     ) -> Result<(), Error> {
         let choice = match self.column_bands {
             Some(b) => BAND_CHOICES
@@ -1566,15 +1439,17 @@ impl Distance3d {
                     device,
                     &overrides,
                 )?;
-                let bound = pipeline.bind(
+                pipeline.record(
                     device,
+                    rec,
                     &edt_columns::columns::Resources {
                         params: (&params).into(),
                         nearest: nearest.into(),
                         stack: stack.into(),
                     },
+                    groups,
+                    name,
                 )?;
-                pass(encoder, pipeline, &bound, groups, name, prof);
             }
             Some(Fuse {
                 distance,
@@ -1583,16 +1458,18 @@ impl Distance3d {
             }) => {
                 let pipeline =
                     ComputePipeline::cached(&self.columns_resolve[choice], device, &overrides)?;
-                let bound = pipeline.bind(
+                pipeline.record(
                     device,
+                    rec,
                     &edt_columns::columns_resolve::Resources {
                         params: (&params).into(),
                         nearest: nearest.into(),
                         stack: stack.into(),
                         distance: distance.into(),
                     },
+                    groups,
+                    name,
                 )?;
-                pass(encoder, pipeline, &bound, groups, name, prof);
             }
             Some(Fuse {
                 distance,
@@ -1604,8 +1481,9 @@ impl Distance3d {
                     device,
                     &overrides,
                 )?;
-                let bound = pipeline.bind(
+                pipeline.record(
                     device,
+                    rec,
                     &edt_columns::columns_resolve_signed::Resources {
                         params: (&params).into(),
                         nearest: nearest.into(),
@@ -1613,8 +1491,9 @@ impl Distance3d {
                         nearest_inside: inside.into(),
                         distance: distance.into(),
                     },
+                    groups,
+                    name,
                 )?;
-                pass(encoder, pipeline, &bound, groups, name, prof);
             }
         }
         Ok(())
@@ -1624,10 +1503,9 @@ impl Distance3d {
     pub fn encode_exact_2d(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         mask: &wgpu::Texture,
         options: &Options3d,
-        mut profiler: Option<&mut Profiler>,
     ) -> Result<FieldBuf2d, Error> {
         options.check()?;
         // The same checks as the 2D JFA's seed texture (the same formats work), then the exact
@@ -1635,13 +1513,10 @@ impl Distance3d {
         let (w, h) = super::check_seed_texture(device, mask)?;
         check_size_2d_exact(device, w, h)?;
         let size = [w, h, 1];
-        let prof = &mut profiler;
         let mv = view(mask);
         let stack = field_buffer(device, "edt envelope stack", size);
-        let flood = |encoder: &mut wgpu::CommandEncoder,
-                     invert: bool,
-                     prof: Prof|
-         -> Result<wgpu::Buffer, Error> {
+        let rec = &mut rec.recorder();
+        let flood = |rec: &mut Recorder<'_>, invert: bool| -> Result<wgpu::Buffer, Error> {
             let nearest = field_buffer(device, "nearest seed", size);
             let params = uniform(
                 device,
@@ -1652,25 +1527,25 @@ impl Distance3d {
                     invert: invert as u32,
                 },
             );
-            let bound = self.rows_2d.bind(
+            self.rows_2d.record(
                 device,
+                rec,
                 &edt_rows::rows_2d::Resources {
                     params: (&params).into(),
                     mask_2d: (&mv).into(),
                     nearest: (&nearest).into(),
                 },
+                [h, 1, 1],
+                "rows (x)",
             )?;
-            pass(encoder, &self.rows_2d, &bound, [h, 1, 1], "rows (x)", prof);
             if h > 1 {
-                self.encode_columns(
-                    device, encoder, true, &nearest, &stack, size, 1, 1, None, prof,
-                )?;
+                self.encode_columns(device, rec, true, &nearest, &stack, size, 1, 1, None)?;
             }
             Ok(nearest)
         };
-        let nearest = flood(encoder, false, prof)?;
+        let nearest = flood(rec, false)?;
         let nearest_outside = if options.signed {
-            Some(flood(encoder, true, prof)?)
+            Some(flood(rec, true)?)
         } else {
             None
         };
@@ -1680,41 +1555,31 @@ impl Distance3d {
         let groups = ComputePipeline::<field_resolve::resolve_unsigned_2d::Entry>::groups_for(size);
         match &nearest_outside {
             None => {
-                let bound = self.resolve_unsigned_2d.bind(
+                self.resolve_unsigned_2d.record(
                     device,
+                    rec,
                     &field_resolve::resolve_unsigned_2d::Resources {
                         params: (&params).into(),
                         nearest: (&nearest).into(),
                         distance_2d: (&dv).into(),
                     },
-                )?;
-                pass(
-                    encoder,
-                    &self.resolve_unsigned_2d,
-                    &bound,
                     groups,
                     "resolve",
-                    prof,
-                );
+                )?;
             }
             Some(o) => {
-                let bound = self.resolve_signed_2d.bind(
+                self.resolve_signed_2d.record(
                     device,
+                    rec,
                     &field_resolve::resolve_signed_2d::Resources {
                         params: (&params).into(),
                         nearest: (&nearest).into(),
                         nearest_outside: o.into(),
                         distance_2d: (&dv).into(),
                     },
-                )?;
-                pass(
-                    encoder,
-                    &self.resolve_signed_2d,
-                    &bound,
                     groups,
                     "resolve",
-                    prof,
-                );
+                )?;
             }
         }
         Ok(FieldBuf2d {
@@ -1750,12 +1615,11 @@ impl Distance3d {
     pub fn encode_resolve(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         size: [u32; 3],
         nearest: &wgpu::Buffer,
         nearest_outside: Option<&wgpu::Buffer>,
         options: &Options3d,
-        prof: Prof,
     ) -> Result<wgpu::Texture, Error> {
         options.check()?;
         check_size_3d(device, size)?;
@@ -1768,14 +1632,7 @@ impl Distance3d {
             // The signed pass runs "in" the outside field with the inside field beside it.
             inside_field: nearest_outside.map(|_| nearest),
         };
-        self.resolve_into(
-            device,
-            encoder,
-            size,
-            nearest_outside.unwrap_or(nearest),
-            fuse,
-            prof,
-        )?;
+        self.resolve_into(device, rec, size, nearest_outside.unwrap_or(nearest), fuse)?;
         Ok(distance)
     }
 }

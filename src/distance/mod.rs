@@ -79,12 +79,16 @@ pub enum Nearest2d {
 
 impl Nearest2d {
     /// The packed seeds, x fastest, once the encoder that made them was submitted.
-    pub fn read(&self, device: &wgpu::Device, queue: &wgpu::Queue, len: usize) -> Readback<Vec<u32>> {
+    pub fn read(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        len: usize,
+    ) -> Readback<Vec<u32>> {
         match self {
             Nearest2d::Texture(t) => readback_texture(device, queue, t),
-            Nearest2d::Buffer(b) => readback_buffer(device, queue, b).then(move |bytes| {
-                Ok(bytemuck::cast_slice::<u8, u32>(&bytes)[..len].to_vec())
-            }),
+            Nearest2d::Buffer(b) => readback_buffer(device, queue, b)
+                .then(move |bytes| Ok(bytemuck::cast_slice::<u8, u32>(&bytes)[..len].to_vec())),
         }
     }
 }
@@ -130,25 +134,29 @@ impl Distance2d {
     }
 
     /// The distance field of `mask` (any of [`SEED_FORMATS`], red channel ≠ 0 marks a seed),
-    /// recorded into `encoder`.
+    /// recorded into `rec` (a command encoder, or [`crate::gpu::Profiler::record`] to time each
+    /// pass).
     pub fn encode(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl crate::gpu::Record,
         mask: &wgpu::Texture,
         options: &Options2d,
     ) -> Result<DistanceField2d, Error> {
         if !(options.texel_size.is_finite() && options.texel_size > 0.0) {
             return Err(Error::Invalid {
                 stage: "distance::d2",
-                what: format!("texel_size {} must be finite and positive", options.texel_size),
+                what: format!(
+                    "texel_size {} must be finite and positive",
+                    options.texel_size
+                ),
             });
         }
         match options.method {
             Method2d::Exact => {
                 let f = self.exact.encode_exact_2d(
                     device,
-                    encoder,
+                    rec,
                     mask,
                     &Options3d {
                         signed: options.signed,
@@ -156,7 +164,6 @@ impl Distance2d {
                         inside: Inside::Mask,
                         ..Options3d::default()
                     },
-                    None,
                 )?;
                 Ok(DistanceField2d {
                     width: f.width,
@@ -169,7 +176,7 @@ impl Distance2d {
             Method2d::Jfa(variant) => {
                 let f = self.jfa.encode(
                     device,
-                    encoder,
+                    rec,
                     mask,
                     &Options {
                         variant,

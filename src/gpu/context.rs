@@ -142,7 +142,9 @@ impl Context {
         let uncaptured = Arc::new(Mutex::new(Vec::new()));
         let sink = uncaptured.clone();
         device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
-            sink.lock().unwrap_or_else(|e| e.into_inner()).push(e.to_string());
+            sink.lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .push(e.to_string());
         }));
         Self {
             adapter: None,
@@ -228,7 +230,6 @@ impl Context {
             .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) })
     }
 }
-
 
 impl<T: 'static> Readback<T> {
     /// Block until the data is back (the convenience layer's helper; a render loop polls

@@ -12,7 +12,7 @@ mod timing;
 #[cfg(feature = "context")]
 pub use context::{ADAPTER_ENV, Context, read_buffer, read_texture};
 pub use readback::{Readback, readback_buffer, readback_texture};
-pub use timing::{Prof, Profiler, Timer};
+pub use timing::{Profiler, Record, Recorder, Timer};
 
 use crate::error::Error;
 

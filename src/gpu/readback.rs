@@ -116,11 +116,7 @@ impl<T: 'static> Readback<T> {
     pub fn is_ready(&self) -> bool {
         self.early.is_some()
             || self.convert.is_none()
-            || self
-                .state
-                .lock()
-                .map(|s| s.done.is_some())
-                .unwrap_or(true)
+            || self.state.lock().map(|s| s.done.is_some()).unwrap_or(true)
     }
 
     /// The result if the mapping has finished, else `None` (ask again after the next

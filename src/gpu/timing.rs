@@ -14,11 +14,7 @@ pub struct Timer {
 impl Timer {
     /// `None` when the adapter has no timestamp queries.
     pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, passes: u32) -> Option<Self> {
-        if !device
-            .features()
-            .contains(wgpu::Features::TIMESTAMP_QUERY)
-            || passes == 0
-        {
+        if !device.features().contains(wgpu::Features::TIMESTAMP_QUERY) || passes == 0 {
             return None;
         }
         let count = passes * 2;
@@ -78,8 +74,68 @@ impl Timer {
     }
 }
 
-/// Optional per-pass timing, threaded through the encode functions.
-pub type Prof<'a, 'b> = &'a mut Option<&'b mut Profiler>;
+/// Where a stage records its passes: the caller's command encoder, and optionally a
+/// [`Profiler`] that times each compute pass. Every `encode*` function takes
+/// `&mut impl Record`, so a plain `&mut wgpu::CommandEncoder` is enough; to time the passes,
+/// hand it [`Profiler::record`] instead — one code path either way.
+///
+/// ```no_run
+/// # fn f(device: &wgpu::Device, queue: &wgpu::Queue, volume: &wgpu::Texture)
+/// #     -> Result<(), fieldkit::Error> {
+/// use fieldkit::distance::{Distance3d, Options3d};
+/// let distance = Distance3d::new(device)?;
+/// let mut encoder = device.create_command_encoder(&Default::default());
+/// // Untimed, as a renderer records it:
+/// distance.encode(device, &mut encoder, volume, &Options3d::default())?;
+/// // Timed pass by pass:
+/// if let Some(mut profiler) = fieldkit::gpu::Profiler::new(device, queue, 64) {
+///     distance.encode(device, &mut profiler.record(&mut encoder), volume, &Options3d::default())?;
+///     profiler.resolve(&mut encoder);
+/// }
+/// # Ok(()) }
+/// ```
+pub struct Recorder<'a> {
+    /// The encoder every pass goes into.
+    pub encoder: &'a mut wgpu::CommandEncoder,
+    /// Times each compute pass when present.
+    pub profiler: Option<&'a mut Profiler>,
+}
+
+/// What an `encode*` function records into: a [`wgpu::CommandEncoder`] or a [`Recorder`].
+pub trait Record {
+    /// A recorder borrowing `self` for one call.
+    fn recorder(&mut self) -> Recorder<'_>;
+}
+
+impl Record for wgpu::CommandEncoder {
+    fn recorder(&mut self) -> Recorder<'_> {
+        Recorder {
+            encoder: self,
+            profiler: None,
+        }
+    }
+}
+
+impl Record for Recorder<'_> {
+    fn recorder(&mut self) -> Recorder<'_> {
+        Recorder {
+            encoder: self.encoder,
+            profiler: self.profiler.as_deref_mut(),
+        }
+    }
+}
+
+impl Recorder<'_> {
+    /// Begin a compute pass labelled `label`, timed under `name` when profiling.
+    pub fn compute_pass(&mut self, label: &str, name: &str) -> wgpu::ComputePass<'_> {
+        let timestamp_writes = self.profiler.as_mut().and_then(|p| p.next(name));
+        self.encoder
+            .begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some(label),
+                timestamp_writes,
+            })
+    }
+}
 
 /// Named GPU time per pass: hand [`Profiler::next`] to each compute pass as it is recorded; passes
 /// past the capacity go untimed. Used by `cargo xtask bench`.
@@ -97,6 +153,14 @@ impl Profiler {
             capacity,
             names: Vec::new(),
         })
+    }
+
+    /// A [`Recorder`] that times every compute pass recorded into `encoder` through it.
+    pub fn record<'a>(&'a mut self, encoder: &'a mut wgpu::CommandEncoder) -> Recorder<'a> {
+        Recorder {
+            encoder,
+            profiler: Some(self),
+        }
     }
 
     /// Timestamp writes for the next pass, recorded under `name`.

@@ -22,9 +22,9 @@ pub mod render;
 use glam::{Vec3, Vec4};
 
 use crate::bind::ComputePipeline;
-use crate::distance::{Distance3d, Grid3, Inside, MAX_POINTS, Method, Options3d, Prof};
+use crate::distance::{Distance3d, Grid3, Inside, MAX_POINTS, Method, Options3d};
 use crate::error::Error;
-use crate::gpu::{Profiler, uniform_buffer as uniform};
+use crate::gpu::{Record, uniform_buffer as uniform};
 use crate::shaders::metaball::{bin_blobs, march_field, splat, surface_seeds};
 
 const STAGE: &str = "metaball";
@@ -389,8 +389,12 @@ impl Metaballs {
 
     /// Upload a voxel set (xyz: centre, w: scale). NaN or infinite centres, and negative or
     /// non-finite scales, are refused.
-    pub fn upload(&self, device: &wgpu::Device,
-        queue: &wgpu::Queue, voxels: &[Vec4]) -> Result<Instances, Error> {
+    pub fn upload(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        voxels: &[Vec4],
+    ) -> Result<Instances, Error> {
         check_voxels(voxels, 1.0)?;
         if voxels.len() > u32::MAX as usize {
             return Err(Error::Size {
@@ -408,8 +412,7 @@ impl Metaballs {
                 | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        queue
-            .write_buffer(&buffer, 0, bytemuck::cast_slice(voxels));
+        queue.write_buffer(&buffer, 0, bytemuck::cast_slice(voxels));
         Ok(Instances {
             buffer,
             count: voxels.len() as u32,
@@ -435,46 +438,23 @@ impl Metaballs {
                 ),
             });
         }
-        queue
-            .write_buffer(&instances.buffer, 0, bytemuck::cast_slice(voxels));
+        queue.write_buffer(&instances.buffer, 0, bytemuck::cast_slice(voxels));
         instances.max_scale = max_scale(voxels);
         Ok(())
     }
 
-    /// Splat, seeds and signed distance for `instances` on `grid` (voxel edge `edge`).
+    /// Splat, seeds and signed distance for `instances` on `grid` (voxel edge `edge`), recorded
+    /// into `rec` (a command encoder, or [`crate::gpu::Profiler::record`] to time each pass).
     pub fn encode(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         instances: &Instances,
         grid: &Grid3,
         edge: f32,
         settings: &Settings,
     ) -> Result<MetaballField, Error> {
-        self.encode_profiled(device, encoder, instances, grid, edge, settings, None)
-    }
-
-    /// [`Self::encode`] with each pass timed by `profiler` (`cargo xtask bench metaball`).
-    #[allow(clippy::too_many_arguments)]
-    pub fn encode_profiled(
-        &self,
-        device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
-        instances: &Instances,
-        grid: &Grid3,
-        edge: f32,
-        settings: &Settings,
-        mut profiler: Option<&mut Profiler>,
-    ) -> Result<MetaballField, Error> {
-        let seeds = self.encode_seeds_profiled(
-            device,
-            encoder,
-            instances,
-            grid,
-            edge,
-            settings,
-            &mut profiler,
-        )?;
+        let seeds = self.encode_seeds(device, rec, instances, grid, edge, settings)?;
         let options = Options3d {
             method: settings.method,
             signed: true,
@@ -483,24 +463,16 @@ impl Metaballs {
             band: Some(settings.band),
         };
         // The flood starts from the keys buffer and may leave intermediate steps in it.
-        let field = self.distance.encode_keyed_points_profiled(
+        let field = self.distance.encode_keyed_points(
             device,
-            encoder,
+            rec,
             seeds.keys,
             &seeds.points,
             grid.size,
             Some(&seeds.density),
             &options,
-            profiler.as_deref_mut(),
         )?;
-        let march = self.encode_pack(
-            device,
-            encoder,
-            grid,
-            &field.distance,
-            &seeds.density,
-            &mut profiler,
-        )?;
+        let march = self.encode_pack(device, rec, grid, &field.distance, &seeds.density)?;
         Ok(MetaballField {
             march,
             grid: *grid,
@@ -521,7 +493,7 @@ impl Metaballs {
     pub fn encode_bins(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         instances: &Instances,
         grid: &Grid3,
         edge: f32,
@@ -559,8 +531,9 @@ impl Metaballs {
         let starts = storage("blob bin starts", (bin_total as u64 + 1) * 4);
         let items = storage("blob bin items", capacity.max(1) * 16);
         let stats = storage("blob bin stats", 8);
-        encoder.clear_buffer(&counts, 0, None);
-        encoder.clear_buffer(&stats, 0, None);
+        let mut rec = rec.recorder();
+        rec.encoder.clear_buffer(&counts, 0, None);
+        rec.encoder.clear_buffer(&stats, 0, None);
         let params = uniform(
             device,
             "blob bin params",
@@ -574,10 +547,7 @@ impl Metaballs {
             },
         );
         let per_instance = [instances.count.div_ceil(64).max(1), 1, 1];
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(bin_blobs::STAGE),
-            timestamp_writes: None,
-        });
+        let mut pass = rec.compute_pass(bin_blobs::STAGE, "bins");
         if instances.count > 0 {
             let bound = self.bin_count.bind(
                 device,
@@ -640,11 +610,10 @@ impl Metaballs {
     fn encode_pack(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         grid: &Grid3,
         sdf: &wgpu::Texture,
         density: &wgpu::Texture,
-        prof: Prof,
     ) -> Result<wgpu::Texture, Error> {
         let packed = volume_texture(
             device,
@@ -665,21 +634,18 @@ impl Metaballs {
             density.create_view(&Default::default()),
             packed.create_view(&Default::default()),
         );
-        let bound = self.pack.bind(
+        self.pack.record(
             device,
+            rec,
             &march_field::march_field::Resources {
                 params: (&params).into(),
                 sdf: (&sv).into(),
                 density: (&dv).into(),
                 packed: (&pv).into(),
             },
+            ComputePipeline::<march_field::march_field::Entry>::groups_for(grid.size),
+            "pack",
         )?;
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(march_field::STAGE),
-            timestamp_writes: prof.as_mut().and_then(|p| p.next("pack")),
-        });
-        let groups = ComputePipeline::<march_field::march_field::Entry>::groups_for(grid.size);
-        self.pack.dispatch(&mut pass, &bound, groups);
         Ok(packed)
     }
 
@@ -687,25 +653,11 @@ impl Metaballs {
     pub fn encode_seeds(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         instances: &Instances,
         grid: &Grid3,
         edge: f32,
         settings: &Settings,
-    ) -> Result<SurfaceSeeds, Error> {
-        self.encode_seeds_profiled(device, encoder, instances, grid, edge, settings, &mut None)
-    }
-
-    #[allow(clippy::too_many_arguments)]
-    fn encode_seeds_profiled(
-        &self,
-        device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
-        instances: &Instances,
-        grid: &Grid3,
-        edge: f32,
-        settings: &Settings,
-        prof: Prof,
     ) -> Result<SurfaceSeeds, Error> {
         check_inputs(settings, edge, grid, STAGE)?;
         crate::distance::check_size_3d(device, grid.size)?;
@@ -730,7 +682,7 @@ impl Metaballs {
         }
         let storage = |label: &str, bytes: u64| storage_buffer(device, label, bytes);
         let density_fixed = storage("metaball density (fixed point)", cells * 4);
-        encoder.clear_buffer(&density_fixed, 0, None);
+        rec.recorder().encoder.clear_buffer(&density_fixed, 0, None);
         let scale = fixed_scale(instances.count);
         if instances.count > 0 {
             let params = uniform(
@@ -745,20 +697,17 @@ impl Metaballs {
                     fixed_scale: scale,
                 },
             );
-            let bound = self.splat.bind(
+            self.splat.record(
                 device,
+                rec,
                 &splat::splat::Resources {
                     params: (&params).into(),
                     instances: (&instances.buffer).into(),
                     density: (&density_fixed).into(),
                 },
+                [instances.count.div_ceil(64), 1, 1],
+                "splat",
             )?;
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some(splat::STAGE),
-                timestamp_writes: prof.as_mut().and_then(|p| p.next("splat")),
-            });
-            self.splat
-                .dispatch(&mut pass, &bound, [instances.count.div_ceil(64), 1, 1]);
         }
         let density = volume_texture(
             device,
@@ -779,8 +728,9 @@ impl Metaballs {
                 },
             );
             let dv = density.create_view(&Default::default());
-            let bound = self.seeds.bind(
+            self.seeds.record(
                 device,
+                rec,
                 &surface_seeds::surface_seeds::Resources {
                     params: (&params).into(),
                     density: (&density_fixed).into(),
@@ -788,14 +738,9 @@ impl Metaballs {
                     keys: (&keys).into(),
                     points: (&points).into(),
                 },
+                ComputePipeline::<surface_seeds::surface_seeds::Entry>::groups_for(grid.size),
+                "seeds",
             )?;
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some(surface_seeds::STAGE),
-                timestamp_writes: prof.as_mut().and_then(|p| p.next("seeds")),
-            });
-            let groups =
-                ComputePipeline::<surface_seeds::surface_seeds::Entry>::groups_for(grid.size);
-            self.seeds.dispatch(&mut pass, &bound, groups);
         }
         Ok(SurfaceSeeds {
             density_fixed,

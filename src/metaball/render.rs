@@ -29,11 +29,11 @@
 use glam::{Mat4, Vec3, Vec4};
 
 use super::{BlobBins, Instances, MetaballField};
-use crate::view::{View, box_visible, depth_state, load_pass, screen_rect};
 use crate::bind::{ComputePipeline, RenderPipeline, RenderTargets};
 use crate::error::Error;
 use crate::gpu::uniform_buffer as uniform;
 use crate::shaders::metaball::{blob_trace, composite, sdf_raymarch, voxel_cubes};
+use crate::view::{View, box_visible, depth_state, load_pass, screen_rect};
 
 /// What the raymarcher writes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -327,7 +327,7 @@ impl Raymarcher {
     pub fn encode_direct_march(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl crate::gpu::Record,
         bins: &BlobBins,
         method: Direct,
         local_to_world: Mat4,
@@ -395,7 +395,7 @@ impl Raymarcher {
             },
         )?;
         Ok(Some(dispatch_rect(
-            encoder,
+            rec,
             blob_trace::STAGE,
             &self.direct,
             &bound,
@@ -429,7 +429,7 @@ impl Raymarcher {
     pub fn encode_march(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl crate::gpu::Record,
         field: &MetaballField,
         local_to_world: Mat4,
         view: &View,
@@ -492,7 +492,7 @@ impl Raymarcher {
             },
         )?;
         Ok(Some(dispatch_rect(
-            encoder,
+            rec,
             sdf_raymarch::STAGE,
             &self.march,
             &marched,
@@ -605,17 +605,15 @@ pub struct Marched {
 
 /// Record a march over `rect` (8×8 pixels per workgroup) into `scratch`.
 fn dispatch_rect<E: crate::bind::Entry>(
-    encoder: &mut wgpu::CommandEncoder,
+    rec: &mut impl crate::gpu::Record,
     label: &str,
     pipeline: &ComputePipeline<E>,
     bound: &crate::bind::Bound<E>,
     rect: [u32; 4],
     scratch: std::sync::Arc<Scratch>,
 ) -> Marched {
-    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-        label: Some(label),
-        timestamp_writes: None,
-    });
+    let mut rec = rec.recorder();
+    let mut pass = rec.compute_pass(label, label);
     let groups = [
         (rect[2] - rect[0]).div_ceil(8),
         (rect[3] - rect[1]).div_ceil(8),

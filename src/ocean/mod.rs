@@ -32,7 +32,7 @@ use glam::{DVec2, DVec3, UVec2, Vec2, Vec4};
 
 use crate::bind::ComputePipeline;
 use crate::error::Error;
-use crate::gpu::uniform_buffer as uniform;
+use crate::gpu::{Record, uniform_buffer as uniform};
 use crate::shaders::ocean::surface::{self as stage, GerstnerWave, GridParams, WaveSet};
 
 const STAGE: &str = stage::STAGE;
@@ -367,7 +367,7 @@ impl WaveGrid {
     pub fn encode(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         waves: &WaveSet,
         start: Vec2,
         spacing: Vec2,
@@ -420,25 +420,18 @@ impl WaveGrid {
                 size: UVec2::from_array(size),
             },
         );
-        let bound = self.pipeline.bind(
+        self.pipeline.record(
             device,
+            rec,
             &stage::displace_grid::Resources {
                 waves: (&wave_buffer).into(),
                 grid: (&grid).into(),
                 positions: (&positions).into(),
                 normals: (&normals).into(),
             },
-        )?;
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(STAGE),
-            timestamp_writes: None,
-        });
-        self.pipeline.dispatch(
-            &mut pass,
-            &bound,
             ComputePipeline::<stage::displace_grid::Entry>::groups_for([size[0], size[1], 1]),
-        );
-        drop(pass);
+            STAGE,
+        )?;
         Ok(DisplacedGrid {
             size,
             positions,

@@ -609,26 +609,20 @@ impl OceanRenderer {
                 aspect: wgpu::TextureAspect::DepthOnly,
                 ..Default::default()
             });
-            let bound = self.copy_depth.bind(
+            self.copy_depth.record(
                 device,
+                encoder,
                 &depth_copy::copy_depth::Resources {
                     depth_in: (&depth_in).into(),
                     depth_out: (&copy_view).into(),
                 },
-            )?;
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some(depth_copy::STAGE),
-                timestamp_writes: None,
-            });
-            self.copy_depth.dispatch(
-                &mut pass,
-                &bound,
                 ComputePipeline::<depth_copy::copy_depth::Entry>::groups_for([
                     size.width,
                     size.height,
                     1,
                 ]),
-            );
+                depth_copy::STAGE,
+            )?;
         }
         if patches.is_empty() {
             return Ok(());

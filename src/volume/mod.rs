@@ -39,9 +39,9 @@ use glam::{Mat4, Vec3};
 
 use crate::bind::{ComputePipeline, RenderPipeline, RenderTargets};
 use crate::error::Error;
-use crate::gpu::uniform_buffer as uniform;
-use crate::view::{View, box_visible, screen_rect};
+use crate::gpu::{Record, uniform_buffer as uniform};
 use crate::shaders::volume::{bricks, lit_density, volume_composite, volume_march};
+use crate::view::{View, box_visible, screen_rect};
 
 const STAGE: &str = volume_march::STAGE;
 
@@ -614,7 +614,7 @@ impl VolumeRenderer {
     pub fn encode_bricks(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         volume: &Volume,
     ) -> Result<Bricks, Error> {
         let count = volume.dims.map(|d| d.div_ceil(BRICK));
@@ -635,20 +635,18 @@ impl VolumeRenderer {
             },
         );
         let dv = volume.texture.create_view(&Default::default());
-        let bound = self.bricks.bind(
+        let groups = ComputePipeline::<bricks::bricks::Entry>::groups_for(count);
+        self.bricks.record(
             device,
+            rec,
             &bricks::bricks::Resources {
                 params: (&params).into(),
                 density: (&dv).into(),
                 ranges: (&ranges).into(),
             },
+            groups,
+            bricks::STAGE,
         )?;
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(bricks::STAGE),
-            timestamp_writes: None,
-        });
-        let groups = ComputePipeline::<bricks::bricks::Entry>::groups_for(count);
-        self.bricks.dispatch(&mut pass, &bound, groups);
         Ok(Bricks { ranges, count })
     }
 
@@ -751,7 +749,7 @@ impl VolumeRenderer {
     pub fn encode_light(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         volume: &Volume,
         bricks: &Bricks,
         tf: &TransferFunction,
@@ -760,7 +758,7 @@ impl VolumeRenderer {
     ) -> Result<LightVolume, Error> {
         self.encode_light_folded(
             device,
-            encoder,
+            rec,
             volume,
             bricks,
             tf,
@@ -777,7 +775,7 @@ impl VolumeRenderer {
     pub fn encode_light_folded(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         volume: &Volume,
         bricks: &Bricks,
         tf: &TransferFunction,
@@ -834,8 +832,10 @@ impl VolumeRenderer {
             volume.texture.create_view(&Default::default()),
             texture.create_view(&Default::default()),
         );
-        let bound = self.light.bind(
+        let groups = ComputePipeline::<volume_march::light_volume::Entry>::groups_for(size);
+        self.light.record(
             device,
+            rec,
             &volume_march::light_volume::Resources {
                 params: (&params).into(),
                 density: (&dv).into(),
@@ -843,16 +843,11 @@ impl VolumeRenderer {
                 tf: (&tf_buffer).into(),
                 light_out: (&lv).into(),
             },
+            groups,
+            "volume light",
         )?;
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("volume light"),
-            timestamp_writes: None,
-        });
-        let groups = ComputePipeline::<volume_march::light_volume::Entry>::groups_for(size);
-        self.light.dispatch(&mut pass, &bound, groups);
-        drop(pass);
         let lit_density = if fold {
-            Some(self.encode_lit_density(device, encoder, volume, &dv, &lv)?)
+            Some(self.encode_lit_density(device, rec, volume, &dv, &lv)?)
         } else {
             None
         };
@@ -873,7 +868,7 @@ impl VolumeRenderer {
     fn encode_lit_density(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         volume: &Volume,
         density: &wgpu::TextureView,
         light: &wgpu::TextureView,
@@ -896,10 +891,8 @@ impl VolumeRenderer {
             view_formats: &[],
         });
         let out = texture.create_view(&Default::default());
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(lit_density::STAGE),
-            timestamp_writes: None,
-        });
+        let mut rec = rec.recorder();
+        let mut pass = rec.compute_pass(lit_density::STAGE, "lit density");
         let groups = [w.div_ceil(8), h.div_ceil(8), d];
         // One entry point per format, each with its own generated bindings.
         macro_rules! fold {
@@ -934,7 +927,7 @@ impl VolumeRenderer {
     pub fn encode_march(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         volume: &Volume,
         bricks: &Bricks,
         light: Option<&LightVolume>,
@@ -1057,8 +1050,14 @@ impl VolumeRenderer {
                 ("COUNT_SAMPLES", settings.count_samples as u32 as f64),
             ],
         )?;
-        let bound = march.bind(
+        let groups = [
+            (rect[2] - rect[0]).div_ceil(8),
+            (rect[3] - rect[1]).div_ceil(8),
+            1,
+        ];
+        march.record(
             device,
+            rec,
             &volume_march::march::Resources {
                 params: (&params).into(),
                 density: (&dv).into(),
@@ -1069,17 +1068,9 @@ impl VolumeRenderer {
                 scene_depth: scene_depth.unwrap_or(&no_depth).into(),
                 colour_out: (&cv).into(),
             },
+            groups,
+            STAGE,
         )?;
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(STAGE),
-            timestamp_writes: None,
-        });
-        let groups = [
-            (rect[2] - rect[0]).div_ceil(8),
-            (rect[3] - rect[1]).div_ceil(8),
-            1,
-        ];
-        march.dispatch(&mut pass, &bound, groups);
         Ok(Some(VolumeMarched { rect, colour }))
     }
 

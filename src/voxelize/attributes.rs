@@ -14,11 +14,11 @@ use glam::{DVec3, Vec3};
 
 use super::{
     Grid, GridMesh, HeavyWork, Mesh, SLACK, Surface, Voxelizer, batches, invalid, run_indirect,
-    run_pass, volume_texture,
+    volume_texture,
 };
 use crate::bind::ComputePipeline;
 use crate::error::Error;
-use crate::gpu::{Readback, readback_buffer, uniform_buffer as uniform};
+use crate::gpu::{Readback, Record, readback_buffer, uniform_buffer as uniform};
 use crate::shaders::voxelize::attribute_volume::{self as volume_stage, AttributeVolumeParams};
 use crate::shaders::voxelize::attributes::{self as stage, AttributeParams};
 use crate::shaders::voxelize::compact::{self as compact, CompactParams};
@@ -119,7 +119,11 @@ fn decode_normal(packed: u32) -> Option<Vec3> {
 
 impl Attributes {
     /// Every occupied voxel's averages, in voxel order.
-    pub fn read(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Readback<Vec<VoxelAttributes>> {
+    pub fn read(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Readback<Vec<VoxelAttributes>> {
         let [nx, ny, _] = self.surface.size;
         let count = self.count as usize;
         readback_buffer(device, queue, &self.voxels).then(move |bytes| {
@@ -223,7 +227,7 @@ impl Voxelizer {
     pub fn encode_attribute_volumes(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         attributes: &Attributes,
     ) -> Result<AttributeVolumes, Error> {
         let [w, h, d] = attributes.surface.size;
@@ -257,25 +261,20 @@ impl Voxelizer {
             volumes.normal.create_view(&Default::default()),
         );
         let pipeline = ComputePipeline::cached(&self.attribute_pipelines.to_volumes, device, &[])?;
-        let bound = pipeline.bind(
+        let groups = attributes.count.div_ceil(64);
+        let row = device.limits().max_compute_workgroups_per_dimension;
+        pipeline.record(
             device,
+            rec,
             &volume_stage::to_volumes::Resources {
                 params: (&params).into(),
                 voxels: (&attributes.voxels).into(),
                 colour: (&colour).into(),
                 normal: (&normal).into(),
             },
-        )?;
-        let groups = attributes.count.div_ceil(64);
-        let row = device.limits().max_compute_workgroups_per_dimension;
-        run_pass(
-            encoder,
-            volume_stage::STAGE,
-            pipeline,
-            &bound,
             [groups.min(row), groups.div_ceil(row), 1],
-            &mut None,
-        );
+            volume_stage::STAGE,
+        )?;
         Ok(volumes)
     }
 
@@ -284,22 +283,21 @@ impl Voxelizer {
     pub fn encode_attributes(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         mesh: &Mesh,
         grid: &Grid,
     ) -> Result<PendingAttributes, Error> {
         let local = mesh.to_grid(grid)?;
         let corner_data = corners(mesh, &local)?;
-        let (occupancy, triangles) = self.bitset(device, encoder, &local, grid)?;
+        let (occupancy, triangles) = self.bitset(device, rec, &local, grid)?;
         let heavy = self.surface_into(
             device,
-            encoder,
+            rec,
             &self.surface,
             &occupancy,
             &triangles,
             &local,
             grid,
-            &mut None,
         )?;
         let voxels = grid.voxels();
         let words = voxels.div_ceil(32);
@@ -342,32 +340,26 @@ impl Voxelizer {
         };
         let p = &self.attribute_pipelines;
         let scan_words = ComputePipeline::cached(&p.scan_words, device, &[])?;
-        let bound = scan_words.bind(device, &resources(()))?;
-        run_pass(
-            encoder,
-            compact::STAGE,
-            scan_words,
-            &bound,
-            [blocks as u32, 1, 1],
-            &mut None,
-        );
-        let scan_blocks = ComputePipeline::cached(&p.scan_blocks, device, &[])?;
-        let bound = scan_blocks.bind(
+        scan_words.record(
             device,
+            rec,
+            &resources(()),
+            [blocks as u32, 1, 1],
+            compact::STAGE,
+        )?;
+        let scan_blocks = ComputePipeline::cached(&p.scan_blocks, device, &[])?;
+
+        scan_blocks.record(
+            device,
+            rec,
             &compact::scan_blocks::Resources {
                 params: (&params).into(),
                 block_offsets: (&block_offsets).into(),
                 total: (&total).into(),
             },
-        )?;
-        run_pass(
-            encoder,
-            compact::STAGE,
-            scan_blocks,
-            &bound,
             [1, 1, 1],
-            &mut None,
-        );
+            compact::STAGE,
+        )?;
         use wgpu::util::DeviceExt;
         let mut corner_data = corner_data;
         if corner_data.is_empty() {
@@ -401,7 +393,7 @@ impl Voxelizer {
     pub fn encode_resolve_attributes(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         pending: PendingAttributes,
         occupied: u32,
     ) -> Result<Attributes, Error> {
@@ -445,7 +437,7 @@ impl Voxelizer {
             occupied as u64 * 16,
             wgpu::BufferUsages::COPY_SRC,
         );
-        encoder.clear_buffer(&sums, 0, None);
+        rec.recorder().encoder.clear_buffer(&sums, 0, None);
         let params_for = |first, n| {
             uniform(
                 device,
@@ -464,8 +456,10 @@ impl Voxelizer {
         let accumulate = ComputePipeline::cached(&p.accumulate, device, &[])?;
         for (first, n) in batches(count) {
             let params = params_for(first, n);
-            let bound = accumulate.bind(
+
+            accumulate.record(
                 device,
+                rec,
                 &stage::accumulate::Resources {
                     params: (&params).into(),
                     triangles: (&triangles).into(),
@@ -475,15 +469,9 @@ impl Voxelizer {
                     block_offsets: (&block_offsets).into(),
                     sums: (&sums).into(),
                 },
-            )?;
-            run_pass(
-                encoder,
-                stage::STAGE,
-                accumulate,
-                &bound,
                 [n.div_ceil(64), 1, 1],
-                &mut None,
-            );
+                stage::STAGE,
+            )?;
         }
         let params = params_for(0, count);
         if heavy.capacity > 0 {
@@ -503,17 +491,19 @@ impl Voxelizer {
                 },
             )?;
             run_indirect(
-                encoder,
+                rec,
                 "voxel attributes of heavy triangles",
                 pipeline,
                 &bound,
                 &heavy.dispatch,
-                &mut None,
             );
         }
         let resolve = ComputePipeline::cached(&p.resolve, device, &[])?;
-        let bound = resolve.bind(
+        let groups = words.div_ceil(64);
+        let row = device.limits().max_compute_workgroups_per_dimension;
+        resolve.record(
             device,
+            rec,
             &stage::resolve::Resources {
                 params: (&params).into(),
                 occupancy: (&surface.occupancy).into(),
@@ -522,17 +512,9 @@ impl Voxelizer {
                 sums: (&sums).into(),
                 voxels: (&voxels).into(),
             },
-        )?;
-        let groups = words.div_ceil(64);
-        let row = device.limits().max_compute_workgroups_per_dimension;
-        run_pass(
-            encoder,
-            stage::STAGE,
-            resolve,
-            &bound,
             [groups.min(row), groups.div_ceil(row), 1],
-            &mut None,
-        );
+            stage::STAGE,
+        )?;
         Ok(Attributes {
             surface,
             count: occupied,

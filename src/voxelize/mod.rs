@@ -31,7 +31,7 @@ use glam::{DVec3, Vec4};
 
 use crate::bind::ComputePipeline;
 use crate::error::Error;
-use crate::gpu::{Prof, Profiler, Readback, readback_buffer, uniform_buffer as uniform};
+use crate::gpu::{Readback, Record, readback_buffer, uniform_buffer as uniform};
 use crate::shaders::voxelize::occupancy_volume::{self as volume_stage, VolumeParams};
 use crate::shaders::voxelize::raster::{self as raster_stage, RasterParams};
 use crate::shaders::voxelize::solid::{self as solid_stage, SolidParams};
@@ -118,7 +118,10 @@ impl Grid {
         Ok(Grid {
             origin: lo - DVec3::splat(voxel),
             voxel,
-            size: size.min(glam::UVec3::splat(n)).max(glam::UVec3::ONE).to_array(),
+            size: size
+                .min(glam::UVec3::splat(n))
+                .max(glam::UVec3::ONE)
+                .to_array(),
         })
     }
 }
@@ -476,37 +479,16 @@ pub struct Voxelizer {
     raster: std::sync::OnceLock<crate::bind::RenderPipeline<raster_stage::fs_raster::Entry>>,
 }
 
-/// One compute pass of `groups` workgroups of `pipeline`, labelled `label`.
-fn run_pass<E: crate::bind::Entry>(
-    encoder: &mut wgpu::CommandEncoder,
-    label: &str,
-    pipeline: &ComputePipeline<E>,
-    bound: &crate::bind::Bound<E>,
-    groups: [u32; 3],
-    prof: Prof,
-) {
-    let timestamp_writes = prof.as_mut().and_then(|p| p.next(label));
-    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-        label: Some(label),
-        timestamp_writes,
-    });
-    pipeline.dispatch(&mut pass, bound, groups);
-}
-
 /// One compute pass of `pipeline` with its workgroup counts read from `args` (three u32).
 fn run_indirect<E: crate::bind::Entry>(
-    encoder: &mut wgpu::CommandEncoder,
+    rec: &mut impl Record,
     label: &str,
     pipeline: &ComputePipeline<E>,
     bound: &crate::bind::Bound<E>,
     args: &wgpu::Buffer,
-    prof: Prof,
 ) {
-    let timestamp_writes = prof.as_mut().and_then(|p| p.next(label));
-    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-        label: Some(label),
-        timestamp_writes,
-    });
+    let mut rec = rec.recorder();
+    let mut pass = rec.compute_pass(label, label);
     pass.set_pipeline(&pipeline.pipeline);
     bound.set_compute(&mut pass);
     pass.dispatch_workgroups_indirect(args, 0);
@@ -577,25 +559,11 @@ impl Voxelizer {
     pub fn encode_solid(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         mesh: &Mesh,
         grid: &Grid,
         with_surface: bool,
     ) -> Result<Surface, Error> {
-        self.encode_solid_profiled(device, encoder, mesh, grid, with_surface, None)
-    }
-
-    /// [`Self::encode_solid`] with each pass timed by `profiler`.
-    pub fn encode_solid_profiled(
-        &self,
-        device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
-        mesh: &Mesh,
-        grid: &Grid,
-        with_surface: bool,
-        mut profiler: Option<&mut Profiler>,
-    ) -> Result<Surface, Error> {
-        let prof = &mut profiler;
         if let Some([a, b]) = mesh.open_edge() {
             return Err(invalid(format!(
                 "solid voxelization needs a closed, consistently oriented mesh: the edge between \
@@ -603,7 +571,7 @@ impl Voxelizer {
             )));
         }
         let local = mesh.to_grid(grid)?;
-        let (occupancy, triangles) = self.bitset(device, encoder, &local, grid)?;
+        let (occupancy, triangles) = self.bitset(device, rec, &local, grid)?;
         let count = (local.vertices.len() / 3) as u32;
         for (first, n) in batches(count) {
             let params = uniform(
@@ -615,33 +583,27 @@ impl Voxelizer {
                     count: n,
                 },
             );
-            let bound = self.solid.bind(
+            self.solid.record(
                 device,
+                rec,
                 &solid_stage::solid::Resources {
                     params: (&params).into(),
                     triangles: (&triangles).into(),
                     occupancy: (&occupancy).into(),
                 },
-            )?;
-            run_pass(
-                encoder,
-                solid_stage::STAGE,
-                &self.solid,
-                &bound,
                 [n.div_ceil(64), 1, 1],
-                prof,
-            );
+                solid_stage::STAGE,
+            )?;
         }
         if with_surface {
             let _ = self.surface_into(
                 device,
-                encoder,
+                rec,
                 &self.surface,
                 &occupancy,
                 &triangles,
                 &local,
                 grid,
-                prof,
             )?;
         }
         Ok(Surface {
@@ -656,7 +618,7 @@ impl Voxelizer {
     pub fn encode_volume(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         voxels: &Surface,
     ) -> Result<wgpu::Texture, Error> {
         let volume = volume_texture(
@@ -673,22 +635,17 @@ impl Voxelizer {
                 grid: voxels.size.into(),
             },
         );
-        let bound = self.to_volume.bind(
+        self.to_volume.record(
             device,
+            rec,
             &volume_stage::to_volume::Resources {
                 params: (&params).into(),
                 occupancy: (&voxels.occupancy).into(),
                 volume: (&view).into(),
             },
-        )?;
-        run_pass(
-            encoder,
-            volume_stage::STAGE,
-            &self.to_volume,
-            &bound,
             ComputePipeline::<volume_stage::to_volume::Entry>::groups_for(voxels.size),
-            &mut None,
-        );
+            volume_stage::STAGE,
+        )?;
         Ok(volume)
     }
 
@@ -696,7 +653,7 @@ impl Voxelizer {
     fn bitset(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         local: &GridMesh,
         grid: &Grid,
     ) -> Result<(wgpu::Buffer, wgpu::Buffer), Error> {
@@ -719,7 +676,7 @@ impl Voxelizer {
                 | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        encoder.clear_buffer(&occupancy, 0, None);
+        rec.recorder().encoder.clear_buffer(&occupancy, 0, None);
         use wgpu::util::DeviceExt;
         // One padding vertex keeps the buffer non-empty when every triangle was degenerate.
         let mut vertices = local.vertices.clone();
@@ -742,13 +699,12 @@ impl Voxelizer {
     fn surface_into(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         pipelines: &SurfacePipelines,
         occupancy: &wgpu::Buffer,
         triangles: &wgpu::Buffer,
         local: &GridMesh,
         grid: &Grid,
-        prof: Prof,
     ) -> Result<HeavyWork, Error> {
         let count = (local.vertices.len() / 3) as u32;
         let capacity = heavy_chunk_bound(local, grid.size);
@@ -780,8 +736,9 @@ impl Voxelizer {
             dispatch,
             ..
         } = &heavy_work;
-        encoder.clear_buffer(work_count, 0, None);
-        encoder.clear_buffer(dispatch, 0, None);
+        let r = rec.recorder();
+        r.encoder.clear_buffer(work_count, 0, None);
+        r.encoder.clear_buffer(dispatch, 0, None);
         if count == 0 {
             return Ok(heavy_work);
         }
@@ -800,8 +757,9 @@ impl Voxelizer {
         };
         for (first, n) in batches(count) {
             let params = params_for(first, n);
-            let bound = pipelines.light.bind(
+            pipelines.light.record(
                 device,
+                rec,
                 &stage::surface::Resources {
                     params: (&params).into(),
                     triangles: triangles.into(),
@@ -809,15 +767,9 @@ impl Voxelizer {
                     work: work.into(),
                     work_count: work_count.into(),
                 },
-            )?;
-            run_pass(
-                encoder,
-                STAGE,
-                &pipelines.light,
-                &bound,
                 [n.div_ceil(64), 1, 1],
-                prof,
-            );
+                STAGE,
+            )?;
         }
         if capacity == 0 {
             return Ok(heavy_work);
@@ -841,21 +793,17 @@ impl Voxelizer {
                 work_count: work_count.into(),
             },
         )?;
-        run_pass(
-            encoder,
-            "voxelize heavy arguments",
-            &pipelines.args,
-            &args,
-            [1, 1, 1],
-            prof,
-        );
+        {
+            let mut r = rec.recorder();
+            let mut pass = r.compute_pass("voxelize heavy arguments", "voxelize heavy arguments");
+            pipelines.args.dispatch(&mut pass, &args, [1, 1, 1]);
+        }
         run_indirect(
-            encoder,
+            rec,
             "voxelize heavy triangles",
             &pipelines.heavy,
             &heavy,
             dispatch,
-            prof,
         );
         Ok(heavy_work)
     }
@@ -868,7 +816,7 @@ impl Voxelizer {
     pub fn encode_surface_raster(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         mesh: &Mesh,
         grid: &Grid,
     ) -> Result<Surface, Error> {
@@ -883,7 +831,7 @@ impl Voxelizer {
             });
         }
         let local = mesh.to_grid(grid)?;
-        let (occupancy, triangles) = self.bitset(device, encoder, &local, grid)?;
+        let (occupancy, triangles) = self.bitset(device, rec, &local, grid)?;
         let format = wgpu::TextureFormat::R8Unorm;
         let pipeline = if let Some(p) = self.raster.get() {
             p
@@ -937,19 +885,22 @@ impl Voxelizer {
             },
         )?;
         let count = (local.vertices.len() / 3) as u32;
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some(raster_stage::STAGE),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                    store: wgpu::StoreOp::Discard,
-                },
-            })],
-            ..Default::default()
-        });
+        let mut pass = rec
+            .recorder()
+            .encoder
+            .begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some(raster_stage::STAGE),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Discard,
+                    },
+                })],
+                ..Default::default()
+            });
         pass.set_pipeline(&pipeline.pipeline);
         bound.set_render(&mut pass);
         pass.draw(0..count * 3, 0..1);
@@ -966,51 +917,30 @@ impl Voxelizer {
     pub fn encode_surface(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         mesh: &Mesh,
         grid: &Grid,
     ) -> Result<Surface, Error> {
-        self.encode_surface_with(device, encoder, mesh, grid, Separation::Conservative)
+        self.encode_surface_with(device, rec, mesh, grid, Separation::Conservative)
     }
 
-    /// Surface voxels of `mesh` in `grid`, as thick as `separation` says.
+    /// Surface voxels of `mesh` in `grid`, as thick as `separation` says, recorded into `rec`
+    /// (a command encoder, or [`crate::gpu::Profiler::record`] to time each pass).
     pub fn encode_surface_with(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         mesh: &Mesh,
         grid: &Grid,
         separation: Separation,
-    ) -> Result<Surface, Error> {
-        self.encode_surface_profiled(device, encoder, mesh, grid, separation, None)
-    }
-
-    /// [`Self::encode_surface_with`] with each pass timed by `profiler`.
-    pub fn encode_surface_profiled(
-        &self,
-        device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
-        mesh: &Mesh,
-        grid: &Grid,
-        separation: Separation,
-        mut profiler: Option<&mut Profiler>,
     ) -> Result<Surface, Error> {
         let local = mesh.to_grid(grid)?;
-        let (occupancy, triangles) = self.bitset(device, encoder, &local, grid)?;
+        let (occupancy, triangles) = self.bitset(device, rec, &local, grid)?;
         let pipelines = match separation {
             Separation::Conservative => &self.surface,
             Separation::Six => &self.surface_six,
         };
-        let _ = self.surface_into(
-            device,
-            encoder,
-            pipelines,
-            &occupancy,
-            &triangles,
-            &local,
-            grid,
-            &mut profiler,
-        )?;
+        let _ = self.surface_into(device, rec, pipelines, &occupancy, &triangles, &local, grid)?;
         Ok(Surface {
             size: grid.size,
             occupancy,

@@ -7,8 +7,8 @@ use super::{Attributes, Grid, invalid};
 use crate::bind::{RenderPipeline, RenderTargets};
 use crate::error::Error;
 use crate::gpu::uniform_buffer as uniform;
-use crate::view::{depth_state, load_pass};
 use crate::shaders::voxelize::voxel_view::{self as stage, ViewParams};
+use crate::view::{depth_state, load_pass};
 
 /// What the cubes are coloured by.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

@@ -30,7 +30,8 @@ pub fn run_jfa(
     h: usize,
     options: Options,
 ) -> (Vec<u32>, Vec<f32>) {
-    let seeds = upload_mask(&ctx.device, &ctx.queue, &to_bytes(mask), w as u32, h as u32).expect("upload");
+    let seeds =
+        upload_mask(&ctx.device, &ctx.queue, &to_bytes(mask), w as u32, h as u32).expect("upload");
     let mut enc = ctx.encoder("test");
     let field = jfa
         .encode(&ctx.device, &mut enc, &seeds, &options)
@@ -75,8 +76,9 @@ pub fn run_3d(
     options: &fieldkit::distance::Options3d,
 ) -> (Vec<u32>, Option<Vec<u32>>, Vec<f32>) {
     use fieldkit::gpu::read_buffer;
-    let volume = fieldkit::distance::upload_volume(&ctx.device, &ctx.queue, &to_bytes(mask), size_u32(size))
-        .expect("upload");
+    let volume =
+        fieldkit::distance::upload_volume(&ctx.device, &ctx.queue, &to_bytes(mask), size_u32(size))
+            .expect("upload");
     let mut enc = ctx.encoder("test");
     let field = d3
         .encode(&ctx.device, &mut enc, &volume, options)

@@ -60,8 +60,7 @@ fn spread(mut v: Vec<f64>) -> (f64, f64, f64) {
 fn bench(reps: usize, warmup: usize) -> Result<(), String> {
     let ctx = Context::new().map_err(|e| e.to_string())?;
     println!("adapter: {}", ctx.adapter_name());
-    let pipeline =
-        ComputePipeline::<jump::Entry>::new(&ctx.device).map_err(|e| e.to_string())?;
+    let pipeline = ComputePipeline::<jump::Entry>::new(&ctx.device).map_err(|e| e.to_string())?;
     let params = fieldkit::gpu::uniform_buffer(
         &ctx.device,
         "bind bench",
@@ -109,8 +108,18 @@ fn bench(reps: usize, warmup: usize) -> Result<(), String> {
     let (a, b) = (spread(a), spread(b));
     println!("| bind of distance/jfa_step::jump (3 resources) | median µs | fastest | slowest |");
     println!("|---|---|---|---|");
-    println!("| as shipped (fieldkit's checks, no error scope) | {:.2} | {:.2} | {:.2} |", a.0 / 1e3, a.1 / 1e3, a.2 / 1e3);
-    println!("| before: inside two error scopes, popped blocking | {:.2} | {:.2} | {:.2} |", b.0 / 1e3, b.1 / 1e3, b.2 / 1e3);
+    println!(
+        "| as shipped (fieldkit's checks, no error scope) | {:.2} | {:.2} | {:.2} |",
+        a.0 / 1e3,
+        a.1 / 1e3,
+        a.2 / 1e3
+    );
+    println!(
+        "| before: inside two error scopes, popped blocking | {:.2} | {:.2} | {:.2} |",
+        b.0 / 1e3,
+        b.1 / 1e3,
+        b.2 / 1e3
+    );
     println!("ratio (before / now, medians): {:.2}", b.0 / a.0);
     Ok(())
 }

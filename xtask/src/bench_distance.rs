@@ -49,7 +49,6 @@ fn random_mask(n: usize, density: f64, salt: u64) -> Vec<u8> {
         .collect()
 }
 
-
 /// Bytes a pass must move at least (reads + writes of the fields it touches, per cell), used for
 /// the bandwidth figure. Neighbour reads of JFA that hit the cache are not counted.
 fn pass_bytes(name: &str, cells: u64, dims: u32) -> f64 {
@@ -272,14 +271,15 @@ fn distance(args: &Args) -> Result<(), String> {
         let size = [n, n, n];
         let cells = (n * n * n) as u64;
         let mask = mask3(n);
-        let volume = upload_volume(&ctx.device, &ctx.queue, &mask, [n as u32; 3]).map_err(|e| e.to_string())?;
+        let volume = upload_volume(&ctx.device, &ctx.queue, &mask, [n as u32; 3])
+            .map_err(|e| e.to_string())?;
         let peer = peers3.remove(&n);
         let mut exact_d2: Vec<u64> = Vec::new();
         for (name, opts) in &methods3 {
             bar.set_message(format!("{n}³ {name}"));
             let (med, min, max, passes) =
                 time_runs(&ctx, args.warmup, args.reps, None, |enc, prof| {
-                    d3.encode_profiled(&ctx.device, enc, &volume, opts, Some(prof))
+                    d3.encode(&ctx.device, &mut prof.record(enc), &volume, opts)
                         .expect("encode");
                 })?;
             let mut enc = ctx.encoder("bench readback");
@@ -335,19 +335,20 @@ fn distance(args: &Args) -> Result<(), String> {
         let size = [n, n, 1];
         let cells = (n * n) as u64;
         let mask = mask2(n);
-        let tex = upload_mask(&ctx.device, &ctx.queue, &mask, n as u32, n as u32).map_err(|e| e.to_string())?;
+        let tex = upload_mask(&ctx.device, &ctx.queue, &mask, n as u32, n as u32)
+            .map_err(|e| e.to_string())?;
         let peer = peers2.remove(&n);
         // Exact.
         bar.set_message(format!("{n}² exact"));
         let opts = Options3d::default();
         let (med, min, max, passes) =
             time_runs(&ctx, args.warmup, args.reps, None, |enc, prof| {
-                d3.encode_exact_2d(&ctx.device, enc, &tex, &opts, Some(prof))
+                d3.encode_exact_2d(&ctx.device, &mut prof.record(enc), &tex, &opts)
                     .expect("encode");
             })?;
         let mut enc = ctx.encoder("bench readback");
         let field = d3
-            .encode_exact_2d(&ctx.device, &mut enc, &tex, &opts, None)
+            .encode_exact_2d(&ctx.device, &mut enc, &tex, &opts)
             .map_err(|e| e.to_string())?;
         ctx.submit_and_wait("bench", enc)
             .map_err(|e| e.to_string())?;
@@ -389,7 +390,7 @@ fn distance(args: &Args) -> Result<(), String> {
             };
             let (med, min, max, passes) =
                 time_runs(&ctx, args.warmup, args.reps, None, |enc, prof| {
-                    jfa2.encode_profiled(&ctx.device, enc, &tex, &opts, Some(prof))
+                    jfa2.encode(&ctx.device, &mut prof.record(enc), &tex, &opts)
                         .expect("encode");
                 })?;
             let mut enc = ctx.encoder("bench readback");

@@ -17,8 +17,8 @@ use fieldkit::distance::Variant;
 use fieldkit::distance::{Grid3, Method};
 use fieldkit::gpu::{Context, read_texture};
 use fieldkit::metaball::render::{Direct, Output, RaymarchSettings, Raymarcher};
-use fieldkit::view::{Targets, View};
 use fieldkit::metaball::{BlobBins, MetaballField, Metaballs, Settings, animate, cpu, packed_grid};
+use fieldkit::view::{Targets, View};
 use glam::{DVec3, Mat4, Vec3, Vec4};
 
 use crate::measure::{Stamps, median};
@@ -142,7 +142,9 @@ fn bench(
             .fit_grid(&voxels, edge)
             .map_err(|e| e.to_string())?
             .ok_or("empty set")?;
-        let inst = balls.upload(&ctx.device, &ctx.queue, &voxels).map_err(|e| e.to_string())?;
+        let inst = balls
+            .upload(&ctx.device, &ctx.queue, &voxels)
+            .map_err(|e| e.to_string())?;
         let extent = Vec3::from_array(fitted.size.map(|s| s as f32)) * fitted.voxel_size;
         let centre = fitted.origin + extent * 0.5;
         let proj = glam::camera::rh::proj::directx::perspective(
@@ -244,7 +246,7 @@ fn bench(
                 let (_, _, _, passes) =
                     crate::measure::time_runs(&ctx, warmup, reps, None, |enc, p| {
                         balls
-                            .encode_profiled(&ctx.device, enc, &inst, &grid, edge, &s, Some(p))
+                            .encode(&ctx.device, &mut p.record(enc), &inst, &grid, edge, &s)
                             .expect("the same build ran above");
                     })?;
                 let split = passes

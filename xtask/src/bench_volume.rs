@@ -189,7 +189,10 @@ fn bench(
     for &n in &sizes {
         let dims = [n; 3];
         let voxel = 1.0 / n as f32;
-        let volume = Volume::upload(&ctx.device, &ctx.queue, &fbm_cloud(dims, 7),
+        let volume = Volume::upload(
+            &ctx.device,
+            &ctx.queue,
+            &fbm_cloud(dims, 7),
             dims,
             wgpu::TextureFormat::R8Unorm,
             Vec3::splat(voxel),

@@ -11,7 +11,7 @@
 //!
 //! `--sizes 512,256,512` times those grid sizes in that order. `--replot voxelize.csv` draws
 //! the chart from a saved table without measuring. Surface and solid rows also print each
-//! pass's time (`encode_surface_profiled`). With `FIELDKIT_BENCH_SHUFFLED` set, the split bunny
+//! pass's time (`Profiler::record` around `encode_surface_with`). With `FIELDKIT_BENCH_SHUFFLED` set, the split bunny
 //! is also timed with its triangles in a
 //! scattered order (neighbours in the list no longer neighbours on the surface).
 
@@ -146,10 +146,12 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
                         "surface" => v.encode_surface(&ctx.device, enc, mesh, &grid),
                         "raster" => v.encode_surface_raster(&ctx.device, enc, mesh, &grid),
                         "solid" => v.encode_solid(&ctx.device, enc, mesh, &grid, true),
-                        _ => v.encode_attributes(&ctx.device, enc, mesh, &grid).and_then(|p| {
-                            v.encode_resolve_attributes(&ctx.device, enc, p, occupied)
-                                .map(|a| a.surface)
-                        }),
+                        _ => v
+                            .encode_attributes(&ctx.device, enc, mesh, &grid)
+                            .and_then(|p| {
+                                v.encode_resolve_attributes(&ctx.device, enc, p, occupied)
+                                    .map(|a| a.surface)
+                            }),
                     }
                     .map_err(|e| e.to_string())
                 };
@@ -187,15 +189,21 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
                         heater.as_ref(),
                         |enc, prof| {
                             let r = if mode == "surface" {
-                                v.encode_surface_profiled(&ctx.device,
-                                    enc,
+                                v.encode_surface_with(
+                                    &ctx.device,
+                                    &mut prof.record(enc),
                                     mesh,
                                     &grid,
                                     fieldkit::voxelize::Separation::Conservative,
-                                    Some(prof),
                                 )
                             } else {
-                                v.encode_solid_profiled(&ctx.device, enc, mesh, &grid, true, Some(prof))
+                                v.encode_solid(
+                                    &ctx.device,
+                                    &mut prof.record(enc),
+                                    mesh,
+                                    &grid,
+                                    true,
+                                )
                             };
                             r.expect("encode");
                         },
@@ -214,7 +222,8 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
                 ctx.submit_and_wait("count", enc)
                     .map_err(|e| e.to_string())?;
                 let voxels = s
-                    .read(&ctx.device, &ctx.queue).wait(&ctx)
+                    .read(&ctx.device, &ctx.queue)
+                    .wait(&ctx)
                     .map_err(|e| e.to_string())?
                     .iter()
                     .filter(|&&o| o)

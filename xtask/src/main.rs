@@ -253,11 +253,12 @@ fn reflect_text(stages: &[toolchain::Stage], filter: Option<&str>, json: bool) -
 
 /// The gallery is an example (`examples/gallery.rs`); this runs it in release mode.
 fn gallery(out: &Path) -> ExitCode {
-    let status = std::process::Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
-        .current_dir(crate_root())
-        .args(["run", "--release", "--example", "gallery", "--"])
-        .arg(out)
-        .status();
+    let status =
+        std::process::Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
+            .current_dir(crate_root())
+            .args(["run", "--release", "--example", "gallery", "--"])
+            .arg(out)
+            .status();
     match status {
         Ok(s) if s.success() => ExitCode::SUCCESS,
         Ok(_) => ExitCode::FAILURE,

@@ -85,7 +85,10 @@ pub(crate) fn time_runs(
         }
         ctx.submit_and_wait("bench", enc)
             .map_err(|e| e.to_string())?;
-        let (passes, total) = prof.read(&ctx.device, &ctx.queue).wait(ctx).map_err(|e| e.to_string())?;
+        let (passes, total) = prof
+            .read(&ctx.device, &ctx.queue)
+            .wait(ctx)
+            .map_err(|e| e.to_string())?;
         if warm < warmup || start.elapsed() < WARMUP_TIME {
             warm += 1;
             continue;
@@ -109,10 +112,7 @@ pub(crate) fn time_runs(
         med,
         min,
         max,
-        per_pass
-            .into_iter()
-            .map(|(n, v)| (n, median(v)))
-            .collect(),
+        per_pass.into_iter().map(|(n, v)| (n, median(v))).collect(),
     ))
 }
 
@@ -185,4 +185,3 @@ pub(crate) fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(|a, b| a.total_cmp(b));
     v[v.len() / 2]
 }
-
