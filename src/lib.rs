@@ -28,22 +28,8 @@ pub mod shaders {
     include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
 }
 
-// The README's and the technique pages' examples compile as doc tests.
+// The README's examples compile as doc tests (each technique's page, docs/<t>.md, is its
+// module's documentation, tested there).
 #[doc = include_str!("../README.md")]
 #[cfg(doctest)]
 pub struct ReadmeDoctests;
-#[doc = include_str!("../docs/distance.md")]
-#[cfg(doctest)]
-pub struct DistanceDoctests;
-#[doc = include_str!("../docs/metaball.md")]
-#[cfg(doctest)]
-pub struct MetaballDoctests;
-#[doc = include_str!("../docs/volume.md")]
-#[cfg(doctest)]
-pub struct VolumeDoctests;
-#[doc = include_str!("../docs/ocean.md")]
-#[cfg(doctest)]
-pub struct OceanDoctests;
-#[doc = include_str!("../docs/voxelize.md")]
-#[cfg(doctest)]
-pub struct VoxelizeDoctests;

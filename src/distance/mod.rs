@@ -23,6 +23,8 @@
 //! assert_eq!(distances[10 * 64 + 23], 3.0);
 //! # Ok(()) }
 //! ```
+//!
+#![doc = include_str!("../../docs/distance.md")]
 
 pub mod cpu;
 mod d2;

@@ -15,6 +15,8 @@
 //! // field.sdf and field.density feed render::Raymarcher.
 //! # Ok(()) }
 //! ```
+//!
+#![doc = include_str!("../../docs/metaball.md")]
 
 pub mod cpu;
 pub mod render;

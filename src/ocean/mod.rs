@@ -22,6 +22,8 @@
 //! assert!(buoy.height.abs() <= 0.85 && buoy.normal.y > 0.0);
 //! # Ok::<(), fieldkit::Error>(())
 //! ```
+//!
+#![doc = include_str!("../../docs/ocean.md")]
 
 pub mod lod;
 pub mod render;

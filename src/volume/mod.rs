@@ -34,6 +34,8 @@
 //! ctx.submit_and_wait("frame", encoder)?;
 //! # Ok(()) }
 //! ```
+//!
+#![doc = include_str!("../../docs/volume.md")]
 
 use glam::{Mat4, Vec3};
 

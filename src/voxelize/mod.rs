@@ -18,6 +18,8 @@
 //! let occupied = surface.read(&ctx.device, &ctx.queue).wait(ctx)?; // one bool per voxel, x fastest
 //! # let _ = occupied; Ok(()) }
 //! ```
+//!
+#![doc = include_str!("../../docs/voxelize.md")]
 
 mod attributes;
 pub mod cpu;
