@@ -38,6 +38,7 @@ pub fn unpack_seed(s: u32) -> Option<(u32, u32)> {
 
 /// Which passes run: plain JFA, or with extra passes of step 1 or 2 that repair its errors.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Variant {
     /// Steps N/2, N/4, …, 1 (N the next power of two at or above the largest side).
     Jfa,
@@ -95,6 +96,7 @@ impl Variant {
 
 /// What [`Jfa2d::encode`] computes.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Options {
     /// Which passes run.
     pub variant: Variant,

@@ -108,6 +108,7 @@ pub fn key_index(key: u32) -> Option<u32> {
 /// Where a volume sits in the world: voxel `(i, j, k)` has its centre at
 /// `origin + (i + ½, j + ½, k + ½) · voxel_size`.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Grid3 {
     /// Voxels per axis.
     pub size: [u32; 3],
@@ -140,6 +141,7 @@ impl Grid3 {
 
 /// Which voxels of the input volume are marked (seeds; for a signed field, inside).
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Inside {
     /// Any positive value.
     Mask,
@@ -158,6 +160,7 @@ impl Inside {
 
 /// How the field is computed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Method {
     /// The exact transform: zero wrong voxels, and the fastest at every size measured (README).
     #[default]
@@ -187,6 +190,7 @@ impl Method {
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 /// What [`Distance3d`] computes.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Options3d {
     /// Exact (default), JFA or the line passes.
     pub method: Method,

@@ -38,6 +38,7 @@ use crate::gpu::{Readback, readback_buffer, readback_texture};
 
 /// How [`Distance2d`] computes a field.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Method2d {
     /// The exact Euclidean transform (rows, then banded lower envelopes along columns): no
     /// wrong texels, and faster than every JFA variant at every size measured. Sides up to
@@ -50,6 +51,7 @@ pub enum Method2d {
 
 /// What [`Distance2d::encode`] computes.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Options2d {
     /// Exact (default) or a JFA variant.
     pub method: Method2d,

@@ -43,6 +43,7 @@ pub fn fixed_scale(count: u32) -> f32 {
 
 /// How the voxel set becomes a field.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Settings {
     /// Iso-level of the surface (the source used 0.5).
     pub threshold: f32,

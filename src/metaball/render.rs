@@ -37,6 +37,7 @@ use crate::view::{View, box_visible, depth_state, load_pass, screen_rect};
 
 /// What the raymarcher writes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Output {
     /// Lit surface.
     #[default]
@@ -54,6 +55,7 @@ pub enum Output {
 
 /// How the SDF raymarch shades and what it writes.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct RaymarchSettings {
     /// Steps per ray before giving up (the pixel is then left as it was).
     pub max_steps: u32,
@@ -575,6 +577,7 @@ impl Raymarcher {
 
 /// How [`Raymarcher::encode_direct`] steps along a ray through the blobs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Direct {
     /// Sphere tracing with one Lipschitz bound for the whole field (the largest bin's sum of
     /// per-blob bounds): safe everywhere, small steps everywhere.
@@ -633,6 +636,7 @@ fn dispatch_rect<E: crate::bind::Entry>(
 
 /// How the debug cubes are drawn.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct CubeStyle {
     /// Faces culled; `None` (the source's choice) draws both sides.
     pub cull: Option<wgpu::Face>,

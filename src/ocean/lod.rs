@@ -21,6 +21,7 @@ use crate::error::Error;
 
 /// The ocean square and the error to refine to.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct LodSettings {
     /// World (x, z) of the square's centre.
     pub centre: DVec2,

@@ -52,6 +52,7 @@ pub const MAX_GRID_SIDE: u32 = 4096;
 
 /// One Gerstner wave.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Wave {
     /// Direction of travel in the horizontal (x, z) plane; normalised on use, must not be zero.
     pub direction: Vec2,

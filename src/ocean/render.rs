@@ -29,6 +29,7 @@ pub const DETAIL_SIZE: u32 = 256;
 
 /// Where the fragments go.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Output {
     /// One lit colour target.
     Forward(wgpu::TextureFormat),
@@ -85,6 +86,7 @@ pub const MAX_PATCH_QUADS: u32 = 256;
 
 /// A scrolling layer of the detail texture.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Layer {
     /// Metres per repeat of the texture.
     pub tile: f32,
@@ -96,6 +98,7 @@ pub struct Layer {
 
 /// Colours, light and the detail layers.
 #[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Look {
     /// Height-map detail layers (at most [`MAX_LAYERS`]).
     pub height_layers: Vec<Layer>,

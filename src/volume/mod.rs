@@ -230,6 +230,7 @@ fn check_format(device: &wgpu::Device, format: wgpu::TextureFormat) -> Result<()
 /// Density → colour (rgb) and opacity (α for a segment of length `reference_step`), as evenly
 /// spaced entries over `range`, interpolated linearly and clamped at the ends.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct TransferFunction {
     /// RGBA entries, evenly spaced over `range`; alpha is opacity per `reference_step`.
     pub entries: Vec<[f32; 4]>,
@@ -333,6 +334,7 @@ impl TransferFunction {
 
 /// What a ray accumulates.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Mode {
     /// Front-to-back emission-absorption: C += T·α·c, T *= 1 − α.
     EmissionAbsorption,
@@ -347,6 +349,7 @@ pub enum Mode {
 
 /// Shadowing toward the light.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Shadow {
     /// Unshadowed light.
     None,
@@ -366,6 +369,7 @@ pub enum Shadow {
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 /// How the volume is marched and lit.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct MarchSettings {
     /// Segment length Δs, world units.
     pub step: f32,

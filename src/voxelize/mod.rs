@@ -68,6 +68,7 @@ pub struct Mesh {
 /// Where the voxels are: the world position of voxel (0, 0, 0)'s min corner, the voxel edge and
 /// the number of voxels per axis.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Grid {
     /// World position of the grid's lowest corner.
     pub origin: DVec3,
@@ -437,6 +438,7 @@ impl Surface {
 
 /// How thick a surface voxelization is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Separation {
     /// Every voxel a triangle touches (closed boxes): no 26-connected path crosses it.
     #[default]

@@ -12,6 +12,7 @@ use crate::view::{depth_state, load_pass};
 
 /// What the cubes are coloured by.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum ColourBy {
     /// The averaged normal, n · ½ + ½.
     #[default]

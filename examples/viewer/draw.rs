@@ -1,0 +1,242 @@
+//! The viewer's own drawing, beside fieldkit's: a textured rectangle (the 2D field) and
+//! coloured lines (the ocean's patch quadtree). Plain wgpu, as an application writes it.
+
+use glam::{Mat4, Vec3, Vec4};
+
+const BLIT_WGSL: &str = r#"
+struct Rect { lo: vec2<f32>, hi: vec2<f32> }
+@group(0) @binding(0) var<uniform> rect: Rect;
+@group(0) @binding(1) var image: texture_2d<f32>;
+
+struct Out { @builtin(position) position: vec4<f32>, @location(0) uv: vec2<f32> }
+
+@vertex
+fn vs(@builtin(vertex_index) i: u32) -> Out {
+    var corners = array(vec2(0.0, 0.0), vec2(1.0, 0.0), vec2(1.0, 1.0),
+                        vec2(0.0, 0.0), vec2(1.0, 1.0), vec2(0.0, 1.0));
+    let uv = corners[i];
+    let p = mix(rect.lo, rect.hi, uv);
+    return Out(vec4(p.x * 2.0 - 1.0, 1.0 - p.y * 2.0, 0.0, 1.0), uv);
+}
+
+@fragment
+fn fs(v: Out) -> @location(0) vec4<f32> {
+    let size = vec2<f32>(textureDimensions(image));
+    let texel = vec2<i32>(clamp(v.uv * size, vec2(0.0), size - 1.0));
+    return textureLoad(image, texel, 0);
+}
+"#;
+
+const LINES_WGSL: &str = r#"
+struct Camera { view_proj: mat4x4<f32> }
+@group(0) @binding(0) var<uniform> camera: Camera;
+
+struct Out { @builtin(position) position: vec4<f32>, @location(0) colour: vec4<f32> }
+
+@vertex
+fn vs(@location(0) p: vec3<f32>, @location(1) c: vec4<f32>) -> Out {
+    return Out(camera.view_proj * vec4(p, 1.0), c);
+}
+
+@fragment
+fn fs(v: Out) -> @location(0) vec4<f32> { return v.colour; }
+"#;
+
+/// Draws an RGBA8 image into a rectangle of the colour target (nearest texel, no blending).
+pub struct Blit {
+    pipeline: wgpu::RenderPipeline,
+    rect: wgpu::Buffer,
+}
+
+impl Blit {
+    /// For a colour target of `format`.
+    pub fn new(device: &wgpu::Device, format: wgpu::TextureFormat) -> Self {
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("viewer blit"),
+            source: wgpu::ShaderSource::Wgsl(BLIT_WGSL.into()),
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("viewer blit"),
+            layout: None,
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs"),
+                compilation_options: Default::default(),
+                targets: &[Some(format.into())],
+            }),
+            primitive: Default::default(),
+            depth_stencil: None,
+            multisample: Default::default(),
+            multiview_mask: None,
+            cache: None,
+        });
+        let rect = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("viewer blit rect"),
+            size: 16,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Self { pipeline, rect }
+    }
+
+    /// Draw `image` into `rect` = [x0, y0, x1, y1] (fractions of the target, y down).
+    pub fn encode(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &wgpu::TextureView,
+        image: &wgpu::TextureView,
+        rect: [f32; 4],
+    ) {
+        queue.write_buffer(&self.rect, 0, bytemuck::cast_slice(&rect));
+        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("viewer blit"),
+            layout: &self.pipeline.get_bind_group_layout(0),
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: self.rect.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(image),
+                },
+            ],
+        });
+        let mut pass = colour_pass(encoder, "viewer blit", target);
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.draw(0..6, 0..1);
+    }
+}
+
+/// Coloured line segments in world space, drawn over the scene without a depth test.
+pub struct Lines {
+    pipeline: wgpu::RenderPipeline,
+    camera: wgpu::Buffer,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Vertex {
+    p: [f32; 3],
+    c: [f32; 4],
+}
+
+impl Lines {
+    /// For a colour target of `format`.
+    pub fn new(device: &wgpu::Device, format: wgpu::TextureFormat) -> Self {
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("viewer lines"),
+            source: wgpu::ShaderSource::Wgsl(LINES_WGSL.into()),
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("viewer lines"),
+            layout: None,
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs"),
+                compilation_options: Default::default(),
+                buffers: &[Some(wgpu::VertexBufferLayout {
+                    array_stride: std::mem::size_of::<Vertex>() as u64,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x4],
+                })],
+            },
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs"),
+                compilation_options: Default::default(),
+                targets: &[Some(format.into())],
+            }),
+            primitive: wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::LineList,
+                ..Default::default()
+            },
+            depth_stencil: None,
+            multisample: Default::default(),
+            multiview_mask: None,
+            cache: None,
+        });
+        let camera = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("viewer lines camera"),
+            size: 64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Self { pipeline, camera }
+    }
+
+    /// Draw `segments` (pairs of points) in `colour`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &wgpu::TextureView,
+        view_proj: Mat4,
+        segments: &[[Vec3; 2]],
+        colour: Vec4,
+    ) {
+        if segments.is_empty() {
+            return;
+        }
+        use wgpu::util::DeviceExt;
+        let vertices: Vec<Vertex> = segments
+            .iter()
+            .flatten()
+            .map(|p| Vertex {
+                p: p.to_array(),
+                c: colour.to_array(),
+            })
+            .collect();
+        let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("viewer lines"),
+            contents: bytemuck::cast_slice(&vertices),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        queue.write_buffer(&self.camera, 0, bytemuck::bytes_of(&view_proj));
+        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("viewer lines"),
+            layout: &self.pipeline.get_bind_group_layout(0),
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: self.camera.as_entire_binding(),
+            }],
+        });
+        let mut pass = colour_pass(encoder, "viewer lines", target);
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.set_vertex_buffer(0, buffer.slice(..));
+        pass.draw(0..vertices.len() as u32, 0..1);
+    }
+}
+
+/// A render pass over `target` alone that keeps what it holds.
+fn colour_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    label: &str,
+    target: &wgpu::TextureView,
+) -> wgpu::RenderPass<'e> {
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(label),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: target,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Load,
+                store: wgpu::StoreOp::Store,
+            },
+        })],
+        ..Default::default()
+    })
+}

@@ -1,0 +1,673 @@
+//! The window: eframe (egui on the same wgpu device), a side panel per scene whose widgets edit
+//! fieldkit's settings structs in place, and the scene drawn into a texture egui shows.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Instant;
+
+use eframe::egui;
+use egui::{ComboBox, DragValue, Slider, Ui};
+use fieldkit::distance::Method2d;
+use fieldkit::gpu::{Profiler, Readback};
+use fieldkit::metaball::render::{Direct, Output as MarchOutput};
+use fieldkit::view::Targets;
+use fieldkit::volume::{Mode, Shadow, TransferFunction};
+use fieldkit::voxelize::Separation;
+use fieldkit::voxelize::view::ColourBy;
+use glam::{Vec2, Vec3};
+
+use super::scenes::{
+    self, ActorDraw, ActorSettings, COLOUR, DEPTH, DistanceSettings, NAMES, OceanSettings, Saved,
+    Scenes, VolumeSettings, VoxelMode, VoxelizerSettings,
+};
+use super::{Args, draw_frame, frame_time, load_settings, read_colour, save_png, save_settings};
+
+type PassTimes = (Vec<(String, f64)>, f64);
+
+struct Viewer {
+    saved: Saved,
+    scene: usize,
+    scenes: Scenes,
+    targets: Option<([u32; 2], Targets, egui::TextureId)>,
+    profiler: Option<Profiler>,
+    reading: Option<Readback<PassTimes>>,
+    passes: PassTimes,
+    stats: Vec<String>,
+    error: Option<String>,
+    note: Option<String>,
+    settings_path: String,
+    start: Instant,
+    last: Instant,
+    frame_ms: f64,
+    drawn: u32,
+    vsync: bool,
+    /// `--frames N --screenshot FILE`: draw N frames at fixed steps, save, close.
+    shot: Option<(u32, PathBuf)>,
+}
+
+/// Open the window and run until it closes.
+pub fn run_window(args: Args, saved: Saved, load_error: Option<String>) -> Result<(), String> {
+    let mut wgpu_options = eframe::egui_wgpu::WgpuConfiguration::default();
+    if let eframe::egui_wgpu::WgpuSetup::CreateNew(new) = &mut wgpu_options.wgpu_setup {
+        // Timestamp queries where the adapter has them: the panel shows per-pass GPU time.
+        let base = new.device_descriptor.clone();
+        new.device_descriptor = Arc::new(move |adapter| {
+            let mut d = base(adapter);
+            d.required_features |= adapter.features() & wgpu::Features::TIMESTAMP_QUERY;
+            d
+        });
+    }
+    // `--size WxH`: the scene's part of the window (the settings panel sits beside it).
+    let [w, h] = args.size;
+    let options = eframe::NativeOptions {
+        viewport: egui::ViewportBuilder::default()
+            .with_inner_size([w as f32 + 340.0, h as f32 + 16.0])
+            .with_title("fieldkit viewer"),
+        wgpu_options,
+        ..Default::default()
+    };
+    let scene = args
+        .scene
+        .as_deref()
+        .and_then(|s| NAMES.iter().position(|n| *n == s))
+        .unwrap_or(0);
+    let shot = match (args.frames, args.screenshot) {
+        (Some(n), Some(p)) => Some((n.max(1), p)),
+        (None, Some(p)) => Some((1, p)),
+        _ => None,
+    };
+    let settings_path = args
+        .settings
+        .as_ref()
+        .map(|p| p.display().to_string())
+        .unwrap_or_else(|| "viewer.ron".into());
+    eframe::run_native(
+        "fieldkit viewer",
+        options,
+        Box::new(move |cc| {
+            let rs = cc
+                .wgpu_render_state
+                .as_ref()
+                .ok_or("eframe started without wgpu")?;
+            let profiler = Profiler::new(&rs.device, &rs.queue, 256);
+            Ok(Box::new(Viewer {
+                saved,
+                scene,
+                scenes: Scenes::new(),
+                targets: None,
+                profiler,
+                reading: None,
+                passes: (Vec::new(), 0.0),
+                stats: Vec::new(),
+                error: load_error.map(|e| format!("settings: {e}")),
+                note: None,
+                settings_path,
+                start: Instant::now(),
+                last: Instant::now(),
+                frame_ms: 0.0,
+                drawn: 0,
+                vsync: true,
+                shot,
+            }))
+        }),
+    )
+    .map_err(|e| e.to_string())
+}
+
+impl eframe::App for Viewer {
+    fn ui(&mut self, ui: &mut Ui, frame: &mut eframe::Frame) {
+        let Some(rs) = frame.wgpu_render_state().cloned() else {
+            return;
+        };
+        let now = Instant::now();
+        self.frame_ms = 0.9 * self.frame_ms + 0.1 * (now - self.last).as_secs_f64() * 1e3;
+        self.last = now;
+        egui::Panel::left("settings")
+            .resizable(true)
+            .default_size(330.0)
+            .show(ui, |ui| {
+                egui::ScrollArea::vertical().show(ui, |ui| self.side_panel(ui, frame));
+            });
+        egui::CentralPanel::default().show(ui, |ui| self.central(ui, &rs));
+        ui.ctx().request_repaint();
+    }
+}
+
+impl Viewer {
+    fn scene_name(&self) -> &'static str {
+        NAMES[self.scene]
+    }
+
+    fn side_panel(&mut self, ui: &mut Ui, frame: &mut eframe::Frame) {
+        ui.heading("fieldkit viewer");
+        ComboBox::from_label("scene")
+            .selected_text(self.scene_name())
+            .show_ui(ui, |ui| {
+                for (i, n) in NAMES.iter().enumerate() {
+                    ui.selectable_value(&mut self.scene, i, *n);
+                }
+            });
+        ui.horizontal(|ui| {
+            ui.text_edit_singleline(&mut self.settings_path);
+        });
+        ui.horizontal(|ui| {
+            if ui.button("Save").clicked() {
+                self.note = Some(
+                    match save_settings(self.settings_path.as_ref(), &self.saved) {
+                        Ok(()) => format!("saved {}", self.settings_path),
+                        Err(e) => e,
+                    },
+                );
+            }
+            if ui.button("Load").clicked() {
+                match load_settings(self.settings_path.as_ref()) {
+                    Ok(s) => {
+                        self.saved = s;
+                        self.note = Some(format!("loaded {}", self.settings_path));
+                    }
+                    Err(e) => self.note = Some(e),
+                }
+            }
+            if ui.button("Defaults").clicked() {
+                self.saved = Saved::default();
+            }
+        });
+        if let Some(n) = &self.note {
+            ui.label(n);
+        }
+        ui.separator();
+        // Cost and accuracy.
+        ui.label(format!("frame (CPU, smoothed): {:.2} ms", self.frame_ms));
+        if self.profiler.is_some() {
+            ui.label(format!(
+                "compute passes (GPU): {:.3} ms first start to last end",
+                self.passes.1
+            ));
+            egui::CollapsingHeader::new("per pass")
+                .default_open(false)
+                .show(ui, |ui| {
+                    for (name, ms) in &self.passes.0 {
+                        ui.label(format!("{name}: {ms:.3} ms"));
+                    }
+                });
+        } else {
+            ui.label("no timestamp queries on this adapter: CPU frame time only");
+        }
+        for s in &self.stats {
+            ui.label(s);
+        }
+        if let Some(e) = &self.error {
+            ui.colored_label(egui::Color32::from_rgb(255, 110, 90), e);
+        }
+        ui.separator();
+        self.camera_panel(ui, frame);
+        ui.separator();
+        let s = &mut self.saved;
+        match NAMES[self.scene] {
+            "actor" => actor_panel(ui, &mut s.actor),
+            "ocean" => ocean_panel(ui, &mut s.ocean),
+            "volume" => volume_panel(ui, &mut s.volume),
+            "distance2d" => distance_panel(ui, &mut s.distance),
+            "voxelizer" => voxelizer_panel(ui, &mut s.voxelizer),
+            _ => {
+                ui.label("The ocean's, the actor's field and march, and the volume's settings.");
+                ocean_panel(ui, &mut s.ocean);
+                volume_panel(ui, &mut s.volume);
+            }
+        }
+    }
+
+    fn camera_panel(&mut self, ui: &mut Ui, frame: &mut eframe::Frame) {
+        let i = self.scene;
+        let c = &mut self.saved.cameras[i];
+        ui.label("camera: drag to turn, scroll to zoom; fly: W/A/S/D/Q/E");
+        ui.horizontal(|ui| {
+            ui.checkbox(&mut c.fly, "fly");
+            ui.checkbox(&mut c.reversed_z, "reversed Z");
+            if ui.checkbox(&mut self.vsync, "vsync").changed() {
+                let mut config = frame
+                    .wgpu_surface_config()
+                    .unwrap_or(eframe::egui_wgpu::SurfaceConfig::LOW_LATENCY);
+                config.present_mode = if self.vsync {
+                    wgpu::PresentMode::AutoVsync
+                } else {
+                    wgpu::PresentMode::AutoNoVsync
+                };
+                frame.set_wgpu_surface_config(config);
+            }
+            if ui.button("reset").clicked() {
+                *c = scenes::default_camera(NAMES[i]);
+            }
+        });
+        ui.add(Slider::new(&mut c.fov, 0.2..=2.0).text("field of view"));
+    }
+
+    fn central(&mut self, ui: &mut Ui, rs: &eframe::egui_wgpu::RenderState) {
+        let avail = ui.available_size();
+        let ppp = ui.ctx().pixels_per_point();
+        let size = [
+            ((avail.x * ppp) as u32).clamp(16, 4096),
+            ((avail.y * ppp) as u32).clamp(16, 4096),
+        ];
+        let (device, queue) = (&rs.device, &rs.queue);
+        if self.targets.as_ref().map(|t| t.0) != Some(size) {
+            let targets = Targets::new(device, size, COLOUR, DEPTH);
+            let mut r = rs.renderer.write();
+            let id = match &self.targets {
+                Some((_, _, id)) => {
+                    r.update_egui_texture_from_wgpu_texture(
+                        device,
+                        &targets.colour_view,
+                        wgpu::FilterMode::Nearest,
+                        *id,
+                    );
+                    *id
+                }
+                None => r.register_native_texture(
+                    device,
+                    &targets.colour_view,
+                    wgpu::FilterMode::Nearest,
+                ),
+            };
+            self.targets = Some((size, targets, id));
+        }
+        let id = self.targets.as_ref().expect("set above").2;
+        // Time: fixed steps when taking a screenshot (so it matches the offscreen render),
+        // else the clock.
+        let time = if self.shot.is_some() {
+            frame_time(self.drawn)
+        } else {
+            self.start.elapsed().as_secs_f32()
+        };
+        // Take finished pass times; time this frame when no read is in flight.
+        if let Some(r) = &mut self.reading
+            && let Some(t) = r.try_take()
+        {
+            self.reading = None;
+            if let Ok(t) = t {
+                self.passes = t;
+            }
+        }
+        let profile = self.reading.is_none();
+        let targets = &self.targets.as_ref().expect("set above").1;
+        let (report, _) = draw_frame(
+            device,
+            queue,
+            &mut self.scenes,
+            &self.saved,
+            NAMES[self.scene],
+            targets,
+            size,
+            time,
+            self.drawn,
+            self.profiler.as_mut().filter(|_| profile),
+        );
+        if profile && let Some(p) = self.profiler.as_mut() {
+            let mut enc = device.create_command_encoder(&Default::default());
+            p.resolve(&mut enc);
+            queue.submit([enc.finish()]);
+            self.reading = Some(p.read(device, queue));
+        }
+        self.stats = report.stats;
+        self.error = report.error.map(|e| e.to_string());
+        self.drawn += 1;
+        let image = egui::Image::new(egui::load::SizedTexture::new(
+            id,
+            egui::vec2(size[0] as f32 / ppp, size[1] as f32 / ppp),
+        ))
+        .sense(egui::Sense::click_and_drag());
+        let response = ui.add(image);
+        self.input(ui, &response, size);
+        if let Some((n, path)) = &self.shot
+            && self.drawn >= *n
+            && !self.scenes.busy(NAMES[self.scene], &self.saved)
+        {
+            let targets = &self.targets.as_ref().expect("set above").1;
+            let result = read_colour(device, queue, targets)
+                .map_err(|e| e.to_string())
+                .and_then(|px| save_png(path, &px, size));
+            match result {
+                Ok(()) => println!("wrote {}", path.display()),
+                Err(e) => eprintln!("{e}"),
+            }
+            if let Some(e) = &self.error {
+                println!("error: {e}");
+            }
+            ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
+            self.shot = None;
+        }
+    }
+
+    fn input(&mut self, ui: &Ui, response: &egui::Response, size: [u32; 2]) {
+        let i = self.scene;
+        if NAMES[i] == "distance2d" {
+            // Left button draws seeds, right erases.
+            let d = &mut self.saved.distance;
+            if let Some(pos) = response.interact_pointer_pos() {
+                let erase = response.dragged_by(egui::PointerButton::Secondary);
+                let r = response.rect;
+                let uv = (pos - r.min) / r.size();
+                let [x0, y0, x1, y1] = scenes::field_rect(size, d.size);
+                let fx = (uv.x - x0) / (x1 - x0);
+                let fy = (uv.y - y0) / (y1 - y0);
+                if (0.0..1.0).contains(&fx) && (0.0..1.0).contains(&fy) {
+                    let at = [
+                        (fx * d.size[0] as f32) as u32,
+                        (fy * d.size[1] as f32) as u32,
+                    ];
+                    d.paint(at, erase);
+                }
+            }
+            return;
+        }
+        let c = &mut self.saved.cameras[i];
+        if response.dragged() {
+            let d = response.drag_delta();
+            c.drag(Vec2::new(d.x, d.y));
+        }
+        if response.hovered() {
+            let scroll = ui.input(|inp| inp.smooth_scroll_delta.y);
+            c.zoom(scroll);
+        }
+        if c.fly {
+            let dt = ui.input(|inp| inp.stable_dt).min(0.1);
+            let speed = c.distance.max(0.5) * dt;
+            let mut v = Vec3::ZERO;
+            ui.input(|inp| {
+                for (key, dir) in [
+                    (egui::Key::W, Vec3::Z),
+                    (egui::Key::S, -Vec3::Z),
+                    (egui::Key::D, Vec3::X),
+                    (egui::Key::A, -Vec3::X),
+                    (egui::Key::E, Vec3::Y),
+                    (egui::Key::Q, -Vec3::Y),
+                ] {
+                    if inp.key_down(key) {
+                        v += dir;
+                    }
+                }
+            });
+            c.fly_by(v * speed);
+        }
+    }
+}
+
+fn vec3_row(ui: &mut Ui, label: &str, v: &mut Vec3, speed: f32) {
+    ui.horizontal(|ui| {
+        ui.label(label);
+        ui.add(DragValue::new(&mut v.x).speed(speed));
+        ui.add(DragValue::new(&mut v.y).speed(speed));
+        ui.add(DragValue::new(&mut v.z).speed(speed));
+    });
+}
+
+fn actor_panel(ui: &mut Ui, s: &mut ActorSettings) {
+    ui.heading("voxel actor (seed 000)");
+    ui.horizontal(|ui| {
+        ui.label("Extent");
+        for e in &mut s.extent {
+            ui.add(DragValue::new(e).speed(0.1).range(0.0..=1000.0));
+        }
+    });
+    ui.add(Slider::new(&mut s.block, 0.1..=4.0).text("BlockSize"));
+    ui.label(match s.counts() {
+        Ok(n) => format!("{} × {} × {} blocks", n[0], n[1], n[2]),
+        Err(e) => e.to_string(),
+    });
+    ComboBox::from_label("draw")
+        .selected_text(format!("{:?}", s.draw))
+        .show_ui(ui, |ui| {
+            for d in [
+                ActorDraw::Surface,
+                ActorDraw::Cubes,
+                ActorDraw::Both,
+                ActorDraw::Direct(Direct::SphereGlobal),
+                ActorDraw::Direct(Direct::Segment),
+            ] {
+                ui.selectable_value(&mut s.draw, d, format!("{d:?}"));
+            }
+        });
+    ComboBox::from_label("SDF method")
+        .selected_text(s.field.method.name())
+        .show_ui(ui, |ui| {
+            use fieldkit::distance::{Method, Variant};
+            for m in [
+                Method::Lines,
+                Method::Jfa(Variant::Jfa),
+                Method::Jfa(Variant::JfaPlus1),
+                Method::Jfa(Variant::JfaPlus2),
+                Method::Jfa(Variant::OnePlusJfa),
+            ] {
+                ui.selectable_value(&mut s.field.method, m, m.name());
+            }
+        });
+    ComboBox::from_label("view")
+        .selected_text(format!("{:?}", s.raymarch.output))
+        .show_ui(ui, |ui| {
+            for o in [
+                MarchOutput::Shaded,
+                MarchOutput::Sdf,
+                MarchOutput::Density,
+                MarchOutput::Steps,
+            ] {
+                ui.selectable_value(&mut s.raymarch.output, o, format!("{o:?}"));
+            }
+        });
+    ui.add(Slider::new(&mut s.field.threshold, 0.05..=0.95).text("threshold"));
+    ui.add(Slider::new(&mut s.field.overlap, 1.0..=4.0).text("overlap"));
+    ui.add(Slider::new(&mut s.field.cells_per_edge, 1.0..=8.0).text("cells per edge"));
+    ui.add(Slider::new(&mut s.field.band, 2.0..=16.0).text("band (cells)"));
+    ui.add(Slider::new(&mut s.raymarch.max_steps, 8..=512).text("max steps"));
+    ui.add(Slider::new(&mut s.raymarch.safety, 0.3..=1.0).text("step safety"));
+    ui.checkbox(&mut s.animate, "animate");
+    ui.add(Slider::new(&mut s.frequency, 0.0..=3.0).text("frequency"));
+    ui.add(Slider::new(&mut s.wobble, 0.0..=0.5).text("wobble"));
+    ui.collapsing("debug cubes", |ui| {
+        ComboBox::from_label("cull")
+            .selected_text(format!("{:?}", s.cubes.cull))
+            .show_ui(ui, |ui| {
+                for c in [None, Some(wgpu::Face::Back), Some(wgpu::Face::Front)] {
+                    ui.selectable_value(&mut s.cubes.cull, c, format!("{c:?}"));
+                }
+            });
+        ComboBox::from_label("depth compare")
+            .selected_text(format!("{:?}", s.cubes.depth_compare))
+            .show_ui(ui, |ui| {
+                for c in [
+                    wgpu::CompareFunction::Always,
+                    wgpu::CompareFunction::Less,
+                    wgpu::CompareFunction::LessEqual,
+                ] {
+                    ui.selectable_value(&mut s.cubes.depth_compare, c, format!("{c:?}"));
+                }
+            });
+        ui.checkbox(
+            &mut s.cubes.wireframe,
+            "wireframe (needs POLYGON_MODE_LINE)",
+        );
+        ui.checkbox(&mut s.cubes.scale_size, "cube size follows the scale");
+    });
+}
+
+fn ocean_panel(ui: &mut Ui, s: &mut OceanSettings) {
+    ui.heading("ocean (seed 001)");
+    ui.label("waves: direction x, z · amplitude · wavelength · speed");
+    let mut remove = None;
+    for (i, w) in s.waves.iter_mut().enumerate() {
+        ui.horizontal(|ui| {
+            ui.add(DragValue::new(&mut w.direction.x).speed(0.02));
+            ui.add(DragValue::new(&mut w.direction.y).speed(0.02));
+            ui.add(DragValue::new(&mut w.amplitude).speed(0.01));
+            ui.add(DragValue::new(&mut w.wavelength).speed(0.1));
+            ui.add(DragValue::new(&mut w.speed).speed(0.05));
+            if ui.small_button("✕").clicked() {
+                remove = Some(i);
+            }
+        });
+    }
+    if let Some(i) = remove {
+        s.waves.remove(i);
+    }
+    if ui.button("add a wave").clicked() {
+        s.waves.push(fieldkit::ocean::Wave {
+            direction: glam::Vec2::new(0.5, 0.5),
+            amplitude: 0.05,
+            wavelength: 6.0,
+            speed: 3.0,
+        });
+    }
+    ui.add(Slider::new(&mut s.steepness, 0.0..=1.0).text("steepness"));
+    ui.add(Slider::new(&mut s.lod.max_error_px, 0.25..=16.0).text("LOD error (px)"));
+    ui.checkbox(&mut s.overlay, "draw the patch quadtree");
+    ui.checkbox(&mut s.fade, "depth fade");
+    ui.add(Slider::new(&mut s.look.fade_distance, 0.1..=20.0).text("fade distance (m)"));
+    ui.add(Slider::new(&mut s.look.roughness, 0.0..=1.0).text("roughness"));
+    ui.label(format!(
+        "detail layers: {} height, {} normal",
+        s.look.height_layers.len(),
+        s.look.normal_layers.len()
+    ));
+    for (name, layers) in [
+        ("height", &mut s.look.height_layers),
+        ("normal", &mut s.look.normal_layers),
+    ] {
+        for (i, l) in layers.iter_mut().enumerate() {
+            ui.horizontal(|ui| {
+                ui.label(format!("{name} {i}: tile"));
+                ui.add(DragValue::new(&mut l.tile).speed(0.1));
+                ui.label("strength");
+                ui.add(DragValue::new(&mut l.strength).speed(0.01));
+            });
+        }
+    }
+    ComboBox::from_label("target")
+        .selected_text(match s.gbuffer {
+            None => "forward".to_string(),
+            Some(i) => format!("G-buffer {i}"),
+        })
+        .show_ui(ui, |ui| {
+            ui.selectable_value(&mut s.gbuffer, None, "forward");
+            for (i, n) in ["scene colour", "normal", "material", "base colour"]
+                .iter()
+                .enumerate()
+            {
+                ui.selectable_value(&mut s.gbuffer, Some(i), format!("G-buffer {i}: {n}"));
+            }
+        });
+}
+
+fn volume_panel(ui: &mut Ui, s: &mut VolumeSettings) {
+    ui.heading("volume (seed 002)");
+    ui.add(Slider::new(&mut s.size, 16..=256).text("cloud voxels per side"));
+    ui.add(DragValue::new(&mut s.seed).prefix("seed "));
+    ui.add(
+        Slider::new(&mut s.march.step, 0.001..=0.05)
+            .logarithmic(true)
+            .text("step"),
+    );
+    ComboBox::from_label("mode")
+        .selected_text(format!("{:?}", s.march.mode))
+        .show_ui(ui, |ui| {
+            for m in [
+                Mode::EmissionAbsorption,
+                Mode::MaximumIntensity,
+                Mode::IsoSurface { iso: 0.3 },
+            ] {
+                ui.selectable_value(&mut s.march.mode, m, format!("{m:?}"));
+            }
+        });
+    ComboBox::from_label("shadow")
+        .selected_text(format!("{:?}", s.march.shadow))
+        .show_ui(ui, |ui| {
+            for m in [
+                Shadow::None,
+                Shadow::Rays { step: 0.02 },
+                Shadow::LightVolume { step: 0.02 },
+            ] {
+                ui.selectable_value(&mut s.march.shadow, m, format!("{m:?}"));
+            }
+        });
+    ui.checkbox(&mut s.march.skip, "empty-space skipping");
+    ui.checkbox(&mut s.march.jitter, "jitter");
+    ui.add(Slider::new(&mut s.march.ambient, 0.0..=1.0).text("ambient"));
+    vec3_row(ui, "light", &mut s.march.light_dir, 0.02);
+    ui.horizontal(|ui| {
+        ui.label("transfer function");
+        if ui.button("cloud").clicked() {
+            s.tf = TransferFunction::cloud();
+        }
+        if ui.button("white").clicked() {
+            s.tf = TransferFunction::constant(Vec3::ONE, 0.05);
+        }
+    });
+    ui.horizontal(|ui| {
+        ui.label("density range");
+        ui.add(DragValue::new(&mut s.tf.range[0]).speed(0.01));
+        ui.add(DragValue::new(&mut s.tf.range[1]).speed(0.01));
+    });
+}
+
+fn distance_panel(ui: &mut Ui, s: &mut DistanceSettings) {
+    ui.heading("2D distance (seed 003)");
+    ui.label("left button: draw seeds, right: erase");
+    ComboBox::from_label("method")
+        .selected_text(scenes::method_name(s.options.method))
+        .show_ui(ui, |ui| {
+            for m in scenes::methods_2d() {
+                ui.selectable_value(&mut s.options.method, m, scenes::method_name(m));
+            }
+        });
+    ui.checkbox(&mut s.options.signed, "signed");
+    ui.add(Slider::new(&mut s.brush, 0..=12).text("brush radius"));
+    ui.add(Slider::new(&mut s.iso_period, 1.0..=32.0).text("iso-line period"));
+    ui.horizontal(|ui| {
+        ui.label("size");
+        ui.add(DragValue::new(&mut s.size[0]).range(1..=4096));
+        ui.add(DragValue::new(&mut s.size[1]).range(1..=4096));
+    });
+    ui.horizontal(|ui| {
+        if ui.button("clear seeds").clicked() {
+            s.seeds.clear();
+        }
+        if ui.button("default seeds").clicked() {
+            s.seeds = DistanceSettings::default().seeds;
+        }
+    });
+    if matches!(s.options.method, Method2d::Exact) {
+        ui.label("exact: 0 wrong texels by construction");
+    }
+}
+
+fn voxelizer_panel(ui: &mut Ui, s: &mut VoxelizerSettings) {
+    ui.heading("voxelizer (seed 004)");
+    ui.horizontal(|ui| {
+        ui.label("mesh");
+        ui.text_edit_singleline(&mut s.mesh);
+    });
+    ui.horizontal(|ui| {
+        for m in ["torus", "sphere", scenes::BUNNY] {
+            if ui.small_button(m.rsplit('/').next().unwrap_or(m)).clicked() {
+                s.mesh = m.into();
+            }
+        }
+    });
+    ui.add(Slider::new(&mut s.grid, 4..=512).text("grid (longest side)"));
+    ComboBox::from_label("voxelization")
+        .selected_text(format!("{:?}", s.mode))
+        .show_ui(ui, |ui| {
+            for m in [
+                VoxelMode::Surface(Separation::Conservative),
+                VoxelMode::Surface(Separation::Six),
+                VoxelMode::Raster,
+                VoxelMode::Solid,
+            ] {
+                ui.selectable_value(&mut s.mode, m, format!("{m:?}"));
+            }
+        });
+    ComboBox::from_label("colour by")
+        .selected_text(format!("{:?}", s.colour_by))
+        .show_ui(ui, |ui| {
+            ui.selectable_value(&mut s.colour_by, ColourBy::Normal, "normal");
+            ui.selectable_value(&mut s.colour_by, ColourBy::Colour, "colour");
+        });
+}

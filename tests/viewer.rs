@@ -1,0 +1,326 @@
+//! The live viewer (`examples/viewer`): every scene renders offscreen and matches its reference
+//! image; every scene renders in a real window under Xvfb and matches the offscreen render; bad
+//! settings come back as fieldkit's typed errors (printed, exit 0); the animation moves and the
+//! grid builder counts as the source's does.
+//!
+//! References: `tests/snapshots/viewer/<scene>.png`, rendered on llvmpipe; `FIELDKIT_BLESS=1`
+//! rewrites them (look at them before committing).
+
+#[path = "../examples/viewer/main.rs"]
+#[allow(dead_code)]
+mod viewer;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use viewer::scenes::{ActorSettings, NAMES, Saved};
+
+/// Small enough for lavapipe on two cores.
+const SIZE: [u32; 2] = [192, 108];
+
+fn device() -> (wgpu::Device, wgpu::Queue) {
+    let ctx = fieldkit::gpu::Context::new().unwrap_or_else(|e| {
+        panic!("this test needs a GPU adapter (apt-get install -y mesa-vulkan-drivers): {e}")
+    });
+    (ctx.device.clone(), ctx.queue.clone())
+}
+
+/// Settings for the tests: the voxelizer on the built-in torus, so no file outside the
+/// repository is read.
+fn settings() -> Saved {
+    let mut s = Saved::default();
+    s.voxelizer.mesh = "torus".into();
+    s.voxelizer.grid = 24;
+    s.volume.size = 48;
+    s.volume.march.step = 1.0 / 48.0;
+    s
+}
+
+/// (mean of the largest channel difference, pixels off by more than `far` levels).
+fn compare(a: &[u8], b: &[u8], far: u8) -> (f64, usize) {
+    assert_eq!(a.len(), b.len());
+    let mut sum = 0u64;
+    let mut off = 0;
+    for (p, q) in a.chunks(4).zip(b.chunks(4)) {
+        let d = (0..3).map(|c| p[c].abs_diff(q[c])).max().unwrap_or(0);
+        sum += d as u64;
+        if d > far {
+            off += 1;
+        }
+    }
+    (sum as f64 / (a.len() / 4) as f64, off)
+}
+
+/// 4×4 block means of RGBA8 pixels (`size` divisible by 4): what the reference comparison
+/// looks at, so a sparkle of the water or an edge pixel that lands one way on one GPU and the
+/// other way on another averages out, while a missing or moved technique does not.
+fn blocks(px: &[u8], [w, h]: [u32; 2]) -> Vec<u8> {
+    let (bw, bh) = (w / 4, h / 4);
+    let mut out = Vec::with_capacity((bw * bh * 4) as usize);
+    for by in 0..bh {
+        for bx in 0..bw {
+            for c in 0..4 {
+                let mut sum = 0u32;
+                for y in 0..4 {
+                    for x in 0..4 {
+                        sum += px[(((by * 4 + y) * w + bx * 4 + x) * 4 + c) as usize] as u32;
+                    }
+                }
+                out.push((sum / 16) as u8);
+            }
+        }
+    }
+    out
+}
+
+fn distinct(px: &[u8]) -> usize {
+    px.chunks(4).collect::<std::collections::HashSet<_>>().len()
+}
+
+#[test]
+fn every_scene_renders_offscreen_and_matches_its_reference() {
+    let (device, queue) = device();
+    let s = settings();
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/snapshots/viewer");
+    let bless = std::env::var_os("FIELDKIT_BLESS").is_some();
+    let mut failures = Vec::new();
+    for scene in NAMES {
+        let shot = viewer::render_offscreen(&device, &queue, scene, &s, SIZE, 2)
+            .unwrap_or_else(|e| panic!("{scene}: {e}"));
+        if let Some(e) = &shot.report.error {
+            panic!("{scene} refused the default settings: {e}");
+        }
+        eprintln!("{scene}: {:?}", shot.report.stats);
+        // Not a blank frame: each scene draws its technique over its background.
+        assert!(
+            distinct(&shot.pixels) > 40,
+            "{scene}: only {} distinct colours",
+            distinct(&shot.pixels)
+        );
+        let path = dir.join(format!("{scene}.png"));
+        if bless {
+            std::fs::create_dir_all(&dir).unwrap();
+            viewer::save_png(&path, &shot.pixels, SIZE).unwrap();
+            continue;
+        }
+        let want = image::open(&path)
+            .unwrap_or_else(|e| panic!("{}: {e} (FIELDKIT_BLESS=1 writes it)", path.display()))
+            .to_rgba8();
+        assert_eq!(want.dimensions(), (SIZE[0], SIZE[1]));
+        // Compared in 4×4 block means. Set on llvmpipe (LLVM 15): against its own reference,
+        // mean 0 and no block off. The margin is for other GPUs: raymarched edges and the
+        // water's sparkle move by a pixel or a rounding step in places, which a block mean
+        // turns into a few levels; a missing or misplaced technique moves far more than 3% of
+        // the blocks by more than 24 levels.
+        let (mean, off) = compare(
+            &blocks(&shot.pixels, SIZE),
+            &blocks(want.as_raw(), SIZE),
+            24,
+        );
+        eprintln!("{scene}: block mean {mean:.3}, {off} blocks off by more than 24 levels");
+        let n = (SIZE[0] * SIZE[1] / 16) as usize;
+        if mean > 3.0 || off > n * 3 / 100 {
+            failures.push(format!(
+                "{scene}: block mean {mean:.3}, {off} of {n} blocks off"
+            ));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// `target/<profile>/examples/viewer`, which `cargo test` builds with the other examples.
+fn viewer_binary() -> PathBuf {
+    let exe = std::env::current_exe().expect("the test binary's path");
+    let profile_dir = exe
+        .parent()
+        .and_then(|deps| deps.parent())
+        .expect("target/<profile>/deps/<test>");
+    let bin = profile_dir
+        .join("examples")
+        .join(format!("viewer{}", std::env::consts::EXE_SUFFIX));
+    assert!(
+        bin.exists(),
+        "{} is missing: `cargo test` builds the examples; run `cargo build --example viewer`",
+        bin.display()
+    );
+    bin
+}
+
+fn temp(name: &str) -> PathBuf {
+    std::env::temp_dir().join(format!("fieldkit_viewer_{}_{name}", std::process::id()))
+}
+
+#[test]
+fn every_scene_in_a_window_matches_the_offscreen_render() {
+    let (device, queue) = device();
+    let s = settings();
+    let file = temp("window.ron");
+    viewer::save_settings(&file, &s).unwrap();
+    let frames = 2;
+    for scene in NAMES {
+        let shot = temp(&format!("{scene}.png"));
+        let output = Command::new("xvfb-run")
+            .args(["-a", "-s", "-screen 0 800x600x24"])
+            .arg(viewer_binary())
+            .args([
+                "--window", "--scene", scene, "--size", "240x160", "--frames",
+            ])
+            .arg(frames.to_string())
+            .arg("--settings")
+            .arg(&file)
+            .arg("--screenshot")
+            .arg(&shot)
+            .output()
+            .unwrap_or_else(|e| {
+                panic!("this test runs the viewer under Xvfb: apt-get install -y xvfb ({e})")
+            });
+        let log = String::from_utf8_lossy(&output.stderr);
+        assert!(output.status.success(), "{scene}: the viewer failed: {log}");
+        let got = image::open(&shot)
+            .unwrap_or_else(|e| panic!("{scene}: no screenshot ({e}): {log}"))
+            .to_rgba8();
+        std::fs::remove_file(&shot).ok();
+        // The window's scene area is whatever the layout left it; render offscreen at that size.
+        let size = [got.width(), got.height()];
+        let want = viewer::render_offscreen(&device, &queue, scene, &s, size, frames).unwrap();
+        // Same adapter, same frames, same settings file: set on llvmpipe, where the two agree
+        // to the bit; the margin is for a GPU whose window device differs from the offscreen
+        // one (a rounding step in a few pixels).
+        let (mean, off) = compare(got.as_raw(), &want.pixels, 8);
+        eprintln!("{scene} at {size:?}: window against offscreen mean {mean:.4}, {off} off");
+        assert!(mean <= 0.5, "{scene}: mean difference {mean}");
+        assert!(
+            off <= (size[0] * size[1]) as usize / 200,
+            "{scene}: {off} pixels differ by more than 8 levels"
+        );
+        assert!(distinct(&want.pixels) > 40, "{scene}: a blank frame");
+    }
+    std::fs::remove_file(&file).ok();
+}
+
+/// Run the viewer headless with a settings file; returns (exit success, stdout).
+fn headless_with(scene: &str, s: &Saved) -> (bool, String) {
+    let file = temp(&format!("{scene}_bad.ron"));
+    viewer::save_settings(&file, s).unwrap();
+    let shot = temp(&format!("{scene}_bad.png"));
+    let output = Command::new(viewer_binary())
+        .args([
+            "--scene",
+            scene,
+            "--size",
+            "64x36",
+            "--frames",
+            "1",
+            "--settings",
+        ])
+        .arg(&file)
+        .arg("--screenshot")
+        .arg(&shot)
+        .output()
+        .expect("the viewer runs");
+    std::fs::remove_file(&file).ok();
+    std::fs::remove_file(&shot).ok();
+    (
+        output.status.success(),
+        String::from_utf8_lossy(&output.stdout).into_owned(),
+    )
+}
+
+#[test]
+fn bad_settings_come_back_as_typed_errors() {
+    // A NaN survives the settings file (RON writes it) and reaches fieldkit's own check.
+    let mut s = settings();
+    s.actor.field.threshold = f32::NAN;
+    let (ok, out) = headless_with("actor", &s);
+    assert!(ok, "{out}");
+    assert!(
+        out.contains("error: ") && out.contains("threshold"),
+        "the metaball settings' NaN is named:\n{out}"
+    );
+
+    // An oversized voxel grid: the voxelizer refuses it by size.
+    let mut s = settings();
+    s.voxelizer.grid = 200_000;
+    let (ok, out) = headless_with("voxelizer", &s);
+    assert!(ok, "{out}");
+    assert!(
+        out.contains("error: ") && out.contains("grid side x is 200000"),
+        "the voxelizer's size error is printed:\n{out}"
+    );
+
+    // An actor region that would make more blocks than the viewer builds.
+    let mut s = settings();
+    s.actor.extent = [1e6, 1e6, 1e6];
+    let (ok, out) = headless_with("actor", &s);
+    assert!(ok, "{out}");
+    assert!(
+        out.contains("error: ") && out.contains("instances"),
+        "{out}"
+    );
+
+    // A wave with no wavelength: the ocean's typed error.
+    let mut s = settings();
+    s.ocean.waves[0].wavelength = 0.0;
+    let (ok, out) = headless_with("ocean", &s);
+    assert!(ok, "{out}");
+    assert!(
+        out.contains("error: ") && out.contains("wavelength"),
+        "{out}"
+    );
+}
+
+#[test]
+fn the_animation_advances_and_the_builder_counts_as_the_source() {
+    // The source's builder: NX = max(1, floor(Extent / BlockSize)) per axis.
+    let a = ActorSettings::default();
+    assert_eq!(a.counts().unwrap(), [5, 4, 3]);
+    let b = ActorSettings {
+        extent: [5.0, 4.0, 3.0],
+        block: 2.0,
+        ..ActorSettings::default()
+    };
+    assert_eq!(b.counts().unwrap(), [2, 2, 1]);
+    let c = ActorSettings {
+        extent: [0.4, 10.0, 2.99],
+        block: 1.0,
+        ..ActorSettings::default()
+    };
+    assert_eq!(c.counts().unwrap(), [1, 10, 2]);
+    assert!(
+        ActorSettings {
+            block: 0.0,
+            ..ActorSettings::default()
+        }
+        .counts()
+        .is_err()
+    );
+
+    // The rendered scene reports the builder's count, and its frames move.
+    let (device, queue) = device();
+    let mut s = settings();
+    s.actor.block = 2.0;
+    let first = viewer::render_offscreen(&device, &queue, "actor", &s, SIZE, 1).unwrap();
+    assert!(
+        first
+            .report
+            .stats
+            .iter()
+            .any(|l| l.starts_with("instances: 4 ")),
+        "{:?}",
+        first.report.stats
+    );
+    let s = settings();
+    let first = viewer::render_offscreen(&device, &queue, "actor", &s, SIZE, 1).unwrap();
+    let later = viewer::render_offscreen(&device, &queue, "actor", &s, SIZE, 31).unwrap();
+    let (mean, off) = compare(&first.pixels, &later.pixels, 24);
+    assert!(
+        off > 50 && mean > 0.5,
+        "half a second of animation moved {off} pixels (mean {mean})"
+    );
+    // With the animation off, the same frames are the same picture.
+    let mut still = settings();
+    still.actor.animate = false;
+    let a = viewer::render_offscreen(&device, &queue, "actor", &still, SIZE, 1).unwrap();
+    let b = viewer::render_offscreen(&device, &queue, "actor", &still, SIZE, 31).unwrap();
+    assert_eq!(compare(&a.pixels, &b.pixels, 0), (0.0, 0));
+}
