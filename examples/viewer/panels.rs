@@ -670,4 +670,5 @@ fn voxelizer_panel(ui: &mut Ui, s: &mut VoxelizerSettings) {
             ui.selectable_value(&mut s.colour_by, ColourBy::Normal, "normal");
             ui.selectable_value(&mut s.colour_by, ColourBy::Colour, "colour");
         });
+    ui.checkbox(&mut s.slice, "distance-field slice (middle z)");
 }

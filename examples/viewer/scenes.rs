@@ -75,7 +75,7 @@ pub fn default_camera(scene: &str) -> Camera {
         "ocean" => Camera::orbit(Vec3::new(0.0, 0.0, 0.0), 0.3, 0.25, 40.0, 3000.0),
         "volume" => Camera::orbit(Vec3::ZERO, 0.6, 0.3, 1.8, 50.0),
         "voxelizer" => Camera::orbit(Vec3::ZERO, 0.5, 0.35, 2.6, 100.0),
-        "composite" => Camera::orbit(Vec3::new(0.0, 2.0, 0.0), -0.15, 0.22, 55.0, 3000.0),
+        "composite" => Camera::orbit(Vec3::new(0.0, -1.0, 0.0), -0.165, 0.29, 31.5, 3000.0),
         _ => Camera::orbit(Vec3::ZERO, 0.0, 0.0, 1.0, 10.0),
     }
 }
@@ -968,6 +968,9 @@ pub struct VoxelizerSettings {
     pub mode: VoxelMode,
     /// Cube colours of the conservative surface (the other modes draw plain cubes).
     pub colour_by: ColourBy,
+    /// Show the mesh's distance field (exact, from the surface voxels) through the middle z
+    /// slice, in the frame's lower-right corner.
+    pub slice: bool,
 }
 
 /// The Stanford bunny of the benches, when this checkout sits beside `shared/`.
@@ -984,6 +987,7 @@ impl Default for VoxelizerSettings {
             grid: 64,
             mode: VoxelMode::Surface(Separation::Conservative),
             colour_by: ColourBy::Normal,
+            slice: true,
         }
     }
 }
@@ -1001,6 +1005,12 @@ enum VoxelJob {
 /// frame until the next change.
 pub struct VoxelizerScene {
     voxelizer: Voxelizer,
+    distance: fieldkit::distance::Distance3d,
+    blit: Blit,
+    /// The distance field recorded with the job (read back once submitted), then its slice.
+    field: Option<wgpu::Texture>,
+    field_read: Option<Readback<Vec<f32>>>,
+    slice: Option<(wgpu::Texture, [u32; 2], f32)>,
     view: Option<(bool, VoxelView)>,
     cubes: Option<(bool, Cubes)>,
     balls: Metaballs,
@@ -1018,6 +1028,11 @@ impl VoxelizerScene {
     fn new(device: &wgpu::Device) -> Result<Self, Error> {
         Ok(Self {
             voxelizer: Voxelizer::new(device)?,
+            distance: fieldkit::distance::Distance3d::new(device)?,
+            blit: Blit::new(device, COLOUR),
+            field: None,
+            field_read: None,
+            slice: None,
             view: None,
             cubes: None,
             balls: Metaballs::new(device)?,
@@ -1029,11 +1044,17 @@ impl VoxelizerScene {
 
     /// Work started and not yet shown.
     pub fn busy(&self, s: &VoxelizerSettings) -> bool {
-        self.job.is_some() || self.shown.as_ref().map(|x| &x.0) != Some(s)
+        self.job.is_some()
+            || self.field.is_some()
+            || self.field_read.is_some()
+            || self.shown.as_ref().map(|x| &x.0) != Some(s)
     }
 
     /// The frame that recorded the job was submitted: start reading its result.
     fn submitted(&mut self, device: &wgpu::Device, queue: &wgpu::Queue) {
+        if let Some(f) = self.field.take() {
+            self.field_read = Some(readback_texture(device, queue, &f));
+        }
         self.job = self.job.take().map(|(key, grid, job)| {
             let job = match job {
                 VoxelJob::RecordedAttributes(p) => {
@@ -1118,7 +1139,53 @@ impl VoxelizerScene {
                         .encode_solid(device, frame.rec, &mesh, &grid, true)?,
                 ),
             };
+            self.slice = None;
+            if s.slice {
+                // The exact distance to the conservative surface voxels, in voxels.
+                let surface = self
+                    .voxelizer
+                    .encode_surface(device, frame.rec, &mesh, &grid)?;
+                let volume = self.voxelizer.encode_volume(device, frame.rec, &surface)?;
+                let field = self.distance.encode(
+                    device,
+                    frame.rec,
+                    &volume,
+                    &fieldkit::distance::Options3d::default(),
+                )?;
+                self.field = Some(field.distance);
+            }
             self.job = Some((s.clone(), grid, job));
+        }
+        if let Some(r) = &mut self.field_read
+            && let Some(d) = r.try_take()
+        {
+            self.field_read = None;
+            let d = d?;
+            let grid = (self.job.as_ref().map(|j| j.1)).or(self.shown.as_ref().map(|j| j.1));
+            if let Some(grid) = grid {
+                let [w, h, depth] = grid.size;
+                let z = depth / 2;
+                let plane = &d[(z * w * h) as usize..((z + 1) * w * h) as usize];
+                let max = plane.iter().copied().fold(1.0f32, f32::max);
+                let px: Vec<u8> = plane
+                    .iter()
+                    .flat_map(|&v| {
+                        let t = v / max;
+                        let line = if (v / 2.0).fract() < 0.15 { 0.6 } else { 1.0 };
+                        if v == 0.0 {
+                            [255, 255, 255, 255]
+                        } else {
+                            [
+                                (255.0 * t * line) as u8,
+                                (90.0 * line) as u8,
+                                (255.0 * (1.0 - t) * line) as u8,
+                                255,
+                            ]
+                        }
+                    })
+                    .collect();
+                self.slice = Some((upload_rgba(device, queue, &px, w, h), [w, h], max));
+            }
         }
         let reversed = frame.camera.reversed_z;
         let view = frame.camera.view(frame.size);
@@ -1185,6 +1252,25 @@ impl VoxelizerScene {
                     stats.push(format!("occupied voxels: {n}"));
                 }
             }
+        }
+        if let Some((texture, [w, h], max)) = &self.slice
+            && s.slice
+        {
+            // Lower-right corner, a third of the frame's height, the slice's aspect.
+            let fh = 1.0 / 3.0;
+            let fw = fh * (*w as f32 / *h as f32) * frame.size[1] as f32 / frame.size[0] as f32;
+            let view = texture.create_view(&Default::default());
+            self.blit.encode(
+                device,
+                queue,
+                frame.rec.encoder,
+                &frame.targets.colour_view,
+                &view,
+                [1.0 - fw - 0.01, 1.0 - fh - 0.01, 0.99, 0.99],
+            );
+            stats.push(format!(
+                "distance, middle z slice ({w}×{h}): 0 (white) to {max:.1} voxels, lines every 2"
+            ));
         }
         if self.job.is_some() {
             stats.push("voxelizing…".into());
@@ -1321,7 +1407,7 @@ impl Scenes {
                     self.volume = Some(VolumeScene::new(device)?);
                 }
                 let v = self.volume.as_mut().expect("set above");
-                let cloud = Mat4::from_translation(Vec3::new(-6.0, 16.0, -20.0))
+                let cloud = Mat4::from_translation(Vec3::new(-6.0, 11.0, -20.0))
                     * Mat4::from_scale(Vec3::new(40.0, 12.0, 24.0));
                 stats.extend(v.draw(device, queue, &s.volume, cloud, frame)?);
                 Ok(stats)
