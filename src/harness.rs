@@ -203,3 +203,129 @@ pub fn compare_image(
     }
     Ok(result)
 }
+
+/// Check a [`Summary`] against its stored snapshot, `<manifest_dir>/tests/snapshots/<file
+/// stem>__<name>.snap` (insta's layout, so the files stay readable and reviewable as before).
+///
+/// Lines must match, with one allowance: a number printed with `d` decimals may differ from
+/// the stored one by one unit in its last decimal (10⁻ᵈ). A statistic whose true value sits
+/// near a rounding boundary lands on either side of it on different adapters (llvmpipe and
+/// NVIDIA round the last bit of `sqrt`, `exp` and filtering differently); a real change moves it
+/// further. Integers, hashes and every other token compare exactly.
+///
+/// `FIELDKIT_BLESS=1` (or `INSTA_UPDATE=always`) rewrites the snapshot; a missing snapshot is
+/// written outside CI and an error in CI.
+pub fn check_summary(
+    manifest_dir: &str,
+    file: &str,
+    name: &str,
+    summary: &str,
+) -> Result<(), String> {
+    let stem = Path::new(file)
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("test");
+    let path = Path::new(manifest_dir)
+        .join("tests/snapshots")
+        .join(format!("{stem}__{name}.snap"));
+    let bless = std::env::var("FIELDKIT_BLESS").is_ok_and(|v| v == "1")
+        || std::env::var("INSTA_UPDATE").is_ok_and(|v| v == "always");
+    let in_ci = std::env::var("CI").is_ok();
+    if bless || (!path.exists() && !in_ci) {
+        std::fs::create_dir_all(path.parent().expect("a parent")).map_err(|e| e.to_string())?;
+        let text = format!(
+            "---\nsource: {file}\nexpression: summary\n---\n{}\n",
+            summary.trim_end()
+        );
+        std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
+        return Ok(());
+    }
+    let stored = std::fs::read_to_string(&path)
+        .map_err(|e| format!("{}: {e} (FIELDKIT_BLESS=1 writes it)", path.display()))?;
+    // The content follows the second `---` line of the header.
+    let content = stored
+        .splitn(3, "---\n")
+        .nth(2)
+        .ok_or_else(|| format!("{}: no snapshot header", path.display()))?;
+    let want: Vec<&str> = content.trim_end().lines().map(str::trim_end).collect();
+    let got: Vec<&str> = summary.trim_end().lines().map(str::trim_end).collect();
+    let mut problems = Vec::new();
+    if want.len() != got.len() {
+        problems.push(format!("{} lines stored, {} now", want.len(), got.len()));
+    }
+    for (i, (w, g)) in want.iter().zip(&got).enumerate() {
+        if !lines_agree(w, g) {
+            problems.push(format!("line {}: stored `{w}`, now `{g}`", i + 1));
+        }
+    }
+    if problems.is_empty() {
+        Ok(())
+    } else {
+        Err(format!(
+            "{} differs beyond one unit in the last decimal:\n  {}\n(FIELDKIT_BLESS=1 rewrites it)",
+            path.display(),
+            problems.join("\n  ")
+        ))
+    }
+}
+
+/// Equal token by token, a decimal number allowed one unit in its last place.
+fn lines_agree(want: &str, got: &str) -> bool {
+    let (w, g): (Vec<&str>, Vec<&str>) = (
+        want.split_whitespace().collect(),
+        got.split_whitespace().collect(),
+    );
+    w.len() == g.len()
+        && w.iter().zip(&g).all(|(a, b)| {
+            if a == b {
+                return true;
+            }
+            let decimals = |t: &str| t.split_once('.').map(|(_, f)| f.len());
+            match (decimals(a), decimals(b), a.parse::<f64>(), b.parse::<f64>()) {
+                (Some(da), Some(db), Ok(x), Ok(y)) if da == db && da > 0 => {
+                    (x - y).abs() <= 10f64.powi(-(da as i32)) * 1.0001
+                }
+                _ => false,
+            }
+        })
+}
+
+/// Assert that a [`Summary`] (or any `Display`) matches its stored snapshot within one unit of
+/// its last printed decimal: [`check_summary`] for the calling test file.
+///
+/// ```ignore
+/// fieldkit::assert_summary!("resolve_stage", Summary::floats(&[h, w], &d, 3));
+/// ```
+#[macro_export]
+macro_rules! assert_summary {
+    ($name:expr, $summary:expr) => {
+        if let Err(e) = $crate::harness::check_summary(
+            env!("CARGO_MANIFEST_DIR"),
+            file!(),
+            $name,
+            &$summary.to_string(),
+        ) {
+            panic!("{e}");
+        }
+    };
+}
+
+#[cfg(test)]
+mod tests {
+    use super::lines_agree;
+
+    #[test]
+    fn a_last_decimal_may_move_by_one_unit_and_no_more() {
+        assert!(lines_agree("mean: 0.719", "mean: 0.720"));
+        assert!(lines_agree("max: 1.017", "max: 1.016"));
+        assert!(!lines_agree("mean: 0.719", "mean: 0.721"));
+        assert!(!lines_agree("mean: 0.719", "mean: 0.72"));
+        assert!(!lines_agree("distinct: 12", "distinct: 13"));
+        assert!(!lines_agree("hash: 00ab", "hash: 00ac"));
+        assert!(lines_agree(
+            "mean rgb: 12.3 45.6 7.8",
+            "mean rgb: 12.4 45.6 7.7"
+        ));
+        assert!(!lines_agree("shape: [32, 32]", "shape: [32, 33]"));
+    }
+}

@@ -105,7 +105,8 @@ fn resolve_stage() {
         .map(|&v| v as u32)
         .collect();
     assert_eq!(d2, exact);
-    insta::assert_snapshot!(
+    fieldkit::assert_summary!(
+        "resolve_stage",
         Summary::floats(&[H, W], &d, 3)
             .and("d² rounded", Summary::ints(&[H, W], &d2))
             .to_string()
@@ -131,7 +132,8 @@ fn whole_chain_signed() {
             ..Options::default()
         },
     );
-    insta::assert_snapshot!(
+    fieldkit::assert_summary!(
+        "whole_chain_signed",
         Summary::floats(&[H * 2, W * 2], &d, 3)
             .and("nearest inside", Summary::ints(&[H * 2, W * 2], &nearest))
             .to_string()

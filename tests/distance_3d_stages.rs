@@ -120,7 +120,8 @@ fn exact_rows_then_columns() {
         .map(|&v| v as u32)
         .collect();
     assert_eq!(d2s(&after_z), exact);
-    insta::assert_snapshot!(
+    fieldkit::assert_summary!(
+        "exact_rows_then_columns",
         Summary::ints(&SHAPE, &rows)
             .and("after y", Summary::ints(&SHAPE, &after_y))
             .and("after z", Summary::ints(&SHAPE, &after_z))
@@ -172,7 +173,8 @@ fn resolve_stage() {
         .map(|&v| v as u32)
         .collect();
     assert_eq!(d2, exact);
-    insta::assert_snapshot!(
+    fieldkit::assert_summary!(
+        "resolve_stage",
         Summary::floats(&SHAPE, &u, 3)
             .and("signed", Summary::floats(&SHAPE, &s, 3))
             .and("d² rounded", Summary::ints(&SHAPE, &d2))
@@ -219,7 +221,8 @@ fn seed_points_stage() {
             "voxel {i}"
         );
     }
-    insta::assert_snapshot!(
+    fieldkit::assert_summary!(
+        "seed_points_stage",
         Summary::ints(&SHAPE, &nearest)
             .and("distance", Summary::floats(&SHAPE, &dist, 3))
             .to_string()

@@ -59,7 +59,7 @@ fn splat_stage() {
     let (out, shape) = seeds(&ctx);
     let fixed = words(&ctx, &out.density_fixed);
     let dens: Vec<f32> = fixed.iter().map(|&f| f as f32 / out.fixed_scale).collect();
-    insta::assert_snapshot!(Summary::floats(&shape, &dens, 3).to_string());
+    fieldkit::assert_summary!("splat_stage", Summary::floats(&shape, &dens, 3).to_string());
 }
 
 #[test]
@@ -70,7 +70,8 @@ fn seed_stage() {
     let is_seed: Vec<u32> = keys.iter().map(|&k| (k != 0) as u32).collect();
     let pts: Vec<f32> =
         bytemuck::cast_slice::<u8, f32>(&read_buffer(&ctx, &out.points).unwrap()).to_vec();
-    insta::assert_snapshot!(
+    fieldkit::assert_summary!(
+        "seed_stage",
         Summary::ints(&shape, &is_seed)
             .and(
                 "points",
@@ -82,12 +83,18 @@ fn seed_stage() {
 
 #[test]
 fn jfa_and_sdf_stages() {
-    insta::assert_snapshot!(distance_summary(Method::Jfa(Variant::JfaPlus2)));
+    fieldkit::assert_summary!(
+        "jfa_and_sdf_stages",
+        distance_summary(Method::Jfa(Variant::JfaPlus2))
+    );
 }
 
 #[test]
 fn line_passes_and_sdf_stages() {
-    insta::assert_snapshot!(distance_summary(Method::Lines));
+    fieldkit::assert_summary!(
+        "line_passes_and_sdf_stages",
+        distance_summary(Method::Lines)
+    );
 }
 
 /// The nearest seed (by table index) and the SDF after the distance stage with `method`.
@@ -106,9 +113,20 @@ fn distance_summary(method: Method) -> String {
         .map(|&k| fieldkit::distance::key_index(k).unwrap_or(u32::MAX))
         .collect();
     let sdf: Vec<f32> = read_texture(&ctx, &field.sdf).unwrap();
-    Summary::ints(&[d, h, w], &seeded)
-        .and("sdf", Summary::floats(&[d, h, w], &sdf, 3))
-        .to_string()
+    let ints = match method {
+        // The line passes pick each row's winner by f32 distances to seeds whose offsets are
+        // quantized to 1/511 voxel, and later passes build on those winners: where two seeds
+        // are near-equal, which one a voxel keeps depends on the adapter's rounding (the
+        // H100 and llvmpipe disagree on a few voxels). Which voxels hold a seed does not;
+        // the kept seeds' distances are the SDF below, compared within its last decimal.
+        Method::Lines => Summary(format!(
+            "shape: {:?}\nseeded voxels: {}\n",
+            [d, h, w],
+            seeded.iter().filter(|&&k| k != u32::MAX).count()
+        )),
+        _ => Summary::ints(&[d, h, w], &seeded),
+    };
+    ints.and("sdf", Summary::floats(&[d, h, w], &sdf, 3)).to_string()
 }
 
 /// Images summarised by coverage and mean colour (1 decimal, 0..255), over the background.
@@ -135,5 +153,8 @@ fn raymarch_and_cube_images() {
     let cubes = metaball_scene(&ctx, w, h, 0.0, MetaballView::Cubes).unwrap();
     let s = image_summary(&surface, w as usize, h as usize);
     let c = image_summary(&cubes, w as usize, h as usize);
-    insta::assert_snapshot!(format!("[surface]\n{s}[cubes]\n{c}"));
+    fieldkit::assert_summary!(
+        "raymarch_and_cube_images",
+        format!("[surface]\n{s}[cubes]\n{c}")
+    );
 }

@@ -368,7 +368,8 @@ fn forward_and_gbuffer_snapshots() {
         .collect();
     let normal_y: Vec<f32> = g[1].iter().map(|n| n.y).collect();
     let roughness: Vec<f32> = g[2].iter().map(|m| m.z).collect();
-    insta::assert_snapshot!(
+    fieldkit::assert_summary!(
+        "forward_and_gbuffer_snapshots",
         Summary::floats(&shape, &lum(&image), 3)
             .and("scene colour", Summary::floats(&shape, &lum(&g[0]), 3))
             .and("normal y", Summary::floats(&shape, &normal_y, 3))

@@ -505,7 +505,8 @@ fn displaced_grid_snapshot() {
         })
         .collect();
     let up: Vec<f32> = nrm.iter().map(|n| n.y).collect();
-    insta::assert_snapshot!(
+    fieldkit::assert_summary!(
+        "displaced_grid_snapshot",
         Summary::floats(&shape, &heights, 3)
             .and("sideways offset", Summary::floats(&shape, &sideways, 3))
             .and("normal y", Summary::floats(&shape, &up, 3))

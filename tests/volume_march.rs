@@ -618,7 +618,7 @@ fn brick_ranges_are_the_dilated_min_and_max() {
             }
         }
     }
-    insta::assert_snapshot!(
+    fieldkit::assert_summary!(
         "bricks",
         Summary::floats(&[2, 2, 3, 2], &got.concat(), 4).to_string()
     );
@@ -736,7 +736,7 @@ fn snapshots_outside_inside_and_across_the_boundary() {
             Summary::floats(&[SIZE as usize, SIZE as usize], &lit, 3)
         );
     }
-    insta::assert_snapshot!("images", out);
+    fieldkit::assert_summary!("images", out);
 }
 
 #[test]
@@ -897,9 +897,14 @@ fn lit_density_is_the_density_and_the_light_nodes_interpolant() {
             let i = ((z * size.height + y) * size.width + x) as usize;
             half::f16::from_bits(nodes[i][0]).to_f32()
         };
-        // (density bits as the upload stored them, green) per voxel, and the green tolerance:
-        // half an 8-bit level, one f16 step below 1 (llvmpipe's storage write rounds toward
-        // zero), or the filter's f32 rounding.
+        // (density bits as the upload stored them, green) per voxel, and the green tolerance,
+        // from the format's quantum and the arithmetic: R8 — Vulkan lets a store return either
+        // of the two nearest levels (one level, 1/255), and the light's trilinear filter over
+        // Rgba16Float nodes may be off by one f16 step near 1 (2⁻¹¹) on hardware that filters
+        // half floats in reduced precision. Measured: llvmpipe within half a level; the H100
+        // 0.53 levels off at (3,5,1) (251/255 stored for 0.98224). R16Float — one f16 step
+        // below 1 (llvmpipe's storage write rounds toward zero). R32Float — the filter's f32
+        // rounding.
         let (texels, tolerance): (Vec<(u32, f32)>, f32) = match format {
             R8Unorm => {
                 let t: Vec<[u8; 4]> = read_texture(ctx, lit_density).unwrap();
@@ -907,7 +912,7 @@ fn lit_density_is_the_density_and_the_light_nodes_interpolant() {
                     .iter()
                     .map(|p| (p[0] as u32, p[1] as f32 / 255.0))
                     .collect();
-                (texels, 0.5 / 255.0 + 1e-6)
+                (texels, 1.0 / 255.0 + 4.9e-4)
             }
             R16Float => {
                 let t: Vec<[u16; 4]> = read_texture(ctx, lit_density).unwrap();

@@ -252,9 +252,13 @@ fn attribute_volumes_hold_the_list() {
             normal[i][1] as f32,
             normal[i][2] as f32,
         ) / 127.0;
-        // snorm8: half a step, 1/254, per component.
+        // snorm8: Vulkan lets a store return either of the two nearest levels ("should
+        // round to nearest"), so one step, 1/127, per component; the GPU's octahedral decode
+        // (f32, with or without fused multiply-adds) adds a few f32 roundings, under 1e-5.
+        // Measured: llvmpipe within half a step; the H100 0.55 steps off at [9, 9, 2]
+        // (x: −0.3228 stored for −0.3271).
         assert!(
-            (got - n).abs().max_element() <= 0.5 / 127.0 + 1e-6,
+            (got - n).abs().max_element() <= 1.0 / 127.0 + 1e-5,
             "normal at {:?}: {got} vs {n}",
             voxel.voxel
         );

@@ -10,6 +10,7 @@ mod bench_ocean;
 mod bench_volume;
 mod bench_voxelize;
 mod chart;
+mod gpu_tests;
 mod heater;
 mod lint;
 mod measure;
@@ -53,6 +54,9 @@ enum Command {
         #[arg(long, default_value = "gallery")]
         out: PathBuf,
     },
+    /// Pack the release test binaries for the GPU machine (`.gpu/tests.tar.xz` and
+    /// `.gpu/run-tests.sh`); there: `. .gpu/env.sh && sh .gpu/run-tests.sh H100 $OUT`.
+    GpuTests,
     /// Time against accuracy for a technique, charted (release build; GPU timestamp queries).
     Bench {
         technique: Technique,
@@ -133,6 +137,7 @@ fn main() -> ExitCode {
             shader_stats::run(&root, stage.as_deref(), &overrides)
         }
         Command::Gallery { out } => gallery(&out),
+        Command::GpuTests => gpu_tests::run(&crate_root()),
         Command::Bench {
             technique,
             quick,

@@ -1,0 +1,138 @@
+//! `cargo xtask gpu-tests`: the whole test suite on a hardware adapter that has no Rust
+//! toolchain (the GPU machine). Here: build every test binary in release, strip them, pack them
+//! with xz into `.gpu/tests.tar.xz` with a runner script. There, in the checkout:
+//!
+//! ```sh
+//! . .gpu/env.sh && sh .gpu/run-tests.sh H100 $OUT
+//! ```
+//!
+//! The binaries find `tests/` (snapshots, reference images) through `CARGO_MANIFEST_DIR`, the
+//! path they were built in; the runner links that path to the checkout when it differs. Each
+//! binary runs with `CI=true INSTA_UPDATE=no FIELDKIT_ADAPTER=<adapter>`, so a snapshot that
+//! differs fails instead of being rewritten. Tests that need what that machine lacks are left
+//! out by name: cargo (the consumer and binding-drift tests build crates) and Xvfb (the window
+//! tests).
+
+use std::path::Path;
+use std::process::{Command, ExitCode};
+
+/// Test binaries (by target name) that cannot run without a toolchain, and tests (by name)
+/// that need a display.
+const NEEDS_CARGO: [&str; 2] = ["consumer", "bindings"];
+const NEEDS_DISPLAY: [(&str, &str); 2] = [
+    ("window", "window_screenshot_matches_the_offscreen_frame"),
+    (
+        "viewer",
+        "every_scene_in_a_window_matches_the_offscreen_render",
+    ),
+];
+
+pub fn run(root: &Path) -> ExitCode {
+    match prepare(root) {
+        Ok(n) => {
+            println!(
+                "packed {n} test binaries into .gpu/tests.tar.xz; on the GPU machine:\n  \
+                 . .gpu/env.sh && sh .gpu/run-tests.sh H100 $OUT"
+            );
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("gpu-tests: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn prepare(root: &Path) -> Result<usize, String> {
+    let gpu = root.join(".gpu");
+    if !gpu.join("env.sh").exists() {
+        return Err("no .gpu/env.sh: run ../shared/device/prepare.sh once first".into());
+    }
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let out = Command::new(&cargo)
+        .current_dir(root)
+        .args([
+            "test",
+            "--release",
+            "-p",
+            "fieldkit",
+            "--tests",
+            "--no-run",
+            "--message-format=json",
+        ])
+        .output()
+        .map_err(|e| format!("cargo: {e}"))?;
+    if !out.status.success() {
+        return Err(format!(
+            "cargo test --no-run failed:\n{}",
+            String::from_utf8_lossy(&out.stderr)
+        ));
+    }
+    let staging = gpu.join("tests");
+    std::fs::remove_dir_all(&staging).ok();
+    std::fs::create_dir_all(&staging).map_err(|e| e.to_string())?;
+    let mut names = Vec::new();
+    for line in String::from_utf8_lossy(&out.stdout).lines() {
+        let Ok(v) = serde_json::from_str::<serde_json::Value>(line) else {
+            continue;
+        };
+        let (Some(exe), Some(name), Some(kinds)) = (
+            v["executable"].as_str(),
+            v["target"]["name"].as_str(),
+            v["target"]["kind"].as_array(),
+        ) else {
+            continue;
+        };
+        // Integration tests only: the library's unit tests have no GPU work.
+        if !kinds.iter().any(|k| k == "test") || NEEDS_CARGO.contains(&name) {
+            continue;
+        }
+        let dst = staging.join(name);
+        std::fs::copy(exe, &dst).map_err(|e| format!("{exe}: {e}"))?;
+        let _ = Command::new("strip").arg(&dst).status();
+        names.push(name.to_string());
+    }
+    names.sort();
+    let skip: String = NEEDS_DISPLAY
+        .iter()
+        .map(|(bin, test)| format!("    {bin}) skip=\"--skip {test}\" ;;\n"))
+        .collect();
+    let script = format!(
+        r#"#!/bin/sh
+# Written by `cargo xtask gpu-tests`. Usage: sh .gpu/run-tests.sh ADAPTER OUT_DIR
+adapter="$1"; out="${{2:-.}}"; logs=/tmp/fieldkit-test-logs; mkdir -p "$logs"
+built="{built}"
+if [ "$(pwd)" != "$built" ] && [ ! -e "$built" ]; then mkdir -p "$(dirname "$built")"; ln -s "$(pwd)" "$built"; fi
+mkdir -p .gpu/bin/tests && tar -xJf .gpu/tests.tar.xz -C .gpu/bin/tests
+pass=0; fail=0
+for name in {names}; do
+  skip=""
+  case "$name" in
+{skip}  esac
+  if (cd "$built" && CI=true INSTA_UPDATE=no FIELDKIT_ADAPTER="$adapter" "$OLDPWD/.gpu/bin/tests/$name" $skip) > "$logs/$name.log" 2>&1; then
+    pass=$((pass+1)); echo "ok   $name: $(grep -h '^test result' "$logs/$name.log" | tail -1)"
+  else
+    fail=$((fail+1)); echo "FAIL $name: $(grep -h '^test result' "$logs/$name.log" | tail -1)"
+    grep -h -A12 -- '---- .* stdout ----' "$logs/$name.log" | head -60
+  fi
+done
+echo "binaries passed: $pass, failed: $fail"
+tar -cJf "$out/test-logs.tar.xz" -C "$logs" .
+"#,
+        built = root.display(),
+        names = names.join(" "),
+    );
+    std::fs::write(gpu.join("run-tests.sh"), script).map_err(|e| e.to_string())?;
+    let status = Command::new("tar")
+        .current_dir(&staging)
+        .arg("-cJf")
+        .arg(gpu.join("tests.tar.xz"))
+        .args(&names)
+        .status()
+        .map_err(|e| format!("tar: {e}"))?;
+    if !status.success() {
+        return Err("tar -cJf failed".into());
+    }
+    std::fs::remove_dir_all(&staging).ok();
+    Ok(names.len())
+}
