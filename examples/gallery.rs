@@ -214,7 +214,7 @@ pub fn metaball_scene(
     use glam::{Mat4, Vec3};
     let device = &ctx.device;
     let edge = 1.0;
-    let base = packed_grid([5, 4, 3], edge);
+    let base = packed_grid([5, 4, 3], edge)?;
     let voxels = animate(&base, edge, t, 0.5, 0.15);
     let settings = Settings::default();
     let balls = Metaballs::new(device)?;
@@ -568,7 +568,7 @@ pub fn ocean_scene(ctx: &Context, w: u32, h: u32, gbuffer: bool) -> Result<Vec<u
     // The island: a mound of blobs 3 m across on a wide shelf just under the water, so the
     // water over the shelf is shallow and fades.
     let edge = 3.0;
-    let voxels: Vec<glam::Vec4> = packed_grid([13, 3, 9], edge)
+    let voxels: Vec<glam::Vec4> = packed_grid([13, 3, 9], edge)?
         .into_iter()
         .map(|v| v - glam::Vec4::new(0.0, 3.5, 0.0, 0.0))
         .filter(|v| {

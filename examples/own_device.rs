@@ -215,7 +215,7 @@ fn frame(
 
     // The island: metaballs on a shelf just under the water.
     let edge = 3.0;
-    let voxels: Vec<Vec4> = packed_grid([13, 3, 9], edge)
+    let voxels: Vec<Vec4> = packed_grid([13, 3, 9], edge)?
         .into_iter()
         .map(|v| v - Vec4::new(0.0, 3.5, 0.0, 0.0))
         .filter(|v| (v.x * v.x + 1.6 * v.z * v.z).sqrt() < 19.0 - 4.0 * (v.y + 3.5))

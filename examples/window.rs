@@ -116,7 +116,7 @@ impl Scene {
                 resource: camera.as_entire_binding(),
             }],
         });
-        let base = packed_grid([4, 3, 3], EDGE);
+        let base = packed_grid([4, 3, 3], EDGE)?;
         let balls = Metaballs::new(device)?;
         let instances = balls.upload(device, queue, &base)?;
         let marcher = Raymarcher::new(device, format, DEPTH, false)?;

@@ -281,7 +281,7 @@ fn bad_input_is_a_typed_error() {
     assert!(err(balls.encode(&ctx.device, &mut enc, &inst, &grid, 1.0, &s)).contains("grid cells"));
     // Updating with another count.
     assert!(
-        err(balls.update(&ctx.queue, &mut inst, &packed_grid([2, 2, 2], 1.0)))
+        err(balls.update(&ctx.queue, &mut inst, &packed_grid([2, 2, 2], 1.0).unwrap()))
             .contains("voxels given")
     );
     // Empty and all-zero sets fit no grid: nothing to draw.
@@ -295,7 +295,7 @@ fn bad_input_is_a_typed_error() {
 
 #[test]
 fn packed_grid_is_centred() {
-    let v = packed_grid([3, 2, 1], 2.0);
+    let v = packed_grid([3, 2, 1], 2.0).unwrap();
     assert_eq!(v.len(), 6);
     let mean = v.iter().map(|p| p.truncate()).sum::<Vec3>() / 6.0;
     assert!(mean.length() < 1e-6);
@@ -312,6 +312,7 @@ fn blob_bins_hold_every_blob_that_reaches_them() {
     let s = Settings::default();
     // Scales from 0 (skipped) to 1.3, centres off the lattice.
     let voxels: Vec<Vec4> = packed_grid([4, 3, 3], 1.0)
+        .unwrap()
         .iter()
         .enumerate()
         .map(|(i, v)| {

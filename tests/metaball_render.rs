@@ -681,7 +681,7 @@ fn direct_tracing_matches_the_analytic_field() {
 fn segment_tracing_takes_fewer_steps_than_the_global_bound() {
     let ctx = Context::shared();
     let s = blob_settings();
-    let voxels = fieldkit::metaball::packed_grid([3, 3, 3], 1.0);
+    let voxels = fieldkit::metaball::packed_grid([3, 3, 3], 1.0).unwrap();
     let bins = blob_bins(&ctx, &voxels, &s);
     let view = camera(Vec3::new(1.2, 1.5, 4.5), Vec3::ZERO, false);
     let settings = RaymarchSettings {

@@ -126,7 +126,8 @@ fn distance_summary(method: Method) -> String {
         )),
         _ => Summary::ints(&[d, h, w], &seeded),
     };
-    ints.and("sdf", Summary::floats(&[d, h, w], &sdf, 3)).to_string()
+    ints.and("sdf", Summary::floats(&[d, h, w], &sdf, 3))
+        .to_string()
 }
 
 /// Images summarised by coverage and mean colour (1 decimal, 0..255), over the background.

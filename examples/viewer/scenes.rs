@@ -231,7 +231,7 @@ impl Actor {
         clear(frame, [0.09, 0.1, 0.12]);
         let counts = s.counts()?;
         if self.base.as_ref().map(|b| (b.0, b.1)) != Some((counts, s.block)) {
-            self.base = Some((counts, s.block, packed_grid(counts, s.block)));
+            self.base = Some((counts, s.block, packed_grid(counts, s.block)?));
         }
         let base = &self.base.as_ref().expect("set above").2;
         let voxels = if s.animate {
@@ -1433,7 +1433,7 @@ impl Actor {
         let saved_clear = [0.55, 0.7, 0.85];
         clear(frame, saved_clear);
         let counts = s.counts()?;
-        let voxels: Vec<glam::Vec4> = packed_grid(counts, s.block)
+        let voxels: Vec<glam::Vec4> = packed_grid(counts, s.block)?
             .into_iter()
             .map(|v| v - glam::Vec4::new(0.0, 3.5, 0.0, 0.0))
             .filter(|v| {

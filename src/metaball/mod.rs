@@ -4,7 +4,7 @@
 //! ```no_run
 //! # fn f(ctx: &fieldkit::gpu::Context) -> Result<(), fieldkit::Error> {
 //! use fieldkit::metaball::{Metaballs, Settings, packed_grid};
-//! let voxels = packed_grid([8, 8, 8], 1.0); // 512 voxels of edge 1, centred on the origin
+//! let voxels = packed_grid([8, 8, 8], 1.0)?; // 512 voxels of edge 1, centred on the origin
 //! let balls = Metaballs::new(&ctx.device)?;
 //! let instances = balls.upload(&ctx.device, &ctx.queue, &voxels)?;
 //! let settings = Settings::default();
@@ -156,11 +156,44 @@ impl Settings {
     }
 }
 
+/// Most voxels [`packed_grid`] builds (16.7 M; 256 MiB of instances, past any device's
+/// default storage binding).
+pub const MAX_PACKED: u64 = 1 << 24;
+
 /// The source's grid builder: `region` voxels per axis of edge `block`, packed, centred on the
-/// origin, scale 1 (xyz: centre, w: scale).
-pub fn packed_grid(region: [u32; 3], block: f32) -> Vec<Vec4> {
+/// origin, scale 1 (xyz: centre, w: scale). A non-finite or non-positive `block`, or more than
+/// [`MAX_PACKED`] voxels, is a typed error.
+pub fn packed_grid(region: [u32; 3], block: f32) -> Result<Vec<Vec4>, Error> {
+    if !(block.is_finite() && block > 0.0) {
+        return Err(Error::Invalid {
+            stage: STAGE,
+            what: format!("block size must be finite and positive, got {block}"),
+        });
+    }
+    let count = region
+        .iter()
+        .try_fold(1u64, |c, &n| c.checked_mul(n as u64))
+        .unwrap_or(u64::MAX);
+    if count > MAX_PACKED {
+        return Err(Error::Size {
+            stage: STAGE,
+            what: "packed voxels (region x × y × z)",
+            got: count,
+            max: MAX_PACKED,
+        });
+    }
+    if count == 0 {
+        // A zero side: nothing to build (and no loop over the other sides).
+        return Ok(Vec::new());
+    }
     let half = Vec3::new(region[0] as f32, region[1] as f32, region[2] as f32) * block * 0.5;
-    let mut v = Vec::with_capacity((region[0] * region[1] * region[2]) as usize);
+    if !half.is_finite() {
+        return Err(Error::Invalid {
+            stage: STAGE,
+            what: format!("region {region:?} × block {block} overflows f32"),
+        });
+    }
+    let mut v = Vec::with_capacity(count as usize);
     for z in 0..region[2] {
         for y in 0..region[1] {
             for x in 0..region[0] {
@@ -169,7 +202,7 @@ pub fn packed_grid(region: [u32; 3], block: f32) -> Vec<Vec4> {
             }
         }
     }
-    v
+    Ok(v)
 }
 
 /// Per-frame animation of the source's demo: scales s₀·(0.5 + 0.5·sin(2π f t + 0.13 i)) and
@@ -399,12 +432,19 @@ impl Metaballs {
         voxels: &[Vec4],
     ) -> Result<Instances, Error> {
         check_voxels(voxels, 1.0)?;
-        if voxels.len() > u32::MAX as usize {
+        // 16 bytes an instance, bound whole as storage.
+        let limits = device.limits();
+        let max = (limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size)
+            / 16)
+            .min(u32::MAX as u64);
+        if voxels.len() as u64 > max {
             return Err(Error::Size {
                 stage: STAGE,
-                what: "voxel count",
+                what: "voxel count (16 bytes each, one storage binding)",
                 got: voxels.len() as u64,
-                max: u32::MAX as u64,
+                max,
             });
         }
         let buffer = device.create_buffer(&wgpu::BufferDescriptor {

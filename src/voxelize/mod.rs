@@ -400,10 +400,11 @@ pub fn heavy_chunk_bound(local: &GridMesh, size: [u32; 3]) -> u32 {
     for t in local.vertices.chunks(3) {
         let lo = t[0].min(t[1]).min(t[2]).truncate();
         let hi = t[0].max(t[1]).max(t[2]).truncate();
+        // Saturating: a vertex far outside the grid (f32 → i64 saturates) clamps to it.
         let side = |a: usize| {
-            let l = (lo[a].ceil() as i64 - 1).max(0);
+            let l = (lo[a].ceil() as i64).saturating_sub(1).max(0);
             let h = (hi[a].floor() as i64).min(size[a] as i64 - 1);
-            (h - l + 1).max(0) as u64
+            h.saturating_sub(l).saturating_add(1).max(0) as u64
         };
         let (x, y, z) = (side(0), side(1), side(2));
         let most = (x * y).max(y * z).max(z * x);

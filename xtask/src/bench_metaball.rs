@@ -137,7 +137,13 @@ fn bench(
     );
     let mut rows = Vec::new();
     for &side in sides {
-        let voxels = animate(&packed_grid([side; 3], edge), edge, 0.3, 0.5, 0.15);
+        let voxels = animate(
+            &packed_grid([side; 3], edge).expect("a bench size"),
+            edge,
+            0.3,
+            0.5,
+            0.15,
+        );
         let fitted = settings
             .fit_grid(&voxels, edge)
             .map_err(|e| e.to_string())?
