@@ -113,19 +113,18 @@ fn distance_summary(method: Method) -> String {
         .map(|&k| fieldkit::distance::key_index(k).unwrap_or(u32::MAX))
         .collect();
     let sdf: Vec<f32> = read_texture(&ctx, &field.sdf).unwrap();
-    let ints = match method {
-        // The line passes pick each row's winner by f32 distances to seeds whose offsets are
-        // quantized to 1/511 voxel, and later passes build on those winners: where two seeds
-        // are near-equal, which one a voxel keeps depends on the adapter's rounding (the
-        // H100 and llvmpipe disagree on a few voxels). Which voxels hold a seed does not;
-        // the kept seeds' distances are the SDF below, compared within its last decimal.
-        Method::Lines => Summary(format!(
-            "shape: {:?}\nseeded voxels: {}\n",
-            [d, h, w],
-            seeded.iter().filter(|&&k| k != u32::MAX).count()
-        )),
-        _ => Summary::ints(&[d, h, w], &seeded),
-    };
+    // Both methods pick between sub-voxel seeds by f32 distances (the line passes to offsets
+    // quantized to 1/511 voxel, JFA to the points themselves), and later passes build on those
+    // picks: where two seeds are near-equal, which one a voxel keeps depends on the adapter's
+    // rounding (the H100 and llvmpipe disagree on a few voxels for both). Which voxels hold a
+    // seed does not; the kept seeds' distances are the SDF below, compared within its last
+    // decimal.
+    let _ = method;
+    let ints = Summary(format!(
+        "shape: {:?}\nseeded voxels: {}\n",
+        [d, h, w],
+        seeded.iter().filter(|&&k| k != u32::MAX).count()
+    ));
     ints.and("sdf", Summary::floats(&[d, h, w], &sdf, 3))
         .to_string()
 }

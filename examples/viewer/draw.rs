@@ -4,7 +4,10 @@
 use glam::{Mat4, Vec3, Vec4};
 
 const BLIT_WGSL: &str = r#"
-struct Rect { lo: vec2<f32>, hi: vec2<f32> }
+// The rectangle as fractions of the target (for the vertices) and in whole pixels (for the
+// texel each pixel shows: integer arithmetic, so every GPU picks the same texel even where a
+// pixel centre falls exactly on a texel boundary).
+struct Rect { lo: vec2<f32>, hi: vec2<f32>, lo_px: vec2<u32>, size_px: vec2<u32> }
 @group(0) @binding(0) var<uniform> rect: Rect;
 @group(0) @binding(1) var image: texture_2d<f32>;
 
@@ -21,8 +24,11 @@ fn vs(@builtin(vertex_index) i: u32) -> Out {
 
 @fragment
 fn fs(v: Out) -> @location(0) vec4<f32> {
-    let size = vec2<f32>(textureDimensions(image));
-    let texel = vec2<i32>(clamp(v.uv * size, vec2(0.0), size - 1.0));
+    let size = textureDimensions(image);
+    // The pixel centre k + ½ truncates to k.
+    let p = vec2<u32>(v.position.xy);
+    let rel = max(p, rect.lo_px) - rect.lo_px;
+    let texel = min(rel * size / max(rect.size_px, vec2(1u)), size - 1u);
     return textureLoad(image, texel, 0);
 }
 "#;
@@ -78,24 +84,41 @@ impl Blit {
         });
         let rect = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("viewer blit rect"),
-            size: 16,
+            size: 32,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         Self { pipeline, rect }
     }
 
-    /// Draw `image` into `rect` = [x0, y0, x1, y1] (fractions of the target, y down).
+    /// Draw `image` into `rect` = [x0, y0, x1, y1] (fractions of the `size` target, y down).
+    #[allow(clippy::too_many_arguments)]
     pub fn encode(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
         target: &wgpu::TextureView,
+        size: [u32; 2],
         image: &wgpu::TextureView,
         rect: [f32; 4],
     ) {
-        queue.write_buffer(&self.rect, 0, bytemuck::cast_slice(&rect));
+        // Snap the rectangle to whole pixels, and hand the shader both forms.
+        let px = |f: f32, s: u32| (f * s as f32).round().max(0.0) as u32;
+        let (x0, y0) = (px(rect[0], size[0]), px(rect[1], size[1]));
+        let (x1, y1) = (px(rect[2], size[0]), px(rect[3], size[1]));
+        let snapped = [
+            x0 as f32 / size[0] as f32,
+            y0 as f32 / size[1] as f32,
+            x1 as f32 / size[0] as f32,
+            y1 as f32 / size[1] as f32,
+        ];
+        let mut words = [0u32; 8];
+        for (w, f) in words.iter_mut().zip(snapped) {
+            *w = f.to_bits();
+        }
+        words[4..].copy_from_slice(&[x0, y0, x1.saturating_sub(x0), y1.saturating_sub(y0)]);
+        queue.write_buffer(&self.rect, 0, bytemuck::cast_slice(&words));
         let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("viewer blit"),
             layout: &self.pipeline.get_bind_group_layout(0),

@@ -845,6 +845,7 @@ impl Distance2dScene {
                 queue,
                 frame.rec.encoder,
                 &frame.targets.colour_view,
+                frame.size,
                 &view,
                 rect,
             );
@@ -1265,6 +1266,7 @@ impl VoxelizerScene {
                 queue,
                 frame.rec.encoder,
                 &frame.targets.colour_view,
+                frame.size,
                 &view,
                 [1.0 - fw - 0.01, 1.0 - fh - 0.01, 0.99, 0.99],
             );
