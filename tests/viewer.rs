@@ -11,6 +11,8 @@
 mod viewer;
 
 use std::path::{Path, PathBuf};
+
+mod common;
 use std::process::Command;
 
 use viewer::scenes::{ActorSettings, NAMES, Saved};
@@ -128,24 +130,6 @@ fn every_scene_renders_offscreen_and_matches_its_reference() {
     assert!(failures.is_empty(), "{failures:#?}");
 }
 
-/// `target/<profile>/examples/viewer`, which `cargo test` builds with the other examples.
-fn viewer_binary() -> PathBuf {
-    let exe = std::env::current_exe().expect("the test binary's path");
-    let profile_dir = exe
-        .parent()
-        .and_then(|deps| deps.parent())
-        .expect("target/<profile>/deps/<test>");
-    let bin = profile_dir
-        .join("examples")
-        .join(format!("viewer{}", std::env::consts::EXE_SUFFIX));
-    assert!(
-        bin.exists(),
-        "{} is missing: `cargo test` builds the examples; run `cargo build --example viewer`",
-        bin.display()
-    );
-    bin
-}
-
 fn temp(name: &str) -> PathBuf {
     std::env::temp_dir().join(format!("fieldkit_viewer_{}_{name}", std::process::id()))
 }
@@ -161,7 +145,7 @@ fn every_scene_in_a_window_matches_the_offscreen_render() {
         let shot = temp(&format!("{scene}.png"));
         let output = Command::new("xvfb-run")
             .args(["-a", "-s", "-screen 0 800x600x24"])
-            .arg(viewer_binary())
+            .arg(common::example_binary("viewer"))
             .args([
                 "--window", "--scene", scene, "--size", "240x160", "--frames",
             ])
@@ -203,7 +187,7 @@ fn headless_with(scene: &str, s: &Saved) -> (bool, String) {
     let file = temp(&format!("{scene}_bad.ron"));
     viewer::save_settings(&file, s).unwrap();
     let shot = temp(&format!("{scene}_bad.png"));
-    let output = Command::new(viewer_binary())
+    let output = Command::new(common::example_binary("viewer"))
         .args([
             "--scene",
             scene,

@@ -6,26 +6,9 @@
 #[allow(dead_code)]
 mod window;
 
-use std::path::PathBuf;
-use std::process::Command;
+mod common;
 
-/// `target/<profile>/examples/window`, which `cargo test` builds with the other examples.
-fn example_binary() -> PathBuf {
-    let exe = std::env::current_exe().expect("the test binary's path");
-    let profile_dir = exe
-        .parent()
-        .and_then(|deps| deps.parent())
-        .expect("target/<profile>/deps/<test>");
-    let bin = profile_dir
-        .join("examples")
-        .join(format!("window{}", std::env::consts::EXE_SUFFIX));
-    assert!(
-        bin.exists(),
-        "{} is missing: `cargo test` builds the examples; run `cargo build --example window`",
-        bin.display()
-    );
-    bin
-}
+use std::process::Command;
 
 #[test]
 fn window_screenshot_matches_the_offscreen_frame() {
@@ -33,7 +16,7 @@ fn window_screenshot_matches_the_offscreen_frame() {
     let shot = std::env::temp_dir().join(format!("fieldkit_window_{}.png", std::process::id()));
     let output = Command::new("xvfb-run")
         .args(["-a", "-s", "-screen 0 640x480x24"])
-        .arg(example_binary())
+        .arg(common::example_binary("window"))
         .args(["--frames", &frames.to_string(), "--screenshot"])
         .arg(&shot)
         .output()

@@ -239,16 +239,9 @@ impl Actor {
         } else {
             base.clone()
         };
-        match &mut self.instances {
-            Some((inst, n)) if *n == voxels.len() => self.balls.update(queue, inst, &voxels)?,
-            _ => self.instances = Some((self.balls.upload(device, queue, &voxels)?, voxels.len())),
-        }
-        let instances = &self.instances.as_ref().expect("set above").0;
+        self.prepare(device, queue, &voxels, frame.camera.reversed_z)?;
         let reversed = frame.camera.reversed_z;
-        if self.marcher.as_ref().map(|m| m.0) != Some(reversed) {
-            self.marcher = Some((reversed, Raymarcher::new(device, COLOUR, DEPTH, reversed)?));
-        }
-        let marcher = &self.marcher.as_ref().expect("set above").1;
+        let instances = &self.instances.as_ref().expect("prepared").0;
         let view = frame.camera.view(frame.size);
         let (cv, dv) = (&frame.targets.colour_view, &frame.targets.depth_view);
         let mut stats = vec![format!(
@@ -286,25 +279,12 @@ impl Actor {
             grid.size[0], grid.size[1], grid.size[2]
         ));
         match s.draw {
-            ActorDraw::Surface | ActorDraw::Both => {
-                let field = self
-                    .balls
-                    .encode(device, frame.rec, instances, &grid, s.block, &s.field)?;
-                if let Some(m) = marcher.encode_march(
-                    device,
-                    frame.rec,
-                    &field,
-                    Mat4::IDENTITY,
-                    &view,
-                    &s.raymarch,
-                )? {
-                    marcher.encode_composite(device, frame.rec.encoder, cv, dv, &m)?;
-                }
-            }
+            ActorDraw::Surface | ActorDraw::Both => self.surface(device, s, &grid, frame)?,
             ActorDraw::Direct(method) => {
                 let bins = self
                     .balls
                     .encode_bins(device, frame.rec, instances, &grid, s.block, &s.field)?;
+                let marcher = &self.marcher.as_ref().expect("prepared").1;
                 if let Some(m) = marcher.encode_direct_march(
                     device,
                     frame.rec,
@@ -1423,6 +1403,58 @@ impl Scenes {
 }
 
 impl Actor {
+    /// Upload (or update in place) the voxels, and make the raymarcher for this depth
+    /// convention if the last one was made for the other.
+    fn prepare(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        voxels: &[glam::Vec4],
+        reversed: bool,
+    ) -> Result<(), Error> {
+        match &mut self.instances {
+            Some((inst, n)) if *n == voxels.len() => self.balls.update(queue, inst, voxels)?,
+            _ => self.instances = Some((self.balls.upload(device, queue, voxels)?, voxels.len())),
+        }
+        if self.marcher.as_ref().map(|m| m.0) != Some(reversed) {
+            self.marcher = Some((reversed, Raymarcher::new(device, COLOUR, DEPTH, reversed)?));
+        }
+        Ok(())
+    }
+
+    /// The field of the prepared voxels on `grid`, marched and composited into the frame.
+    fn surface(
+        &self,
+        device: &wgpu::Device,
+        s: &ActorSettings,
+        grid: &fieldkit::distance::Grid3,
+        frame: &mut Frame,
+    ) -> Result<(), Error> {
+        let instances = &self.instances.as_ref().expect("prepared").0;
+        let marcher = &self.marcher.as_ref().expect("prepared").1;
+        let view = frame.camera.view(frame.size);
+        let field = self
+            .balls
+            .encode(device, frame.rec, instances, grid, s.block, &s.field)?;
+        if let Some(m) = marcher.encode_march(
+            device,
+            frame.rec,
+            &field,
+            Mat4::IDENTITY,
+            &view,
+            &s.raymarch,
+        )? {
+            marcher.encode_composite(
+                device,
+                frame.rec.encoder,
+                &frame.targets.colour_view,
+                &frame.targets.depth_view,
+                &m,
+            )?;
+        }
+        Ok(())
+    }
+
     /// The actor drawn as the composite's island: sky cleared, the blocks sunk by half their
     /// height.
     fn encode_island(
@@ -1443,37 +1475,9 @@ impl Actor {
                 r < 19.0 - 4.0 * (v.y + 3.5)
             })
             .collect();
-        match &mut self.instances {
-            Some((inst, n)) if *n == voxels.len() => self.balls.update(queue, inst, &voxels)?,
-            _ => self.instances = Some((self.balls.upload(device, queue, &voxels)?, voxels.len())),
-        }
-        let instances = &self.instances.as_ref().expect("set above").0;
-        let reversed = frame.camera.reversed_z;
-        if self.marcher.as_ref().map(|m| m.0) != Some(reversed) {
-            self.marcher = Some((reversed, Raymarcher::new(device, COLOUR, DEPTH, reversed)?));
-        }
-        let marcher = &self.marcher.as_ref().expect("set above").1;
-        let view = frame.camera.view(frame.size);
+        self.prepare(device, queue, &voxels, frame.camera.reversed_z)?;
         if let Some(grid) = s.field.fit_grid(&voxels, s.block)? {
-            let field = self
-                .balls
-                .encode(device, frame.rec, instances, &grid, s.block, &s.field)?;
-            if let Some(m) = marcher.encode_march(
-                device,
-                frame.rec,
-                &field,
-                Mat4::IDENTITY,
-                &view,
-                &s.raymarch,
-            )? {
-                marcher.encode_composite(
-                    device,
-                    frame.rec.encoder,
-                    &frame.targets.colour_view,
-                    &frame.targets.depth_view,
-                    &m,
-                )?;
-            }
+            self.surface(device, s, &grid, frame)?;
         }
         Ok(vec![format!("island instances: {}", voxels.len())])
     }

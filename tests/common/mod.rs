@@ -114,3 +114,21 @@ pub fn metaball_field(
     ctx.submit_and_wait("metaball test", enc).unwrap();
     field
 }
+
+/// `target/<profile>/examples/<name>`, which `cargo test` builds with the other examples.
+pub fn example_binary(name: &str) -> std::path::PathBuf {
+    let exe = std::env::current_exe().expect("the test binary's path");
+    let profile_dir = exe
+        .parent()
+        .and_then(|deps| deps.parent())
+        .expect("target/<profile>/deps/<test>");
+    let bin = profile_dir
+        .join("examples")
+        .join(format!("{name}{}", std::env::consts::EXE_SUFFIX));
+    assert!(
+        bin.exists(),
+        "{} is missing: `cargo test` builds the examples; run `cargo build --example {name}`",
+        bin.display()
+    );
+    bin
+}
