@@ -117,7 +117,11 @@ impl Grid {
             )));
         }
         let voxel = extent / (n - 2) as f64;
-        let size = ((hi - lo) / voxel).ceil().as_uvec3() + 2;
+        // Saturating: with n near u32::MAX the side plus margin would overflow.
+        let size = ((hi - lo) / voxel)
+            .ceil()
+            .as_uvec3()
+            .saturating_add(glam::UVec3::splat(2));
         Ok(Grid {
             origin: lo - DVec3::splat(voxel),
             voxel,
