@@ -19,11 +19,16 @@
 //! `ocean` (seed 001), `volume` (seed 002), `distance2d` (seed 003: draw seeds with the left
 //! button, erase with the right), `voxelizer` (seed 004; `--mesh PATH` loads an OBJ) and
 //! `composite` (ocean, metaball island and cloud in one frame with one depth buffer).
+//!
+//! `--soak FRAMES` runs the four animated techniques (or `--scene`'s) for FRAMES frames each,
+//! offscreen (`--size`, default 320×240), sampling memory after every frame, and fails when a
+//! frame errs or memory grows after warm-up (see `soak.rs`; `cargo xtask soak` runs 10 000).
 
 pub mod camera;
 pub mod draw;
 pub mod panels;
 pub mod scenes;
+pub mod soak;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -51,6 +56,10 @@ pub struct Args {
     pub window: bool,
     /// Offscreen size.
     pub size: [u32; 2],
+    /// `--size` was given.
+    pub sized: bool,
+    /// Soak: frames per scene.
+    pub soak: Option<u32>,
 }
 
 fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
@@ -67,6 +76,7 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
             "--settings" => a.settings = Some(value()?.into()),
             "--mesh" => a.mesh = Some(value()?),
             "--window" => a.window = true,
+            "--soak" => a.soak = Some(value()?.parse().map_err(|e| format!("--soak: {e}"))?),
             "--size" => {
                 let v = value()?;
                 let (w, h) = v.split_once('x').ok_or("--size WxH")?;
@@ -74,6 +84,7 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
                     w.parse().map_err(|e| format!("--size: {e}"))?,
                     h.parse().map_err(|e| format!("--size: {e}"))?,
                 ];
+                a.sized = true;
             }
             "--help" | "-h" => return Err(HELP.into()),
             other => return Err(format!("unknown argument {other:?}\n{HELP}")),
@@ -91,7 +102,7 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
 }
 
 const HELP: &str = "viewer [--scene NAME] [--frames N] [--screenshot FILE.png] [--settings FILE.ron] \
-[--mesh FILE.obj] [--size WxH] [--window]";
+[--mesh FILE.obj] [--size WxH] [--window] [--soak FRAMES]";
 
 /// Read a settings file (RON). Missing fields take their defaults.
 pub fn load_settings(path: &Path) -> Result<Saved, String> {
@@ -350,7 +361,18 @@ fn main() -> std::process::ExitCode {
     if let Some(mesh) = &args.mesh {
         saved.voxelizer.mesh = mesh.clone();
     }
-    let result = if args.screenshot.is_some() && !args.window {
+    let result = if let Some(frames) = args.soak {
+        if let Some(e) = &load_error {
+            eprintln!("settings: {e}");
+            return std::process::ExitCode::from(2);
+        }
+        let scenes: Vec<String> = match &args.scene {
+            Some(s) => vec![s.clone()],
+            None => soak::SOAK_SCENES.iter().map(|s| s.to_string()).collect(),
+        };
+        let size = if args.sized { args.size } else { [320, 240] };
+        soak::run(&scenes, &saved, size, frames)
+    } else if args.screenshot.is_some() && !args.window {
         if let Some(e) = &load_error {
             eprintln!("settings: {e}");
             return std::process::ExitCode::from(2);

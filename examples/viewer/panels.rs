@@ -652,6 +652,10 @@ fn voxelizer_panel(ui: &mut Ui, s: &mut VoxelizerSettings) {
         }
     });
     ui.add(Slider::new(&mut s.grid, 4..=512).text("grid (longest side)"));
+    ui.add(
+        Slider::new(&mut s.spin, -std::f32::consts::PI..=std::f32::consts::PI)
+            .text("spin (about y)"),
+    );
     ComboBox::from_label("voxelization")
         .selected_text(format!("{:?}", s.mode))
         .show_ui(ui, |ui| {

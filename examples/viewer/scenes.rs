@@ -952,6 +952,9 @@ pub struct VoxelizerSettings {
     /// Show the mesh's distance field (exact, from the surface voxels) through the middle z
     /// slice, in the frame's lower-right corner.
     pub slice: bool,
+    /// Radians the mesh turns about the y axis through its bounds' centre before voxelizing
+    /// (the soak turns it every frame, so the mesh is voxelized again and again).
+    pub spin: f32,
 }
 
 /// The Stanford bunny of the benches, when this checkout sits beside `shared/`.
@@ -969,8 +972,29 @@ impl Default for VoxelizerSettings {
             mode: VoxelMode::Surface(Separation::Conservative),
             colour_by: ColourBy::Normal,
             slice: true,
+            spin: 0.0,
         }
     }
+}
+
+/// `mesh` turned `angle` radians about the y axis through its bounds' centre.
+fn spun(mesh: &Mesh, angle: f32) -> Result<Mesh, Error> {
+    if !angle.is_finite() {
+        return Err(invalid(format!("voxelizer spin {angle} is not finite")));
+    }
+    let mut mesh = mesh.clone();
+    if angle != 0.0 {
+        let (lo, hi) = mesh.positions.iter().fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+        );
+        let centre = (lo + hi) * 0.5;
+        let turn = glam::DQuat::from_rotation_y(angle as f64);
+        for p in &mut mesh.positions {
+            *p = centre + turn * (*p - centre);
+        }
+    }
+    Ok(mesh)
 }
 
 enum VoxelJob {
@@ -998,6 +1022,8 @@ pub struct VoxelizerScene {
     mesh: Option<(String, Mesh)>,
     job: Option<(VoxelizerSettings, Grid, VoxelJob)>,
     shown: Option<(VoxelizerSettings, Grid, Shown)>,
+    /// Voxelizations that reached the screen.
+    voxelized: u64,
 }
 
 enum Shown {
@@ -1020,6 +1046,7 @@ impl VoxelizerScene {
             mesh: None,
             job: None,
             shown: None,
+            voxelized: 0,
         })
     }
 
@@ -1078,6 +1105,7 @@ impl VoxelizerScene {
                             .voxelizer
                             .encode_resolve_attributes(device, frame.rec, pending, n?)?;
                         self.shown = Some((key, grid, Shown::Attributes(attrs)));
+                        self.voxelized += 1;
                     }
                     None => self.job = Some((key, grid, VoxelJob::Attributes(pending, count))),
                 },
@@ -1088,6 +1116,7 @@ impl VoxelizerScene {
                         let n = centres.len();
                         let instances = self.balls.upload(device, queue, &centres)?;
                         self.shown = Some((key, grid, Shown::Cubes(instances, n)));
+                        self.voxelized += 1;
                     }
                     None => self.job = Some((key, grid, VoxelJob::Bits(bits))),
                 },
@@ -1096,7 +1125,7 @@ impl VoxelizerScene {
         }
         // Start one when the settings changed.
         if self.job.is_none() && self.shown.as_ref().map(|x| &x.0) != Some(s) {
-            let mesh = self.mesh(&s.mesh)?.clone();
+            let mesh = spun(self.mesh(&s.mesh)?, s.spin)?;
             let grid = Grid::fit(&mesh, s.grid)?;
             let job = match s.mode {
                 VoxelMode::Surface(Separation::Conservative) => VoxelJob::RecordedAttributes(
@@ -1317,6 +1346,11 @@ impl Scenes {
             "voxelizer" => self.voxelizer.as_ref().is_none_or(|v| v.busy(&s.voxelizer)),
             _ => false,
         }
+    }
+
+    /// Voxelizations the voxelizer scene has shown.
+    pub fn voxelized(&self) -> u64 {
+        self.voxelizer.as_ref().map_or(0, |v| v.voxelized)
     }
 
     /// The frame was submitted: readbacks of what it recorded may start.

@@ -54,6 +54,23 @@ enum Command {
         #[arg(long, default_value = "gallery")]
         out: PathBuf,
     },
+    /// Run each animated technique for many frames (release viewer, offscreen), sampling
+    /// resident memory and GPU allocations after every frame; fails on any error or growth
+    /// after warm-up.
+    Soak {
+        /// Frames per technique.
+        #[arg(long, default_value_t = 10_000)]
+        frames: u32,
+        /// Offscreen size, WxH.
+        #[arg(long, default_value = "320x240")]
+        size: String,
+        /// One scene only (actor, ocean, volume, voxelizer).
+        #[arg(long)]
+        scene: Option<String>,
+        /// The voxelizer's mesh (OBJ path, `torus` or `sphere`).
+        #[arg(long)]
+        mesh: Option<String>,
+    },
     /// Pack the release test binaries for the GPU machine (`.gpu/tests.tar.xz` and
     /// `.gpu/run-tests.sh`); there: `. .gpu/env.sh && sh .gpu/run-tests.sh H100 $OUT`.
     GpuTests,
@@ -138,6 +155,12 @@ fn main() -> ExitCode {
         }
         Command::Gallery { out } => gallery(&out),
         Command::GpuTests => gpu_tests::run(&crate_root()),
+        Command::Soak {
+            frames,
+            size,
+            scene,
+            mesh,
+        } => soak(frames, &size, scene.as_deref(), mesh.as_deref()),
         Command::Bench {
             technique,
             quick,
@@ -253,6 +276,31 @@ fn reflect_text(stages: &[toolchain::Stage], filter: Option<&str>, json: bool) -
             .map(|r| r.to_table())
             .collect::<Vec<_>>()
             .join("\n")
+    }
+}
+
+/// The soak lives in the viewer example (`examples/viewer/soak.rs`), which has the scenes; this
+/// runs it in release mode.
+fn soak(frames: u32, size: &str, scene: Option<&str>, mesh: Option<&str>) -> ExitCode {
+    let mut cmd =
+        std::process::Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
+    cmd.current_dir(crate_root())
+        .args(["run", "--release", "--example", "viewer", "--", "--soak"])
+        .arg(frames.to_string())
+        .args(["--size", size]);
+    if let Some(s) = scene {
+        cmd.args(["--scene", s]);
+    }
+    if let Some(m) = mesh {
+        cmd.args(["--mesh", m]);
+    }
+    match cmd.status() {
+        Ok(s) if s.success() => ExitCode::SUCCESS,
+        Ok(_) => ExitCode::FAILURE,
+        Err(e) => {
+            eprintln!("error: cannot run cargo: {e}");
+            ExitCode::FAILURE
+        }
     }
 }
 
