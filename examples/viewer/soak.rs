@@ -76,6 +76,11 @@ pub fn sample(device: &wgpu::Device) -> Sample {
     }
 }
 
+/// Frames of warm-up in a run of `frames`: a tenth, at least 20.
+pub fn warm_up(frames: usize) -> usize {
+    (frames / 10).max(20)
+}
+
 /// Growth of one quantity after warm-up: the largest value of the last quarter of the samples
 /// minus the largest of the first quarter (negative: it shrank).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -98,7 +103,7 @@ impl Drift {
     /// The drift of `samples` (all frames, warm-up included), or `None` when too few remain
     /// after warm-up.
     pub fn of(samples: &[Sample]) -> Option<Drift> {
-        let warm = (samples.len() / 10).max(20);
+        let warm = warm_up(samples.len());
         let rest = samples.get(warm..)?;
         let quarter = rest.len() / 4;
         if quarter == 0 {
@@ -210,7 +215,7 @@ pub fn soak_scene(
     let queue = &ctx.queue;
     let start = Instant::now();
     let mut samples = Vec::with_capacity(frames as usize);
-    let mut voxelized = 0;
+    let voxelized;
     {
         let targets = Targets::new(device, size, COLOUR, DEPTH);
         let mut scenes = Scenes::new();
@@ -244,7 +249,7 @@ pub fn soak_scene(
             }
             samples.push(sample(device));
         }
-        voxelized = voxelized.max(scenes.voxelized());
+        voxelized = scenes.voxelized();
     }
     Ok(SoakReport {
         scene: scene.into(),
@@ -288,9 +293,7 @@ pub fn run(scenes: &[String], base: &Saved, size: [u32; 2], frames: u32) -> Resu
                 continue;
             }
         };
-        let warm = (r.samples.len() / 10)
-            .max(20)
-            .min(r.samples.len().saturating_sub(1));
+        let warm = warm_up(r.samples.len()).min(r.samples.len().saturating_sub(1));
         let (w, end) = (r.samples[warm], r.samples[r.samples.len() - 1]);
         let fmt = |v: Option<u64>, mb: bool| match v {
             Some(v) if mb => format!("{:.1} MiB", v as f64 / (1024.0 * 1024.0)),
