@@ -256,3 +256,28 @@ fn bad_settings_are_refused() {
     }
     assert!(select(&w, &look, &cam, 0, &LodSettings::default()).is_err());
 }
+
+/// An error bound no quadtree can meet (a millionth of a pixel, 24 levels) is refused once the
+/// walk passes `MAX_LOD_NODES`, instead of walking 4²⁴ nodes (found by
+/// `tests/properties.rs::ocean_lod_selects_or_refuses`: 5 GiB allocated before it was bounded).
+#[test]
+fn an_unreachable_error_is_refused_not_walked() {
+    let (w, look, cam) = (waves(), Look::default(), camera());
+    let s = LodSettings {
+        max_error_px: 1e-6,
+        max_depth: 24,
+        ..LodSettings::default()
+    };
+    match select(&w, &look, &cam, 1080, &s) {
+        Err(fieldkit::Error::Size { got, max, .. }) => {
+            assert_eq!(max, fieldkit::ocean::lod::MAX_LOD_NODES);
+            assert!(got > max, "{got} ≤ {max}");
+        }
+        other => panic!("expected Error::Size, got {other:?}"),
+    }
+    // The default settings stay far below the budget.
+    let sel = select(&w, &look, &cam, 1080, &LodSettings::default()).unwrap();
+    assert!(
+        (sel.patches.len() as u64 + sel.culled as u64) < fieldkit::ocean::lod::MAX_LOD_NODES / 16
+    );
+}

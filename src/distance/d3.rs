@@ -274,8 +274,13 @@ impl Options3d {
         let steps = variant.steps(max_side);
         let Some(band) = self.band else { return steps };
         // Steps p, p/2, …, 1 reach any seed up to 2p − 1 ≥ band voxels away along each axis.
-        let first = (band.ceil() as u32).max(1).next_power_of_two();
         let full = max_side.max(1).next_power_of_two() / 2;
+        // A band as wide as the grid (or wider, up to f32::MAX) keeps every step; compare in f32
+        // before converting so a huge band cannot overflow.
+        if !(band.ceil() < full as f32) {
+            return steps;
+        }
+        let first = (band.ceil() as u32).max(1).next_power_of_two();
         if first >= full {
             return steps;
         }

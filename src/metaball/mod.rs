@@ -117,6 +117,16 @@ impl Settings {
         self.check()?;
         check_voxels(voxels, edge)?;
         let cell = edge / self.cells_per_edge;
+        if !(cell.is_finite() && cell >= f32::MIN_POSITIVE) {
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: format!(
+                    "cell size edge / cells_per_edge = {edge} / {} = {cell} is not a normal \
+                     positive number",
+                    self.cells_per_edge
+                ),
+            });
+        }
         let mut lo = Vec3::splat(f32::INFINITY);
         let mut hi = Vec3::splat(f32::NEG_INFINITY);
         for v in voxels.iter().filter(|v| v.w > 0.0) {
@@ -129,8 +139,10 @@ impl Settings {
         }
         let lo = lo - cell;
         let hi = hi + cell;
-        let cells = ((hi - lo) / cell).ceil();
-        let size = [cells.x as u64, cells.y as u64, cells.z as u64];
+        // At least one cell per axis; a span that overflows f32 is infinitely many (refused below).
+        let cells = ((hi - lo) / cell).ceil().max(Vec3::ONE);
+        let count = |c: f32| if c.is_finite() { c as u64 } else { u64::MAX };
+        let size = [count(cells.x), count(cells.y), count(cells.z)];
         let max = crate::distance::MAX_SIDE_3D;
         for (i, what) in ["grid width", "grid height", "grid depth"]
             .into_iter()

@@ -19,6 +19,11 @@ use super::Waves;
 use super::render::{DETAIL_OCTAVES, Look, MAX_PATCH_QUADS, OceanCamera, Patch};
 use crate::error::Error;
 
+/// Most quadtree nodes [`select`] visits (split, culled or drawn) before it refuses the settings
+/// with [`Error::Size`]: 2¹⁸ nodes are ~200 000 patches, far past any frame's budget; an error
+/// of a millionth of a pixel at depth 24 would otherwise walk 4²⁴ nodes.
+pub const MAX_LOD_NODES: u64 = 1 << 18;
+
 /// The ocean square and the error to refine to.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -275,7 +280,17 @@ pub fn select(
     let mut spacing_error = HashMap::new();
     let mut leaves = Vec::new();
     let mut stack = vec![(0u32, 0u32, 0u32)];
+    let mut visited = 0u64;
     while let Some((depth, i, j)) = stack.pop() {
+        visited += 1;
+        if visited > MAX_LOD_NODES {
+            return Err(Error::Size {
+                stage: "ocean::lod",
+                what: "quadtree nodes (raise max_error_px or lower max_depth)",
+                got: visited + stack.len() as u64,
+                max: MAX_LOD_NODES,
+            });
+        }
         let size = s.size / (1u64 << depth) as f64;
         let corner = origin + DVec2::new(i as f64, j as f64) * size;
         let lo = DVec3::new(corner.x - sideways, low, corner.y - sideways);
