@@ -277,7 +277,7 @@ impl Options3d {
         let full = max_side.max(1).next_power_of_two() / 2;
         // A band as wide as the grid (or wider, up to f32::MAX) keeps every step; compare in f32
         // before converting so a huge band cannot overflow.
-        if !(band.ceil() < full as f32) {
+        if band.is_nan() || band.ceil() >= full as f32 {
             return steps;
         }
         let first = (band.ceil() as u32).max(1).next_power_of_two();
