@@ -523,6 +523,50 @@ fn module(device: &wgpu::Device, info: &EntryInfo) -> wgpu::ShaderModule {
     })
 }
 
+/// Compute pipelines of one entry point `E` specialised by override values, each made on first
+/// use and kept (for overrides that take many values, such as a workgroup array's length).
+pub(crate) struct Variants<E> {
+    made: std::sync::Mutex<Vec<(VariantKey, std::sync::Arc<ComputePipeline<E>>)>>,
+}
+
+/// Override names and values (as bits), and the zero-fill choice.
+type VariantKey = Vec<(String, u64)>;
+
+impl<E> Default for Variants<E> {
+    fn default() -> Self {
+        Self {
+            made: Default::default(),
+        }
+    }
+}
+
+impl<E: Entry> Variants<E> {
+    /// The pipeline for `overrides`, made now if it is the first use.
+    pub(crate) fn get(
+        &self,
+        device: &wgpu::Device,
+        overrides: &[(&str, f64)],
+        zero_initialize_workgroup_memory: bool,
+    ) -> Result<std::sync::Arc<ComputePipeline<E>>, Error> {
+        let key: VariantKey = overrides
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.to_bits()))
+            .chain([(String::new(), zero_initialize_workgroup_memory as u64)])
+            .collect();
+        let mut made = self.made.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((_, p)) = made.iter().find(|(k, _)| *k == key) {
+            return Ok(p.clone());
+        }
+        let p = std::sync::Arc::new(ComputePipeline::with_options(
+            device,
+            overrides,
+            zero_initialize_workgroup_memory,
+        )?);
+        made.push((key, p.clone()));
+        Ok(p)
+    }
+}
+
 /// A compute pipeline for a generated entry point `E`.
 pub struct ComputePipeline<E> {
     /// The wgpu pipeline.
@@ -551,11 +595,27 @@ impl<E: Entry> ComputePipeline<E> {
 
     /// Create the pipeline with values for the shader's `override` constants.
     pub fn with_overrides(device: &wgpu::Device, overrides: &[(&str, f64)]) -> Result<Self, Error> {
+        Self::with_options(device, overrides, true)
+    }
+
+    /// [`Self::with_overrides`], choosing whether wgpu zero-fills workgroup memory before the
+    /// shader runs (`false` only for shaders that write every workgroup cell before reading it).
+    pub fn with_options(
+        device: &wgpu::Device,
+        overrides: &[(&str, f64)],
+        zero_initialize_workgroup_memory: bool,
+    ) -> Result<Self, Error> {
         let info = E::INFO;
         info.check_overrides(overrides)?;
         crate::gpu::scoped(device, info.stage, || {
             let layouts = info.layouts(device);
-            let pipeline = build_compute(device, info, &layouts, overrides);
+            let pipeline = build_compute(
+                device,
+                info,
+                &layouts,
+                overrides,
+                zero_initialize_workgroup_memory,
+            );
             Self {
                 pipeline,
                 layouts,
@@ -695,6 +755,7 @@ fn build_compute(
     info: &EntryInfo,
     layouts: &[(u32, wgpu::BindGroupLayout)],
     overrides: &[(&str, f64)],
+    zero_initialize_workgroup_memory: bool,
 ) -> wgpu::ComputePipeline {
     let layout = info.pipeline_layout(device, layouts);
     device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
@@ -704,7 +765,7 @@ fn build_compute(
         entry_point: Some(info.entry_point),
         compilation_options: wgpu::PipelineCompilationOptions {
             constants: overrides,
-            ..Default::default()
+            zero_initialize_workgroup_memory,
         },
         cache: None,
     })
@@ -758,7 +819,7 @@ pub fn create_any(device: &wgpu::Device, info: &'static EntryInfo) -> Result<(),
         let layouts = info.layouts(device);
         match info.kind {
             EntryKind::Compute { .. } => {
-                let _ = build_compute(device, info, &layouts, &[]);
+                let _ = build_compute(device, info, &layouts, &[], true);
             }
             EntryKind::Render { targets, .. } => {
                 let color: Vec<_> = targets

@@ -1,11 +1,12 @@
 //! 3D distance fields against the exact CPU transform: the exact GPU transform must match it
-//! everywhere; the JFA variants' errors are measured, printed and asserted. Grids stay ≤ 64³
-//! (one case 96×200×37) for lavapipe.
+//! everywhere, on both column paths (workgroup and global memory) and at WebGPU's default
+//! workgroup-memory limit; the JFA variants' errors are measured, printed and asserted. Grids stay
+//! ≤ 64³ (one case 96×200×37, columns to 1000 long) for lavapipe.
 
 mod common;
 
 use common::*;
-use fieldkit::distance::{Distance3d, Method, Options3d, unpack_seed3};
+use fieldkit::distance::{ColumnPasses, Distance3d, Method, Options3d, tile_columns, unpack_seed3};
 use fieldkit::distance::{FAR, Variant, cpu};
 use fieldkit::gpu::Context;
 
@@ -270,6 +271,8 @@ fn exact_and_jfa_against_the_cpu_transform() {
 fn every_column_band_count_is_exact() {
     let ctx = Context::shared();
     let mut d3 = Distance3d::new(&ctx.device).unwrap();
+    // The bands are the global-memory passes' (the workgroup-memory passes pick their own).
+    d3.set_column_passes(ColumnPasses::Global);
     for bands in [1, 2, 4, 8, 16, 32] {
         d3.set_column_bands(Some(bands)).unwrap();
         for case in cases() {
@@ -288,4 +291,117 @@ fn every_column_band_count_is_exact() {
         let err = d3.set_column_bands(Some(bad)).unwrap_err().to_string();
         assert!(err.contains("column bands"), "{err}");
     }
+}
+
+/// A device on the same adapter with WebGPU's default limits: 16 KiB of workgroup memory, so the
+/// workgroup-memory column passes take 8 or 4 columns per tile, or the global path, by length.
+fn default_limits(ctx: &Context) -> Context {
+    let adapter = ctx
+        .adapter
+        .as_ref()
+        .expect("Context::shared opens an adapter");
+    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        label: Some("default limits"),
+        required_limits: wgpu::Limits::default(),
+        ..Default::default()
+    }))
+    .expect("every WebGPU adapter takes the default limits");
+    Context::from_device(device, queue)
+}
+
+/// The column passes in workgroup memory (`edt_tile.wgsl`) and in global memory
+/// (`edt_columns.wgsl`), chosen automatically or forced, at the adapter's limits and at WebGPU's
+/// defaults, unsigned and signed, against the CPU transform: exact everywhere. The extra shapes
+/// reach the tile's edge cases: one voxel, one column 300 long (forced into workgroup memory at
+/// 16 KiB: 8 columns per tile, 7 of them past the grid), and columns 600 and 1000 long (4 and 2
+/// per tile when forced).
+#[test]
+fn every_column_path_is_exact() {
+    let shared = Context::shared();
+    let defaults = default_limits(&shared);
+    assert_eq!(
+        defaults.device.limits().max_compute_workgroup_storage_size,
+        16384
+    );
+    // What Auto takes at these lengths (forced to workgroup memory at 16 KiB, 300, 600 and 1000
+    // take 8, 4 and 2 columns per tile): the test covers each of them.
+    assert_eq!(tile_columns(16384, 37), Some(16));
+    assert_eq!(tile_columns(16384, 200), Some(8));
+    assert_eq!(tile_columns(16384, 300), None);
+    assert_eq!(tile_columns(16384, 1000), None);
+    let mut extra = vec![
+        ("one voxel, seeded", [1, 1, 1], vec![true]),
+        ("one voxel, empty", [1, 1, 1], vec![false]),
+        (
+            "1×300×2",
+            [1, 300, 2],
+            mask_3d([1, 300, 2], &[[0, 7, 0], [0, 290, 1]]),
+        ),
+        (
+            "3×1000×2",
+            [3, 1000, 2],
+            random_mask_3d([3, 1000, 2], 3e-3, 12),
+        ),
+        (
+            "5×2×600",
+            [5, 2, 600],
+            random_mask_3d([5, 2, 600], 4e-3, 13),
+        ),
+    ];
+    let mut all: Vec<(String, [usize; 3], Vec<bool>)> = cases()
+        .into_iter()
+        .map(|c| (c.name.to_string(), c.size, c.mask))
+        .collect();
+    all.extend(extra.drain(..).map(|(n, s, m)| (n.to_string(), s, m)));
+    let references: Vec<(Vec<u64>, Vec<f64>)> = all
+        .iter()
+        .map(|(_, size, mask)| {
+            (
+                cpu::edt_3d_squared(mask, *size),
+                cpu::signed_3d(mask, *size),
+            )
+        })
+        .collect();
+    for (device_name, ctx) in [("adapter limits", &shared), ("default limits", &defaults)] {
+        let mut d3 = Distance3d::new(&ctx.device).unwrap();
+        for passes in [
+            ColumnPasses::Auto,
+            ColumnPasses::Workgroup,
+            ColumnPasses::Global,
+        ] {
+            d3.set_column_passes(passes);
+            for ((name, size, mask), (exact, signed)) in all.iter().zip(&references) {
+                for is_signed in [false, true] {
+                    let options = Options3d {
+                        signed: is_signed,
+                        ..Options3d::default()
+                    };
+                    let (nearest, _, dist) = run_3d(ctx, &d3, mask, *size, &options);
+                    let case = Case {
+                        name: Box::leak(name.clone().into_boxed_str()),
+                        size: *size,
+                        mask: mask.clone(),
+                        jfa: false,
+                    };
+                    let what = format!("{name} ({device_name}, {passes:?}, signed {is_signed})");
+                    if is_signed {
+                        for i in 0..dist.len() {
+                            let want = signed[i];
+                            assert!(
+                                (dist[i] as f64 - want).abs() <= 1e-5 * (1.0 + want.abs())
+                                    || (want.abs() > 1e30 && dist[i].abs() > 1e30),
+                                "{what}: voxel {i}: {} vs {want}",
+                                dist[i]
+                            );
+                        }
+                    } else {
+                        let e = score(&case, &nearest, &dist, exact);
+                        assert_eq!(e.wrong, 0, "{what}: {} wrong voxels", e.wrong);
+                    }
+                }
+            }
+        }
+    }
+    assert!(shared.take_uncaptured().is_empty());
+    assert!(defaults.take_uncaptured().is_empty());
 }

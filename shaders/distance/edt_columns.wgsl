@@ -73,9 +73,11 @@ fn cost(s: u32, p: vec3<i32>) -> i32 {
 // A site's position along the column.
 fn position(s: u32) -> i32 {
     if PACK_2D {
-        return unpack_seed2(s)[params.axis];
+        return unpack_seed2(s).y;
     }
-    return unpack_seed3(s)[params.axis];
+    // No vector indexed at run time: that can be lowered to a private array in memory.
+    let p = unpack_seed3(s);
+    return select(p.z, p.y, params.axis == 1u);
 }
 
 fn floor_div(a: i32, b: i32) -> i32 {
@@ -167,7 +169,7 @@ fn column_of(li: u32, wg: vec3<u32>) -> Column {
     c.band = li / c.columns_per_group;
     c.x = wg.x * c.columns_per_group + c.lane;
     c.other = wg.y;
-    c.n = params.size[params.axis];
+    c.n = select(params.size.z, params.size.y, params.axis == 1u);
     let row = params.size.x;
     let plane = params.size.x * params.size.y;
     c.base = select(c.other * row + c.x, c.other * plane + c.x, params.axis == 1u);

@@ -26,11 +26,12 @@
 use glam::Vec3;
 
 use super::Variant;
-use crate::bind::ComputePipeline;
+use crate::bind::{ComputePipeline, Variants};
 use crate::error::Error;
 use crate::gpu::{Record, Recorder, uniform_buffer as uniform};
 use crate::shaders::distance::{
-    edt_columns, edt_rows, field_resolve, jfa3_seed, jfa3_seed_points, jfa3_step, point_lines,
+    edt_columns, edt_rows, edt_tile, field_resolve, jfa3_seed, jfa3_seed_points, jfa3_step,
+    point_lines,
 };
 
 const STAGE: &str = "distance::d3";
@@ -67,6 +68,103 @@ fn rows_per_group(width: u32, rows: u32) -> u32 {
         r /= 2;
     }
     r
+}
+
+/// Where the exact transform's column passes hold a column while they build its envelopes.
+///
+/// Both give the exact distance; on a tie between two seeds, which one is named may differ.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum ColumnPasses {
+    /// Workgroup memory for columns up to [`AUTO_TILE_MAX_LENGTH`] long (where it was measured
+    /// faster), global memory for longer ones (see [`tile_columns`]).
+    #[default]
+    Auto,
+    /// Workgroup memory at every length, with the most columns per tile (16 to 1) that fit;
+    /// [`Error::Size`] where one column does not.
+    Workgroup,
+    /// Global memory (`edt_columns.wgsl`): the envelopes are stacks in a buffer beside the field.
+    Global,
+}
+
+/// Fewest adjacent columns per workgroup-memory tile [`ColumnPasses::Auto`] takes: fewer reads
+/// too little of each 32-byte sector the tile's loads touch.
+pub const MIN_TILE_COLUMNS: u32 = 4;
+/// Most columns per tile (256 threads: 16 bands per column at 16 columns).
+pub const MAX_TILE_COLUMNS: u32 = 16;
+/// Longest column [`ColumnPasses::Auto`] holds in workgroup memory. Measured on the H100
+/// (`cargo xtask bench distance --exact-only --workgroup-storage B`, 1% seeds, clocks held,
+/// 2026-11-24): the workgroup passes took 0.140 ms against 0.162 at 128³ and 0.886 against 0.989
+/// at 256³ (8 columns per tile), but 7.21 against 6.76 at 512³ (4 columns) and 0.323 against
+/// 0.257 at 2048² (4 columns); with 16 columns 256³ took 1.078 and 512³ 11.8 ms. Bands of 8
+/// positions ([`AUTO_TILE_BAND`]) were fastest at every length measured.
+pub const AUTO_TILE_MAX_LENGTH: u32 = 256;
+/// Band length [`ColumnPasses::Auto`] aims for: at most `256 · 8 / n` columns per tile.
+pub const AUTO_TILE_BAND: u32 = 8;
+
+/// How a column of length `n` is laid out in a workgroup-memory tile (`edt_tile.wgsl`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct TileGeometry {
+    lg_columns: u32,
+    lg_band: u32,
+    bands: u32,
+    column_cells: u32,
+}
+
+impl TileGeometry {
+    /// The most columns (a power of two from `min_columns` to `max_columns`) whose tile fits
+    /// `storage` bytes of workgroup memory, with the envelope sizes beside it.
+    fn fit(n: u32, storage: u32, min_columns: u32, max_columns: u32) -> Option<Self> {
+        let mut columns = max_columns.clamp(1, MAX_TILE_COLUMNS).next_power_of_two();
+        if columns > max_columns.max(1) {
+            columns /= 2;
+        }
+        while columns >= min_columns.max(1) {
+            let band_len = n.div_ceil(256 / columns).next_power_of_two();
+            let bands = n.div_ceil(band_len);
+            let column_cells = (n + bands) | 1;
+            let bytes = (column_cells as u64 * columns as u64 + 256) * 4;
+            if bytes <= storage as u64 {
+                return Some(Self {
+                    lg_columns: columns.trailing_zeros(),
+                    lg_band: band_len.trailing_zeros(),
+                    bands,
+                    column_cells,
+                });
+            }
+            columns /= 2;
+        }
+        None
+    }
+
+    /// What [`ColumnPasses::Auto`] takes for columns of length `n`.
+    fn auto(n: u32, storage: u32) -> Option<Self> {
+        if n > AUTO_TILE_MAX_LENGTH {
+            return None;
+        }
+        let max = (256 * AUTO_TILE_BAND / n.max(1)).min(MAX_TILE_COLUMNS);
+        Self::fit(n, storage, MIN_TILE_COLUMNS, max)
+    }
+
+    fn cells(&self) -> u32 {
+        self.column_cells << self.lg_columns
+    }
+}
+
+/// Columns per workgroup-memory tile that [`ColumnPasses::Auto`] takes for columns of length `n`
+/// on a device with `storage` bytes of workgroup memory (`max_compute_workgroup_storage_size`),
+/// or `None` where it takes the global-memory passes: columns up to [`AUTO_TILE_MAX_LENGTH`]
+/// long, with up to `256 · 8 / n` columns per tile (bands of 8 positions), 16 at most, 4 at
+/// least. WebGPU's default 16 KiB holds every tile this takes.
+///
+/// ```
+/// use fieldkit::distance::tile_columns;
+/// assert_eq!(tile_columns(16 << 10, 128), Some(16));
+/// assert_eq!(tile_columns(16 << 10, 256), Some(8));
+/// assert_eq!(tile_columns(48 << 10, 512), None);
+/// ```
+pub fn tile_columns(storage: u32, n: u32) -> Option<u32> {
+    TileGeometry::auto(n, storage).map(|g| 1 << g.lg_columns)
 }
 
 /// Where the last exact column pass writes distances (`columns_resolve*` in `edt_columns.wgsl`).
@@ -359,6 +457,12 @@ pub struct Distance3d {
         [std::sync::OnceLock<ComputePipeline<edt_columns::columns_resolve_signed::Entry>>; 6],
     /// Bands per column chosen by the caller; `None` picks by grid size.
     column_bands: Option<u32>,
+    /// The column passes in workgroup memory (`edt_tile.wgsl`), per tile size.
+    tile_columns: Variants<edt_tile::tile_columns::Entry>,
+    tile_columns_resolve: Variants<edt_tile::tile_columns_resolve::Entry>,
+    tile_columns_resolve_signed: Variants<edt_tile::tile_columns_resolve_signed::Entry>,
+    tile_copy: Variants<edt_tile::tile_copy::Entry>,
+    column_passes: ColumnPasses,
     resolve_unsigned: ComputePipeline<field_resolve::resolve_unsigned::Entry>,
     resolve_signed: ComputePipeline<field_resolve::resolve_signed::Entry>,
     resolve_points: ComputePipeline<field_resolve::resolve_points::Entry>,
@@ -680,6 +784,12 @@ impl Distance3d {
         Ok(())
     }
 
+    /// Choose where the exact transform's column passes hold their columns (default
+    /// [`ColumnPasses::Auto`]). Only speed differs, and which of two equally near seeds is named.
+    pub fn set_column_passes(&mut self, passes: ColumnPasses) {
+        self.column_passes = passes;
+    }
+
     /// Create every 3D pipeline (and the 2D exact transform's).
     pub fn new(device: &wgpu::Device) -> Result<Self, Error> {
         Ok(Self {
@@ -697,6 +807,11 @@ impl Distance3d {
             columns_resolve: Default::default(),
             columns_resolve_signed: Default::default(),
             column_bands: None,
+            tile_columns: Default::default(),
+            tile_columns_resolve: Default::default(),
+            tile_columns_resolve_signed: Default::default(),
+            tile_copy: Default::default(),
+            column_passes: ColumnPasses::Auto,
             resolve_unsigned: ComputePipeline::new(device)?,
             resolve_signed: ComputePipeline::new(device)?,
             resolve_points: ComputePipeline::new(device)?,
@@ -1415,6 +1530,26 @@ impl Distance3d {
         others: u32,
         fuse: Option<Fuse>,
     ) -> Result<(), Error> {
+        let n = size[axis as usize];
+        let storage = device.limits().max_compute_workgroup_storage_size;
+        let tile = match self.column_passes {
+            ColumnPasses::Global => None,
+            ColumnPasses::Auto => TileGeometry::auto(n, storage),
+            ColumnPasses::Workgroup => Some(
+                TileGeometry::fit(n, storage, 1, MAX_TILE_COLUMNS).ok_or(Error::Size {
+                    stage: edt_tile::STAGE,
+                    what: "column length for one column in workgroup memory \
+                           (max_compute_workgroup_storage_size / 4 - 257)",
+                    got: n as u64,
+                    max: (storage / 4).saturating_sub(257) as u64,
+                })?,
+            ),
+        };
+        if let Some(tile) = tile {
+            return self.encode_tile_columns(
+                device, rec, pack_2d, nearest, size, axis, others, tile, fuse,
+            );
+        }
         let choice = match self.column_bands {
             Some(b) => BAND_CHOICES
                 .iter()
@@ -1506,6 +1641,155 @@ impl Distance3d {
             }
         }
         Ok(())
+    }
+
+    /// For benchmarks: the loads and stores of one workgroup-memory column pass along `axis` (1:
+    /// y, 2: z) of a 3D field of `size` in `nearest`, without the envelopes: the floor that pass
+    /// is measured against, with the most columns per tile that fit (as
+    /// [`ColumnPasses::Workgroup`] takes them). `None` where not even four columns fit.
+    #[doc(hidden)]
+    pub fn encode_tile_copy(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        nearest: &wgpu::Buffer,
+        size: [u32; 3],
+        axis: u32,
+    ) -> Result<Option<()>, Error> {
+        let storage = device.limits().max_compute_workgroup_storage_size;
+        let n = size[axis as usize];
+        let Some(tile) = TileGeometry::fit(n, storage, MIN_TILE_COLUMNS, MAX_TILE_COLUMNS) else {
+            return Ok(None);
+        };
+        let params = uniform(
+            device,
+            "edt tile params",
+            &edt_tile::TileParams {
+                size: size.into(),
+                voxel_size: 1.0,
+                band: f32::MAX,
+                lg_columns: tile.lg_columns,
+                lg_band: tile.lg_band,
+                bands: tile.bands,
+                column_cells: tile.column_cells,
+            },
+        );
+        let overrides = [
+            ("PACK_2D", 0.0),
+            ("AXIS", axis as f64),
+            ("CELLS", tile.cells() as f64),
+        ];
+        self.tile_copy.get(device, &overrides, false)?.record(
+            device,
+            rec,
+            &edt_tile::tile_copy::Resources {
+                params: (&params).into(),
+                nearest: nearest.into(),
+            },
+            [
+                size[0].div_ceil(1 << tile.lg_columns),
+                size[3 - axis as usize],
+                1,
+            ],
+            if axis == 1 {
+                "copy (y, workgroup)"
+            } else {
+                "copy (z, workgroup)"
+            },
+        )?;
+        Ok(Some(()))
+    }
+
+    /// A column pass in workgroup memory (`edt_tile.wgsl`), tiles laid out as `tile` says.
+    #[allow(clippy::too_many_arguments)]
+    fn encode_tile_columns(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        pack_2d: bool,
+        nearest: &wgpu::Buffer,
+        size: [u32; 3],
+        axis: u32,
+        others: u32,
+        tile: TileGeometry,
+        fuse: Option<Fuse>,
+    ) -> Result<(), Error> {
+        let overrides = [
+            ("PACK_2D", pack_2d as u32 as f64),
+            ("AXIS", axis as f64),
+            ("CELLS", tile.cells() as f64),
+        ];
+        let params = uniform(
+            device,
+            "edt tile params",
+            &edt_tile::TileParams {
+                size: size.into(),
+                voxel_size: fuse.as_ref().map_or(1.0, |f| f.voxel_size),
+                band: fuse.as_ref().map_or(f32::MAX, |f| f.band),
+                lg_columns: tile.lg_columns,
+                lg_band: tile.lg_band,
+                bands: tile.bands,
+                column_cells: tile.column_cells,
+            },
+        );
+        let groups = [size[0].div_ceil(1 << tile.lg_columns), others, 1];
+        let name = match (axis, &fuse) {
+            (1, None) => "columns (y, workgroup)",
+            (1, Some(_)) => "columns (y, workgroup) + resolve",
+            (_, None) => "columns (z, workgroup)",
+            (_, Some(_)) => "columns (z, workgroup) + resolve",
+        };
+        // Every tile cell a thread reads was written by the load first: no zero fill needed.
+        let zero = false;
+        match fuse {
+            None => self.tile_columns.get(device, &overrides, zero)?.record(
+                device,
+                rec,
+                &edt_tile::tile_columns::Resources {
+                    params: (&params).into(),
+                    nearest: nearest.into(),
+                },
+                groups,
+                name,
+            ),
+            Some(Fuse {
+                distance,
+                inside_field: None,
+                ..
+            }) => self
+                .tile_columns_resolve
+                .get(device, &overrides, zero)?
+                .record(
+                    device,
+                    rec,
+                    &edt_tile::tile_columns_resolve::Resources {
+                        params: (&params).into(),
+                        nearest: nearest.into(),
+                        distance: distance.into(),
+                    },
+                    groups,
+                    name,
+                ),
+            Some(Fuse {
+                distance,
+                inside_field: Some(inside),
+                ..
+            }) => self
+                .tile_columns_resolve_signed
+                .get(device, &overrides, zero)?
+                .record(
+                    device,
+                    rec,
+                    &edt_tile::tile_columns_resolve_signed::Resources {
+                        params: (&params).into(),
+                        nearest: nearest.into(),
+                        nearest_inside: inside.into(),
+                        distance: distance.into(),
+                    },
+                    groups,
+                    name,
+                ),
+        }
     }
 
     /// The exact transform of a 2D mask (any of [`super::SEED_FORMATS`]; red channel marks).

@@ -10,7 +10,9 @@ use std::io::Write;
 use std::path::Path;
 use std::process::ExitCode;
 
-use fieldkit::distance::{Distance3d, Method, Options3d, upload_volume};
+use fieldkit::distance::{
+    ColumnPasses, Distance3d, Method, Options3d, tile_columns, upload_volume,
+};
 use fieldkit::distance::{Jfa2d, Options, Variant, cpu, upload_mask};
 use fieldkit::gpu::{Context, read_buffer, read_texture};
 
@@ -18,6 +20,9 @@ use crate::measure::{Args, time_runs};
 
 /// Memory bandwidth the pass figures are compared with (H100 SXM HBM3, rounded down).
 const PEAK_BYTES_PER_S: f64 = 3.0e12;
+
+/// The exact transform with its column passes in global memory (`ColumnPasses::Global`).
+const GLOBAL: &str = "exact (global columns)";
 
 /// One method at one size.
 struct Row {
@@ -59,6 +64,12 @@ fn pass_bytes(name: &str, cells: u64, dims: u32) -> f64 {
         // 2D rows are walked twice: mask read in both sweeps, left result written and re-read,
         // final seed written.
         1.0 * 2.0 + 4.0 * 3.0
+    } else if name.contains("workgroup") && name.ends_with("+ resolve") {
+        // The tile is read once and each answer written once, plus the distance.
+        12.0
+    } else if name.contains("workgroup") {
+        // The tile is read once and each answer written once.
+        8.0
     } else if name.starts_with("columns") && name.ends_with("+ resolve") {
         // As below, plus the distance written.
         20.0
@@ -225,7 +236,22 @@ fn distance(args: &Args) -> Result<(), String> {
             peers2.insert(n, run_peer(cmd, &mask2(n), &[n, n], &format!("{n}s"))?);
         }
     }
-    let ctx = Context::new().map_err(|e| e.to_string())?;
+    let mut ctx = Context::new().map_err(|e| e.to_string())?;
+    if let Some(bytes) = args.workgroup_storage {
+        let adapter = ctx.adapter.take().expect("Context::new opens an adapter");
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("bench distance"),
+            required_features: ctx.device.features(),
+            required_limits: wgpu::Limits {
+                max_compute_workgroup_storage_size: bytes,
+                ..adapter.limits()
+            },
+            ..Default::default()
+        }))
+        .map_err(|e| format!("--workgroup-storage {bytes}: {e}"))?;
+        ctx = Context::from_device(device, queue);
+        ctx.adapter = Some(adapter);
+    }
     let info = ctx
         .adapter
         .as_ref()
@@ -236,10 +262,38 @@ fn distance(args: &Args) -> Result<(), String> {
     let mut d3 = Distance3d::new(&ctx.device).map_err(|e| e.to_string())?;
     d3.set_column_bands(args.column_bands)
         .map_err(|e| e.to_string())?;
+    // The same transform with the column passes in global memory, for comparison in one command.
+    let mut d3_global = Distance3d::new(&ctx.device).map_err(|e| e.to_string())?;
+    d3_global.set_column_passes(ColumnPasses::Global);
+    d3_global
+        .set_column_bands(args.column_bands)
+        .map_err(|e| e.to_string())?;
+    let storage = ctx.device.limits().max_compute_workgroup_storage_size;
+    println!(
+        "workgroup memory: {storage} bytes; columns per tile by length: {}",
+        sizes3
+            .iter()
+            .chain(&sizes2)
+            .map(|&n| format!(
+                "{n}: {}",
+                tile_columns(storage, n as u32).map_or("global".into(), |c| c.to_string())
+            ))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    // Clocks held up as the volume and voxelize benches hold them: a 20 ms spin before every
+    // run (outside the timestamps), on hardware adapters.
+    let heater = if ctx.is_software() {
+        None
+    } else {
+        Some(crate::heater::Heater::new(&ctx, 20.0)?)
+    };
+    let heater = heater.as_ref();
     let jfa2 = Jfa2d::new(&ctx.device).map_err(|e| e.to_string())?;
     let banded = format!("JFA+2 band {}", args.band);
     let methods3: Vec<(String, Options3d)> =
         std::iter::once(("exact".to_string(), Options3d::default()))
+            .chain(std::iter::once((GLOBAL.to_string(), Options3d::default())))
             .chain(Variant::ALL.into_iter().map(|v| {
                 (
                     v.name().to_string(),
@@ -257,7 +311,7 @@ fn distance(args: &Args) -> Result<(), String> {
                     ..Options3d::default()
                 },
             )))
-            .take(if args.exact_only { 1 } else { usize::MAX })
+            .take(if args.exact_only { 2 } else { usize::MAX })
             .collect();
     let variants2: &[Variant] = if args.exact_only { &[] } else { &Variant::ALL };
     let total = (sizes3.len() * methods3.len() + sizes2.len() * (1 + variants2.len())) as u64;
@@ -266,6 +320,8 @@ fn distance(args: &Args) -> Result<(), String> {
         indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} {elapsed} {msg}").unwrap(),
     );
     let mut rows: Vec<Row> = Vec::new();
+    // (size, axis, median ms) of the workgroup column passes' load/store floor.
+    let mut floors: Vec<(String, u32, f64)> = Vec::new();
 
     for &n in &sizes3 {
         let size = [n, n, n];
@@ -277,8 +333,9 @@ fn distance(args: &Args) -> Result<(), String> {
         let mut exact_d2: Vec<u64> = Vec::new();
         for (name, opts) in &methods3 {
             bar.set_message(format!("{n}³ {name}"));
+            let d3 = if name == GLOBAL { &d3_global } else { &d3 };
             let (med, min, max, passes) =
-                time_runs(&ctx, args.warmup, args.reps, None, |enc, prof| {
+                time_runs(&ctx, args.warmup, args.reps, heater, |enc, prof| {
                     d3.encode(&ctx.device, &mut prof.record(enc), &volume, opts)
                         .expect("encode");
                 })?;
@@ -289,7 +346,10 @@ fn distance(args: &Args) -> Result<(), String> {
             ctx.submit_and_wait("bench", enc)
                 .map_err(|e| e.to_string())?;
             let d2 = d2_of(&words(&ctx, &field.nearest)?, size, 3);
-            let (wrong, max_err, mean_err, peer_ms) = if opts.method == Method::Exact {
+            let (wrong, max_err, mean_err, peer_ms) = if name == GLOBAL {
+                let (w, mx, mean) = errors(&d2, &exact_d2, None);
+                (w, mx, mean, peer.as_ref().map(|p| p.ms))
+            } else if opts.method == Method::Exact {
                 // The reference: the peer's distances, or the CPU transform in quick mode.
                 let reference = match &peer {
                     Some(p) => p.d2.clone(),
@@ -326,6 +386,31 @@ fn distance(args: &Args) -> Result<(), String> {
             });
             bar.inc(1);
         }
+        // The floor of each workgroup column pass: its loads and stores alone.
+        for axis in [1u32, 2] {
+            let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("bench tile copy"),
+                size: cells * 4,
+                usage: wgpu::BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            });
+            let mut any = false;
+            let timing = time_runs(&ctx, args.warmup, args.reps, heater, |enc, prof| {
+                any = d3
+                    .encode_tile_copy(
+                        &ctx.device,
+                        &mut prof.record(enc),
+                        &buffer,
+                        [n as u32; 3],
+                        axis,
+                    )
+                    .expect("encode")
+                    .is_some();
+            })?;
+            if any {
+                floors.push((format!("{n}³"), axis, timing.0));
+            }
+        }
         if let Some(p) = &peer {
             bar.println(format!("peer {n}³: {}", p.json));
         }
@@ -342,10 +427,15 @@ fn distance(args: &Args) -> Result<(), String> {
         bar.set_message(format!("{n}² exact"));
         let opts = Options3d::default();
         let (med, min, max, passes) =
-            time_runs(&ctx, args.warmup, args.reps, None, |enc, prof| {
+            time_runs(&ctx, args.warmup, args.reps, heater, |enc, prof| {
                 d3.encode_exact_2d(&ctx.device, &mut prof.record(enc), &tex, &opts)
                     .expect("encode");
             })?;
+        let global = time_runs(&ctx, args.warmup, args.reps, heater, |enc, prof| {
+            d3_global
+                .encode_exact_2d(&ctx.device, &mut prof.record(enc), &tex, &opts)
+                .expect("encode");
+        })?;
         let mut enc = ctx.encoder("bench readback");
         let field = d3
             .encode_exact_2d(&ctx.device, &mut enc, &tex, &opts)
@@ -381,6 +471,20 @@ fn distance(args: &Args) -> Result<(), String> {
             peer_ms: peer.as_ref().map(|p| p.ms),
             passes: pass_rows(passes),
         });
+        rows.push(Row {
+            dims: 2,
+            size: format!("{n}²"),
+            voxels: cells,
+            method: GLOBAL.into(),
+            median_ms: global.0,
+            min_ms: global.1,
+            max_ms: global.2,
+            wrong: 0,
+            max_err: 0.0,
+            mean_err: 0.0,
+            peer_ms: peer.as_ref().map(|p| p.ms),
+            passes: pass_rows(global.3),
+        });
         bar.inc(1);
         for &v in variants2 {
             bar.set_message(format!("{n}² {}", v.name()));
@@ -389,7 +493,7 @@ fn distance(args: &Args) -> Result<(), String> {
                 ..Options::default()
             };
             let (med, min, max, passes) =
-                time_runs(&ctx, args.warmup, args.reps, None, |enc, prof| {
+                time_runs(&ctx, args.warmup, args.reps, heater, |enc, prof| {
                     jfa2.encode(&ctx.device, &mut prof.record(enc), &tex, &opts)
                         .expect("encode");
                 })?;
@@ -428,6 +532,28 @@ fn distance(args: &Args) -> Result<(), String> {
     write_csv(&args.out, &adapter, &rows).map_err(|e| e.to_string())?;
     chart(&args.out.join("distance.png"), &adapter, &rows, (1000, 640))?;
     print_table(&rows);
+    println!();
+    println!("| size | workgroup column pass | ms (median) | load/store only ms | ratio |");
+    println!("|---|---|---|---|---|");
+    for (size, axis, floor) in &floors {
+        let tag = if *axis == 1 {
+            "columns (y, workgroup)"
+        } else {
+            "columns (z, workgroup)"
+        };
+        if let Some(ms) = rows
+            .iter()
+            .filter(|r| &r.size == size && r.method == "exact")
+            .flat_map(|r| &r.passes)
+            .find(|p| p.0.starts_with(tag))
+            .map(|p| p.1)
+        {
+            println!(
+                "| {size} | {tag} | {ms:.3} | {floor:.3} | {:.2} |",
+                ms / floor
+            );
+        }
+    }
     println!("wrote {}", args.out.display());
     Ok(())
 }
@@ -481,17 +607,41 @@ fn write_csv(dir: &Path, adapter: &str, rows: &[Row]) -> std::io::Result<()> {
 }
 
 fn print_table(rows: &[Row]) {
-    println!("| size | method | ms (median) | peer ms | ratio | wrong | max err |");
-    println!("|---|---|---|---|---|---|---|");
+    println!(
+        "| size | method | ms (median) | min–max | spread (max/min) | peer ms | ratio | wrong | max err | bytes/voxel (floor) |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|");
     for r in rows {
         let peer = r.peer_ms.map_or("".into(), |p| format!("{p:.3}"));
         let ratio = r
             .peer_ms
             .map_or("".into(), |p| format!("{:.2}", r.median_ms / p));
+        let bytes: f64 = r.passes.iter().map(|p| p.2).sum::<f64>() / r.voxels as f64;
         println!(
-            "| {} | {} | {:.3} | {peer} | {ratio} | {} | {:.3} |",
-            r.size, r.method, r.median_ms, r.wrong, r.max_err
+            "| {} | {} | {:.3} | {:.3}–{:.3} | {:.2} | {peer} | {ratio} | {} | {:.3} | {bytes:.0} |",
+            r.size,
+            r.method,
+            r.median_ms,
+            r.min_ms,
+            r.max_ms,
+            r.max_ms / r.min_ms,
+            r.wrong,
+            r.max_err
         );
+    }
+    println!();
+    println!("| size | method | pass | ms (median) | bytes/voxel (floor) | GB/s at the floor |");
+    println!("|---|---|---|---|---|---|");
+    for r in rows.iter().filter(|r| r.method.starts_with("exact")) {
+        for (pass, ms, bytes) in &r.passes {
+            println!(
+                "| {} | {} | {pass} | {ms:.3} | {:.0} | {:.0} |",
+                r.size,
+                r.method,
+                bytes / r.voxels as f64,
+                bytes / (ms * 1e-3) / 1e9
+            );
+        }
     }
 }
 

@@ -103,6 +103,10 @@ enum Command {
         /// Bands per column in the exact transform (1, 2, 4, 8, 16, 32); by grid size if absent.
         #[arg(long)]
         column_bands: Option<u32>,
+        /// `distance`: open the device with this `max_compute_workgroup_storage_size` (bytes)
+        /// instead of the adapter's, to time the column-pass tiles each limit gives.
+        #[arg(long)]
+        workgroup_storage: Option<u32>,
         /// Only these edge lengths (3D edges from the sweep's 3D sizes, 2D from its 2D sizes;
         /// comma-separated), e.g. `--sizes 512` for one point. `volume` and `voxelize` take
         /// any sizes, in the order given.
@@ -172,6 +176,7 @@ fn main() -> ExitCode {
             out,
             exact_only,
             column_bands,
+            workgroup_storage,
             sizes,
             mesh,
             modes,
@@ -196,6 +201,7 @@ fn main() -> ExitCode {
                 band,
                 exact_only,
                 column_bands,
+                workgroup_storage,
                 sizes,
                 mesh,
                 modes,

@@ -24,6 +24,9 @@ pub struct Args {
     pub exact_only: bool,
     /// Bands per column of the exact transform; `None` lets the library choose.
     pub column_bands: Option<u32>,
+    /// `distance`: the device's `max_compute_workgroup_storage_size` (bytes); the adapter's if
+    /// `None`.
+    pub workgroup_storage: Option<u32>,
     /// Only these sizes of the sweep (empty: all).
     pub sizes: Vec<usize>,
     /// `voxelize`: the bunny's `index.js` (`scripts/fetch-bunny.sh`).

@@ -1,0 +1,513 @@
+// Exact EDT, column passes held in workgroup memory: the same banded lower envelopes as
+// `edt_columns.wgsl` (Meijster, Roerdink & Hesselink 2000; bands as in Cao et al.'s PBA), with a
+// tile of 2^lg_columns adjacent columns × the whole column loaded into workgroup memory once.
+//
+// Path of the data: the tile is read from `nearest` once (consecutive x, so a warp reads whole
+// runs of a row), every band builds its envelope in place in the tile (the stack never passes the
+// element being read), one barrier, then each thread answers its band's positions from its own
+// envelope and from neighbour bands only while their nearest position is nearer than the best so
+// far, and writes each answer once. Nothing else touches global memory: the global path's
+// dependent loads through a stack in `nearest`'s neighbour buffer become workgroup loads.
+//
+// The host sizes the tile from `max_compute_workgroup_storage_size` (`CELLS`, an override, so a
+// workgroup declares only what its columns need) and falls back to `edt_columns.wgsl` where not
+// even four columns fit.
+//
+// No integer division or modulo runs per element: the tile index is `k + (k >> lg_band)` (one pad
+// cell per band, so the bands of a warp fall in different banks), columns and bands come from
+// shifts and masks, and the separator is an f32 division corrected to the exact integer floor.
+
+import package::shared::seed::{FAR, NO_SEED, pack_seed3, signed_distance, unpack_seed2, unpack_seed3};
+
+struct TileParams {
+    size: vec3<u32>,
+    // The resolving entries: world units per voxel, and the band (world units) distances are
+    // clamped to (FAR when none).
+    voxel_size: f32,
+    band: f32,
+    // Columns per tile = 1 << lg_columns; bands per column = 256 >> lg_columns.
+    lg_columns: u32,
+    // Positions per band = 1 << lg_band.
+    lg_band: u32,
+    // Bands that hold positions: ceil(n / band length).
+    bands: u32,
+    // Tile cells per column: n + bands (one pad cell per band), made odd.
+    column_cells: u32,
+}
+
+@group(0) @binding(0) var<uniform> params: TileParams;
+@group(0) @binding(1) var<storage, read_write> nearest: array<u32>;
+// `tile_columns_resolve_signed` runs in the outside seeds' field; this is the inside seeds' field.
+@group(0) @binding(2) var<storage, read> nearest_inside: array<u32>;
+@group(0) @binding(3) var distance: texture_storage_3d<r32float, write>;
+
+// 2D fields pack 16/16 bits.
+override PACK_2D: bool = false;
+// 1: columns run along y; 2: along z. A constant, so no vector is indexed at run time (a
+// dynamically indexed vector can be lowered to a private array in memory).
+override AXIS: u32 = 1u;
+// Tile cells: (column_cells << lg_columns), set by the host per column length.
+override CELLS: u32 = 4096u;
+
+const THREADS: u32 = 256u;
+// "Nothing found yet": above any squared distance in range.
+const FAR_D2: i32 = 0x7fffffff;
+
+var<workgroup> tile: array<u32, CELLS>;
+// Envelope size per thread (band b of column c at b << lg_columns | c).
+var<workgroup> envelope_size: array<u32, THREADS>;
+
+// One thread's view: column c of the tile, band b of it.
+struct Lane {
+    // The column's x and its other coordinate (z for y columns, y for z columns).
+    x: u32,
+    other: u32,
+    // First tile cell of the column, and its first global element.
+    col: u32,
+    at: u32,
+    stride: u32,
+    n: u32,
+    c: u32,
+    b: u32,
+    lo: u32,
+    hi: u32,
+    valid: bool,
+}
+
+fn lane_of(li: u32, wg: vec3<u32>) -> Lane {
+    var l: Lane;
+    l.c = li & ((1u << params.lg_columns) - 1u);
+    l.b = li >> params.lg_columns;
+    l.x = (wg.x << params.lg_columns) + l.c;
+    l.other = wg.y;
+    l.n = select(params.size.z, params.size.y, AXIS == 1u);
+    let row = params.size.x;
+    let plane = params.size.x * params.size.y;
+    l.at = select(l.other * row + l.x, l.other * plane + l.x, AXIS == 1u);
+    l.stride = select(plane, row, AXIS == 1u);
+    l.col = l.c * params.column_cells;
+    l.lo = min(l.n, l.b << params.lg_band);
+    l.hi = min(l.n, l.lo + (1u << params.lg_band));
+    l.valid = l.x < params.size.x;
+    return l;
+}
+
+fn cell(col: u32, k: u32) -> u32 {
+    return col + k + (k >> params.lg_band);
+}
+
+// A site's squared distance within the plane through its position (its cost there), and its
+// position along the column.
+fn own_cost(s: u32, l: Lane) -> i32 {
+    if PACK_2D {
+        let d = unpack_seed2(s).x - i32(l.x);
+        return d * d;
+    }
+    let p = unpack_seed3(s);
+    let dx = p.x - i32(l.x);
+    if AXIS == 1u {
+        return dx * dx;
+    }
+    let dy = p.y - i32(l.other);
+    return dx * dx + dy * dy;
+}
+
+fn position(s: u32) -> i32 {
+    if PACK_2D {
+        return unpack_seed2(s).y;
+    }
+    let p = unpack_seed3(s);
+    return select(p.z, p.y, AXIS == 1u);
+}
+
+// A site (cost g at position p) at position i.
+fn cost_at(g: i32, p: i32, i: i32) -> i32 {
+    let d = p - i;
+    return g + d * d;
+}
+
+fn cost(s: u32, l: Lane, i: i32) -> i32 {
+    return cost_at(own_cost(s, l), position(s), i);
+}
+
+// Meijster's separator: the first integer position where site b (after a) is at least as near
+// as a. floor(num / den) as an f32 division, then corrected to the exact integer floor by its
+// remainder: num is exact in f32 in 3D (|num| < 2^24 for sides ≤ 2048), and the separators that
+// matter lie in [0, n), where the quotient is within one of the truth; in 2D (16-bit sides) num
+// may round, and the loops walk the few steps back.
+fn separator(pa: i32, ga: i32, pb: i32, gb: i32) -> i32 {
+    let num = pb * pb - pa * pa + gb - ga;
+    let den = 2 * (pb - pa);
+    var q = i32(floor(f32(num) / f32(den)));
+    var r = num - q * den;
+    loop {
+        if r < den {
+            break;
+        }
+        q += 1;
+        r -= den;
+    }
+    loop {
+        if r >= 0 {
+            break;
+        }
+        q -= 1;
+        r += den;
+    }
+    return q + 1;
+}
+
+// Load the tile: column c's position i at cell(c · column_cells, i). Positions past the grid's x
+// (or past the column) hold no seed.
+struct Loader {
+    at: u32,
+    stride: u32,
+    total: u32,
+    mask: u32,
+    live: u32,
+}
+
+fn fetch(ld: Loader, e: u32) -> u32 {
+    let c = e & ld.mask;
+    if e >= ld.total || c >= ld.live {
+        return NO_SEED;
+    }
+    return nearest[ld.at + (e >> params.lg_columns) * ld.stride + c];
+}
+
+fn put(ld: Loader, e: u32, s: u32) {
+    if e < ld.total {
+        tile[cell((e & ld.mask) * params.column_cells, e >> params.lg_columns)] = s;
+    }
+}
+
+// Eight loads in flight per thread before the first store: a thread's loads are independent,
+// and issuing them together hides the memory latency that a load-then-store loop waits out
+// once per element (the tile is 8 to 32 elements per thread).
+fn load(li: u32, wg: vec3<u32>) {
+    let n = select(params.size.z, params.size.y, AXIS == 1u);
+    let x0 = wg.x << params.lg_columns;
+    let row = params.size.x;
+    let plane = params.size.x * params.size.y;
+    var ld: Loader;
+    ld.at = select(wg.y * row + x0, wg.y * plane + x0, AXIS == 1u);
+    ld.stride = select(plane, row, AXIS == 1u);
+    ld.total = n << params.lg_columns;
+    ld.mask = (1u << params.lg_columns) - 1u;
+    ld.live = min(row - x0, 1u << params.lg_columns);
+    for (var e = li; e < ld.total; e += 8u * THREADS) {
+        let s0 = fetch(ld, e);
+        let s1 = fetch(ld, e + THREADS);
+        let s2 = fetch(ld, e + 2u * THREADS);
+        let s3 = fetch(ld, e + 3u * THREADS);
+        let s4 = fetch(ld, e + 4u * THREADS);
+        let s5 = fetch(ld, e + 5u * THREADS);
+        let s6 = fetch(ld, e + 6u * THREADS);
+        let s7 = fetch(ld, e + 7u * THREADS);
+        put(ld, e, s0);
+        put(ld, e + THREADS, s1);
+        put(ld, e + 2u * THREADS, s2);
+        put(ld, e + 3u * THREADS, s3);
+        put(ld, e + 4u * THREADS, s4);
+        put(ld, e + 5u * THREADS, s5);
+        put(ld, e + 6u * THREADS, s6);
+        put(ld, e + 7u * THREADS, s7);
+    }
+}
+
+// This band's envelope over the whole column, in place at the band's own cells; returns its
+// size. The top two sites stay in registers.
+fn build(l: Lane) -> u32 {
+    var top = -1;
+    var p_top = 0;
+    var g_top = 0;
+    var t_top = 0;
+    var p_below = 0;
+    var g_below = 0;
+    let n = i32(l.n);
+    for (var i = l.lo; i < l.hi; i++) {
+        let s = tile[cell(l.col, i)];
+        if s == NO_SEED {
+            continue;
+        }
+        let gs = own_cost(s, l);
+        let pi = i32(i);
+        loop {
+            if top < 0 || cost_at(g_top, p_top, t_top) <= cost_at(gs, pi, t_top) {
+                break;
+            }
+            top -= 1;
+            p_top = p_below;
+            g_top = g_below;
+            t_top = 0;
+            if top > 0 {
+                let below = tile[cell(l.col, l.lo + u32(top - 1))];
+                p_below = position(below);
+                g_below = own_cost(below, l);
+                t_top = separator(p_below, g_below, p_top, g_top);
+            }
+        }
+        var t = 0;
+        if top >= 0 {
+            t = separator(p_top, g_top, pi, gs);
+        }
+        if t < n {
+            top += 1;
+            p_below = p_top;
+            g_below = g_top;
+            p_top = pi;
+            g_top = gs;
+            t_top = t;
+            tile[cell(l.col, l.lo + u32(top))] = s;
+        }
+    }
+    return u32(top + 1);
+}
+
+// Nearest site of band q's envelope (size m, first cell at `first`) to position i: the first k
+// whose successor is not strictly nearer (costs along an envelope fall to the minimum, then
+// never fall again).
+fn search(l: Lane, first: u32, m: u32, i: i32) -> u32 {
+    var a = 0u;
+    var z = m - 1u;
+    while a < z {
+        let mid = (a + z) >> 1u;
+        if cost(tile[cell(l.col, first + mid + 1u)], l, i) >= cost(tile[cell(l.col, first + mid)], l, i) {
+            z = mid;
+        } else {
+            a = mid + 1u;
+        }
+    }
+    return tile[cell(l.col, first + a)];
+}
+
+// The walk along the own envelope: site k and the next, in registers.
+struct Walk {
+    k: u32,
+    m: u32,
+    s: u32,
+    p: i32,
+    g: i32,
+    next: u32,
+    p_next: i32,
+    g_next: i32,
+}
+
+fn walk_of(l: Lane, m: u32) -> Walk {
+    var w: Walk;
+    w.k = 0u;
+    w.m = m;
+    w.s = NO_SEED;
+    w.next = NO_SEED;
+    if m > 0u {
+        w.s = tile[cell(l.col, l.lo)];
+        w.p = position(w.s);
+        w.g = own_cost(w.s, l);
+    }
+    if m > 1u {
+        w.next = tile[cell(l.col, l.lo + 1u)];
+        w.p_next = position(w.next);
+        w.g_next = own_cost(w.next, l);
+    }
+    return w;
+}
+
+// The nearest site to position i (increasing from call to call) and its squared distance.
+fn query(l: Lane, w: ptr<function, Walk>, i: u32) -> vec2<u32> {
+    let pi = i32(i);
+    var best = NO_SEED;
+    var best_d = FAR_D2;
+    if (*w).m > 0u {
+        var d = cost_at((*w).g, (*w).p, pi);
+        loop {
+            if (*w).k + 1u >= (*w).m {
+                break;
+            }
+            let d_next = cost_at((*w).g_next, (*w).p_next, pi);
+            if d_next >= d {
+                break;
+            }
+            (*w).k += 1u;
+            (*w).s = (*w).next;
+            (*w).p = (*w).p_next;
+            (*w).g = (*w).g_next;
+            d = d_next;
+            if (*w).k + 1u < (*w).m {
+                (*w).next = tile[cell(l.col, l.lo + (*w).k + 1u)];
+                (*w).p_next = position((*w).next);
+                (*w).g_next = own_cost((*w).next, l);
+            }
+        }
+        best = (*w).s;
+        best_d = d;
+    }
+    // Other bands outward, both sides at once; a band whose nearest position is already as far
+    // as the best found cannot win, and those beyond it are farther still. The adjacent bands'
+    // nearest site is almost always their first (above) or last (below): walk from that end.
+    for (var off = 1u; off < params.bands; off++) {
+        var open = false;
+        let above = l.b + off;
+        if above < params.bands {
+            let first = above << params.lg_band;
+            let e = pi - i32(first);
+            if e * e < best_d {
+                open = true;
+                let m = envelope_size[(above << params.lg_columns) | l.c];
+                if m > 0u {
+                    var s = tile[cell(l.col, first)];
+                    var d = cost(s, l, pi);
+                    if off == 1u {
+                        for (var k = 1u; k < m; k++) {
+                            let t = tile[cell(l.col, first + k)];
+                            let dt = cost(t, l, pi);
+                            if dt >= d {
+                                break;
+                            }
+                            s = t;
+                            d = dt;
+                        }
+                    } else {
+                        s = search(l, first, m, pi);
+                        d = cost(s, l, pi);
+                    }
+                    if d < best_d {
+                        best = s;
+                        best_d = d;
+                    }
+                }
+            }
+        }
+        if off <= l.b {
+            let below = l.b - off;
+            let first = below << params.lg_band;
+            let e = pi - i32(first + (1u << params.lg_band) - 1u);
+            if e * e < best_d {
+                open = true;
+                let m = envelope_size[(below << params.lg_columns) | l.c];
+                if m > 0u {
+                    var s: u32;
+                    var d: i32;
+                    if off == 1u {
+                        var k = m - 1u;
+                        s = tile[cell(l.col, first + k)];
+                        d = cost(s, l, pi);
+                        for (; k > 0u; k--) {
+                            let t = tile[cell(l.col, first + k - 1u)];
+                            let dt = cost(t, l, pi);
+                            if dt > d {
+                                break;
+                            }
+                            s = t;
+                            d = dt;
+                        }
+                    } else {
+                        s = search(l, first, m, pi);
+                        d = cost(s, l, pi);
+                    }
+                    if d < best_d {
+                        best = s;
+                        best_d = d;
+                    }
+                }
+            }
+        }
+        if !open {
+            break;
+        }
+    }
+    return vec2<u32>(best, u32(best_d));
+}
+
+fn voxel(l: Lane, i: u32) -> vec3<u32> {
+    return select(vec3<u32>(l.x, l.other, i), vec3<u32>(l.x, i, l.other), AXIS == 1u);
+}
+
+// World distance of a query's answer, clamped to the band (FAR where there is no seed).
+fn world(found: vec2<u32>) -> f32 {
+    if found.x == NO_SEED {
+        return FAR;
+    }
+    return sqrt(f32(found.y)) * params.voxel_size;
+}
+
+fn banded(d: f32) -> f32 {
+    return clamp(d, -params.band, params.band);
+}
+
+// Every entry starts the same: load the tile, build this band's envelope, publish its size,
+// wait. Called by every thread (it holds the barriers).
+fn start(li: u32, wg: vec3<u32>) -> Walk {
+    load(li, wg);
+    workgroupBarrier();
+    let l = lane_of(li, wg);
+    let m = build(l);
+    envelope_size[li] = m;
+    workgroupBarrier();
+    return walk_of(l, m);
+}
+
+@compute @workgroup_size(256)
+fn tile_columns(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
+    var walk = start(li, wg);
+    let l = lane_of(li, wg);
+    if !l.valid {
+        return;
+    }
+    for (var i = l.lo; i < l.hi; i++) {
+        nearest[l.at + i * l.stride] = query(l, &walk, i).x;
+    }
+}
+
+// `tile_columns`, and the unsigned distance of every voxel it answers (3D).
+@compute @workgroup_size(256)
+fn tile_columns_resolve(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
+    var walk = start(li, wg);
+    let l = lane_of(li, wg);
+    if !l.valid {
+        return;
+    }
+    for (var i = l.lo; i < l.hi; i++) {
+        let found = query(l, &walk, i);
+        nearest[l.at + i * l.stride] = found.x;
+        textureStore(distance, voxel(l, i), vec4<f32>(banded(world(found)), 0.0, 0.0, 0.0));
+    }
+}
+
+// `tile_columns` in the outside seeds' field, and the signed distance of every voxel it answers,
+// as `field_resolve.wgsl`'s `resolve_signed` gives it from both fields (3D).
+@compute @workgroup_size(256)
+fn tile_columns_resolve_signed(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
+    var walk = start(li, wg);
+    let l = lane_of(li, wg);
+    if !l.valid {
+        return;
+    }
+    for (var i = l.lo; i < l.hi; i++) {
+        let found = query(l, &walk, i);
+        let at = l.at + i * l.stride;
+        nearest[at] = found.x;
+        let p = voxel(l, i);
+        let s_in = nearest_inside[at];
+        var to_inside = FAR;
+        if s_in != NO_SEED {
+            to_inside = length(vec3<f32>(unpack_seed3(s_in) - vec3<i32>(p))) * params.voxel_size;
+        }
+        let d = signed_distance(s_in, pack_seed3(p), to_inside, world(found), found.x, 0.5 * params.voxel_size);
+        textureStore(distance, p, vec4<f32>(banded(d), 0.0, 0.0, 0.0));
+    }
+}
+
+// The floor of a workgroup column pass: the tile's loads and the answers' stores alone (each
+// thread writes back its band's positions as loaded), for `bench distance` to compare with.
+@compute @workgroup_size(256)
+fn tile_copy(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
+    load(li, wg);
+    workgroupBarrier();
+    let l = lane_of(li, wg);
+    if !l.valid {
+        return;
+    }
+    for (var i = l.lo; i < l.hi; i++) {
+        nearest[l.at + i * l.stride] = tile[cell(l.col, i)];
+    }
+}
