@@ -402,6 +402,23 @@ fn every_column_path_is_exact() {
             }
         }
     }
+    // Forced into workgroup memory, a column longer than one tile holds is a typed error naming
+    // the longest that fits (3613 at 16 KiB), not a pipeline the device refuses.
+    let mut d3 = Distance3d::new(&defaults.device).unwrap();
+    d3.set_column_passes(ColumnPasses::Workgroup);
+    let tall = fieldkit::distance::upload_mask(
+        &defaults.device,
+        &defaults.queue,
+        &vec![0u8; 4000],
+        1,
+        4000,
+    )
+    .unwrap();
+    let mut enc = defaults.encoder("too long");
+    match d3.encode_exact_2d(&defaults.device, &mut enc, &tall, &Options3d::default()) {
+        Err(fieldkit::Error::Size { got, max, .. }) => assert_eq!((got, max), (4000, 3613)),
+        other => panic!("expected Error::Size, got {other:?}"),
+    }
     assert!(shared.take_uncaptured().is_empty());
     assert!(defaults.take_uncaptured().is_empty());
 }

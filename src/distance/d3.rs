@@ -137,6 +137,21 @@ impl TileGeometry {
         None
     }
 
+    /// The longest column one tile of one column holds in `storage` bytes (0 if none).
+    fn longest(storage: u32) -> u32 {
+        // The tile's size grows with n: bisect.
+        let (mut lo, mut hi) = (0u32, storage / 4);
+        while lo < hi {
+            let mid = (lo + hi).div_ceil(2);
+            if Self::fit(mid, storage, 1, 1).is_some() {
+                lo = mid;
+            } else {
+                hi = mid - 1;
+            }
+        }
+        lo
+    }
+
     /// What [`ColumnPasses::Auto`] takes for columns of length `n`.
     fn auto(n: u32, storage: u32) -> Option<Self> {
         if n > AUTO_TILE_MAX_LENGTH {
@@ -1539,9 +1554,9 @@ impl Distance3d {
                 TileGeometry::fit(n, storage, 1, MAX_TILE_COLUMNS).ok_or(Error::Size {
                     stage: edt_tile::STAGE,
                     what: "column length for one column in workgroup memory \
-                           (max_compute_workgroup_storage_size / 4 - 257)",
+                           (max_compute_workgroup_storage_size)",
                     got: n as u64,
-                    max: (storage / 4).saturating_sub(257) as u64,
+                    max: TileGeometry::longest(storage) as u64,
                 })?,
             ),
         };
