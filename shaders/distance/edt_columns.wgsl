@@ -26,7 +26,7 @@
 // The last pass of a 3D transform can resolve distances as `field_resolve.wgsl` would, in the
 // same sweep (`columns_resolve`, `columns_resolve_signed`): that saves reading the field again.
 
-import package::shared::seed::{FAR, NO_SEED, dist2, dist2_3, pack_seed3, signed_distance, unpack_seed2, unpack_seed3};
+import package::shared::seed::{NO_SEED, answer_distance, dist2, dist2_3, signed_at3, unpack_seed2, unpack_seed3};
 
 struct ColumnParams {
     size: vec3<u32>,
@@ -344,14 +344,7 @@ fn query(c: Column, walk: ptr<function, Walk>, i: u32) -> vec2<u32> {
     return vec2<u32>(best, u32(best_d));
 }
 
-// World distance of a query's answer, clamped to the band (FAR where there is no seed).
-fn world(found: vec2<u32>) -> f32 {
-    if found.x == NO_SEED {
-        return FAR;
-    }
-    return sqrt(f32(found.y)) * params.voxel_size;
-}
-
+// A distance clamped to the band.
 fn banded(d: f32) -> f32 {
     return clamp(d, -params.band, params.band);
 }
@@ -400,7 +393,7 @@ fn columns_resolve(@builtin(local_invocation_index) li: u32, @builtin(workgroup_
         let found = query(c, &walk, i);
         nearest[c.base + i * c.stride] = found.x;
         let p = vec3<u32>(voxel(c.x, c.other, i));
-        textureStore(distance, p, vec4<f32>(banded(world(found)), 0.0, 0.0, 0.0));
+        textureStore(distance, p, vec4<f32>(banded(answer_distance(found, params.voxel_size)), 0.0, 0.0, 0.0));
     }
 }
 
@@ -419,12 +412,7 @@ fn columns_resolve_signed(@builtin(local_invocation_index) li: u32, @builtin(wor
         let at = c.base + i * c.stride;
         nearest[at] = found.x;
         let p = vec3<u32>(voxel(c.x, c.other, i));
-        let s_in = nearest_inside[at];
-        var to_inside = FAR;
-        if s_in != NO_SEED {
-            to_inside = length(vec3<f32>(unpack_seed3(s_in) - vec3<i32>(p))) * params.voxel_size;
-        }
-        let d = signed_distance(s_in, pack_seed3(p), to_inside, world(found), found.x, 0.5 * params.voxel_size);
+        let d = signed_at3(nearest_inside[at], p, answer_distance(found, params.voxel_size), found.x, params.voxel_size);
         textureStore(distance, p, vec4<f32>(banded(d), 0.0, 0.0, 0.0));
     }
 }

@@ -17,7 +17,7 @@
 // cell per band, so the bands of a warp fall in different banks), columns and bands come from
 // shifts and masks, and the separator is an f32 division corrected to the exact integer floor.
 
-import package::shared::seed::{FAR, NO_SEED, pack_seed3, signed_distance, unpack_seed2, unpack_seed3};
+import package::shared::seed::{NO_SEED, answer_distance, signed_at3, unpack_seed2, unpack_seed3};
 
 struct TileParams {
     size: vec3<u32>,
@@ -281,6 +281,58 @@ fn search(l: Lane, first: u32, m: u32, i: i32) -> u32 {
     return tile[cell(l.col, first + a)];
 }
 
+// Nearest site of band q's envelope (size m > 0, first cell at `first`) to position i, and its
+// cost (the site's bits as i32): an adjacent band's nearest is almost always its first site (the band above) or its last
+// (the band below), so those are walked from that end; farther bands are searched. Both stop
+// at the same site the search would (the first of equally near ones).
+fn band_nearest(l: Lane, first: u32, m: u32, i: i32, adjacent: bool, above: bool) -> vec2<i32> {
+    if !adjacent {
+        let s = search(l, first, m, i);
+        return vec2<i32>(bitcast<i32>(s), cost(s, l, i));
+    }
+    var k = select(m - 1u, 0u, above);
+    var s = tile[cell(l.col, first + k)];
+    var d = cost(s, l, i);
+    loop {
+        if (above && k + 1u >= m) || (!above && k == 0u) {
+            break;
+        }
+        let next = select(k - 1u, k + 1u, above);
+        let t = tile[cell(l.col, first + next)];
+        let dt = cost(t, l, i);
+        // Forward: stop unless strictly nearer; backward: go on while as near.
+        if dt > d || (above && dt == d) {
+            break;
+        }
+        k = next;
+        s = t;
+        d = dt;
+    }
+    return vec2<i32>(bitcast<i32>(s), d);
+}
+
+// Band q (above the thread's own band or below it) at position i: false if its nearest
+// position is already as far as the best found; else its envelope's nearest site replaces the
+// best if nearer.
+fn consult(l: Lane, q: u32, above: bool, adjacent: bool, i: i32, best: ptr<function, u32>, best_d: ptr<function, i32>) -> bool {
+    let first = q << params.lg_band;
+    // The band's position nearest i: its first (above) or its last (below).
+    let edge = select(first + (1u << params.lg_band) - 1u, first, above);
+    let e = i - i32(edge);
+    if e * e >= *best_d {
+        return false;
+    }
+    let m = envelope_size[(q << params.lg_columns) | l.c];
+    if m > 0u {
+        let found = band_nearest(l, first, m, i, adjacent, above);
+        if found.y < *best_d {
+            *best = bitcast<u32>(found.x);
+            *best_d = found.y;
+        }
+    }
+    return true;
+}
+
 // The walk along the own envelope: site k and the next, in registers.
 struct Walk {
     k: u32,
@@ -342,74 +394,14 @@ fn query(l: Lane, w: ptr<function, Walk>, i: u32) -> vec2<u32> {
         best_d = d;
     }
     // Other bands outward, both sides at once; a band whose nearest position is already as far
-    // as the best found cannot win, and those beyond it are farther still. The adjacent bands'
-    // nearest site is almost always their first (above) or last (below): walk from that end.
+    // as the best found cannot win, and those beyond it are farther still.
     for (var off = 1u; off < params.bands; off++) {
         var open = false;
-        let above = l.b + off;
-        if above < params.bands {
-            let first = above << params.lg_band;
-            let e = pi - i32(first);
-            if e * e < best_d {
-                open = true;
-                let m = envelope_size[(above << params.lg_columns) | l.c];
-                if m > 0u {
-                    var s = tile[cell(l.col, first)];
-                    var d = cost(s, l, pi);
-                    if off == 1u {
-                        for (var k = 1u; k < m; k++) {
-                            let t = tile[cell(l.col, first + k)];
-                            let dt = cost(t, l, pi);
-                            if dt >= d {
-                                break;
-                            }
-                            s = t;
-                            d = dt;
-                        }
-                    } else {
-                        s = search(l, first, m, pi);
-                        d = cost(s, l, pi);
-                    }
-                    if d < best_d {
-                        best = s;
-                        best_d = d;
-                    }
-                }
-            }
+        if l.b + off < params.bands {
+            open = consult(l, l.b + off, true, off == 1u, pi, &best, &best_d);
         }
         if off <= l.b {
-            let below = l.b - off;
-            let first = below << params.lg_band;
-            let e = pi - i32(first + (1u << params.lg_band) - 1u);
-            if e * e < best_d {
-                open = true;
-                let m = envelope_size[(below << params.lg_columns) | l.c];
-                if m > 0u {
-                    var s: u32;
-                    var d: i32;
-                    if off == 1u {
-                        var k = m - 1u;
-                        s = tile[cell(l.col, first + k)];
-                        d = cost(s, l, pi);
-                        for (; k > 0u; k--) {
-                            let t = tile[cell(l.col, first + k - 1u)];
-                            let dt = cost(t, l, pi);
-                            if dt > d {
-                                break;
-                            }
-                            s = t;
-                            d = dt;
-                        }
-                    } else {
-                        s = search(l, first, m, pi);
-                        d = cost(s, l, pi);
-                    }
-                    if d < best_d {
-                        best = s;
-                        best_d = d;
-                    }
-                }
-            }
+            open = consult(l, l.b - off, false, off == 1u, pi, &best, &best_d) || open;
         }
         if !open {
             break;
@@ -422,14 +414,7 @@ fn voxel(l: Lane, i: u32) -> vec3<u32> {
     return select(vec3<u32>(l.x, l.other, i), vec3<u32>(l.x, i, l.other), AXIS == 1u);
 }
 
-// World distance of a query's answer, clamped to the band (FAR where there is no seed).
-fn world(found: vec2<u32>) -> f32 {
-    if found.x == NO_SEED {
-        return FAR;
-    }
-    return sqrt(f32(found.y)) * params.voxel_size;
-}
-
+// A distance clamped to the band.
 fn banded(d: f32) -> f32 {
     return clamp(d, -params.band, params.band);
 }
@@ -469,7 +454,7 @@ fn tile_columns_resolve(@builtin(local_invocation_index) li: u32, @builtin(workg
     for (var i = l.lo; i < l.hi; i++) {
         let found = query(l, &walk, i);
         nearest[l.at + i * l.stride] = found.x;
-        textureStore(distance, voxel(l, i), vec4<f32>(banded(world(found)), 0.0, 0.0, 0.0));
+        textureStore(distance, voxel(l, i), vec4<f32>(banded(answer_distance(found, params.voxel_size)), 0.0, 0.0, 0.0));
     }
 }
 
@@ -487,12 +472,7 @@ fn tile_columns_resolve_signed(@builtin(local_invocation_index) li: u32, @builti
         let at = l.at + i * l.stride;
         nearest[at] = found.x;
         let p = voxel(l, i);
-        let s_in = nearest_inside[at];
-        var to_inside = FAR;
-        if s_in != NO_SEED {
-            to_inside = length(vec3<f32>(unpack_seed3(s_in) - vec3<i32>(p))) * params.voxel_size;
-        }
-        let d = signed_distance(s_in, pack_seed3(p), to_inside, world(found), found.x, 0.5 * params.voxel_size);
+        let d = signed_at3(nearest_inside[at], p, answer_distance(found, params.voxel_size), found.x, params.voxel_size);
         textureStore(distance, p, vec4<f32>(banded(d), 0.0, 0.0, 0.0));
     }
 }

@@ -6,7 +6,7 @@
 // seeds lie on the surface itself: the distance is to the seed point, and the sign comes from
 // the volume (negative where the voxel's value is ≥ threshold), as the sources' metaball SDF does.
 
-import package::shared::seed::{FAR, NO_SEED, key_index, signed_distance, pack_seed2, pack_seed3, unpack_seed2, unpack_seed3};
+import package::shared::seed::{FAR, NO_SEED, key_index, seed_distance3, signed_at3, signed_distance, pack_seed2, unpack_seed2};
 
 struct ResolveParams {
     size: vec3<u32>,
@@ -39,13 +39,6 @@ fn banded(d: f32) -> f32 {
     return clamp(d, -params.band, params.band);
 }
 
-fn seed_distance3(s: u32, p: vec3<u32>) -> f32 {
-    if s == NO_SEED {
-        return FAR;
-    }
-    return world(length(vec3<f32>(unpack_seed3(s) - vec3<i32>(p))));
-}
-
 fn seed_distance2(s: u32, p: vec2<u32>) -> f32 {
     if s == NO_SEED {
         return FAR;
@@ -63,7 +56,7 @@ fn resolve_unsigned(@builtin(global_invocation_id) id: vec3<u32>) {
     if any(id >= params.size) {
         return;
     }
-    textureStore(distance, id, vec4<f32>(banded(seed_distance3(nearest[index_of(id)], id)), 0.0, 0.0, 0.0));
+    textureStore(distance, id, vec4<f32>(banded(seed_distance3(nearest[index_of(id)], id, params.voxel_size)), 0.0, 0.0, 0.0));
 }
 
 @compute @workgroup_size(32, 4, 2)
@@ -74,7 +67,7 @@ fn resolve_signed(@builtin(global_invocation_id) id: vec3<u32>) {
     let i = index_of(id);
     let s_in = nearest[i];
     let s_out = nearest_outside[i];
-    let d = signed(s_in, pack_seed3(id), seed_distance3(s_in, id), seed_distance3(s_out, id), s_out);
+    let d = signed_at3(s_in, id, seed_distance3(s_out, id, params.voxel_size), s_out, params.voxel_size);
     textureStore(distance, id, vec4<f32>(banded(d), 0.0, 0.0, 0.0));
 }
 

@@ -93,11 +93,11 @@ pub const MIN_TILE_COLUMNS: u32 = 4;
 /// Most columns per tile (256 threads: 16 bands per column at 16 columns).
 pub const MAX_TILE_COLUMNS: u32 = 16;
 /// Longest column [`ColumnPasses::Auto`] holds in workgroup memory. Measured on the H100
-/// (`cargo xtask bench distance --exact-only --workgroup-storage B`, 1% seeds, clocks held,
-/// 2026-11-24): the workgroup passes took 0.140 ms against 0.162 at 128³ and 0.886 against 0.989
-/// at 256³ (8 columns per tile), but 7.21 against 6.76 at 512³ (4 columns) and 0.323 against
-/// 0.257 at 2048² (4 columns); with 16 columns 256³ took 1.078 and 512³ 11.8 ms. Bands of 8
-/// positions ([`AUTO_TILE_BAND`]) were fastest at every length measured.
+/// (`cargo xtask bench distance --exact-only [--workgroup-storage B]`, 1% seeds, clocks held,
+/// 2026-11-24), the whole transform: 0.138 ms against 0.162 with global columns at 128³ and
+/// 0.872 against 0.988 at 256³ (8 columns per tile), but 7.21 against 6.76 at 512³ (4 columns)
+/// and 0.323 against 0.257 at 2048² (4 columns); with 16 columns 256³ took 1.078 and 512³
+/// 11.8 ms. Bands of 8 positions ([`AUTO_TILE_BAND`]) were fastest at every length measured.
 pub const AUTO_TILE_MAX_LENGTH: u32 = 256;
 /// Band length [`ColumnPasses::Auto`] aims for: at most `256 · 8 / n` columns per tile.
 pub const AUTO_TILE_BAND: u32 = 8;
@@ -137,19 +137,14 @@ impl TileGeometry {
         None
     }
 
-    /// The longest column one tile of one column holds in `storage` bytes (0 if none).
+    /// The longest column a tile of one column holds in `storage` bytes (0 if none). A tile's
+    /// size does not grow monotonically with n (its pad cells fall where the band length
+    /// doubles), so every length is tried, longest first; this runs only to word an error.
     fn longest(storage: u32) -> u32 {
-        // The tile's size grows with n: bisect.
-        let (mut lo, mut hi) = (0u32, storage / 4);
-        while lo < hi {
-            let mid = (lo + hi).div_ceil(2);
-            if Self::fit(mid, storage, 1, 1).is_some() {
-                lo = mid;
-            } else {
-                hi = mid - 1;
-            }
-        }
-        lo
+        (1..=storage / 4)
+            .rev()
+            .find(|&n| Self::fit(n, storage, 1, 1).is_some())
+            .unwrap_or(0)
     }
 
     /// What [`ColumnPasses::Auto`] takes for columns of length `n`.
@@ -161,8 +156,39 @@ impl TileGeometry {
         Self::fit(n, storage, MIN_TILE_COLUMNS, max)
     }
 
-    fn cells(&self) -> u32 {
-        self.column_cells << self.lg_columns
+    /// The pass's parameters and override constants.
+    fn bind(
+        &self,
+        device: &wgpu::Device,
+        size: [u32; 3],
+        axis: u32,
+        pack_2d: bool,
+        fuse: Option<&Fuse>,
+    ) -> (wgpu::Buffer, [(&'static str, f64); 3]) {
+        let params = uniform(
+            device,
+            "edt tile params",
+            &edt_tile::TileParams {
+                size: size.into(),
+                voxel_size: fuse.map_or(1.0, |f| f.voxel_size),
+                band: fuse.map_or(f32::MAX, |f| f.band),
+                lg_columns: self.lg_columns,
+                lg_band: self.lg_band,
+                bands: self.bands,
+                column_cells: self.column_cells,
+            },
+        );
+        let overrides = [
+            ("PACK_2D", pack_2d as u32 as f64),
+            ("AXIS", axis as f64),
+            ("CELLS", (self.column_cells << self.lg_columns) as f64),
+        ];
+        (params, overrides)
+    }
+
+    /// Workgroups for a pass over `size[0]` columns × `others`.
+    fn groups(&self, size: [u32; 3], others: u32) -> [u32; 3] {
+        [size[0].div_ceil(1 << self.lg_columns), others, 1]
     }
 }
 
@@ -1545,21 +1571,7 @@ impl Distance3d {
         others: u32,
         fuse: Option<Fuse>,
     ) -> Result<(), Error> {
-        let n = size[axis as usize];
-        let storage = device.limits().max_compute_workgroup_storage_size;
-        let tile = match self.column_passes {
-            ColumnPasses::Global => None,
-            ColumnPasses::Auto => TileGeometry::auto(n, storage),
-            ColumnPasses::Workgroup => Some(
-                TileGeometry::fit(n, storage, 1, MAX_TILE_COLUMNS).ok_or(Error::Size {
-                    stage: edt_tile::STAGE,
-                    what: "column length for one column in workgroup memory \
-                           (max_compute_workgroup_storage_size)",
-                    got: n as u64,
-                    max: TileGeometry::longest(storage) as u64,
-                })?,
-            ),
-        };
+        let tile = self.tile_for(device, size[axis as usize])?;
         if let Some(tile) = tile {
             return self.encode_tile_columns(
                 device, rec, pack_2d, nearest, size, axis, others, tile, fuse,
@@ -1658,10 +1670,29 @@ impl Distance3d {
         Ok(())
     }
 
+    /// The workgroup-memory tile the column passes take for columns of length `n`, or `None`
+    /// for the global-memory passes (as [`Self::set_column_passes`] chose).
+    fn tile_for(&self, device: &wgpu::Device, n: u32) -> Result<Option<TileGeometry>, Error> {
+        let storage = device.limits().max_compute_workgroup_storage_size;
+        Ok(match self.column_passes {
+            ColumnPasses::Global => None,
+            ColumnPasses::Auto => TileGeometry::auto(n, storage),
+            ColumnPasses::Workgroup => Some(
+                TileGeometry::fit(n, storage, 1, MAX_TILE_COLUMNS).ok_or(Error::Size {
+                    stage: edt_tile::STAGE,
+                    what: "column length for one column in workgroup memory \
+                           (max_compute_workgroup_storage_size)",
+                    got: n as u64,
+                    max: TileGeometry::longest(storage) as u64,
+                })?,
+            ),
+        })
+    }
+
     /// For benchmarks: the loads and stores of one workgroup-memory column pass along `axis` (1:
-    /// y, 2: z) of a 3D field of `size` in `nearest`, without the envelopes: the floor that pass
-    /// is measured against, with the most columns per tile that fit (as
-    /// [`ColumnPasses::Workgroup`] takes them). `None` where not even four columns fit.
+    /// y, 2: z) of a 3D field of `size` in `nearest`, without the envelopes, with the tile the
+    /// pass itself takes: the floor that pass is measured against. `None` where the pass runs
+    /// in global memory.
     #[doc(hidden)]
     pub fn encode_tile_copy(
         &self,
@@ -1671,29 +1702,10 @@ impl Distance3d {
         size: [u32; 3],
         axis: u32,
     ) -> Result<Option<()>, Error> {
-        let storage = device.limits().max_compute_workgroup_storage_size;
-        let n = size[axis as usize];
-        let Some(tile) = TileGeometry::fit(n, storage, MIN_TILE_COLUMNS, MAX_TILE_COLUMNS) else {
+        let Some(tile) = self.tile_for(device, size[axis as usize])? else {
             return Ok(None);
         };
-        let params = uniform(
-            device,
-            "edt tile params",
-            &edt_tile::TileParams {
-                size: size.into(),
-                voxel_size: 1.0,
-                band: f32::MAX,
-                lg_columns: tile.lg_columns,
-                lg_band: tile.lg_band,
-                bands: tile.bands,
-                column_cells: tile.column_cells,
-            },
-        );
-        let overrides = [
-            ("PACK_2D", 0.0),
-            ("AXIS", axis as f64),
-            ("CELLS", tile.cells() as f64),
-        ];
+        let (params, overrides) = tile.bind(device, size, axis, false, None);
         self.tile_copy.get(device, &overrides, false)?.record(
             device,
             rec,
@@ -1701,11 +1713,7 @@ impl Distance3d {
                 params: (&params).into(),
                 nearest: nearest.into(),
             },
-            [
-                size[0].div_ceil(1 << tile.lg_columns),
-                size[3 - axis as usize],
-                1,
-            ],
+            tile.groups(size, size[3 - axis as usize]),
             if axis == 1 {
                 "copy (y, workgroup)"
             } else {
@@ -1729,25 +1737,8 @@ impl Distance3d {
         tile: TileGeometry,
         fuse: Option<Fuse>,
     ) -> Result<(), Error> {
-        let overrides = [
-            ("PACK_2D", pack_2d as u32 as f64),
-            ("AXIS", axis as f64),
-            ("CELLS", tile.cells() as f64),
-        ];
-        let params = uniform(
-            device,
-            "edt tile params",
-            &edt_tile::TileParams {
-                size: size.into(),
-                voxel_size: fuse.as_ref().map_or(1.0, |f| f.voxel_size),
-                band: fuse.as_ref().map_or(f32::MAX, |f| f.band),
-                lg_columns: tile.lg_columns,
-                lg_band: tile.lg_band,
-                bands: tile.bands,
-                column_cells: tile.column_cells,
-            },
-        );
-        let groups = [size[0].div_ceil(1 << tile.lg_columns), others, 1];
+        let (params, overrides) = tile.bind(device, size, axis, pack_2d, fuse.as_ref());
+        let groups = tile.groups(size, others);
         let name = match (axis, &fuse) {
             (1, None) => "columns (y, workgroup)",
             (1, Some(_)) => "columns (y, workgroup) + resolve",

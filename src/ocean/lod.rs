@@ -286,8 +286,8 @@ pub fn select(
         if visited > MAX_LOD_NODES {
             return Err(Error::Size {
                 stage: "ocean::lod",
-                what: "quadtree nodes (raise max_error_px or lower max_depth)",
-                got: visited + stack.len() as u64,
+                what: "quadtree nodes visited (raise max_error_px or lower max_depth)",
+                got: visited,
                 max: MAX_LOD_NODES,
             });
         }
