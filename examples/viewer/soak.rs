@@ -222,7 +222,7 @@ pub fn soak_scene(
         let mut saved = base.clone();
         for i in 0..frames {
             move_inputs(scene, &mut saved, i);
-            let (report, index) = draw_frame(
+            let (report, _) = draw_frame(
                 device,
                 queue,
                 &mut scenes,
@@ -237,11 +237,13 @@ pub fn soak_scene(
             if let Some(e) = report.error {
                 return Err(format!("{scene}, frame {i}: {e}"));
             }
+            // Wait for everything submitted, the frame's readbacks included (they are
+            // submitted after the frame): a sample taken while a readback may or may not have
+            // finished counts its staging buffer on some runs and not on others, and the
+            // voxelizer starts its next job only once the last one is read — so waiting for
+            // the frame alone made the live allocations at the sample depend on timing.
             device
-                .poll(wgpu::PollType::Wait {
-                    submission_index: Some(index),
-                    timeout: None,
-                })
+                .poll(wgpu::PollType::wait_indefinitely())
                 .map_err(|e| format!("{scene}, frame {i}: {e}"))?;
             let uncaptured = ctx.take_uncaptured();
             if !uncaptured.is_empty() {
