@@ -380,7 +380,7 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, s: &mut String) {
     let main_entry = p.entries.last().unwrap();
     writeln!(
         s,
-        "/// What the shader says about this pipeline's interface, read by `crate::bind`.\npub static INFO: crate::bind::EntryInfo = crate::bind::EntryInfo {{ stage: STAGE, path: PATH, entry_point: \"{}\", source: SOURCE, kind: {kind}, slots: &[{}], overrides: &[{}] }};",
+        "/// What the shader says about this pipeline's interface, read by `crate::bind`.\npub static INFO: crate::bind::EntryInfo = crate::bind::EntryInfo {{ stage: STAGE, path: PATH, entry_point: \"{}\", source: SOURCE, kind: {kind}, slots: &[{}], overrides: &[{}], loops_end: true }};",
         main_entry.name,
         slots.join(", "),
         overrides.join(", ")

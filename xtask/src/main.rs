@@ -48,6 +48,10 @@ enum Command {
         /// Values for `override` constants, NAME=value (repeatable).
         #[arg(long = "override")]
         overrides: Vec<String>,
+        /// The runtime checks naga writes into the SPIR-V: `wgpu` (as wgpu's Vulkan backend
+        /// writes them: clamped indices, bounded loops), `no-loop-bounding`, or `none`.
+        #[arg(long, default_value = "wgpu")]
+        checks: String,
     },
     /// Render every technique to PNG on the default adapter (FIELDKIT_ADAPTER picks another).
     Gallery {
@@ -148,14 +152,18 @@ fn main() -> ExitCode {
     match cli.command {
         Command::Lint => lint::run(&crate_root()),
         Command::Reflect { stage, json } => reflect(&crate_root(), stage.as_deref(), json),
-        Command::ShaderStats { stage, overrides } => {
+        Command::ShaderStats {
+            stage,
+            overrides,
+            checks,
+        } => {
             // The checkout it runs in (a release binary sent to another machine), else the one
             // it was built from.
             let here = std::env::current_dir()
                 .ok()
                 .filter(|d| d.join("shaders").is_dir() && d.join("build.rs").is_file());
             let root = here.unwrap_or_else(crate_root);
-            shader_stats::run(&root, stage.as_deref(), &overrides)
+            shader_stats::run(&root, stage.as_deref(), &overrides, &checks)
         }
         Command::Gallery { out } => gallery(&out),
         Command::GpuTests => gpu_tests::run(&crate_root()),

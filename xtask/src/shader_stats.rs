@@ -13,8 +13,8 @@ use std::process::ExitCode;
 
 use ash::vk;
 
-pub fn run(root: &Path, filter: Option<&str>, overrides: &[String]) -> ExitCode {
-    match stats(root, filter, overrides) {
+pub fn run(root: &Path, filter: Option<&str>, overrides: &[String], checks: &str) -> ExitCode {
+    match stats(root, filter, overrides, checks) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("shader-stats: {e}");
@@ -277,8 +277,44 @@ fn bindings(module: &naga::Module) -> Vec<(u32, u32, vk::DescriptorType)> {
         .collect()
 }
 
-fn stats(root: &Path, filter: Option<&str>, overrides: &[String]) -> Result<(), String> {
+/// naga's SPIR-V options for `--checks`: `wgpu` as wgpu's Vulkan backend sets them on a
+/// device with robust buffer and image access (indices clamped, buffers and images left to the
+/// driver, every loop bounded), `no-loop-bounding`, `none` (what
+/// `create_shader_module_trusted` with every check off gives).
+fn spirv_options(checks: &str) -> Result<naga::back::spv::Options<'static>, String> {
+    use naga::proc::{BoundsCheckPolicies, BoundsCheckPolicy::*};
+    let wgpu = BoundsCheckPolicies {
+        index: Restrict,
+        buffer: Unchecked,
+        image_load: Unchecked,
+        binding_array: Unchecked,
+    };
+    let (policies, bounded) = match checks {
+        "wgpu" => (wgpu, true),
+        "no-loop-bounding" => (wgpu, false),
+        "none" => (BoundsCheckPolicies::default(), false),
+        _ => {
+            return Err(format!(
+                "--checks {checks:?}: one of wgpu, no-loop-bounding, none"
+            ));
+        }
+    };
+    Ok(naga::back::spv::Options {
+        lang_version: (1, 3),
+        bounds_check_policies: policies,
+        force_loop_bounding: bounded,
+        ..Default::default()
+    })
+}
+
+fn stats(
+    root: &Path,
+    filter: Option<&str>,
+    overrides: &[String],
+    checks: &str,
+) -> Result<(), String> {
     let overrides = parse_overrides(overrides)?;
+    let options = spirv_options(checks)?;
     let stages = crate::stages(root).ok_or("the shaders do not build")?;
     let vulkan = Vulkan::open()?;
     println!("device: {}", vulkan.name);
@@ -312,10 +348,6 @@ fn stats(root: &Path, filter: Option<&str>, overrides: &[String]) -> Result<(), 
             .iter()
             .filter(|e| e.stage == naga::ShaderStage::Compute)
         {
-            let options = naga::back::spv::Options {
-                lang_version: (1, 3),
-                ..Default::default()
-            };
             let pipeline = naga::back::spv::PipelineOptions {
                 shader_stage: naga::ShaderStage::Compute,
                 entry_point: ep.name.clone(),
