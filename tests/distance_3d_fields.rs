@@ -5,6 +5,7 @@ mod common;
 
 use common::*;
 use fieldkit::distance::{
+    ColumnPasses,
     Distance3d, Grid3, Inside, Method, Options3d, upload_points, upload_points_with_homes,
     upload_volume,
 };
@@ -323,13 +324,18 @@ fn sub_voxel_seeds_on_a_torus() {
 #[test]
 fn exact_2d_matches_cpu() {
     let ctx = Context::shared();
-    let d3 = Distance3d::new(&ctx.device).unwrap();
-    for (w, h, density, seed) in [
-        (97usize, 61usize, 0.01, 1u64),
-        (300, 2, 0.02, 2),
-        (1, 80, 0.05, 3),
-        (513, 40, 0.001, 4),
+    // Both column paths resolve as they answer (a single row, 50×1, has no column pass and is
+    // resolved on its own).
+    let mut d3 = Distance3d::new(&ctx.device).unwrap();
+    for (w, h, density, seed, passes) in [
+        (97usize, 61usize, 0.01, 1u64, ColumnPasses::Workgroup),
+        (97, 61, 0.01, 1, ColumnPasses::Global),
+        (300, 2, 0.02, 2, ColumnPasses::Auto),
+        (1, 80, 0.05, 3, ColumnPasses::Global),
+        (513, 40, 0.001, 4, ColumnPasses::Auto),
+        (50, 1, 0.05, 5, ColumnPasses::Auto),
     ] {
+        d3.set_column_passes(passes);
         let m = random_mask(w, h, density, seed);
         let exact = cpu::edt_2d_squared(&m, w, h);
         let signed = cpu::signed_2d(&m, w, h);
@@ -361,7 +367,7 @@ fn exact_2d_matches_cpu() {
                 };
                 assert!(
                     (d[i] as f64 - want).abs() <= 1e-5 * (1.0 + want.abs()),
-                    "{w}x{h} signed={is_signed} texel {i}: {} vs {want}",
+                    "{w}x{h} {passes:?} signed={is_signed} texel {i}: {} vs {want}",
                     d[i]
                 );
                 if !is_signed {

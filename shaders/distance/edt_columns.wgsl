@@ -26,7 +26,7 @@
 // The last pass of a 3D transform can resolve distances as `field_resolve.wgsl` would, in the
 // same sweep (`columns_resolve`, `columns_resolve_signed`): that saves reading the field again.
 
-import package::shared::seed::{NO_SEED, answer_distance, dist2, dist2_3, signed_at3, unpack_seed2, unpack_seed3};
+import package::shared::seed::{NO_SEED, answer_distance, dist2, dist2_3, signed_at2, signed_at3, unpack_seed2, unpack_seed3};
 
 struct ColumnParams {
     size: vec3<u32>,
@@ -44,6 +44,8 @@ struct ColumnParams {
 // `columns_resolve_signed` runs in the outside seeds' field; this is the inside seeds' field.
 @group(0) @binding(3) var<storage, read> nearest_inside: array<u32>;
 @group(0) @binding(4) var distance: texture_storage_3d<r32float, write>;
+// The resolving entries of a 2D field write here.
+@group(0) @binding(5) var distance_2d: texture_storage_2d<r32float, write>;
 
 // 2D fields pack 16/16 bits (sides to 16384 keep every separator numerator in i32).
 override PACK_2D: bool = false;
@@ -414,5 +416,42 @@ fn columns_resolve_signed(@builtin(local_invocation_index) li: u32, @builtin(wor
         let p = vec3<u32>(voxel(c.x, c.other, i));
         let d = signed_at3(nearest_inside[at], p, answer_distance(found, params.voxel_size), found.x, params.voxel_size);
         textureStore(distance, p, vec4<f32>(banded(d), 0.0, 0.0, 0.0));
+    }
+}
+
+// `columns` in a 2D field, and the unsigned distance of every pixel it answers.
+@compute @workgroup_size(32, 8)
+fn columns_resolve_2d(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
+    let s = start(li, wg);
+    let c = s.c;
+    if !c.valid {
+        return;
+    }
+    var walk = s.walk;
+    for (var i = c.lo; i < c.hi; i++) {
+        let found = query(c, &walk, i);
+        let at = c.base + i * c.stride;
+        nearest[at] = found.x;
+        let p = vec3<u32>(voxel(c.x, c.other, i)).xy;
+        textureStore(distance_2d, p, vec4<f32>(banded(answer_distance(found, params.voxel_size)), 0.0, 0.0, 0.0));
+    }
+}
+
+// `columns` in the outside seeds' 2D field, and the signed distance of every pixel it answers.
+@compute @workgroup_size(32, 8)
+fn columns_resolve_signed_2d(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
+    let s = start(li, wg);
+    let c = s.c;
+    if !c.valid {
+        return;
+    }
+    var walk = s.walk;
+    for (var i = c.lo; i < c.hi; i++) {
+        let found = query(c, &walk, i);
+        let at = c.base + i * c.stride;
+        nearest[at] = found.x;
+        let p = vec3<u32>(voxel(c.x, c.other, i)).xy;
+        let d = signed_at2(nearest_inside[at], p, answer_distance(found, params.voxel_size), found.x, params.voxel_size);
+        textureStore(distance_2d, p, vec4<f32>(banded(d), 0.0, 0.0, 0.0));
     }
 }

@@ -36,11 +36,18 @@ override ROWS: u32 = 1u;
 
 var<workgroup> scan: array<u32, 256>;
 // `rows`: the rows' marks, then their packed nearest seeds.
-var<workgroup> row_cells: array<u32, MAX_ROW>;
+// One pad cell after every 8: a thread sweeps a segment of (usually) 8 cells, so without the
+// pad the 32 threads of a warp would read and write cells 8 apart, four to a bank.
+var<workgroup> row_cells: array<u32, MAX_ROW + MAX_ROW / 8u>;
 // `rows`: per segment, the last mark + 1 (0: none) and the first mark (NONE_RIGHT: none),
 // scanned into prefix maxima and suffix minima.
 var<workgroup> seg_last: array<u32, 256>;
 var<workgroup> seg_first: array<u32, 256>;
+
+// Cell i of `row_cells`, padded.
+fn padded(i: u32) -> u32 {
+    return i + (i >> 3u);
+}
 
 fn is_seed(value: f32) -> bool {
     return (value >= params.threshold) != (params.invert != 0u);
@@ -114,7 +121,7 @@ fn rows(@builtin(local_invocation_id) lid: vec3<u32>, @builtin(workgroup_id) wg:
     let cells = r * w;
     for (var x = t; x < w; x += lanes) {
         if live {
-            row_cells[cells + x] = u32(is_seed(textureLoad(volume, vec3<u32>(x, y, z), 0).r));
+            row_cells[padded(cells + x)] = u32(is_seed(textureLoad(volume, vec3<u32>(x, y, z), 0).r));
         }
     }
     workgroupBarrier();
@@ -126,7 +133,7 @@ fn rows(@builtin(local_invocation_id) lid: vec3<u32>, @builtin(workgroup_id) wg:
     var first = NONE_RIGHT;
     if live {
         for (var x = s0; x < s1; x++) {
-            if row_cells[cells + x] != 0u {
+            if row_cells[padded(cells + x)] != 0u {
                 last = x + 1u;
                 first = min(first, x);
             }
@@ -152,28 +159,28 @@ fn rows(@builtin(local_invocation_id) lid: vec3<u32>, @builtin(workgroup_id) wg:
         // bit 31, so nothing is kept in a private array (those live in slow local memory).
         var right = select(NONE_RIGHT, seg_first[lid.x + min(1u, lanes - 1u - t)], t + 1u < lanes);
         for (var x = s1; x > s0; x--) {
-            let marked = row_cells[cells + x - 1u] != 0u;
+            let marked = row_cells[padded(cells + x - 1u)] != 0u;
             if marked {
                 right = x - 1u;
             }
-            row_cells[cells + x - 1u] = select(0u, right + 1u, right != NONE_RIGHT) | (u32(marked) << 31u);
+            row_cells[padded(cells + x - 1u)] = select(0u, right + 1u, right != NONE_RIGHT) | (u32(marked) << 31u);
         }
         var left = select(0u, seg_last[lid.x - min(t, 1u)], t > 0u);
         for (var x = s0; x < s1; x++) {
-            let cell = row_cells[cells + x];
+            let cell = row_cells[padded(cells + x)];
             if (cell >> 31u) != 0u {
                 left = x + 1u;
             }
             let rc = cell & 0x7fffffffu;
             let near = nearer(x, left, select(NONE_RIGHT, rc - 1u, rc != 0u));
-            row_cells[cells + x] = select(NO_SEED, pack_seed3(vec3<u32>(near - 1u, y, z)), near != 0u);
+            row_cells[padded(cells + x)] = select(NO_SEED, pack_seed3(vec3<u32>(near - 1u, y, z)), near != 0u);
         }
     }
     workgroupBarrier();
     if live {
         let row_start = (z * params.size.y + y) * w;
         for (var x = t; x < w; x += lanes) {
-            nearest[row_start + x] = row_cells[cells + x];
+            nearest[row_start + x] = row_cells[padded(cells + x)];
         }
     }
 }

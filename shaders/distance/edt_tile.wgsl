@@ -17,7 +17,7 @@
 // cell per band, so the bands of a warp fall in different banks), columns and bands come from
 // shifts and masks, and the separator is an f32 division corrected to the exact integer floor.
 
-import package::shared::seed::{NO_SEED, answer_distance, signed_at3, unpack_seed2, unpack_seed3};
+import package::shared::seed::{NO_SEED, answer_distance, signed_at2, signed_at3, unpack_seed2, unpack_seed3};
 
 struct TileParams {
     size: vec3<u32>,
@@ -40,6 +40,8 @@ struct TileParams {
 // `tile_columns_resolve_signed` runs in the outside seeds' field; this is the inside seeds' field.
 @group(0) @binding(2) var<storage, read> nearest_inside: array<u32>;
 @group(0) @binding(3) var distance: texture_storage_3d<r32float, write>;
+// The resolving entries of a 2D field write here.
+@group(0) @binding(4) var distance_2d: texture_storage_2d<r32float, write>;
 
 // 2D fields pack 16/16 bits.
 override PACK_2D: bool = false;
@@ -474,6 +476,41 @@ fn tile_columns_resolve_signed(@builtin(local_invocation_index) li: u32, @builti
         let p = voxel(l, i);
         let d = signed_at3(nearest_inside[at], p, answer_distance(found, params.voxel_size), found.x, params.voxel_size);
         textureStore(distance, p, vec4<f32>(banded(d), 0.0, 0.0, 0.0));
+    }
+}
+
+// `tile_columns` in a 2D field, and the unsigned distance of every pixel it answers.
+@compute @workgroup_size(256)
+fn tile_columns_resolve_2d(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
+    var walk = start(li, wg);
+    let l = lane_of(li, wg);
+    if !l.valid {
+        return;
+    }
+    for (var i = l.lo; i < l.hi; i++) {
+        let found = query(l, &walk, i);
+        let at = l.at + i * l.stride;
+        nearest[at] = found.x;
+        let p = voxel(l, i).xy;
+        textureStore(distance_2d, p, vec4<f32>(banded(answer_distance(found, params.voxel_size)), 0.0, 0.0, 0.0));
+    }
+}
+
+// `tile_columns` in the outside seeds' 2D field, and the signed distance of every pixel it answers.
+@compute @workgroup_size(256)
+fn tile_columns_resolve_signed_2d(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
+    var walk = start(li, wg);
+    let l = lane_of(li, wg);
+    if !l.valid {
+        return;
+    }
+    for (var i = l.lo; i < l.hi; i++) {
+        let found = query(l, &walk, i);
+        let at = l.at + i * l.stride;
+        nearest[at] = found.x;
+        let p = voxel(l, i).xy;
+        let d = signed_at2(nearest_inside[at], p, answer_distance(found, params.voxel_size), found.x, params.voxel_size);
+        textureStore(distance_2d, p, vec4<f32>(banded(d), 0.0, 0.0, 0.0));
     }
 }
 

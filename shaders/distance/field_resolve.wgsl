@@ -6,7 +6,7 @@
 // seeds lie on the surface itself: the distance is to the seed point, and the sign comes from
 // the volume (negative where the voxel's value is ≥ threshold), as the sources' metaball SDF does.
 
-import package::shared::seed::{FAR, NO_SEED, key_index, seed_distance3, signed_at3, signed_distance, pack_seed2, unpack_seed2};
+import package::shared::seed::{FAR, NO_SEED, key_index, seed_distance2, seed_distance3, signed_at2, signed_at3, signed_distance};
 
 struct ResolveParams {
     size: vec3<u32>,
@@ -39,12 +39,6 @@ fn banded(d: f32) -> f32 {
     return clamp(d, -params.band, params.band);
 }
 
-fn seed_distance2(s: u32, p: vec2<u32>) -> f32 {
-    if s == NO_SEED {
-        return FAR;
-    }
-    return world(length(vec2<f32>(unpack_seed2(s) - vec2<i32>(p))));
-}
 
 // Signed from the two fields: `own` is the packed seed naming this voxel itself.
 fn signed(inside_seed: u32, own: u32, to_inside: f32, to_outside: f32, outside_seed: u32) -> f32 {
@@ -101,7 +95,7 @@ fn resolve_unsigned_2d(@builtin(global_invocation_id) id: vec3<u32>) {
     if any(id.xy >= params.size.xy) {
         return;
     }
-    let d = seed_distance2(nearest[id.y * params.size.x + id.x], id.xy);
+    let d = seed_distance2(nearest[id.y * params.size.x + id.x], id.xy, params.voxel_size);
     textureStore(distance_2d, id.xy, vec4<f32>(banded(d), 0.0, 0.0, 0.0));
 }
 
@@ -113,6 +107,6 @@ fn resolve_signed_2d(@builtin(global_invocation_id) id: vec3<u32>) {
     let i = id.y * params.size.x + id.x;
     let s_in = nearest[i];
     let s_out = nearest_outside[i];
-    let d = signed(s_in, pack_seed2(id.xy), seed_distance2(s_in, id.xy), seed_distance2(s_out, id.xy), s_out);
+    let d = signed_at2(s_in, id.xy, seed_distance2(s_out, id.xy, params.voxel_size), s_out, params.voxel_size);
     textureStore(distance_2d, id.xy, vec4<f32>(banded(d), 0.0, 0.0, 0.0));
 }

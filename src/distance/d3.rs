@@ -210,8 +210,9 @@ pub fn tile_columns(storage: u32, n: u32) -> Option<u32> {
 
 /// Where the last exact column pass writes distances (`columns_resolve*` in `edt_columns.wgsl`).
 struct Fuse<'a> {
-    /// `R32Float` 3D storage view.
+    /// `R32Float` storage view: 3D, or 2D where `flat`.
     distance: &'a wgpu::TextureView,
+    flat: bool,
     voxel_size: f32,
     /// World units; `f32::MAX` for none.
     band: f32,
@@ -496,12 +497,19 @@ pub struct Distance3d {
     columns_resolve: [std::sync::OnceLock<ComputePipeline<edt_columns::columns_resolve::Entry>>; 6],
     columns_resolve_signed:
         [std::sync::OnceLock<ComputePipeline<edt_columns::columns_resolve_signed::Entry>>; 6],
+    /// The same for the column pass of a 2D field.
+    columns_resolve_2d:
+        [std::sync::OnceLock<ComputePipeline<edt_columns::columns_resolve_2d::Entry>>; 6],
+    columns_resolve_signed_2d:
+        [std::sync::OnceLock<ComputePipeline<edt_columns::columns_resolve_signed_2d::Entry>>; 6],
     /// Bands per column chosen by the caller; `None` picks by grid size.
     column_bands: Option<u32>,
     /// The column passes in workgroup memory (`edt_tile.wgsl`), per tile size.
     tile_columns: Variants<edt_tile::tile_columns::Entry>,
     tile_columns_resolve: Variants<edt_tile::tile_columns_resolve::Entry>,
     tile_columns_resolve_signed: Variants<edt_tile::tile_columns_resolve_signed::Entry>,
+    tile_columns_resolve_2d: Variants<edt_tile::tile_columns_resolve_2d::Entry>,
+    tile_columns_resolve_signed_2d: Variants<edt_tile::tile_columns_resolve_signed_2d::Entry>,
     tile_copy: Variants<edt_tile::tile_copy::Entry>,
     column_passes: ColumnPasses,
     resolve_unsigned: ComputePipeline<field_resolve::resolve_unsigned::Entry>,
@@ -847,10 +855,14 @@ impl Distance3d {
             columns: Default::default(),
             columns_resolve: Default::default(),
             columns_resolve_signed: Default::default(),
+            columns_resolve_2d: Default::default(),
+            columns_resolve_signed_2d: Default::default(),
             column_bands: None,
             tile_columns: Default::default(),
             tile_columns_resolve: Default::default(),
             tile_columns_resolve_signed: Default::default(),
+            tile_columns_resolve_2d: Default::default(),
+            tile_columns_resolve_signed_2d: Default::default(),
             tile_copy: Default::default(),
             column_passes: ColumnPasses::Auto,
             resolve_unsigned: ComputePipeline::new(device)?,
@@ -901,6 +913,7 @@ impl Distance3d {
             let dv = view(&distance);
             let resolve = |inside_field| Fuse {
                 distance: &dv,
+                flat: false,
                 voxel_size: options.voxel_size,
                 band: options.world_band(),
                 inside_field,
@@ -1624,6 +1637,52 @@ impl Distance3d {
             }
             Some(Fuse {
                 distance,
+                flat: true,
+                inside_field: None,
+                ..
+            }) => {
+                let pipeline =
+                    ComputePipeline::cached(&self.columns_resolve_2d[choice], device, &overrides)?;
+                pipeline.record(
+                    device,
+                    rec,
+                    &edt_columns::columns_resolve_2d::Resources {
+                        params: (&params).into(),
+                        nearest: nearest.into(),
+                        stack: stack.into(),
+                        distance_2d: distance.into(),
+                    },
+                    groups,
+                    name,
+                )?;
+            }
+            Some(Fuse {
+                distance,
+                flat: true,
+                inside_field: Some(inside),
+                ..
+            }) => {
+                let pipeline = ComputePipeline::cached(
+                    &self.columns_resolve_signed_2d[choice],
+                    device,
+                    &overrides,
+                )?;
+                pipeline.record(
+                    device,
+                    rec,
+                    &edt_columns::columns_resolve_signed_2d::Resources {
+                        params: (&params).into(),
+                        nearest: nearest.into(),
+                        stack: stack.into(),
+                        nearest_inside: inside.into(),
+                        distance_2d: distance.into(),
+                    },
+                    groups,
+                    name,
+                )?;
+            }
+            Some(Fuse {
+                distance,
                 inside_field: None,
                 ..
             }) => {
@@ -1749,6 +1808,45 @@ impl Distance3d {
         // the H100 the fill cost nothing measurable: 0.872 ms at 256³ with it and without).
         let zero = false;
         match fuse {
+            Some(Fuse {
+                distance,
+                flat: true,
+                inside_field: None,
+                ..
+            }) => self
+                .tile_columns_resolve_2d
+                .get(device, &overrides, zero)?
+                .record(
+                    device,
+                    rec,
+                    &edt_tile::tile_columns_resolve_2d::Resources {
+                        params: (&params).into(),
+                        nearest: nearest.into(),
+                        distance_2d: distance.into(),
+                    },
+                    groups,
+                    name,
+                ),
+            Some(Fuse {
+                distance,
+                flat: true,
+                inside_field: Some(inside),
+                ..
+            }) => self
+                .tile_columns_resolve_signed_2d
+                .get(device, &overrides, zero)?
+                .record(
+                    device,
+                    rec,
+                    &edt_tile::tile_columns_resolve_signed_2d::Resources {
+                        params: (&params).into(),
+                        nearest: nearest.into(),
+                        nearest_inside: inside.into(),
+                        distance_2d: distance.into(),
+                    },
+                    groups,
+                    name,
+                ),
             None => self.tile_columns.get(device, &overrides, zero)?.record(
                 device,
                 rec,
@@ -1816,7 +1914,23 @@ impl Distance3d {
         let mv = view(mask);
         let stack = field_buffer(device, "edt envelope stack", size);
         let rec = &mut rec.recorder();
-        let flood = |rec: &mut Recorder<'_>, invert: bool| -> Result<wgpu::Buffer, Error> {
+        let distance = distance_texture(device, size, wgpu::TextureDimension::D2);
+        let dv = view(&distance);
+        // The column pass resolves as it answers (`*_resolve*_2d`), as in 3D; a single row has
+        // no column pass and is resolved on its own.
+        let fuse = |inside_field| {
+            (h > 1).then_some(Fuse {
+                distance: &dv,
+                flat: true,
+                voxel_size: options.voxel_size,
+                band: options.world_band(),
+                inside_field,
+            })
+        };
+        let flood = |rec: &mut Recorder<'_>,
+                     invert: bool,
+                     fuse: Option<Fuse>|
+         -> Result<wgpu::Buffer, Error> {
             let nearest = field_buffer(device, "nearest seed", size);
             let params = uniform(
                 device,
@@ -1839,47 +1953,48 @@ impl Distance3d {
                 "rows (x)",
             )?;
             if h > 1 {
-                self.encode_columns(device, rec, true, &nearest, &stack, size, 1, 1, None)?;
+                self.encode_columns(device, rec, true, &nearest, &stack, size, 1, 1, fuse)?;
             }
             Ok(nearest)
         };
-        let nearest = flood(rec, false)?;
+        let nearest = flood(rec, false, fuse(None).filter(|_| !options.signed))?;
         let nearest_outside = if options.signed {
-            Some(flood(rec, true)?)
+            Some(flood(rec, true, fuse(Some(&nearest)))?)
         } else {
             None
         };
-        let params = self.resolve_params(device, size, options);
-        let distance = distance_texture(device, size, wgpu::TextureDimension::D2);
-        let dv = view(&distance);
-        let groups = ComputePipeline::<field_resolve::resolve_unsigned_2d::Entry>::groups_for(size);
-        match &nearest_outside {
-            None => {
-                self.resolve_unsigned_2d.record(
-                    device,
-                    rec,
-                    &field_resolve::resolve_unsigned_2d::Resources {
-                        params: (&params).into(),
-                        nearest: (&nearest).into(),
-                        distance_2d: (&dv).into(),
-                    },
-                    groups,
-                    "resolve",
-                )?;
-            }
-            Some(o) => {
-                self.resolve_signed_2d.record(
-                    device,
-                    rec,
-                    &field_resolve::resolve_signed_2d::Resources {
-                        params: (&params).into(),
-                        nearest: (&nearest).into(),
-                        nearest_outside: o.into(),
-                        distance_2d: (&dv).into(),
-                    },
-                    groups,
-                    "resolve",
-                )?;
+        if h == 1 {
+            let params = self.resolve_params(device, size, options);
+            let groups =
+                ComputePipeline::<field_resolve::resolve_unsigned_2d::Entry>::groups_for(size);
+            match &nearest_outside {
+                None => {
+                    self.resolve_unsigned_2d.record(
+                        device,
+                        rec,
+                        &field_resolve::resolve_unsigned_2d::Resources {
+                            params: (&params).into(),
+                            nearest: (&nearest).into(),
+                            distance_2d: (&dv).into(),
+                        },
+                        groups,
+                        "resolve",
+                    )?;
+                }
+                Some(o) => {
+                    self.resolve_signed_2d.record(
+                        device,
+                        rec,
+                        &field_resolve::resolve_signed_2d::Resources {
+                            params: (&params).into(),
+                            nearest: (&nearest).into(),
+                            nearest_outside: o.into(),
+                            distance_2d: (&dv).into(),
+                        },
+                        groups,
+                        "resolve",
+                    )?;
+                }
             }
         }
         Ok(FieldBuf2d {
@@ -1927,6 +2042,7 @@ impl Distance3d {
         let dv = view(&distance);
         let fuse = Fuse {
             distance: &dv,
+            flat: false,
             voxel_size: options.voxel_size,
             band: options.world_band(),
             // The signed pass runs "in" the outside field with the inside field beside it.
