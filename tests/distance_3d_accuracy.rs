@@ -324,11 +324,14 @@ fn every_column_path_is_exact() {
         16384
     );
     // What Auto takes at these lengths (forced to workgroup memory at 16 KiB, 300, 600 and 1000
-    // take 8, 4 and 2 columns per tile): the test covers each of them.
-    assert_eq!(tile_columns(16384, 37), Some(16));
-    assert_eq!(tile_columns(16384, 200), Some(8));
-    assert_eq!(tile_columns(16384, 300), None);
-    assert_eq!(tile_columns(16384, 1000), None);
+    // take 4, 2 and 2 columns per tile, bands of 8): the test covers each of them.
+    assert_eq!(tile_columns(16384, 37, 1), Some(16));
+    assert_eq!(tile_columns(16384, 200, 1), Some(8));
+    assert_eq!(tile_columns(16384, 300, 1), None);
+    assert_eq!(tile_columns(16384, 300, 2), Some(4));
+    assert_eq!(tile_columns(16384, 512, 2), Some(4));
+    assert_eq!(tile_columns(16384, 513, 2), None);
+    assert_eq!(tile_columns(16384, 1000, 1), None);
     let mut extra = vec![
         ("one voxel, seeded", [1, 1, 1], vec![true]),
         ("one voxel, empty", [1, 1, 1], vec![false]),
@@ -346,6 +349,12 @@ fn every_column_path_is_exact() {
             "5×2×600",
             [5, 2, 600],
             random_mask_3d([5, 2, 600], 4e-3, 13),
+        ),
+        // Auto: y in workgroup memory, z (400 > 256, ≤ 512) too.
+        (
+            "6×3×400",
+            [6, 3, 400],
+            random_mask_3d([6, 3, 400], 5e-3, 14),
         ),
     ];
     let mut all: Vec<(String, [usize; 3], Vec<bool>)> = cases()
@@ -410,7 +419,7 @@ fn every_column_path_is_exact() {
         }
     }
     // Forced into workgroup memory, a column longer than one tile holds is a typed error naming
-    // the longest that fits (3613 at 16 KiB), not a pipeline the device refuses.
+    // the longest that fits (3614 at 16 KiB), not a pipeline the device refuses.
     let mut d3 = Distance3d::new(&defaults.device).unwrap();
     d3.set_column_passes(ColumnPasses::Workgroup);
     let tall = fieldkit::distance::upload_mask(
@@ -423,7 +432,7 @@ fn every_column_path_is_exact() {
     .unwrap();
     let mut enc = defaults.encoder("too long");
     match d3.encode_exact_2d(&defaults.device, &mut enc, &tall, &Options3d::default()) {
-        Err(fieldkit::Error::Size { got, max, .. }) => assert_eq!((got, max), (4000, 3613)),
+        Err(fieldkit::Error::Size { got, max, .. }) => assert_eq!((got, max), (4000, 3614)),
         other => panic!("expected Error::Size, got {other:?}"),
     }
     assert!(shared.take_uncaptured().is_empty());

@@ -5,9 +5,8 @@ mod common;
 
 use common::*;
 use fieldkit::distance::{
-    ColumnPasses,
-    Distance3d, Grid3, Inside, Method, Options3d, upload_points, upload_points_with_homes,
-    upload_volume,
+    ColumnPasses, Distance3d, Grid3, Inside, Method, Options3d, upload_points,
+    upload_points_with_homes, upload_volume,
 };
 use fieldkit::distance::{Variant, cpu, upload_mask};
 use fieldkit::gpu::Context;

@@ -14,7 +14,7 @@
 // even four columns fit.
 //
 // No integer division or modulo runs per element: the tile index is `k + (k >> lg_band)` (one pad
-// cell per band, so the bands of a warp fall in different banks), columns and bands come from
+// cell per band, and a column stride that keeps a warp's threads in different banks), columns and bands come from
 // shifts and masks, and the separator is an f32 division corrected to the exact integer floor.
 
 import package::shared::seed::{NO_SEED, answer_distance, signed_at2, signed_at3, unpack_seed2, unpack_seed3};
@@ -31,7 +31,8 @@ struct TileParams {
     lg_band: u32,
     // Bands that hold positions: ceil(n / band length).
     bands: u32,
-    // Tile cells per column: n + bands (one pad cell per band), made odd.
+    // Tile cells per column: n + bands (one pad cell per band), rounded up to 32 / columns
+    // (mod 32) so that no two threads of a warp share a bank, loading or sweeping.
     column_cells: u32,
 }
 

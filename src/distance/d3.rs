@@ -80,8 +80,9 @@ pub enum ColumnPasses {
     /// faster), global memory for longer ones (see [`tile_columns`]).
     #[default]
     Auto,
-    /// Workgroup memory at every length, with the most columns per tile (16 to 1) that fit;
-    /// [`Error::Size`] where one column does not.
+    /// Workgroup memory at every length: `256 · 8 / n` columns per tile (bands of 8 positions,
+    /// 16 columns at most) where they fit, fewer where workgroup memory is short;
+    /// [`Error::Size`] where one column does not fit.
     Workgroup,
     /// Global memory (`edt_columns.wgsl`): the envelopes are stacks in a buffer beside the field.
     Global,
@@ -92,13 +93,19 @@ pub enum ColumnPasses {
 pub const MIN_TILE_COLUMNS: u32 = 4;
 /// Most columns per tile (256 threads: 16 bands per column at 16 columns).
 pub const MAX_TILE_COLUMNS: u32 = 16;
-/// Longest column [`ColumnPasses::Auto`] holds in workgroup memory. Measured on the H100
-/// (`cargo xtask bench distance --exact-only [--workgroup-storage B]`, 1% seeds, clocks held,
-/// 2026-11-24), the whole transform: 0.138 ms against 0.162 with global columns at 128³ and
-/// 0.872 against 0.988 at 256³ (8 columns per tile), but 7.21 against 6.76 at 512³ (4 columns)
-/// and 0.323 against 0.257 at 2048² (4 columns); with 16 columns 256³ took 1.078 and 512³
-/// 11.8 ms. Bands of 8 positions ([`AUTO_TILE_BAND`]) were fastest at every length measured.
+/// Longest y column (and 2D column) [`ColumnPasses::Auto`] holds in workgroup memory. Measured
+/// on the H100 (`cargo xtask bench distance --exact-only`, 1% seeds, clocks held, 2026-11-24),
+/// per pass: y at 256³ 0.290 ms in workgroup memory (8 columns per tile) against 0.303 in
+/// global memory, but at 512³ 2.70 (4 columns) against 2.31; 2D columns of 2048 took 0.323 ms
+/// for the whole transform against 0.257. With 16 columns per tile 512³ took 4.48 for y: bands
+/// of 8 positions ([`AUTO_TILE_BAND`]) were fastest at every length measured, and 512 or 1024
+/// threads per workgroup instead of 256 gave nothing (2.82 and 2.93 ms for y at 512³).
 pub const AUTO_TILE_MAX_LENGTH: u32 = 256;
+/// Longest z column [`ColumnPasses::Auto`] holds in workgroup memory. The z pass's global
+/// loads stride a whole plane and it also writes the distance, and there the tile wins at
+/// 512³ as well (same measurement): 2.51 ms against 3.08 (4 columns), 0.278 against 0.426 at
+/// 256³.
+pub const AUTO_TILE_MAX_LENGTH_Z: u32 = 512;
 /// Band length [`ColumnPasses::Auto`] aims for: at most `256 · 8 / n` columns per tile.
 pub const AUTO_TILE_BAND: u32 = 8;
 
@@ -122,7 +129,18 @@ impl TileGeometry {
         while columns >= min_columns.max(1) {
             let band_len = n.div_ceil(256 / columns).next_power_of_two();
             let bands = n.div_ceil(band_len);
-            let column_cells = (n + bands) | 1;
+            // One pad cell per band, then rounded up to 32 / columns (mod 32): a warp holds
+            // 32 / columns positions of each column when it loads the tile and 32 / columns
+            // bands of each when it sweeps them, and with that stride between columns neither
+            // puts two of its threads in one bank (with an odd stride, as before, the load met
+            // 4-way conflicts: the row pass's sweep went from 0.93 to 0.65 ms at 512³ when its
+            // 4-way conflicts went).
+            let need = n + bands;
+            let column_cells = if columns == 1 {
+                need
+            } else {
+                need + (32 / columns + 32 - need % 32) % 32
+            };
             let bytes = (column_cells as u64 * columns as u64 + 256) * 4;
             if bytes <= storage as u64 {
                 return Some(Self {
@@ -147,13 +165,23 @@ impl TileGeometry {
             .unwrap_or(0)
     }
 
-    /// What [`ColumnPasses::Auto`] takes for columns of length `n`.
-    fn auto(n: u32, storage: u32) -> Option<Self> {
-        if n > AUTO_TILE_MAX_LENGTH {
+    /// What [`ColumnPasses::Auto`] takes for columns of length `n` along `axis` (1: y or a 2D
+    /// field's columns, 2: z).
+    fn auto(n: u32, storage: u32, axis: u32) -> Option<Self> {
+        let longest = if axis == 2 {
+            AUTO_TILE_MAX_LENGTH_Z
+        } else {
+            AUTO_TILE_MAX_LENGTH
+        };
+        if n > longest {
             return None;
         }
-        let max = (256 * AUTO_TILE_BAND / n.max(1)).min(MAX_TILE_COLUMNS);
-        Self::fit(n, storage, MIN_TILE_COLUMNS, max)
+        Self::fit(n, storage, MIN_TILE_COLUMNS, Self::banded_columns(n))
+    }
+
+    /// Columns per tile for bands of [`AUTO_TILE_BAND`] positions: `256 · 8 / n`, 1 to 16.
+    fn banded_columns(n: u32) -> u32 {
+        (256 * AUTO_TILE_BAND / n.max(1)).clamp(1, MAX_TILE_COLUMNS)
     }
 
     /// The pass's parameters and override constants.
@@ -193,19 +221,21 @@ impl TileGeometry {
 }
 
 /// Columns per workgroup-memory tile that [`ColumnPasses::Auto`] takes for columns of length `n`
-/// on a device with `storage` bytes of workgroup memory (`max_compute_workgroup_storage_size`),
-/// or `None` where it takes the global-memory passes: columns up to [`AUTO_TILE_MAX_LENGTH`]
-/// long, with up to `256 · 8 / n` columns per tile (bands of 8 positions), 16 at most, 4 at
-/// least. WebGPU's default 16 KiB holds every tile this takes.
+/// along `axis` (1: y, or a 2D field's columns; 2: z) on a device with `storage` bytes of
+/// workgroup memory (`max_compute_workgroup_storage_size`), or `None` where it takes the
+/// global-memory passes: y columns up to [`AUTO_TILE_MAX_LENGTH`] long, z columns up to
+/// [`AUTO_TILE_MAX_LENGTH_Z`], with up to `256 · 8 / n` columns per tile (bands of 8
+/// positions), 16 at most, 4 at least. WebGPU's default 16 KiB holds every tile this takes.
 ///
 /// ```
 /// use fieldkit::distance::tile_columns;
-/// assert_eq!(tile_columns(16 << 10, 128), Some(16));
-/// assert_eq!(tile_columns(16 << 10, 256), Some(8));
-/// assert_eq!(tile_columns(48 << 10, 512), None);
+/// assert_eq!(tile_columns(16 << 10, 128, 1), Some(16));
+/// assert_eq!(tile_columns(16 << 10, 256, 1), Some(8));
+/// assert_eq!(tile_columns(48 << 10, 512, 1), None);
+/// assert_eq!(tile_columns(16 << 10, 512, 2), Some(4));
 /// ```
-pub fn tile_columns(storage: u32, n: u32) -> Option<u32> {
-    TileGeometry::auto(n, storage).map(|g| 1 << g.lg_columns)
+pub fn tile_columns(storage: u32, n: u32, axis: u32) -> Option<u32> {
+    TileGeometry::auto(n, storage, axis).map(|g| 1 << g.lg_columns)
 }
 
 /// Where the last exact column pass writes distances (`columns_resolve*` in `edt_columns.wgsl`).
@@ -1584,7 +1614,7 @@ impl Distance3d {
         others: u32,
         fuse: Option<Fuse>,
     ) -> Result<(), Error> {
-        let tile = self.tile_for(device, size[axis as usize])?;
+        let tile = self.tile_for(device, size[axis as usize], axis)?;
         if let Some(tile) = tile {
             return self.encode_tile_columns(
                 device, rec, pack_2d, nearest, size, axis, others, tile, fuse,
@@ -1731,19 +1761,28 @@ impl Distance3d {
 
     /// The workgroup-memory tile the column passes take for columns of length `n`, or `None`
     /// for the global-memory passes (as [`Self::set_column_passes`] chose).
-    fn tile_for(&self, device: &wgpu::Device, n: u32) -> Result<Option<TileGeometry>, Error> {
+    fn tile_for(
+        &self,
+        device: &wgpu::Device,
+        n: u32,
+        axis: u32,
+    ) -> Result<Option<TileGeometry>, Error> {
         let storage = device.limits().max_compute_workgroup_storage_size;
         Ok(match self.column_passes {
             ColumnPasses::Global => None,
-            ColumnPasses::Auto => TileGeometry::auto(n, storage),
+            ColumnPasses::Auto => TileGeometry::auto(n, storage, axis),
             ColumnPasses::Workgroup => Some(
-                TileGeometry::fit(n, storage, 1, MAX_TILE_COLUMNS).ok_or(Error::Size {
-                    stage: edt_tile::STAGE,
-                    what: "column length for one column in workgroup memory \
+                // Bands of 8 where they fit (16 columns of 512 took 4.48 ms for y at 512³, 4
+                // columns 2.70), fewer columns where the storage is short.
+                TileGeometry::fit(n, storage, 1, TileGeometry::banded_columns(n)).ok_or(
+                    Error::Size {
+                        stage: edt_tile::STAGE,
+                        what: "column length for one column in workgroup memory \
                            (max_compute_workgroup_storage_size)",
-                    got: n as u64,
-                    max: TileGeometry::longest(storage) as u64,
-                })?,
+                        got: n as u64,
+                        max: TileGeometry::longest(storage) as u64,
+                    },
+                )?,
             ),
         })
     }
@@ -1761,7 +1800,7 @@ impl Distance3d {
         size: [u32; 3],
         axis: u32,
     ) -> Result<Option<()>, Error> {
-        let Some(tile) = self.tile_for(device, size[axis as usize])? else {
+        let Some(tile) = self.tile_for(device, size[axis as usize], axis)? else {
             return Ok(None);
         };
         let (params, overrides) = tile.bind(device, size, axis, false, None);

@@ -276,13 +276,16 @@ fn distance(args: &Args) -> Result<(), String> {
     d3_workgroup.set_column_passes(ColumnPasses::Workgroup);
     let storage = ctx.device.limits().max_compute_workgroup_storage_size;
     println!(
-        "workgroup memory: {storage} bytes; columns per tile by length: {}",
+        "workgroup memory: {storage} bytes; columns per tile by length (y/z): {}",
         sizes3
             .iter()
             .chain(&sizes2)
             .map(|&n| format!(
                 "{n}: {}",
-                tile_columns(storage, n as u32).map_or("global".into(), |c| c.to_string())
+                [1, 2]
+                    .map(|axis| tile_columns(storage, n as u32, axis)
+                        .map_or("global".into(), |c| c.to_string()))
+                    .join("/")
             ))
             .collect::<Vec<_>>()
             .join(", ")
@@ -300,7 +303,10 @@ fn distance(args: &Args) -> Result<(), String> {
     let methods3: Vec<(String, Options3d)> =
         std::iter::once(("exact".to_string(), Options3d::default()))
             .chain(std::iter::once((GLOBAL.to_string(), Options3d::default())))
-            .chain(std::iter::once((WORKGROUP.to_string(), Options3d::default())))
+            .chain(std::iter::once((
+                WORKGROUP.to_string(),
+                Options3d::default(),
+            )))
             .chain(Variant::ALL.into_iter().map(|v| {
                 (
                     v.name().to_string(),
@@ -348,8 +354,12 @@ fn distance(args: &Args) -> Result<(), String> {
             };
             // Where no tile fits (or the path is the one Auto takes anyway), no row.
             if name == WORKGROUP
-                && (d3.encode(&ctx.device, &mut ctx.encoder("probe"), &volume, opts).is_err()
-                    || tile_columns(storage, n as u32).is_some())
+                && (d3
+                    .encode(&ctx.device, &mut ctx.encoder("probe"), &volume, opts)
+                    .is_err()
+                    || [1, 2]
+                        .iter()
+                        .all(|&a| tile_columns(storage, n as u32, a).is_some()))
             {
                 bar.inc(1);
                 continue;
