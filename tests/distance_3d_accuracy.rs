@@ -325,13 +325,13 @@ fn every_column_path_is_exact() {
     );
     // What Auto takes at these lengths (forced to workgroup memory at 16 KiB, 300, 600 and 1000
     // take 4, 2 and 2 columns per tile, bands of 8): the test covers each of them.
-    assert_eq!(tile_columns(16384, 37, 1), Some(16));
-    assert_eq!(tile_columns(16384, 200, 1), Some(8));
-    assert_eq!(tile_columns(16384, 300, 1), None);
-    assert_eq!(tile_columns(16384, 300, 2), Some(4));
-    assert_eq!(tile_columns(16384, 512, 2), Some(4));
-    assert_eq!(tile_columns(16384, 513, 2), None);
-    assert_eq!(tile_columns(16384, 1000, 1), None);
+    assert_eq!(tile_columns(16384, 37, 3), Some(16));
+    assert_eq!(tile_columns(16384, 200, 3), Some(8));
+    assert_eq!(tile_columns(16384, 300, 3), Some(4));
+    assert_eq!(tile_columns(16384, 300, 2), None);
+    assert_eq!(tile_columns(16384, 512, 3), Some(4));
+    assert_eq!(tile_columns(16384, 600, 3), None);
+    assert_eq!(tile_columns(16384, 1000, 3), None);
     let mut extra = vec![
         ("one voxel, seeded", [1, 1, 1], vec![true]),
         ("one voxel, empty", [1, 1, 1], vec![false]),
@@ -350,7 +350,7 @@ fn every_column_path_is_exact() {
             [5, 2, 600],
             random_mask_3d([5, 2, 600], 4e-3, 13),
         ),
-        // Auto: y in workgroup memory, z (400 > 256, ≤ 512) too.
+        // Auto: y and z (400: 4 columns per tile) in workgroup memory.
         (
             "6×3×400",
             [6, 3, 400],

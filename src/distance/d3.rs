@@ -93,19 +93,20 @@ pub enum ColumnPasses {
 pub const MIN_TILE_COLUMNS: u32 = 4;
 /// Most columns per tile (256 threads: 16 bands per column at 16 columns).
 pub const MAX_TILE_COLUMNS: u32 = 16;
-/// Longest y column (and 2D column) [`ColumnPasses::Auto`] holds in workgroup memory. Measured
-/// on the H100 (`cargo xtask bench distance --exact-only`, 1% seeds, clocks held, 2026-11-24),
-/// per pass: y at 256³ 0.290 ms in workgroup memory (8 columns per tile) against 0.303 in
-/// global memory, but at 512³ 2.70 (4 columns) against 2.31; 2D columns of 2048 took 0.323 ms
-/// for the whole transform against 0.257. With 16 columns per tile 512³ took 4.48 for y: bands
-/// of 8 positions ([`AUTO_TILE_BAND`]) were fastest at every length measured, and 512 or 1024
-/// threads per workgroup instead of 256 gave nothing (2.82 and 2.93 ms for y at 512³).
-pub const AUTO_TILE_MAX_LENGTH: u32 = 256;
-/// Longest z column [`ColumnPasses::Auto`] holds in workgroup memory. The z pass's global
-/// loads stride a whole plane and it also writes the distance, and there the tile wins at
-/// 512³ as well (same measurement): 2.51 ms against 3.08 (4 columns), 0.278 against 0.426 at
-/// 256³.
-pub const AUTO_TILE_MAX_LENGTH_Z: u32 = 512;
+/// Longest column of a 3D field (y or z) [`ColumnPasses::Auto`] holds in workgroup memory.
+/// Measured on the H100 (`cargo xtask bench distance --exact-only`, 1% seeds, clocks held,
+/// 2026-11-24), per pass at 256³: y 0.290 ms in workgroup memory (8 columns per tile) against
+/// 0.303 in global memory, z + resolve 0.278 against 0.426; at 512³ (4 columns per tile): y
+/// 2.41 against 2.27 to 2.47, z + resolve 2.31 against 3.29, and the whole transform 5.36 ms
+/// in two runs (spread 1.09) against 5.31 and 5.61 (spread 1.13) with y in global memory.
+/// With 16 columns per tile 512³ took 4.48 ms for y: bands of 8 positions
+/// ([`AUTO_TILE_BAND`]) were fastest at every length measured, and 512 or 1024 threads per
+/// workgroup instead of 256 gave nothing (2.82 and 2.93 ms for y at 512³).
+pub const AUTO_TILE_MAX_LENGTH: u32 = 512;
+/// Longest column of a 2D field [`ColumnPasses::Auto`] holds in workgroup memory: 2048² took
+/// 0.323 ms with 4 columns per tile against 0.257 in global memory; lengths from 257 to 512
+/// were not measured, so they stay in global memory.
+pub const AUTO_TILE_MAX_LENGTH_2D: u32 = 256;
 /// Band length [`ColumnPasses::Auto`] aims for: at most `256 · 8 / n` columns per tile.
 pub const AUTO_TILE_BAND: u32 = 8;
 
@@ -165,11 +166,11 @@ impl TileGeometry {
             .unwrap_or(0)
     }
 
-    /// What [`ColumnPasses::Auto`] takes for columns of length `n` along `axis` (1: y or a 2D
-    /// field's columns, 2: z).
-    fn auto(n: u32, storage: u32, axis: u32) -> Option<Self> {
-        let longest = if axis == 2 {
-            AUTO_TILE_MAX_LENGTH_Z
+    /// What [`ColumnPasses::Auto`] takes for columns of length `n` of a field of `dims` (2 or
+    /// 3) dimensions.
+    fn auto(n: u32, storage: u32, dims: u32) -> Option<Self> {
+        let longest = if dims == 2 {
+            AUTO_TILE_MAX_LENGTH_2D
         } else {
             AUTO_TILE_MAX_LENGTH
         };
@@ -221,21 +222,22 @@ impl TileGeometry {
 }
 
 /// Columns per workgroup-memory tile that [`ColumnPasses::Auto`] takes for columns of length `n`
-/// along `axis` (1: y, or a 2D field's columns; 2: z) on a device with `storage` bytes of
-/// workgroup memory (`max_compute_workgroup_storage_size`), or `None` where it takes the
-/// global-memory passes: y columns up to [`AUTO_TILE_MAX_LENGTH`] long, z columns up to
-/// [`AUTO_TILE_MAX_LENGTH_Z`], with up to `256 · 8 / n` columns per tile (bands of 8
+/// of a field of `dims` dimensions (2 or 3) on a device with `storage` bytes of workgroup
+/// memory (`max_compute_workgroup_storage_size`), or `None` where it takes the global-memory
+/// passes: 3D columns up to [`AUTO_TILE_MAX_LENGTH`] long, 2D columns up to
+/// [`AUTO_TILE_MAX_LENGTH_2D`], with up to `256 · 8 / n` columns per tile (bands of 8
 /// positions), 16 at most, 4 at least. WebGPU's default 16 KiB holds every tile this takes.
 ///
 /// ```
 /// use fieldkit::distance::tile_columns;
-/// assert_eq!(tile_columns(16 << 10, 128, 1), Some(16));
-/// assert_eq!(tile_columns(16 << 10, 256, 1), Some(8));
-/// assert_eq!(tile_columns(48 << 10, 512, 1), None);
-/// assert_eq!(tile_columns(16 << 10, 512, 2), Some(4));
+/// assert_eq!(tile_columns(16 << 10, 128, 3), Some(16));
+/// assert_eq!(tile_columns(16 << 10, 256, 3), Some(8));
+/// assert_eq!(tile_columns(16 << 10, 512, 3), Some(4));
+/// assert_eq!(tile_columns(48 << 10, 513, 3), None);
+/// assert_eq!(tile_columns(48 << 10, 512, 2), None);
 /// ```
-pub fn tile_columns(storage: u32, n: u32, axis: u32) -> Option<u32> {
-    TileGeometry::auto(n, storage, axis).map(|g| 1 << g.lg_columns)
+pub fn tile_columns(storage: u32, n: u32, dims: u32) -> Option<u32> {
+    TileGeometry::auto(n, storage, dims).map(|g| 1 << g.lg_columns)
 }
 
 /// Where the last exact column pass writes distances (`columns_resolve*` in `edt_columns.wgsl`).
@@ -1614,7 +1616,7 @@ impl Distance3d {
         others: u32,
         fuse: Option<Fuse>,
     ) -> Result<(), Error> {
-        let tile = self.tile_for(device, size[axis as usize], axis)?;
+        let tile = self.tile_for(device, size[axis as usize], pack_2d)?;
         if let Some(tile) = tile {
             return self.encode_tile_columns(
                 device, rec, pack_2d, nearest, size, axis, others, tile, fuse,
@@ -1759,18 +1761,19 @@ impl Distance3d {
         Ok(())
     }
 
-    /// The workgroup-memory tile the column passes take for columns of length `n`, or `None`
-    /// for the global-memory passes (as [`Self::set_column_passes`] chose).
+    /// The workgroup-memory tile the column passes take for columns of length `n` (of a 2D
+    /// field where `flat`), or `None` for the global-memory passes (as
+    /// [`Self::set_column_passes`] chose).
     fn tile_for(
         &self,
         device: &wgpu::Device,
         n: u32,
-        axis: u32,
+        flat: bool,
     ) -> Result<Option<TileGeometry>, Error> {
         let storage = device.limits().max_compute_workgroup_storage_size;
         Ok(match self.column_passes {
             ColumnPasses::Global => None,
-            ColumnPasses::Auto => TileGeometry::auto(n, storage, axis),
+            ColumnPasses::Auto => TileGeometry::auto(n, storage, if flat { 2 } else { 3 }),
             ColumnPasses::Workgroup => Some(
                 // Bands of 8 where they fit (16 columns of 512 took 4.48 ms for y at 512³, 4
                 // columns 2.70), fewer columns where the storage is short.
@@ -1800,7 +1803,7 @@ impl Distance3d {
         size: [u32; 3],
         axis: u32,
     ) -> Result<Option<()>, Error> {
-        let Some(tile) = self.tile_for(device, size[axis as usize], axis)? else {
+        let Some(tile) = self.tile_for(device, size[axis as usize], false)? else {
             return Ok(None);
         };
         let (params, overrides) = tile.bind(device, size, axis, false, None);
