@@ -640,8 +640,8 @@ impl OceanRenderer {
             let lo = p.corner - origin;
             let hi = p.corner + DVec2::splat(p.size) - origin;
             stage::fs_forward::Instance {
-                instance_patch: Vec4::new(lo.x as f32, lo.y as f32, hi.x as f32, hi.y as f32),
-                instance_quads: glam::UVec4::new(p.quads, 0, 0, 0),
+                instance_patch: [lo.x as f32, lo.y as f32, hi.x as f32, hi.y as f32],
+                instance_quads: [p.quads, 0, 0, 0],
             }
         };
         let mut instances: Vec<stage::fs_forward::Instance> =

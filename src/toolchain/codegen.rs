@@ -508,14 +508,65 @@ struct FsOut { @location(0) colour: vec4<f32>, @location(1) id: u32 }
 }
 ";
 
+    /// A `vec4<f32>` beside a `vec2<f32>` (and a `vec3`, a scalar, integer vectors): glam's
+    /// 16-byte-aligned `Vec4` made such a struct 32 bytes against a stride of 24, which neither
+    /// `bytemuck::Pod` nor the stride assertion accepts. Fields are arrays of 4-byte scalars,
+    /// so the struct is exactly the stride.
+    #[test]
+    fn vertex_structs_have_no_padding() {
+        let src = "// Test vertex mix.
+struct VsOut { @builtin(position) clip: vec4<f32>, @location(0) uv: vec2<f32> }
+@vertex fn vs(@location(0) position: vec4<f32>, @location(1) uv: vec2<f32>, @location(2) normal: vec3<f32>, @location(3) weight: f32, @location(4) joints: vec4<u32>, @location(5) id: i32) -> VsOut {
+    var o: VsOut;
+    o.clip = position + vec4<f32>(normal * weight, f32(joints.x) + f32(id));
+    o.uv = uv;
+    return o;
+}
+@fragment fn fs(in: VsOut) -> @location(0) vec4<f32> {
+    return vec4<f32>(in.uv, 0.0, 1.0);
+}
+";
+        let code = format(&stage_module(&stage(src)));
+        let flat: String = code.split_whitespace().collect();
+        for field in [
+            "pubposition:[f32;4],",
+            "pubuv:[f32;2],",
+            "pubnormal:[f32;3],",
+            "pubweight:f32,",
+            "pubjoints:[u32;4],",
+            "pubid:i32,",
+        ] {
+            assert!(flat.contains(field), "{field} in {code}");
+        }
+        assert!(!code.contains("glam::Vec4"), "{code}");
+        // 16 + 8 + 12 + 4 + 16 + 4, asserted against the struct's size in the generated code.
+        assert!(flat.contains("array_stride:60"), "{code}");
+        assert!(flat.contains("size_of::<Vertex>()==60"), "{code}");
+        for (format, offset) in [
+            ("Float32x4", 0),
+            ("Float32x2", 16),
+            ("Float32x3", 24),
+            ("Float32", 36),
+            ("Uint32x4", 40),
+            ("Sint32", 56),
+        ] {
+            assert!(
+                flat.contains(&format!(
+                    "format:wgpu::VertexFormat::{format},offset:{offset},"
+                )),
+                "{format} at {offset} in {code}"
+            );
+        }
+    }
+
     #[test]
     fn render_stage_generates_vertex_structs_layouts_and_targets() {
         let code = format(&stage_module(&stage(RENDER)));
         // Per-vertex inputs in buffer 0, `instance_*` inputs in a per-instance buffer 1.
         assert!(code.contains("pub struct Vertex {"), "{code}");
-        assert!(code.contains("pub position: glam::Vec3"));
+        assert!(code.contains("pub position: [f32; 3]"));
         assert!(code.contains("pub struct Instance {"));
-        assert!(code.contains("pub instance_offset: glam::Vec4"));
+        assert!(code.contains("pub instance_offset: [f32; 4]"));
         assert!(code.contains("array_stride: 24"));
         assert!(code.contains("step_mode: wgpu::VertexStepMode::Instance"));
         assert!(code.contains("format: wgpu::VertexFormat::Float32x3"));
