@@ -121,13 +121,28 @@ fn link(shader_root: &Path, stage: &StageFile) -> Result<Linked, String> {
     compiler.use_sourcemap(true);
     // Keep every entry point of the stage file (stripping only removes unused helpers).
     compiler.keep_all_entrypoints();
-    let result = compiler.compile(&root).map_err(|e| {
-        format!(
-            "error: WESL could not link {}\n{}",
-            stage.rel_path,
-            strip_ansi(&e.to_string())
-        )
-    })?;
+    let result = match compiler.compile(&root) {
+        Ok(r) => r,
+        Err(e) => {
+            // A file that imports nothing needs no link: WGSL the pinned WESL parser does not
+            // read (`binding_array` is a reserved word to wesl 0.4.0) goes to naga as it is.
+            let original = std::fs::read_to_string(&stage.abs_path).unwrap_or_default();
+            if !original.is_empty() && !imports_anything(&original) {
+                return Ok(Linked {
+                    origins: vec![DeclOrigin {
+                        linked: 0..original.len(),
+                        file: Some((stage.rel_path.clone(), 0..original.len())),
+                    }],
+                    text: original,
+                });
+            }
+            return Err(format!(
+                "error: WESL could not link {}\n{}",
+                stage.rel_path,
+                strip_ansi(&e.to_string())
+            ));
+        }
+    };
     let sourcemap = result.sourcemap.as_ref();
 
     let mut text = String::new();
@@ -161,6 +176,47 @@ fn link(shader_root: &Path, stage: &StageFile) -> Result<Linked, String> {
         });
     }
     Ok(Linked { text, origins })
+}
+
+/// Whether a WGSL/WESL file has an `import` declaration (a line that starts with one).
+fn imports_anything(source: &str) -> bool {
+    source
+        .lines()
+        .any(|l| l.trim_start().starts_with("import ") || l.trim_start().starts_with("import\t"))
+}
+
+/// Bindings the generated host code cannot express, as errors at their declaration: binding
+/// arrays, external textures and acceleration structures would otherwise be left out of the
+/// layouts without a word.
+fn unsupported_bindings(stage: &StageFile, module: &naga::Module, original: &str) -> Vec<String> {
+    use naga::TypeInner;
+    module
+        .global_variables
+        .iter()
+        .filter_map(|(_, var)| {
+            let rb = var.binding.as_ref()?;
+            let why = match &module.types[var.ty].inner {
+                TypeInner::BindingArray { .. } => {
+                    "binding arrays are not supported by fieldkit's generated bindings yet; \
+                     declare the textures or buffers as separate bindings"
+                }
+                TypeInner::Image {
+                    class: naga::ImageClass::External,
+                    ..
+                } => "external textures are not supported by fieldkit's generated bindings",
+                TypeInner::AccelerationStructure { .. } => {
+                    "acceleration structures are not supported by fieldkit's generated bindings"
+                }
+                _ => return None,
+            };
+            let name = var.name.clone().unwrap_or_default();
+            let (line, column) = lint::locate_binding(original, &name);
+            Some(format!(
+                "error: {}:{line}:{column}: binding `{name}` (@group({}) @binding({})): {why}",
+                stage.rel_path, rb.group, rb.binding
+            ))
+        })
+        .collect()
 }
 
 /// Remove terminal colour codes (wesl colours its messages; cargo warnings and logs should not).
@@ -306,6 +362,12 @@ pub fn build_stage(crate_root: &Path, stage: &StageFile) -> Result<Stage, String
             .collect();
         render(crate_root, &linked, stage, e.message(), &labels, vec![])
     })?;
+    // Before validation, which would refuse a binding array for a capability rather than say
+    // what the bindings cannot hold.
+    let unsupported = unsupported_bindings(stage, &module, &original);
+    if !unsupported.is_empty() {
+        return Err(unsupported.join("\n"));
+    }
     let mut validator = naga::valid::Validator::new(
         naga::valid::ValidationFlags::all(),
         naga::valid::Capabilities::default(),
@@ -377,6 +439,44 @@ mod tests {
             std::fs::write(root.join(format!("shaders/room/{name}.wgsl")), src).unwrap();
         }
         root
+    }
+
+    /// Bindings the generated code cannot hold are build errors at their declaration, not
+    /// silently left out; a file that imports nothing reaches naga even where the pinned WESL
+    /// parser refuses it (`binding_array`).
+    #[test]
+    fn unsupported_bindings_are_errors_naming_the_binding() {
+        let root = tree(&[
+            (
+                "a_array",
+                "// Binding array, no imports.\nenable wgpu_binding_array;\n@group(0) @binding(0) var textures: binding_array<texture_2d<f32>, 4>;\n@group(0) @binding(1) var<storage, read_write> out: array<f32>;\n@compute @workgroup_size(1)\nfn main() {\n    out[0] = textureLoad(textures[0], vec2<i32>(0, 0), 0).x;\n}\n",
+            ),
+            (
+                "b_external",
+                "// External texture.\n@group(0) @binding(0) var<storage, read_write> out: array<f32>;\n@group(0) @binding(1) var video: texture_external;\n@compute @workgroup_size(1)\nfn main() {\n    out[0] = textureLoad(video, vec2<u32>(0u, 0u)).x;\n}\n",
+            ),
+            (
+                "c_fine",
+                "// A valid stage.\n@compute @workgroup_size(1)\nfn main() {}\n",
+            ),
+        ]);
+        let errors = build_all(&root).err().expect("unsupported bindings fail");
+        assert_eq!(errors.len(), 2, "{errors:#?}");
+        assert!(
+            errors[0].contains("shaders/room/a_array.wgsl:3:")
+                && errors[0].contains("binding `textures` (@group(0) @binding(0))")
+                && errors[0].contains("binding arrays are not supported"),
+            "{}",
+            errors[0]
+        );
+        assert!(
+            errors[1].contains("shaders/room/b_external.wgsl:3:")
+                && errors[1].contains("binding `video` (@group(0) @binding(1))")
+                && errors[1].contains("external textures"),
+            "{}",
+            errors[1]
+        );
+        std::fs::remove_dir_all(&root).ok();
     }
 
     #[test]
