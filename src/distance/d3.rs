@@ -1648,115 +1648,70 @@ impl Distance3d {
             (_, None) => "columns (z)",
             (_, Some(_)) => "columns (z) + resolve",
         };
+        // One arm per entry point: the same resources, plus what its resolve writes.
+        macro_rules! record {
+            ($cache:expr, $entry:ident { $($field:ident: $value:expr),* }) => {
+                ComputePipeline::cached(&$cache, device, &overrides)?.record(
+                    device,
+                    rec,
+                    &edt_columns::$entry::Resources {
+                        params: (&params).into(),
+                        nearest: nearest.into(),
+                        stack: stack.into(),
+                        $($field: $value.into()),*
+                    },
+                    groups,
+                    name,
+                )?
+            };
+        }
         match fuse {
-            None => {
-                let pipeline = ComputePipeline::cached(
-                    &self.columns[choice + if pack_2d { 6 } else { 0 }],
-                    device,
-                    &overrides,
-                )?;
-                pipeline.record(
-                    device,
-                    rec,
-                    &edt_columns::columns::Resources {
-                        params: (&params).into(),
-                        nearest: nearest.into(),
-                        stack: stack.into(),
-                    },
-                    groups,
-                    name,
-                )?;
-            }
+            None => record!(
+                self.columns[choice + if pack_2d { 6 } else { 0 }],
+                columns {}
+            ),
             Some(Fuse {
                 distance,
                 flat: true,
                 inside_field: None,
                 ..
-            }) => {
-                let pipeline =
-                    ComputePipeline::cached(&self.columns_resolve_2d[choice], device, &overrides)?;
-                pipeline.record(
-                    device,
-                    rec,
-                    &edt_columns::columns_resolve_2d::Resources {
-                        params: (&params).into(),
-                        nearest: nearest.into(),
-                        stack: stack.into(),
-                        distance_2d: distance.into(),
-                    },
-                    groups,
-                    name,
-                )?;
-            }
+            }) => record!(
+                self.columns_resolve_2d[choice],
+                columns_resolve_2d {
+                    distance_2d: distance
+                }
+            ),
             Some(Fuse {
                 distance,
                 flat: true,
                 inside_field: Some(inside),
                 ..
-            }) => {
-                let pipeline = ComputePipeline::cached(
-                    &self.columns_resolve_signed_2d[choice],
-                    device,
-                    &overrides,
-                )?;
-                pipeline.record(
-                    device,
-                    rec,
-                    &edt_columns::columns_resolve_signed_2d::Resources {
-                        params: (&params).into(),
-                        nearest: nearest.into(),
-                        stack: stack.into(),
-                        nearest_inside: inside.into(),
-                        distance_2d: distance.into(),
-                    },
-                    groups,
-                    name,
-                )?;
-            }
+            }) => record!(
+                self.columns_resolve_signed_2d[choice],
+                columns_resolve_signed_2d {
+                    nearest_inside: inside,
+                    distance_2d: distance
+                }
+            ),
             Some(Fuse {
                 distance,
                 inside_field: None,
                 ..
-            }) => {
-                let pipeline =
-                    ComputePipeline::cached(&self.columns_resolve[choice], device, &overrides)?;
-                pipeline.record(
-                    device,
-                    rec,
-                    &edt_columns::columns_resolve::Resources {
-                        params: (&params).into(),
-                        nearest: nearest.into(),
-                        stack: stack.into(),
-                        distance: distance.into(),
-                    },
-                    groups,
-                    name,
-                )?;
-            }
+            }) => record!(
+                self.columns_resolve[choice],
+                columns_resolve { distance: distance }
+            ),
             Some(Fuse {
                 distance,
                 inside_field: Some(inside),
                 ..
-            }) => {
-                let pipeline = ComputePipeline::cached(
-                    &self.columns_resolve_signed[choice],
-                    device,
-                    &overrides,
-                )?;
-                pipeline.record(
-                    device,
-                    rec,
-                    &edt_columns::columns_resolve_signed::Resources {
-                        params: (&params).into(),
-                        nearest: nearest.into(),
-                        stack: stack.into(),
-                        nearest_inside: inside.into(),
-                        distance: distance.into(),
-                    },
-                    groups,
-                    name,
-                )?;
-            }
+            }) => record!(
+                self.columns_resolve_signed[choice],
+                columns_resolve_signed {
+                    nearest_inside: inside,
+                    distance: distance
+                }
+            ),
         }
         Ok(())
     }
@@ -1849,93 +1804,66 @@ impl Distance3d {
         // Every tile cell a thread reads was written by the load first: no zero fill needed (on
         // the H100 the fill cost nothing measurable: 0.872 ms at 256³ with it and without).
         let zero = false;
+        // One arm per entry point: the same resources, plus what its resolve writes.
+        macro_rules! record {
+            ($variants:expr, $entry:ident { $($field:ident: $value:expr),* }) => {
+                $variants.get(device, &overrides, zero)?.record(
+                    device,
+                    rec,
+                    &edt_tile::$entry::Resources {
+                        params: (&params).into(),
+                        nearest: nearest.into(),
+                        $($field: $value.into()),*
+                    },
+                    groups,
+                    name,
+                )
+            };
+        }
         match fuse {
+            None => record!(self.tile_columns, tile_columns {}),
             Some(Fuse {
                 distance,
                 flat: true,
                 inside_field: None,
                 ..
-            }) => self
-                .tile_columns_resolve_2d
-                .get(device, &overrides, zero)?
-                .record(
-                    device,
-                    rec,
-                    &edt_tile::tile_columns_resolve_2d::Resources {
-                        params: (&params).into(),
-                        nearest: nearest.into(),
-                        distance_2d: distance.into(),
-                    },
-                    groups,
-                    name,
-                ),
+            }) => record!(
+                self.tile_columns_resolve_2d,
+                tile_columns_resolve_2d {
+                    distance_2d: distance
+                }
+            ),
             Some(Fuse {
                 distance,
                 flat: true,
                 inside_field: Some(inside),
                 ..
-            }) => self
-                .tile_columns_resolve_signed_2d
-                .get(device, &overrides, zero)?
-                .record(
-                    device,
-                    rec,
-                    &edt_tile::tile_columns_resolve_signed_2d::Resources {
-                        params: (&params).into(),
-                        nearest: nearest.into(),
-                        nearest_inside: inside.into(),
-                        distance_2d: distance.into(),
-                    },
-                    groups,
-                    name,
-                ),
-            None => self.tile_columns.get(device, &overrides, zero)?.record(
-                device,
-                rec,
-                &edt_tile::tile_columns::Resources {
-                    params: (&params).into(),
-                    nearest: nearest.into(),
-                },
-                groups,
-                name,
+            }) => record!(
+                self.tile_columns_resolve_signed_2d,
+                tile_columns_resolve_signed_2d {
+                    nearest_inside: inside,
+                    distance_2d: distance
+                }
             ),
             Some(Fuse {
                 distance,
                 inside_field: None,
                 ..
-            }) => self
-                .tile_columns_resolve
-                .get(device, &overrides, zero)?
-                .record(
-                    device,
-                    rec,
-                    &edt_tile::tile_columns_resolve::Resources {
-                        params: (&params).into(),
-                        nearest: nearest.into(),
-                        distance: distance.into(),
-                    },
-                    groups,
-                    name,
-                ),
+            }) => record!(
+                self.tile_columns_resolve,
+                tile_columns_resolve { distance: distance }
+            ),
             Some(Fuse {
                 distance,
                 inside_field: Some(inside),
                 ..
-            }) => self
-                .tile_columns_resolve_signed
-                .get(device, &overrides, zero)?
-                .record(
-                    device,
-                    rec,
-                    &edt_tile::tile_columns_resolve_signed::Resources {
-                        params: (&params).into(),
-                        nearest: nearest.into(),
-                        nearest_inside: inside.into(),
-                        distance: distance.into(),
-                    },
-                    groups,
-                    name,
-                ),
+            }) => record!(
+                self.tile_columns_resolve_signed,
+                tile_columns_resolve_signed {
+                    nearest_inside: inside,
+                    distance: distance
+                }
+            ),
         }
     }
 
