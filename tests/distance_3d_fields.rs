@@ -333,6 +333,11 @@ fn exact_2d_matches_cpu() {
         (1, 80, 0.05, 3, ColumnPasses::Global),
         (513, 40, 0.001, 4, ColumnPasses::Auto),
         (50, 1, 0.05, 5, ColumnPasses::Auto),
+        // Rows across word and thread boundaries of the row pass's bitmask (32 texels a word,
+        // 64 a thread), and the longest row the exact transform takes.
+        (33, 4, 0.1, 6, ColumnPasses::Auto),
+        (200, 3, 0.004, 7, ColumnPasses::Auto),
+        (16384, 2, 2e-4, 8, ColumnPasses::Global),
     ] {
         d3.set_column_passes(passes);
         let m = random_mask(w, h, density, seed);

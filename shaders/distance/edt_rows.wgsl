@@ -5,8 +5,11 @@
 // is coalesced although the row is the direction a thread-per-line scheme would stride across.
 // `rows` (3D, rows ≤ 2046) holds whole rows in workgroup memory, as many as fit (ROWS): each
 // thread sweeps a short segment, a scan over the row's segments carries the nearest marks across
-// them, and the volume is read once and the field written once (5 bytes per voxel). `rows_2d` (rows to 16384) walks the
-// row in chunks of 256 with a max-scan from the left and a min-scan from the right, and packs
+// them, and the volume is read once and the field written once (5 bytes per voxel). `rows_2d` (rows to 16384, too long
+// to hold as seeds) holds the row as a bitmask (16384 bits: 2 KiB), carries each word's
+// nearest mark to the left and right across the words with one scan, and finds every texel's
+// nearest mark in its own word with firstLeadingBit / firstTrailingBit: the mask is read once
+// and the field written once (5 bytes per texel, where walking the row twice took 14), packed
 // 16/16 bits.
 
 import package::shared::seed::{NO_SEED, pack_seed2, pack_seed3};
@@ -34,7 +37,6 @@ const MAX_ROW: u32 = 2048u;
 // workgroup so that each barrier serves several rows and each thread sweeps a few cells.
 override ROWS: u32 = 1u;
 
-var<workgroup> scan: array<u32, 256>;
 // `rows`: the rows' marks, then their packed nearest seeds.
 // One pad cell after every 8: a thread sweeps a segment of (usually) 8 cells, so without the
 // pad the 32 threads of a warp would read and write cells 8 apart, four to a bank.
@@ -51,53 +53,6 @@ fn padded(i: u32) -> u32 {
 
 fn is_seed(value: f32) -> bool {
     return (value >= params.threshold) != (params.invert != 0u);
-}
-
-// Inclusive scan of `scan` with max (left) or min (right), Hillis & Steele; all threads call it.
-fn scan_chunk(lane: u32, use_max: bool) {
-    for (var offset = 1u; offset < CHUNK; offset <<= 1u) {
-        var other = scan[lane];
-        if use_max && lane >= offset {
-            other = scan[lane - offset];
-        }
-        if !use_max && lane + offset < CHUNK {
-            other = scan[lane + offset];
-        }
-        workgroupBarrier();
-        scan[lane] = select(min(scan[lane], other), max(scan[lane], other), use_max);
-        workgroupBarrier();
-    }
-}
-
-// Sweep one row whose marks the caller loads; returns nothing, writes `nearest[row_start + x]`
-// as the nearest marked x + 1 (0: none) after the left sweep, then the final packed seed.
-fn left_sweep(lane: u32, chunk: u32, marked: bool, row_start: u32, carry: ptr<function, u32>) {
-    let x = chunk * CHUNK + lane;
-    scan[lane] = select(0u, x + 1u, marked && x < params.size.x);
-    workgroupBarrier();
-    scan_chunk(lane, true);
-    let left = max(scan[lane], *carry);
-    if x < params.size.x {
-        nearest[row_start + x] = left;
-    }
-    *carry = max(*carry, scan[CHUNK - 1u]);
-    workgroupBarrier();
-}
-
-// Returns the nearest marked x (left or right, left on a tie) + 1, or 0.
-fn right_sweep(lane: u32, chunk: u32, marked: bool, row_start: u32, carry: ptr<function, u32>) -> u32 {
-    let x = chunk * CHUNK + lane;
-    scan[lane] = select(NONE_RIGHT, x, marked && x < params.size.x);
-    workgroupBarrier();
-    scan_chunk(lane, false);
-    let right = min(scan[lane], *carry);
-    *carry = min(*carry, scan[0]);
-    workgroupBarrier();
-    if x >= params.size.x {
-        return 0u;
-    }
-    // Only this thread wrote this element in the left sweep.
-    return nearer(x, nearest[row_start + x], right);
 }
 
 // Nearer of the marks left (x + 1, 0: none) and right (x, NONE_RIGHT: none) of x, as x + 1.
@@ -185,24 +140,88 @@ fn rows(@builtin(local_invocation_id) lid: vec3<u32>, @builtin(workgroup_id) wg:
     }
 }
 
+// `rows_2d`: a word per thread at most this many times (16384 / 32 / 256).
+const WORDS_PER_THREAD: u32 = 2u;
+const MAX_WORDS: u32 = 512u;
+
+// `rows_2d`: the row's marks, one bit per texel.
+var<workgroup> row_bits: array<u32, MAX_WORDS>;
+
+// Marks of the 32 texels from x0 as the bits of a word.
+fn mark_word(x0: u32, y: u32) -> u32 {
+    var word = 0u;
+    for (var b = 0u; b < 32u; b++) {
+        let x = x0 + b;
+        if x < params.size.x && is_seed(textureLoad(mask_2d, vec2<u32>(x, y), 0).r) {
+            word |= 1u << b;
+        }
+    }
+    return word;
+}
+
 @compute @workgroup_size(256)
 fn rows_2d(@builtin(local_invocation_id) lid: vec3<u32>, @builtin(workgroup_id) wg: vec3<u32>) {
     let y = wg.x;
-    let row_start = y * params.size.x;
-    let chunks = (params.size.x + CHUNK - 1u) / CHUNK;
-    var carry = 0u;
-    for (var c = 0u; c < chunks; c++) {
-        let x = c * CHUNK + lid.x;
-        let marked = x < params.size.x && is_seed(textureLoad(mask_2d, vec2<u32>(x, y), 0).r);
-        left_sweep(lid.x, c, marked, row_start, &carry);
-    }
-    carry = NONE_RIGHT;
-    for (var c = chunks; c > 0u; c--) {
-        let x = (c - 1u) * CHUNK + lid.x;
-        let marked = x < params.size.x && is_seed(textureLoad(mask_2d, vec2<u32>(x, y), 0).r);
-        let near = right_sweep(lid.x, c - 1u, marked, row_start, &carry);
-        if x < params.size.x {
-            nearest[row_start + x] = select(NO_SEED, pack_seed2(vec2<u32>(near - 1u, y)), near != 0u);
+    let w = params.size.x;
+    let words = (w + 31u) / 32u;
+    let t = lid.x;
+    // Thread t owns words t·2 and t·2 + 1: it builds them, and keeps its last mark + 1 (0:
+    // none) and first mark (NONE_RIGHT: none) for the scan across threads.
+    var last = 0u;
+    var first = NONE_RIGHT;
+    for (var k = 0u; k < WORDS_PER_THREAD; k++) {
+        let i = t * WORDS_PER_THREAD + k;
+        var word = 0u;
+        if i < words {
+            word = mark_word(i * 32u, y);
+            row_bits[i] = word;
         }
+        if word != 0u {
+            last = i * 32u + firstLeadingBit(word) + 1u;
+            first = min(first, i * 32u + firstTrailingBit(word));
+        }
+    }
+    // Prefix maxima of `last` and suffix minima of `first` over the threads (Hillis & Steele).
+    seg_last[t] = last;
+    seg_first[t] = first;
+    workgroupBarrier();
+    for (var offset = 1u; offset < CHUNK; offset <<= 1u) {
+        let l = select(0u, seg_last[t - min(t, offset)], t >= offset);
+        let r = select(NONE_RIGHT, seg_first[min(t + offset, CHUNK - 1u)], t + offset < CHUNK);
+        workgroupBarrier();
+        seg_last[t] = max(seg_last[t], l);
+        seg_first[t] = min(seg_first[t], r);
+        workgroupBarrier();
+    }
+    // Each texel: the nearest mark at or left of it and at or right of it, in its own word
+    // first, else carried from the words before (threads before) or after.
+    let row_start = y * w;
+    for (var x = t; x < w; x += CHUNK) {
+        let i = x >> 5u;
+        let b = x & 31u;
+        let word = row_bits[i];
+        // The thread that owns word i, and whether the word is its first or second.
+        let owner = i / WORDS_PER_THREAD;
+        let second = (i & 1u) == 1u;
+        var left = 0u;
+        let below = word & (0xffffffffu >> (31u - b));
+        if below != 0u {
+            left = i * 32u + firstLeadingBit(below) + 1u;
+        } else if second && row_bits[i - 1u] != 0u {
+            left = (i - 1u) * 32u + firstLeadingBit(row_bits[i - 1u]) + 1u;
+        } else if owner > 0u {
+            left = seg_last[owner - 1u];
+        }
+        var right = NONE_RIGHT;
+        let above = word & (0xffffffffu << b);
+        if above != 0u {
+            right = i * 32u + firstTrailingBit(above);
+        } else if !second && i + 1u < words && row_bits[i + 1u] != 0u {
+            right = (i + 1u) * 32u + firstTrailingBit(row_bits[i + 1u]);
+        } else if owner + 1u < CHUNK {
+            right = seg_first[owner + 1u];
+        }
+        let near = nearer(x, left, right);
+        nearest[row_start + x] = select(NO_SEED, pack_seed2(vec2<u32>(near - 1u, y)), near != 0u);
     }
 }
