@@ -51,6 +51,21 @@ fn padded(i: u32) -> u32 {
     return i + (i >> 3u);
 }
 
+// Prefix maxima of `seg_last` and suffix minima of `seg_first` over a row's `lanes` segments
+// (Hillis & Steele): `slot` is this thread's entry, `t` its segment in the row. Called by every
+// thread (it holds the barriers); `lanes` is the same for all.
+fn scan_segments(slot: u32, t: u32, lanes: u32) {
+    for (var offset = 1u; offset < lanes; offset <<= 1u) {
+        // Indices are clamped so no read leaves the row; select then drops those values.
+        let l = select(0u, seg_last[slot - min(t, offset)], t >= offset);
+        let r = select(NONE_RIGHT, seg_first[slot + min(lanes - 1u - t, offset)], t + offset < lanes);
+        workgroupBarrier();
+        seg_last[slot] = max(seg_last[slot], l);
+        seg_first[slot] = min(seg_first[slot], r);
+        workgroupBarrier();
+    }
+}
+
 fn is_seed(value: f32) -> bool {
     return (value >= params.threshold) != (params.invert != 0u);
 }
@@ -97,17 +112,7 @@ fn rows(@builtin(local_invocation_id) lid: vec3<u32>, @builtin(workgroup_id) wg:
     seg_last[lid.x] = last;
     seg_first[lid.x] = first;
     workgroupBarrier();
-    // Prefix maxima of `seg_last` and suffix minima of `seg_first` within each row's lanes.
-    for (var offset = 1u; offset < lanes; offset <<= 1u) {
-        // Indices are clamped so no read leaves the row; select then drops those values.
-        let l = select(0u, seg_last[lid.x - min(t, offset)], t >= offset);
-        let r_i = lid.x + min(lanes - 1u - t, offset);
-        let rv = select(NONE_RIGHT, seg_first[r_i], t + offset < lanes);
-        workgroupBarrier();
-        seg_last[lid.x] = max(seg_last[lid.x], l);
-        seg_first[lid.x] = min(seg_first[lid.x], rv);
-        workgroupBarrier();
-    }
+    scan_segments(lid.x, t, lanes);
     if live {
         // Sweep the own segment both ways; only this thread touches its cells from here. The
         // right sweep leaves the nearest mark to the right + 1 in the low bits and the mark in
@@ -181,18 +186,10 @@ fn rows_2d(@builtin(local_invocation_id) lid: vec3<u32>, @builtin(workgroup_id) 
             first = min(first, i * 32u + firstTrailingBit(word));
         }
     }
-    // Prefix maxima of `last` and suffix minima of `first` over the threads (Hillis & Steele).
     seg_last[t] = last;
     seg_first[t] = first;
     workgroupBarrier();
-    for (var offset = 1u; offset < CHUNK; offset <<= 1u) {
-        let l = select(0u, seg_last[t - min(t, offset)], t >= offset);
-        let r = select(NONE_RIGHT, seg_first[min(t + offset, CHUNK - 1u)], t + offset < CHUNK);
-        workgroupBarrier();
-        seg_last[t] = max(seg_last[t], l);
-        seg_first[t] = min(seg_first[t], r);
-        workgroupBarrier();
-    }
+    scan_segments(t, t, CHUNK);
     // Each texel: the nearest mark at or left of it and at or right of it, in its own word
     // first, else carried from the words before (threads before) or after.
     let row_start = y * w;
