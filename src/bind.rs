@@ -526,8 +526,8 @@ impl<E: Entry> Bound<E> {
 /// unreachable by the driver's compiler. Every loop in `shaders/` ends by construction (a
 /// counted `for`, a step count, a stack that only shrinks, a walk along an array's
 /// bounds), and the counter costs a register pair, a compare and a carry per iteration: measured
-/// on the H100 (`cargo xtask bench distance --exact-only`, clocks held, one command with
-/// `FIELDKIT_CHECKS` toggling it), the exact transform took 0.709 ms without it against 0.873
+/// on the H100 (`cargo xtask bench distance --exact-only`, clocks held, one command running a
+/// build with it and one without), the exact transform took 0.709 ms without it against 0.873
 /// with it at 256³, 6.01 against 6.77 at 512³ and 2.55 against 2.95 at 8192², and the
 /// workgroup column pass went from 47 to 41 registers. Entries whose [`EntryInfo::loops_end`]
 /// is false (a shader no one has checked) keep every check.

@@ -180,9 +180,11 @@ fn link(shader_root: &Path, stage: &StageFile) -> Result<Linked, String> {
 
 /// Whether a WGSL/WESL file has an `import` declaration (a line that starts with one).
 fn imports_anything(source: &str) -> bool {
-    source
-        .lines()
-        .any(|l| l.trim_start().starts_with("import ") || l.trim_start().starts_with("import\t"))
+    source.lines().any(|l| {
+        l.trim_start()
+            .strip_prefix("import")
+            .is_some_and(|rest| rest.starts_with(char::is_whitespace))
+    })
 }
 
 /// Bindings the generated host code cannot express, as errors at their declaration: binding
