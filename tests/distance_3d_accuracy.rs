@@ -350,6 +350,12 @@ fn every_column_path_is_exact() {
             [5, 2, 600],
             random_mask_3d([5, 2, 600], 4e-3, 13),
         ),
+        // Rows of 2000 voxels: 63 row words, one row per workgroup of the word pass.
+        (
+            "2000×5×2",
+            [2000, 5, 2],
+            random_mask_3d([2000, 5, 2], 2e-3, 15),
+        ),
         // Auto: y and z (400: 4 columns per tile) in workgroup memory.
         (
             "6×3×400",

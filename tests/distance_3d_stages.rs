@@ -129,6 +129,78 @@ fn exact_rows_then_columns() {
     );
 }
 
+/// The row pass as words, then the y pass reading them: the words against a CPU model (bits,
+/// nearest marks before and after), the y pass against the 2D transform of every slice and
+/// against the row pass followed by the y pass (the same ties, so the same seeds).
+#[test]
+fn exact_row_words_then_y() {
+    // Rows of 70 voxels: three words, the last one partial.
+    let size = [70usize, 13, 5];
+    let [w, h, d] = size;
+    let ctx = Context::shared();
+    let d3 = Distance3d::new(&ctx.device).unwrap();
+    let m = random_mask_3d(size, 0.03, 5);
+    let volume = upload_volume(&ctx.device, &ctx.queue, &to_bytes(&m), size_u32(size)).unwrap();
+    let mut enc = ctx.encoder("row words");
+    let row_words = d3
+        .encode_row_words(&ctx.device, &mut enc, &volume, Inside::Mask, false)
+        .unwrap();
+    let nearest = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: None,
+        size: (w * h * d * 4) as u64,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    d3.encode_columns_from_words(&ctx.device, &mut enc, &row_words, &nearest, size_u32(size))
+        .unwrap();
+    ctx.submit_and_wait("row words", enc).unwrap();
+    let got = words(&ctx, &row_words);
+    let count = w.div_ceil(32);
+    assert_eq!(got.len(), count * h * d * 2);
+    for row in 0..h * d {
+        let marks: Vec<usize> = (0..w).filter(|&x| m[row * w + x]).collect();
+        for k in 0..count {
+            let bits = marks
+                .iter()
+                .filter(|&&x| x / 32 == k)
+                .fold(0u32, |b, &x| b | 1 << (x % 32));
+            let before = marks.iter().rev().find(|&&x| x < 32 * k).map_or(0, |&x| x + 1);
+            let after = marks.iter().find(|&&x| x >= 32 * (k + 1)).map_or(0, |&x| x + 1);
+            let at = 2 * (row * count + k);
+            assert_eq!(got[at], bits, "row {row}, word {k}: marks");
+            assert_eq!(
+                got[at + 1],
+                (before | after << 16) as u32,
+                "row {row}, word {k}: marks before and after"
+            );
+        }
+    }
+    let after_y = words(&ctx, &nearest);
+    for z in 0..d {
+        let slice = &m[z * w * h..(z + 1) * w * h];
+        let exact = cpu::edt_2d_squared(slice, w, h);
+        for j in 0..w * h {
+            let i = z * w * h + j;
+            let got = cpu::seed_d2_3(after_y[i], i, size).unwrap_or(cpu::NONE);
+            assert_eq!(got, exact[j], "y pass from words, slice {z}, texel {j}");
+        }
+    }
+    let mut enc = ctx.encoder("rows, columns y");
+    let by_rows = d3
+        .encode_rows(&ctx.device, &mut enc, &volume, Inside::Mask, false)
+        .unwrap();
+    let stack = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: None,
+        size: by_rows.size(),
+        usage: wgpu::BufferUsages::STORAGE,
+        mapped_at_creation: false,
+    });
+    d3.encode_column_pass(&ctx.device, &mut enc, &by_rows, &stack, size_u32(size), 1)
+        .unwrap();
+    ctx.submit_and_wait("rows, columns y", enc).unwrap();
+    assert_eq!(after_y, words(&ctx, &by_rows), "the same seeds as rows, then y");
+}
+
 #[test]
 fn resolve_stage() {
     let (ctx, d3, m, volume) = setup();

@@ -10,7 +10,9 @@
 // nearest mark to the left and right across the words with one scan, and finds every texel's
 // nearest mark in its own word with firstLeadingBit / firstTrailingBit: the mask is read once
 // and the field written once (5 bytes per texel, where walking the row twice took 14), packed
-// 16/16 bits.
+// 16/16 bits. `row_words` (3D) writes no field at all: per 32 voxels of a row, their marks as a
+// word and the nearest marks on either side of it, which the y column pass reads in place of a
+// field (`tile_columns_words` in `edt_tile.wgsl`): 1.25 bytes per voxel moved where `rows` moves 5.
 
 import package::shared::seed::{NO_SEED, pack_seed2, pack_seed3};
 
@@ -26,6 +28,10 @@ struct RowParams {
 @group(0) @binding(1) var volume: texture_3d<f32>;
 @group(0) @binding(2) var mask_2d: texture_2d<f32>;
 @group(0) @binding(3) var<storage, read_write> nearest: array<u32>;
+// `row_words`: per row (x fastest, then y, then z), per 32 voxels: their marks (bit b: voxel
+// 32·k + b) and, packed, the last mark before them + 1 (low 16 bits) and the first mark after
+// them + 1 (high 16 bits), 0 for none.
+@group(0) @binding(4) var<storage, read_write> words: array<vec2<u32>>;
 
 const CHUNK: u32 = 256u;
 // "Nothing to the right yet" for the min-scan.
@@ -220,5 +226,56 @@ fn rows_2d(@builtin(local_invocation_id) lid: vec3<u32>, @builtin(workgroup_id) 
         }
         let near = nearer(x, left, right);
         nearest[row_start + x] = select(NO_SEED, pack_seed2(vec2<u32>(near - 1u, y)), near != 0u);
+    }
+}
+
+// `row_words`: the cells of ROWS rows (ROWS · lanes · 32 ≤ 2048), read coalesced, then one
+// thread per word gathers its 32 cells (a pad cell after every 32 keeps those gathers in
+// different banks). Reading a word's 32 voxels from one thread instead strides the warp's
+// loads 32 voxels apart: 0.53 ms at 512³ on the H100 against 0.63 for the whole `rows`.
+fn word_cell(i: u32) -> u32 {
+    return i + (i >> 5u);
+}
+
+// ROWS rows per workgroup of up to 64 words each (rows to 2048 voxels), a thread per word
+// (ROWS · lanes = 64 of the 256); one scan across each row's words carries the nearest marks on
+// either side.
+@compute @workgroup_size(256)
+fn row_words(@builtin(local_invocation_id) lid: vec3<u32>, @builtin(workgroup_id) wg: vec3<u32>) {
+    let count = (params.size.x + 31u) / 32u;
+    let lanes = 64u / ROWS;
+    // Cells per row in workgroup memory (a power of two), so a cell's row is a shift away.
+    let row_cells_len = lanes * 32u;
+    let z = wg.y;
+    for (var e = lid.x; e < ROWS * row_cells_len; e += CHUNK) {
+        let x = e & (row_cells_len - 1u);
+        let y = wg.x * ROWS + e / row_cells_len;
+        var marked = false;
+        if x < params.size.x && y < params.size.y {
+            marked = is_seed(textureLoad(volume, vec3<u32>(x, y, z), 0).r);
+        }
+        row_cells[word_cell(e)] = u32(marked);
+    }
+    workgroupBarrier();
+    let t = lid.x & (lanes - 1u);
+    let y = wg.x * ROWS + lid.x / lanes;
+    let live = lid.x < 64u && y < params.size.y && t < count;
+    var word = 0u;
+    if live {
+        for (var b = 0u; b < 32u; b++) {
+            word |= row_cells[word_cell(lid.x * 32u + b)] << b;
+        }
+    }
+    seg_last[lid.x] = select(0u, t * 32u + firstLeadingBit(word) + 1u, word != 0u);
+    seg_first[lid.x] = select(NONE_RIGHT, t * 32u + firstTrailingBit(word), word != 0u);
+    workgroupBarrier();
+    scan_segments(lid.x, t, lanes);
+    if live {
+        // The scans are inclusive: the entries of the threads before and after hold the marks
+        // outside this word (indices clamped so that none leaves the row; select drops them).
+        let before = select(0u, seg_last[lid.x - min(t, 1u)], t > 0u);
+        let first_after = seg_first[lid.x + min(lanes - 1u - t, 1u)];
+        let after = select(0u, first_after + 1u, t + 1u < lanes && first_after != NONE_RIGHT);
+        words[(z * params.size.y + y) * count + t] = vec2<u32>(word, before | (after << 16u));
     }
 }

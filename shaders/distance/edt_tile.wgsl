@@ -17,7 +17,7 @@
 // cell per band, and a column stride that keeps a warp's threads in different banks), columns and bands come from
 // shifts and masks, and the separator is an f32 division corrected to the exact integer floor.
 
-import package::shared::seed::{NO_SEED, answer_distance, signed_at2, signed_at3, unpack_seed2, unpack_seed3};
+import package::shared::seed::{NO_SEED, answer_distance, pack_seed3, signed_at2, signed_at3, unpack_seed2, unpack_seed3};
 
 struct TileParams {
     size: vec3<u32>,
@@ -43,6 +43,9 @@ struct TileParams {
 @group(0) @binding(3) var distance: texture_storage_3d<r32float, write>;
 // The resolving entries of a 2D field write here.
 @group(0) @binding(4) var distance_2d: texture_storage_2d<r32float, write>;
+// `tile_columns_words` reads each row's nearest marks from `edt_rows.wgsl`'s `row_words` instead
+// of a field: marks per 32 voxels, and the marks on either side of them.
+@group(0) @binding(5) var<storage, read> words: array<vec2<u32>>;
 
 // 2D fields pack 16/16 bits.
 override PACK_2D: bool = false;
@@ -215,6 +218,86 @@ fn load(li: u32, wg: vec3<u32>) {
         put(ld, e + 5u * THREADS, s5);
         put(ld, e + 6u * THREADS, s6);
         put(ld, e + 7u * THREADS, s7);
+    }
+}
+
+// Where `load_words` reads: the tile's first column, its z, and words per row.
+struct WordLoader {
+    x0: u32,
+    z: u32,
+    count: u32,
+    total: u32,
+    mask: u32,
+    live: u32,
+}
+
+// The row word that holds tile element e (its column's voxel in row e >> lg_columns).
+fn word_of(ld: WordLoader, e: u32) -> vec2<u32> {
+    if e >= ld.total || (e & ld.mask) >= ld.live {
+        return vec2<u32>(0u);
+    }
+    let y = e >> params.lg_columns;
+    let x = ld.x0 + (e & ld.mask);
+    return words[(ld.z * params.size.y + y) * ld.count + (x >> 5u)];
+}
+
+// The nearest mark along x to tile element e's voxel (x, y, z), packed (NO_SEED: none), from
+// the row word that holds it: in the word itself by firstLeadingBit / firstTrailingBit, else the
+// word's nearest marks before and after it. On a tie the mark to the left wins, as in `rows`.
+fn put_word(ld: WordLoader, e: u32, word: vec2<u32>) {
+    if e >= ld.total {
+        return;
+    }
+    let y = e >> params.lg_columns;
+    let x = ld.x0 + (e & ld.mask);
+    let b = x & 31u;
+    let base = x & ~31u;
+    // Both as the mark + 1, 0 for none (a column past the grid has a zero word: no seed).
+    var left = word.y & 0xffffu;
+    let below = word.x & (0xffffffffu >> (31u - b));
+    if below != 0u {
+        left = base + firstLeadingBit(below) + 1u;
+    }
+    var right = word.y >> 16u;
+    let above = word.x & (0xffffffffu << b);
+    if above != 0u {
+        right = base + firstTrailingBit(above) + 1u;
+    }
+    var near = left;
+    if right != 0u && (left == 0u || right - 1u - x < x + 1u - left) {
+        near = right;
+    }
+    let s = select(NO_SEED, pack_seed3(vec3<u32>(near - 1u, y, ld.z)), near != 0u);
+    tile[cell((e & ld.mask) * params.column_cells, y)] = s;
+}
+
+// `load` for y columns from the row words: each cell's row answer is made as it is loaded,
+// eight words in flight per thread as in `load`.
+fn load_words(li: u32, wg: vec3<u32>) {
+    var ld: WordLoader;
+    ld.x0 = wg.x << params.lg_columns;
+    ld.z = wg.y;
+    ld.count = (params.size.x + 31u) / 32u;
+    ld.total = params.size.y << params.lg_columns;
+    ld.mask = (1u << params.lg_columns) - 1u;
+    ld.live = min(params.size.x - ld.x0, 1u << params.lg_columns);
+    for (var e = li; e < ld.total; e += 8u * THREADS) {
+        let w0 = word_of(ld, e);
+        let w1 = word_of(ld, e + THREADS);
+        let w2 = word_of(ld, e + 2u * THREADS);
+        let w3 = word_of(ld, e + 3u * THREADS);
+        let w4 = word_of(ld, e + 4u * THREADS);
+        let w5 = word_of(ld, e + 5u * THREADS);
+        let w6 = word_of(ld, e + 6u * THREADS);
+        let w7 = word_of(ld, e + 7u * THREADS);
+        put_word(ld, e, w0);
+        put_word(ld, e + THREADS, w1);
+        put_word(ld, e + 2u * THREADS, w2);
+        put_word(ld, e + 3u * THREADS, w3);
+        put_word(ld, e + 4u * THREADS, w4);
+        put_word(ld, e + 5u * THREADS, w5);
+        put_word(ld, e + 6u * THREADS, w6);
+        put_word(ld, e + 7u * THREADS, w7);
     }
 }
 
@@ -426,6 +509,11 @@ fn banded(d: f32) -> f32 {
 // wait. Called by every thread (it holds the barriers).
 fn start(li: u32, wg: vec3<u32>) -> Walk {
     load(li, wg);
+    return envelopes(li, wg);
+}
+
+// After the load: build this band's envelope, publish its size, wait.
+fn envelopes(li: u32, wg: vec3<u32>) -> Walk {
     workgroupBarrier();
     let l = lane_of(li, wg);
     let m = build(l);
@@ -437,6 +525,21 @@ fn start(li: u32, wg: vec3<u32>) -> Walk {
 @compute @workgroup_size(256)
 fn tile_columns(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
     var walk = start(li, wg);
+    let l = lane_of(li, wg);
+    if !l.valid {
+        return;
+    }
+    for (var i = l.lo; i < l.hi; i++) {
+        nearest[l.at + i * l.stride] = query(l, &walk, i).x;
+    }
+}
+
+// `tile_columns` along y (3D) with the row pass folded into the load: the tile is made from
+// `row_words` instead of read from a field, so the rows' answers never go through memory.
+@compute @workgroup_size(256)
+fn tile_columns_words(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
+    load_words(li, wg);
+    var walk = envelopes(li, wg);
     let l = lane_of(li, wg);
     if !l.valid {
         return;

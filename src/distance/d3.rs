@@ -523,6 +523,8 @@ pub struct Distance3d {
     /// By rows per workgroup: 1, 2, 4, ..., 32 (`rows_per_group`).
     rows: [std::sync::OnceLock<ComputePipeline<edt_rows::rows::Entry>>; 6],
     rows_2d: ComputePipeline<edt_rows::rows_2d::Entry>,
+    /// The 3D row pass as words of marks, per rows per workgroup (`ROWS`).
+    row_words: Variants<edt_rows::row_words::Entry>,
     /// Column pass per band count (3D packing, then 2D), made on first use.
     columns: [std::sync::OnceLock<ComputePipeline<edt_columns::columns::Entry>>; 12],
     /// The last 3D column pass with the resolve folded in, per band count.
@@ -538,12 +540,15 @@ pub struct Distance3d {
     column_bands: Option<u32>,
     /// The column passes in workgroup memory (`edt_tile.wgsl`), per tile size.
     tile_columns: Variants<edt_tile::tile_columns::Entry>,
+    tile_columns_words: Variants<edt_tile::tile_columns_words::Entry>,
     tile_columns_resolve: Variants<edt_tile::tile_columns_resolve::Entry>,
     tile_columns_resolve_signed: Variants<edt_tile::tile_columns_resolve_signed::Entry>,
     tile_columns_resolve_2d: Variants<edt_tile::tile_columns_resolve_2d::Entry>,
     tile_columns_resolve_signed_2d: Variants<edt_tile::tile_columns_resolve_signed_2d::Entry>,
     tile_copy: Variants<edt_tile::tile_copy::Entry>,
     column_passes: ColumnPasses,
+    /// Fold the 3D row pass into the y pass where it runs in workgroup memory.
+    fold_rows: bool,
     resolve_unsigned: ComputePipeline<field_resolve::resolve_unsigned::Entry>,
     resolve_signed: ComputePipeline<field_resolve::resolve_signed::Entry>,
     resolve_points: ComputePipeline<field_resolve::resolve_points::Entry>,
@@ -865,6 +870,13 @@ impl Distance3d {
         Ok(())
     }
 
+    /// For benchmarks: `false` runs the 3D row pass on its own (its field written, then read
+    /// by the y pass) where the exact transform otherwise folds it into the y pass's load.
+    #[doc(hidden)]
+    pub fn set_fold_rows(&mut self, fold: bool) {
+        self.fold_rows = fold;
+    }
+
     /// Choose where the exact transform's column passes hold their columns (default
     /// [`ColumnPasses::Auto`]). Only speed differs, and which of two equally near seeds is named.
     pub fn set_column_passes(&mut self, passes: ColumnPasses) {
@@ -884,6 +896,7 @@ impl Distance3d {
             lines_z_signed: ComputePipeline::new(device)?,
             rows: Default::default(),
             rows_2d: ComputePipeline::new(device)?,
+            row_words: Default::default(),
             columns: Default::default(),
             columns_resolve: Default::default(),
             columns_resolve_signed: Default::default(),
@@ -891,12 +904,14 @@ impl Distance3d {
             columns_resolve_signed_2d: Default::default(),
             column_bands: None,
             tile_columns: Default::default(),
+            tile_columns_words: Default::default(),
             tile_columns_resolve: Default::default(),
             tile_columns_resolve_signed: Default::default(),
             tile_columns_resolve_2d: Default::default(),
             tile_columns_resolve_signed_2d: Default::default(),
             tile_copy: Default::default(),
             column_passes: ColumnPasses::Auto,
+            fold_rows: true,
             resolve_unsigned: ComputePipeline::new(device)?,
             resolve_signed: ComputePipeline::new(device)?,
             resolve_points: ComputePipeline::new(device)?,
@@ -1446,12 +1461,34 @@ impl Distance3d {
         fuse: Option<Fuse>,
     ) -> Result<wgpu::Buffer, Error> {
         let size = check_volume(device, volume)?;
-        let nearest = self.encode_rows(device, rec, volume, inside, invert)?;
-        let stack = field_buffer(device, "edt envelope stack", size);
-        let axes: Vec<u32> = [1u32, 2]
-            .into_iter()
+        // Along y in workgroup memory, and not the last pass: the row pass folds into the y
+        // pass's load (`row_words`, then `tile_columns_words`); else rows, then columns.
+        let y_tile = if self.fold_rows && size[1] > 1 && size[2] > 1 {
+            self.tile_for(device, size[1], false)?
+        } else {
+            None
+        };
+        let (nearest, first_axis) = match y_tile {
+            Some(tile) => {
+                let words = self.encode_row_words(device, rec, volume, inside, invert)?;
+                let nearest = field_buffer(device, "nearest seed", size);
+                self.encode_tile_columns_words(device, rec, &words, &nearest, size, tile)?;
+                (nearest, 2)
+            }
+            None => (
+                self.encode_rows(device, rec, volume, inside, invert)?,
+                1,
+            ),
+        };
+        let axes: Vec<u32> = (first_axis..=2u32)
             .filter(|&a| size[a as usize] > 1)
             .collect();
+        // The envelope stack only where a pass runs in global memory.
+        let mut global = false;
+        for &axis in &axes {
+            global |= self.tile_for(device, size[axis as usize], false)?.is_none();
+        }
+        let stack = global.then(|| field_buffer(device, "edt envelope stack", size));
         let mut fuse = fuse;
         for (k, &axis) in axes.iter().enumerate() {
             let last = k + 1 == axes.len();
@@ -1461,7 +1498,7 @@ impl Distance3d {
                 rec,
                 false,
                 &nearest,
-                &stack,
+                stack.as_ref(),
                 size,
                 axis,
                 size[3 - axis as usize],
@@ -1568,6 +1605,124 @@ impl Distance3d {
         Ok(nearest)
     }
 
+    /// The 3D row pass as words (`row_words`): per 32 voxels of a row, their marks and the
+    /// nearest marks on either side (a new buffer of `vec2<u32>`, `ceil(width / 32)` per row),
+    /// which [`Self::encode_columns_from_words`] reads in place of the row pass's field.
+    pub fn encode_row_words(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        volume: &wgpu::Texture,
+        inside: Inside,
+        invert: bool,
+    ) -> Result<wgpu::Buffer, Error> {
+        let size = check_volume(device, volume)?;
+        let count = size[0].div_ceil(32);
+        let words = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("edt row words"),
+            size: count as u64 * size[1] as u64 * size[2] as u64 * 8,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let params = uniform(
+            device,
+            "edt rows params",
+            &edt_rows::RowParams {
+                size: size.into(),
+                threshold: inside.threshold(),
+                invert: invert as u32,
+            },
+        );
+        let vv = view(volume);
+        // 2048 cells of workgroup memory per workgroup: rows of up to 2048 voxels (64 words),
+        // as many as fit (a power of two).
+        let per_group = 64 / count.next_power_of_two();
+        self.row_words
+            .get(device, &[("ROWS", per_group as f64)], false)?
+            .record(
+                device,
+                rec,
+                &edt_rows::row_words::Resources {
+                    params: (&params).into(),
+                    volume: (&vv).into(),
+                    words: (&words).into(),
+                },
+                [size[1].div_ceil(per_group), size[2], 1],
+                "row words (x)",
+            )?;
+        Ok(words)
+    }
+
+    /// The y column pass (in workgroup memory) of a 3D field of `size` from the row words of
+    /// [`Self::encode_row_words`]: writes the nearest seed of every voxel within its xy plane
+    /// into `nearest`, as [`Self::encode_rows`] followed by the y pass of
+    /// [`Self::encode_column_pass`] would. [`Error::Size`] where y columns of this length do
+    /// not fit the device's workgroup memory.
+    pub fn encode_columns_from_words(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        words: &wgpu::Buffer,
+        nearest: &wgpu::Buffer,
+        size: [u32; 3],
+    ) -> Result<(), Error> {
+        check_size_3d(device, size)?;
+        let need = [
+            ("words", words, size[0].div_ceil(32) as u64 * (size[1] * size[2]) as u64 * 8),
+            ("nearest", nearest, voxels(size) * 4),
+        ];
+        for (what, b, bytes) in need {
+            if b.size() != bytes {
+                return Err(Error::Invalid {
+                    stage: edt_tile::STAGE,
+                    what: format!("{what} buffer has {} bytes, {size:?} needs {bytes}", b.size()),
+                });
+            }
+        }
+        // The tile the exact transform takes; where that is global memory, the widest that fits.
+        let tile = match self.tile_for(device, size[1], false)? {
+            Some(tile) => tile,
+            None => {
+                let storage = device.limits().max_compute_workgroup_storage_size;
+                TileGeometry::fit(size[1], storage, 1, TileGeometry::banded_columns(size[1]))
+                    .ok_or(Error::Size {
+                        stage: edt_tile::STAGE,
+                        what: "column length for one column in workgroup memory \
+                               (max_compute_workgroup_storage_size)",
+                        got: size[1] as u64,
+                        max: TileGeometry::longest(storage) as u64,
+                    })?
+            }
+        };
+        self.encode_tile_columns_words(device, rec, words, nearest, size, tile)
+    }
+
+    fn encode_tile_columns_words(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        words: &wgpu::Buffer,
+        nearest: &wgpu::Buffer,
+        size: [u32; 3],
+        tile: TileGeometry,
+    ) -> Result<(), Error> {
+        let (params, overrides) = tile.bind(device, size, 1, false, None);
+        self.tile_columns_words
+            .get(device, &overrides, false)?
+            .record(
+                device,
+                rec,
+                &edt_tile::tile_columns_words::Resources {
+                    params: (&params).into(),
+                    nearest: nearest.into(),
+                    words: words.into(),
+                },
+                tile.groups(size, size[2]),
+                "columns (y, workgroup) from row words",
+            )?;
+        Ok(())
+    }
+
     /// One exact column pass alone (`axis` 1 = y, 2 = z), in place on `nearest`; `stack` is
     /// scratch of the same size.
     #[allow(clippy::too_many_arguments)]
@@ -1600,7 +1755,17 @@ impl Distance3d {
             }
         }
         let others = if axis == 1 { size[2] } else { size[1] };
-        self.encode_columns(device, rec, false, nearest, stack, size, axis, others, None)
+        self.encode_columns(
+            device,
+            rec,
+            false,
+            nearest,
+            Some(stack),
+            size,
+            axis,
+            others,
+            None,
+        )
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -1610,7 +1775,7 @@ impl Distance3d {
         rec: &mut impl Record,
         pack_2d: bool,
         nearest: &wgpu::Buffer,
-        stack: &wgpu::Buffer,
+        stack: Option<&wgpu::Buffer>,
         size: [u32; 3],
         axis: u32,
         others: u32,
@@ -1622,6 +1787,14 @@ impl Distance3d {
                 device, rec, pack_2d, nearest, size, axis, others, tile, fuse,
             );
         }
+        let owned;
+        let stack = match stack {
+            Some(s) => s,
+            None => {
+                owned = field_buffer(device, "edt envelope stack", size);
+                &owned
+            }
+        };
         let choice = match self.column_bands {
             Some(b) => BAND_CHOICES
                 .iter()
@@ -1882,7 +2055,10 @@ impl Distance3d {
         check_size_2d_exact(device, w, h)?;
         let size = [w, h, 1];
         let mv = view(mask);
-        let stack = field_buffer(device, "edt envelope stack", size);
+        let stack = self
+            .tile_for(device, h, true)?
+            .is_none()
+            .then(|| field_buffer(device, "edt envelope stack", size));
         let rec = &mut rec.recorder();
         let distance = distance_texture(device, size, wgpu::TextureDimension::D2);
         let dv = view(&distance);
@@ -1923,7 +2099,17 @@ impl Distance3d {
                 "rows (x)",
             )?;
             if h > 1 {
-                self.encode_columns(device, rec, true, &nearest, &stack, size, 1, 1, fuse)?;
+                self.encode_columns(
+                    device,
+                    rec,
+                    true,
+                    &nearest,
+                    stack.as_ref(),
+                    size,
+                    1,
+                    1,
+                    fuse,
+                )?;
             }
             Ok(nearest)
         };

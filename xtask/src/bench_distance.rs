@@ -28,6 +28,10 @@ const GLOBAL: &str = "exact (global columns)";
 /// (`ColumnPasses::Workgroup`), so both paths are timed at every size.
 const WORKGROUP: &str = "exact (workgroup columns)";
 
+/// The exact transform with the 3D row pass as a pass of its own (its field written, then read
+/// by the y pass) where the default folds it into the y pass.
+const ROWS_PASS: &str = "exact (rows pass)";
+
 /// One method at one size.
 struct Row {
     dims: u32,
@@ -61,7 +65,13 @@ fn random_mask(n: usize, density: f64, salt: u64) -> Vec<u8> {
 /// Bytes a pass must move at least (reads + writes of the fields it touches, per cell), used for
 /// the bandwidth figure. Neighbour reads of JFA that hit the cache are not counted.
 fn pass_bytes(name: &str, cells: u64, dims: u32) -> f64 {
-    let per = if name.starts_with("rows") && dims == 3 {
+    let per = if name.starts_with("row words") {
+        // Mask read once, 8 bytes written per 32 voxels.
+        1.0 + 8.0 / 32.0
+    } else if name.ends_with("from row words") {
+        // Each row word read once (the tile's columns share it), each answer written once.
+        8.0 / 32.0 + 4.0
+    } else if name.starts_with("rows") && dims == 3 {
         // The row is held in workgroup memory: mask read once, seed written once.
         1.0 + 4.0
     } else if name.starts_with("rows") {
@@ -273,6 +283,8 @@ fn distance(args: &Args) -> Result<(), String> {
         .map_err(|e| e.to_string())?;
     let mut d3_workgroup = Distance3d::new(&ctx.device).map_err(|e| e.to_string())?;
     d3_workgroup.set_column_passes(ColumnPasses::Workgroup);
+    let mut d3_rows = Distance3d::new(&ctx.device).map_err(|e| e.to_string())?;
+    d3_rows.set_fold_rows(false);
     let storage = ctx.device.limits().max_compute_workgroup_storage_size;
     println!(
         "workgroup memory: {storage} bytes; columns per tile by length: {}",
@@ -304,6 +316,7 @@ fn distance(args: &Args) -> Result<(), String> {
                 WORKGROUP.to_string(),
                 Options3d::default(),
             )))
+            .chain(std::iter::once((ROWS_PASS.to_string(), Options3d::default())))
             .chain(Variant::ALL.into_iter().map(|v| {
                 (
                     v.name().to_string(),
@@ -321,7 +334,7 @@ fn distance(args: &Args) -> Result<(), String> {
                     ..Options3d::default()
                 },
             )))
-            .take(if args.exact_only { 3 } else { usize::MAX })
+            .take(if args.exact_only { 4 } else { usize::MAX })
             .collect();
     let variants2: &[Variant] = if args.exact_only { &[] } else { &Variant::ALL };
     let total = (sizes3.len() * methods3.len() + sizes2.len() * (1 + variants2.len())) as u64;
@@ -347,6 +360,7 @@ fn distance(args: &Args) -> Result<(), String> {
             let d3 = match name.as_str() {
                 GLOBAL => &d3_global,
                 WORKGROUP => &d3_workgroup,
+                ROWS_PASS => &d3_rows,
                 _ => &d3,
             };
             // Where no tile fits (or the path is the one Auto takes anyway), no row.
