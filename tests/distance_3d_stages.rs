@@ -164,8 +164,15 @@ fn exact_row_words_then_y() {
                 .iter()
                 .filter(|&&x| x / 32 == k)
                 .fold(0u32, |b, &x| b | 1 << (x % 32));
-            let before = marks.iter().rev().find(|&&x| x < 32 * k).map_or(0, |&x| x + 1);
-            let after = marks.iter().find(|&&x| x >= 32 * (k + 1)).map_or(0, |&x| x + 1);
+            let before = marks
+                .iter()
+                .rev()
+                .find(|&&x| x < 32 * k)
+                .map_or(0, |&x| x + 1);
+            let after = marks
+                .iter()
+                .find(|&&x| x >= 32 * (k + 1))
+                .map_or(0, |&x| x + 1);
             let at = 2 * (row * count + k);
             assert_eq!(got[at], bits, "row {row}, word {k}: marks");
             assert_eq!(
@@ -179,10 +186,10 @@ fn exact_row_words_then_y() {
     for z in 0..d {
         let slice = &m[z * w * h..(z + 1) * w * h];
         let exact = cpu::edt_2d_squared(slice, w, h);
-        for j in 0..w * h {
+        for (j, &want) in exact.iter().enumerate() {
             let i = z * w * h + j;
             let got = cpu::seed_d2_3(after_y[i], i, size).unwrap_or(cpu::NONE);
-            assert_eq!(got, exact[j], "y pass from words, slice {z}, texel {j}");
+            assert_eq!(got, want, "y pass from words, slice {z}, texel {j}");
         }
     }
     let mut enc = ctx.encoder("rows, columns y");
@@ -198,7 +205,11 @@ fn exact_row_words_then_y() {
     d3.encode_column_pass(&ctx.device, &mut enc, &by_rows, &stack, size_u32(size), 1)
         .unwrap();
     ctx.submit_and_wait("rows, columns y", enc).unwrap();
-    assert_eq!(after_y, words(&ctx, &by_rows), "the same seeds as rows, then y");
+    assert_eq!(
+        after_y,
+        words(&ctx, &by_rows),
+        "the same seeds as rows, then y"
+    );
 }
 
 #[test]

@@ -143,7 +143,8 @@ impl TileGeometry {
                 need + (32 / columns + 32 - need % 32) % 32
             };
             let bytes = (column_cells as u64 * columns as u64 + 256) * 4;
-            if bytes <= storage as u64 {
+            // A band's envelope size is 8 bits in the shader's `envelope_size`.
+            if bytes <= storage as u64 && band_len <= 128 {
                 return Some(Self {
                     lg_columns: columns.trailing_zeros(),
                     lg_band: band_len.trailing_zeros(),
@@ -1475,10 +1476,7 @@ impl Distance3d {
                 self.encode_tile_columns_words(device, rec, &words, &nearest, size, tile)?;
                 (nearest, 2)
             }
-            None => (
-                self.encode_rows(device, rec, volume, inside, invert)?,
-                1,
-            ),
+            None => (self.encode_rows(device, rec, volume, inside, invert)?, 1),
         };
         let axes: Vec<u32> = (first_axis..=2u32)
             .filter(|&a| size[a as usize] > 1)
@@ -1668,14 +1666,21 @@ impl Distance3d {
     ) -> Result<(), Error> {
         check_size_3d(device, size)?;
         let need = [
-            ("words", words, size[0].div_ceil(32) as u64 * (size[1] * size[2]) as u64 * 8),
+            (
+                "words",
+                words,
+                size[0].div_ceil(32) as u64 * (size[1] * size[2]) as u64 * 8,
+            ),
             ("nearest", nearest, voxels(size) * 4),
         ];
         for (what, b, bytes) in need {
             if b.size() != bytes {
                 return Err(Error::Invalid {
                     stage: edt_tile::STAGE,
-                    what: format!("{what} buffer has {} bytes, {size:?} needs {bytes}", b.size()),
+                    what: format!(
+                        "{what} buffer has {} bytes, {size:?} needs {bytes}",
+                        b.size()
+                    ),
                 });
             }
         }

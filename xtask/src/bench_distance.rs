@@ -316,7 +316,10 @@ fn distance(args: &Args) -> Result<(), String> {
                 WORKGROUP.to_string(),
                 Options3d::default(),
             )))
-            .chain(std::iter::once((ROWS_PASS.to_string(), Options3d::default())))
+            .chain(std::iter::once((
+                ROWS_PASS.to_string(),
+                Options3d::default(),
+            )))
             .chain(Variant::ALL.into_iter().map(|v| {
                 (
                     v.name().to_string(),
