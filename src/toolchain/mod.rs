@@ -17,6 +17,36 @@ use codespan_reporting::term;
 /// Folder under `shaders/` that holds importable helpers rather than stages.
 pub const SHARED_DIR: &str = "shared";
 
+/// A shader folder: `base.join(dir)`, laid out as fieldkit's `shaders/` is (one folder per
+/// technique, helpers under `shared/`). Messages name files `dir/room/file` (relative to `base`,
+/// which may be empty for a path relative to the working directory).
+#[derive(Debug, Clone)]
+pub struct ShaderDir {
+    pub base: PathBuf,
+    pub dir: String,
+}
+
+impl ShaderDir {
+    /// `dir` under `base`, written with forward slashes and no trailing slash.
+    pub fn new(base: impl Into<PathBuf>, dir: &str) -> Self {
+        let dir = dir.replace('\\', "/");
+        let trimmed = dir.trim_end_matches('/');
+        Self {
+            base: base.into(),
+            dir: if trimmed.is_empty() {
+                dir
+            } else {
+                trimmed.to_string()
+            },
+        }
+    }
+
+    /// The folder on disk.
+    pub fn root(&self) -> PathBuf {
+        self.base.join(&self.dir)
+    }
+}
+
 /// One shader stage file: everything under `shaders/` except `shaders/shared/`.
 #[derive(Debug, Clone)]
 pub struct StageFile {
@@ -48,9 +78,9 @@ pub struct Stage {
 }
 
 /// Every shader file that is a stage, sorted by path for deterministic output.
-pub fn discover(shader_root: &Path) -> std::io::Result<Vec<StageFile>> {
+pub fn discover(shaders: &ShaderDir) -> std::io::Result<Vec<StageFile>> {
     let mut out = Vec::new();
-    let mut rooms: Vec<_> = std::fs::read_dir(shader_root)?.collect::<Result<_, _>>()?;
+    let mut rooms: Vec<_> = std::fs::read_dir(shaders.root())?.collect::<Result<_, _>>()?;
     rooms.sort_by_key(|e| e.file_name());
     for room in rooms {
         if !room.file_type()?.is_dir() || room.file_name() == SHARED_DIR {
@@ -67,7 +97,11 @@ pub fn discover(shader_root: &Path) -> std::io::Result<Vec<StageFile>> {
             }
             let name = p.file_stem().unwrap().to_string_lossy().into_owned();
             out.push(StageFile {
-                rel_path: format!("shaders/{room_name}/{}", f.file_name().to_string_lossy()),
+                rel_path: format!(
+                    "{}/{room_name}/{}",
+                    shaders.dir,
+                    f.file_name().to_string_lossy()
+                ),
                 room: room_name.clone(),
                 name,
                 abs_path: p,
@@ -113,14 +147,19 @@ struct Linked {
 
 /// Link one stage's imports with WESL and print the result declaration by declaration, keeping
 /// for each its source file and span so naga's errors can be reported against the original file.
-fn link(shader_root: &Path, stage: &StageFile) -> Result<Linked, String> {
+fn link(shaders: &ShaderDir, stage: &StageFile) -> Result<Linked, String> {
     let root: wesl::ModulePath = format!("package::{}::{}", stage.room, stage.name)
         .parse()
         .map_err(|e| format!("{}: bad module path: {e:?}", stage.rel_path))?;
-    let mut compiler = wesl::Wesl::new(shader_root);
+    let mut compiler = wesl::Wesl::new(shaders.root());
+    // Keep every declaration of the stage file itself, used or not: stripping it would drop an
+    // unused binding (or a broken unused function) without a word, where the lints and naga
+    // should see it. Imported helpers are still stripped to what the stage uses.
+    compiler.set_options(wesl::CompileOptions {
+        keep_root: true,
+        ..Default::default()
+    });
     compiler.use_sourcemap(true);
-    // Keep every entry point of the stage file (stripping only removes unused helpers).
-    compiler.keep_all_entrypoints();
     let result = match compiler.compile(&root) {
         Ok(r) => r,
         Err(e) => {
@@ -167,7 +206,7 @@ fn link(shader_root: &Path, stage: &StageFile) -> Result<Linked, String> {
             .ident()
             .and_then(|id| sourcemap.and_then(|m| m.get_decl(&id.name()).map(|(p, _)| p.clone())));
         let file = match module {
-            Some(path) => module_file(shader_root, &path),
+            Some(path) => module_file(shaders, &path),
             None => Some(stage.rel_path.clone()),
         };
         origins.push(DeclOrigin {
@@ -241,13 +280,13 @@ fn strip_ansi(s: &str) -> String {
 }
 
 /// `package::shared::grid` → "shaders/shared/grid.wesl" (or .wgsl), whichever exists.
-fn module_file(shader_root: &Path, path: &wesl::ModulePath) -> Option<String> {
+fn module_file(shaders: &ShaderDir, path: &wesl::ModulePath) -> Option<String> {
     let comps: Vec<String> = path.components.iter().map(|c| c.to_string()).collect();
     let rel = comps.join("/");
     for ext in ["wesl", "wgsl"] {
-        let p = shader_root.join(format!("{rel}.{ext}"));
+        let p = shaders.root().join(format!("{rel}.{ext}"));
         if p.exists() {
-            return Some(format!("shaders/{rel}.{ext}"));
+            return Some(format!("{}/{rel}.{ext}", shaders.dir));
         }
     }
     None
@@ -352,9 +391,9 @@ fn render(
 }
 
 /// Link, parse and validate one stage. Errors are rendered against the original file.
-pub fn build_stage(crate_root: &Path, stage: &StageFile) -> Result<Stage, String> {
-    let shader_root = crate_root.join("shaders");
-    let linked = link(&shader_root, stage)?;
+pub fn build_stage(shaders: &ShaderDir, stage: &StageFile) -> Result<Stage, String> {
+    let crate_root = shaders.base.as_path();
+    let linked = link(shaders, stage)?;
     let original =
         std::fs::read_to_string(&stage.abs_path).map_err(|e| format!("{}: {e}", stage.rel_path))?;
     let module = naga::front::wgsl::parse_str(&linked.text).map_err(|e| {
@@ -403,14 +442,20 @@ pub fn build_stage(crate_root: &Path, stage: &StageFile) -> Result<Stage, String
     })
 }
 
-/// Build every stage; on failure return *all* errors, one rendered message per broken stage.
+/// Build every stage of a crate's `shaders/`; on failure return *all* errors, one rendered
+/// message per broken stage.
 pub fn build_all(crate_root: &Path) -> Result<Vec<Stage>, Vec<String>> {
-    let files = discover(&crate_root.join("shaders"))
-        .map_err(|e| vec![format!("cannot read shaders/: {e}")])?;
+    build_dir(&ShaderDir::new(crate_root, "shaders"))
+}
+
+/// [`build_all`] for any shader folder.
+pub fn build_dir(shaders: &ShaderDir) -> Result<Vec<Stage>, Vec<String>> {
+    let files =
+        discover(shaders).map_err(|e| vec![format!("cannot read {}/: {e}", shaders.dir)])?;
     let mut stages = Vec::new();
     let mut errors = Vec::new();
     for f in &files {
-        match build_stage(crate_root, f) {
+        match build_stage(shaders, f) {
             Ok(s) => stages.push(s),
             Err(e) => errors.push(e),
         }

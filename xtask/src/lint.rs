@@ -1,9 +1,9 @@
 //! `cargo xtask lint`: naga validation, translation to every wgpu backend language, style lints.
 
-use std::path::Path;
 use std::process::ExitCode;
 
-use crate::toolchain::{Stage, lint, reflect::reflect};
+use crate::toolchain::lint::{self, LintConfig};
+use crate::toolchain::{ShaderDir, Stage, reflect::reflect};
 
 /// Translate a stage to each backend language; `Err` names the language and why.
 pub fn translate_all(stage: &Stage) -> Vec<(&'static str, Result<usize, String>)> {
@@ -84,38 +84,58 @@ pub fn translate_all(stage: &Stage) -> Vec<(&'static str, Result<usize, String>)
     out
 }
 
-pub fn run(root: &Path) -> ExitCode {
-    let Some(stages) = crate::stages(root) else {
-        return ExitCode::FAILURE;
+/// What `lint` found over a folder.
+pub struct Report {
+    /// Every finding as `file:line:col: [lint] message` (portability first, per stage).
+    pub lines: Vec<String>,
+    /// Per stage (`room::name`), the languages it translated to.
+    pub translated: Vec<(String, Vec<&'static str>)>,
+}
+
+/// Translate every stage to every backend language and run the lints `config` selects.
+pub fn findings(stages: &[Stage], config: &LintConfig) -> Report {
+    let mut report = Report {
+        lines: Vec::new(),
+        translated: Vec::new(),
     };
-    let mut failures = 0;
-    for stage in &stages {
-        let r = reflect(stage);
+    for stage in stages {
         let mut langs = Vec::new();
         for (lang, result) in translate_all(stage) {
             match result {
                 Ok(_) => langs.push(lang),
-                Err(e) => {
-                    failures += 1;
-                    println!(
-                        "{}:1:1: [portability] cannot translate to {lang}: {e}",
-                        stage.file.rel_path
-                    );
-                }
+                Err(e) => report.lines.push(format!(
+                    "{}:1:1: [portability] cannot translate to {lang}: {e}",
+                    stage.file.rel_path
+                )),
             }
         }
-        let violations = lint::run(stage, &r);
-        for v in &violations {
-            println!("{v}");
-        }
-        failures += violations.len();
-        eprintln!(
-            "  {:<28} valid; {}; {} lint finding(s)",
-            stage.file.id(),
-            langs.join(", "),
-            violations.len()
+        report.translated.push((stage.file.id(), langs));
+        let r = reflect(stage);
+        report.lines.extend(
+            lint::run_with(stage, &r, config)
+                .iter()
+                .map(|v| v.to_string()),
         );
     }
+    report
+}
+
+pub fn run(shaders: &ShaderDir, config: &LintConfig) -> ExitCode {
+    if let Err(e) = config.check() {
+        eprintln!("{e}");
+        return ExitCode::FAILURE;
+    }
+    let Some(stages) = crate::stages_in(shaders) else {
+        return ExitCode::FAILURE;
+    };
+    let report = findings(&stages, config);
+    for line in &report.lines {
+        println!("{line}");
+    }
+    for (id, langs) in &report.translated {
+        eprintln!("  {id:<28} valid; {}", langs.join(", "));
+    }
+    let failures = report.lines.len();
     if failures > 0 {
         eprintln!("{failures} problem(s)");
         ExitCode::FAILURE
@@ -143,6 +163,103 @@ mod tests {
                 assert!(r.is_ok(), "{} -> {lang}: {:?}", s.file.id(), r);
             }
         }
+    }
+
+    /// A user's folder (any name, anywhere): its stages build, each finding names the file as
+    /// given, line and column, a file's allow comment (with a reason) turns a lint off for that
+    /// file alone, and `--only` / `--allow` select lints.
+    #[test]
+    fn any_folder_lints_with_file_line_col_and_allows() {
+        let base = std::env::temp_dir().join(format!("fieldkit-lint-{}", std::process::id()));
+        let room = base.join("user/shaders/room");
+        std::fs::create_dir_all(&room).unwrap();
+        std::fs::create_dir_all(base.join("user/shaders/shared")).unwrap();
+        std::fs::write(
+            base.join("user/shaders/shared/math.wesl"),
+            "// Helpers.\n\nfn twice(x: u32) -> u32 {\n    return x * 2u;\n}\n",
+        )
+        .unwrap();
+        let body = "@group(0) @binding(0) var<storage, read_write> data: array<u32>;\n\
+                    @group(0) @binding(1) var<uniform> unused: vec4<f32>;\n\n\
+                    @compute @workgroup_size(64)\n\
+                    fn main(@builtin(global_invocation_id) id: vec3<u32>) {\n    \
+                    data[id.x] = twice(data[id.x]);\n}\n";
+        let import = "import package::shared::math::twice;\n\n";
+        // No header comment, an unused binding.
+        std::fs::write(room.join("plain.wgsl"), format!("{import}{body}")).unwrap();
+        // The same, allowing both for itself, with a reason.
+        std::fs::write(
+            room.join("allowed.wgsl"),
+            format!(
+                "{import}// lint: allow(header-comment, unused-binding): generated by a tool\n{body}"
+            ),
+        )
+        .unwrap();
+        // An allow without a reason, and one naming no lint.
+        std::fs::write(
+            room.join("careless.wgsl"),
+            format!("// Doubles.\n// lint: allow(unused-binding)\n// lint: allow(no-such-lint): why\n{import}{body}"),
+        )
+        .unwrap();
+        let dir = ShaderDir::new(&base, "user/shaders/");
+        let stages = crate::stages_in(&dir).expect("the user's stages build");
+        assert_eq!(stages.len(), 3);
+        let all = findings(&stages, &LintConfig::default()).lines;
+        let of = |file: &str| -> Vec<&String> {
+            all.iter()
+                .filter(|l| l.starts_with(&format!("user/shaders/room/{file}.wgsl:")))
+                .collect()
+        };
+        let plain = of("plain");
+        assert_eq!(plain.len(), 2, "{all:#?}");
+        assert!(plain[0].starts_with("user/shaders/room/plain.wgsl:1:1: [header-comment]"));
+        assert!(
+            plain[1].starts_with("user/shaders/room/plain.wgsl:4:34: [unused-binding]"),
+            "{}",
+            plain[1]
+        );
+        assert!(of("allowed").is_empty(), "{all:#?}");
+        let careless = of("careless");
+        assert_eq!(careless.len(), 3, "{all:#?}");
+        assert!(
+            careless[0].starts_with("user/shaders/room/careless.wgsl:2:1: [lint-allow] say why")
+        );
+        assert!(careless[1].contains(":3:1: [lint-allow] `no-such-lint` is not a lint"));
+        assert!(careless[2].contains("[unused-binding]"));
+        let only = LintConfig {
+            only: vec!["header-comment".into()],
+            allow: vec![],
+        };
+        let lines = findings(&stages, &only).lines;
+        assert!(
+            lines.iter().all(|l| !l.contains("[unused-binding]")),
+            "{lines:#?}"
+        );
+        assert!(
+            lines
+                .iter()
+                .any(|l| l.contains("plain.wgsl:1:1: [header-comment]"))
+        );
+        let allow = LintConfig {
+            only: vec![],
+            allow: vec!["unused-binding".into(), "header-comment".into()],
+        };
+        let lines = findings(&stages, &allow).lines;
+        assert_eq!(
+            lines.len(),
+            2,
+            "only the careless allows are left: {lines:#?}"
+        );
+        assert!(
+            LintConfig {
+                only: vec!["nope".into()],
+                allow: vec![]
+            }
+            .check()
+            .unwrap_err()
+            .contains("`nope` is not a lint")
+        );
+        std::fs::remove_dir_all(&base).unwrap();
     }
 
     #[test]

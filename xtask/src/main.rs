@@ -30,8 +30,21 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Validate every stage with naga, translate it to SPIR-V, MSL, HLSL and GLSL, and run the style lints.
-    Lint,
+    /// Validate every stage with naga, translate it to SPIR-V, MSL, HLSL and GLSL, and run the
+    /// style lints. Exits non-zero on any finding, each printed as `file:line:col: [lint] ...`.
+    /// A file turns a lint off for itself with a line `// lint: allow(name): why`.
+    Lint {
+        /// A shader folder laid out as fieldkit's `shaders/` (a folder per technique, helpers in
+        /// `shared/`), instead of fieldkit's own.
+        #[arg(long)]
+        shaders: Option<PathBuf>,
+        /// Run only this lint (repeatable).
+        #[arg(long)]
+        only: Vec<String>,
+        /// Do not run this lint (repeatable).
+        #[arg(long)]
+        allow: Vec<String>,
+    },
     /// Print each stage's bindings, structs, workgroup sizes and overrides.
     Reflect {
         /// Only stages whose `room::name` contains this.
@@ -39,6 +52,9 @@ enum Command {
         /// JSON instead of tables.
         #[arg(long)]
         json: bool,
+        /// A shader folder laid out as fieldkit's `shaders/`, instead of fieldkit's own.
+        #[arg(long)]
+        shaders: Option<PathBuf>,
     },
     /// What the Vulkan driver made of each compute entry point (registers, spills, ...), through
     /// VK_KHR_pipeline_executable_properties.
@@ -150,8 +166,19 @@ fn crate_root() -> PathBuf {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
-        Command::Lint => lint::run(&crate_root()),
-        Command::Reflect { stage, json } => reflect(&crate_root(), stage.as_deref(), json),
+        Command::Lint {
+            shaders,
+            only,
+            allow,
+        } => lint::run(
+            &shader_dir(shaders.as_deref()),
+            &toolchain::lint::LintConfig { only, allow },
+        ),
+        Command::Reflect {
+            stage,
+            json,
+            shaders,
+        } => reflect(&shader_dir(shaders.as_deref()), stage.as_deref(), json),
         Command::ShaderStats {
             stage,
             overrides,
@@ -247,8 +274,21 @@ fn rerun_release() -> ExitCode {
 }
 
 /// Build every stage or print every error.
+/// The folder `--shaders` names (as given, relative to the working directory), else fieldkit's
+/// own `shaders/`.
+fn shader_dir(shaders: Option<&Path>) -> toolchain::ShaderDir {
+    match shaders {
+        Some(dir) => toolchain::ShaderDir::new(PathBuf::new(), &dir.to_string_lossy()),
+        None => toolchain::ShaderDir::new(crate_root(), "shaders"),
+    }
+}
+
 fn stages(root: &Path) -> Option<Vec<toolchain::Stage>> {
-    match toolchain::build_all(root) {
+    stages_in(&toolchain::ShaderDir::new(root, "shaders"))
+}
+
+fn stages_in(shaders: &toolchain::ShaderDir) -> Option<Vec<toolchain::Stage>> {
+    match toolchain::build_dir(shaders) {
         Ok(s) => Some(s),
         Err(errors) => {
             for e in &errors {
@@ -260,8 +300,8 @@ fn stages(root: &Path) -> Option<Vec<toolchain::Stage>> {
     }
 }
 
-fn reflect(root: &Path, filter: Option<&str>, json: bool) -> ExitCode {
-    let Some(stages) = stages(root) else {
+fn reflect(shaders: &toolchain::ShaderDir, filter: Option<&str>, json: bool) -> ExitCode {
+    let Some(stages) = stages_in(shaders) else {
         return ExitCode::FAILURE;
     };
     let text = reflect_text(&stages, filter, json);

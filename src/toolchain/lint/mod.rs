@@ -47,12 +47,98 @@ pub fn all() -> Vec<Box<dyn Lint>> {
     ]
 }
 
-/// Run every lint on a stage.
+/// Run every lint on a stage (as [`run_with`] with the default configuration: every lint, less
+/// those the file allows).
 pub fn run(stage: &Stage, reflection: &Reflection) -> Vec<Violation> {
-    all()
-        .iter()
-        .flat_map(|l| l.check(stage, reflection))
-        .collect()
+    run_with(stage, reflection, &LintConfig::default())
+}
+
+/// Which lints run over a folder: every lint, or only those in `only` where it is not empty,
+/// less those in `allow`. A file turns lints off for itself with a comment line
+/// `// lint: allow(name, ...): why`; the reason is required.
+#[derive(Debug, Clone, Default)]
+pub struct LintConfig {
+    pub only: Vec<String>,
+    pub allow: Vec<String>,
+}
+
+impl LintConfig {
+    /// `Err` naming the first lint name that is not a lint, and the lints there are.
+    pub fn check(&self) -> Result<(), String> {
+        for name in self.only.iter().chain(&self.allow) {
+            if !is_lint(name) {
+                return Err(unknown(name));
+            }
+        }
+        Ok(())
+    }
+
+    fn runs(&self, name: &str) -> bool {
+        (self.only.is_empty() || self.only.iter().any(|n| n == name))
+            && !self.allow.iter().any(|n| n == name)
+    }
+}
+
+fn is_lint(name: &str) -> bool {
+    all().iter().any(|l| l.name() == name)
+}
+
+fn unknown(name: &str) -> String {
+    let names: Vec<_> = all().iter().map(|l| l.name()).collect();
+    format!("`{name}` is not a lint (lints: {})", names.join(", "))
+}
+
+/// The marker of a file's own allow comment.
+const ALLOW: &str = "// lint: allow(";
+
+/// The lints a stage file allows for itself, and a finding (lint `lint-allow`) for each allow
+/// comment that names no lint, an unknown one, or gives no reason.
+fn file_allows(stage: &Stage) -> (Vec<String>, Vec<Violation>) {
+    let mut names = Vec::new();
+    let mut findings = Vec::new();
+    for (i, line) in stage.original.lines().enumerate() {
+        let Some(at) = line.find(ALLOW) else {
+            continue;
+        };
+        let rest = &line[at + ALLOW.len()..];
+        let mut finding = |message: String| {
+            findings.push(Violation {
+                lint: "lint-allow",
+                file: stage.file.rel_path.clone(),
+                line: i + 1,
+                column: at + 1,
+                message,
+            })
+        };
+        let Some(close) = rest.find(')') else {
+            finding("`// lint: allow(` without its `)`".into());
+            continue;
+        };
+        let reason = rest[close + 1..].trim_start_matches(':').trim();
+        if reason.is_empty() {
+            finding("say why after the allow: `// lint: allow(name): why`".into());
+            continue;
+        }
+        for name in rest[..close].split(',').map(str::trim) {
+            if is_lint(name) {
+                names.push(name.to_string());
+            } else {
+                finding(unknown(name));
+            }
+        }
+    }
+    (names, findings)
+}
+
+/// Run the lints `config` selects on a stage, less those the file allows for itself.
+pub fn run_with(stage: &Stage, reflection: &Reflection, config: &LintConfig) -> Vec<Violation> {
+    let (allowed, mut findings) = file_allows(stage);
+    for l in all() {
+        if config.runs(l.name()) && !allowed.iter().any(|n| n == l.name()) {
+            findings.extend(l.check(stage, reflection));
+        }
+    }
+    findings
 }
 
 /// 1-based line and column of the first match of `pat` in the stage file (1:1 if absent).
