@@ -166,6 +166,38 @@ fn unknown_override_is_an_error() {
     ));
 }
 
+/// A stage's `Overrides` hold the shader's defaults (`override ROWS: u32 = 1u;` in
+/// `edt_rows.wgsl`, `PACK_2D = false`, `AXIS = 1u`, `CELLS = 4096u` in `edt_tile.wgsl`), and
+/// their `constants()` make pipelines.
+#[test]
+fn typed_overrides_hold_the_shader_defaults_and_make_pipelines() {
+    use fieldkit::shaders::distance::{edt_rows, edt_tile};
+    let ctx = noop();
+    assert_eq!(
+        edt_rows::Overrides::default(),
+        edt_rows::Overrides { rows: 1 }
+    );
+    assert_eq!(
+        edt_rows::Overrides { rows: 4 }.constants(),
+        vec![("ROWS", 4.0)]
+    );
+    let tile = edt_tile::Overrides {
+        cells: 2336,
+        ..Default::default()
+    };
+    assert_eq!(
+        tile.constants(),
+        vec![("PACK_2D", 0.0), ("AXIS", 1.0), ("CELLS", 2336.0)]
+    );
+    edt_rows::row_words::Pipeline::with_overrides(
+        &ctx.device,
+        &edt_rows::Overrides { rows: 4 }.constants(),
+    )
+    .expect("a pipeline from typed overrides");
+    edt_tile::tile_columns::Pipeline::with_overrides(&ctx.device, &tile.constants())
+        .expect("a pipeline from typed overrides");
+}
+
 /// Host code written against a different shader interface fails to compile.
 #[test]
 fn drifted_host_code_does_not_compile() {

@@ -375,7 +375,7 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, s: &mut String) {
     let overrides: Vec<String> = r
         .overrides
         .iter()
-        .map(|o| format!("\"{}\"", o.name))
+        .map(|o| format!("\"{}\"", o.id.map_or(o.name.clone(), |id| id.to_string())))
         .collect();
     let main_entry = p.entries.last().unwrap();
     writeln!(
@@ -415,6 +415,99 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, s: &mut String) {
 }
 
 /// Generated Rust for one stage (unformatted).
+/// Rust keywords that WGSL allows as names: a field so named is written raw (`r#match`).
+const RUST_KEYWORDS: &[&str] = &[
+    "as", "async", "await", "box", "crate", "dyn", "extern", "fn", "gen", "impl", "in", "macro",
+    "match", "mod", "move", "mut", "priv", "pub", "ref", "self", "super", "trait", "try", "type",
+    "unsafe", "unsized", "use", "virtual", "where", "yield",
+];
+
+/// The Rust type of an override's field: `Some` for the scalar types an override can have.
+fn override_rust_type(ty: &str) -> Option<&'static str> {
+    Some(match ty {
+        "u32" => "u32",
+        "i32" => "i32",
+        "f32" | "f16" => "f32",
+        "bool" => "bool",
+        _ => return None,
+    })
+}
+
+/// A literal default as Rust source of the field's type.
+fn override_literal(rust: &str, v: f64) -> String {
+    match rust {
+        "bool" => (v != 0.0).to_string(),
+        "f32" => format!("{:?}f32", v as f32),
+        "i32" => format!("{}i32", v as i64),
+        _ => format!("{}u32", v as u64),
+    }
+}
+
+/// `Overrides`: one typed field per `override` (snake case), `Default` where every override has
+/// a literal default (an override the shader computes from others is an `Option`, `None`
+/// leaving it to the shader), and `constants()` for the pipeline.
+fn gen_overrides(r: &Reflection, s: &mut String) {
+    let mut fields = Vec::new();
+    for o in &r.overrides {
+        let Some(rust) = override_rust_type(&o.ty) else {
+            return;
+        };
+        let mut field = o.name.to_lowercase();
+        if RUST_KEYWORDS.contains(&field.as_str()) {
+            field = format!("r#{field}");
+        }
+        let computed = o.has_default && o.default.is_none();
+        fields.push((o, field, rust, computed));
+    }
+    let all_default = fields.iter().all(|(o, ..)| o.has_default);
+    writeln!(s, "/// The stage's `override` constants, typed, with the shader's defaults: pass\n/// [`Overrides::constants`] where a pipeline is made (`bind::ComputePipeline::with_overrides`,\n/// or `wgpu::PipelineCompilationOptions::constants`).\n#[derive(Debug, Clone, Copy, PartialEq)]\npub struct Overrides {{").unwrap();
+    for (o, field, rust, computed) in &fields {
+        let doc = match (o.default, computed) {
+            (Some(v), _) => format!(
+                "`{}` (default {})",
+                o.name,
+                override_literal(rust, v).trim_end_matches(*rust)
+            ),
+            (None, true) => format!("`{}`: `None` keeps the value the shader computes", o.name),
+            (None, false) => format!("`{}` (no default: required)", o.name),
+        };
+        let ty = if *computed {
+            format!("Option<{rust}>")
+        } else {
+            rust.to_string()
+        };
+        writeln!(s, "    /// {doc}.\n    pub {field}: {ty},").unwrap();
+    }
+    writeln!(s, "}}").unwrap();
+    if all_default {
+        let inits: Vec<String> = fields
+            .iter()
+            .map(|(o, field, rust, computed)| match o.default {
+                Some(v) if !computed => format!("{field}: {}", override_literal(rust, v)),
+                _ => format!("{field}: None"),
+            })
+            .collect();
+        writeln!(s, "impl Default for Overrides {{\n    fn default() -> Self {{\n        Self {{ {} }}\n    }}\n}}", inits.join(", ")).unwrap();
+    }
+    let pairs: Vec<String> = fields
+        .iter()
+        .map(|(o, field, rust, computed)| {
+            // An override with an `@id` is set by its id, as naga and wgpu look it up.
+            let key = o.id.map_or(o.name.clone(), |id| id.to_string());
+            let value = match *rust {
+                "bool" => "v as u32 as f64".to_string(),
+                _ => "v as f64".to_string(),
+            };
+            if *computed {
+                format!("self.{field}.map(|v| (\"{key}\", {value}))")
+            } else {
+                format!("{{ let v = self.{field}; Some((\"{key}\", {value})) }}")
+            }
+        })
+        .collect();
+    writeln!(s, "impl Overrides {{\n    /// `(name, value)` for each override to set, as pipelines take them.\n    pub fn constants(&self) -> Vec<(&'static str, f64)> {{\n        [{}].into_iter().flatten().collect()\n    }}\n}}", pairs.join(", ")).unwrap();
+}
+
 pub fn stage_module(stage: &Stage) -> String {
     let r = reflect(stage);
     let mut s = String::new();
@@ -444,6 +537,7 @@ pub fn stage_module(stage: &Stage) -> String {
     if !r.overrides.is_empty() {
         writeln!(s, "/// Pipeline-overridable constants (`override` declarations).\npub const OVERRIDES: &[&str] = &[{}];",
             r.overrides.iter().map(|o| format!("\"{}\"", o.name)).collect::<Vec<_>>().join(", ")).unwrap();
+        gen_overrides(&r, &mut s);
     }
     gen_structs(&r, &mut s);
     for p in pipelines(&r) {
@@ -512,6 +606,59 @@ struct FsOut { @location(0) colour: vec4<f32>, @location(1) id: u32 }
     /// 16-byte-aligned `Vec4` made such a struct 32 bytes against a stride of 24, which neither
     /// `bytemuck::Pod` nor the stride assertion accepts. Fields are arrays of 4-byte scalars,
     /// so the struct is exactly the stride.
+    /// Every kind of override: literal defaults of each scalar type, an `@id`, a default the
+    /// shader computes, none at all, and a name that is a Rust keyword.
+    #[test]
+    fn overrides_are_typed_with_their_defaults() {
+        let src = "// Test overrides.
+override ROWS: u32 = 4u;
+override GAIN: f32 = 0.5;
+override BIAS: i32 = -3;
+override SIGNED: bool = true;
+@id(7) override SEED: u32 = 9u;
+override dyn: u32 = 1u;
+@group(0) @binding(0) var<storage, read_write> out: array<f32>;
+@compute @workgroup_size(1) fn main() {
+    out[0] = f32(ROWS) * GAIN + f32(BIAS) + f32(SIGNED) + f32(SEED) + f32(dyn);
+}
+";
+        let code = format(&stage_module(&stage(src)));
+        let flat: String = code.split_whitespace().collect();
+        for want in [
+            "pubrows:u32,",
+            "pubgain:f32,",
+            "pubbias:i32,",
+            "pubsigned:bool,",
+            "pubseed:u32,",
+            "pubr#dyn:u32,",
+            "rows:4u32,gain:0.5f32,bias:-3i32,signed:true,seed:9u32,r#dyn:1u32",
+            // An `@id` override is set by its id.
+            "Some((\"7\",vasf64))",
+            "Some((\"SIGNED\",vasu32asf64))",
+            "overrides:&[\"ROWS\",\"GAIN\",\"BIAS\",\"SIGNED\",\"7\",\"dyn\"]",
+        ] {
+            assert!(flat.contains(want), "{want} in {code}");
+        }
+        let computed = "// Test computed and required overrides.
+override BASE: u32;
+override TWICE: u32 = BASE * 2u;
+@group(0) @binding(0) var<storage, read_write> out: array<u32>;
+@compute @workgroup_size(1) fn main() {
+    out[0] = TWICE;
+}
+";
+        let code = format(&stage_module(&stage(computed)));
+        let flat: String = code.split_whitespace().collect();
+        assert!(flat.contains("pubbase:u32,"), "{code}");
+        assert!(flat.contains("pubtwice:Option<u32>,"), "{code}");
+        assert!(
+            flat.contains("self.twice.map(|v|(\"TWICE\",vasf64))"),
+            "{code}"
+        );
+        // BASE has no default, so there is no `Default` to fill it with.
+        assert!(!code.contains("impl Default for Overrides"), "{code}");
+    }
+
     #[test]
     fn vertex_structs_have_no_padding() {
         let src = "// Test vertex mix.

@@ -130,6 +130,34 @@ pub struct Override {
     pub id: Option<u16>,
     pub ty: String,
     pub has_default: bool,
+    /// The default where it is a literal (`override ROWS: u32 = 1u;`), as f64 (bool: 0 or 1);
+    /// `None` where there is none or it is an expression the shader computes.
+    pub default: Option<f64>,
+}
+
+/// A literal initializer's value, as f64.
+fn literal_value(
+    module: &naga::Module,
+    init: Option<naga::Handle<naga::Expression>>,
+) -> Option<f64> {
+    use naga::Literal as L;
+    match module.global_expressions[init?] {
+        naga::Expression::Literal(l) => Some(match l {
+            L::F64(v) => v,
+            L::F32(v) => v as f64,
+            L::F16(v) => f64::from(v),
+            L::U32(v) => v as f64,
+            L::I32(v) => v as f64,
+            L::U64(v) => v as f64,
+            L::I64(v) => v as f64,
+            L::U16(v) => v as f64,
+            L::I16(v) => v as f64,
+            L::Bool(v) => v as u32 as f64,
+            L::AbstractInt(v) => v as f64,
+            L::AbstractFloat(v) => v,
+        }),
+        _ => None,
+    }
 }
 
 fn scalar_name(s: naga::Scalar) -> String {
@@ -599,6 +627,7 @@ pub fn reflect(stage: &Stage) -> Reflection {
             id: o.id,
             ty: wgsl_type(module, o.ty),
             has_default: o.init.is_some(),
+            default: literal_value(module, o.init),
         })
         .collect();
 
