@@ -53,7 +53,9 @@ override PACK_2D: bool = false;
 // dynamically indexed vector can be lowered to a private array in memory).
 override AXIS: u32 = 1u;
 // Tile cells: (column_cells << lg_columns), set by the host per column length.
-override CELLS: u32 = 4096u;
+// The default is the most WebGPU's default 16 KiB of workgroup memory holds beside
+// `envelope_size`.
+override CELLS: u32 = 3840u;
 
 const THREADS: u32 = 256u;
 // "Nothing found yet": above any squared distance in range.

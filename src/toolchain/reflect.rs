@@ -81,6 +81,9 @@ pub struct EntryPoint {
     pub name: String,
     pub stage: String,
     pub workgroup_size: [u32; 3],
+    /// Bytes of `var<workgroup>` the entry point uses (array lengths from overrides at their
+    /// defaults).
+    pub workgroup_storage: u32,
     pub uses: Vec<BindingUse>,
     pub vertex_inputs: Vec<VertexInput>,
     pub fragment_outputs: Vec<FragmentOutput>,
@@ -581,10 +584,17 @@ pub fn reflect(stage: &Stage) -> Reflection {
         } else {
             vec![]
         };
+        let workgroup_storage = module
+            .global_variables
+            .iter()
+            .filter(|(h, v)| v.space == AddressSpace::WorkGroup && !fi[*h].is_empty())
+            .map(|(_, v)| module.types[v.ty].inner.size(module.to_ctx()))
+            .sum();
         entry_points.push(EntryPoint {
             name: ep.name.clone(),
             stage: stage_name.into(),
             workgroup_size: ep.workgroup_size,
+            workgroup_storage,
             uses,
             vertex_inputs,
             fragment_outputs,

@@ -4,6 +4,7 @@
 mod ascending_bindings;
 mod header_comment;
 mod unused_binding;
+mod webgpu_limits;
 mod workgroup_limits;
 
 use super::Stage;
@@ -44,6 +45,7 @@ pub fn all() -> Vec<Box<dyn Lint>> {
         Box::new(ascending_bindings::AscendingBindings),
         Box::new(unused_binding::UnusedBinding),
         Box::new(workgroup_limits::WorkgroupLimits),
+        Box::new(webgpu_limits::WebgpuLimits),
     ]
 }
 

@@ -1,0 +1,175 @@
+use super::{Lint, Violation, locate};
+use crate::toolchain::Stage;
+use crate::toolchain::reflect::{BindingKind, Reflection};
+
+/// WebGPU's default limits (what `wgpu::Limits::default()` asks of a device), per shader stage
+/// where the limit is per stage.
+pub const STORAGE_BUFFERS: usize = 8;
+pub const STORAGE_TEXTURES: usize = 4;
+pub const SAMPLED_TEXTURES: usize = 16;
+pub const SAMPLERS: usize = 16;
+pub const UNIFORM_BUFFERS: usize = 12;
+pub const BIND_GROUPS: u32 = 4;
+pub const WORKGROUP_STORAGE: u32 = 16384;
+pub const UNIFORM_BINDING: u32 = 65536;
+/// Storage texture formats WebGPU allows `read_write` without a feature.
+pub const READ_WRITE_FORMATS: &[&str] = &["r32float", "r32uint", "r32sint"];
+
+/// Each entry point fits WebGPU's default limits, so it runs on every adapter wgpu supports.
+pub struct WebgpuLimits;
+
+impl Lint for WebgpuLimits {
+    fn name(&self) -> &'static str {
+        "webgpu-limits"
+    }
+    fn summary(&self) -> &'static str {
+        "bindings per stage, bind groups, workgroup memory, uniform size and storage-texture access within WebGPU defaults"
+    }
+    fn explanation(&self) -> &'static str {
+        "Past WebGPU's default limits a pipeline needs a device created with higher limits or a native feature; browsers and many mobile adapters refuse it. A file that needs more says so with `// lint: allow(webgpu-limits): why` and the host asks for the limit."
+    }
+    fn check(&self, stage: &Stage, r: &Reflection) -> Vec<Violation> {
+        let mut out = Vec::new();
+        for ep in &r.entry_points {
+            let (line, column) = locate(&stage.original, &format!("fn {}", ep.name));
+            let mut say = |message: String| {
+                out.push(Violation {
+                    lint: self.name(),
+                    file: stage.file.rel_path.clone(),
+                    line,
+                    column,
+                    message: format!("`{}`: {message}", ep.name),
+                })
+            };
+            let used: Vec<_> = ep
+                .uses
+                .iter()
+                .filter_map(|u| {
+                    r.bindings
+                        .iter()
+                        .find(|b| b.group == u.group && b.binding == u.binding)
+                })
+                .collect();
+            let count =
+                |f: &dyn Fn(&BindingKind) -> bool| used.iter().filter(|b| f(&b.kind)).count();
+            let counts = [
+                (
+                    "storage buffers",
+                    count(&|k| matches!(k, BindingKind::Storage { .. })),
+                    STORAGE_BUFFERS,
+                ),
+                (
+                    "storage textures",
+                    count(&|k| matches!(k, BindingKind::StorageTexture { .. })),
+                    STORAGE_TEXTURES,
+                ),
+                (
+                    "sampled textures",
+                    count(&|k| matches!(k, BindingKind::Texture { .. })),
+                    SAMPLED_TEXTURES,
+                ),
+                (
+                    "samplers",
+                    count(&|k| matches!(k, BindingKind::Sampler { .. })),
+                    SAMPLERS,
+                ),
+                (
+                    "uniform buffers",
+                    count(&|k| matches!(k, BindingKind::Uniform { .. })),
+                    UNIFORM_BUFFERS,
+                ),
+            ];
+            for (what, n, max) in counts {
+                if n > max {
+                    say(format!(
+                        "{n} {what} in one stage, past WebGPU's default {max}"
+                    ));
+                }
+            }
+            if let Some(group) = used.iter().map(|b| b.group).max()
+                && group >= BIND_GROUPS
+            {
+                say(format!(
+                    "bind group {group} needs {} bind groups, past WebGPU's default {BIND_GROUPS}",
+                    group + 1
+                ));
+            }
+            if ep.workgroup_storage > WORKGROUP_STORAGE {
+                say(format!(
+                    "{} bytes of workgroup memory, past WebGPU's default {WORKGROUP_STORAGE}",
+                    ep.workgroup_storage
+                ));
+            }
+            for b in &used {
+                match &b.kind {
+                    BindingKind::Uniform { min_size, .. } if *min_size > UNIFORM_BINDING => {
+                        say(format!(
+                            "uniform `{}` is {min_size} bytes, past WebGPU's default {UNIFORM_BINDING}",
+                            b.name
+                        ))
+                    }
+                    BindingKind::StorageTexture { format, access, .. }
+                        if access == "read_write"
+                            && !READ_WRITE_FORMATS
+                                .contains(&format.to_ascii_lowercase().as_str()) =>
+                    {
+                        let format = format.to_ascii_lowercase();
+                        say(format!(
+                            "storage texture `{}` is read_write in {format}, which WebGPU allows only for r32float, r32uint and r32sint without a native feature",
+                            b.name
+                        ))
+                    }
+                    _ => {}
+                }
+            }
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::toolchain::{lint::test_util::stage, reflect::reflect};
+
+    #[test]
+    fn flags_what_webgpu_defaults_refuse() {
+        let bad = stage(
+            "var<workgroup> big: array<u32, 5000>;
+@group(4) @binding(0) var<storage, read_write> a: array<u32>;
+@group(0) @binding(1) var img: texture_storage_2d<rgba8unorm, read_write>;
+@compute @workgroup_size(64) fn main(@builtin(local_invocation_index) i: u32) {
+    big[i] = a[i];
+    a[i] = big[63u - i];
+    textureStore(img, vec2<u32>(i, 0u), textureLoad(img, vec2<u32>(0u, i)));
+}",
+        );
+        let v = WebgpuLimits.check(&bad, &reflect(&bad));
+        let text: Vec<_> = v.iter().map(|v| v.message.clone()).collect();
+        assert_eq!(v.len(), 3, "{text:#?}");
+        assert!(
+            text[0].contains("bind group 4 needs 5 bind groups"),
+            "{text:#?}"
+        );
+        assert!(
+            text[1].contains("20000 bytes of workgroup memory"),
+            "{text:#?}"
+        );
+        assert!(
+            text[2].contains("`img` is read_write in rgba8unorm"),
+            "{text:#?}"
+        );
+        let good = stage(
+            "var<workgroup> small: array<u32, 4096>;
+@group(3) @binding(0) var<storage, read_write> a: array<u32>;
+@group(0) @binding(1) var img: texture_storage_2d<r32float, read_write>;
+@compute @workgroup_size(64) fn main(@builtin(local_invocation_index) i: u32) {
+    small[i] = a[i];
+    a[i] = small[63u - i];
+    textureStore(img, vec2<u32>(i, 0u), textureLoad(img, vec2<u32>(0u, i)));
+}",
+        );
+        let v = WebgpuLimits.check(&good, &reflect(&good));
+        assert!(v.is_empty(), "{v:#?}");
+    }
+}
