@@ -1,7 +1,6 @@
 //! `cargo xtask <command>`: a thin command layer over fieldkit and its toolchain.
 
-#[path = "../../src/toolchain/mod.rs"]
-mod toolchain;
+use fieldkit_build as toolchain;
 
 mod bench_bind;
 mod bench_distance;

@@ -1,5 +1,5 @@
 use super::{Lint, Violation};
-use crate::toolchain::{Stage, reflect::Reflection};
+use crate::{Stage, reflect::Reflection};
 
 /// A stage file opens with a comment saying what it does (and the source it follows).
 pub struct HeaderComment;
@@ -34,7 +34,7 @@ impl Lint for HeaderComment {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::toolchain::{lint::test_util::stage, reflect::reflect};
+    use crate::{lint::test_util::stage, reflect::reflect};
 
     #[test]
     fn flags_missing_header_and_accepts_present_one() {

@@ -1,5 +1,5 @@
 use super::{Lint, Violation, locate_binding};
-use crate::toolchain::{Stage, reflect::Reflection};
+use crate::{Stage, reflect::Reflection};
 
 /// Every declared binding is used by some entry point.
 pub struct UnusedBinding;
@@ -44,7 +44,7 @@ impl Lint for UnusedBinding {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::toolchain::{lint::test_util::stage, reflect::reflect};
+    use crate::{lint::test_util::stage, reflect::reflect};
 
     #[test]
     fn flags_unused_only() {

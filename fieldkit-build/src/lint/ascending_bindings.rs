@@ -1,5 +1,5 @@
 use super::{Lint, Violation, locate_binding};
-use crate::toolchain::{Stage, reflect::Reflection};
+use crate::{Stage, reflect::Reflection};
 
 /// Bindings are declared in ascending `(group, binding)` order.
 pub struct AscendingBindings;
@@ -41,7 +41,7 @@ impl Lint for AscendingBindings {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::toolchain::{lint::test_util::stage, reflect::reflect};
+    use crate::{lint::test_util::stage, reflect::reflect};
 
     const BODY: &str = "@compute @workgroup_size(1) fn main() { _ = a; _ = b; }";
 

@@ -1,7 +1,18 @@
-//! The shader toolchain: find stages, link their WESL imports, validate with naga, reflect, and
-//! generate host code. Shared by `build.rs` (through `#[path]`) and `xtask`, so codegen, `lint`
-//! and `reflect` always see the same thing.
-#![allow(dead_code)]
+//! fieldkit's shader toolchain, for build scripts: find the stages of a shader folder, link their
+//! WESL imports, validate them with naga (every error at its original file:line:col), reflect
+//! them, lint them, and generate typed wgpu bindings. fieldkit's own `build.rs` and `xtask`
+//! run it, and so can yours:
+//!
+//! ```no_run
+//! // The body of `fn main` in the build.rs of a crate with `fieldkit` in [dependencies] and
+//! // `fieldkit-build` in [build-dependencies]; its shaders in `shaders/<technique>/<stage>.wgsl`,
+//! // helpers it imports (`import package::shared::name::item;`) in `shaders/shared/`.
+//! fieldkit_build::Builder::new("shaders").build_or_exit();
+//! ```
+//!
+//! and in the crate: `mod shaders { include!(concat!(env!("OUT_DIR"), "/shaders.rs")); }`.
+//! The generated code uses `fieldkit::bind` (the runtime half: resources, pipelines, typed
+//! binding errors) and derives from `bytemuck` and `encase`, which the crate depends on too.
 
 pub mod codegen;
 pub mod lint;
@@ -467,6 +478,82 @@ pub fn build_dir(shaders: &ShaderDir) -> Result<Vec<Stage>, Vec<String>> {
     }
 }
 
+/// A shader folder to build into generated bindings in `OUT_DIR`, from a build script.
+#[derive(Debug, Clone)]
+pub struct Builder {
+    dir: String,
+    runtime: String,
+    out_file: String,
+}
+
+impl Builder {
+    /// The shader folder, relative to the crate root (`CARGO_MANIFEST_DIR`).
+    pub fn new(dir: &str) -> Self {
+        Self {
+            dir: dir.to_string(),
+            runtime: "::fieldkit".into(),
+            out_file: "shaders.rs".into(),
+        }
+    }
+
+    /// The path the generated code reaches fieldkit's runtime types by (`::fieldkit` unless set;
+    /// fieldkit itself uses `crate`).
+    pub fn runtime(mut self, path: &str) -> Self {
+        self.runtime = path.to_string();
+        self
+    }
+
+    /// The generated file's name in `OUT_DIR` (`shaders.rs` unless set).
+    pub fn out_file(mut self, name: &str) -> Self {
+        self.out_file = name.to_string();
+        self
+    }
+
+    /// Build every stage and write the bindings to `OUT_DIR`, telling cargo to rerun when the
+    /// folder changes. Returns the file written, or every stage's errors.
+    pub fn build(&self) -> Result<PathBuf, Vec<String>> {
+        let root = PathBuf::from(
+            std::env::var("CARGO_MANIFEST_DIR")
+                .map_err(|e| vec![format!("CARGO_MANIFEST_DIR: {e}")])?,
+        );
+        let out =
+            PathBuf::from(std::env::var("OUT_DIR").map_err(|e| vec![format!("OUT_DIR: {e}")])?)
+                .join(&self.out_file);
+        // A directory here makes cargo rerun when any file under it changes.
+        println!("cargo:rerun-if-changed={}", self.dir);
+        self.build_to(&root, &out)
+    }
+
+    /// [`Self::build`] from `crate_root` into `out`, without cargo's environment.
+    pub fn build_to(&self, crate_root: &Path, out: &Path) -> Result<PathBuf, Vec<String>> {
+        let stages = build_dir(&ShaderDir::new(crate_root, &self.dir))?;
+        let code = codegen::generate_for(&stages, &self.runtime);
+        // Only touch the file when it changes, so dependents are not rebuilt for nothing.
+        if std::fs::read_to_string(out).ok().as_deref() != Some(code.as_str()) {
+            std::fs::write(out, code).map_err(|e| vec![format!("{}: {e}", out.display())])?;
+        }
+        Ok(out.to_path_buf())
+    }
+
+    /// [`Self::build`], and on failure every error as a cargo warning and on stderr, then exit
+    /// with status 1 (what a build script wants).
+    pub fn build_or_exit(&self) -> PathBuf {
+        match self.build() {
+            Ok(p) => p,
+            Err(errors) => {
+                for e in &errors {
+                    for line in e.lines() {
+                        println!("cargo:warning={line}");
+                    }
+                    eprintln!("{e}");
+                }
+                eprintln!("{} shader(s) failed to validate", errors.len());
+                std::process::exit(1);
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -486,6 +573,52 @@ mod tests {
             std::fs::write(root.join(format!("shaders/room/{name}.wgsl")), src).unwrap();
         }
         root
+    }
+
+    /// `Builder` writes bindings that reach fieldkit's runtime through the path asked for, and
+    /// leaves an unchanged file untouched; a broken stage is an error at its file:line:col.
+    #[test]
+    fn builder_writes_bindings_for_a_user_crate() {
+        let root = tree(&[(
+            "double",
+            "// Doubles each value.\nimport package::shared::util::twice;\n@group(0) @binding(0) var<storage, read_write> v: array<u32>;\n@compute @workgroup_size(64)\nfn main(@builtin(global_invocation_id) id: vec3<u32>) {\n    v[id.x] = twice(v[id.x]);\n}\n",
+        )]);
+        let out = root.join("shaders.rs");
+        Builder::new("shaders")
+            .build_to(&root, &out)
+            .expect("builds");
+        let code = std::fs::read_to_string(&out).unwrap();
+        assert!(
+            code.starts_with("// @generated by fieldkit-build"),
+            "{code}"
+        );
+        assert!(
+            code.contains("::fieldkit::bind::StorageReadWrite"),
+            "{code}"
+        );
+        assert!(!code.contains("crate::bind"), "{code}");
+        let before = std::fs::metadata(&out).unwrap().modified().unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(20));
+        Builder::new("shaders").build_to(&root, &out).unwrap();
+        assert_eq!(std::fs::metadata(&out).unwrap().modified().unwrap(), before);
+        let own = Builder::new("shaders").runtime("crate");
+        own.build_to(&root, &out).unwrap();
+        assert!(
+            std::fs::read_to_string(&out)
+                .unwrap()
+                .contains("crate::bind::StorageReadWrite")
+        );
+        std::fs::write(
+            root.join("shaders/room/double.wgsl"),
+            "// Broken.\n@compute @workgroup_size(64)\nfn main() {\n    let x: f32 = 1u;\n}\n",
+        )
+        .unwrap();
+        let errors = Builder::new("shaders").build_to(&root, &out).unwrap_err();
+        assert!(
+            errors[0].contains("shaders/room/double.wgsl:4:"),
+            "{errors:#?}"
+        );
+        std::fs::remove_dir_all(&root).unwrap();
     }
 
     /// Bindings the generated code cannot hold are build errors at their declaration, not

@@ -1,5 +1,5 @@
 use super::{Lint, Violation, locate};
-use crate::toolchain::{Stage, reflect::Reflection};
+use crate::{Stage, reflect::Reflection};
 
 /// WebGPU's default limits: every adapter wgpu supports must accept these.
 pub const MAX_X: u32 = 256;
@@ -43,7 +43,7 @@ impl Lint for WorkgroupLimits {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::toolchain::{lint::test_util::stage, reflect::reflect};
+    use crate::{lint::test_util::stage, reflect::reflect};
 
     #[test]
     fn flags_too_many_invocations() {

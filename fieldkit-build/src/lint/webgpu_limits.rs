@@ -1,6 +1,6 @@
 use super::{Lint, Violation, locate};
-use crate::toolchain::Stage;
-use crate::toolchain::reflect::{BindingKind, Reflection};
+use crate::Stage;
+use crate::reflect::{BindingKind, Reflection};
 
 /// WebGPU's default limits (what `wgpu::Limits::default()` asks of a device), per shader stage
 /// where the limit is per stage.
@@ -130,7 +130,7 @@ impl Lint for WebgpuLimits {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::toolchain::{lint::test_util::stage, reflect::reflect};
+    use crate::{lint::test_util::stage, reflect::reflect};
 
     #[test]
     fn flags_what_webgpu_defaults_refuse() {
