@@ -96,6 +96,82 @@ pub struct EntryInfo {
     /// bounding ([`stage_checks`]). True for fieldkit's own stages; set it for a shader of your
     /// own only where you know the same of it.
     pub loops_end: bool,
+    /// The device limits the pipeline needs.
+    pub needs: Needs,
+}
+
+/// The device limits a pipeline needs, as the build reflected them from its shader (named as
+/// `wgpu::Limits` names them; per-stage counts are the larger of its entry points'; workgroup
+/// memory has override-sized arrays at their defaults).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Needs {
+    /// Storage buffers bound in one shader stage.
+    pub max_storage_buffers_per_shader_stage: u32,
+    /// Storage textures bound in one shader stage.
+    pub max_storage_textures_per_shader_stage: u32,
+    /// Sampled textures bound in one shader stage.
+    pub max_sampled_textures_per_shader_stage: u32,
+    /// Samplers bound in one shader stage.
+    pub max_samplers_per_shader_stage: u32,
+    /// Uniform buffers bound in one shader stage.
+    pub max_uniform_buffers_per_shader_stage: u32,
+    /// Bind groups (the highest group used + 1).
+    pub max_bind_groups: u32,
+    /// Bytes of the largest uniform binding.
+    pub max_uniform_buffer_binding_size: u32,
+    /// Bytes of `var<workgroup>` memory.
+    pub max_compute_workgroup_storage_size: u32,
+    /// Invocations per workgroup (compute).
+    pub max_compute_invocations_per_workgroup: u32,
+}
+
+/// Visit every field of [`Needs`] with the same-named field of `wgpu::Limits`.
+macro_rules! each_need {
+    ($m:ident) => {
+        $m!(max_storage_buffers_per_shader_stage);
+        $m!(max_storage_textures_per_shader_stage);
+        $m!(max_sampled_textures_per_shader_stage);
+        $m!(max_samplers_per_shader_stage);
+        $m!(max_uniform_buffers_per_shader_stage);
+        $m!(max_bind_groups);
+        $m!(max_uniform_buffer_binding_size);
+        $m!(max_compute_workgroup_storage_size);
+        $m!(max_compute_invocations_per_workgroup);
+    };
+}
+
+impl Needs {
+    /// `limits` raised wherever this needs more: what to ask `request_device` for (fold it over
+    /// every pipeline the application makes).
+    ///
+    /// ```
+    /// use fieldkit::shaders::distance::edt_rows;
+    /// let limits = edt_rows::rows::INFO.needs.raise(wgpu::Limits::downlevel_defaults());
+    /// assert!(limits.max_compute_workgroup_storage_size >= 11264);
+    /// ```
+    pub fn raise(&self, mut limits: wgpu::Limits) -> wgpu::Limits {
+        macro_rules! up {
+            ($f:ident) => {
+                limits.$f = limits.$f.max(self.$f.into());
+            };
+        }
+        each_need!(up);
+        limits
+    }
+
+    /// The first limit of `limits` this needs more of: its name, what is needed, what is
+    /// offered.
+    pub fn lacking(&self, limits: &wgpu::Limits) -> Option<(&'static str, u64, u64)> {
+        macro_rules! check {
+            ($f:ident) => {
+                if u64::from(self.$f) > u64::from(limits.$f) {
+                    return Some((stringify!($f), self.$f.into(), limits.$f.into()));
+                }
+            };
+        }
+        each_need!(check);
+        None
+    }
 }
 
 impl EntryInfo {

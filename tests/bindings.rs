@@ -198,6 +198,54 @@ fn typed_overrides_hold_the_shader_defaults_and_make_pipelines() {
         .expect("a pipeline from typed overrides");
 }
 
+/// Each pipeline's `needs` as the build reflected them. The workgroup memory agrees with what the
+/// NVIDIA Vulkan driver reported for the same entry points (`xtask shader-stats edt_rows` on
+/// the H100: Shared Memory Size 11264 for `rows`, 4096 for `rows_2d`).
+#[test]
+fn pipelines_state_the_limits_they_need() {
+    use fieldkit::shaders::distance::{edt_rows, edt_tile};
+    let rows = edt_rows::rows::INFO.needs;
+    assert_eq!(rows.max_compute_workgroup_storage_size, 11264);
+    assert_eq!(
+        edt_rows::rows_2d::INFO
+            .needs
+            .max_compute_workgroup_storage_size,
+        4096
+    );
+    assert_eq!(rows.max_compute_invocations_per_workgroup, 256);
+    // params (uniform), volume (sampled texture), nearest (storage), all in group 0.
+    assert_eq!(rows.max_uniform_buffers_per_shader_stage, 1);
+    assert_eq!(rows.max_sampled_textures_per_shader_stage, 1);
+    assert_eq!(rows.max_storage_buffers_per_shader_stage, 1);
+    assert_eq!(rows.max_bind_groups, 1);
+    // The tile at CELLS' default (3840) and the envelope sizes: WebGPU's 16 KiB exactly.
+    assert_eq!(
+        edt_tile::tile_columns::INFO
+            .needs
+            .max_compute_workgroup_storage_size,
+        16384
+    );
+    // Nothing fieldkit ships needs more than WebGPU's defaults.
+    for info in fieldkit::shaders::ALL {
+        assert_eq!(
+            info.needs.lacking(&wgpu::Limits::default()),
+            None,
+            "{}::{}",
+            info.stage,
+            info.entry_point
+        );
+    }
+    let low = wgpu::Limits {
+        max_compute_workgroup_storage_size: 8192,
+        ..wgpu::Limits::default()
+    };
+    assert_eq!(
+        rows.lacking(&low),
+        Some(("max_compute_workgroup_storage_size", 11264, 8192))
+    );
+    assert_eq!(rows.raise(low).max_compute_workgroup_storage_size, 11264);
+}
+
 /// Host code written against a different shader interface fails to compile.
 #[test]
 fn drifted_host_code_does_not_compile() {

@@ -378,12 +378,22 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, s: &mut String) {
         .map(|o| format!("\"{}\"", o.id.map_or(o.name.clone(), |id| id.to_string())))
         .collect();
     let main_entry = p.entries.last().unwrap();
+    let needs = p
+        .entries
+        .iter()
+        .fold(super::reflect::Needs::default(), |n, e| n.max(e.needs));
+    let needs: Vec<String> = needs
+        .fields()
+        .iter()
+        .map(|(name, v)| format!("{name}: {v}"))
+        .collect();
     writeln!(
         s,
-        "/// What the shader says about this pipeline's interface, read by fieldkit's `bind`.\npub static INFO: crate::bind::EntryInfo = crate::bind::EntryInfo {{ stage: STAGE, path: PATH, entry_point: \"{}\", source: SOURCE, kind: {kind}, slots: &[{}], overrides: &[{}], loops_end: true }};",
+        "/// What the shader says about this pipeline's interface, read by fieldkit's `bind`.\npub static INFO: crate::bind::EntryInfo = crate::bind::EntryInfo {{ stage: STAGE, path: PATH, entry_point: \"{}\", source: SOURCE, kind: {kind}, slots: &[{}], overrides: &[{}], loops_end: true, needs: crate::bind::Needs {{ {} }} }};",
         main_entry.name,
         slots.join(", "),
-        overrides.join(", ")
+        overrides.join(", "),
+        needs.join(", ")
     )
     .unwrap();
     writeln!(

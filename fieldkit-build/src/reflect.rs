@@ -84,9 +84,142 @@ pub struct EntryPoint {
     /// Bytes of `var<workgroup>` the entry point uses (array lengths from overrides at their
     /// defaults).
     pub workgroup_storage: u32,
+    /// What it asks of a device's limits.
+    pub needs: Needs,
     pub uses: Vec<BindingUse>,
     pub vertex_inputs: Vec<VertexInput>,
     pub fragment_outputs: Vec<FragmentOutput>,
+}
+
+/// The device limits an entry point (or a pipeline, field by field the larger of its entry
+/// points') needs, named as `wgpu::Limits` names them.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct Needs {
+    pub max_storage_buffers_per_shader_stage: u32,
+    pub max_storage_textures_per_shader_stage: u32,
+    pub max_sampled_textures_per_shader_stage: u32,
+    pub max_samplers_per_shader_stage: u32,
+    pub max_uniform_buffers_per_shader_stage: u32,
+    pub max_bind_groups: u32,
+    pub max_uniform_buffer_binding_size: u32,
+    pub max_compute_workgroup_storage_size: u32,
+    pub max_compute_invocations_per_workgroup: u32,
+}
+
+impl Needs {
+    /// Field by field, the larger of the two.
+    pub fn max(self, o: Needs) -> Needs {
+        Needs {
+            max_storage_buffers_per_shader_stage: self
+                .max_storage_buffers_per_shader_stage
+                .max(o.max_storage_buffers_per_shader_stage),
+            max_storage_textures_per_shader_stage: self
+                .max_storage_textures_per_shader_stage
+                .max(o.max_storage_textures_per_shader_stage),
+            max_sampled_textures_per_shader_stage: self
+                .max_sampled_textures_per_shader_stage
+                .max(o.max_sampled_textures_per_shader_stage),
+            max_samplers_per_shader_stage: self
+                .max_samplers_per_shader_stage
+                .max(o.max_samplers_per_shader_stage),
+            max_uniform_buffers_per_shader_stage: self
+                .max_uniform_buffers_per_shader_stage
+                .max(o.max_uniform_buffers_per_shader_stage),
+            max_bind_groups: self.max_bind_groups.max(o.max_bind_groups),
+            max_uniform_buffer_binding_size: self
+                .max_uniform_buffer_binding_size
+                .max(o.max_uniform_buffer_binding_size),
+            max_compute_workgroup_storage_size: self
+                .max_compute_workgroup_storage_size
+                .max(o.max_compute_workgroup_storage_size),
+            max_compute_invocations_per_workgroup: self
+                .max_compute_invocations_per_workgroup
+                .max(o.max_compute_invocations_per_workgroup),
+        }
+    }
+
+    /// `(name, value)` per field, in declaration order.
+    pub fn fields(&self) -> [(&'static str, u32); 9] {
+        [
+            (
+                "max_storage_buffers_per_shader_stage",
+                self.max_storage_buffers_per_shader_stage,
+            ),
+            (
+                "max_storage_textures_per_shader_stage",
+                self.max_storage_textures_per_shader_stage,
+            ),
+            (
+                "max_sampled_textures_per_shader_stage",
+                self.max_sampled_textures_per_shader_stage,
+            ),
+            (
+                "max_samplers_per_shader_stage",
+                self.max_samplers_per_shader_stage,
+            ),
+            (
+                "max_uniform_buffers_per_shader_stage",
+                self.max_uniform_buffers_per_shader_stage,
+            ),
+            ("max_bind_groups", self.max_bind_groups),
+            (
+                "max_uniform_buffer_binding_size",
+                self.max_uniform_buffer_binding_size,
+            ),
+            (
+                "max_compute_workgroup_storage_size",
+                self.max_compute_workgroup_storage_size,
+            ),
+            (
+                "max_compute_invocations_per_workgroup",
+                self.max_compute_invocations_per_workgroup,
+            ),
+        ]
+    }
+}
+
+/// What an entry point using `uses` of `bindings` needs.
+fn needs_of(
+    bindings: &[Binding],
+    uses: &[BindingUse],
+    workgroup_storage: u32,
+    workgroup_size: [u32; 3],
+    compute: bool,
+) -> Needs {
+    let used: Vec<&Binding> = uses
+        .iter()
+        .filter_map(|u| {
+            bindings
+                .iter()
+                .find(|b| b.group == u.group && b.binding == u.binding)
+        })
+        .collect();
+    let count =
+        |f: &dyn Fn(&BindingKind) -> bool| used.iter().filter(|b| f(&b.kind)).count() as u32;
+    Needs {
+        max_storage_buffers_per_shader_stage: count(&|k| matches!(k, BindingKind::Storage { .. })),
+        max_storage_textures_per_shader_stage: count(&|k| {
+            matches!(k, BindingKind::StorageTexture { .. })
+        }),
+        max_sampled_textures_per_shader_stage: count(&|k| matches!(k, BindingKind::Texture { .. })),
+        max_samplers_per_shader_stage: count(&|k| matches!(k, BindingKind::Sampler { .. })),
+        max_uniform_buffers_per_shader_stage: count(&|k| matches!(k, BindingKind::Uniform { .. })),
+        max_bind_groups: used.iter().map(|b| b.group + 1).max().unwrap_or(0),
+        max_uniform_buffer_binding_size: used
+            .iter()
+            .filter_map(|b| match b.kind {
+                BindingKind::Uniform { min_size, .. } => Some(min_size),
+                _ => None,
+            })
+            .max()
+            .unwrap_or(0),
+        max_compute_workgroup_storage_size: workgroup_storage,
+        max_compute_invocations_per_workgroup: if compute {
+            workgroup_size.iter().product()
+        } else {
+            0
+        },
+    }
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -590,11 +723,19 @@ pub fn reflect(stage: &Stage) -> Reflection {
             .filter(|(h, v)| v.space == AddressSpace::WorkGroup && !fi[*h].is_empty())
             .map(|(_, v)| module.types[v.ty].inner.size(module.to_ctx()))
             .sum();
+        let needs = needs_of(
+            &bindings,
+            &uses,
+            workgroup_storage,
+            ep.workgroup_size,
+            ep.stage == ShaderStage::Compute,
+        );
         entry_points.push(EntryPoint {
             name: ep.name.clone(),
             stage: stage_name.into(),
             workgroup_size: ep.workgroup_size,
             workgroup_storage,
+            needs,
             uses,
             vertex_inputs,
             fragment_outputs,

@@ -596,6 +596,19 @@ fn distance_texture(
     })
 }
 
+/// The parameters of the 3D row passes (`rows`, `row_words`).
+fn row_params(device: &wgpu::Device, size: [u32; 3], inside: Inside, invert: bool) -> wgpu::Buffer {
+    uniform(
+        device,
+        "edt rows params",
+        &edt_rows::RowParams {
+            size: size.into(),
+            threshold: inside.threshold(),
+            invert: invert as u32,
+        },
+    )
+}
+
 fn view(t: &wgpu::Texture) -> wgpu::TextureView {
     t.create_view(&Default::default())
 }
@@ -1573,15 +1586,7 @@ impl Distance3d {
     ) -> Result<wgpu::Buffer, Error> {
         let size = check_volume(device, volume)?;
         let nearest = field_buffer(device, "nearest seed", size);
-        let params = uniform(
-            device,
-            "edt rows params",
-            &edt_rows::RowParams {
-                size: size.into(),
-                threshold: inside.threshold(),
-                invert: invert as u32,
-            },
-        );
+        let params = row_params(device, size, inside, invert);
         let vv = view(volume);
         let per_group = rows_per_group(size[0], size[1]);
         let rows = ComputePipeline::cached(
@@ -1622,15 +1627,7 @@ impl Distance3d {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
-        let params = uniform(
-            device,
-            "edt rows params",
-            &edt_rows::RowParams {
-                size: size.into(),
-                threshold: inside.threshold(),
-                invert: invert as u32,
-            },
-        );
+        let params = row_params(device, size, inside, invert);
         let vv = view(volume);
         // 2048 cells of workgroup memory per workgroup: rows of up to 2048 voxels (64 words),
         // as many as fit (a power of two).

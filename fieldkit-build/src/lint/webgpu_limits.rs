@@ -4,11 +4,11 @@ use crate::reflect::{BindingKind, Reflection};
 
 /// WebGPU's default limits (what `wgpu::Limits::default()` asks of a device), per shader stage
 /// where the limit is per stage.
-pub const STORAGE_BUFFERS: usize = 8;
-pub const STORAGE_TEXTURES: usize = 4;
-pub const SAMPLED_TEXTURES: usize = 16;
-pub const SAMPLERS: usize = 16;
-pub const UNIFORM_BUFFERS: usize = 12;
+pub const STORAGE_BUFFERS: u32 = 8;
+pub const STORAGE_TEXTURES: u32 = 4;
+pub const SAMPLED_TEXTURES: u32 = 16;
+pub const SAMPLERS: u32 = 16;
+pub const UNIFORM_BUFFERS: u32 = 12;
 pub const BIND_GROUPS: u32 = 4;
 pub const WORKGROUP_STORAGE: u32 = 16384;
 pub const UNIFORM_BINDING: u32 = 65536;
@@ -41,66 +41,56 @@ impl Lint for WebgpuLimits {
                     message: format!("`{}`: {message}", ep.name),
                 })
             };
-            let used: Vec<_> = ep
-                .uses
-                .iter()
-                .filter_map(|u| {
-                    r.bindings
-                        .iter()
-                        .find(|b| b.group == u.group && b.binding == u.binding)
-                })
-                .collect();
-            let count =
-                |f: &dyn Fn(&BindingKind) -> bool| used.iter().filter(|b| f(&b.kind)).count();
+            let n = ep.needs;
             let counts = [
                 (
                     "storage buffers",
-                    count(&|k| matches!(k, BindingKind::Storage { .. })),
+                    n.max_storage_buffers_per_shader_stage,
                     STORAGE_BUFFERS,
                 ),
                 (
                     "storage textures",
-                    count(&|k| matches!(k, BindingKind::StorageTexture { .. })),
+                    n.max_storage_textures_per_shader_stage,
                     STORAGE_TEXTURES,
                 ),
                 (
                     "sampled textures",
-                    count(&|k| matches!(k, BindingKind::Texture { .. })),
+                    n.max_sampled_textures_per_shader_stage,
                     SAMPLED_TEXTURES,
                 ),
-                (
-                    "samplers",
-                    count(&|k| matches!(k, BindingKind::Sampler { .. })),
-                    SAMPLERS,
-                ),
+                ("samplers", n.max_samplers_per_shader_stage, SAMPLERS),
                 (
                     "uniform buffers",
-                    count(&|k| matches!(k, BindingKind::Uniform { .. })),
+                    n.max_uniform_buffers_per_shader_stage,
                     UNIFORM_BUFFERS,
                 ),
             ];
-            for (what, n, max) in counts {
-                if n > max {
+            for (what, got, max) in counts {
+                if got > max {
                     say(format!(
-                        "{n} {what} in one stage, past WebGPU's default {max}"
+                        "{got} {what} in one stage, past WebGPU's default {max}"
                     ));
                 }
             }
-            if let Some(group) = used.iter().map(|b| b.group).max()
-                && group >= BIND_GROUPS
-            {
+            if n.max_bind_groups > BIND_GROUPS {
                 say(format!(
-                    "bind group {group} needs {} bind groups, past WebGPU's default {BIND_GROUPS}",
-                    group + 1
+                    "bind group {} needs {} bind groups, past WebGPU's default {BIND_GROUPS}",
+                    n.max_bind_groups - 1,
+                    n.max_bind_groups
                 ));
             }
-            if ep.workgroup_storage > WORKGROUP_STORAGE {
+            if n.max_compute_workgroup_storage_size > WORKGROUP_STORAGE {
                 say(format!(
                     "{} bytes of workgroup memory, past WebGPU's default {WORKGROUP_STORAGE}",
-                    ep.workgroup_storage
+                    n.max_compute_workgroup_storage_size
                 ));
             }
-            for b in &used {
+            let used = ep.uses.iter().filter_map(|u| {
+                r.bindings
+                    .iter()
+                    .find(|b| b.group == u.group && b.binding == u.binding)
+            });
+            for b in used {
                 match &b.kind {
                     BindingKind::Uniform { min_size, .. } if *min_size > UNIFORM_BINDING => {
                         say(format!(
