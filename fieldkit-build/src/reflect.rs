@@ -92,7 +92,9 @@ pub struct EntryPoint {
 }
 
 /// The device limits an entry point (or a pipeline, field by field the larger of its entry
-/// points') needs, named as `wgpu::Limits` names them.
+/// points') needs, named as `wgpu::Limits` names them. The build-time twin of fieldkit's
+/// `bind::Needs` (this crate cannot depend on fieldkit, which builds with it): generated code
+/// fills the runtime one field by field, so a field that drifts is a compile error.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
 pub struct Needs {
     pub max_storage_buffers_per_shader_stage: u32,

@@ -181,6 +181,19 @@ impl TileGeometry {
         Self::fit(n, storage, MIN_TILE_COLUMNS, Self::banded_columns(n))
     }
 
+    /// The tile [`ColumnPasses::Workgroup`] takes at any length: bands of 8 where they fit (16
+    /// columns of 512 took 4.48 ms for y at 512³, 4 columns 2.70), fewer columns where the
+    /// storage is short; [`Error::Size`] where not even one column fits.
+    fn forced(n: u32, storage: u32) -> Result<Self, Error> {
+        Self::fit(n, storage, 1, Self::banded_columns(n)).ok_or(Error::Size {
+            stage: edt_tile::STAGE,
+            what: "column length for one column in workgroup memory \
+                   (max_compute_workgroup_storage_size)",
+            got: n as u64,
+            max: Self::longest(storage) as u64,
+        })
+    }
+
     /// Columns per tile for bands of [`AUTO_TILE_BAND`] positions: `256 · 8 / n`, 1 to 16.
     fn banded_columns(n: u32) -> u32 {
         (256 * AUTO_TILE_BAND / n.max(1)).clamp(1, MAX_TILE_COLUMNS)
@@ -1685,15 +1698,7 @@ impl Distance3d {
         let tile = match self.tile_for(device, size[1], false)? {
             Some(tile) => tile,
             None => {
-                let storage = device.limits().max_compute_workgroup_storage_size;
-                TileGeometry::fit(size[1], storage, 1, TileGeometry::banded_columns(size[1]))
-                    .ok_or(Error::Size {
-                        stage: edt_tile::STAGE,
-                        what: "column length for one column in workgroup memory \
-                               (max_compute_workgroup_storage_size)",
-                        got: size[1] as u64,
-                        max: TileGeometry::longest(storage) as u64,
-                    })?
+                TileGeometry::forced(size[1], device.limits().max_compute_workgroup_storage_size)?
             }
         };
         self.encode_tile_columns_words(device, rec, words, nearest, size, tile)
@@ -1904,19 +1909,7 @@ impl Distance3d {
         Ok(match self.column_passes {
             ColumnPasses::Global => None,
             ColumnPasses::Auto => TileGeometry::auto(n, storage, if flat { 2 } else { 3 }),
-            ColumnPasses::Workgroup => Some(
-                // Bands of 8 where they fit (16 columns of 512 took 4.48 ms for y at 512³, 4
-                // columns 2.70), fewer columns where the storage is short.
-                TileGeometry::fit(n, storage, 1, TileGeometry::banded_columns(n)).ok_or(
-                    Error::Size {
-                        stage: edt_tile::STAGE,
-                        what: "column length for one column in workgroup memory \
-                           (max_compute_workgroup_storage_size)",
-                        got: n as u64,
-                        max: TileGeometry::longest(storage) as u64,
-                    },
-                )?,
-            ),
+            ColumnPasses::Workgroup => Some(TileGeometry::forced(n, storage)?),
         })
     }
 
