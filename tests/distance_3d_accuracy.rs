@@ -444,3 +444,100 @@ fn every_column_path_is_exact() {
     assert!(shared.take_uncaptured().is_empty());
     assert!(defaults.take_uncaptured().is_empty());
 }
+
+/// A field larger than one storage binding (1024³ is 4 GiB where wgpu binds 2 GiB − 1) is split:
+/// the z pass into parts of whole columns held apart, the y pass into the field's slabs of
+/// planes, one buffer each. Here the split is forced at small sizes (`set_split_bytes`) so that
+/// every part and slab boundary runs on lavapipe (parts that do not divide the width, two
+/// slabs or more), unsigned and signed, at the adapter's limits and at WebGPU's defaults,
+/// against the CPU transform.
+#[test]
+fn fields_split_across_bindings_are_exact() {
+    let shared = Context::shared();
+    let defaults = default_limits(&shared);
+    // (name, size, mask, bytes per binding): three parts or more, and two slabs or more.
+    let cases = [
+        (
+            "96×200×37",
+            [96, 200, 37],
+            random_mask_3d([96, 200, 37], 2e-3, 21),
+            96 * 200 * 37 * 4 / 3,
+        ),
+        (
+            "70×33×90",
+            [70, 33, 90],
+            random_mask_3d([70, 33, 90], 5e-3, 22),
+            300_000,
+        ),
+        (
+            "single seed 40×9×30",
+            [40, 9, 30],
+            mask_3d([40, 9, 30], &[[39, 0, 29]]),
+            40 * 9 * 30 * 4 / 2,
+        ),
+    ];
+    for (name, size, mask, split) in &cases {
+        let exact = cpu::edt_3d_squared(mask, *size);
+        let signed = cpu::signed_3d(mask, *size);
+        for (device_name, ctx) in [("adapter limits", &shared), ("default limits", &defaults)] {
+            let mut d3 = Distance3d::new(&ctx.device).unwrap();
+            d3.set_split_bytes(Some(*split));
+            let volume = fieldkit::distance::upload_volume(
+                &ctx.device,
+                &ctx.queue,
+                &to_bytes(mask),
+                size_u32(*size),
+            )
+            .unwrap();
+            let mut enc = ctx.encoder("split");
+            let field = d3
+                .encode(&ctx.device, &mut enc, &volume, &Options3d::default())
+                .unwrap();
+            assert!(
+                field.nearest.buffers.len() >= 2 && field.nearest.whole().is_none(),
+                "{name}: {} slabs",
+                field.nearest.buffers.len()
+            );
+            drop(enc);
+            for is_signed in [false, true] {
+                let options = Options3d {
+                    signed: is_signed,
+                    ..Options3d::default()
+                };
+                let what = format!("{name} ({device_name}, split, signed {is_signed})");
+                let (nearest, _, dist) = run_3d(ctx, &d3, mask, *size, &options);
+                if is_signed {
+                    for i in 0..dist.len() {
+                        let want = signed[i];
+                        // As in every_column_path_is_exact: a few ulps of sqrt (lavapipe).
+                        let ok = if want.abs() > 1e30 {
+                            dist[i].abs() > 1e30 && (dist[i] < 0.0) == (want < 0.0)
+                        } else {
+                            (dist[i] as f64 - want).abs() <= 1e-5 * (1.0 + want.abs())
+                        };
+                        assert!(ok, "{what}: voxel {i}: {} vs {want}", dist[i]);
+                    }
+                } else {
+                    let case = Case {
+                        name: Box::leak(what.clone().into_boxed_str()),
+                        size: *size,
+                        mask: mask.clone(),
+                        jfa: false,
+                    };
+                    let e = score(&case, &nearest, &dist, &exact);
+                    assert_eq!(e.wrong, 0, "{what}: {} wrong voxels", e.wrong);
+                }
+            }
+            // Only the workgroup-memory passes split: the global ones say so.
+            d3.set_column_passes(ColumnPasses::Global);
+            let mut enc = ctx.encoder("split, global");
+            match d3.encode(&ctx.device, &mut enc, &volume, &Options3d::default()) {
+                Err(fieldkit::Error::Invalid { what, .. }) => {
+                    assert!(what.contains("split across bindings"), "{what}")
+                }
+                other => panic!("{name}: expected Error::Invalid, got {other:?}"),
+            }
+            assert!(ctx.take_uncaptured().is_empty());
+        }
+    }
+}

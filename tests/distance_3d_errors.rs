@@ -33,7 +33,7 @@ fn zero_sized_grids() {
 #[test]
 fn past_the_packing_range() {
     let ctx = Context::shared();
-    // x and y have 11 bits, z 10: 2047 across (or 1023 deep) cannot be named.
+    // x and y have 11 bits, z 10: 2049 across (or 1025 deep) cannot be named.
     let tex = ctx.device.limits().max_texture_dimension_3d;
     for (axis, what) in [(0, "width"), (1, "height"), (2, "depth")] {
         let mut size = [4, 4, 4];
@@ -60,16 +60,31 @@ fn past_the_packing_range() {
 }
 
 #[test]
+fn the_one_grid_whose_packing_wraps() {
+    let ctx = Context::shared();
+    // 2048 × 2048 × 1024: every side is in range, but the last voxel's code + 1 is 2^32.
+    let e = check_size_3d(&ctx.device, MAX_SIDE_3D).unwrap_err();
+    if ctx.device.limits().max_texture_dimension_3d >= 2048 {
+        assert!(
+            matches!(&e, Error::Invalid { what, .. } if what.contains("wrap")),
+            "{e}"
+        );
+    } else {
+        assert!(matches!(e, Error::Size { .. }), "{e}");
+    }
+}
+
+#[test]
 fn past_the_device_buffer_limit() {
     let ctx = Context::shared();
-    // Within the packing, but 2046 × 2046 × 1022 × 4 bytes ≈ 17 GB exceeds every device's
+    // Within the packing, but 2048 × 2048 × 1023 × 4 bytes ≈ 17 GB exceeds every device's
     // storage binding limit: refused before anything is allocated.
     let e = check_size_3d(
         &ctx.device,
         [
-            2046.min(ctx.device.limits().max_texture_dimension_3d),
-            2046.min(ctx.device.limits().max_texture_dimension_3d),
-            1022,
+            2048.min(ctx.device.limits().max_texture_dimension_3d),
+            2048.min(ctx.device.limits().max_texture_dimension_3d),
+            1023,
         ],
     )
     .unwrap_err();

@@ -12,10 +12,6 @@ use fieldkit::metaball::{Metaballs, Settings};
 use glam::{Vec3, Vec4};
 use wgpu::util::DeviceExt;
 
-fn words(ctx: &Context, b: &wgpu::Buffer) -> Vec<u32> {
-    bytemuck::cast_slice::<u8, u32>(&read_buffer(ctx, b).unwrap()).to_vec()
-}
-
 fn key_index(key: u32) -> usize {
     (0xffffff - (key & 0xffffff)) as usize
 }
@@ -138,7 +134,7 @@ fn line_passes_are_exact_for_seeds_at_voxel_centres() {
         )
         .unwrap();
     ctx.submit_and_wait("lines", enc).unwrap();
-    let nearest = words(&ctx, &field.nearest);
+    let nearest = slab_words(&ctx, &field.nearest);
     let distance: Vec<f32> = read_texture(&ctx, &field.distance).unwrap();
     let exact2 = brute_force(&points, size);
     let mut within = 0;
@@ -201,7 +197,7 @@ fn line_passes_on_surface_seeds_against_brute_force() {
             .unwrap();
         ctx.submit_and_wait("surface seeds", enc).unwrap();
         let all: Vec<Vec4> = bytemuck::cast_slice(&read_buffer(&ctx, &table).unwrap()).to_vec();
-        (words(&ctx, &field.nearest), all)
+        (slab_words(&ctx, &field.nearest), all)
     };
     let (lines, table) = run(Method::Lines);
     let (jfa, _) = run(Method::Jfa(Variant::JfaPlus2));

@@ -222,20 +222,24 @@ fn resolve_stage() {
     let outside = d3
         .encode_exact(&ctx.device, &mut enc, &volume, Inside::Mask, true)
         .unwrap();
+    let (inside, outside) = (
+        inside.whole().expect("one buffer"),
+        outside.whole().expect("one buffer"),
+    );
     let opts = Options3d {
         voxel_size: 0.5,
         ..Options3d::default()
     };
     let unsigned = d3
-        .encode_resolve(&ctx.device, &mut enc, size_u32(SIZE), &inside, None, &opts)
+        .encode_resolve(&ctx.device, &mut enc, size_u32(SIZE), inside, None, &opts)
         .unwrap();
     let signed = d3
         .encode_resolve(
             &ctx.device,
             &mut enc,
             size_u32(SIZE),
-            &inside,
-            Some(&outside),
+            inside,
+            Some(outside),
             &opts,
         )
         .unwrap();
@@ -287,7 +291,7 @@ fn seed_points_stage() {
         .encode_points(&ctx.device, &mut enc, &seeds, size_u32(SIZE), None, &opts)
         .unwrap();
     ctx.submit_and_wait("points", enc).unwrap();
-    let nearest = words(&ctx, &field.nearest);
+    let nearest = slab_words(&ctx, &field.nearest);
     let dist: Vec<f32> = read_texture(&ctx, &field.distance).unwrap();
     let [w, h, _] = SIZE;
     let at = |v: [usize; 3]| (v[2] * h + v[1]) * w + v[0];

@@ -3,7 +3,7 @@
 //
 // One workgroup per row; every global read and write is a contiguous run of the row, so the pass
 // is coalesced although the row is the direction a thread-per-line scheme would stride across.
-// `rows` (3D, rows ≤ 2046) holds whole rows in workgroup memory, as many as fit (ROWS): each
+// `rows` (3D, rows ≤ 2048) holds whole rows in workgroup memory, as many as fit (ROWS): each
 // thread sweeps a short segment, a scan over the row's segments carries the nearest marks across
 // them, and the volume is read once and the field written once (5 bytes per voxel). `rows_2d` (rows to 16384, too long
 // to hold as seeds) holds the row as a bitmask (16384 bits: 2 KiB), carries each word's
@@ -37,7 +37,7 @@ const CHUNK: u32 = 256u;
 // "Nothing to the right yet" for the min-scan.
 const NONE_RIGHT: u32 = 0xffffffffu;
 
-// `rows` holds whole rows: the 3D packing's 2046 fits.
+// `rows` holds whole rows: the 3D packing's 2048 fits.
 const MAX_ROW: u32 = 2048u;
 // `rows`: rows per workgroup (a power of two; ROWS × width ≤ MAX_ROW). Short rows share a
 // workgroup so that each barrier serves several rows and each thread sweeps a few cells.

@@ -19,6 +19,15 @@
 
 import package::shared::seed::{NO_SEED, answer_distance, pack_seed3, signed_at2, signed_at3, unpack_seed2, unpack_seed3};
 
+// Where voxel (x, y, z) sits in a buffer: (x - origin.x) + row · (y - origin.y) + plane ·
+// (z - origin.z). A whole field has origin 0, row = size.x and plane = size.x · size.y; a part of
+// a field too large for one binding has its own.
+struct Placement {
+    origin: vec3<u32>,
+    row: u32,
+    plane: u32,
+}
+
 struct TileParams {
     size: vec3<u32>,
     // The resolving entries: world units per voxel, and the band (world units) distances are
@@ -34,6 +43,14 @@ struct TileParams {
     // Tile cells per column: n + bands (one pad cell per band), rounded up to 32 / columns
     // (mod 32) so that no two threads of a warp share a bank, loading or sweeping.
     column_cells: u32,
+    // This dispatch's first column: the x of workgroup 0's first column and the other
+    // coordinate (z for y columns, y for z columns) of workgroup row 0; and the x where its
+    // columns end (size.x, or the end of its part of a field split across bindings).
+    first: vec2<u32>,
+    x_end: u32,
+    // Where the pass reads (`source`) and writes (`nearest`, `nearest_inside`).
+    src: Placement,
+    dst: Placement,
 }
 
 @group(0) @binding(0) var<uniform> params: TileParams;
@@ -46,12 +63,20 @@ struct TileParams {
 // `tile_columns_words` reads each row's nearest marks from `edt_rows.wgsl`'s `row_words` instead
 // of a field: marks per 32 voxels, and the marks on either side of them.
 @group(0) @binding(5) var<storage, read> words: array<vec2<u32>>;
+// What the column passes read where it is not `nearest` itself (SOURCE_APART): a part of a
+// field too large for one binding, held apart. In place, a placeholder is bound here.
+@group(0) @binding(6) var<storage, read> source: array<u32>;
 
 // 2D fields pack 16/16 bits.
 override PACK_2D: bool = false;
 // 1: columns run along y; 2: along z. A constant, so no vector is indexed at run time (a
 // dynamically indexed vector can be lowered to a private array in memory).
 override AXIS: u32 = 1u;
+// The y pass runs after the z pass (a field split across bindings): its sites lie off the
+// column's plane in z as well as in x. A constant, so the usual order pays nothing for it.
+override Y_AFTER_Z: bool = false;
+// The pass reads `source`, not `nearest` (a field split across bindings).
+override SOURCE_APART: bool = false;
 // Tile cells: (column_cells << lg_columns), set by the host per column length.
 // The default is the most WebGPU's default 16 KiB of workgroup memory holds beside
 // `envelope_size`.
@@ -84,21 +109,34 @@ struct Lane {
     valid: bool,
 }
 
+// Voxel (x, y, z)'s index in a buffer placed as `p`.
+fn place(p: Placement, v: vec3<u32>) -> u32 {
+    return (v.x - p.origin.x) + p.row * (v.y - p.origin.y) + p.plane * (v.z - p.origin.z);
+}
+
+// The first voxel of the column at x, other (position 0 along the axis).
+fn column_start(x: u32, other: u32) -> vec3<u32> {
+    return select(vec3<u32>(x, other, 0u), vec3<u32>(x, 0u, other), AXIS == 1u);
+}
+
+// Elements between a column's positions in a buffer placed as `p`.
+fn column_stride(p: Placement) -> u32 {
+    return select(p.plane, p.row, AXIS == 1u);
+}
+
 fn lane_of(li: u32, wg: vec3<u32>) -> Lane {
     var l: Lane;
     l.c = li & ((1u << params.lg_columns) - 1u);
     l.b = li >> params.lg_columns;
-    l.x = (wg.x << params.lg_columns) + l.c;
-    l.other = wg.y;
+    l.x = params.first.x + (wg.x << params.lg_columns) + l.c;
+    l.other = params.first.y + wg.y;
     l.n = select(params.size.z, params.size.y, AXIS == 1u);
-    let row = params.size.x;
-    let plane = params.size.x * params.size.y;
-    l.at = select(l.other * row + l.x, l.other * plane + l.x, AXIS == 1u);
-    l.stride = select(plane, row, AXIS == 1u);
+    l.at = place(params.dst, column_start(l.x, l.other));
+    l.stride = column_stride(params.dst);
     l.col = l.c * params.column_cells;
     l.lo = min(l.n, l.b << params.lg_band);
     l.hi = min(l.n, l.lo + (1u << params.lg_band));
-    l.valid = l.x < params.size.x;
+    l.valid = l.x < params.x_end;
     return l;
 }
 
@@ -115,8 +153,12 @@ fn own_cost(s: u32, l: Lane) -> i32 {
     }
     let p = unpack_seed3(s);
     let dx = p.x - i32(l.x);
-    if AXIS == 1u {
+    if AXIS == 1u && !Y_AFTER_Z {
         return dx * dx;
+    }
+    if AXIS == 1u {
+        let dz = p.z - i32(l.other);
+        return dx * dx + dz * dz;
     }
     let dy = p.y - i32(l.other);
     return dx * dx + dy * dy;
@@ -182,7 +224,11 @@ fn fetch(ld: Loader, e: u32) -> u32 {
     if e >= ld.total || c >= ld.live {
         return NO_SEED;
     }
-    return nearest[ld.at + (e >> params.lg_columns) * ld.stride + c];
+    let i = ld.at + (e >> params.lg_columns) * ld.stride + c;
+    if SOURCE_APART {
+        return source[i];
+    }
+    return nearest[i];
 }
 
 fn put(ld: Loader, e: u32, s: u32) {
@@ -196,15 +242,13 @@ fn put(ld: Loader, e: u32, s: u32) {
 // once per element (the tile is 8 to 32 elements per thread).
 fn load(li: u32, wg: vec3<u32>) {
     let n = select(params.size.z, params.size.y, AXIS == 1u);
-    let x0 = wg.x << params.lg_columns;
-    let row = params.size.x;
-    let plane = params.size.x * params.size.y;
+    let x0 = params.first.x + (wg.x << params.lg_columns);
     var ld: Loader;
-    ld.at = select(wg.y * row + x0, wg.y * plane + x0, AXIS == 1u);
-    ld.stride = select(plane, row, AXIS == 1u);
+    ld.at = place(params.src, column_start(x0, params.first.y + wg.y));
+    ld.stride = column_stride(params.src);
     ld.total = n << params.lg_columns;
     ld.mask = (1u << params.lg_columns) - 1u;
-    ld.live = min(row - x0, 1u << params.lg_columns);
+    ld.live = min(params.x_end - x0, 1u << params.lg_columns);
     for (var e = li; e < ld.total; e += 8u * THREADS) {
         let s0 = fetch(ld, e);
         let s1 = fetch(ld, e + THREADS);
@@ -225,24 +269,30 @@ fn load(li: u32, wg: vec3<u32>) {
     }
 }
 
-// Where `load_words` reads: the tile's first column, its z, and words per row.
+// Where `load_words` reads: the tile's first column, its other coordinate, and words per row.
 struct WordLoader {
     x0: u32,
-    z: u32,
+    other: u32,
     count: u32,
     total: u32,
     mask: u32,
     live: u32,
 }
 
-// The row word that holds tile element e (its column's voxel in row e >> lg_columns).
+// The row (y, z) of tile element e: its column's position e >> lg_columns.
+fn word_row(ld: WordLoader, e: u32) -> vec2<u32> {
+    let i = e >> params.lg_columns;
+    return select(vec2<u32>(ld.other, i), vec2<u32>(i, ld.other), AXIS == 1u);
+}
+
+// The row word that holds tile element e.
 fn word_of(ld: WordLoader, e: u32) -> vec2<u32> {
     if e >= ld.total || (e & ld.mask) >= ld.live {
         return vec2<u32>(0u);
     }
-    let y = e >> params.lg_columns;
+    let r = word_row(ld, e);
     let x = ld.x0 + (e & ld.mask);
-    return words[(ld.z * params.size.y + y) * ld.count + (x >> 5u)];
+    return words[(r.y * params.size.y + r.x) * ld.count + (x >> 5u)];
 }
 
 // The nearest mark along x to tile element e's voxel (x, y, z), packed (NO_SEED: none), from
@@ -252,7 +302,7 @@ fn put_word(ld: WordLoader, e: u32, word: vec2<u32>) {
     if e >= ld.total {
         return;
     }
-    let y = e >> params.lg_columns;
+    let r = word_row(ld, e);
     let x = ld.x0 + (e & ld.mask);
     let b = x & 31u;
     let base = x & ~31u;
@@ -271,21 +321,21 @@ fn put_word(ld: WordLoader, e: u32, word: vec2<u32>) {
     if right != 0u && (left == 0u || right - 1u - x < x + 1u - left) {
         near = right;
     }
-    let s = select(NO_SEED, pack_seed3(vec3<u32>(near - 1u, y, ld.z)), near != 0u);
-    tile[cell((e & ld.mask) * params.column_cells, y)] = s;
+    let s = select(NO_SEED, pack_seed3(vec3<u32>(near - 1u, r.x, r.y)), near != 0u);
+    tile[cell((e & ld.mask) * params.column_cells, e >> params.lg_columns)] = s;
 }
 
-// `load` for y columns from the row words: each cell's row answer is made as it is loaded,
+// `load` from the row words: each cell's row answer is made as it is loaded,
 // four words in flight per thread (eight, as in `load`, took 49 registers where four take 42,
 // and were no faster).
 fn load_words(li: u32, wg: vec3<u32>) {
     var ld: WordLoader;
-    ld.x0 = wg.x << params.lg_columns;
-    ld.z = wg.y;
+    ld.x0 = params.first.x + (wg.x << params.lg_columns);
+    ld.other = params.first.y + wg.y;
     ld.count = (params.size.x + 31u) / 32u;
-    ld.total = params.size.y << params.lg_columns;
+    ld.total = select(params.size.z, params.size.y, AXIS == 1u) << params.lg_columns;
     ld.mask = (1u << params.lg_columns) - 1u;
-    ld.live = min(params.size.x - ld.x0, 1u << params.lg_columns);
+    ld.live = min(params.x_end - ld.x0, 1u << params.lg_columns);
     for (var e = li; e < ld.total; e += 4u * THREADS) {
         let w0 = word_of(ld, e);
         let w1 = word_of(ld, e + THREADS);
@@ -603,8 +653,9 @@ fn tile_columns(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id)
     }
 }
 
-// `tile_columns` along y (3D) with the row pass folded into the load: the tile is made from
-// `row_words` instead of read from a field, so the rows' answers never go through memory.
+// `tile_columns` (3D, along y, or along z where a field is split across bindings) with the row
+// pass folded into the load: the tile is made from `row_words` instead of read from a field, so
+// the rows' answers never go through memory.
 @compute @workgroup_size(256)
 fn tile_columns_words(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
     load_words(li, wg);

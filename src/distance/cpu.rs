@@ -218,18 +218,19 @@ pub fn signed_3d(mask: &[bool], size: [usize; 3]) -> Vec<f64> {
     signed_from(mask, &to_inside, &to_outside)
 }
 
-/// Pack a 3D seed as the shaders do (11/11/10 bits, each coordinate + 1).
+/// Pack a 3D seed as the shaders do (11/11/10 bits, the whole code + 1).
 pub fn pack_seed3(x: usize, y: usize, z: usize) -> u32 {
-    ((x + 1) | ((y + 1) << 11) | ((z + 1) << 22)) as u32
+    ((x | (y << 11) | (z << 22)) + 1) as u32
 }
 
 /// Unpack a 3D seed; `None` for no seed.
 pub fn unpack_seed3(s: u32) -> Option<[i64; 3]> {
     (s != 0).then(|| {
+        let c = s - 1;
         [
-            (s & 0x7ff) as i64 - 1,
-            ((s >> 11) & 0x7ff) as i64 - 1,
-            (s >> 22) as i64 - 1,
+            (c & 0x7ff) as i64,
+            ((c >> 11) & 0x7ff) as i64,
+            (c >> 22) as i64,
         ]
     })
 }

@@ -36,8 +36,10 @@ use crate::shaders::distance::{
 
 const STAGE: &str = "distance::d3";
 
-/// Largest sides the 3D packing can name: x and y in 11 bits, z in 10 (each coordinate + 1).
-pub const MAX_SIDE_3D: [u32; 3] = [2046, 2046, 1022];
+/// Largest sides the 3D packing can name: x and y in 11 bits, z in 10 ([`pack_seed3`]). The
+/// one grid at all three (2048 × 2048 × 1024, whose last voxel's code + 1 would wrap to 0) is
+/// refused too.
+pub const MAX_SIDE_3D: [u32; 3] = [2048, 2048, 1024];
 /// Largest side of a 2D exact transform: keeps the integer separators inside i32.
 pub const MAX_SIDE_2D_EXACT: u32 = 16384;
 /// Bands per column in the exact column passes (`edt_columns.wgsl`): enough that columns × bands
@@ -194,12 +196,23 @@ impl TileGeometry {
         })
     }
 
+    /// The tile of a field split across bindings (`Distance3d::split_for`) for columns of
+    /// length `n`: as [`Self::forced`], but at least `least` columns where they fit (at 1024,
+    /// bands of 8 would leave 2, and a warp would read 8 bytes of each row).
+    fn split(n: u32, storage: u32, least: u32) -> Result<Self, Error> {
+        let columns = least.max(Self::banded_columns(n));
+        match Self::fit(n, storage, least, columns) {
+            Some(tile) => Ok(tile),
+            None => Self::forced(n, storage),
+        }
+    }
+
     /// Columns per tile for bands of [`AUTO_TILE_BAND`] positions: `256 · 8 / n`, 1 to 16.
     fn banded_columns(n: u32) -> u32 {
         (256 * AUTO_TILE_BAND / n.max(1)).clamp(1, MAX_TILE_COLUMNS)
     }
 
-    /// The pass's parameters and override constants.
+    /// The pass's parameters and override constants, for the columns `span` names.
     fn bind(
         &self,
         device: &wgpu::Device,
@@ -207,7 +220,8 @@ impl TileGeometry {
         axis: u32,
         pack_2d: bool,
         fuse: Option<&Fuse>,
-    ) -> (wgpu::Buffer, [(&'static str, f64); 3]) {
+        span: &Span,
+    ) -> (wgpu::Buffer, [(&'static str, f64); 5]) {
         let params = uniform(
             device,
             "edt tile params",
@@ -219,19 +233,105 @@ impl TileGeometry {
                 lg_band: self.lg_band,
                 bands: self.bands,
                 column_cells: self.column_cells,
+                first: span.first.into(),
+                x_end: span.x_end,
+                src: span.src,
+                dst: span.dst,
             },
         );
         let overrides = [
             ("PACK_2D", pack_2d as u32 as f64),
             ("AXIS", axis as f64),
             ("CELLS", (self.column_cells << self.lg_columns) as f64),
+            ("Y_AFTER_Z", span.y_after_z as u32 as f64),
+            ("SOURCE_APART", span.source_apart as u32 as f64),
         ];
         (params, overrides)
     }
 
-    /// Workgroups for a pass over `size[0]` columns × `others`.
-    fn groups(&self, size: [u32; 3], others: u32) -> [u32; 3] {
-        [size[0].div_ceil(1 << self.lg_columns), others, 1]
+    /// Workgroups for a pass over the span's columns × `others`.
+    fn groups(&self, span: &Span, others: u32) -> [u32; 3] {
+        [
+            (span.x_end - span.first[0]).div_ceil(1 << self.lg_columns),
+            others,
+            1,
+        ]
+    }
+}
+
+/// The columns one dispatch of a workgroup column pass answers, and where it reads and writes
+/// them: a whole field in place, or, for a field too large for one binding, a part of it.
+#[derive(Debug, Clone)]
+struct Span {
+    /// The first column's x, and the other coordinate (z for y columns, y for z columns) of the
+    /// first row of workgroups.
+    first: [u32; 2],
+    /// The x where the span's columns end.
+    x_end: u32,
+    /// A y pass after the z pass: its sites are off the column's plane in z too.
+    y_after_z: bool,
+    /// The pass reads a buffer of its own (`TileIo::source`), not the one it writes.
+    source_apart: bool,
+    src: edt_tile::Placement,
+    dst: edt_tile::Placement,
+}
+
+/// How the exact transform splits a field too large for one binding (`Distance3d::split_for`).
+#[derive(Debug, Clone, Copy)]
+struct Split {
+    /// Columns (x) per part held apart between the z and the y pass: a multiple of both
+    /// tiles' columns.
+    part_width: u32,
+    /// Planes (z) of the field per binding of the y pass.
+    slab_depth: u32,
+    /// The y and z passes' tiles.
+    y: TileGeometry,
+    z: TileGeometry,
+}
+
+/// A buffer holding the voxels from `origin` on, `row` elements per row, `plane` per plane.
+fn placement(origin: [u32; 3], row: u32, plane: u32) -> edt_tile::Placement {
+    edt_tile::Placement {
+        origin: origin.into(),
+        row,
+        plane,
+    }
+}
+
+/// What one dispatch of a workgroup column pass reads (`source`, or, `None`, `nearest` itself)
+/// and writes (`nearest`, and slab `slab` of a signed pass's inside field), with the columns
+/// `span` names.
+struct TileIo<'a> {
+    source: Option<&'a wgpu::Buffer>,
+    nearest: &'a wgpu::Buffer,
+    slab: usize,
+    span: Span,
+}
+
+impl<'a> TileIo<'a> {
+    /// Every column of `nearest` (a field of `size`), in place.
+    fn in_place(nearest: &'a wgpu::Buffer, size: [u32; 3]) -> Self {
+        Self {
+            source: None,
+            nearest,
+            slab: 0,
+            span: Span::whole(size),
+        }
+    }
+}
+
+impl Span {
+    /// Every column of a field of `size`, read and written in place.
+    fn whole(size: [u32; 3]) -> Self {
+        let p = placement([0; 3], size[0], size[0] * size[1]);
+        Self {
+            first: [0, 0],
+            x_end: size[0],
+            y_after_z: false,
+            source_apart: false,
+            src: p,
+            dst: p,
+        }
     }
 }
 
@@ -255,6 +355,7 @@ pub fn tile_columns(storage: u32, n: u32, dims: u32) -> Option<u32> {
 }
 
 /// Where the last exact column pass writes distances (`columns_resolve*` in `edt_columns.wgsl`).
+#[derive(Clone, Copy)]
 struct Fuse<'a> {
     /// `R32Float` storage view: 3D, or 2D where `flat`.
     distance: &'a wgpu::TextureView,
@@ -262,8 +363,9 @@ struct Fuse<'a> {
     voxel_size: f32,
     /// World units; `f32::MAX` for none.
     band: f32,
-    /// Signed: the inside seeds' field (the pass runs in the outside seeds' field).
-    inside_field: Option<&'a wgpu::Buffer>,
+    /// Signed: the inside seeds' field (the pass runs in the outside seeds' field); its slabs
+    /// where the field is split, else one buffer.
+    inside_field: Option<&'a [wgpu::Buffer]>,
 }
 
 /// Most sub-voxel seeds one table may hold (24-bit index in the key).
@@ -276,14 +378,18 @@ pub const VOLUME_FORMATS: &[wgpu::TextureFormat] = &[
     wgpu::TextureFormat::R32Float,
 ];
 
-/// Pack a 3D seed as the shaders do.
+/// Pack a 3D seed as the shaders do: x in 11 bits, y in 11, z in 10, and the whole code + 1 so
+/// that 0 is [`super::NO_SEED`].
 pub fn pack_seed3(x: u32, y: u32, z: u32) -> u32 {
-    (x + 1) | ((y + 1) << 11) | ((z + 1) << 22)
+    (x | (y << 11) | (z << 22)) + 1
 }
 
 /// Unpack a 3D seed; `None` for [`super::NO_SEED`].
 pub fn unpack_seed3(s: u32) -> Option<[u32; 3]> {
-    (s != super::NO_SEED).then(|| [(s & 0x7ff) - 1, ((s >> 11) & 0x7ff) - 1, (s >> 22) - 1])
+    (s != super::NO_SEED).then(|| {
+        let c = s - 1;
+        [c & 0x7ff, (c >> 11) & 0x7ff, c >> 22]
+    })
 }
 
 /// Table index named by a sub-voxel seed key; `None` for no seed.
@@ -494,16 +600,52 @@ pub struct PointSeeds {
     pub count: u32,
 }
 
+/// A `u32` per voxel (x fastest, then y, then z) in one buffer, or, for a field larger than one
+/// buffer or binding may be (the exact transform at 1024³: 4 GiB, where wgpu binds at most
+/// 2 GiB − 1 and NVIDIA's `max_buffer_size` is 2 MiB short of 4 GiB), in slabs of whole z
+/// planes, one buffer each.
+#[derive(Debug)]
+pub struct Slabs {
+    /// The buffers, in z order: planes `k · depth ..` in buffer `k`.
+    pub buffers: Vec<wgpu::Buffer>,
+    /// Planes per buffer (the last may hold fewer).
+    pub depth: u32,
+}
+
+impl Slabs {
+    fn one(buffer: wgpu::Buffer, depth: u32) -> Self {
+        Self {
+            buffers: vec![buffer],
+            depth,
+        }
+    }
+
+    /// The field's buffer where one holds it; `None` where it is split.
+    pub fn whole(&self) -> Option<&wgpu::Buffer> {
+        match self.buffers.as_slice() {
+            [one] => Some(one),
+            _ => None,
+        }
+    }
+
+    /// The buffer holding plane `z`, and the plane's index in it.
+    pub fn plane(&self, z: u32) -> Option<(&wgpu::Buffer, u32)> {
+        let k = (z / self.depth.max(1)) as usize;
+        self.buffers.get(k).map(|b| (b, z - k as u32 * self.depth))
+    }
+}
+
 /// A 3D distance field on the GPU.
 #[derive(Debug)]
 pub struct Field3d {
     /// Voxels per axis.
     pub size: [u32; 3],
     /// Nearest seed per voxel: packed ([`unpack_seed3`]), or a key into `points` ([`key_index`]).
-    /// For a signed field of integer seeds, the nearest *inside* voxel.
-    pub nearest: wgpu::Buffer,
+    /// For a signed field of integer seeds, the nearest *inside* voxel. One buffer
+    /// ([`Slabs::whole`]) except where the exact transform split a field too large for one.
+    pub nearest: Slabs,
     /// For a signed field of integer seeds, the nearest *outside* voxel.
-    pub nearest_outside: Option<wgpu::Buffer>,
+    pub nearest_outside: Option<Slabs>,
     /// `R32Float`: distance in world units (signed: negative inside), clamped to the band.
     /// `±f32::MAX` where no seed exists.
     pub distance: wgpu::Texture,
@@ -563,6 +705,13 @@ pub struct Distance3d {
     column_passes: ColumnPasses,
     /// Fold the 3D row pass into the y pass where it runs in workgroup memory.
     fold_rows: bool,
+    /// The largest field the exact transform binds whole (below the device's limit: for tests).
+    split_bytes: Option<u64>,
+    /// Fewest columns per tile of a split field's passes.
+    split_columns: u32,
+    /// Bound as `edt_tile.wgsl`'s `source` where a pass reads the buffer it writes (a binding
+    /// must be there; the shader does not read it then).
+    no_source: wgpu::Buffer,
     resolve_unsigned: ComputePipeline<field_resolve::resolve_unsigned::Entry>,
     resolve_signed: ComputePipeline<field_resolve::resolve_signed::Entry>,
     resolve_points: ComputePipeline<field_resolve::resolve_points::Entry>,
@@ -626,8 +775,16 @@ fn view(t: &wgpu::Texture) -> wgpu::TextureView {
     t.create_view(&Default::default())
 }
 
-/// Check a 3D grid size against the packing and the device.
+/// Check a 3D grid size against the packing and the device: its sides, and its field (a `u32`
+/// per voxel) against one storage binding. The exact transform ([`Method::Exact`]) takes larger
+/// fields too, split across bindings, up to the device's `max_buffer_size`.
 pub fn check_size_3d(device: &wgpu::Device, size: [u32; 3]) -> Result<(), Error> {
+    check_sides_3d(device, size)?;
+    check_bytes(&device.limits(), voxels(size) * 4)
+}
+
+/// Check a 3D grid's sides against the packing and the device's 3D textures.
+fn check_sides_3d(device: &wgpu::Device, size: [u32; 3]) -> Result<(), Error> {
     let limits = device.limits();
     let tex = limits.max_texture_dimension_3d;
     for (i, what) in ["width", "height", "depth"].into_iter().enumerate() {
@@ -641,7 +798,17 @@ pub fn check_size_3d(device: &wgpu::Device, size: [u32; 3]) -> Result<(), Error>
             });
         }
     }
-    check_bytes(&limits, voxels(size) * 4)
+    if size == MAX_SIDE_3D {
+        return Err(Error::Invalid {
+            stage: STAGE,
+            what: format!(
+                "a {}×{}×{} grid: its last voxel's packed seed would wrap to \"no seed\"; \
+                 take one voxel off any side",
+                size[0], size[1], size[2]
+            ),
+        });
+    }
+    Ok(())
 }
 
 fn check_bytes(limits: &wgpu::Limits, bytes: u64) -> Result<(), Error> {
@@ -677,6 +844,13 @@ pub fn check_size_2d_exact(device: &wgpu::Device, w: u32, h: u32) -> Result<(), 
 }
 
 fn check_volume(device: &wgpu::Device, volume: &wgpu::Texture) -> Result<[u32; 3], Error> {
+    let size = volume_size(device, volume)?;
+    check_bytes(&device.limits(), voxels(size) * 4)?;
+    Ok(size)
+}
+
+/// A volume's size, its dimension, format and sides checked (not its field's bytes).
+fn volume_size(device: &wgpu::Device, volume: &wgpu::Texture) -> Result<[u32; 3], Error> {
     if volume.dimension() != wgpu::TextureDimension::D3 {
         return Err(Error::Invalid {
             stage: STAGE,
@@ -698,7 +872,7 @@ fn check_volume(device: &wgpu::Device, volume: &wgpu::Texture) -> Result<[u32; 3
         volume.height(),
         volume.depth_or_array_layers(),
     ];
-    check_size_3d(device, size)?;
+    check_sides_3d(device, size)?;
     Ok(size)
 }
 
@@ -710,7 +884,7 @@ pub fn upload_volume(
     data: &[u8],
     size: [u32; 3],
 ) -> Result<wgpu::Texture, Error> {
-    check_size_3d(device, size)?;
+    check_sides_3d(device, size)?;
     if data.len() as u64 != voxels(size) {
         return Err(Error::Invalid {
             stage: STAGE,
@@ -904,6 +1078,29 @@ impl Distance3d {
         self.fold_rows = fold;
     }
 
+    /// For tests: split the exact transform's field across bindings past `bytes` (or, `None`,
+    /// past the device's `max_storage_buffer_binding_size` only, the default), so that the
+    /// split runs at sizes a software adapter handles.
+    #[doc(hidden)]
+    pub fn set_split_bytes(&mut self, bytes: Option<u64>) {
+        self.split_bytes = bytes;
+    }
+
+    /// For benchmarks: the fewest columns per tile (1 to 16, a power of two) of the y pass of a
+    /// split field (default [`MIN_TILE_COLUMNS`]; `None` restores it).
+    #[doc(hidden)]
+    pub fn set_split_columns(&mut self, columns: Option<u32>) -> Result<(), Error> {
+        let c = columns.unwrap_or(MIN_TILE_COLUMNS);
+        if !(c.is_power_of_two() && c <= MAX_TILE_COLUMNS) {
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: format!("split columns must be a power of two up to 16, got {c}"),
+            });
+        }
+        self.split_columns = c;
+        Ok(())
+    }
+
     /// Choose where the exact transform's column passes hold their columns (default
     /// [`ColumnPasses::Auto`]). Only speed differs, and which of two equally near seeds is named.
     pub fn set_column_passes(&mut self, passes: ColumnPasses) {
@@ -939,6 +1136,14 @@ impl Distance3d {
             tile_copy: Default::default(),
             column_passes: ColumnPasses::Auto,
             fold_rows: true,
+            split_bytes: None,
+            split_columns: MIN_TILE_COLUMNS,
+            no_source: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("edt tile: no source"),
+                size: 4,
+                usage: wgpu::BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            }),
             resolve_unsigned: ComputePipeline::new(device)?,
             resolve_signed: ComputePipeline::new(device)?,
             resolve_points: ComputePipeline::new(device)?,
@@ -957,11 +1162,15 @@ impl Distance3d {
         options: &Options3d,
     ) -> Result<Field3d, Error> {
         options.check()?;
-        let size = check_volume(device, volume)?;
+        let size = match options.method {
+            // Checked against the split it takes where the field is larger than one binding.
+            Method::Exact => volume_size(device, volume)?,
+            _ => check_volume(device, volume)?,
+        };
         let rec = &mut rec.recorder();
         let flood = |rec: &mut Recorder<'_>, invert: bool| -> Result<wgpu::Buffer, Error> {
             match options.method {
-                Method::Exact => self.encode_exact(device, rec, volume, options.inside, invert),
+                Method::Exact => unreachable!("the exact transform returns below"),
                 Method::Lines => Err(Error::Invalid {
                     stage: STAGE,
                     what: "the line passes are for sub-voxel seeds; integer seeds take the exact \
@@ -1007,7 +1216,7 @@ impl Distance3d {
                     volume,
                     options.inside,
                     true,
-                    Some(resolve(Some(&nearest))),
+                    Some(resolve(Some(&nearest.buffers))),
                 )?)
             } else {
                 None
@@ -1035,8 +1244,8 @@ impl Distance3d {
         )?;
         Ok(Field3d {
             size,
-            nearest,
-            nearest_outside,
+            nearest: Slabs::one(nearest, size[2]),
+            nearest_outside: nearest_outside.map(|b| Slabs::one(b, size[2])),
             distance,
         })
     }
@@ -1176,7 +1385,7 @@ impl Distance3d {
                     self.encode_lines(device, rec, keys, points, size, inside, options, band)?;
                 return Ok(Field3d {
                     size,
-                    nearest,
+                    nearest: Slabs::one(nearest, size[2]),
                     nearest_outside: None,
                     distance,
                 });
@@ -1227,7 +1436,7 @@ impl Distance3d {
         }
         Ok(Field3d {
             size,
-            nearest,
+            nearest: Slabs::one(nearest, size[2]),
             nearest_outside: None,
             distance,
         })
@@ -1463,8 +1672,8 @@ impl Distance3d {
         Ok(a)
     }
 
-    /// The exact transform (rows, then columns along y and z) of the marked voxels: a new buffer
-    /// of packed nearest seeds.
+    /// The exact transform (rows, then columns along y and z) of the marked voxels: packed
+    /// nearest seeds in a new buffer, or in slabs where the field is larger than one.
     pub fn encode_exact(
         &self,
         device: &wgpu::Device,
@@ -1472,7 +1681,7 @@ impl Distance3d {
         volume: &wgpu::Texture,
         inside: Inside,
         invert: bool,
-    ) -> Result<wgpu::Buffer, Error> {
+    ) -> Result<Slabs, Error> {
         self.encode_exact_fused(device, rec, volume, inside, invert, None)
     }
 
@@ -1486,8 +1695,11 @@ impl Distance3d {
         inside: Inside,
         invert: bool,
         fuse: Option<Fuse>,
-    ) -> Result<wgpu::Buffer, Error> {
-        let size = check_volume(device, volume)?;
+    ) -> Result<Slabs, Error> {
+        let size = volume_size(device, volume)?;
+        if let Some(split) = self.split_for(device, size)? {
+            return self.encode_exact_split(device, rec, volume, inside, invert, fuse, split);
+        }
         // Along y in workgroup memory, and not the last pass: the row pass folds into the y
         // pass's load (`row_words`, then `tile_columns_words`); else rows, then columns.
         let y_tile = if self.fold_rows && size[1] > 1 && size[2] > 1 {
@@ -1499,7 +1711,15 @@ impl Distance3d {
             Some(tile) => {
                 let words = self.encode_row_words(device, rec, volume, inside, invert)?;
                 let nearest = field_buffer(device, "nearest seed", size);
-                self.encode_tile_columns_words(device, rec, &words, &nearest, size, tile)?;
+                self.encode_tile_columns_words(
+                    device,
+                    rec,
+                    &words,
+                    TileIo::in_place(&nearest, size),
+                    size,
+                    1,
+                    tile,
+                )?;
                 (nearest, 2)
             }
             None => (self.encode_rows(device, rec, volume, inside, invert)?, 1),
@@ -1533,7 +1753,7 @@ impl Distance3d {
             // A single row (no column pass ran): resolve on its own.
             self.resolve_into(device, rec, size, &nearest, f)?;
         }
-        Ok(nearest)
+        Ok(Slabs::one(nearest, size[2]))
     }
 
     /// Unsigned or signed resolve of integer seeds into `fuse.distance` in a pass of its own.
@@ -1576,7 +1796,7 @@ impl Distance3d {
                     rec,
                     &field_resolve::resolve_signed::Resources {
                         params: (&params).into(),
-                        nearest: inside.into(),
+                        nearest: (&inside[0]).into(),
                         nearest_outside: nearest.into(),
                         distance: fuse.distance.into(),
                     },
@@ -1632,7 +1852,7 @@ impl Distance3d {
         inside: Inside,
         invert: bool,
     ) -> Result<wgpu::Buffer, Error> {
-        let size = check_volume(device, volume)?;
+        let size = volume_size(device, volume)?;
         let count = size[0].div_ceil(32);
         let words = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("edt row words"),
@@ -1701,19 +1921,32 @@ impl Distance3d {
                 TileGeometry::forced(size[1], device.limits().max_compute_workgroup_storage_size)?
             }
         };
-        self.encode_tile_columns_words(device, rec, words, nearest, size, tile)
+        self.encode_tile_columns_words(
+            device,
+            rec,
+            words,
+            TileIo::in_place(nearest, size),
+            size,
+            1,
+            tile,
+        )
     }
 
+    /// The column pass along `axis` from the row words, writing where `io` says (its `source`
+    /// is not read).
+    #[allow(clippy::too_many_arguments)]
     fn encode_tile_columns_words(
         &self,
         device: &wgpu::Device,
         rec: &mut impl Record,
         words: &wgpu::Buffer,
-        nearest: &wgpu::Buffer,
+        io: TileIo,
         size: [u32; 3],
+        axis: u32,
         tile: TileGeometry,
     ) -> Result<(), Error> {
-        let (params, overrides) = tile.bind(device, size, 1, false, None);
+        let (params, overrides) = tile.bind(device, size, axis, false, None, &io.span);
+        let others = if axis == 1 { size[2] } else { size[1] };
         self.tile_columns_words
             .get(device, &overrides, false)?
             .record(
@@ -1721,13 +1954,169 @@ impl Distance3d {
                 rec,
                 &edt_tile::tile_columns_words::Resources {
                     params: (&params).into(),
-                    nearest: nearest.into(),
+                    nearest: io.nearest.into(),
                     words: words.into(),
                 },
-                tile.groups(size, size[2]),
-                "columns (y, workgroup) from row words",
+                tile.groups(&io.span, others),
+                if axis == 1 {
+                    "columns (y, workgroup) from row words"
+                } else {
+                    "columns (z, workgroup) from row words"
+                },
             )?;
         Ok(())
+    }
+
+    /// How the exact transform splits a field of `size`, or `None` where one binding holds it.
+    /// [`Error::Size`] past the device's `max_buffer_size`, or where even a split part is too
+    /// large for a binding.
+    fn split_for(&self, device: &wgpu::Device, size: [u32; 3]) -> Result<Option<Split>, Error> {
+        let limits = device.limits();
+        let bytes = voxels(size) * 4;
+        let binding = limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size)
+            .min(self.split_bytes.unwrap_or(u64::MAX));
+        if bytes <= binding {
+            return Ok(None);
+        }
+        if matches!(self.column_passes, ColumnPasses::Global) {
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: format!(
+                    "a {size:?} field ({bytes} bytes) is larger than one storage binding \
+                     ({binding} bytes) and is split across bindings, which only the \
+                     workgroup-memory column passes do: use ColumnPasses::Auto or Workgroup"
+                ),
+            });
+        }
+        let storage = limits.max_compute_workgroup_storage_size;
+        let (y, z) = (
+            TileGeometry::split(size[1], storage, self.split_columns)?,
+            // Bands of 8 for the z pass from the words: at 1024³ on the H100 it took 7.95 ms
+            // per part with 2 columns per tile against 8.70 with 4 (the y pass took 2.87 ms per
+            // slab with 4, 3.15 with 2; the whole transform 54.4 ms with 4 for both).
+            TileGeometry::split(size[2], storage, 1)?,
+        );
+        // Parts are whole tiles wide for both passes.
+        let columns = 1u64 << y.lg_columns.max(z.lg_columns);
+        let column_bytes = size[1] as u64 * size[2] as u64 * 4;
+        let widest = binding / column_bytes / columns * columns;
+        if widest == 0 {
+            return Err(Error::Size {
+                stage: STAGE,
+                what: "one tile of columns (bytes) of a field split across bindings",
+                got: column_bytes * columns,
+                max: binding,
+            });
+        }
+        // Each slab is a buffer of its own.
+        let plane = size[0] as u64 * size[1] as u64 * 4;
+        let deepest = binding.min(limits.max_buffer_size) / plane;
+        if deepest == 0 {
+            return Err(Error::Size {
+                stage: STAGE,
+                what: "one plane (bytes) of a field split across bindings",
+                got: plane,
+                max: binding,
+            });
+        }
+        // As few parts and slabs as fit, of even sizes (no last dispatch of a few columns).
+        let even = |total: u64, most: u64, unit: u64| {
+            total
+                .div_ceil(total.div_ceil(most))
+                .next_multiple_of(unit)
+                .min(most) as u32
+        };
+        Ok(Some(Split {
+            part_width: even(size[0] as u64, widest, columns),
+            slab_depth: even(size[2] as u64, deepest, 1),
+            y,
+            z,
+        }))
+    }
+
+    /// The exact transform of a field too large for one binding. The row words as always; then
+    /// per part of `split.part_width` columns (x), the z pass from the words into a buffer that
+    /// holds that part alone; then per slab of `split.slab_depth` planes of the field, the y
+    /// pass from the part into the field, bound one slab at a time (resolving as it goes where
+    /// `fuse` says). z before y: each pass then reads and writes whole bindings.
+    #[allow(clippy::too_many_arguments)]
+    fn encode_exact_split(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        volume: &wgpu::Texture,
+        inside: Inside,
+        invert: bool,
+        fuse: Option<Fuse>,
+        split: Split,
+    ) -> Result<Slabs, Error> {
+        let size = volume_size(device, volume)?;
+        let [w, h, d] = size;
+        let words = self.encode_row_words(device, rec, volume, inside, invert)?;
+        let slabs: Vec<(u32, u32)> = (0..d)
+            .step_by(split.slab_depth as usize)
+            .map(|z0| (z0, (z0 + split.slab_depth).min(d)))
+            .collect();
+        let nearest: Vec<wgpu::Buffer> = slabs
+            .iter()
+            .map(|&(z0, z_end)| field_buffer(device, "nearest seed (a slab)", [w, h, z_end - z0]))
+            .collect();
+        let part = field_buffer(
+            device,
+            "nearest seed (a part of the field)",
+            [split.part_width, h, d],
+        );
+        let part_at = |x0: u32| placement([x0, 0, 0], split.part_width, split.part_width * h);
+        for x0 in (0..w).step_by(split.part_width as usize) {
+            let x_end = (x0 + split.part_width).min(w);
+            let span = Span {
+                first: [x0, 0],
+                x_end,
+                y_after_z: false,
+                source_apart: false,
+                src: part_at(x0),
+                dst: part_at(x0),
+            };
+            let io = TileIo {
+                source: None,
+                nearest: &part,
+                slab: 0,
+                span,
+            };
+            self.encode_tile_columns_words(device, rec, &words, io, size, 2, split.z)?;
+            for (k, &(z0, z_end)) in slabs.iter().enumerate() {
+                let io = TileIo {
+                    source: Some(&part),
+                    nearest: &nearest[k],
+                    slab: k,
+                    span: Span {
+                        first: [x0, z0],
+                        x_end,
+                        y_after_z: true,
+                        source_apart: true,
+                        src: part_at(x0),
+                        dst: placement([0, 0, z0], w, w * h),
+                    },
+                };
+                self.encode_tile_columns(
+                    device,
+                    rec,
+                    false,
+                    io,
+                    size,
+                    1,
+                    z_end - z0,
+                    split.y,
+                    fuse,
+                )?;
+            }
+        }
+        Ok(Slabs {
+            buffers: nearest,
+            depth: split.slab_depth,
+        })
     }
 
     /// One exact column pass alone (`axis` 1 = y, 2 = z), in place on `nearest`; `stack` is
@@ -1791,7 +2180,15 @@ impl Distance3d {
         let tile = self.tile_for(device, size[axis as usize], pack_2d)?;
         if let Some(tile) = tile {
             return self.encode_tile_columns(
-                device, rec, pack_2d, nearest, size, axis, others, tile, fuse,
+                device,
+                rec,
+                pack_2d,
+                TileIo::in_place(nearest, size),
+                size,
+                axis,
+                others,
+                tile,
+                fuse,
             );
         }
         let owned;
@@ -1869,7 +2266,7 @@ impl Distance3d {
             }) => record!(
                 self.columns_resolve_signed_2d[choice],
                 columns_resolve_signed_2d {
-                    nearest_inside: inside,
+                    nearest_inside: &inside[0],
                     distance_2d: distance
                 }
             ),
@@ -1888,7 +2285,7 @@ impl Distance3d {
             }) => record!(
                 self.columns_resolve_signed[choice],
                 columns_resolve_signed {
-                    nearest_inside: inside,
+                    nearest_inside: &inside[0],
                     distance: distance
                 }
             ),
@@ -1929,15 +2326,17 @@ impl Distance3d {
         let Some(tile) = self.tile_for(device, size[axis as usize], false)? else {
             return Ok(None);
         };
-        let (params, overrides) = tile.bind(device, size, axis, false, None);
+        let span = Span::whole(size);
+        let (params, overrides) = tile.bind(device, size, axis, false, None, &span);
         self.tile_copy.get(device, &overrides, false)?.record(
             device,
             rec,
             &edt_tile::tile_copy::Resources {
                 params: (&params).into(),
                 nearest: nearest.into(),
+                source: (&self.no_source).into(),
             },
-            tile.groups(size, size[3 - axis as usize]),
+            tile.groups(&span, size[3 - axis as usize]),
             if axis == 1 {
                 "copy (y, workgroup)"
             } else {
@@ -1954,15 +2353,19 @@ impl Distance3d {
         device: &wgpu::Device,
         rec: &mut impl Record,
         pack_2d: bool,
-        nearest: &wgpu::Buffer,
+        io: TileIo,
         size: [u32; 3],
         axis: u32,
         others: u32,
         tile: TileGeometry,
         fuse: Option<Fuse>,
     ) -> Result<(), Error> {
-        let (params, overrides) = tile.bind(device, size, axis, pack_2d, fuse.as_ref());
-        let groups = tile.groups(size, others);
+        let (params, overrides) = tile.bind(device, size, axis, pack_2d, fuse.as_ref(), &io.span);
+        let groups = tile.groups(&io.span, others);
+        let nearest = io.nearest.into();
+        debug_assert_eq!(io.span.source_apart, io.source.is_some());
+        let source = io.source.unwrap_or(&self.no_source).into();
+        let slab = io.slab;
         let name = match (axis, &fuse) {
             (1, None) => "columns (y, workgroup)",
             (1, Some(_)) => "columns (y, workgroup) + resolve",
@@ -1980,7 +2383,8 @@ impl Distance3d {
                     rec,
                     &edt_tile::$entry::Resources {
                         params: (&params).into(),
-                        nearest: nearest.into(),
+                        nearest,
+                        source,
                         $($field: $value.into()),*
                     },
                     groups,
@@ -2004,12 +2408,12 @@ impl Distance3d {
             Some(Fuse {
                 distance,
                 flat: true,
-                inside_field: Some(inside),
+                inside_field: Some(inside_field),
                 ..
             }) => record!(
                 self.tile_columns_resolve_signed_2d,
                 tile_columns_resolve_signed_2d {
-                    nearest_inside: inside,
+                    nearest_inside: &inside_field[slab],
                     distance_2d: distance
                 }
             ),
@@ -2023,12 +2427,12 @@ impl Distance3d {
             ),
             Some(Fuse {
                 distance,
-                inside_field: Some(inside),
+                inside_field: Some(inside_field),
                 ..
             }) => record!(
                 self.tile_columns_resolve_signed,
                 tile_columns_resolve_signed {
-                    nearest_inside: inside,
+                    nearest_inside: &inside_field[slab],
                     distance: distance
                 }
             ),
@@ -2110,7 +2514,11 @@ impl Distance3d {
         };
         let nearest = flood(rec, false, fuse(None).filter(|_| !options.signed))?;
         let nearest_outside = if options.signed {
-            Some(flood(rec, true, fuse(Some(&nearest)))?)
+            Some(flood(
+                rec,
+                true,
+                fuse(Some(std::slice::from_ref(&nearest))),
+            )?)
         } else {
             None
         };
@@ -2197,7 +2605,7 @@ impl Distance3d {
             voxel_size: options.voxel_size,
             band: options.world_band(),
             // The signed pass runs "in" the outside field with the inside field beside it.
-            inside_field: nearest_outside.map(|_| nearest),
+            inside_field: nearest_outside.map(|_| std::slice::from_ref(nearest)),
         };
         self.resolve_into(device, rec, size, nearest_outside.unwrap_or(nearest), fuse)?;
         Ok(distance)

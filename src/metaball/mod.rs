@@ -518,7 +518,7 @@ impl Metaballs {
             band: Some(settings.band),
         };
         // The flood starts from the keys buffer and may leave intermediate steps in it.
-        let field = self.distance.encode_keyed_points(
+        let mut field = self.distance.encode_keyed_points(
             device,
             rec,
             seeds.keys,
@@ -535,7 +535,9 @@ impl Metaballs {
             fixed_scale: seeds.fixed_scale,
             density: seeds.density,
             points: seeds.points,
-            nearest: field.nearest,
+            // A field of sub-voxel seeds is one buffer (`check_size_3d`): only the exact
+            // transform splits.
+            nearest: field.nearest.buffers.swap_remove(0),
             sdf: field.distance,
             band: settings.band * grid.voxel_size,
             threshold: settings.threshold,

@@ -68,6 +68,17 @@ pub fn size_u32(size: [usize; 3]) -> [u32; 3] {
 }
 
 /// Run a 3D distance computation on a mask; returns (nearest, nearest outside, distance).
+/// A field's words, its slabs one after another.
+pub fn slab_words(ctx: &Context, slabs: &fieldkit::distance::Slabs) -> Vec<u32> {
+    slabs
+        .buffers
+        .iter()
+        .flat_map(|b| {
+            bytemuck::cast_slice::<u8, u32>(&fieldkit::gpu::read_buffer(ctx, b).unwrap()).to_vec()
+        })
+        .collect()
+}
+
 pub fn run_3d(
     ctx: &Context,
     d3: &fieldkit::distance::Distance3d,
@@ -75,7 +86,6 @@ pub fn run_3d(
     size: [usize; 3],
     options: &fieldkit::distance::Options3d,
 ) -> (Vec<u32>, Option<Vec<u32>>, Vec<f32>) {
-    use fieldkit::gpu::read_buffer;
     let volume =
         fieldkit::distance::upload_volume(&ctx.device, &ctx.queue, &to_bytes(mask), size_u32(size))
             .expect("upload");
@@ -84,11 +94,9 @@ pub fn run_3d(
         .encode(&ctx.device, &mut enc, &volume, options)
         .expect("encode");
     ctx.submit_and_wait("test", enc).expect("run");
-    let words =
-        |b: &wgpu::Buffer| bytemuck::cast_slice::<u8, u32>(&read_buffer(ctx, b).unwrap()).to_vec();
     (
-        words(&field.nearest),
-        field.nearest_outside.as_ref().map(words),
+        slab_words(ctx, &field.nearest),
+        field.nearest_outside.as_ref().map(|s| slab_words(ctx, s)),
         read_texture(ctx, &field.distance).unwrap(),
     )
 }

@@ -100,9 +100,7 @@ fn pass_bytes(name: &str, cells: u64, dims: u32) -> f64 {
     per * cells as f64
 }
 
-/// Write `name` under `dir` (created if missing): the `header` line, then one line per row.
-/// Returns the file's path.
-/// Squared distance per cell from packed seeds (3D 11/11/10 or 2D 16/16); u64::MAX for none.
+/// Squared distance per cell from packed seeds (3D as `unpack_seed3`, 2D 16/16); u64::MAX for none.
 fn d2_of(nearest: &[u32], size: [usize; 3], dims: u32) -> Vec<u64> {
     let (w, h) = (size[0], size[1]);
     nearest
@@ -114,11 +112,8 @@ fn d2_of(nearest: &[u32], size: [usize; 3], dims: u32) -> Vec<u64> {
             }
             let (x, y, z) = ((i % w) as i64, ((i / w) % h) as i64, (i / (w * h)) as i64);
             let (sx, sy, sz) = if dims == 3 {
-                (
-                    (s & 0x7ff) as i64 - 1,
-                    ((s >> 11) & 0x7ff) as i64 - 1,
-                    (s >> 22) as i64 - 1,
-                )
+                let [sx, sy, sz] = fieldkit::distance::unpack_seed3(s).expect("not NO_SEED");
+                (sx as i64, sy as i64, sz as i64)
             } else {
                 ((s & 0xffff) as i64 - 1, (s >> 16) as i64 - 1, 0)
             };
@@ -204,6 +199,15 @@ fn words(ctx: &Context, b: &wgpu::Buffer) -> Result<Vec<u32>, String> {
     Ok(bytemuck::cast_slice::<u8, u32>(&read_buffer(ctx, b).map_err(|e| e.to_string())?).to_vec())
 }
 
+/// A field's words, its slabs one after another.
+fn slab_words(ctx: &Context, slabs: &fieldkit::distance::Slabs) -> Result<Vec<u32>, String> {
+    let mut all = Vec::new();
+    for b in &slabs.buffers {
+        all.extend(words(ctx, b)?);
+    }
+    Ok(all)
+}
+
 pub fn run(args: &Args) -> ExitCode {
     match distance(args) {
         Ok(()) => ExitCode::SUCCESS,
@@ -224,7 +228,7 @@ fn distance(args: &Args) -> Result<(), String> {
     let sizes3 = pick(if args.quick {
         &[32, 64]
     } else {
-        &[128, 256, 512]
+        &[128, 256, 512, 1024]
     });
     let sizes2 = pick(if args.quick {
         &[256, 512]
@@ -274,6 +278,8 @@ fn distance(args: &Args) -> Result<(), String> {
     println!("adapter: {adapter}");
     let mut d3 = Distance3d::new(&ctx.device).map_err(|e| e.to_string())?;
     d3.set_column_bands(args.column_bands)
+        .map_err(|e| e.to_string())?;
+    d3.set_split_columns(args.split_columns)
         .map_err(|e| e.to_string())?;
     // The same transform with the column passes in global memory, for comparison in one command.
     let mut d3_global = Distance3d::new(&ctx.device).map_err(|e| e.to_string())?;
@@ -349,9 +355,14 @@ fn distance(args: &Args) -> Result<(), String> {
     // (size, axis, median ms) of the workgroup column passes' load/store floor.
     let mut floors: Vec<(String, u32, f64)> = Vec::new();
 
+    // Fields larger than one storage binding (1024³ is 4 GiB) are split across bindings, which
+    // only the exact transform's workgroup-memory passes do, always from the row words: the
+    // other exact rows would time the same passes or none, and JFA refuses the size.
+    let binding = ctx.device.limits().max_storage_buffer_binding_size;
     for &n in &sizes3 {
         let size = [n, n, n];
         let cells = (n * n * n) as u64;
+        let split = cells * 4 > binding;
         let mask = mask3(n);
         let volume = upload_volume(&ctx.device, &ctx.queue, &mask, [n as u32; 3])
             .map_err(|e| e.to_string())?;
@@ -366,6 +377,14 @@ fn distance(args: &Args) -> Result<(), String> {
                 ROWS_PASS => &d3_rows,
                 _ => &d3,
             };
+            // JFA takes fields of one binding only.
+            if split
+                && ([GLOBAL, WORKGROUP, ROWS_PASS].contains(&name.as_str())
+                    || opts.method != Method::Exact)
+            {
+                bar.inc(1);
+                continue;
+            }
             // Where no tile fits (or the path is the one Auto takes anyway), no row.
             if name == WORKGROUP
                 && (d3
@@ -387,7 +406,7 @@ fn distance(args: &Args) -> Result<(), String> {
                 .map_err(|e| e.to_string())?;
             ctx.submit_and_wait("bench", enc)
                 .map_err(|e| e.to_string())?;
-            let d2 = d2_of(&words(&ctx, &field.nearest)?, size, 3);
+            let d2 = d2_of(&slab_words(&ctx, &field.nearest)?, size, 3);
             let (wrong, max_err, mean_err, peer_ms) = if opts.method == Method::Exact {
                 // Both exact rows against the reference: the peer's distances, or the CPU
                 // transform in quick mode.
@@ -418,18 +437,20 @@ fn distance(args: &Args) -> Result<(), String> {
                 max_err,
                 mean_err,
                 peer_ms,
-                passes: passes
-                    .into_iter()
-                    .map(|(p, ms)| {
-                        let b = pass_bytes(&p, cells, 3);
-                        (p, ms, b)
-                    })
-                    .collect(),
+                // A split field runs a pass once per part or slab: each moves its share.
+                passes: {
+                    let count = |p: &str| passes.iter().filter(|(q, _)| q == p).count() as f64;
+                    passes
+                        .iter()
+                        .map(|(p, ms)| (p.clone(), *ms, pass_bytes(p, cells, 3) / count(p)))
+                        .collect()
+                },
             });
             bar.inc(1);
         }
-        // The floor of each workgroup column pass: its loads and stores alone.
-        for axis in [1u32, 2] {
+        // The floor of each workgroup column pass: its loads and stores alone (of a field in one
+        // binding).
+        for axis in [1u32, 2].into_iter().filter(|_| !split) {
             let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("bench tile copy"),
                 size: cells * 4,
@@ -624,7 +645,7 @@ fn write_csv(dir: &Path, adapter: &str, rows: &[Row]) -> std::io::Result<()> {
             .map_or(String::new(), |p| format!("{:.3}", r.median_ms / p));
         writeln!(
             f,
-            "\"{adapter}\",{},{},{},{},{:.4},{:.4},{:.4},{},{:.3e},{:.4},{:.3e},{peer},{ratio}",
+            "\"{adapter}\",{},{},{},\"{}\",{:.4},{:.4},{:.4},{},{:.3e},{:.4},{:.3e},{peer},{ratio}",
             r.dims,
             r.size,
             r.voxels,
@@ -648,7 +669,7 @@ fn write_csv(dir: &Path, adapter: &str, rows: &[Row]) -> std::io::Result<()> {
             let bw = bytes / (ms / 1e3);
             writeln!(
                 f,
-                "\"{adapter}\",{},{},{p},{ms:.4},{bytes:.0},{:.1},{:.3}",
+                "\"{adapter}\",{},\"{}\",\"{p}\",{ms:.4},{bytes:.0},{:.1},{:.3}",
                 r.size,
                 r.method,
                 bw / 1e9,

@@ -122,6 +122,10 @@ enum Command {
         /// Bands per column in the exact transform (1, 2, 4, 8, 16, 32); by grid size if absent.
         #[arg(long)]
         column_bands: Option<u32>,
+        /// Columns per tile (at least) of the y pass where the exact transform splits a field
+        /// too large for one binding (1024³); 4 if absent.
+        #[arg(long)]
+        split_columns: Option<u32>,
         /// `distance`: open the device with this `max_compute_workgroup_storage_size` (bytes)
         /// instead of the adapter's, to time the column-pass tiles each limit gives.
         #[arg(long)]
@@ -210,6 +214,7 @@ fn main() -> ExitCode {
             out,
             exact_only,
             column_bands,
+            split_columns,
             workgroup_storage,
             sizes,
             mesh,
@@ -235,6 +240,7 @@ fn main() -> ExitCode {
                 band,
                 exact_only,
                 column_bands,
+                split_columns,
                 workgroup_storage,
                 sizes,
                 mesh,

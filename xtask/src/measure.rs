@@ -24,6 +24,8 @@ pub struct Args {
     pub exact_only: bool,
     /// Bands per column of the exact transform; `None` lets the library choose.
     pub column_bands: Option<u32>,
+    /// `distance`: columns per tile (at least) of a split field's passes.
+    pub split_columns: Option<u32>,
     /// `distance`: the device's `max_compute_workgroup_storage_size` (bytes); the adapter's if
     /// `None`.
     pub workgroup_storage: Option<u32>,
