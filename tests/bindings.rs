@@ -167,8 +167,8 @@ fn unknown_override_is_an_error() {
 }
 
 /// A stage's `Overrides` hold the shader's defaults (`override ROWS: u32 = 1u;` in
-/// `edt_rows.wgsl`, `PACK_2D = false`, `AXIS = 1u`, `CELLS = 4096u` in `edt_tile.wgsl`), and
-/// their `constants()` make pipelines.
+/// `edt_rows.wgsl`; `PACK_2D`, `AXIS`, `Y_AFTER_Z`, `SOURCE_APART` and `CELLS = 3840u` in
+/// `edt_tile.wgsl`), and their `constants()` make pipelines.
 #[test]
 fn typed_overrides_hold_the_shader_defaults_and_make_pipelines() {
     use fieldkit::shaders::distance::{edt_rows, edt_tile};
@@ -187,7 +187,13 @@ fn typed_overrides_hold_the_shader_defaults_and_make_pipelines() {
     };
     assert_eq!(
         tile.constants(),
-        vec![("PACK_2D", 0.0), ("AXIS", 1.0), ("CELLS", 2336.0)]
+        vec![
+            ("PACK_2D", 0.0),
+            ("AXIS", 1.0),
+            ("Y_AFTER_Z", 0.0),
+            ("SOURCE_APART", 0.0),
+            ("CELLS", 2336.0)
+        ]
     );
     edt_rows::row_words::Pipeline::with_overrides(
         &ctx.device,

@@ -10,6 +10,10 @@
 //! fieldkit_build::Builder::new("shaders").build_or_exit();
 //! ```
 //!
+//! Every link has fieldkit's own helpers too, as the WESL package `fieldkit` (the `fieldkit-wesl`
+//! crate): `import fieldkit::seed::pack_seed3;` (seed packing, Gerstner waves, octahedral
+//! normals, triangle/box overlap, field sampling; the module tree is in `fieldkit_wesl`'s docs).
+//!
 //! and in the crate: `mod shaders { include!(concat!(env!("OUT_DIR"), "/shaders.rs")); }`.
 //! The generated code uses `fieldkit::bind` (the runtime half: resources, pipelines, typed
 //! binding errors) and derives from `bytemuck` and `encase`, which the crate depends on too.
@@ -163,6 +167,8 @@ fn link(shaders: &ShaderDir, stage: &StageFile) -> Result<Linked, String> {
         .parse()
         .map_err(|e| format!("{}: bad module path: {e:?}", stage.rel_path))?;
     let mut compiler = wesl::Wesl::new(shaders.root());
+    // fieldkit's helpers, for `import fieldkit::…` (the `fieldkit-wesl` crate).
+    compiler.add_package(&fieldkit_wesl::PACKAGE);
     // Keep every declaration of the stage file itself, used or not: stripping it would drop an
     // unused binding (or a broken unused function) without a word, where the lints and naga
     // should see it. Imported helpers are still stripped to what the stage uses.
@@ -292,6 +298,10 @@ fn strip_ansi(s: &str) -> String {
 
 /// `package::shared::grid` → "shaders/shared/grid.wesl" (or .wgsl), whichever exists.
 fn module_file(shaders: &ShaderDir, path: &wesl::ModulePath) -> Option<String> {
+    // A package's module (`fieldkit::seed`) is not a file of this folder.
+    if matches!(path.origin, wgsl_parse::syntax::PathOrigin::Package(_)) {
+        return None;
+    }
     let comps: Vec<String> = path.components.iter().map(|c| c.to_string()).collect();
     let rel = comps.join("/");
     for ext in ["wesl", "wgsl"] {
@@ -657,6 +667,35 @@ mod tests {
             errors[1]
         );
         std::fs::remove_dir_all(&root).ok();
+    }
+
+    /// fieldkit's helpers are a package every link has (`import fieldkit::…`), beside the
+    /// folder's own; a module the package lacks is an error naming it, at the stage's file.
+    #[test]
+    fn stages_import_fieldkits_package() {
+        let root = tree(&[
+            (
+                "a_seeds",
+                "// Packs seeds with fieldkit's helper.\nimport fieldkit::seed::{NO_SEED, pack_seed2};\nimport package::shared::util::twice;\n@group(0) @binding(0) var<storage, read_write> out: array<u32>;\n@compute @workgroup_size(64)\nfn main(@builtin(global_invocation_id) id: vec3<u32>) {\n    out[id.x] = select(NO_SEED, pack_seed2(vec2<u32>(id.x, twice(id.x))), id.x > 0u);\n}\n",
+            ),
+            (
+                "b_missing",
+                "// Imports a module the package does not have.\nimport fieldkit::nowhere::thing;\n@compute @workgroup_size(1)\nfn main() { _ = thing(); }\n",
+            ),
+        ]);
+        let errors = build_all(&root).err().expect("the missing module fails");
+        assert_eq!(errors.len(), 1, "{errors:#?}");
+        assert!(
+            errors[0].contains("shaders/room/b_missing.wgsl") && errors[0].contains("nowhere"),
+            "{}",
+            errors[0]
+        );
+        std::fs::remove_file(root.join("shaders/room/b_missing.wgsl")).unwrap();
+        let stages = build_all(&root).expect("the package import links");
+        let linked = &stages[0].source;
+        // The helper's body came from fieldkit's seed.wesl (the 16/16 packing).
+        assert!(linked.contains("<< 16u"), "{linked}");
+        std::fs::remove_dir_all(root).ok();
     }
 
     #[test]

@@ -1,0 +1,74 @@
+//! fieldkit's WGSL helpers as a WESL package: what fieldkit's own stages import from
+//! `shaders/shared/`, for a user's shaders to import as `fieldkit::…`.
+//!
+//! `fieldkit-build` adds [`PACKAGE`] to every link, so a shader built by it may write
+//!
+//! ```wgsl
+//! import fieldkit::seed::{pack_seed3, unpack_seed3};
+//! ```
+//!
+//! With wesl alone: `wesl::Wesl::new("shaders").add_package(&fieldkit_wesl::PACKAGE)`.
+//!
+//! # The module tree (public API)
+//!
+//! | module | what it holds |
+//! |---|---|
+//! | `fieldkit::seed` | seed packing as the distance stages store it: 2D 16/16 bits, 3D 11/11/10 bits + 1 (`pack_seed2/3`, `unpack_seed2/3`, `NO_SEED`), squared distances, sub-voxel seed keys, signed distances from two fields |
+//! | `fieldkit::gerstner` | the Gerstner wave sum the ocean displaces by (`GerstnerWave`, positions, normals) |
+//! | `fieldkit::octahedral` | unit vectors packed as two snorm16 by the octahedral map (`NO_NORMAL` for none) |
+//! | `fieldkit::triangle_box` | Schwarz & Seidel's triangle/voxel overlap |
+//! | `fieldkit::field` | trilinear field sampling by `textureLoad` and ray/box helpers |
+//!
+//! Each module is the file of the same name in fieldkit's `shaders/shared/`, which fieldkit's
+//! own stages import (`package::shared::…`): one source, so the package cannot drift from what
+//! fieldkit runs. `shared/cube.wesl` and `shared/shading.wesl` (the debug views' cube and the
+//! metaball tracers' colours) are internal and not in the package.
+
+use wesl::{CodegenModule, CodegenPkg};
+
+macro_rules! module {
+    ($name:ident) => {
+        CodegenModule {
+            name: stringify!($name),
+            source: include_str!(concat!("../../shaders/shared/", stringify!($name), ".wesl")),
+            submodules: &[],
+        }
+    };
+}
+
+static SEED: CodegenModule = module!(seed);
+static GERSTNER: CodegenModule = module!(gerstner);
+static OCTAHEDRAL: CodegenModule = module!(octahedral);
+static TRIANGLE_BOX: CodegenModule = module!(triangle_box);
+static FIELD: CodegenModule = module!(field);
+
+static ROOT: CodegenModule = CodegenModule {
+    name: "fieldkit",
+    source: "",
+    submodules: &[&SEED, &GERSTNER, &OCTAHEDRAL, &TRIANGLE_BOX, &FIELD],
+};
+
+/// The `fieldkit` WESL package.
+pub static PACKAGE: CodegenPkg = CodegenPkg {
+    crate_name: "fieldkit",
+    root: &ROOT,
+    dependencies: &[],
+};
+
+/// The package's public modules, by name.
+pub const MODULES: &[&str] = &["seed", "gerstner", "octahedral", "triangle_box", "field"];
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every module named in the docs is in the tree, with its source.
+    #[test]
+    fn the_tree_holds_every_module() {
+        let names: Vec<&str> = ROOT.submodules.iter().map(|m| m.name).collect();
+        assert_eq!(names, MODULES);
+        for m in ROOT.submodules {
+            assert!(m.source.contains("fn "), "{}: no functions", m.name);
+        }
+    }
+}
