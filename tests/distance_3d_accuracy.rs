@@ -498,6 +498,20 @@ fn fields_split_across_bindings_are_exact() {
                 "{name}: {} slabs",
                 field.nearest.buffers.len()
             );
+            // Slab k holds planes k · depth onwards; `plane` finds each one's buffer.
+            let depth = field.nearest.depth as usize;
+            let plane_bytes = (size[0] * size[1] * 4) as u64;
+            for (k, b) in field.nearest.buffers.iter().enumerate() {
+                let planes = depth.min(size[2] - k * depth);
+                assert_eq!(b.size(), planes as u64 * plane_bytes, "{name}: slab {k}");
+            }
+            for z in 0..size[2] as u32 {
+                let (b, local) = field.nearest.plane(z).unwrap();
+                let k = z as usize / depth;
+                assert_eq!(b, &field.nearest.buffers[k], "{name}: plane {z}");
+                assert_eq!(local as usize, z as usize - k * depth, "{name}: plane {z}");
+            }
+            assert!(field.nearest.plane(size[2] as u32).is_none());
             drop(enc);
             for is_signed in [false, true] {
                 let options = Options3d {

@@ -695,6 +695,19 @@ mod tests {
         let linked = &stages[0].source;
         // The helper's body came from fieldkit's seed.wesl (the 16/16 packing).
         assert!(linked.contains("<< 16u"), "{linked}");
+        // A struct imported from the package is named as in the package, as one imported from
+        // the folder's own helpers is.
+        std::fs::write(
+            root.join("shaders/room/c_waves.wgsl"),
+            "// Reads waves in fieldkit's layout.\nimport fieldkit::gerstner::GerstnerWave;\n@group(0) @binding(0) var<uniform> wave: GerstnerWave;\n@group(0) @binding(1) var<storage, read_write> out: array<f32>;\n@compute @workgroup_size(1)\nfn main() {\n    out[0] = wave.amplitude;\n}\n",
+        )
+        .unwrap();
+        let out = root.join("shaders.rs");
+        Builder::new("shaders")
+            .build_to(&root, &out)
+            .expect("builds");
+        let code = std::fs::read_to_string(&out).unwrap();
+        assert!(code.contains("pub struct GerstnerWave"), "{code}");
         std::fs::remove_dir_all(root).ok();
     }
 

@@ -325,10 +325,16 @@ fn dim_name(dim: ImageDimension, arrayed: bool) -> String {
 }
 
 /// The name a struct imported through WESL is known by: the linker spells
-/// `package::shared::gerstner::GerstnerWave` as `package_shared_gerstner_GerstnerWave`, and
-/// the host code should say `GerstnerWave`. Names with escaped underscores are left alone.
+/// `package::shared::gerstner::GerstnerWave` as `package_shared_gerstner_GerstnerWave` (and
+/// `fieldkit::gerstner::GerstnerWave`, from fieldkit's package, as
+/// `fieldkit_gerstner_GerstnerWave`), and the host code should say `GerstnerWave`. Names with
+/// escaped underscores are left alone.
 pub fn host_name(name: &str) -> String {
-    match name.strip_prefix("package_") {
+    let package = format!("{}_", fieldkit_wesl::PACKAGE.root.name);
+    match name
+        .strip_prefix("package_")
+        .or_else(|| name.strip_prefix(package.as_str()))
+    {
         Some(rest) if !rest.contains("__") => rest.rsplit('_').next().unwrap_or(rest).to_string(),
         _ => name.to_string(),
     }

@@ -610,6 +610,8 @@ pub struct Slabs {
     pub buffers: Vec<wgpu::Buffer>,
     /// Planes per buffer (the last may hold fewer).
     pub depth: u32,
+    /// Planes in all (the field's depth).
+    pub planes: u32,
 }
 
 impl Slabs {
@@ -617,6 +619,7 @@ impl Slabs {
         Self {
             buffers: vec![buffer],
             depth,
+            planes: depth,
         }
     }
 
@@ -628,8 +631,11 @@ impl Slabs {
         }
     }
 
-    /// The buffer holding plane `z`, and the plane's index in it.
+    /// The buffer holding plane `z`, and the plane's index in it; `None` past the field.
     pub fn plane(&self, z: u32) -> Option<(&wgpu::Buffer, u32)> {
+        if z >= self.planes {
+            return None;
+        }
         let k = (z / self.depth.max(1)) as usize;
         self.buffers.get(k).map(|b| (b, z - k as u32 * self.depth))
     }
@@ -2116,6 +2122,7 @@ impl Distance3d {
         Ok(Slabs {
             buffers: nearest,
             depth: split.slab_depth,
+            planes: d,
         })
     }
 
