@@ -298,9 +298,18 @@ fn strip_ansi(s: &str) -> String {
 
 /// `package::shared::grid` → "shaders/shared/grid.wesl" (or .wgsl), whichever exists.
 fn module_file(shaders: &ShaderDir, path: &wesl::ModulePath) -> Option<String> {
-    // A package's module (`fieldkit::seed`) is not a file of this folder.
-    if matches!(path.origin, wgsl_parse::syntax::PathOrigin::Package(_)) {
-        return None;
+    // A module of fieldkit's package (`fieldkit::seed`) is a file of the fieldkit-wesl crate,
+    // named by its absolute path; another package's is not a file of this folder.
+    if let wgsl_parse::syntax::PathOrigin::Package(name) = &path.origin {
+        if name.as_str() != fieldkit_wesl::PACKAGE.root.name {
+            return None;
+        }
+        let comps: Vec<String> = path.components.iter().map(|c| c.to_string()).collect();
+        return Some(format!(
+            "{}/{}.wesl",
+            fieldkit_wesl::SOURCE_DIR,
+            comps.join("/")
+        ));
     }
     let comps: Vec<String> = path.components.iter().map(|c| c.to_string()).collect();
     let rel = comps.join("/");

@@ -1,5 +1,5 @@
-//! fieldkit's WGSL helpers as a WESL package: what fieldkit's own stages import from
-//! `shaders/shared/`, for a user's shaders to import as `fieldkit::…`.
+//! fieldkit's WGSL helpers as a WESL package, `fieldkit`: what fieldkit's own stages import,
+//! for a user's shaders to import the same way (`fieldkit::…`).
 //!
 //! `fieldkit-build` adds [`PACKAGE`] to every link, so a shader built by it may write
 //!
@@ -19,10 +19,10 @@
 //! | `fieldkit::triangle_box` | Schwarz & Seidel's triangle/voxel overlap |
 //! | `fieldkit::field` | trilinear field sampling by `textureLoad` and ray/box helpers |
 //!
-//! Each module is the file of the same name in fieldkit's `shaders/shared/`, which fieldkit's
-//! own stages import (`package::shared::…`): one source, so the package cannot drift from what
-//! fieldkit runs. `shared/cube.wesl` and `shared/shading.wesl` (the debug views' cube and the
-//! metaball tracers' colours) are internal and not in the package.
+//! Each module is the file of the same name in this crate's `shaders/`, and fieldkit's own
+//! stages import them from here too (`import fieldkit::seed::…`): one source, so the package
+//! cannot drift from what fieldkit runs. fieldkit's internal helpers (the debug views' cube, the
+//! metaball tracers' colours) stay in its `shaders/shared/` and are not part of the package.
 
 use wesl::{CodegenModule, CodegenPkg};
 
@@ -30,7 +30,7 @@ macro_rules! module {
     ($name:ident) => {
         CodegenModule {
             name: stringify!($name),
-            source: include_str!(concat!("../../shaders/shared/", stringify!($name), ".wesl")),
+            source: include_str!(concat!("../shaders/", stringify!($name), ".wesl")),
             submodules: &[],
         }
     };
@@ -54,6 +54,10 @@ pub static PACKAGE: CodegenPkg = CodegenPkg {
     root: &ROOT,
     dependencies: &[],
 };
+
+/// Where the modules' files are (`SOURCE_DIR/<module>.wesl`), for tools that report an error
+/// in one at its file:line:col.
+pub const SOURCE_DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/shaders");
 
 /// The package's public modules, by name.
 pub const MODULES: &[&str] = &["seed", "gerstner", "octahedral", "triangle_box", "field"];

@@ -26,7 +26,7 @@
 // The last pass of a 3D transform can resolve distances as `field_resolve.wgsl` would, in the
 // same sweep (`columns_resolve`, `columns_resolve_signed`): that saves reading the field again.
 
-import package::shared::seed::{NO_SEED, answer_distance, dist2, dist2_3, signed_at2, signed_at3, unpack_seed2, unpack_seed3};
+import fieldkit::seed::{NO_SEED, answer_distance, dist2, dist2_3, signed_at2, signed_at3, unpack_seed2, unpack_seed3};
 
 struct ColumnParams {
     size: vec3<u32>,

@@ -14,7 +14,7 @@
 // word and the nearest marks on either side of it, which the y column pass reads in place of a
 // field (`tile_columns_words` in `edt_tile.wgsl`): 1.25 bytes per voxel moved where `rows` moves 5.
 
-import package::shared::seed::{NO_SEED, pack_seed2, pack_seed3};
+import fieldkit::seed::{NO_SEED, pack_seed2, pack_seed3};
 
 struct RowParams {
     size: vec3<u32>,

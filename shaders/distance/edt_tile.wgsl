@@ -17,7 +17,7 @@
 // cell per band, and a column stride that keeps a warp's threads in different banks), columns and bands come from
 // shifts and masks, and the separator is an f32 division corrected to the exact integer floor.
 
-import package::shared::seed::{NO_SEED, answer_distance, pack_seed3, signed_at2, signed_at3, unpack_seed2, unpack_seed3};
+import fieldkit::seed::{NO_SEED, answer_distance, pack_seed3, signed_at2, signed_at3, unpack_seed2, unpack_seed3};
 
 // Where voxel (x, y, z) sits in a buffer: (x - origin.x) + row · (y - origin.y) + plane ·
 // (z - origin.z). A whole field has origin 0, row = size.x and plane = size.x · size.y; a part of

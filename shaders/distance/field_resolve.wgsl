@@ -6,7 +6,7 @@
 // seeds lie on the surface itself: the distance is to the seed point, and the sign comes from
 // the volume (negative where the voxel's value is ≥ threshold), as the sources' metaball SDF does.
 
-import package::shared::seed::{FAR, NO_SEED, key_index, seed_distance2, seed_distance3, signed_at2, signed_at3, signed_distance};
+import fieldkit::seed::{FAR, NO_SEED, key_index, seed_distance2, seed_distance3, signed_at2, signed_at3, signed_distance};
 
 struct ResolveParams {
     size: vec3<u32>,

@@ -5,7 +5,7 @@
 // inside half of a signed distance. The field is a buffer, x fastest, so every JFA neighbour read
 // of a warp is one contiguous run.
 
-import package::shared::seed::{NO_SEED, pack_seed3};
+import fieldkit::seed::{NO_SEED, pack_seed3};
 
 struct SeedParams {
     size: vec3<u32>,

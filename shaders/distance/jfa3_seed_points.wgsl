@@ -6,7 +6,7 @@
 // smaller index (see `point_key`), so the result does not depend on thread order. Points that
 // lose are not seen by JFA; homes avoid that. The field must be zeroed first.
 
-import package::shared::seed::{point_key, unpack_seed3};
+import fieldkit::seed::{point_key, unpack_seed3};
 
 struct PointParams {
     size: vec3<u32>,

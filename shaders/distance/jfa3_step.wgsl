@@ -5,7 +5,7 @@
 // Out-of-range neighbours are skipped. Equal distances keep the smaller packed seed (smaller
 // table index), so the result is the same on every adapter.
 
-import package::shared::seed::{NO_SEED, dist2_3, key_index, unpack_seed3};
+import fieldkit::seed::{NO_SEED, dist2_3, key_index, unpack_seed3};
 
 struct JumpParams {
     size: vec3<u32>,

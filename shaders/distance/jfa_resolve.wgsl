@@ -5,7 +5,7 @@
 // its own nearest inside seed. Half a texel is taken off so the zero crossing lies on the boundary
 // between texel centres, as in the source tool's mask mode.
 
-import package::shared::seed::{FAR, NO_SEED, pack_seed2, unpack_seed2};
+import fieldkit::seed::{FAR, NO_SEED, pack_seed2, unpack_seed2};
 
 struct ResolveParams {
     size: vec2<u32>,

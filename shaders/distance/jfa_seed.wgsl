@@ -3,7 +3,7 @@
 // A texel is a seed where the seed texture's red channel is non-zero, or zero when `invert` is
 // set (the outside of a mask, for the inside half of a signed distance).
 
-import package::shared::seed::{NO_SEED, pack_seed2};
+import fieldkit::seed::{NO_SEED, pack_seed2};
 
 struct SeedParams {
     size: vec2<u32>,

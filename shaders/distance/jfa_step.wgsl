@@ -4,7 +4,7 @@
 // edge texel's seed again and hide nothing, but a wrapped one would offer seeds from the far side.
 // Equal distances keep the smaller packed seed so the result is the same on every adapter.
 
-import package::shared::seed::{FAR2, NO_SEED, dist2, unpack_seed2};
+import fieldkit::seed::{FAR2, NO_SEED, dist2, unpack_seed2};
 
 struct JumpParams {
     size: vec2<u32>,

@@ -16,7 +16,7 @@
 // floor(band + √3/2) voxels along every axis (the host sets it). Beyond the band voxels may keep
 // no seed; the resolve clamps them to ±band.
 
-import package::shared::seed::{FAR, NO_SEED, key_index, pack_seed3, unpack_seed3};
+import fieldkit::seed::{FAR, NO_SEED, key_index, pack_seed3, unpack_seed3};
 
 struct LineParams {
     size: vec3<u32>,

@@ -14,7 +14,7 @@
 // Both evaluate f from the bin under the sample, skip empty bins whole, stop a ray where f ≥ T
 // and refine the crossing by bisection on f, and shade with the analytic gradient.
 
-import package::shared::field::{ndc_depth, pixel_ray, ray_box};
+import fieldkit::field::{ndc_depth, pixel_ray, ray_box};
 import package::shared::shading::{heat, surface_colour};
 
 struct TraceParams {

@@ -14,7 +14,7 @@
 // tolerance grows with distance (a pixel's footprint). A sample below the tolerance, or a sign
 // change, is refined by bisection on density − threshold, whose zero set the seeds came from.
 
-import package::shared::field::{ndc_depth, pixel_ray, ray_box};
+import fieldkit::field::{ndc_depth, pixel_ray, ray_box};
 import package::shared::shading::{heat, surface_colour};
 
 struct RaymarchParams {

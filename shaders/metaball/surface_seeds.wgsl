@@ -5,7 +5,7 @@
 // Each seed is its own voxel's point, so the seed table is indexed by voxel and the stage writes
 // the JFA keys directly (see `point_key` in the distance stages).
 
-import package::shared::seed::{NO_SEED, point_key};
+import fieldkit::seed::{NO_SEED, point_key};
 
 struct SurfaceParams {
     size: vec3<u32>,

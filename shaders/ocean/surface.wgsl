@@ -1,4 +1,4 @@
-// The ocean surface: the Gerstner wave sum (`shared/gerstner`) drawn as patches of a grid, with
+// The ocean surface: the Gerstner wave sum (`fieldkit::gerstner`) drawn as patches of a grid, with
 // scrolling height-map layers in the vertex stage, scrolling normal-map layers and depth fade in
 // the fragment stage, written to one forward-shaded colour target (`fs_forward`) or to four
 // G-buffer targets (`fs_gbuffer`). `displace_grid` evaluates the same sum on a grid for reading
@@ -11,8 +11,8 @@
 // fade from a copy made just before it (`fieldkit::ocean::OceanRenderer` copies it), which is
 // how the write-up's "fade or write, not both" is lifted.
 
-import package::shared::gerstner::{GerstnerWave, WaveSurface, add_wave, flat_surface, surface_normal};
-import package::shared::field::unproject;
+import fieldkit::gerstner::{GerstnerWave, WaveSurface, add_wave, flat_surface, surface_normal};
+import fieldkit::field::unproject;
 
 // Most waves one set holds (`fieldkit::ocean::MAX_WAVES` is read from this array's length).
 const MAX_WAVES: u32 = 16u;

@@ -31,7 +31,7 @@
 // the lookup costs every lane of the warp a dependent load (looking up every brick entered made
 // skipping slower than no skipping: 0.66 against 0.47 ms outside the 256³ cloud on the H100).
 
-import package::shared::field::{ray_box, unproject};
+import fieldkit::field::{ray_box, unproject};
 
 struct MarchParams {
     inv_view_proj: mat4x4<f32>,

@@ -3,7 +3,7 @@
 // (zero where no voxel is; the normal's w is 1 exactly where one is), one thread per occupied
 // voxel.
 
-import package::shared::octahedral::decode_octahedral;
+import fieldkit::octahedral::decode_octahedral;
 
 struct AttributeVolumeParams {
     grid: vec3<u32>,

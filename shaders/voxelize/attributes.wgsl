@@ -10,8 +10,8 @@
 // closest point on the triangle's plane (barycentrics clamped to the triangle),
 // written as a0 + b1·(a1 − a0) + b2·(a2 − a0) so a constant attribute stays exact.
 
-import package::shared::octahedral::{NO_NORMAL, encode_octahedral};
-import package::shared::triangle_box::{CHUNK, LIGHT, Setup, column, overlaps, setup};
+import fieldkit::octahedral::{NO_NORMAL, encode_octahedral};
+import fieldkit::triangle_box::{CHUNK, LIGHT, Setup, column, overlaps, setup};
 
 struct AttributeParams {
     grid: vec3<u32>,

@@ -4,10 +4,10 @@
 // normal's dominant axis (one pixel per voxel column) and enlarges it by half a pixel's
 // diagonal (Hasselgren et al., GPU Gems 2 ch. 42) so every column the triangle touches gets a
 // fragment, since WebGPU has neither geometry shaders nor conservative rasterization. Each
-// fragment then runs the exact tests of `shared/triangle_box` on its column and sets bits with
+// fragment then runs the exact tests of `fieldkit::triangle_box` on its column and sets bits with
 // atomicOr, so the voxels are the compute path's, and only the way columns are found differs.
 
-import package::shared::triangle_box::{Setup, column_at, in_box, overlaps, setup};
+import fieldkit::triangle_box::{Setup, column_at, in_box, overlaps, setup};
 
 struct RasterParams {
     grid: vec3<u32>,

@@ -1,7 +1,7 @@
 // Conservative surface voxelization (Schwarz & Seidel 2010): every voxel a triangle touches,
 // closed boxes, written to an occupancy bitset with atomicOr. Vertices arrive in grid-local
 // coordinates (origin 0, voxel size 1; the host transforms them in f64). The overlap tests are
-// in `shared/triangle_box`: a voxel passes exactly when the triangle and the box overlap (the
+// in `fieldkit::triangle_box`: a voxel passes exactly when the triangle and the box overlap (the
 // 13-axis separating-axis test says the same), widened by `slack` against rounding.
 //
 // One thread per triangle (`first` and `count` select a run of the triangle list). A triangle
@@ -12,7 +12,7 @@
 // SIX_SEPARATING gives the thinner voxelization of the same paper, through which no
 // 6-connected path gets; 26-connected paths can.
 
-import package::shared::triangle_box::{CHUNK, LIGHT, Setup, column, overlaps, setup};
+import fieldkit::triangle_box::{CHUNK, LIGHT, Setup, column, overlaps, setup};
 
 struct SurfaceParams {
     grid: vec3<u32>,

@@ -3,7 +3,7 @@
 // coloured by the voxel's averaged normal or colour and lit by one directional light.
 
 import package::shared::cube::{cube_corner, cube_face_normal};
-import package::shared::octahedral::decode_octahedral;
+import fieldkit::octahedral::decode_octahedral;
 
 struct ViewParams {
     view_proj: mat4x4<f32>,

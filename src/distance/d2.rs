@@ -12,7 +12,7 @@ const STAGE: &str = "distance::jfa";
 /// Largest side the 16-bit-per-axis seed packing can name (x + 1 must fit in 16 bits).
 pub const MAX_PACKED_SIDE: u32 = 0xfffe;
 
-/// Packed "no seed" (see `shaders/shared/seed.wesl`).
+/// Packed "no seed" (see `fieldkit-wesl/shaders/seed.wesl`).
 pub const NO_SEED: u32 = 0;
 
 /// Distance written where no seed exists (largest finite f32; `-FAR` inside a full mask).
