@@ -551,7 +551,25 @@ fn fields_split_across_bindings_are_exact() {
                 }
                 other => panic!("{name}: expected Error::Invalid, got {other:?}"),
             }
+            // A binding too small for even one tile of whole columns: a typed error naming it.
+            d3.set_column_passes(ColumnPasses::Auto);
+            d3.set_split_bytes(Some(64));
+            let mut enc = ctx.encoder("split, too fine");
+            match d3.encode(&ctx.device, &mut enc, &volume, &Options3d::default()) {
+                Err(fieldkit::Error::Size { what, got, max, .. }) => {
+                    assert!(what.contains("tile of columns"), "{what}");
+                    assert!(got > max && max == 64, "{got} vs {max}");
+                }
+                other => panic!("{name}: expected Error::Size, got {other:?}"),
+            }
             assert!(ctx.take_uncaptured().is_empty());
         }
     }
+    // The bench's knob takes powers of two up to 16 columns, and says so otherwise.
+    let mut d3 = Distance3d::new(&shared.device).unwrap();
+    for bad in [0, 3, 32] {
+        let e = d3.set_split_columns(Some(bad)).unwrap_err().to_string();
+        assert!(e.contains("split columns"), "{e}");
+    }
+    d3.set_split_columns(None).unwrap();
 }

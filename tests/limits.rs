@@ -8,7 +8,7 @@
 
 use fieldkit::Error;
 use fieldkit::distance::{Distance3d, Options3d, check_size_3d, cpu, upload_volume};
-use fieldkit::gpu::{Context, read_buffer};
+use fieldkit::gpu::Context;
 
 /// The largest cube side `check_size_3d` accepts on this device.
 fn largest_cube(device: &wgpu::Device) -> u32 {
@@ -108,9 +108,7 @@ fn the_largest_grid_runs_one_larger_is_refused_and_the_device_stays_usable() {
         .encode(&ctx.device, &mut enc, &volume, &Options3d::default())
         .unwrap();
     ctx.submit_and_wait("small after", enc).unwrap();
-    let words: Vec<u32> =
-        bytemuck::cast_slice(&read_buffer(&ctx, f.nearest.whole().expect("one buffer")).unwrap())
-            .to_vec();
+    let words = f.nearest.read(&ctx).unwrap();
     let want = cpu::edt_3d_squared(&small.iter().map(|&m| m != 0).collect::<Vec<_>>(), size);
     for (i, (&w, &d2)) in words.iter().zip(&want).enumerate() {
         let [x, y, z] = fieldkit::distance::unpack_seed3(w).expect("every voxel has a seed");

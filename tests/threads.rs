@@ -7,7 +7,7 @@ use std::sync::Arc;
 use fieldkit::distance::{
     Distance2d, Distance3d, Jfa2d, Options2d, Options3d, upload_mask, upload_volume,
 };
-use fieldkit::gpu::{Context, read_buffer, read_texture};
+use fieldkit::gpu::{Context, read_texture};
 use fieldkit::metaball::render::{Cubes, Raymarcher};
 use fieldkit::metaball::{Metaballs, Settings, packed_grid};
 use fieldkit::ocean::render::OceanRenderer;
@@ -80,7 +80,7 @@ fn the_same_technique_from_several_threads_gives_the_same_results() {
                 .encode(&ctx.device, &mut enc, &volume, &Options3d::default())
                 .unwrap();
             ctx.submit_and_wait("thread distance", enc).unwrap();
-            read_buffer(ctx, f.nearest.whole().expect("one buffer")).unwrap()
+            f.nearest.read(ctx).unwrap()
         }
     });
     assert!(

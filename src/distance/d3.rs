@@ -212,7 +212,9 @@ impl TileGeometry {
         (256 * AUTO_TILE_BAND / n.max(1)).clamp(1, MAX_TILE_COLUMNS)
     }
 
-    /// The pass's parameters and override constants, for the columns `span` names.
+    /// The pass's parameters and override constants, for the columns `span` names, reading
+    /// a buffer apart from the one it writes where `source_apart`.
+    #[allow(clippy::too_many_arguments)]
     fn bind(
         &self,
         device: &wgpu::Device,
@@ -221,6 +223,7 @@ impl TileGeometry {
         pack_2d: bool,
         fuse: Option<&Fuse>,
         span: &Span,
+        source_apart: bool,
     ) -> (wgpu::Buffer, [(&'static str, f64); 5]) {
         let params = uniform(
             device,
@@ -244,7 +247,7 @@ impl TileGeometry {
             ("AXIS", axis as f64),
             ("CELLS", (self.column_cells << self.lg_columns) as f64),
             ("Y_AFTER_Z", span.y_after_z as u32 as f64),
-            ("SOURCE_APART", span.source_apart as u32 as f64),
+            ("SOURCE_APART", source_apart as u32 as f64),
         ];
         (params, overrides)
     }
@@ -270,8 +273,6 @@ struct Span {
     x_end: u32,
     /// A y pass after the z pass: its sites are off the column's plane in z too.
     y_after_z: bool,
-    /// The pass reads a buffer of its own (`TileIo::source`), not the one it writes.
-    source_apart: bool,
     src: edt_tile::Placement,
     dst: edt_tile::Placement,
 }
@@ -328,7 +329,6 @@ impl Span {
             first: [0, 0],
             x_end: size[0],
             y_after_z: false,
-            source_apart: false,
             src: p,
             dst: p,
         }
@@ -629,6 +629,16 @@ impl Slabs {
             [one] => Some(one),
             _ => None,
         }
+    }
+
+    /// Every voxel's word, slab after slab (x fastest, then y, then z), blocking.
+    #[cfg(feature = "context")]
+    pub fn read(&self, ctx: &crate::gpu::Context) -> Result<Vec<u32>, Error> {
+        let mut words = Vec::new();
+        for b in &self.buffers {
+            words.extend_from_slice(bytemuck::cast_slice(&crate::gpu::read_buffer(ctx, b)?));
+        }
+        Ok(words)
     }
 
     /// The buffer holding plane `z`, and the plane's index in it; `None` past the field.
@@ -1951,7 +1961,7 @@ impl Distance3d {
         axis: u32,
         tile: TileGeometry,
     ) -> Result<(), Error> {
-        let (params, overrides) = tile.bind(device, size, axis, false, None, &io.span);
+        let (params, overrides) = tile.bind(device, size, axis, false, None, &io.span, false);
         let others = if axis == 1 { size[2] } else { size[1] };
         self.tile_columns_words
             .get(device, &overrides, false)?
@@ -2081,7 +2091,6 @@ impl Distance3d {
                 first: [x0, 0],
                 x_end,
                 y_after_z: false,
-                source_apart: false,
                 src: part_at(x0),
                 dst: part_at(x0),
             };
@@ -2101,7 +2110,6 @@ impl Distance3d {
                         first: [x0, z0],
                         x_end,
                         y_after_z: true,
-                        source_apart: true,
                         src: part_at(x0),
                         dst: placement([0, 0, z0], w, w * h),
                     },
@@ -2334,7 +2342,7 @@ impl Distance3d {
             return Ok(None);
         };
         let span = Span::whole(size);
-        let (params, overrides) = tile.bind(device, size, axis, false, None, &span);
+        let (params, overrides) = tile.bind(device, size, axis, false, None, &span, false);
         self.tile_copy.get(device, &overrides, false)?.record(
             device,
             rec,
@@ -2367,10 +2375,11 @@ impl Distance3d {
         tile: TileGeometry,
         fuse: Option<Fuse>,
     ) -> Result<(), Error> {
-        let (params, overrides) = tile.bind(device, size, axis, pack_2d, fuse.as_ref(), &io.span);
+        let apart = io.source.is_some();
+        let (params, overrides) =
+            tile.bind(device, size, axis, pack_2d, fuse.as_ref(), &io.span, apart);
         let groups = tile.groups(&io.span, others);
         let nearest = io.nearest.into();
-        debug_assert_eq!(io.span.source_apart, io.source.is_some());
         let source = io.source.unwrap_or(&self.no_source).into();
         let slab = io.slab;
         let name = match (axis, &fuse) {

@@ -68,17 +68,6 @@ pub fn size_u32(size: [usize; 3]) -> [u32; 3] {
 }
 
 /// Run a 3D distance computation on a mask; returns (nearest, nearest outside, distance).
-/// A field's words, its slabs one after another.
-pub fn slab_words(ctx: &Context, slabs: &fieldkit::distance::Slabs) -> Vec<u32> {
-    slabs
-        .buffers
-        .iter()
-        .flat_map(|b| {
-            bytemuck::cast_slice::<u8, u32>(&fieldkit::gpu::read_buffer(ctx, b).unwrap()).to_vec()
-        })
-        .collect()
-}
-
 pub fn run_3d(
     ctx: &Context,
     d3: &fieldkit::distance::Distance3d,
@@ -95,8 +84,8 @@ pub fn run_3d(
         .expect("encode");
     ctx.submit_and_wait("test", enc).expect("run");
     (
-        slab_words(ctx, &field.nearest),
-        field.nearest_outside.as_ref().map(|s| slab_words(ctx, s)),
+        field.nearest.read(ctx).unwrap(),
+        field.nearest_outside.as_ref().map(|s| s.read(ctx).unwrap()),
         read_texture(ctx, &field.distance).unwrap(),
     )
 }

@@ -199,15 +199,6 @@ fn words(ctx: &Context, b: &wgpu::Buffer) -> Result<Vec<u32>, String> {
     Ok(bytemuck::cast_slice::<u8, u32>(&read_buffer(ctx, b).map_err(|e| e.to_string())?).to_vec())
 }
 
-/// A field's words, its slabs one after another.
-fn slab_words(ctx: &Context, slabs: &fieldkit::distance::Slabs) -> Result<Vec<u32>, String> {
-    let mut all = Vec::new();
-    for b in &slabs.buffers {
-        all.extend(words(ctx, b)?);
-    }
-    Ok(all)
-}
-
 pub fn run(args: &Args) -> ExitCode {
     match distance(args) {
         Ok(()) => ExitCode::SUCCESS,
@@ -406,7 +397,11 @@ fn distance(args: &Args) -> Result<(), String> {
                 .map_err(|e| e.to_string())?;
             ctx.submit_and_wait("bench", enc)
                 .map_err(|e| e.to_string())?;
-            let d2 = d2_of(&slab_words(&ctx, &field.nearest)?, size, 3);
+            let d2 = d2_of(
+                &field.nearest.read(&ctx).map_err(|e| e.to_string())?,
+                size,
+                3,
+            );
             let (wrong, max_err, mean_err, peer_ms) = if opts.method == Method::Exact {
                 // Both exact rows against the reference: the peer's distances, or the CPU
                 // transform in quick mode.
