@@ -272,6 +272,7 @@ fn distance(args: &Args) -> Result<(), String> {
         .map_err(|e| e.to_string())?;
     d3.set_split_columns(args.split_columns)
         .map_err(|e| e.to_string())?;
+    d3.set_split_bytes(args.split_bytes);
     // The same transform with the column passes in global memory, for comparison in one command.
     let mut d3_global = Distance3d::new(&ctx.device).map_err(|e| e.to_string())?;
     d3_global.set_column_passes(ColumnPasses::Global);
@@ -349,7 +350,11 @@ fn distance(args: &Args) -> Result<(), String> {
     // Fields larger than one storage binding (1024³ is 4 GiB) are split across bindings, which
     // only the exact transform's workgroup-memory passes do, always from the row words: the
     // other exact rows would time the same passes or none, and JFA refuses the size.
-    let binding = ctx.device.limits().max_storage_buffer_binding_size;
+    let binding = ctx
+        .device
+        .limits()
+        .max_storage_buffer_binding_size
+        .min(args.split_bytes.unwrap_or(u64::MAX));
     for &n in &sizes3 {
         let size = [n, n, n];
         let cells = (n * n * n) as u64;

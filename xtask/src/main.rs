@@ -126,6 +126,10 @@ enum Command {
         /// too large for one binding (1024³); 4 if absent.
         #[arg(long)]
         split_columns: Option<u32>,
+        /// Split the exact transform's field across bindings of at most this many bytes (to
+        /// time the split path at sizes one binding holds); the device's binding size if absent.
+        #[arg(long)]
+        split_bytes: Option<u64>,
         /// `distance`: open the device with this `max_compute_workgroup_storage_size` (bytes)
         /// instead of the adapter's, to time the column-pass tiles each limit gives.
         #[arg(long)]
@@ -215,6 +219,7 @@ fn main() -> ExitCode {
             exact_only,
             column_bands,
             split_columns,
+            split_bytes,
             workgroup_storage,
             sizes,
             mesh,
@@ -241,6 +246,7 @@ fn main() -> ExitCode {
                 exact_only,
                 column_bands,
                 split_columns,
+                split_bytes,
                 workgroup_storage,
                 sizes,
                 mesh,

@@ -26,6 +26,8 @@ pub struct Args {
     pub column_bands: Option<u32>,
     /// `distance`: columns per tile (at least) of a split field's passes.
     pub split_columns: Option<u32>,
+    /// `distance`: the largest binding (bytes) of a split field; the device's if `None`.
+    pub split_bytes: Option<u64>,
     /// `distance`: the device's `max_compute_workgroup_storage_size` (bytes); the adapter's if
     /// `None`.
     pub workgroup_storage: Option<u32>,
