@@ -32,8 +32,11 @@ pub struct Slot {
     pub wgsl: &'static str,
     /// Stages that really use it.
     pub visibility: wgpu::ShaderStages,
-    /// The binding type the layout declares (from real use: access, sample type, size).
+    /// The binding type the layout declares (from real use: access, sample type, size); for a
+    /// binding array, the type of each element.
     pub ty: wgpu::BindingType,
+    /// A binding array's length (`binding_array<T, N>`); `None` for a single resource.
+    pub count: Option<std::num::NonZeroU32>,
 }
 
 /// Scalar class of a fragment output: which colour target formats it can write.
@@ -98,6 +101,13 @@ pub struct EntryInfo {
     pub loops_end: bool,
     /// The device limits the pipeline needs.
     pub needs: Needs,
+    /// The device features the pipeline needs (binding arrays and their non-uniform indexing,
+    /// immediates), one flag each, as the build found them by validating the shader without
+    /// each; [`EntryInfo::required_features`] is their union.
+    pub features: &'static [wgpu::Features],
+    /// Bytes of `var<immediate>` data the pipeline layout holds (0: none). Set them with
+    /// `set_immediates` on the pass; the device needs `Features::IMMEDIATES`.
+    pub immediate_size: u32,
 }
 
 /// The device limits a pipeline needs, as the build reflected them from its shader (named as
@@ -203,7 +213,7 @@ impl EntryInfo {
                         binding: s.binding,
                         visibility: s.visibility,
                         ty: s.ty,
-                        count: None,
+                        count: s.count,
                     })
                     .collect();
                 let label = format!("{}::{} group {g}", self.stage, self.entry_point);
@@ -243,8 +253,30 @@ impl EntryInfo {
         device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some(self.stage),
             bind_group_layouts: &ordered,
-            immediate_size: 0,
+            immediate_size: self.immediate_size,
         })
+    }
+
+    /// [`Error::Unsupported`] where the device lacks a feature the shader needs (checked before
+    /// a pipeline is made, where wgpu would otherwise report a validation error).
+    pub fn check_features(&self, device: &wgpu::Device) -> Result<(), Error> {
+        let needed = self.required_features();
+        let missing = needed - device.features();
+        if missing.is_empty() {
+            return Ok(());
+        }
+        Err(Error::Unsupported {
+            stage: self.stage,
+            what: format!("features {missing:?} (the shader needs {needed:?})"),
+        })
+    }
+
+    /// Every device feature the pipeline needs: ask for these (and [`Needs::raise`]'s limits)
+    /// in the `wgpu::DeviceDescriptor`.
+    pub fn required_features(&self) -> wgpu::Features {
+        self.features
+            .iter()
+            .fold(wgpu::Features::empty(), |all, f| all | *f)
     }
 
     fn check_overrides(&self, overrides: &[(&str, f64)]) -> Result<(), Error> {
@@ -289,6 +321,14 @@ pub enum Resource<'a> {
     StorageTexture(&'a wgpu::TextureView),
     /// A sampler.
     Sampler(&'a wgpu::Sampler),
+    /// A binding array of uniform or storage buffer ranges.
+    Buffers(&'a [wgpu::BufferBinding<'a>]),
+    /// A binding array of sampled texture views.
+    Textures(&'a [&'a wgpu::TextureView]),
+    /// A binding array of storage texture views.
+    StorageTextures(&'a [&'a wgpu::TextureView]),
+    /// A binding array of samplers.
+    Samplers(&'a [&'a wgpu::Sampler]),
 }
 
 /// What a generated parameter struct's fields turn into for binding.
@@ -368,6 +408,72 @@ view_wrapper!(
     Sampler, Sampler, wgpu::Sampler
 );
 
+macro_rules! array_wrapper {
+    ($(#[$doc:meta])* $name:ident, $variant:ident, $inner:ty) => {
+        $(#[$doc])*
+        #[derive(Clone, Copy)]
+        pub struct $name<'a>(pub &'a [&'a $inner]);
+        impl<'a> From<&'a [&'a $inner]> for $name<'a> {
+            fn from(v: &'a [&'a $inner]) -> Self {
+                Self(v)
+            }
+        }
+        impl<'a, const N: usize> From<&'a [&'a $inner; N]> for $name<'a> {
+            fn from(v: &'a [&'a $inner; N]) -> Self {
+                Self(v)
+            }
+        }
+        impl<'a> IntoResource<'a> for $name<'a> {
+            fn resource(&self) -> Resource<'a> {
+                Resource::$variant(self.0)
+            }
+        }
+    };
+}
+
+array_wrapper!(
+    /// A binding array of sampled textures (`binding_array<texture_2d<f32>, N>`): exactly N views.
+    Textures, Textures, wgpu::TextureView
+);
+array_wrapper!(
+    /// A binding array of storage textures: exactly N views.
+    StorageTextures, StorageTextures, wgpu::TextureView
+);
+array_wrapper!(
+    /// A binding array of samplers: exactly N.
+    Samplers, Samplers, wgpu::Sampler
+);
+
+/// A binding array of uniform or storage buffers each holding a `T` (`binding_array<T, N>` in
+/// `var<uniform>` or `var<storage>`): exactly N ranges.
+pub struct Buffers<'a, T: ?Sized> {
+    /// The buffer ranges bound, one per element.
+    pub bindings: &'a [wgpu::BufferBinding<'a>],
+    _t: PhantomData<fn() -> Box<T>>,
+}
+
+impl<'a, T: ?Sized> Buffers<'a, T> {
+    /// The ranges bound, one per element of the array.
+    pub fn new(bindings: &'a [wgpu::BufferBinding<'a>]) -> Self {
+        Self {
+            bindings,
+            _t: PhantomData,
+        }
+    }
+}
+
+impl<'a, T: ?Sized> From<&'a [wgpu::BufferBinding<'a>]> for Buffers<'a, T> {
+    fn from(bindings: &'a [wgpu::BufferBinding<'a>]) -> Self {
+        Self::new(bindings)
+    }
+}
+
+impl<'a, T: ?Sized> IntoResource<'a> for Buffers<'a, T> {
+    fn resource(&self) -> Resource<'a> {
+        Resource::Buffers(self.bindings)
+    }
+}
+
 fn view_dimension_of(t: &wgpu::Texture) -> wgpu::TextureViewDimension {
     match t.dimension() {
         wgpu::TextureDimension::D1 => wgpu::TextureViewDimension::D1,
@@ -379,8 +485,46 @@ fn view_dimension_of(t: &wgpu::Texture) -> wgpu::TextureViewDimension {
     }
 }
 
-/// Check one resource against its slot. `Err(problem)` says what is wrong, in words.
+/// Check one resource against its slot. `Err(problem)` says what is wrong, in words. A
+/// binding array takes exactly its count of elements, each checked as a single resource.
 fn check(slot: &Slot, res: &Resource<'_>, device: &wgpu::Device) -> Result<(), String> {
+    let elements: Option<Vec<Resource<'_>>> = match res {
+        Resource::Buffers(b) => Some(b.iter().cloned().map(Resource::Buffer).collect()),
+        Resource::Textures(v) => Some(v.iter().map(|v| Resource::Texture(v)).collect()),
+        Resource::StorageTextures(v) => {
+            Some(v.iter().map(|v| Resource::StorageTexture(v)).collect())
+        }
+        Resource::Samplers(v) => Some(v.iter().map(|v| Resource::Sampler(v)).collect()),
+        _ => None,
+    };
+    match (slot.count, elements) {
+        (None, None) => check_one(slot, res, device),
+        (Some(count), Some(elements)) => {
+            if elements.len() != count.get() as usize {
+                return Err(format!(
+                    "{} resources bound, the shader's `{}` holds {count}",
+                    elements.len(),
+                    slot.wgsl
+                ));
+            }
+            for (i, e) in elements.iter().enumerate() {
+                check_one(slot, e, device).map_err(|p| format!("element {i}: {p}"))?;
+            }
+            Ok(())
+        }
+        (Some(_), None) => Err(format!(
+            "one resource bound, the shader's `{}` is a binding array",
+            slot.wgsl
+        )),
+        (None, Some(_)) => Err(format!(
+            "a binding array bound, the shader's `{}` is one resource",
+            slot.wgsl
+        )),
+    }
+}
+
+/// [`check`] for a single resource.
+fn check_one(slot: &Slot, res: &Resource<'_>, device: &wgpu::Device) -> Result<(), String> {
     use wgpu::BindingType as B;
     match (&slot.ty, res) {
         (
@@ -555,6 +699,11 @@ fn bind_groups<E: Entry>(
                             wgpu::BindingResource::TextureView(v)
                         }
                         Resource::Sampler(s) => wgpu::BindingResource::Sampler(s),
+                        Resource::Buffers(b) => wgpu::BindingResource::BufferArray(b),
+                        Resource::Textures(v) | Resource::StorageTextures(v) => {
+                            wgpu::BindingResource::TextureViewArray(v)
+                        }
+                        Resource::Samplers(s) => wgpu::BindingResource::SamplerArray(s),
                     },
                 })
                 .collect();
@@ -711,6 +860,7 @@ impl<E: Entry> ComputePipeline<E> {
     ) -> Result<Self, Error> {
         let info = E::INFO;
         info.check_overrides(overrides)?;
+        info.check_features(device)?;
         crate::gpu::scoped(device, info.stage, || {
             let layouts = info.layouts(device);
             let pipeline = build_compute(
@@ -797,6 +947,7 @@ impl<E: Entry> RenderPipeline<E> {
     /// Create the pipeline; colour targets are checked against the fragment outputs first.
     pub fn new(device: &wgpu::Device, targets: &RenderTargets<'_>) -> Result<Self, Error> {
         let info = E::INFO;
+        info.check_features(device)?;
         let EntryKind::Render {
             targets: outputs, ..
         } = info.kind
@@ -919,6 +1070,7 @@ fn build_render(
 /// pipeline is accepted by wgpu, on the noop backend in tests). Colour targets get a format of
 /// each output's scalar class, and a depth target.
 pub fn create_any(device: &wgpu::Device, info: &'static EntryInfo) -> Result<(), Error> {
+    info.check_features(device)?;
     crate::gpu::scoped(device, info.stage, || {
         let layouts = info.layouts(device);
         match info.kind {

@@ -89,6 +89,15 @@ pub enum Error {
         /// The formats it takes.
         supported: &'static str,
     },
+    /// The device lacks a feature the stage's shader needs (binding arrays, immediates): ask
+    /// for it when the device is made.
+    #[error("stage {stage}: the device lacks {what}; request it in the device descriptor")]
+    Unsupported {
+        /// The stage refusing to run.
+        stage: &'static str,
+        /// What is missing.
+        what: String,
+    },
     /// Mapping a buffer for readback failed.
     #[error("readback failed: {0}")]
     Readback(String),

@@ -94,7 +94,17 @@ fn wgpu_binding_type(kind: &BindingKind) -> String {
     }
 }
 
-fn resource_field_type(kind: &BindingKind) -> String {
+fn resource_field_type(kind: &BindingKind, count: Option<u32>) -> String {
+    if count.is_some() {
+        return match kind {
+            BindingKind::Uniform { rust, .. } | BindingKind::Storage { rust, .. } => {
+                format!("crate::bind::Buffers<'a, {rust}>")
+            }
+            BindingKind::Texture { .. } => "crate::bind::Textures<'a>".into(),
+            BindingKind::StorageTexture { .. } => "crate::bind::StorageTextures<'a>".into(),
+            BindingKind::Sampler { .. } => "crate::bind::Samplers<'a>".into(),
+        };
+    }
     match kind {
         BindingKind::Uniform { rust, .. } => format!("crate::bind::Uniform<'a, {rust}>"),
         BindingKind::Storage {
@@ -331,7 +341,13 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, s: &mut String) {
             b.group, b.binding, b.name, b.ty
         )
         .unwrap();
-        writeln!(s, "pub {}: {},", b.name, resource_field_type(&b.kind)).unwrap();
+        writeln!(
+            s,
+            "pub {}: {},",
+            b.name,
+            resource_field_type(&b.kind, b.count)
+        )
+        .unwrap();
     }
     if used.is_empty() {
         writeln!(
@@ -346,13 +362,14 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, s: &mut String) {
         .iter()
         .map(|(b, stages)| {
             format!(
-                "crate::bind::Slot {{ group: {}, binding: {}, name: \"{}\", wgsl: \"{}\", visibility: {}, ty: {} }}",
+                "crate::bind::Slot {{ group: {}, binding: {}, name: \"{}\", wgsl: \"{}\", visibility: {}, ty: {}, count: {} }}",
                 b.group,
                 b.binding,
                 b.name,
                 b.ty,
                 stage_bits(stages),
-                wgpu_binding_type(&b.kind)
+                wgpu_binding_type(&b.kind),
+                b.count.map_or("None".to_string(), |n| format!("core::num::NonZeroU32::new({n})"))
             )
         })
         .collect();
@@ -387,9 +404,32 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, s: &mut String) {
         .iter()
         .map(|(name, v)| format!("{name}: {v}"))
         .collect();
+    let features: Vec<String> = r
+        .features
+        .iter()
+        .map(|f| format!("wgpu::Features::{f}"))
+        .collect();
     writeln!(
         s,
-        "/// What the shader says about this pipeline's interface, read by fieldkit's `bind`.\npub static INFO: crate::bind::EntryInfo = crate::bind::EntryInfo {{ stage: STAGE, path: PATH, entry_point: \"{}\", source: SOURCE, kind: {kind}, slots: &[{}], overrides: &[{}], loops_end: true, needs: crate::bind::Needs {{ {} }} }};",
+        "/// Device features the pipeline needs (binding arrays, immediates): ask for them in the\n/// `wgpu::DeviceDescriptor` (their union: `INFO.required_features()`).\npub const REQUIRED_FEATURES: &[wgpu::Features] = &[{}];",
+        features.join(", ")
+    )
+    .unwrap();
+    let immediate_size = match &r.immediate {
+        Some(im) if p.entries.iter().any(|e| e.uses_immediate) => {
+            writeln!(
+                s,
+                "/// Bytes of the `var<immediate> {}: {}` block the pipeline layout holds (set with\n/// `set_immediates(0, bytes)` on the pass).\npub const IMMEDIATE_SIZE: u32 = {};",
+                im.name, im.ty, im.size
+            )
+            .unwrap();
+            im.size
+        }
+        _ => 0,
+    };
+    writeln!(
+        s,
+        "/// What the shader says about this pipeline's interface, read by fieldkit's `bind`.\npub static INFO: crate::bind::EntryInfo = crate::bind::EntryInfo {{ stage: STAGE, path: PATH, entry_point: \"{}\", source: SOURCE, kind: {kind}, slots: &[{}], overrides: &[{}], loops_end: true, needs: crate::bind::Needs {{ {} }}, features: REQUIRED_FEATURES, immediate_size: {immediate_size} }};",
         main_entry.name,
         slots.join(", "),
         overrides.join(", "),

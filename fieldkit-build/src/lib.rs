@@ -90,6 +90,8 @@ pub struct Stage {
     pub info: naga::valid::ModuleInfo,
     /// Original source of the stage file itself (for header comments and lints).
     pub original: String,
+    /// `wgpu::Features` the module needs (constant names), sorted.
+    pub features: Vec<String>,
 }
 
 /// Every shader file that is a stage, sorted by path for deterministic output.
@@ -244,8 +246,8 @@ fn imports_anything(source: &str) -> bool {
 }
 
 /// Bindings the generated host code cannot express, as errors at their declaration: binding
-/// arrays, external textures and acceleration structures would otherwise be left out of the
-/// layouts without a word.
+/// arrays without a length, external textures and acceleration structures would otherwise be
+/// left out of the layouts without a word.
 fn unsupported_bindings(stage: &StageFile, module: &naga::Module, original: &str) -> Vec<String> {
     use naga::TypeInner;
     module
@@ -254,9 +256,23 @@ fn unsupported_bindings(stage: &StageFile, module: &naga::Module, original: &str
         .filter_map(|(_, var)| {
             let rb = var.binding.as_ref()?;
             let why = match &module.types[var.ty].inner {
+                TypeInner::BindingArray {
+                    size: naga::ArraySize::Constant(_),
+                    base,
+                } => match &module.types[*base].inner {
+                    TypeInner::AccelerationStructure { .. } | TypeInner::BindingArray { .. } => {
+                        "binding arrays of acceleration structures or of binding arrays are not \
+                         supported by fieldkit's generated bindings"
+                    }
+                    TypeInner::Image {
+                        class: naga::ImageClass::External,
+                        ..
+                    } => "external textures are not supported by fieldkit's generated bindings",
+                    _ => return None,
+                },
                 TypeInner::BindingArray { .. } => {
-                    "binding arrays are not supported by fieldkit's generated bindings yet; \
-                     declare the textures or buffers as separate bindings"
+                    "a binding array needs a length here (`binding_array<T, N>`): its bind group \
+                     layout holds a count"
                 }
                 TypeInner::Image {
                     class: naga::ImageClass::External,
@@ -439,10 +455,9 @@ pub fn build_stage(shaders: &ShaderDir, stage: &StageFile) -> Result<Stage, Stri
     if !unsupported.is_empty() {
         return Err(unsupported.join("\n"));
     }
-    let mut validator = naga::valid::Validator::new(
-        naga::valid::ValidationFlags::all(),
-        naga::valid::Capabilities::default(),
-    );
+    let (capabilities, features) = needed_features(&module);
+    let mut validator =
+        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), capabilities);
     let info = validator.validate(&module).map_err(|e| {
         let labels: Vec<_> = e
             .spans()
@@ -469,7 +484,107 @@ pub fn build_stage(shaders: &ShaderDir, stage: &StageFile) -> Result<Stage, Stri
         module,
         info,
         original,
+        features,
     })
+}
+
+/// The naga capabilities wgpu grants for a device feature, as `wgpu-naga-bridge` maps them,
+/// with the `wgpu::Features` constants each needs.
+const FEATURE_CAPABILITIES: &[(naga::valid::Capabilities, &[&str])] = {
+    use naga::valid::Capabilities as C;
+    &[
+        (C::IMMEDIATES, &["IMMEDIATES"]),
+        (
+            C::TEXTURE_AND_SAMPLER_BINDING_ARRAY,
+            &["TEXTURE_BINDING_ARRAY"],
+        ),
+        (C::BUFFER_BINDING_ARRAY, &["BUFFER_BINDING_ARRAY"]),
+        (
+            C::STORAGE_TEXTURE_BINDING_ARRAY,
+            &["TEXTURE_BINDING_ARRAY", "STORAGE_RESOURCE_BINDING_ARRAY"],
+        ),
+        (
+            C::STORAGE_BUFFER_BINDING_ARRAY,
+            &["BUFFER_BINDING_ARRAY", "STORAGE_RESOURCE_BINDING_ARRAY"],
+        ),
+        (
+            C::TEXTURE_AND_SAMPLER_BINDING_ARRAY_NON_UNIFORM_INDEXING,
+            &["SAMPLED_TEXTURE_AND_STORAGE_BUFFER_ARRAY_NON_UNIFORM_INDEXING"],
+        ),
+        (
+            C::BUFFER_BINDING_ARRAY_NON_UNIFORM_INDEXING,
+            &["UNIFORM_BUFFER_BINDING_ARRAYS"],
+        ),
+        (
+            C::STORAGE_TEXTURE_BINDING_ARRAY_NON_UNIFORM_INDEXING,
+            &["STORAGE_TEXTURE_ARRAY_NON_UNIFORM_INDEXING"],
+        ),
+        (
+            C::STORAGE_BUFFER_BINDING_ARRAY_NON_UNIFORM_INDEXING,
+            &["SAMPLED_TEXTURE_AND_STORAGE_BUFFER_ARRAY_NON_UNIFORM_INDEXING"],
+        ),
+    ]
+};
+
+/// The capabilities to validate `module` with, and the `wgpu::Features` it needs: for a module
+/// with binding arrays or immediates, each capability of [`FEATURE_CAPABILITIES`] whose
+/// absence makes validation fail (so a binding array indexed only by constants does not ask
+/// for non-uniform indexing), and the features each binding array's layout entry needs
+/// (`wgpu-core` asks for them when the bind group layout is made).
+pub(crate) fn needed_features(module: &naga::Module) -> (naga::valid::Capabilities, Vec<String>) {
+    use naga::TypeInner;
+    let base = naga::valid::Capabilities::default();
+    let arrays: Vec<(&naga::GlobalVariable, naga::Handle<naga::Type>)> = module
+        .global_variables
+        .iter()
+        .filter_map(|(_, v)| match module.types[v.ty].inner {
+            TypeInner::BindingArray { base, .. } => Some((v, base)),
+            _ => None,
+        })
+        .collect();
+    let immediates = module
+        .global_variables
+        .iter()
+        .any(|(_, v)| v.space == naga::AddressSpace::Immediate);
+    if arrays.is_empty() && !immediates {
+        return (base, Vec::new());
+    }
+    let all = FEATURE_CAPABILITIES
+        .iter()
+        .fold(base, |c, (cap, _)| c | *cap);
+    let mut features: Vec<&str> = Vec::new();
+    // Where the module is invalid anyway, the caller's validation says why.
+    let valid = |caps| {
+        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), caps)
+            .validate(module)
+            .is_ok()
+    };
+    if valid(all) {
+        for (cap, names) in FEATURE_CAPABILITIES {
+            if !valid(all - *cap) {
+                features.extend_from_slice(names);
+            }
+        }
+    }
+    for (var, elem) in arrays {
+        features.extend_from_slice(match (var.space, &module.types[elem].inner) {
+            (naga::AddressSpace::Uniform, _) => &["BUFFER_BINDING_ARRAY"][..],
+            (naga::AddressSpace::Storage { .. }, _) => {
+                &["BUFFER_BINDING_ARRAY", "STORAGE_RESOURCE_BINDING_ARRAY"]
+            }
+            (
+                _,
+                TypeInner::Image {
+                    class: naga::ImageClass::Storage { .. },
+                    ..
+                },
+            ) => &["TEXTURE_BINDING_ARRAY", "STORAGE_RESOURCE_BINDING_ARRAY"],
+            _ => &["TEXTURE_BINDING_ARRAY"],
+        });
+    }
+    features.sort();
+    features.dedup();
+    (all, features.into_iter().map(String::from).collect())
 }
 
 /// Build every stage of a crate's `shaders/`; on failure return *all* errors, one rendered
@@ -641,14 +756,14 @@ mod tests {
     }
 
     /// Bindings the generated code cannot hold are build errors at their declaration, not
-    /// silently left out; a file that imports nothing reaches naga even where the pinned WESL
-    /// parser refuses it (`binding_array`).
+    /// silently left out (an unsized binding array, an external texture); a file that imports
+    /// nothing reaches naga even where the pinned WESL parser refuses it (`binding_array`).
     #[test]
     fn unsupported_bindings_are_errors_naming_the_binding() {
         let root = tree(&[
             (
                 "a_array",
-                "// Binding array, no imports.\nenable wgpu_binding_array;\n@group(0) @binding(0) var textures: binding_array<texture_2d<f32>, 4>;\n@group(0) @binding(1) var<storage, read_write> out: array<f32>;\n@compute @workgroup_size(1)\nfn main() {\n    out[0] = textureLoad(textures[0], vec2<i32>(0, 0), 0).x;\n}\n",
+                "// Binding array without a length, no imports.\nenable wgpu_binding_array;\n@group(0) @binding(0) var textures: binding_array<texture_2d<f32>>;\n@group(0) @binding(1) var<storage, read_write> out: array<f32>;\n@compute @workgroup_size(1)\nfn main() {\n    out[0] = textureLoad(textures[0], vec2<i32>(0, 0), 0).x;\n}\n",
             ),
             (
                 "b_external",
@@ -664,7 +779,7 @@ mod tests {
         assert!(
             errors[0].contains("shaders/room/a_array.wgsl:3:")
                 && errors[0].contains("binding `textures` (@group(0) @binding(0))")
-                && errors[0].contains("binding arrays are not supported"),
+                && errors[0].contains("needs a length"),
             "{}",
             errors[0]
         );
@@ -674,6 +789,55 @@ mod tests {
                 && errors[1].contains("external textures"),
             "{}",
             errors[1]
+        );
+        std::fs::remove_dir_all(&root).ok();
+    }
+
+    /// Binding arrays (sampled and storage textures, samplers, storage buffers) reach the
+    /// generated code with their counts and array resource types, and the features they need
+    /// are found by validation: non-uniform indexing only where an index is non-uniform; an
+    /// immediate block gives its size and `IMMEDIATES`.
+    #[test]
+    fn binding_arrays_and_immediates_are_bound_with_the_features_they_need() {
+        let root = tree(&[
+            (
+                "a_arrays",
+                "// Binding arrays, indexed by constants and by a non-uniform value.\nenable wgpu_binding_array;\nstruct Block {\n    values: array<u32>,\n}\n@group(0) @binding(0) var textures: binding_array<texture_2d<f32>, 4>;\n@group(0) @binding(1) var samplers: binding_array<sampler, 2>;\n@group(0) @binding(2) var<storage, read_write> blocks: binding_array<Block, 3>;\n@group(0) @binding(3) var<storage, read_write> out: array<f32>;\n@compute @workgroup_size(8)\nfn main(@builtin(local_invocation_index) i: u32) {\n    let t = textureSampleLevel(textures[i % 4u], samplers[1], vec2<f32>(0.5), 0.0).x;\n    out[i] = t + f32(blocks[2].values[i]);\n}\n",
+            ),
+            (
+                "b_immediates",
+                "// Immediates.\nstruct Push {\n    scale: f32,\n    offset: vec2<f32>,\n}\nvar<immediate> push: Push;\n@group(0) @binding(0) var<storage, read_write> out: array<f32>;\n@compute @workgroup_size(8)\nfn main(@builtin(local_invocation_index) i: u32) {\n    out[i] = push.scale * f32(i) + push.offset.x;\n}\n",
+            ),
+        ]);
+        let out = root.join("shaders.rs");
+        let code = Builder::new("shaders")
+            .build_to(&root, &out)
+            .map(|p| std::fs::read_to_string(p).unwrap())
+            .unwrap_or_else(|e| panic!("{e:#?}"));
+        for want in [
+            "pub textures: ::fieldkit::bind::Textures<'a>",
+            "pub samplers: ::fieldkit::bind::Samplers<'a>",
+            "pub blocks: ::fieldkit::bind::Buffers<'a, Block>",
+            "count: core::num::NonZeroU32::new(4)",
+            "count: core::num::NonZeroU32::new(3)",
+            "wgpu::Features::TEXTURE_BINDING_ARRAY",
+            "wgpu::Features::STORAGE_RESOURCE_BINDING_ARRAY",
+            "wgpu::Features::SAMPLED_TEXTURE_AND_STORAGE_BUFFER_ARRAY_NON_UNIFORM_INDEXING",
+            "pub const IMMEDIATE_SIZE: u32 = 16;",
+            "wgpu::Features::IMMEDIATES",
+            "immediate_size: 16",
+            "pub struct Push",
+        ] {
+            assert!(code.contains(want), "missing {want:?} in\n{code}");
+        }
+        // Only the textures are indexed non-uniformly (the samplers and buffers by constants),
+        // and no storage texture is bound.
+        let arrays = &code
+            [code.find("pub mod a_arrays").unwrap()..code.find("pub mod b_immediates").unwrap()];
+        assert!(
+            !arrays.contains("wgpu::Features::STORAGE_TEXTURE_ARRAY_NON_UNIFORM_INDEXING")
+                && !arrays.contains("wgpu::Features::IMMEDIATES"),
+            "{arrays}"
         );
         std::fs::remove_dir_all(&root).ok();
     }

@@ -15,6 +15,19 @@ pub struct Reflection {
     pub bindings: Vec<Binding>,
     pub structs: Vec<StructInfo>,
     pub overrides: Vec<Override>,
+    /// The `var<immediate>` block, if the module declares one.
+    pub immediate: Option<Immediate>,
+    /// `wgpu::Features` the module needs (constant names, e.g. "TEXTURE_BINDING_ARRAY").
+    pub features: Vec<String>,
+}
+
+/// A module's `var<immediate>` (push constants): its host type and size in bytes.
+#[derive(Debug, Clone, Serialize)]
+pub struct Immediate {
+    pub name: String,
+    pub ty: String,
+    pub rust: String,
+    pub size: u32,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -25,6 +38,8 @@ pub struct Binding {
     pub kind: BindingKind,
     /// WGSL spelling of the bound type.
     pub ty: String,
+    /// A binding array's length (`binding_array<T, N>`); `None` for one resource.
+    pub count: Option<u32>,
     /// Source line of the declaration in the linked text (for lints).
     #[serde(skip)]
     pub linked_offset: usize,
@@ -89,6 +104,8 @@ pub struct EntryPoint {
     pub uses: Vec<BindingUse>,
     pub vertex_inputs: Vec<VertexInput>,
     pub fragment_outputs: Vec<FragmentOutput>,
+    /// It reads the module's `var<immediate>`.
+    pub uses_immediate: bool,
 }
 
 /// The device limits an entry point (or a pipeline, field by field the larger of its entry
@@ -196,8 +213,13 @@ fn needs_of(
                 .find(|b| b.group == u.group && b.binding == u.binding)
         })
         .collect();
-    let count =
-        |f: &dyn Fn(&BindingKind) -> bool| used.iter().filter(|b| f(&b.kind)).count() as u32;
+    // A binding array counts as its length against the per-stage limits, as wgpu counts it.
+    let count = |f: &dyn Fn(&BindingKind) -> bool| {
+        used.iter()
+            .filter(|b| f(&b.kind))
+            .map(|b| b.count.unwrap_or(1))
+            .sum::<u32>()
+    };
     Needs {
         max_storage_buffers_per_shader_stage: count(&|k| matches!(k, BindingKind::Storage { .. })),
         max_storage_textures_per_shader_stage: count(&|k| {
@@ -367,6 +389,12 @@ pub fn wgsl_type(module: &naga::Module, ty: naga::Handle<naga::Type>) -> String 
         TypeInner::Array { base, size, .. } => match size {
             naga::ArraySize::Constant(n) => format!("array<{}, {n}>", wgsl_type(module, *base)),
             _ => format!("array<{}>", wgsl_type(module, *base)),
+        },
+        TypeInner::BindingArray { base, size } => match size {
+            naga::ArraySize::Constant(n) => {
+                format!("binding_array<{}, {n}>", wgsl_type(module, *base))
+            }
+            _ => format!("binding_array<{}>", wgsl_type(module, *base)),
         },
         TypeInner::Image {
             dim,
@@ -602,21 +630,31 @@ pub fn reflect(stage: &Stage) -> Reflection {
     let mut handles = Vec::new();
     for (handle, var) in module.global_variables.iter() {
         let Some(rb) = &var.binding else { continue };
-        let ty_inner = &module.types[var.ty].inner;
+        // A binding array is described by its element, with its length beside it (an
+        // unsized one is refused before reflection: a layout needs a count).
+        let (elem, count) = match &module.types[var.ty].inner {
+            TypeInner::BindingArray {
+                base,
+                size: naga::ArraySize::Constant(n),
+            } => (*base, Some(n.get())),
+            TypeInner::BindingArray { base, .. } => (*base, None),
+            _ => (var.ty, None),
+        };
+        let ty_inner = &module.types[elem].inner;
         let kind = match (var.space, ty_inner) {
             (AddressSpace::Uniform, _) => {
-                mark_shareable(module, var.ty, &mut shareable);
+                mark_shareable(module, elem, &mut shareable);
                 BindingKind::Uniform {
-                    min_size: layouter[var.ty].size,
-                    rust: rust_type(module, var.ty).unwrap_or_default(),
+                    min_size: layouter[elem].size,
+                    rust: rust_type(module, elem).unwrap_or_default(),
                 }
             }
             (AddressSpace::Storage { access }, _) => {
-                mark_shareable(module, var.ty, &mut shareable);
+                mark_shareable(module, elem, &mut shareable);
                 BindingKind::Storage {
                     read_only: !access.contains(naga::StorageAccess::STORE),
-                    min_size: layouter[var.ty].size,
-                    rust: rust_type(module, var.ty).unwrap_or_default(),
+                    min_size: layouter[elem].size,
+                    rust: rust_type(module, elem).unwrap_or_default(),
                 }
             }
             (
@@ -668,6 +706,7 @@ pub fn reflect(stage: &Stage) -> Reflection {
             name: var.name.clone().unwrap_or_default(),
             kind,
             ty: wgsl_type(module, var.ty),
+            count,
             linked_offset,
         });
         handles.push(handle);
@@ -731,6 +770,10 @@ pub fn reflect(stage: &Stage) -> Reflection {
             .filter(|(h, v)| v.space == AddressSpace::WorkGroup && !fi[*h].is_empty())
             .map(|(_, v)| module.types[v.ty].inner.size(module.to_ctx()))
             .sum();
+        let uses_immediate = module
+            .global_variables
+            .iter()
+            .any(|(h, v)| v.space == AddressSpace::Immediate && !fi[h].is_empty());
         let needs = needs_of(
             &bindings,
             &uses,
@@ -747,8 +790,24 @@ pub fn reflect(stage: &Stage) -> Reflection {
             uses,
             vertex_inputs,
             fragment_outputs,
+            uses_immediate,
         });
     }
+
+    // The immediate block is host data like a uniform: its struct is generated.
+    let immediate = module
+        .global_variables
+        .iter()
+        .find(|(_, v)| v.space == AddressSpace::Immediate)
+        .map(|(_, v)| {
+            mark_shareable(module, v.ty, &mut shareable);
+            Immediate {
+                name: v.name.clone().unwrap_or_default(),
+                ty: wgsl_type(module, v.ty),
+                rust: rust_type(module, v.ty).unwrap_or_default(),
+                size: layouter[v.ty].size,
+            }
+        });
 
     let mut structs = Vec::new();
     for (handle, ty) in module.types.iter() {
@@ -798,6 +857,8 @@ pub fn reflect(stage: &Stage) -> Reflection {
         bindings,
         structs,
         overrides,
+        immediate,
+        features: stage.features.clone(),
     }
 }
 

@@ -11,14 +11,14 @@
 //! binary runs with `CI=true INSTA_UPDATE=no FIELDKIT_ADAPTER=<adapter>`, so a snapshot that
 //! differs fails instead of being rewritten. Tests that need what that machine lacks are left
 //! out by name: cargo (the consumer and binding-drift tests build crates) and Xvfb (the window
-//! tests).
+//! tests). The user crate's tests (`tests/user-crate`) run too.
 
 use std::path::Path;
 use std::process::{Command, ExitCode};
 
 /// Test binaries (by target name) that cannot run without a toolchain, and tests (by name)
 /// that need a display.
-const NEEDS_CARGO: [&str; 2] = ["consumer", "bindings"];
+const NEEDS_CARGO: [&str; 3] = ["consumer", "bindings", "drift"];
 const NEEDS_DISPLAY: [(&str, &str); 2] = [
     ("window", "window_screenshot_matches_the_offscreen_frame"),
     (
@@ -56,6 +56,9 @@ fn prepare(root: &Path) -> Result<usize, String> {
             "--release",
             "-p",
             "fieldkit",
+            // The user crate's own stages (binding arrays run where the adapter has them).
+            "-p",
+            "fieldkit-user-crate",
             "--tests",
             "--no-run",
             "--message-format=json",

@@ -178,12 +178,10 @@ pub(crate) mod test_util {
     /// Build a stage from WGSL text (no imports), as the build does.
     pub fn stage(src: &str) -> Stage {
         let module = naga::front::wgsl::parse_str(src).expect("test shader parses");
-        let info = naga::valid::Validator::new(
-            naga::valid::ValidationFlags::all(),
-            naga::valid::Capabilities::default(),
-        )
-        .validate(&module)
-        .expect("test shader validates");
+        let (capabilities, features) = crate::needed_features(&module);
+        let info = naga::valid::Validator::new(naga::valid::ValidationFlags::all(), capabilities)
+            .validate(&module)
+            .expect("test shader validates");
         Stage {
             file: StageFile {
                 room: "test".into(),
@@ -195,6 +193,7 @@ pub(crate) mod test_util {
             module,
             info,
             original: src.into(),
+            features,
         }
     }
 }

@@ -41,6 +41,26 @@ impl Lint for WebgpuLimits {
                     message: format!("`{}`: {message}", ep.name),
                 })
             };
+            // Binding arrays and immediates are native features, not WebGPU.
+            let native: Vec<&str> = r
+                .features
+                .iter()
+                .map(String::as_str)
+                .filter(|_| {
+                    ep.uses_immediate
+                        || ep.uses.iter().any(|u| {
+                            r.bindings.iter().any(|b| {
+                                b.group == u.group && b.binding == u.binding && b.count.is_some()
+                            })
+                        })
+                })
+                .collect();
+            if !native.is_empty() {
+                say(format!(
+                    "needs the native features {} (binding arrays, immediates), which WebGPU lacks",
+                    native.join(", ")
+                ));
+            }
             let n = ep.needs;
             let counts = [
                 (
@@ -161,5 +181,29 @@ mod tests {
         );
         let v = WebgpuLimits.check(&good, &reflect(&good));
         assert!(v.is_empty(), "{v:#?}");
+    }
+
+    /// Binding arrays and immediates need native features: flagged per entry point that uses
+    /// them, with the features named.
+    #[test]
+    fn flags_native_features() {
+        let native = stage(
+            "struct Push { scale: f32, }
+var<immediate> push: Push;
+@group(0) @binding(0) var<storage, read_write> a: array<f32>;
+@compute @workgroup_size(64) fn uses(@builtin(local_invocation_index) i: u32) {
+    a[i] = push.scale;
+}
+@compute @workgroup_size(64) fn plain(@builtin(local_invocation_index) i: u32) {
+    a[i] = 1.0;
+}",
+        );
+        let v = WebgpuLimits.check(&native, &reflect(&native));
+        let text: Vec<_> = v.iter().map(|v| v.message.clone()).collect();
+        assert_eq!(v.len(), 1, "{text:#?}");
+        assert!(
+            text[0].starts_with("`uses`") && text[0].contains("IMMEDIATES"),
+            "{text:#?}"
+        );
     }
 }

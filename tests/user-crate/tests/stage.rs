@@ -3,7 +3,7 @@
 
 use fieldkit::gpu::{read_buffer, Context};
 use fieldkit_user_crate::shaders::{
-    math::{scale, seeds},
+    math::{layers, push, scale, seeds},
     ALL,
 };
 use wgpu::util::DeviceExt as _;
@@ -75,7 +75,7 @@ fn the_users_stage_runs_with_typed_bindings_and_overrides() {
         assert_eq!(v, want, "value {i}");
     }
     // The generated list names the user's files, not fieldkit's.
-    assert_eq!(ALL.len(), 2);
+    assert_eq!(ALL.len(), 4);
     assert_eq!(scale::PATH, "shaders/math/scale.wgsl");
 }
 
@@ -183,6 +183,217 @@ fn the_users_stage_packs_seeds_with_fieldkits_helpers() {
         } else {
             assert_eq!(packed[i], fieldkit::distance::NO_SEED, "voxel {i}");
             assert_eq!(unpacked[i], [-1; 4], "voxel {i}");
+        }
+    }
+}
+
+/// An immediate block (push constants) in the user's own shader: the generated code gives its
+/// size and the feature, and the stage runs with the block set on the pass from the generated
+/// struct, exactly as the CPU computes it.
+#[test]
+fn immediates_run_with_the_generated_struct() {
+    let shared = Context::shared();
+    let info = &push::main::INFO;
+    assert_eq!(info.required_features(), wgpu::Features::IMMEDIATES);
+    assert_eq!(push::main::IMMEDIATE_SIZE, 12);
+    assert_eq!(info.immediate_size, 12);
+    // The shared context does not ask for immediates: a typed error, not a wgpu panic.
+    match push::main::Pipeline::new(&shared.device) {
+        Err(fieldkit::Error::Unsupported { what, .. }) => {
+            assert!(what.contains("IMMEDIATES"), "{what}")
+        }
+        other => panic!("expected Error::Unsupported, got {:?}", other.err()),
+    }
+    let ctx = device_with(&shared, info.required_features(), |l| wgpu::Limits {
+        max_immediate_size: push::main::IMMEDIATE_SIZE,
+        ..l
+    });
+    let pipeline = push::main::Pipeline::new(&ctx.device).expect("the user's pipeline");
+    let values: Vec<f32> = (0..100).map(|i| i as f32).collect();
+    let buffer = ctx
+        .device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("values"),
+            contents: bytemuck::cast_slice(&values),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        });
+    let block = push::Push {
+        scale: 0.25,
+        offset: -3.0,
+        count: 90,
+    };
+    let mut bytes = encase::StorageBuffer::new(Vec::new());
+    bytes.write(&block).unwrap();
+    let bytes = bytes.into_inner();
+    assert_eq!(bytes.len(), 12);
+    let bound = pipeline
+        .bind(
+            &ctx.device,
+            &push::main::Resources {
+                values: (&buffer).into(),
+            },
+        )
+        .expect("binds");
+    let mut encoder = ctx.encoder("push");
+    {
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&pipeline.pipeline);
+        bound.set_compute(&mut pass);
+        pass.set_immediates(0, &bytes);
+        let g = push::main::Pipeline::groups_for([100, 1, 1]);
+        pass.dispatch_workgroups(g[0], g[1], g[2]);
+    }
+    ctx.submit_and_wait("push", encoder).unwrap();
+    let got: Vec<f32> = bytemuck::cast_slice(&read_buffer(&ctx, &buffer).unwrap()).to_vec();
+    for (i, &v) in got.iter().enumerate() {
+        // Quarters of small integers less 3: exact in f32.
+        let want = if i < 90 {
+            i as f32 * 0.25 - 3.0
+        } else {
+            i as f32
+        };
+        assert_eq!(v, want, "value {i}");
+    }
+}
+
+/// A device on the shared context's adapter with `features` and the limits `limits` makes of
+/// the adapter's: the test fails, saying what is missing, where the adapter lacks them.
+fn device_with(
+    shared: &Context,
+    features: wgpu::Features,
+    limits: impl FnOnce(wgpu::Limits) -> wgpu::Limits,
+) -> Context {
+    let adapter = shared
+        .adapter
+        .as_ref()
+        .expect("Context::shared opens an adapter");
+    assert!(
+        adapter.features().contains(features),
+        "the adapter ({}) lacks {:?}",
+        adapter.get_info().name,
+        features - adapter.features()
+    );
+    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        label: Some("user crate, native features"),
+        required_features: features,
+        required_limits: limits(adapter.limits()),
+        ..Default::default()
+    }))
+    .expect("a device with the features the shader needs");
+    Context::from_device(device, queue)
+}
+
+/// A binding array of textures in the user's own shader: the generated code names the features
+/// it needs (naga's uniformity analysis, which wgpu validates with, counts the loop counter
+/// that indexes it as non-uniform), and a device without them gets a typed error instead of a
+/// wgpu validation panic. Where the adapter has them (NVIDIA, AMD, Intel, Apple; not the
+/// lavapipe of Debian's Mesa 22.3, which lacks the descriptor indexing wgpu asks for), the
+/// stage also runs: a wrong count is a binding error, and each texel weighs the layers exactly
+/// as the CPU does.
+#[test]
+fn binding_arrays_say_what_they_need_and_run_where_the_device_has_it() {
+    let shared = Context::shared();
+    let info = &layers::main::INFO;
+    let needed = info.required_features();
+    assert_eq!(
+        needed,
+        wgpu::Features::TEXTURE_BINDING_ARRAY
+            | wgpu::Features::SAMPLED_TEXTURE_AND_STORAGE_BUFFER_ARRAY_NON_UNIFORM_INDEXING
+    );
+    assert_eq!(info.slots[0].count.map(|c| c.get()), Some(3));
+    match layers::main::Pipeline::new(&shared.device) {
+        Err(fieldkit::Error::Unsupported { what, .. }) => {
+            assert!(what.contains("TEXTURE_BINDING_ARRAY"), "{what}")
+        }
+        other => panic!("expected Error::Unsupported, got {:?}", other.err()),
+    }
+    let adapter = shared.adapter.as_ref().expect("an adapter");
+    if !adapter.features().contains(needed) {
+        eprintln!(
+            "{} lacks {:?}: binding arrays checked for their typed error only",
+            adapter.get_info().name,
+            needed - adapter.features()
+        );
+        return;
+    }
+    let ctx = device_with(&shared, needed, |l| l);
+    let pipeline = layers::main::Pipeline::new(&ctx.device).expect("the user's pipeline");
+    let [w, h] = [11u32, 5];
+    let texel = |k: u32, x: u32, y: u32| (k * 100 + y * w + x) as f32 * 0.25;
+    let textures: Vec<wgpu::Texture> = (0..3)
+        .map(|k| {
+            let data: Vec<f32> = (0..h)
+                .flat_map(|y| (0..w).map(move |x| texel(k, x, y)))
+                .collect();
+            ctx.device.create_texture_with_data(
+                &ctx.queue,
+                &wgpu::TextureDescriptor {
+                    label: Some("layer"),
+                    size: wgpu::Extent3d {
+                        width: w,
+                        height: h,
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format: wgpu::TextureFormat::R32Float,
+                    usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                    view_formats: &[],
+                },
+                wgpu::util::TextureDataOrder::LayerMajor,
+                bytemuck::cast_slice(&data),
+            )
+        })
+        .collect();
+    let views: Vec<wgpu::TextureView> = textures
+        .iter()
+        .map(|t| t.create_view(&Default::default()))
+        .collect();
+    let view_refs: Vec<&wgpu::TextureView> = views.iter().collect();
+    let sums = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("sums"),
+        size: (w * h * 4) as u64,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    match pipeline.bind(
+        &ctx.device,
+        &layers::main::Resources {
+            layers: view_refs[..2].into(),
+            sums: (&sums).into(),
+        },
+    ) {
+        Err(fieldkit::Error::Binding(e)) => {
+            assert_eq!(e.binding, "layers");
+            assert!(
+                e.problem.contains("2 resources bound") && e.problem.contains("holds 3"),
+                "{}",
+                e.problem
+            );
+        }
+        other => panic!("expected a binding error, got {:?}", other.err()),
+    }
+    let mut encoder = ctx.encoder("layers");
+    pipeline
+        .record(
+            &ctx.device,
+            &mut encoder,
+            &layers::main::Resources {
+                layers: view_refs[..].into(),
+                sums: (&sums).into(),
+            },
+            layers::main::Pipeline::groups_for([w, h, 1]),
+            "layers",
+        )
+        .expect("binds");
+    ctx.submit_and_wait("layers", encoder).unwrap();
+    let got: Vec<f32> = bytemuck::cast_slice(&read_buffer(&ctx, &sums).unwrap()).to_vec();
+    for y in 0..h {
+        for x in 0..w {
+            // Quarters of small integers weighted by 1, 2 and 3: exact in f32.
+            let want = texel(0, x, y) + 2.0 * texel(1, x, y) + 3.0 * texel(2, x, y);
+            assert_eq!(got[(y * w + x) as usize], want, "texel ({x}, {y})");
         }
     }
 }
