@@ -708,6 +708,11 @@ fn bind_groups<E: Entry>(
                 })
                 .collect();
             let label = format!("{}::{} group {g}", info.stage, info.entry_point);
+            let dynamic = info
+                .slots
+                .iter()
+                .filter(|s| s.group == *g && has_dynamic_offset(s))
+                .count();
             (
                 *g,
                 device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -715,33 +720,105 @@ fn bind_groups<E: Entry>(
                     layout,
                     entries: &entries,
                 }),
+                dynamic,
             )
         })
         .collect();
     Ok(Bound {
         groups,
+        stage: info.stage,
         _e: PhantomData,
     })
 }
 
+/// A bind group's index, the group, and its dynamic offsets.
+type GroupOffsets<'s, 'o> = (u32, &'s wgpu::BindGroup, &'o [u32]);
+
+fn has_dynamic_offset(slot: &Slot) -> bool {
+    matches!(
+        slot.ty,
+        wgpu::BindingType::Buffer {
+            has_dynamic_offset: true,
+            ..
+        }
+    )
+}
+
 /// Bind groups for one dispatch or draw, made by [`ComputePipeline::bind`] / [`RenderPipeline::bind`].
 pub struct Bound<E> {
-    groups: Vec<(u32, wgpu::BindGroup)>,
+    /// Each group, and how many of its bindings take a dynamic offset.
+    groups: Vec<(u32, wgpu::BindGroup, usize)>,
+    stage: &'static str,
     _e: PhantomData<E>,
 }
 
 impl<E: Entry> Bound<E> {
-    /// Set every bind group on a compute pass.
+    /// Set every bind group on a compute pass (a binding with a dynamic offset at offset 0).
     pub fn set_compute(&self, pass: &mut wgpu::ComputePass<'_>) {
-        for (g, group) in &self.groups {
-            pass.set_bind_group(*g, group, &[]);
+        for (g, group, dynamic) in &self.groups {
+            pass.set_bind_group(*g, group, &vec![0; *dynamic]);
         }
     }
-    /// Set every bind group on a render pass.
+    /// Set every bind group on a render pass (a binding with a dynamic offset at offset 0).
     pub fn set_render(&self, pass: &mut wgpu::RenderPass<'_>) {
-        for (g, group) in &self.groups {
-            pass.set_bind_group(*g, group, &[]);
+        for (g, group, dynamic) in &self.groups {
+            pass.set_bind_group(*g, group, &vec![0; *dynamic]);
         }
+    }
+
+    /// Bindings that take a dynamic offset (`fieldkit_build::Builder::dynamic_offset`), in
+    /// group then binding order: one offset each is expected.
+    pub fn dynamic_offsets(&self) -> usize {
+        self.groups.iter().map(|(_, _, d)| d).sum()
+    }
+
+    /// [`Self::set_compute`] with `offsets`, one per binding that takes a dynamic offset, in
+    /// group then binding order; [`Error::Invalid`] for the wrong number of them.
+    pub fn set_compute_with_offsets(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        offsets: &[u32],
+    ) -> Result<(), Error> {
+        for (g, group, split) in self.split(offsets)? {
+            pass.set_bind_group(g, group, split);
+        }
+        Ok(())
+    }
+
+    /// [`Self::set_render`] with `offsets`, as [`Self::set_compute_with_offsets`] takes them.
+    pub fn set_render_with_offsets(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        offsets: &[u32],
+    ) -> Result<(), Error> {
+        for (g, group, split) in self.split(offsets)? {
+            pass.set_bind_group(g, group, split);
+        }
+        Ok(())
+    }
+
+    /// Each group with its share of `offsets`.
+    fn split<'s, 'o>(&'s self, offsets: &'o [u32]) -> Result<Vec<GroupOffsets<'s, 'o>>, Error> {
+        if offsets.len() != self.dynamic_offsets() {
+            return Err(Error::Invalid {
+                stage: self.stage,
+                what: format!(
+                    "{} dynamic offsets given, the pipeline's layouts take {}",
+                    offsets.len(),
+                    self.dynamic_offsets()
+                ),
+            });
+        }
+        let mut rest = offsets;
+        Ok(self
+            .groups
+            .iter()
+            .map(|(g, group, d)| {
+                let (mine, after) = rest.split_at(*d);
+                rest = after;
+                (*g, group, mine)
+            })
+            .collect())
     }
 }
 

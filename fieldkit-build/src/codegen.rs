@@ -33,17 +33,17 @@ fn view_dim(dim: &str) -> &'static str {
     }
 }
 
-fn wgpu_binding_type(kind: &BindingKind) -> String {
+fn wgpu_binding_type(kind: &BindingKind, dynamic: bool) -> String {
     match kind {
         BindingKind::Uniform { min_size, .. } => format!(
-            "wgpu::BindingType::Buffer {{ ty: wgpu::BufferBindingType::Uniform, has_dynamic_offset: false, min_binding_size: core::num::NonZeroU64::new({min_size}) }}"
+            "wgpu::BindingType::Buffer {{ ty: wgpu::BufferBindingType::Uniform, has_dynamic_offset: {dynamic}, min_binding_size: core::num::NonZeroU64::new({min_size}) }}"
         ),
         BindingKind::Storage {
             read_only,
             min_size,
             ..
         } => format!(
-            "wgpu::BindingType::Buffer {{ ty: wgpu::BufferBindingType::Storage {{ read_only: {read_only} }}, has_dynamic_offset: false, min_binding_size: core::num::NonZeroU64::new({min_size}) }}"
+            "wgpu::BindingType::Buffer {{ ty: wgpu::BufferBindingType::Storage {{ read_only: {read_only} }}, has_dynamic_offset: {dynamic}, min_binding_size: core::num::NonZeroU64::new({min_size}) }}"
         ),
         BindingKind::Texture {
             dim,
@@ -368,7 +368,7 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, s: &mut String) {
                 b.name,
                 b.ty,
                 stage_bits(stages),
-                wgpu_binding_type(&b.kind),
+                wgpu_binding_type(&b.kind, b.dynamic_offset),
                 b.count.map_or("None".to_string(), |n| format!("core::num::NonZeroU32::new({n})"))
             )
         })

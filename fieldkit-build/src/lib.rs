@@ -92,6 +92,8 @@ pub struct Stage {
     pub original: String,
     /// `wgpu::Features` the module needs (constant names), sorted.
     pub features: Vec<String>,
+    /// Bindings (by name) whose layouts take a dynamic offset ([`Builder::dynamic_offset`]).
+    pub dynamic_offsets: Vec<String>,
 }
 
 /// Every shader file that is a stage, sorted by path for deterministic output.
@@ -485,6 +487,7 @@ pub fn build_stage(shaders: &ShaderDir, stage: &StageFile) -> Result<Stage, Stri
         info,
         original,
         features,
+        dynamic_offsets: Vec::new(),
     })
 }
 
@@ -618,6 +621,7 @@ pub struct Builder {
     dir: String,
     runtime: String,
     out_file: String,
+    dynamic_offsets: Vec<String>,
 }
 
 impl Builder {
@@ -627,7 +631,17 @@ impl Builder {
             dir: dir.to_string(),
             runtime: "::fieldkit".into(),
             out_file: "shaders.rs".into(),
+            dynamic_offsets: Vec::new(),
         }
+    }
+
+    /// Give one uniform or storage buffer binding, `room::stage::binding` (e.g.
+    /// `"math::scale::params"`), a dynamic offset: its layout entry has `has_dynamic_offset`,
+    /// and the offset is passed when the bind group is set (`Bound::set_compute_with_offsets`).
+    /// A name that matches no buffer binding is a build error.
+    pub fn dynamic_offset(mut self, binding: &str) -> Self {
+        self.dynamic_offsets.push(binding.to_string());
+        self
     }
 
     /// The path the generated code reaches fieldkit's runtime types by (`::fieldkit` unless set;
@@ -660,7 +674,43 @@ impl Builder {
 
     /// [`Self::build`] from `crate_root` into `out`, without cargo's environment.
     pub fn build_to(&self, crate_root: &Path, out: &Path) -> Result<PathBuf, Vec<String>> {
-        let stages = build_dir(&ShaderDir::new(crate_root, &self.dir))?;
+        let mut stages = build_dir(&ShaderDir::new(crate_root, &self.dir))?;
+        let mut errors = Vec::new();
+        for name in &self.dynamic_offsets {
+            let (stage_id, binding) = name.rsplit_once("::").unwrap_or(("", name));
+            let Some(stage) = stages.iter_mut().find(|s| s.file.id() == stage_id) else {
+                errors.push(format!(
+                    "error: dynamic_offset(\"{name}\"): no stage `{stage_id}` in {}/ \
+                     (name a binding as room::stage::binding)",
+                    self.dir
+                ));
+                continue;
+            };
+            let is_buffer = stage.module.global_variables.iter().any(|(_, v)| {
+                v.name.as_deref() == Some(binding)
+                    && v.binding.is_some()
+                    && matches!(
+                        v.space,
+                        naga::AddressSpace::Uniform | naga::AddressSpace::Storage { .. }
+                    )
+                    && !matches!(
+                        stage.module.types[v.ty].inner,
+                        naga::TypeInner::BindingArray { .. }
+                    )
+            });
+            if !is_buffer {
+                errors.push(format!(
+                    "error: dynamic_offset(\"{name}\"): {} has no uniform or storage buffer \
+                     binding `{binding}` (only those take a dynamic offset)",
+                    stage.file.rel_path
+                ));
+                continue;
+            }
+            stage.dynamic_offsets.push(binding.to_string());
+        }
+        if !errors.is_empty() {
+            return Err(errors);
+        }
         let code = codegen::generate_for(&stages, &self.runtime);
         // Only touch the file when it changes, so dependents are not rebuilt for nothing.
         if std::fs::read_to_string(out).ok().as_deref() != Some(code.as_str()) {
@@ -735,6 +785,27 @@ mod tests {
         std::thread::sleep(std::time::Duration::from_millis(20));
         Builder::new("shaders").build_to(&root, &out).unwrap();
         assert_eq!(std::fs::metadata(&out).unwrap().modified().unwrap(), before);
+        // A dynamic offset on a named buffer binding; names that match none are errors.
+        Builder::new("shaders")
+            .dynamic_offset("room::double::v")
+            .build_to(&root, &out)
+            .expect("builds");
+        assert!(
+            std::fs::read_to_string(&out)
+                .unwrap()
+                .contains("has_dynamic_offset: true")
+        );
+        let errors = Builder::new("shaders")
+            .dynamic_offset("room::nope::v")
+            .dynamic_offset("room::double::missing")
+            .build_to(&root, &out)
+            .unwrap_err();
+        assert!(
+            errors.len() == 2
+                && errors[0].contains("no stage `room::nope`")
+                && errors[1].contains("no uniform or storage buffer binding `missing`"),
+            "{errors:#?}"
+        );
         let own = Builder::new("shaders").runtime("crate");
         own.build_to(&root, &out).unwrap();
         assert!(

@@ -40,6 +40,8 @@ pub struct Binding {
     pub ty: String,
     /// A binding array's length (`binding_array<T, N>`); `None` for one resource.
     pub count: Option<u32>,
+    /// Its layout takes a dynamic offset (buffers the build script names).
+    pub dynamic_offset: bool,
     /// Source line of the declaration in the linked text (for lints).
     #[serde(skip)]
     pub linked_offset: usize,
@@ -707,6 +709,10 @@ pub fn reflect(stage: &Stage) -> Reflection {
             kind,
             ty: wgsl_type(module, var.ty),
             count,
+            dynamic_offset: stage
+                .dynamic_offsets
+                .iter()
+                .any(|d| Some(d.as_str()) == var.name.as_deref()),
             linked_offset,
         });
         handles.push(handle);

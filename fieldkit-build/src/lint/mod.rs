@@ -194,6 +194,7 @@ pub(crate) mod test_util {
             info,
             original: src.into(),
             features,
+            dynamic_offsets: Vec::new(),
         }
     }
 }

@@ -397,3 +397,89 @@ fn binding_arrays_say_what_they_need_and_run_where_the_device_has_it() {
         }
     }
 }
+
+/// A uniform with a dynamic offset (`Builder::dynamic_offset("math::scale::params")` in the
+/// build script): one buffer holds two parameter blocks, and each dispatch picks its block by
+/// offset; the wrong number of offsets is a typed error.
+#[test]
+fn a_dynamic_offset_picks_the_uniform_block() {
+    let ctx = Context::shared();
+    let slot = &scale::main::INFO.slots[0];
+    assert!(matches!(
+        slot.ty,
+        wgpu::BindingType::Buffer {
+            has_dynamic_offset: true,
+            ..
+        }
+    ));
+    let pipeline = scale::main::Pipeline::new(&ctx.device).expect("the user's pipeline");
+    let stride = ctx.device.limits().min_uniform_buffer_offset_alignment as usize;
+    let blocks = [
+        scale::Params {
+            factor: 3.0,
+            count: 100,
+        },
+        scale::Params {
+            factor: 2.0,
+            count: 40,
+        },
+    ];
+    let mut bytes = vec![0u8; stride * 2];
+    for (k, block) in blocks.iter().enumerate() {
+        let mut one = encase::UniformBuffer::new(Vec::new());
+        one.write(block).unwrap();
+        let one = one.into_inner();
+        bytes[k * stride..k * stride + one.len()].copy_from_slice(&one);
+    }
+    let params = ctx
+        .device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("two parameter blocks"),
+            contents: &bytes,
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+    let values: Vec<f32> = (0..64).map(|i| i as f32).collect();
+    let buffer = ctx
+        .device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("values"),
+            contents: bytemuck::cast_slice(&values),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        });
+    let bound = pipeline
+        .bind(
+            &ctx.device,
+            &scale::main::Resources {
+                // One block's worth: the dynamic offset moves it.
+                params: fieldkit::bind::Uniform::range(&params, 0, std::num::NonZeroU64::new(8)),
+                values: (&buffer).into(),
+            },
+        )
+        .expect("binds");
+    assert_eq!(bound.dynamic_offsets(), 1);
+    let mut encoder = ctx.encoder("dynamic");
+    {
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&pipeline.pipeline);
+        match bound.set_compute_with_offsets(&mut pass, &[]) {
+            Err(fieldkit::Error::Invalid { what, .. }) => {
+                assert!(
+                    what.contains("0 dynamic offsets given") && what.contains("take 1"),
+                    "{what}"
+                )
+            }
+            other => panic!("expected Error::Invalid, got {other:?}"),
+        }
+        bound
+            .set_compute_with_offsets(&mut pass, &[stride as u32])
+            .expect("one offset");
+        pass.dispatch_workgroups(1, 1, 1);
+    }
+    ctx.submit_and_wait("dynamic", encoder).unwrap();
+    let got: Vec<f32> = bytemuck::cast_slice(&read_buffer(&ctx, &buffer).unwrap()).to_vec();
+    for (i, &v) in got.iter().enumerate() {
+        // The second block: the first 40 values doubled (exact), the rest untouched.
+        let want = if i < 40 { i as f32 * 2.0 } else { i as f32 };
+        assert_eq!(v, want, "value {i}");
+    }
+}
