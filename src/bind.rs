@@ -839,12 +839,14 @@ pub const fn stage_checks() -> wgpu::ShaderRuntimeChecks {
     checks
 }
 
-fn module(device: &wgpu::Device, info: &EntryInfo) -> wgpu::ShaderModule {
+/// The shader module of `info`, from its compiled-in source, or from `relinked` (hot reload:
+/// every runtime check kept, as no one has read its loops).
+fn module(device: &wgpu::Device, info: &EntryInfo, relinked: Option<&str>) -> wgpu::ShaderModule {
     let desc = wgpu::ShaderModuleDescriptor {
         label: Some(info.path),
-        source: wgpu::ShaderSource::Wgsl(info.source.into()),
+        source: wgpu::ShaderSource::Wgsl(relinked.unwrap_or(info.source).into()),
     };
-    if !info.loops_end {
+    if !info.loops_end || relinked.is_some() {
         return device.create_shader_module(desc);
     }
     // SAFETY: `stage_checks` keeps every bounds check and turns off only loop bounding, whose
@@ -935,6 +937,15 @@ impl<E: Entry> ComputePipeline<E> {
         overrides: &[(&str, f64)],
         zero_initialize_workgroup_memory: bool,
     ) -> Result<Self, Error> {
+        Self::make(device, None, overrides, zero_initialize_workgroup_memory)
+    }
+
+    fn make(
+        device: &wgpu::Device,
+        relinked: Option<&str>,
+        overrides: &[(&str, f64)],
+        zero_initialize_workgroup_memory: bool,
+    ) -> Result<Self, Error> {
         let info = E::INFO;
         info.check_overrides(overrides)?;
         info.check_features(device)?;
@@ -943,6 +954,7 @@ impl<E: Entry> ComputePipeline<E> {
             let pipeline = build_compute(
                 device,
                 info,
+                relinked,
                 &layouts,
                 overrides,
                 zero_initialize_workgroup_memory,
@@ -953,6 +965,22 @@ impl<E: Entry> ComputePipeline<E> {
                 _e: PhantomData,
             }
         })
+    }
+
+    /// The pipeline made again from the stage's file under `crate_root` (`EntryInfo::path`,
+    /// its imports relinked), for iterating on a shader while the app runs: [`Error::Reload`]
+    /// where the file no longer links or validates (the message has its file:line:col) or
+    /// where its interface no longer matches the compiled-in bindings (a new or retyped
+    /// binding, another workgroup size or set of overrides); the body may change freely.
+    /// Feature `hot-reload`.
+    #[cfg(feature = "hot-reload")]
+    pub fn reload(
+        device: &wgpu::Device,
+        crate_root: &std::path::Path,
+        overrides: &[(&str, f64)],
+    ) -> Result<Self, Error> {
+        let source = crate::hot::relink(E::INFO, crate_root)?;
+        Self::make(device, Some(&source), overrides, true)
     }
 
     /// Check every resource against the shader's slots and make the bind groups.
@@ -1023,6 +1051,26 @@ pub struct RenderPipeline<E> {
 impl<E: Entry> RenderPipeline<E> {
     /// Create the pipeline; colour targets are checked against the fragment outputs first.
     pub fn new(device: &wgpu::Device, targets: &RenderTargets<'_>) -> Result<Self, Error> {
+        Self::make(device, None, targets)
+    }
+
+    /// The pipeline made again from the stage's file under `crate_root`, as
+    /// [`ComputePipeline::reload`] makes a compute pipeline. Feature `hot-reload`.
+    #[cfg(feature = "hot-reload")]
+    pub fn reload(
+        device: &wgpu::Device,
+        crate_root: &std::path::Path,
+        targets: &RenderTargets<'_>,
+    ) -> Result<Self, Error> {
+        let source = crate::hot::relink(E::INFO, crate_root)?;
+        Self::make(device, Some(&source), targets)
+    }
+
+    fn make(
+        device: &wgpu::Device,
+        relinked: Option<&str>,
+        targets: &RenderTargets<'_>,
+    ) -> Result<Self, Error> {
         let info = E::INFO;
         info.check_features(device)?;
         let EntryKind::Render {
@@ -1063,7 +1111,7 @@ impl<E: Entry> RenderPipeline<E> {
         }
         crate::gpu::scoped(device, info.stage, || {
             let layouts = info.layouts(device);
-            let pipeline = build_render(device, info, &layouts, targets);
+            let pipeline = build_render(device, info, relinked, &layouts, targets);
             Self {
                 pipeline,
                 layouts,
@@ -1085,6 +1133,7 @@ impl<E: Entry> RenderPipeline<E> {
 fn build_compute(
     device: &wgpu::Device,
     info: &EntryInfo,
+    relinked: Option<&str>,
     layouts: &[(u32, wgpu::BindGroupLayout)],
     overrides: &[(&str, f64)],
     zero_initialize_workgroup_memory: bool,
@@ -1093,7 +1142,7 @@ fn build_compute(
     device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some(info.stage),
         layout: Some(&layout),
-        module: &module(device, info),
+        module: &module(device, info, relinked),
         entry_point: Some(info.entry_point),
         compilation_options: wgpu::PipelineCompilationOptions {
             constants: overrides,
@@ -1107,6 +1156,7 @@ fn build_compute(
 fn build_render(
     device: &wgpu::Device,
     info: &EntryInfo,
+    relinked: Option<&str>,
     layouts: &[(u32, wgpu::BindGroupLayout)],
     targets: &RenderTargets<'_>,
 ) -> wgpu::RenderPipeline {
@@ -1119,7 +1169,7 @@ fn build_render(
         unreachable!("callers pass render entries")
     };
     let layout = info.pipeline_layout(device, layouts);
-    let module = module(device, info);
+    let module = module(device, info, relinked);
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some(info.stage),
         layout: Some(&layout),
@@ -1152,7 +1202,7 @@ pub fn create_any(device: &wgpu::Device, info: &'static EntryInfo) -> Result<(),
         let layouts = info.layouts(device);
         match info.kind {
             EntryKind::Compute { .. } => {
-                let _ = build_compute(device, info, &layouts, &[], true);
+                let _ = build_compute(device, info, None, &layouts, &[], true);
             }
             EntryKind::Render { targets, .. } => {
                 let color: Vec<_> = targets
@@ -1168,6 +1218,7 @@ pub fn create_any(device: &wgpu::Device, info: &'static EntryInfo) -> Result<(),
                 let _ = build_render(
                     device,
                     info,
+                    None,
                     &layouts,
                     &RenderTargets {
                         color: &color,

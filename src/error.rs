@@ -98,6 +98,15 @@ pub enum Error {
         /// What is missing.
         what: String,
     },
+    /// Hot reload refused a stage's file: it no longer links or validates, or its interface
+    /// differs from the bindings compiled into the app (feature `hot-reload`).
+    #[error("stage {stage}: reload refused: {what}")]
+    Reload {
+        /// The stage being reloaded.
+        stage: &'static str,
+        /// Why, with file:line:col for a shader error.
+        what: String,
+    },
     /// Mapping a buffer for readback failed.
     #[error("readback failed: {0}")]
     Readback(String),

@@ -13,6 +13,8 @@ pub mod error;
 pub mod gpu;
 #[cfg(feature = "harness")]
 pub mod harness;
+#[cfg(feature = "hot-reload")]
+mod hot;
 pub mod metaball;
 pub mod ocean;
 pub mod view;

@@ -19,6 +19,7 @@
 //! binding errors) and derives from `bytemuck` and `encase`, which the crate depends on too.
 
 pub mod codegen;
+pub mod drift;
 pub mod lint;
 pub mod reflect;
 
@@ -588,6 +589,38 @@ pub(crate) fn needed_features(module: &naga::Module) -> (naga::valid::Capabiliti
     features.sort();
     features.dedup();
     (all, features.into_iter().map(String::from).collect())
+}
+
+/// A stage from WGSL that is already linked (imports resolved), as generated code holds it in
+/// `SOURCE`: parsed and validated as [`build_stage`] does the file, so its reflection is the
+/// interface the host code was generated from.
+pub fn stage_from_linked(file: StageFile, linked: &str) -> Result<Stage, String> {
+    let module = naga::front::wgsl::parse_str(linked).map_err(|e| {
+        format!(
+            "{}: the linked source no longer parses: {}",
+            file.rel_path,
+            e.message()
+        )
+    })?;
+    let (capabilities, features) = needed_features(&module);
+    let info = naga::valid::Validator::new(naga::valid::ValidationFlags::all(), capabilities)
+        .validate(&module)
+        .map_err(|e| {
+            format!(
+                "{}: the linked source no longer validates: {}",
+                file.rel_path,
+                e.as_inner()
+            )
+        })?;
+    Ok(Stage {
+        file,
+        source: linked.to_string(),
+        module,
+        info,
+        original: linked.to_string(),
+        features,
+        dynamic_offsets: Vec::new(),
+    })
 }
 
 /// Build every stage of a crate's `shaders/`; on failure return *all* errors, one rendered
