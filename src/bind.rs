@@ -108,6 +108,9 @@ pub struct EntryInfo {
     /// Bytes of `var<immediate>` data the pipeline layout holds (0: none). Set them with
     /// `set_immediates` on the pass; the device needs `Features::IMMEDIATES`.
     pub immediate_size: u32,
+    /// Groups bound as a whole from a [`Group`] (a shared module's bindings), not binding by
+    /// binding: their slots are the shared module's, with the visibility of every user.
+    pub shared_groups: &'static [u32],
 }
 
 /// The device limits a pipeline needs, as the build reflected them from its shader (named as
@@ -205,25 +208,14 @@ impl EntryInfo {
         self.groups()
             .into_iter()
             .map(|g| {
-                let entries: Vec<_> = self
+                let slots: Vec<Slot> = self
                     .slots
                     .iter()
                     .filter(|s| s.group == g)
-                    .map(|s| wgpu::BindGroupLayoutEntry {
-                        binding: s.binding,
-                        visibility: s.visibility,
-                        ty: s.ty,
-                        count: s.count,
-                    })
+                    .copied()
                     .collect();
                 let label = format!("{}::{} group {g}", self.stage, self.entry_point);
-                (
-                    g,
-                    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                        label: Some(&label),
-                        entries: &entries,
-                    }),
-                )
+                (g, layout_of(device, &slots, &label))
             })
             .collect()
     }
@@ -307,8 +299,80 @@ pub trait Entry: 'static {
     type Resources<'a>;
     /// The entry point's interface table.
     const INFO: &'static EntryInfo;
+    /// The resources in slot order (slots of shared groups left out).
+    fn resources<'a>(r: &Self::Resources<'a>) -> Vec<Resource<'a>>;
+    /// The bind groups of [`EntryInfo::shared_groups`], made once from a [`Group`].
+    fn groups<'a>(_r: &Self::Resources<'a>) -> Vec<(u32, &'a wgpu::BindGroup)> {
+        Vec::new()
+    }
+}
+
+/// A group of bindings declared once in a module of the shader folder's `shared/` and used by
+/// several pipelines (generated as `shaders::groups::<module>`): bound once as a [`Group`]
+/// and handed to every pipeline that uses it.
+pub trait SharedGroup: 'static {
+    /// The module (`shared/<module>.wesl`).
+    const MODULE: &'static str;
+    /// Its `@group`.
+    const GROUP: u32;
+    /// Its bindings, with the visibility of every pipeline that uses them.
+    const SLOTS: &'static [Slot];
+    /// One typed field per binding.
+    type Resources<'a>;
     /// The resources in slot order.
     fn resources<'a>(r: &Self::Resources<'a>) -> Vec<Resource<'a>>;
+}
+
+/// The bind group of a [`SharedGroup`], made once and set on every pipeline that uses it
+/// (their `Resources` take a `&Group`).
+pub struct Group<G> {
+    /// The wgpu bind group.
+    pub bind_group: wgpu::BindGroup,
+    _g: PhantomData<G>,
+}
+
+impl<G: SharedGroup> Group<G> {
+    /// The group's layout (equal, entry for entry, to the one each pipeline that uses it makes).
+    pub fn layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+        layout_of(device, G::SLOTS, G::MODULE)
+    }
+
+    /// Check every resource against the module's slots (as a pipeline's `bind` does) and make
+    /// the bind group.
+    pub fn new(device: &wgpu::Device, resources: &G::Resources<'_>) -> Result<Self, Error> {
+        let layout = Self::layout(device);
+        let res = G::resources(resources);
+        let bind_group = make_group(
+            device,
+            &layout,
+            G::SLOTS,
+            &res,
+            G::MODULE,
+            "(shared group)",
+            G::GROUP,
+        )?;
+        Ok(Self {
+            bind_group,
+            _g: PhantomData,
+        })
+    }
+}
+
+/// A bind group layout for `slots` (one group's).
+fn layout_of(device: &wgpu::Device, slots: &[Slot], label: &str) -> wgpu::BindGroupLayout {
+    let entries: Vec<_> = slots
+        .iter()
+        .map(|s| wgpu::BindGroupLayoutEntry {
+            binding: s.binding,
+            visibility: s.visibility,
+            ty: s.ty,
+            count: s.count,
+        })
+        .collect();
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some(label),
+        entries: &entries,
+    })
 }
 
 /// A resource handed to a slot, before it is checked against the slot.
@@ -671,11 +735,77 @@ fn bind_groups<E: Entry>(
 ) -> Result<Bound<E>, Error> {
     let info = E::INFO;
     let res = E::resources(resources);
-    for (slot, r) in info.slots.iter().zip(&res) {
+    let shared = E::groups(resources);
+    // The slots bound one by one: all but the shared groups', in the order `res` lists them.
+    let own: Vec<Slot> = info
+        .slots
+        .iter()
+        .filter(|s| !info.shared_groups.contains(&s.group))
+        .copied()
+        .collect();
+    let mut groups = Vec::new();
+    for (g, layout) in layouts {
+        let dynamic = info
+            .slots
+            .iter()
+            .filter(|s| s.group == *g && has_dynamic_offset(s))
+            .count();
+        if let Some((_, group)) = shared.iter().find(|(sg, _)| sg == g) {
+            groups.push((*g, (*group).clone(), dynamic));
+            continue;
+        }
+        let (slots, group_res): (Vec<Slot>, Vec<&Resource<'_>>) = own
+            .iter()
+            .zip(&res)
+            .filter(|(s, _)| s.group == *g)
+            .map(|(s, r)| (*s, r))
+            .unzip();
+        let group = make_group_refs(
+            device,
+            layout,
+            &slots,
+            &group_res,
+            info.stage,
+            info.entry_point,
+            *g,
+        )?;
+        groups.push((*g, group, dynamic));
+    }
+    Ok(Bound {
+        groups,
+        stage: info.stage,
+        _e: PhantomData,
+    })
+}
+
+/// Check each resource against its slot, then make group `g` of them.
+fn make_group(
+    device: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    slots: &[Slot],
+    res: &[Resource<'_>],
+    stage: &'static str,
+    entry_point: &'static str,
+    g: u32,
+) -> Result<wgpu::BindGroup, Error> {
+    let refs: Vec<&Resource<'_>> = res.iter().collect();
+    make_group_refs(device, layout, slots, &refs, stage, entry_point, g)
+}
+
+fn make_group_refs(
+    device: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    slots: &[Slot],
+    res: &[&Resource<'_>],
+    stage: &'static str,
+    entry_point: &'static str,
+    g: u32,
+) -> Result<wgpu::BindGroup, Error> {
+    for (slot, r) in slots.iter().zip(res) {
         check(slot, r, device).map_err(|problem| {
             Error::Binding(BindingError {
-                stage: info.stage,
-                entry_point: info.entry_point,
+                stage,
+                entry_point,
                 binding: slot.name,
                 group: slot.group,
                 index: slot.binding,
@@ -683,52 +813,31 @@ fn bind_groups<E: Entry>(
             })
         })?;
     }
-    let groups = layouts
+    let entries: Vec<wgpu::BindGroupEntry> = slots
         .iter()
-        .map(|(g, layout)| {
-            let entries: Vec<wgpu::BindGroupEntry> = info
-                .slots
-                .iter()
-                .zip(&res)
-                .filter(|(s, _)| s.group == *g)
-                .map(|(s, r)| wgpu::BindGroupEntry {
-                    binding: s.binding,
-                    resource: match r {
-                        Resource::Buffer(b) => wgpu::BindingResource::Buffer(b.clone()),
-                        Resource::Texture(v) | Resource::StorageTexture(v) => {
-                            wgpu::BindingResource::TextureView(v)
-                        }
-                        Resource::Sampler(s) => wgpu::BindingResource::Sampler(s),
-                        Resource::Buffers(b) => wgpu::BindingResource::BufferArray(b),
-                        Resource::Textures(v) | Resource::StorageTextures(v) => {
-                            wgpu::BindingResource::TextureViewArray(v)
-                        }
-                        Resource::Samplers(s) => wgpu::BindingResource::SamplerArray(s),
-                    },
-                })
-                .collect();
-            let label = format!("{}::{} group {g}", info.stage, info.entry_point);
-            let dynamic = info
-                .slots
-                .iter()
-                .filter(|s| s.group == *g && has_dynamic_offset(s))
-                .count();
-            (
-                *g,
-                device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some(&label),
-                    layout,
-                    entries: &entries,
-                }),
-                dynamic,
-            )
+        .zip(res)
+        .map(|(s, r)| wgpu::BindGroupEntry {
+            binding: s.binding,
+            resource: match r {
+                Resource::Buffer(b) => wgpu::BindingResource::Buffer(b.clone()),
+                Resource::Texture(v) | Resource::StorageTexture(v) => {
+                    wgpu::BindingResource::TextureView(v)
+                }
+                Resource::Sampler(s) => wgpu::BindingResource::Sampler(s),
+                Resource::Buffers(b) => wgpu::BindingResource::BufferArray(b),
+                Resource::Textures(v) | Resource::StorageTextures(v) => {
+                    wgpu::BindingResource::TextureViewArray(v)
+                }
+                Resource::Samplers(s) => wgpu::BindingResource::SamplerArray(s),
+            },
         })
         .collect();
-    Ok(Bound {
-        groups,
-        stage: info.stage,
-        _e: PhantomData,
-    })
+    let label = format!("{stage}::{entry_point} group {g}");
+    Ok(device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(&label),
+        layout,
+        entries: &entries,
+    }))
 }
 
 /// A bind group's index, the group, and its dynamic offsets.

@@ -137,6 +137,242 @@ fn stage_bits(stages: &[&str]) -> String {
     bits.join(".union(") + &")".repeat(bits.len() - 1)
 }
 
+/// A shared group: the bindings of one `@group` that a module of the folder's `shared/`
+/// declares, as every pipeline that uses them binds them (the union of their uses).
+pub struct SharedGroupInfo {
+    module: String,
+    group: u32,
+    /// Per binding: the binding, the stages that use it anywhere, its host type path.
+    bindings: Vec<(super::reflect::Binding, Vec<String>, String)>,
+}
+
+/// The groups of a pipeline that a shared module declares whole: every binding of the group
+/// the pipeline uses comes from that one module.
+fn shared_groups_of<'r>(r: &'r Reflection, p: &PipelineDesc) -> Vec<(u32, &'r str)> {
+    let mut groups: Vec<(u32, Option<&str>)> = Vec::new();
+    for b in &r.bindings {
+        let used = p.entries.iter().any(|e| {
+            e.uses
+                .iter()
+                .any(|u| u.group == b.group && u.binding == b.binding)
+        });
+        if !used {
+            continue;
+        }
+        let module = b.shared.as_ref().map(|s| s.module.as_str());
+        match groups.iter_mut().find(|(g, _)| *g == b.group) {
+            Some((_, m)) => {
+                if *m != module {
+                    *m = None;
+                }
+            }
+            None => groups.push((b.group, module)),
+        }
+    }
+    groups
+        .into_iter()
+        .filter_map(|(g, m)| m.map(|m| (g, m)))
+        .collect()
+}
+
+/// Every shared group of the folder, its bindings merged over all stages that use them.
+pub fn shared_groups(stages: &[Stage]) -> Vec<SharedGroupInfo> {
+    let mut out: Vec<SharedGroupInfo> = Vec::new();
+    for st in stages {
+        let r = reflect(st);
+        for p in pipelines(&r) {
+            for (group, module) in shared_groups_of(&r, &p) {
+                let i = match out
+                    .iter()
+                    .position(|s| s.module == module && s.group == group)
+                {
+                    Some(i) => i,
+                    None => {
+                        out.push(SharedGroupInfo {
+                            module: module.to_string(),
+                            group,
+                            bindings: Vec::new(),
+                        });
+                        out.len() - 1
+                    }
+                };
+                for b in r.bindings.iter().filter(|b| b.group == group) {
+                    let stages: Vec<String> = p
+                        .entries
+                        .iter()
+                        .filter(|e| {
+                            e.uses
+                                .iter()
+                                .any(|u| u.group == b.group && u.binding == b.binding)
+                        })
+                        .map(|e| e.stage.clone())
+                        .collect();
+                    let path = format!("super::super::{}::{}::", st.file.room, st.file.name);
+                    let rust = qualify(&r, rust_of(&b.kind), &path);
+                    let shared = &mut out[i];
+                    match shared
+                        .bindings
+                        .iter_mut()
+                        .find(|(o, ..)| o.binding == b.binding)
+                    {
+                        Some((o, used, _)) => {
+                            // A texture sampled through a filtering sampler by any user is
+                            // filterable for all.
+                            if let (
+                                BindingKind::Texture {
+                                    sample: SampleKind::Float { filterable: a },
+                                    ..
+                                },
+                                BindingKind::Texture {
+                                    sample: SampleKind::Float { filterable: b },
+                                    ..
+                                },
+                            ) = (&mut o.kind, &b.kind)
+                            {
+                                *a |= *b;
+                            }
+                            for s in stages {
+                                if !used.contains(&s) {
+                                    used.push(s);
+                                }
+                            }
+                        }
+                        None => shared.bindings.push((b.clone(), stages, rust)),
+                    }
+                }
+            }
+        }
+    }
+    for s in &mut out {
+        s.bindings.sort_by_key(|(b, ..)| b.binding);
+    }
+    out
+}
+
+fn rust_of(kind: &BindingKind) -> &str {
+    match kind {
+        BindingKind::Uniform { rust, .. } | BindingKind::Storage { rust, .. } => rust,
+        _ => "",
+    }
+}
+
+/// `rust` with each of the stage's struct names (whole words) reached through `path`.
+fn qualify(r: &Reflection, rust: &str, path: &str) -> String {
+    let mut out = String::new();
+    let mut word = String::new();
+    let flush = |word: &mut String, out: &mut String| {
+        if r.structs
+            .iter()
+            .any(|st| st.name == *word && st.host_shareable)
+        {
+            out.push_str(path);
+        }
+        out.push_str(word);
+        word.clear();
+    };
+    for c in rust.chars() {
+        if c.is_alphanumeric() || c == '_' {
+            word.push(c);
+        } else {
+            flush(&mut word, &mut out);
+            out.push(c);
+        }
+    }
+    flush(&mut word, &mut out);
+    out
+}
+
+/// `pub mod groups`: per shared group, its typed resources, slots and `Group` type.
+fn gen_shared_groups(shared: &[SharedGroupInfo], s: &mut String) {
+    if shared.is_empty() {
+        return;
+    }
+    writeln!(s, "/// Bind groups declared once in a module of `shared/` and used by several pipelines: make\n/// one `Group` and hand it to each.\npub mod groups {{").unwrap();
+    for g in shared {
+        let name = if shared.iter().filter(|o| o.module == g.module).count() > 1 {
+            format!("{}_{}", g.module, g.group)
+        } else {
+            g.module.clone()
+        };
+        writeln!(
+            s,
+            "/// `@group({})` of `shared/{}`.\npub mod {name} {{\n/// Its `@group`.\npub const GROUP: u32 = {};",
+            g.group, g.module, g.group
+        )
+        .unwrap();
+        writeln!(s, "/// Every binding of the group, typed by what may be bound there.\npub struct Resources<'a> {{").unwrap();
+        for (b, _, rust) in &g.bindings {
+            let name = b
+                .shared
+                .as_ref()
+                .map_or(b.name.as_str(), |r| r.name.as_str());
+            let ty = match &b.kind {
+                BindingKind::Uniform { rust: r, .. } | BindingKind::Storage { rust: r, .. } => {
+                    resource_field_type(&b.kind, b.count).replace(r.as_str(), rust)
+                }
+                _ => resource_field_type(&b.kind, b.count),
+            };
+            writeln!(
+                s,
+                "/// `@binding({})`: `{}`\npub {name}: {ty},",
+                b.binding, b.ty
+            )
+            .unwrap();
+        }
+        writeln!(s, "}}").unwrap();
+        let slots: Vec<String> = g
+            .bindings
+            .iter()
+            .map(|(b, stages, _)| {
+                let stages: Vec<&str> = stages.iter().map(String::as_str).collect();
+                slot_literal(b, &stages)
+            })
+            .collect();
+        writeln!(s, "/// The group's slots, visible to every stage that uses them in any pipeline.\npub const SLOTS: &[crate::bind::Slot] = &[{}];", slots.join(", ")).unwrap();
+        let items: Vec<String> = g
+            .bindings
+            .iter()
+            .map(|(b, ..)| {
+                let name = b
+                    .shared
+                    .as_ref()
+                    .map_or(b.name.as_str(), |r| r.name.as_str());
+                format!("crate::bind::IntoResource::resource(&r.{name})")
+            })
+            .collect();
+        writeln!(s, "/// Marker type for the group.\npub struct Entry;\nimpl crate::bind::SharedGroup for Entry {{\nconst MODULE: &'static str = \"{}\";\nconst GROUP: u32 = GROUP;\nconst SLOTS: &'static [crate::bind::Slot] = SLOTS;\ntype Resources<'a> = Resources<'a>;\nfn resources<'a>(r: &Self::Resources<'a>) -> Vec<crate::bind::Resource<'a>> {{ vec![{}] }}\n}}", g.module, items.join(", ")).unwrap();
+        writeln!(s, "/// The group's bind group: `Group::new(&device, &Resources {{ .. }})`, once.\npub type Group = crate::bind::Group<Entry>;\n}}").unwrap();
+    }
+    writeln!(s, "}}").unwrap();
+}
+
+/// The `Slot` literal of a binding used by `stages`.
+fn slot_literal(b: &super::reflect::Binding, stages: &[&str]) -> String {
+    format!(
+        "crate::bind::Slot {{ group: {}, binding: {}, name: \"{}\", wgsl: \"{}\", visibility: {}, ty: {}, count: {} }}",
+        b.group,
+        b.binding,
+        b.shared
+            .as_ref()
+            .map_or(b.name.as_str(), |r| r.name.as_str()),
+        b.ty,
+        stage_bits(stages),
+        wgpu_binding_type(&b.kind, b.dynamic_offset),
+        b.count.map_or("None".to_string(), |n| format!(
+            "core::num::NonZeroU32::new({n})"
+        ))
+    )
+}
+
+/// The module name of shared group (module, group) under `groups`.
+fn group_module(shared: &[SharedGroupInfo], module: &str, group: u32) -> String {
+    if shared.iter().filter(|o| o.module == module).count() > 1 {
+        format!("{module}_{group}")
+    } else {
+        module.to_string()
+    }
+}
+
 /// One pipeline's worth of entry points: a compute entry, or a vertex entry paired with a fragment entry.
 struct PipelineDesc<'r> {
     /// Module name inside the stage module.
@@ -216,7 +452,14 @@ fn gen_structs(r: &Reflection, s: &mut String) {
     }
 }
 
-fn gen_pipeline(r: &Reflection, p: &PipelineDesc, s: &mut String) {
+fn gen_pipeline(r: &Reflection, p: &PipelineDesc, shared: &[SharedGroupInfo], s: &mut String) {
+    // Groups bound whole from a shared `Group` (only where the folder's analysis has them).
+    let whole: Vec<(u32, String)> = shared_groups_of(r, p)
+        .into_iter()
+        .filter(|(g, m)| shared.iter().any(|o| o.group == *g && o.module == *m))
+        .map(|(g, m)| (g, group_module(shared, m, g)))
+        .collect();
+    let is_whole = |g: u32| whole.iter().any(|(w, _)| *w == g);
     let compute = p.entries[0].stage == "compute";
     writeln!(
         s,
@@ -324,7 +567,14 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, s: &mut String) {
     )
     .unwrap();
     writeln!(s, "pub struct Resources<'a> {{").unwrap();
-    for (b, _) in &used {
+    for (g, module) in &whole {
+        writeln!(
+            s,
+            "/// `@group({g})`, bound once for every pipeline that uses it.\npub {module}: &'a super::super::super::groups::{module}::Group,"
+        )
+        .unwrap();
+    }
+    for (b, _) in used.iter().filter(|(b, _)| !is_whole(b.group)) {
         let space = match &b.kind {
             BindingKind::Uniform { .. } => "<uniform>",
             BindingKind::Storage {
@@ -349,7 +599,7 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, s: &mut String) {
         )
         .unwrap();
     }
-    if used.is_empty() {
+    if used.iter().all(|(b, _)| is_whole(b.group)) && whole.is_empty() {
         writeln!(
             s,
             "#[doc(hidden)]\npub _marker: core::marker::PhantomData<&'a ()>,"
@@ -358,21 +608,29 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, s: &mut String) {
     }
     writeln!(s, "}}").unwrap();
 
-    let slots: Vec<String> = used
+    // Slots ascending; a shared group's are the module's, as every user binds them.
+    let mut slot_list: Vec<(u32, u32, String)> = used
         .iter()
-        .map(|(b, stages)| {
-            format!(
-                "crate::bind::Slot {{ group: {}, binding: {}, name: \"{}\", wgsl: \"{}\", visibility: {}, ty: {}, count: {} }}",
-                b.group,
-                b.binding,
-                b.name,
-                b.ty,
-                stage_bits(stages),
-                wgpu_binding_type(&b.kind, b.dynamic_offset),
-                b.count.map_or("None".to_string(), |n| format!("core::num::NonZeroU32::new({n})"))
-            )
-        })
+        .filter(|(b, _)| !is_whole(b.group))
+        .map(|(b, stages)| (b.group, b.binding, slot_literal(b, stages)))
         .collect();
+    for (g, _) in &whole {
+        let m = shared_groups_of(r, p)
+            .into_iter()
+            .find(|(w, _)| w == g)
+            .map(|(_, m)| m)
+            .unwrap_or_default();
+        let info = shared
+            .iter()
+            .find(|o| o.group == *g && o.module == m)
+            .expect("filtered above");
+        for (b, stages, _) in &info.bindings {
+            let stages: Vec<&str> = stages.iter().map(String::as_str).collect();
+            slot_list.push((b.group, b.binding, slot_literal(b, &stages)));
+        }
+    }
+    slot_list.sort_by_key(|(g, b, _)| (*g, *b));
+    let slots: Vec<String> = slot_list.into_iter().map(|(_, _, l)| l).collect();
     let kind = if compute {
         "crate::bind::EntryKind::Compute { workgroup_size: WORKGROUP_SIZE }".to_string()
     } else {
@@ -429,11 +687,16 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, s: &mut String) {
     };
     writeln!(
         s,
-        "/// What the shader says about this pipeline's interface, read by fieldkit's `bind`.\npub static INFO: crate::bind::EntryInfo = crate::bind::EntryInfo {{ stage: STAGE, path: PATH, entry_point: \"{}\", source: SOURCE, kind: {kind}, slots: &[{}], overrides: &[{}], loops_end: true, needs: crate::bind::Needs {{ {} }}, features: REQUIRED_FEATURES, immediate_size: {immediate_size} }};",
+        "/// What the shader says about this pipeline's interface, read by fieldkit's `bind`.\npub static INFO: crate::bind::EntryInfo = crate::bind::EntryInfo {{ stage: STAGE, path: PATH, entry_point: \"{}\", source: SOURCE, kind: {kind}, slots: &[{}], overrides: &[{}], loops_end: true, needs: crate::bind::Needs {{ {} }}, features: REQUIRED_FEATURES, immediate_size: {immediate_size}, shared_groups: &[{}] }};",
         main_entry.name,
         slots.join(", "),
         overrides.join(", "),
-        needs.join(", ")
+        needs.join(", "),
+        whole
+            .iter()
+            .map(|(g, _)| g.to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
     )
     .unwrap();
     writeln!(
@@ -446,10 +709,18 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, s: &mut String) {
     writeln!(s, "const INFO: &'static crate::bind::EntryInfo = &INFO;").unwrap();
     let items: Vec<String> = used
         .iter()
+        .filter(|(b, _)| !is_whole(b.group))
         .map(|(b, _)| format!("crate::bind::IntoResource::resource(&r.{})", b.name))
         .collect();
-    let rname = if used.is_empty() { "_r" } else { "r" };
+    let rname = if items.is_empty() { "_r" } else { "r" };
     writeln!(s, "fn resources<'a>({rname}: &Self::Resources<'a>) -> Vec<crate::bind::Resource<'a>> {{ vec![{}] }}", items.join(", ")).unwrap();
+    if !whole.is_empty() {
+        let groups: Vec<String> = whole
+            .iter()
+            .map(|(g, m)| format!("({g}, &r.{m}.bind_group)"))
+            .collect();
+        writeln!(s, "fn groups<'a>(r: &Self::Resources<'a>) -> Vec<(u32, &'a wgpu::BindGroup)> {{ vec![{}] }}", groups.join(", ")).unwrap();
+    }
     writeln!(s, "}}").unwrap();
     let ptype = if compute {
         "ComputePipeline"
@@ -559,6 +830,11 @@ fn gen_overrides(r: &Reflection, s: &mut String) {
 }
 
 pub fn stage_module(stage: &Stage) -> String {
+    stage_module_with(stage, &[])
+}
+
+/// [`stage_module`] with the folder's shared groups.
+pub fn stage_module_with(stage: &Stage, shared: &[SharedGroupInfo]) -> String {
     let r = reflect(stage);
     let mut s = String::new();
     writeln!(s, "/// Stage `{}` from `{}`.", r.stage, r.path).unwrap();
@@ -591,7 +867,7 @@ pub fn stage_module(stage: &Stage) -> String {
     }
     gen_structs(&r, &mut s);
     for p in pipelines(&r) {
-        gen_pipeline(&r, &p, &mut s);
+        gen_pipeline(&r, &p, shared, &mut s);
     }
     writeln!(s, "}}").unwrap();
     s
@@ -610,10 +886,12 @@ pub fn generate_for(stages: &[Stage], runtime: &str) -> String {
     let mut rooms: Vec<&str> = stages.iter().map(|s| s.file.room.as_str()).collect();
     rooms.dedup();
     let mut all = Vec::new();
+    let shared = shared_groups(stages);
+    gen_shared_groups(&shared, &mut s);
     for room in rooms {
         writeln!(s, "/// Stages in `shaders/{room}/`.\npub mod {room} {{").unwrap();
         for st in stages.iter().filter(|s| s.file.room == room) {
-            s.push_str(&stage_module(st));
+            s.push_str(&stage_module_with(st, &shared));
             for p in pipelines(&reflect(st)) {
                 all.push(format!("&{room}::{}::{}::INFO", st.file.name, p.module));
             }

@@ -95,6 +95,8 @@ pub struct Stage {
     pub features: Vec<String>,
     /// Bindings (by name) whose layouts take a dynamic offset ([`Builder::dynamic_offset`]).
     pub dynamic_offsets: Vec<String>,
+    /// Declarations imported from modules of the folder's `shared/`.
+    pub shared: Vec<SharedDecl>,
 }
 
 /// Every shader file that is a stage, sorted by path for deterministic output.
@@ -163,6 +165,20 @@ struct DeclOrigin {
 struct Linked {
     text: String,
     origins: Vec<DeclOrigin>,
+    /// Declarations from imported modules of the folder's `shared/`: mangled name, module
+    /// (file stem under `shared/`), original name.
+    shared: Vec<SharedDecl>,
+}
+
+/// A declaration a stage imported from a module of the folder's `shared/`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SharedDecl {
+    /// Its name in the linked WGSL (mangled by WESL).
+    pub linked: String,
+    /// The module's path under `shared/`, with `_` between levels (`view`, `lights_sun`).
+    pub module: String,
+    /// Its name in the module.
+    pub name: String,
 }
 
 /// Link one stage's imports with WESL and print the result declaration by declaration, keeping
@@ -195,6 +211,7 @@ fn link(shaders: &ShaderDir, stage: &StageFile) -> Result<Linked, String> {
                         file: Some((stage.rel_path.clone(), 0..original.len())),
                     }],
                     text: original,
+                    shared: Vec::new(),
                 });
             }
             return Err(format!(
@@ -211,6 +228,7 @@ fn link(shaders: &ShaderDir, stage: &StageFile) -> Result<Linked, String> {
         writeln!(text, "{directive}").unwrap();
     }
     let mut origins = Vec::new();
+    let mut shared = Vec::new();
     for decl in &result.syntax.global_declarations {
         if !text.is_empty() {
             text.push('\n');
@@ -224,9 +242,23 @@ fn link(shaders: &ShaderDir, stage: &StageFile) -> Result<Linked, String> {
         // the root module's own declarations are not mangled.
         use wesl::SourceMap as _;
         use wgsl_parse::SyntaxNode as _;
-        let module = decl
-            .ident()
-            .and_then(|id| sourcemap.and_then(|m| m.get_decl(&id.name()).map(|(p, _)| p.clone())));
+        let found = decl.ident().and_then(|id| {
+            sourcemap.and_then(|m| {
+                m.get_decl(&id.name())
+                    .map(|(p, n)| (id.name().to_string(), p.clone(), n.to_string()))
+            })
+        });
+        if let Some((linked, path, name)) = &found {
+            let text = path.to_string();
+            if let Some(rest) = text.strip_prefix(&format!("package::{SHARED_DIR}::")) {
+                shared.push(SharedDecl {
+                    linked: linked.clone(),
+                    module: rest.replace("::", "_"),
+                    name: name.clone(),
+                });
+            }
+        }
+        let module = found.map(|(_, p, _)| p);
         let file = match module {
             Some(path) => module_file(shaders, &path),
             None => Some(stage.rel_path.clone()),
@@ -236,7 +268,11 @@ fn link(shaders: &ShaderDir, stage: &StageFile) -> Result<Linked, String> {
             file: file.map(|f| (f, span)),
         });
     }
-    Ok(Linked { text, origins })
+    Ok(Linked {
+        text,
+        origins,
+        shared,
+    })
 }
 
 /// Whether a WGSL/WESL file has an `import` declaration (a line that starts with one).
@@ -489,6 +525,7 @@ pub fn build_stage(shaders: &ShaderDir, stage: &StageFile) -> Result<Stage, Stri
         original,
         features,
         dynamic_offsets: Vec::new(),
+        shared: linked.shared,
     })
 }
 
@@ -620,6 +657,7 @@ pub fn stage_from_linked(file: StageFile, linked: &str) -> Result<Stage, String>
         original: linked.to_string(),
         features,
         dynamic_offsets: Vec::new(),
+        shared: Vec::new(),
     })
 }
 

@@ -42,9 +42,21 @@ pub struct Binding {
     pub count: Option<u32>,
     /// Its layout takes a dynamic offset (buffers the build script names).
     pub dynamic_offset: bool,
+    /// Declared in a module of the folder's `shared/` (its module and its name there): a
+    /// group all of whose bindings one such module declares is a shared group.
+    pub shared: Option<SharedRef>,
     /// Source line of the declaration in the linked text (for lints).
     #[serde(skip)]
     pub linked_offset: usize,
+}
+
+/// Where a binding of a shared module comes from.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct SharedRef {
+    /// The module's path under `shared/`, `_` between levels.
+    pub module: String,
+    /// The binding's name in the module.
+    pub name: String,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -713,6 +725,14 @@ pub fn reflect(stage: &Stage) -> Reflection {
                 .dynamic_offsets
                 .iter()
                 .any(|d| Some(d.as_str()) == var.name.as_deref()),
+            shared: stage
+                .shared
+                .iter()
+                .find(|d| Some(d.linked.as_str()) == var.name.as_deref())
+                .map(|d| SharedRef {
+                    module: d.module.clone(),
+                    name: d.name.clone(),
+                }),
             linked_offset,
         });
         handles.push(handle);

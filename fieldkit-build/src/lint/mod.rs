@@ -195,6 +195,7 @@ pub(crate) mod test_util {
             original: src.into(),
             features,
             dynamic_offsets: Vec::new(),
+            shared: Vec::new(),
         }
     }
 }

@@ -1,0 +1,107 @@
+//! A bind group declared once in a shared module (`shaders/shared/frame.wesl`) and used by two
+//! stages: generated as `shaders::groups::frame`, made once, handed to both pipelines.
+
+use fieldkit::gpu::{read_buffer, Context};
+use fieldkit_user_crate::shaders::{
+    groups::frame,
+    scene::{advance, stretch},
+};
+use wgpu::util::DeviceExt as _;
+
+#[test]
+fn one_shared_group_serves_both_pipelines() {
+    let ctx = Context::shared();
+    // Both pipelines bind group 1 whole, from the shared module, with the same slots.
+    assert_eq!(advance::main::INFO.shared_groups, &[1]);
+    assert_eq!(stretch::main::INFO.shared_groups, &[1]);
+    let slot = |info: &fieldkit::bind::EntryInfo| {
+        let s = info.slots.iter().find(|s| s.group == 1).expect("group 1");
+        (s.binding, s.name, s.visibility, s.ty)
+    };
+    assert_eq!(slot(&advance::main::INFO), slot(&stretch::main::INFO));
+    assert_eq!(slot(&advance::main::INFO).1, "frame");
+
+    let mut bytes = encase::UniformBuffer::new(Vec::new());
+    bytes
+        .write(&advance::Frame {
+            time: 1.5,
+            scale: 4.0,
+        })
+        .unwrap();
+    let uniform = ctx
+        .device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("frame"),
+            contents: &bytes.into_inner(),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+    // A buffer without UNIFORM usage: a typed error naming the group's binding.
+    let wrong = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("not a uniform"),
+        size: 8,
+        usage: wgpu::BufferUsages::STORAGE,
+        mapped_at_creation: false,
+    });
+    match frame::Group::new(
+        &ctx.device,
+        &frame::Resources {
+            frame: (&wrong).into(),
+        },
+    ) {
+        Err(fieldkit::Error::Binding(e)) => {
+            assert_eq!((e.stage, e.binding, e.group), ("frame", "frame", 1));
+            assert!(e.problem.contains("UNIFORM"), "{}", e.problem);
+        }
+        other => panic!("expected a binding error, got {:?}", other.err()),
+    }
+    let group = frame::Group::new(
+        &ctx.device,
+        &frame::Resources {
+            frame: (&uniform).into(),
+        },
+    )
+    .expect("the shared group");
+
+    let values: Vec<f32> = (0..100).map(|i| i as f32).collect();
+    let buffer = ctx
+        .device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("values"),
+            contents: bytemuck::cast_slice(&values),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        });
+    let advance = advance::main::Pipeline::new(&ctx.device).expect("advance");
+    let stretch = stretch::main::Pipeline::new(&ctx.device).expect("stretch");
+    let mut encoder = ctx.encoder("shared group");
+    let groups = advance::main::Pipeline::groups_for([100, 1, 1]);
+    advance
+        .record(
+            &ctx.device,
+            &mut encoder,
+            &advance::main::Resources {
+                frame: &group,
+                values: (&buffer).into(),
+            },
+            groups,
+            "advance",
+        )
+        .expect("advance binds");
+    stretch
+        .record(
+            &ctx.device,
+            &mut encoder,
+            &stretch::main::Resources {
+                frame: &group,
+                values: (&buffer).into(),
+            },
+            groups,
+            "stretch",
+        )
+        .expect("stretch binds");
+    ctx.submit_and_wait("shared group", encoder).unwrap();
+    let got: Vec<f32> = bytemuck::cast_slice(&read_buffer(&ctx, &buffer).unwrap()).to_vec();
+    for (i, &v) in got.iter().enumerate() {
+        // (i + 1.5) · 4: exact in f32.
+        assert_eq!(v, (i as f32 + 1.5) * 4.0, "value {i}");
+    }
+}
