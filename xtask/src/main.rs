@@ -3,6 +3,7 @@
 use fieldkit_build as toolchain;
 
 mod bench_bind;
+mod bench_build;
 mod bench_distance;
 mod bench_metaball;
 mod bench_ocean;
@@ -156,6 +157,8 @@ enum Command {
 enum Technique {
     /// The CPU cost of binding a stage's resources (not a technique; `--reps` runs of 1000).
     Bind,
+    /// fieldkit-build's time on a 40-stage folder with one stage touched (a build script's cost).
+    Build,
     Distance,
     Metaball,
     Volume,
@@ -255,6 +258,7 @@ fn main() -> ExitCode {
             };
             match technique {
                 Technique::Bind => bench_bind::run(&args),
+                Technique::Build => bench_build::run(&args),
                 Technique::Distance => bench_distance::run(&args),
                 Technique::Metaball => bench_metaball::run(&args),
                 Technique::Volume => bench_volume::run(&args),
