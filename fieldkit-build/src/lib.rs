@@ -494,6 +494,29 @@ pub fn build_stage(shaders: &ShaderDir, stage: &StageFile) -> Result<Stage, Stri
     if !unsupported.is_empty() {
         return Err(unsupported.join("\n"));
     }
+    // A vertex input the generated vertex struct cannot hold would shift every attribute after
+    // it: an error at the entry point, not a silent gap.
+    let mut unmapped = Vec::new();
+    for ep in module
+        .entry_points
+        .iter()
+        .filter(|e| e.stage == naga::ShaderStage::Vertex)
+    {
+        for (location, name, ty) in reflect::located_args(&module, &ep.function) {
+            if reflect::vertex_format(&module, ty).is_none() {
+                let (line, column) = lint::locate(&original, &format!("fn {}", ep.name));
+                unmapped.push(format!(
+                    "error: {}:{line}:{column}: vertex input `{name}` (@location({location})) of `{}` is `{}`, which has no vertex format fieldkit's generated vertex structs hold (32-bit scalars and vectors: f32, u32, i32)",
+                    stage.rel_path,
+                    ep.name,
+                    reflect::wgsl_type(&module, ty)
+                ));
+            }
+        }
+    }
+    if !unmapped.is_empty() {
+        return Err(unmapped.join("\n"));
+    }
     let (capabilities, features) = needed_features(&module);
     let mut validator =
         naga::valid::Validator::new(naga::valid::ValidationFlags::all(), capabilities);
@@ -931,6 +954,25 @@ mod tests {
                 && errors[1].contains("external textures"),
             "{}",
             errors[1]
+        );
+        std::fs::remove_dir_all(&root).ok();
+    }
+
+    /// A vertex input the generated vertex struct cannot hold (f16) is a build error naming it,
+    /// not an attribute silently left out of the struct and its stride.
+    #[test]
+    fn unmapped_vertex_inputs_are_errors() {
+        let root = tree(&[(
+            "half",
+            "// Half-float vertex input.\nenable f16;\n@vertex\nfn vs(@location(0) p: vec3<f32>, @location(1) h: vec2<f16>) -> @builtin(position) vec4<f32> {\n    return vec4<f32>(p + vec3<f32>(vec2<f32>(h), 0.0), 1.0);\n}\n",
+        )]);
+        let errors = build_all(&root).err().expect("an f16 vertex input fails");
+        assert!(
+            errors.len() == 1
+                && errors[0].contains("shaders/room/half.wgsl:4:")
+                && errors[0].contains("vertex input `h` (@location(1))")
+                && errors[0].contains("vec2<f16>"),
+            "{errors:#?}"
         );
         std::fs::remove_dir_all(&root).ok();
     }

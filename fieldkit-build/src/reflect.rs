@@ -505,7 +505,7 @@ pub fn storage_format_wgsl(f: naga::StorageFormat) -> String {
     format!("{f:?}").to_lowercase()
 }
 
-fn vertex_format(
+pub(crate) fn vertex_format(
     module: &naga::Module,
     ty: naga::Handle<naga::Type>,
 ) -> Option<(String, String, u32)> {
@@ -546,7 +546,7 @@ fn scalar_class(module: &naga::Module, ty: naga::Handle<naga::Type>) -> String {
 }
 
 /// Collect `(location, name, type)` of a function's inputs, flattening struct arguments.
-fn located_args(
+pub(crate) fn located_args(
     module: &naga::Module,
     func: &naga::Function,
 ) -> Vec<(u32, String, naga::Handle<naga::Type>)> {

@@ -75,7 +75,7 @@ fn the_users_stage_runs_with_typed_bindings_and_overrides() {
         assert_eq!(v, want, "value {i}");
     }
     // The generated list names the user's files, not fieldkit's.
-    assert_eq!(ALL.len(), 6);
+    assert_eq!(ALL.len(), 12);
     assert_eq!(scale::PATH, "shaders/math/scale.wgsl");
 }
 
