@@ -4,6 +4,11 @@
 //! its original file, line and column.
 
 fn main() {
+    // Without the techniques there are no stages of fieldkit's own to build: the crate is the
+    // runtime of generated bindings alone.
+    if std::env::var_os("CARGO_FEATURE_TECHNIQUES").is_none() {
+        return;
+    }
     fieldkit_build::Builder::new("shaders")
         .runtime("crate")
         .build_or_exit();

@@ -966,11 +966,15 @@ fn module(device: &wgpu::Device, info: &EntryInfo, relinked: Option<&str>) -> wg
 
 /// Compute pipelines of one entry point `E` specialised by override values, each made on first
 /// use and kept (for overrides that take many values, such as a workgroup array's length).
+// Used by the techniques' stages.
+#[cfg_attr(not(feature = "techniques"), allow(dead_code))]
 pub(crate) struct Variants<E> {
     made: std::sync::Mutex<Vec<(VariantKey, std::sync::Arc<ComputePipeline<E>>)>>,
 }
 
 /// Override names and values (as bits), and the zero-fill choice.
+// Used by the techniques' stages.
+#[cfg_attr(not(feature = "techniques"), allow(dead_code))]
 type VariantKey = Vec<(String, u64)>;
 
 impl<E> Default for Variants<E> {
@@ -981,6 +985,8 @@ impl<E> Default for Variants<E> {
     }
 }
 
+// Used by the techniques' stages.
+#[cfg_attr(not(feature = "techniques"), allow(dead_code))]
 impl<E: Entry> Variants<E> {
     /// The pipeline for `overrides`, made now if it is the first use.
     pub(crate) fn get(
@@ -1023,6 +1029,8 @@ impl<E: Entry> ComputePipeline<E> {
     }
 
     /// The pipeline specialised by `overrides` held in `slot`, made there on first use.
+    // Used by the techniques' stages.
+    #[cfg_attr(not(feature = "techniques"), allow(dead_code))]
     pub(crate) fn cached<'a>(
         slot: &'a std::sync::OnceLock<Self>,
         device: &wgpu::Device,

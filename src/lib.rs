@@ -8,6 +8,7 @@
 #![warn(missing_docs)]
 
 pub mod bind;
+#[cfg(feature = "techniques")]
 pub mod distance;
 pub mod error;
 pub mod gpu;
@@ -15,16 +16,22 @@ pub mod gpu;
 pub mod harness;
 #[cfg(feature = "hot-reload")]
 mod hot;
+#[cfg(feature = "techniques")]
 pub mod metaball;
+#[cfg(feature = "techniques")]
 pub mod ocean;
+#[cfg(feature = "techniques")]
 pub mod view;
+#[cfg(feature = "techniques")]
 pub mod volume;
+#[cfg(feature = "techniques")]
 pub mod voxelize;
 
 pub use error::{BindingError, Error};
 pub use wgpu;
 
 /// Generated bindings, one module per stage (`shaders::<room>::<stage>`). See [`bind`].
+#[cfg(feature = "techniques")]
 #[allow(clippy::all, missing_docs)]
 pub mod shaders {
     include!(concat!(env!("OUT_DIR"), "/shaders.rs"));

@@ -30,6 +30,17 @@ fn distance(
 fn main() {}
 "#;
 
+/// A crate that builds its own shaders and needs only the runtime of generated bindings.
+const RUNTIME_MAIN: &str = r#"
+//! Uses the runtime of generated bindings alone (compiled, not run).
+#[allow(dead_code)]
+fn needs(info: &fieldkit::bind::EntryInfo) -> fieldkit::wgpu::Features {
+    info.required_features()
+}
+
+fn main() {}
+"#;
+
 fn cargo() -> Command {
     Command::new(env!("CARGO"))
 }
@@ -111,4 +122,52 @@ fn a_user_crate_builds_on_both_editions_within_the_dependency_budget() {
             crates.len()
         );
     }
+}
+
+/// With default features off, fieldkit is the runtime of generated bindings alone (`bind`,
+/// `error`, `gpu`): no technique is compiled and no stage of fieldkit's own is built.
+#[test]
+fn the_runtime_alone_builds_without_the_techniques() {
+    // The editions' target directory: the dependencies they share are built once.
+    let root = Path::new(env!("CARGO_TARGET_TMPDIR")).join("consumer");
+    let dir = root.join("runtime");
+    std::fs::create_dir_all(dir.join("src")).unwrap();
+    let fieldkit = env!("CARGO_MANIFEST_DIR").replace('\\', "/");
+    std::fs::write(
+        dir.join("Cargo.toml"),
+        format!(
+            "[package]\nname = \"runtime\"\nversion = \"0.0.0\"\nedition = \"2024\"\npublish = false\n\n\
+             [dependencies]\nfieldkit = {{ path = \"{fieldkit}\", default-features = false, features = [\"vulkan\"] }}\n\n\
+             [workspace]\n"
+        ),
+    )
+    .unwrap();
+    std::fs::write(dir.join("src/main.rs"), RUNTIME_MAIN).unwrap();
+    std::fs::remove_file(dir.join("Cargo.lock")).ok();
+    let mut check = cargo();
+    check
+        .current_dir(&dir)
+        .env("CARGO_TARGET_DIR", root.join("target"))
+        .args(["check", "--quiet"]);
+    run(
+        check,
+        "cargo check of a crate using fieldkit's runtime alone",
+    );
+    // The technique modules are gone: using one fails to compile.
+    std::fs::write(
+        dir.join("src/main.rs"),
+        format!("{RUNTIME_MAIN}\n#[allow(dead_code)]\nfn technique() {{ let _ = fieldkit::distance::Distance2d::new; }}\n"),
+    )
+    .unwrap();
+    let mut check = cargo();
+    check
+        .current_dir(&dir)
+        .env("CARGO_TARGET_DIR", root.join("target"))
+        .args(["check", "--quiet"]);
+    let output = check.output().unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        !output.status.success() && stderr.contains("distance"),
+        "fieldkit::distance compiled without the techniques feature:\n{stderr}"
+    );
 }
