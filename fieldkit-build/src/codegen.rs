@@ -673,6 +673,32 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, shared: &[SharedGroupInfo], s:
         features.join(", ")
     )
     .unwrap();
+    // Limits `Needs` does not hold: immediates and binding array elements (samplers apart).
+    let array_elements = |samplers: bool| -> u32 {
+        used.iter()
+            .filter(|(b, _)| matches!(b.kind, BindingKind::Sampler { .. }) == samplers)
+            .filter_map(|(b, _)| b.count)
+            .sum()
+    };
+    let mut extra_limits = String::new();
+    for (field, n) in [
+        (
+            "max_binding_array_elements_per_shader_stage",
+            array_elements(false),
+        ),
+        (
+            "max_binding_array_sampler_elements_per_shader_stage",
+            array_elements(true),
+        ),
+    ] {
+        if n > 0 {
+            write!(
+                extra_limits,
+                "\n    limits.{field} = limits.{field}.max({n});"
+            )
+            .unwrap();
+        }
+    }
     let immediate_size = match &r.immediate {
         Some(im) if p.entries.iter().any(|e| e.uses_immediate) => {
             writeln!(
@@ -685,6 +711,13 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, shared: &[SharedGroupInfo], s:
         }
         _ => 0,
     };
+    if immediate_size > 0 {
+        write!(
+            extra_limits,
+            "\n    limits.max_immediate_size = limits.max_immediate_size.max({immediate_size});"
+        )
+        .unwrap();
+    }
     writeln!(
         s,
         "/// What the shader says about this pipeline's interface, read by fieldkit's `bind`.\npub static INFO: crate::bind::EntryInfo = crate::bind::EntryInfo {{ stage: STAGE, path: PATH, entry_point: \"{}\", source: SOURCE, kind: {kind}, slots: &[{}], overrides: &[{}], loops_end: true, needs: crate::bind::Needs {{ {} }}, features: REQUIRED_FEATURES, immediate_size: {immediate_size}, shared_groups: &[{}] }};",
@@ -697,6 +730,12 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, shared: &[SharedGroupInfo], s:
             .map(|(g, _)| g.to_string())
             .collect::<Vec<_>>()
             .join(", ")
+    )
+    .unwrap();
+    writeln!(
+        s,
+        "/// The device limits the pipeline needs: WebGPU's defaults, raised where the shader needs\n/// more (`INFO.needs`, immediates, binding arrays). Ask for them (and `REQUIRED_FEATURES`) in\n/// the `wgpu::DeviceDescriptor`.\npub fn required_limits() -> wgpu::Limits {{\n    #[allow(unused_mut)]\n    let mut limits = INFO.needs.raise(wgpu::Limits::default());{}\n    limits\n}}",
+        extra_limits
     )
     .unwrap();
     writeln!(

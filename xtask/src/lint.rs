@@ -5,8 +5,30 @@ use std::process::ExitCode;
 use crate::toolchain::lint::{self, LintConfig};
 use crate::toolchain::{ShaderDir, Stage, reflect::reflect};
 
-/// Translate a stage to each backend language; `Err` names the language and why.
+/// Translate a stage to each backend language; `Err` names the language and why. A writer
+/// that panics (naga 30's HLSL and GLSL writers reach `unreachable!` on binding arrays of
+/// buffers; HLSL wants a bind target for immediates) is a finding for that language, not the
+/// end of the run.
 pub fn translate_all(stage: &Stage) -> Vec<(&'static str, Result<usize, String>)> {
+    let hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let out = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| translate_each(stage)));
+    std::panic::set_hook(hook);
+    out.unwrap_or_else(|p| {
+        let why = p
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| p.downcast_ref::<String>().cloned())
+            .unwrap_or_default();
+        vec![(
+            "a backend",
+            Err(format!("naga panicked translating it: {why}")),
+        )]
+    })
+}
+
+/// [`translate_all`]'s work, each language's writer guarded on its own.
+fn translate_each(stage: &Stage) -> Vec<(&'static str, Result<usize, String>)> {
     use naga::back::{glsl, hlsl, msl, spv};
     let mut out = Vec::new();
     // Backends take a module with its overrides already resolved, as wgpu does at pipeline
@@ -42,7 +64,7 @@ pub fn translate_all(stage: &Stage) -> Vec<(&'static str, Result<usize, String>)
         .map(|(s, _)| s.len())
         .map_err(|e| e.to_string()),
     ));
-    let hlsl_result = (|| {
+    let hlsl_result = guarded(|| {
         let mut s = String::new();
         let opts = hlsl::Options::default();
         let popts = hlsl::PipelineOptions::default();
@@ -50,10 +72,10 @@ pub fn translate_all(stage: &Stage) -> Vec<(&'static str, Result<usize, String>)
             .write(module, info, None)
             .map_err(|e| e.to_string())?;
         Ok(s.len())
-    })();
+    });
     out.push(("HLSL", hlsl_result));
     // GLSL is written one entry point at a time.
-    let glsl_result = (|| {
+    let glsl_result = guarded(|| {
         let mut total = 0;
         for ep in &module.entry_points {
             let mut s = String::new();
@@ -79,9 +101,21 @@ pub fn translate_all(stage: &Stage) -> Vec<(&'static str, Result<usize, String>)
             total += s.len();
         }
         Ok(total)
-    })();
+    });
     out.push(("GLSL", glsl_result));
     out
+}
+
+/// Run one writer; a panic in it is an `Err` saying so.
+fn guarded(f: impl FnOnce() -> Result<usize, String>) -> Result<usize, String> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)).unwrap_or_else(|p| {
+        let why = p
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| p.downcast_ref::<String>().cloned())
+            .unwrap_or_default();
+        Err(format!("naga's writer panicked: {why}"))
+    })
 }
 
 /// What `lint` found over a folder.

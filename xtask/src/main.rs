@@ -395,6 +395,32 @@ fn gallery(out: &Path) -> ExitCode {
 mod tests {
     use super::*;
 
+    /// naga 30's HLSL and GLSL writers panic on binding arrays of buffers: `lint` reports
+    /// that as a portability finding for the language and goes on.
+    #[test]
+    fn a_panicking_backend_writer_is_a_finding() {
+        let root = crate_root();
+        let stages = toolchain::build_dir(&toolchain::ShaderDir::new(
+            &root,
+            "tests/user-crate/shaders",
+        ))
+        .expect("the user crate's stages validate");
+        let report = lint::findings(&stages, &Default::default());
+        assert!(
+            report.lines.iter().any(|l| l.contains("corpus/arrays.wgsl")
+                && l.contains("cannot translate to HLSL")
+                && l.contains("panicked")),
+            "{:#?}",
+            report.lines
+        );
+        let translated = report
+            .translated
+            .iter()
+            .find(|(s, _)| s == "corpus::arrays")
+            .map(|(_, l)| l.clone());
+        assert_eq!(translated, Some(vec!["SPIR-V", "MSL"]));
+    }
+
     #[test]
     fn reflect_tables_snapshot() {
         let stages = stages(&crate_root()).expect("stages validate");

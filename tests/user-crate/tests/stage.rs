@@ -204,9 +204,10 @@ fn immediates_run_with_the_generated_struct() {
         }
         other => panic!("expected Error::Unsupported, got {:?}", other.err()),
     }
-    let ctx = device_with(&shared, info.required_features(), |l| wgpu::Limits {
-        max_immediate_size: push::main::IMMEDIATE_SIZE,
-        ..l
+    // The generated limits: WebGPU's defaults with room for the immediates.
+    assert_eq!(push::main::required_limits().max_immediate_size, 12);
+    let ctx = device_with(&shared, info.required_features(), |_| {
+        push::main::required_limits()
     });
     let pipeline = push::main::Pipeline::new(&ctx.device).expect("the user's pipeline");
     let values: Vec<f32> = (0..100).map(|i| i as f32).collect();
@@ -316,7 +317,11 @@ fn binding_arrays_say_what_they_need_and_run_where_the_device_has_it() {
         );
         return;
     }
-    let ctx = device_with(&shared, needed, |l| l);
+    assert_eq!(
+        layers::main::required_limits().max_binding_array_elements_per_shader_stage,
+        3
+    );
+    let ctx = device_with(&shared, needed, |_| layers::main::required_limits());
     let pipeline = layers::main::Pipeline::new(&ctx.device).expect("the user's pipeline");
     let [w, h] = [11u32, 5];
     let texel = |k: u32, x: u32, y: u32| (k * 100 + y * w + x) as f32 * 0.25;
