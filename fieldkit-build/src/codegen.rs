@@ -197,16 +197,8 @@ pub fn shared_groups(stages: &[Stage]) -> Vec<SharedGroupInfo> {
                     }
                 };
                 for b in r.bindings.iter().filter(|b| b.group == group) {
-                    let stages: Vec<String> = p
-                        .entries
-                        .iter()
-                        .filter(|e| {
-                            e.uses
-                                .iter()
-                                .any(|u| u.group == b.group && u.binding == b.binding)
-                        })
-                        .map(|e| e.stage.clone())
-                        .collect();
+                    let stages: Vec<String> =
+                        p.stages_using(b).into_iter().map(String::from).collect();
                     let path = format!("super::super::{}::{}::", st.file.room, st.file.name);
                     let rust = qualify(&r, rust_of(&b.kind), &path);
                     let shared = &mut out[i];
@@ -380,6 +372,21 @@ struct PipelineDesc<'r> {
     entries: Vec<&'r super::reflect::EntryPoint>,
 }
 
+impl PipelineDesc<'_> {
+    /// The stages ("vertex", "fragment", "compute") of the pipeline that use binding `b`.
+    fn stages_using(&self, b: &super::reflect::Binding) -> Vec<&str> {
+        self.entries
+            .iter()
+            .filter(|e| {
+                e.uses
+                    .iter()
+                    .any(|u| u.group == b.group && u.binding == b.binding)
+            })
+            .map(|e| e.stage.as_str())
+            .collect()
+    }
+}
+
 fn pipelines(r: &Reflection) -> Vec<PipelineDesc<'_>> {
     let mut out = Vec::new();
     let vertex: Vec<_> = r
@@ -482,16 +489,7 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, shared: &[SharedGroupInfo], s:
     // Bindings used by any of the entries, with visibility from real use.
     let mut used: Vec<(&super::reflect::Binding, Vec<&str>)> = Vec::new();
     for b in &r.bindings {
-        let stages: Vec<&str> = p
-            .entries
-            .iter()
-            .filter(|e| {
-                e.uses
-                    .iter()
-                    .any(|u| u.group == b.group && u.binding == b.binding)
-            })
-            .map(|e| e.stage.as_str())
-            .collect();
+        let stages = p.stages_using(b);
         if !stages.is_empty() {
             used.push((b, stages));
         }

@@ -1,12 +1,13 @@
 //! A bind group declared once in a shared module (`shaders/shared/frame.wesl`) and used by two
 //! stages: generated as `shaders::groups::frame`, made once, handed to both pipelines.
 
-use fieldkit::gpu::{read_buffer, Context};
+mod common;
+
+use fieldkit::gpu::Context;
 use fieldkit_user_crate::shaders::{
     groups::frame,
     scene::{advance, stretch},
 };
-use wgpu::util::DeviceExt as _;
 
 #[test]
 fn one_shared_group_serves_both_pipelines() {
@@ -21,20 +22,14 @@ fn one_shared_group_serves_both_pipelines() {
     assert_eq!(slot(&advance::main::INFO), slot(&stretch::main::INFO));
     assert_eq!(slot(&advance::main::INFO).1, "frame");
 
-    let mut bytes = encase::UniformBuffer::new(Vec::new());
-    bytes
-        .write(&advance::Frame {
+    let uniform = common::uniform(
+        &ctx,
+        "frame",
+        &advance::Frame {
             time: 1.5,
             scale: 4.0,
-        })
-        .unwrap();
-    let uniform = ctx
-        .device
-        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("frame"),
-            contents: &bytes.into_inner(),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
+        },
+    );
     // A buffer without UNIFORM usage: a typed error naming the group's binding.
     let wrong = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("not a uniform"),
@@ -63,13 +58,7 @@ fn one_shared_group_serves_both_pipelines() {
     .expect("the shared group");
 
     let values: Vec<f32> = (0..100).map(|i| i as f32).collect();
-    let buffer = ctx
-        .device
-        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("values"),
-            contents: bytemuck::cast_slice(&values),
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        });
+    let buffer = common::storage(&ctx, "values", &values);
     let advance = advance::main::Pipeline::new(&ctx.device).expect("advance");
     let stretch = stretch::main::Pipeline::new(&ctx.device).expect("stretch");
     let mut encoder = ctx.encoder("shared group");
@@ -99,7 +88,7 @@ fn one_shared_group_serves_both_pipelines() {
         )
         .expect("stretch binds");
     ctx.submit_and_wait("shared group", encoder).unwrap();
-    let got: Vec<f32> = bytemuck::cast_slice(&read_buffer(&ctx, &buffer).unwrap()).to_vec();
+    let got = common::read_f32(&ctx, &buffer);
     for (i, &v) in got.iter().enumerate() {
         // (i + 1.5) · 4: exact in f32.
         assert_eq!(v, (i as f32 + 1.5) * 4.0, "value {i}");

@@ -2,11 +2,12 @@
 //! relinked from the file and runs; a file that no longer validates, or whose interface no
 //! longer matches the compiled-in bindings, is refused with a typed error saying why.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 
-use fieldkit::gpu::{read_buffer, Context};
+use fieldkit::gpu::Context;
 use fieldkit_user_crate::shaders::math::scale;
-use wgpu::util::DeviceExt as _;
 
 /// A copy of the crate's `shaders/` in a fresh folder, with `scale.wgsl` rewritten by `edit`.
 fn shaders_with(tag: &str, edit: impl Fn(&str) -> String) -> PathBuf {
@@ -30,28 +31,16 @@ fn shaders_with(tag: &str, edit: impl Fn(&str) -> String) -> PathBuf {
 }
 
 fn run(ctx: &Context, pipeline: &scale::main::Pipeline) -> Vec<f32> {
-    let mut bytes = encase::UniformBuffer::new(Vec::new());
-    bytes
-        .write(&scale::Params {
+    let params = common::uniform(
+        ctx,
+        "params",
+        &scale::Params {
             factor: 3.0,
             count: 16,
-        })
-        .unwrap();
-    let params = ctx
-        .device
-        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("params"),
-            contents: &bytes.into_inner(),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
+        },
+    );
     let values: Vec<f32> = (0..16).map(|i| i as f32).collect();
-    let buffer = ctx
-        .device
-        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("values"),
-            contents: bytemuck::cast_slice(&values),
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        });
+    let buffer = common::storage(ctx, "values", &values);
     let mut encoder = ctx.encoder("reload");
     pipeline
         .record(
@@ -66,7 +55,7 @@ fn run(ctx: &Context, pipeline: &scale::main::Pipeline) -> Vec<f32> {
         )
         .expect("binds");
     ctx.submit_and_wait("reload", encoder).unwrap();
-    bytemuck::cast_slice(&read_buffer(ctx, &buffer).unwrap()).to_vec()
+    common::read_f32(ctx, &buffer)
 }
 
 #[test]

@@ -1,28 +1,14 @@
 //! The user's own stage, built by fieldkit-build and bound through fieldkit's runtime, run on
 //! the default adapter (lavapipe in CI) and checked against what it computes on the CPU.
 
+mod common;
+
 use fieldkit::gpu::{read_buffer, Context};
 use fieldkit_user_crate::shaders::{
     math::{layers, push, scale, seeds},
     ALL,
 };
 use wgpu::util::DeviceExt as _;
-
-/// A uniform buffer holding `value`, laid out by encase as the generated struct says.
-fn uniform<T: encase::ShaderType + encase::internal::WriteInto>(
-    ctx: &Context,
-    label: &str,
-    value: &T,
-) -> wgpu::Buffer {
-    let mut bytes = encase::UniformBuffer::new(Vec::new());
-    bytes.write(value).unwrap();
-    ctx.device
-        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some(label),
-            contents: &bytes.into_inner(),
-            usage: wgpu::BufferUsages::UNIFORM,
-        })
-}
 
 #[test]
 fn the_users_stage_runs_with_typed_bindings_and_overrides() {
@@ -41,15 +27,9 @@ fn the_users_stage_runs_with_typed_bindings_and_overrides() {
         factor: 3.0,
         count: 100,
     };
-    let params_buffer = uniform(&ctx, "params", &params);
+    let params_buffer = common::uniform(&ctx, "params", &params);
     let values: Vec<f32> = (0..128).map(|i| i as f32).collect();
-    let values_buffer = ctx
-        .device
-        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("values"),
-            contents: bytemuck::cast_slice(&values),
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        });
+    let values_buffer = common::storage(&ctx, "values", &values);
     let mut encoder = ctx.encoder("scale");
     pipeline
         .record(
@@ -64,7 +44,7 @@ fn the_users_stage_runs_with_typed_bindings_and_overrides() {
         )
         .expect("binds");
     ctx.submit_and_wait("scale", encoder).unwrap();
-    let got: Vec<f32> = bytemuck::cast_slice(&read_buffer(&ctx, &values_buffer).unwrap()).to_vec();
+    let got = common::read_f32(&ctx, &values_buffer);
     for (i, &v) in got.iter().enumerate() {
         // Exact in f32: small integers times 3, plus 0.5.
         let want = if i < 100 {
@@ -129,7 +109,7 @@ fn the_users_stage_packs_seeds_with_fieldkits_helpers() {
         size: size.into(),
         every: 3,
     };
-    let grid_buffer = uniform(&ctx, "grid", &grid);
+    let grid_buffer = common::uniform(&ctx, "grid", &grid);
     let storage = |label: &str, bytes: u64| {
         ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(label),
@@ -211,13 +191,7 @@ fn immediates_run_with_the_generated_struct() {
     });
     let pipeline = push::main::Pipeline::new(&ctx.device).expect("the user's pipeline");
     let values: Vec<f32> = (0..100).map(|i| i as f32).collect();
-    let buffer = ctx
-        .device
-        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("values"),
-            contents: bytemuck::cast_slice(&values),
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        });
+    let buffer = common::storage(&ctx, "values", &values);
     let block = push::Push {
         scale: 0.25,
         offset: -3.0,
@@ -245,7 +219,7 @@ fn immediates_run_with_the_generated_struct() {
         pass.dispatch_workgroups(g[0], g[1], g[2]);
     }
     ctx.submit_and_wait("push", encoder).unwrap();
-    let got: Vec<f32> = bytemuck::cast_slice(&read_buffer(&ctx, &buffer).unwrap()).to_vec();
+    let got = common::read_f32(&ctx, &buffer);
     for (i, &v) in got.iter().enumerate() {
         // Quarters of small integers less 3: exact in f32.
         let want = if i < 90 {
@@ -393,7 +367,7 @@ fn binding_arrays_say_what_they_need_and_run_where_the_device_has_it() {
         )
         .expect("binds");
     ctx.submit_and_wait("layers", encoder).unwrap();
-    let got: Vec<f32> = bytemuck::cast_slice(&read_buffer(&ctx, &sums).unwrap()).to_vec();
+    let got = common::read_f32(&ctx, &sums);
     for y in 0..h {
         for x in 0..w {
             // Quarters of small integers weighted by 1, 2 and 3: exact in f32.
@@ -444,13 +418,7 @@ fn a_dynamic_offset_picks_the_uniform_block() {
             usage: wgpu::BufferUsages::UNIFORM,
         });
     let values: Vec<f32> = (0..64).map(|i| i as f32).collect();
-    let buffer = ctx
-        .device
-        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("values"),
-            contents: bytemuck::cast_slice(&values),
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        });
+    let buffer = common::storage(&ctx, "values", &values);
     let bound = pipeline
         .bind(
             &ctx.device,
@@ -481,7 +449,7 @@ fn a_dynamic_offset_picks_the_uniform_block() {
         pass.dispatch_workgroups(1, 1, 1);
     }
     ctx.submit_and_wait("dynamic", encoder).unwrap();
-    let got: Vec<f32> = bytemuck::cast_slice(&read_buffer(&ctx, &buffer).unwrap()).to_vec();
+    let got = common::read_f32(&ctx, &buffer);
     for (i, &v) in got.iter().enumerate() {
         // The second block: the first 40 values doubled (exact), the rest untouched.
         let want = if i < 40 { i as f32 * 2.0 } else { i as f32 };
