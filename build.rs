@@ -11,5 +11,7 @@ fn main() {
     }
     fieldkit_build::Builder::new("shaders")
         .runtime("crate")
+        // fieldkit's own stages keep every lint (or say why a file does not).
+        .deny_lints()
         .build_or_exit();
 }

@@ -716,6 +716,7 @@ pub struct Builder {
     runtime: String,
     out_file: String,
     dynamic_offsets: Vec<String>,
+    deny_lints: bool,
 }
 
 impl Builder {
@@ -726,7 +727,17 @@ impl Builder {
             runtime: "::fieldkit".into(),
             out_file: "shaders.rs".into(),
             dynamic_offsets: Vec::new(),
+            deny_lints: false,
         }
+    }
+
+    /// Make the lints' findings (header comment, ascending bindings, unused bindings, workgroup
+    /// and WebGPU limits; a file opts out of one with `// lint: allow(name): why`) build errors.
+    /// Without it they are cargo warnings. Portability to every backend language is checked by
+    /// `cargo xtask lint --shaders DIR`, which carries naga's writers.
+    pub fn deny_lints(mut self) -> Self {
+        self.deny_lints = true;
+        self
     }
 
     /// Give one uniform or storage buffer binding, `room::stage::binding` (e.g.
@@ -763,11 +774,26 @@ impl Builder {
                 .join(&self.out_file);
         // A directory here makes cargo rerun when any file under it changes.
         println!("cargo:rerun-if-changed={}", self.dir);
-        self.build_to(&root, &out)
+        let (path, findings) = self.build_linted(&root, &out)?;
+        for f in &findings {
+            println!("cargo:warning={f}");
+        }
+        Ok(path)
     }
 
-    /// [`Self::build`] from `crate_root` into `out`, without cargo's environment.
+    /// [`Self::build`] from `crate_root` into `out`, without cargo's environment (lint
+    /// findings are errors only with [`Self::deny_lints`]).
     pub fn build_to(&self, crate_root: &Path, out: &Path) -> Result<PathBuf, Vec<String>> {
+        self.build_linted(crate_root, out).map(|(p, _)| p)
+    }
+
+    /// [`Self::build_to`], and the lints' findings (`file:line:col: [lint] message`), which
+    /// are the error where [`Self::deny_lints`] is set.
+    fn build_linted(
+        &self,
+        crate_root: &Path,
+        out: &Path,
+    ) -> Result<(PathBuf, Vec<String>), Vec<String>> {
         let mut stages = build_dir(&ShaderDir::new(crate_root, &self.dir))?;
         let mut errors = Vec::new();
         for name in &self.dynamic_offsets {
@@ -805,12 +831,20 @@ impl Builder {
         if !errors.is_empty() {
             return Err(errors);
         }
+        let findings: Vec<String> = stages
+            .iter()
+            .flat_map(|st| lint::run(st, &reflect::reflect(st)))
+            .map(|v| v.to_string())
+            .collect();
+        if self.deny_lints && !findings.is_empty() {
+            return Err(findings);
+        }
         let code = codegen::generate_for(&stages, &self.runtime);
         // Only touch the file when it changes, so dependents are not rebuilt for nothing.
         if std::fs::read_to_string(out).ok().as_deref() != Some(code.as_str()) {
             std::fs::write(out, code).map_err(|e| vec![format!("{}: {e}", out.display())])?;
         }
-        Ok(out.to_path_buf())
+        Ok((out.to_path_buf(), findings))
     }
 
     /// [`Self::build`], and on failure every error as a cargo warning and on stderr, then exit
@@ -879,6 +913,25 @@ mod tests {
         std::thread::sleep(std::time::Duration::from_millis(20));
         Builder::new("shaders").build_to(&root, &out).unwrap();
         assert_eq!(std::fs::metadata(&out).unwrap().modified().unwrap(), before);
+        // A stage without its header comment: a lint finding, an error only when denied.
+        std::fs::write(
+            root.join("shaders/room/bare.wgsl"),
+            "@group(0) @binding(0) var<storage, read_write> w: array<u32>;\n@compute @workgroup_size(1)\nfn main() {\n    w[0] = 1u;\n}\n",
+        )
+        .unwrap();
+        Builder::new("shaders")
+            .build_to(&root, &out)
+            .expect("lints warn by default");
+        let errors = Builder::new("shaders")
+            .deny_lints()
+            .build_to(&root, &out)
+            .unwrap_err();
+        assert!(
+            errors.len() == 1
+                && errors[0].starts_with("shaders/room/bare.wgsl:1:1: [header-comment]"),
+            "{errors:#?}"
+        );
+        std::fs::remove_file(root.join("shaders/room/bare.wgsl")).unwrap();
         // A dynamic offset on a named buffer binding; names that match none are errors.
         Builder::new("shaders")
             .dynamic_offset("room::double::v")
