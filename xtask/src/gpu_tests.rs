@@ -9,7 +9,9 @@
 //! The binaries find `tests/` (snapshots, reference images) through `CARGO_MANIFEST_DIR`, the
 //! path they were built in; the runner links that path to the checkout when it differs. Each
 //! binary runs with `CI=true INSTA_UPDATE=no FIELDKIT_ADAPTER=<adapter>`, so a snapshot that
-//! differs fails instead of being rewritten. Tests that need what that machine lacks are left
+//! differs fails instead of being rewritten, and with `INSTA_WORKSPACE_ROOT` set to the
+//! checkout (there is no cargo there to find it, and the user crate's snapshots are named
+//! from the workspace root). Tests that need what that machine lacks are left
 //! out by name: cargo (the consumer and binding-drift tests build crates) and Xvfb (the window
 //! tests). The user crate's tests (`tests/user-crate`) run too.
 
@@ -112,7 +114,7 @@ for name in {names}; do
   skip=""
   case "$name" in
 {skip}  esac
-  if (cd "$built" && CI=true INSTA_UPDATE=no FIELDKIT_ADAPTER="$adapter" "$OLDPWD/.gpu/bin/tests/$name" $skip) > "$logs/$name.log" 2>&1; then
+  if (cd "$built" && CI=true INSTA_UPDATE=no INSTA_WORKSPACE_ROOT="$built" FIELDKIT_ADAPTER="$adapter" "$OLDPWD/.gpu/bin/tests/$name" $skip) > "$logs/$name.log" 2>&1; then
     pass=$((pass+1)); echo "ok   $name: $(grep -h '^test result' "$logs/$name.log" | tail -1)"
   else
     fail=$((fail+1)); echo "FAIL $name: $(grep -h '^test result' "$logs/$name.log" | tail -1)"

@@ -157,7 +157,7 @@ enum Command {
 enum Technique {
     /// The CPU cost of binding a stage's resources (not a technique; `--reps` runs of 1000).
     Bind,
-    /// fieldkit-build's time on a 40-stage folder with one stage touched (a build script's cost).
+    /// fieldkit-build's time on a 45-stage folder with one stage touched (a build script's cost).
     Build,
     Distance,
     Metaball,
