@@ -187,9 +187,15 @@ fn link(shaders: &ShaderDir, stage: &StageFile) -> Result<Linked, String> {
     let root: wesl::ModulePath = format!("package::{}::{}", stage.room, stage.name)
         .parse()
         .map_err(|e| format!("{}: bad module path: {e:?}", stage.rel_path))?;
-    let mut compiler = wesl::Wesl::new(shaders.root());
+    let mut resolver = wesl::StandardResolver::new(shaders.root());
     // fieldkit's helpers, for `import fieldkit::…` (the `fieldkit-wesl` crate).
-    compiler.add_package(&fieldkit_wesl::PACKAGE);
+    resolver.add_package(&fieldkit_wesl::PACKAGE);
+    let original_text = std::fs::read_to_string(&stage.abs_path).unwrap_or_default();
+    let binding_arrays = binding_array_vars(&original_text);
+    let mut compiler = wesl::Wesl::new(shaders.root()).set_custom_resolver(BindingArrays {
+        inner: resolver,
+        root: root.clone(),
+    });
     // Keep every declaration of the stage file itself, used or not: stripping it would drop an
     // unused binding (or a broken unused function) without a word, where the lints and naga
     // should see it. Imported helpers are still stripped to what the stage uses.
@@ -234,7 +240,16 @@ fn link(shaders: &ShaderDir, stage: &StageFile) -> Result<Linked, String> {
             text.push('\n');
         }
         let start = text.len();
-        write!(text, "{}", &**decl).unwrap();
+        let mut printed = format!("{}", &**decl);
+        // A binding array of the stage file went through WESL as `array<`: restore it.
+        if let wgsl_parse::syntax::GlobalDeclaration::Declaration(d) = &**decl
+            && binding_arrays.iter().any(|v| *v == *d.ident.name())
+            && let Some(colon) = printed.find(':')
+            && let Some(at) = printed[colon..].find("array<")
+        {
+            printed.insert_str(colon + at, "binding_");
+        }
+        text.push_str(&printed);
         let end = text.len();
         text.push('\n');
         let span = decl.span().range();
@@ -273,6 +288,60 @@ fn link(shaders: &ShaderDir, stage: &StageFile) -> Result<Linked, String> {
         origins,
         shared,
     })
+}
+
+/// The names of a file's `var`s declared as `binding_array<…>`.
+fn binding_array_vars(source: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut rest = source;
+    while let Some(at) = rest.find("binding_array<") {
+        // `var<…>? name: binding_array<`: the name is the identifier before the colon.
+        let before = rest[..at].trim_end();
+        if let Some(head) = before.strip_suffix(':') {
+            let name: String = head
+                .trim_end()
+                .chars()
+                .rev()
+                .take_while(|c| c.is_alphanumeric() || *c == '_')
+                .collect::<Vec<_>>()
+                .into_iter()
+                .rev()
+                .collect();
+            if !name.is_empty() {
+                out.push(name);
+            }
+        }
+        rest = &rest[at + "binding_array<".len()..];
+    }
+    out
+}
+
+/// The standard resolver, with the stage file's `binding_array<` read as `        array<` (a
+/// word the pinned WESL parser reserves, replaced by one it reads, at the same length so
+/// every span still points into the original file); `link` restores the word in the stage's
+/// own declarations. Imported modules are read as they are.
+struct BindingArrays {
+    inner: wesl::StandardResolver,
+    root: wesl::ModulePath,
+}
+
+impl wesl::Resolver for BindingArrays {
+    fn resolve_source<'a>(
+        &'a self,
+        path: &wesl::ModulePath,
+    ) -> Result<std::borrow::Cow<'a, str>, wesl::ResolveError> {
+        let source = self.inner.resolve_source(path)?;
+        if *path == self.root && source.contains("binding_array<") {
+            return Ok(source.replace("binding_array<", "        array<").into());
+        }
+        Ok(source)
+    }
+    fn display_name(&self, path: &wesl::ModulePath) -> Option<String> {
+        self.inner.display_name(path)
+    }
+    fn fs_path(&self, path: &wesl::ModulePath) -> Option<std::path::PathBuf> {
+        self.inner.fs_path(path)
+    }
 }
 
 /// Whether a WGSL/WESL file has an `import` declaration (a line that starts with one).
@@ -1030,7 +1099,8 @@ mod tests {
         std::fs::remove_dir_all(&root).ok();
     }
 
-    /// Binding arrays (sampled and storage textures, samplers, storage buffers) reach the
+    /// Binding arrays (sampled and storage textures, samplers, storage buffers), in a file that
+    /// imports (WESL links it though its parser reserves the word), reach the
     /// generated code with their counts and array resource types, and the features they need
     /// are found by validation: non-uniform indexing only where an index is non-uniform; an
     /// immediate block gives its size and `IMMEDIATES`.
@@ -1039,7 +1109,7 @@ mod tests {
         let root = tree(&[
             (
                 "a_arrays",
-                "// Binding arrays, indexed by constants and by a non-uniform value.\nenable wgpu_binding_array;\nstruct Block {\n    values: array<u32>,\n}\n@group(0) @binding(0) var textures: binding_array<texture_2d<f32>, 4>;\n@group(0) @binding(1) var samplers: binding_array<sampler, 2>;\n@group(0) @binding(2) var<storage, read_write> blocks: binding_array<Block, 3>;\n@group(0) @binding(3) var<storage, read_write> out: array<f32>;\n@compute @workgroup_size(8)\nfn main(@builtin(local_invocation_index) i: u32) {\n    let t = textureSampleLevel(textures[i % 4u], samplers[1], vec2<f32>(0.5), 0.0).x;\n    out[i] = t + f32(blocks[2].values[i]);\n}\n",
+                "// Binding arrays, indexed by constants and by a non-uniform value, in a file that imports.\nimport package::shared::util::twice;\nenable wgpu_binding_array;\nstruct Block {\n    values: array<u32>,\n}\n@group(0) @binding(0) var textures: binding_array<texture_2d<f32>, 4>;\n@group(0) @binding(1) var samplers: binding_array<sampler, 2>;\n@group(0) @binding(2) var<storage, read_write> blocks: binding_array<Block, 3>;\n@group(0) @binding(3) var<storage, read_write> out: array<f32>;\n@compute @workgroup_size(8)\nfn main(@builtin(local_invocation_index) i: u32) {\n    let t = textureSampleLevel(textures[i % 4u], samplers[1], vec2<f32>(0.5), 0.0).x;\n    out[i] = t + f32(twice(blocks[2].values[i]));\n}\n",
             ),
             (
                 "b_immediates",

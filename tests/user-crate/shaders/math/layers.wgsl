@@ -1,7 +1,9 @@
 // Weighs the layers of a binding array of textures per texel (layer k by k + 1): fieldkit-build's
-// binding arrays, run by the user crate's test. No imports: the pinned WESL parser does not
-// read `binding_array`, and a file that imports nothing goes to naga as it is.
+// binding arrays, in a file that imports a helper, run by the user crate's test.
 // lint: allow(webgpu-limits): binding arrays are a native feature; the test asks for it.
+
+import package::shared::scale::scaled;
+
 enable wgpu_binding_array;
 
 @group(0) @binding(0) var layers: binding_array<texture_2d<f32>, 3>;
@@ -15,7 +17,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     var total = 0.0;
     for (var k = 0u; k < 3u; k++) {
-        total += textureLoad(layers[k], id.xy, 0).x * f32(k + 1u);
+        total += scaled(textureLoad(layers[k], id.xy, 0).x, f32(k + 1u));
     }
     sums[id.y * size.x + id.x] = total;
 }
