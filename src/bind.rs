@@ -840,6 +840,16 @@ fn make_group_refs(
     }))
 }
 
+/// Offset 0 for each of `n` dynamic bindings, without an allocation per pass where `n` is
+/// within what any adapter offers (WebGPU's defaults: 8 uniform and 4 storage per layout).
+fn zero_offsets(n: usize) -> std::borrow::Cow<'static, [u32]> {
+    const ZEROS: [u32; 64] = [0; 64];
+    match ZEROS.get(..n) {
+        Some(z) => std::borrow::Cow::Borrowed(z),
+        None => std::borrow::Cow::Owned(vec![0; n]),
+    }
+}
+
 /// A bind group's index, the group, and its dynamic offsets.
 type GroupOffsets<'s, 'o> = (u32, &'s wgpu::BindGroup, &'o [u32]);
 
@@ -865,13 +875,13 @@ impl<E: Entry> Bound<E> {
     /// Set every bind group on a compute pass (a binding with a dynamic offset at offset 0).
     pub fn set_compute(&self, pass: &mut wgpu::ComputePass<'_>) {
         for (g, group, dynamic) in &self.groups {
-            pass.set_bind_group(*g, group, &vec![0; *dynamic]);
+            pass.set_bind_group(*g, group, &zero_offsets(*dynamic));
         }
     }
     /// Set every bind group on a render pass (a binding with a dynamic offset at offset 0).
     pub fn set_render(&self, pass: &mut wgpu::RenderPass<'_>) {
         for (g, group, dynamic) in &self.groups {
-            pass.set_bind_group(*g, group, &vec![0; *dynamic]);
+            pass.set_bind_group(*g, group, &zero_offsets(*dynamic));
         }
     }
 
