@@ -21,6 +21,8 @@
 pub mod codegen;
 pub mod drift;
 pub mod lint;
+#[cfg(feature = "portability")]
+pub mod portability;
 pub mod reflect;
 
 use std::fmt::Write as _;
@@ -786,6 +788,7 @@ pub struct Builder {
     out_file: String,
     dynamic_offsets: Vec<String>,
     deny_lints: bool,
+    portability: bool,
 }
 
 impl Builder {
@@ -797,7 +800,18 @@ impl Builder {
             out_file: "shaders.rs".into(),
             dynamic_offsets: Vec::new(),
             deny_lints: false,
+            portability: false,
         }
+    }
+
+    /// Also translate every stage to SPIR-V, MSL, HLSL and GLSL (the languages wgpu's backends
+    /// take) and report a stage that does not translate as a `[portability]` finding, a warning
+    /// or, with [`Self::deny_lints`], an error. Feature `portability` (naga's writers: a longer
+    /// build of this crate).
+    #[cfg(feature = "portability")]
+    pub fn check_portability(mut self) -> Self {
+        self.portability = true;
+        self
     }
 
     /// Make the lints' findings (header comment, ascending bindings, unused bindings, workgroup
@@ -900,11 +914,12 @@ impl Builder {
         if !errors.is_empty() {
             return Err(errors);
         }
-        let findings: Vec<String> = stages
+        let mut findings: Vec<String> = stages
             .iter()
             .flat_map(|st| lint::run(st, &reflect::reflect(st)))
             .map(|v| v.to_string())
             .collect();
+        findings.extend(self.portability_findings(&stages));
         if self.deny_lints && !findings.is_empty() {
             return Err(findings);
         }
@@ -914,6 +929,30 @@ impl Builder {
             std::fs::write(out, code).map_err(|e| vec![format!("{}: {e}", out.display())])?;
         }
         Ok((out.to_path_buf(), findings))
+    }
+
+    /// With [`Self::check_portability`], each stage that does not translate to a backend
+    /// language, as a `[portability]` finding.
+    fn portability_findings(&self, stages: &[Stage]) -> Vec<String> {
+        #[cfg_attr(not(feature = "portability"), allow(unused_mut))]
+        let mut out = Vec::new();
+        if !self.portability {
+            return out;
+        }
+        #[cfg(feature = "portability")]
+        for st in stages {
+            for (lang, result) in portability::translate_all(st) {
+                if let Err(e) = result {
+                    out.push(format!(
+                        "{}:1:1: [portability] cannot translate to {lang}: {e}",
+                        st.file.rel_path
+                    ));
+                }
+            }
+        }
+        #[cfg(not(feature = "portability"))]
+        let _ = stages;
+        out
     }
 
     /// [`Self::build`], and on failure every error as a cargo warning and on stderr, then exit
@@ -1076,6 +1115,35 @@ mod tests {
                 && errors[1].contains("external textures"),
             "{}",
             errors[1]
+        );
+        std::fs::remove_dir_all(&root).ok();
+    }
+
+    /// With `check_portability`, a stage that does not translate to a backend language is a
+    /// `[portability]` finding (here naga's HLSL writer panics on a binding array of buffers):
+    /// a warning, or an error with `deny_lints`.
+    #[cfg(feature = "portability")]
+    #[test]
+    fn portability_findings_come_from_the_build() {
+        let root = tree(&[(
+            "blocks",
+            "// A binding array of storage buffers.\nenable wgpu_binding_array;\nstruct Block {\n    values: array<u32>,\n}\n@group(0) @binding(0) var<storage, read_write> blocks: binding_array<Block, 2>;\n@compute @workgroup_size(1)\nfn main() {\n    blocks[1].values[0] = blocks[0].values[0];\n}\n",
+        )]);
+        let out = root.join("shaders.rs");
+        Builder::new("shaders")
+            .check_portability()
+            .build_to(&root, &out)
+            .expect("portability findings warn by default");
+        let errors = Builder::new("shaders")
+            .check_portability()
+            .deny_lints()
+            .build_to(&root, &out)
+            .unwrap_err();
+        assert!(
+            errors.iter().any(|e| e.starts_with(
+                "shaders/room/blocks.wgsl:1:1: [portability] cannot translate to HLSL"
+            )),
+            "{errors:#?}"
         );
         std::fs::remove_dir_all(&root).ok();
     }
