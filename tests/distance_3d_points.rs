@@ -134,7 +134,11 @@ fn line_passes_are_exact_for_seeds_at_voxel_centres() {
         )
         .unwrap();
     ctx.submit_and_wait("lines", enc).unwrap();
-    let nearest = field.nearest.read(&ctx).unwrap();
+    let nearest = field
+        .nearest
+        .read(&ctx.device, &ctx.queue)
+        .wait(&ctx)
+        .unwrap();
     let distance: Vec<f32> = read_texture(&ctx, &field.distance).unwrap();
     let exact2 = brute_force(&points, size);
     let mut within = 0;
@@ -197,7 +201,14 @@ fn line_passes_on_surface_seeds_against_brute_force() {
             .unwrap();
         ctx.submit_and_wait("surface seeds", enc).unwrap();
         let all: Vec<Vec4> = bytemuck::cast_slice(&read_buffer(&ctx, &table).unwrap()).to_vec();
-        (field.nearest.read(&ctx).unwrap(), all)
+        (
+            field
+                .nearest
+                .read(&ctx.device, &ctx.queue)
+                .wait(&ctx)
+                .unwrap(),
+            all,
+        )
     };
     let (lines, table) = run(Method::Lines);
     let (jfa, _) = run(Method::Jfa(Variant::JfaPlus2));

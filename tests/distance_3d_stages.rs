@@ -291,7 +291,11 @@ fn seed_points_stage() {
         .encode_points(&ctx.device, &mut enc, &seeds, size_u32(SIZE), None, &opts)
         .unwrap();
     ctx.submit_and_wait("points", enc).unwrap();
-    let nearest = field.nearest.read(&ctx).unwrap();
+    let nearest = field
+        .nearest
+        .read(&ctx.device, &ctx.queue)
+        .wait(&ctx)
+        .unwrap();
     let dist: Vec<f32> = read_texture(&ctx, &field.distance).unwrap();
     let [w, h, _] = SIZE;
     let at = |v: [usize; 3]| (v[2] * h + v[1]) * w + v[0];

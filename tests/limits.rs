@@ -108,7 +108,7 @@ fn the_largest_grid_runs_one_larger_is_refused_and_the_device_stays_usable() {
         .encode(&ctx.device, &mut enc, &volume, &Options3d::default())
         .unwrap();
     ctx.submit_and_wait("small after", enc).unwrap();
-    let words = f.nearest.read(&ctx).unwrap();
+    let words = f.nearest.read(&ctx.device, &ctx.queue).wait(&ctx).unwrap();
     let want = cpu::edt_3d_squared(&small.iter().map(|&m| m != 0).collect::<Vec<_>>(), size);
     for (i, (&w, &d2)) in words.iter().zip(&want).enumerate() {
         let [x, y, z] = fieldkit::distance::unpack_seed3(w).expect("every voxel has a seed");

@@ -80,7 +80,7 @@ fn the_same_technique_from_several_threads_gives_the_same_results() {
                 .encode(&ctx.device, &mut enc, &volume, &Options3d::default())
                 .unwrap();
             ctx.submit_and_wait("thread distance", enc).unwrap();
-            f.nearest.read(ctx).unwrap()
+            f.nearest.read(&ctx.device, &ctx.queue).wait(ctx).unwrap()
         }
     });
     assert!(

@@ -631,14 +631,16 @@ impl Slabs {
         }
     }
 
-    /// Every voxel's word, slab after slab (x fastest, then y, then z), blocking.
-    #[cfg(feature = "context")]
-    pub fn read(&self, ctx: &crate::gpu::Context) -> Result<Vec<u32>, Error> {
-        let mut words = Vec::new();
-        for b in &self.buffers {
-            words.extend_from_slice(bytemuck::cast_slice(&crate::gpu::read_buffer(ctx, b)?));
-        }
-        Ok(words)
+    /// Every voxel's word, slab after slab (x fastest, then y, then z): one submission, and a
+    /// [`Readback`](crate::gpu::Readback) that completes when every slab is mapped.
+    pub fn read(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> crate::gpu::Readback<Vec<u32>> {
+        let buffers: Vec<&wgpu::Buffer> = self.buffers.iter().collect();
+        crate::gpu::readback_buffers(device, queue, &buffers)
+            .then(|bytes| Ok(bytemuck::cast_slice::<u8, u32>(&bytes).to_vec()))
     }
 
     /// The buffer holding plane `z`, and the plane's index in it; `None` past the field.

@@ -11,7 +11,7 @@ mod timing;
 
 #[cfg(feature = "context")]
 pub use context::{ADAPTER_ENV, Context, read_buffer, read_texture};
-pub use readback::{Readback, readback_buffer, readback_texture};
+pub use readback::{Readback, readback_buffer, readback_buffers, readback_texture};
 pub use timing::{Profiler, Record, Recorder, Timer};
 
 use crate::error::Error;

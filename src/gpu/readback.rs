@@ -18,8 +18,11 @@ type Convert<T> = Box<dyn FnOnce(&[u8]) -> Result<T, Error> + Send>;
 
 #[derive(Default)]
 struct MapState {
-    /// The mapping's outcome, once wgpu called back.
+    /// The mapping's outcome, once wgpu called back for every staging buffer (or for the first
+    /// that failed).
     done: Option<Result<(), String>>,
+    /// Staging buffers whose mapping has not called back yet.
+    pending: usize,
     waker: Option<Waker>,
 }
 
@@ -33,7 +36,8 @@ struct MapState {
 /// ```
 #[must_use = "a readback does nothing unless polled, awaited or taken"]
 pub struct Readback<T> {
-    staging: Option<wgpu::Buffer>,
+    /// The staging buffers the copy fills, in order (several where one buffer cannot hold it).
+    staging: Vec<wgpu::Buffer>,
     state: Arc<Mutex<MapState>>,
     convert: Option<Convert<T>>,
     /// An outcome known before any mapping (a refused copy, or a value computed on the CPU).
@@ -54,7 +58,7 @@ impl<T: 'static> Readback<T> {
     /// A readback that is already finished with `result` (used for errors found before any copy).
     pub fn ready(result: Result<T, Error>) -> Self {
         Self {
-            staging: None,
+            staging: Vec::new(),
             state: Arc::default(),
             convert: None,
             early: Some(result),
@@ -62,23 +66,34 @@ impl<T: 'static> Readback<T> {
         }
     }
 
-    /// Map `staging` (which a submitted copy, `submission`, fills) and turn its bytes into `T`.
+    /// Map `staging` (which a submitted copy, `submission`, fills) and turn its bytes, buffer
+    /// after buffer, into `T`.
     fn map(
-        staging: wgpu::Buffer,
+        staging: Vec<wgpu::Buffer>,
         submission: wgpu::SubmissionIndex,
         convert: impl FnOnce(&[u8]) -> Result<T, Error> + Send + 'static,
     ) -> Self {
-        let state = Arc::new(Mutex::new(MapState::default()));
-        let sink = state.clone();
-        staging.map_async(wgpu::MapMode::Read, .., move |r| {
-            let mut s = sink.lock().unwrap_or_else(|e| e.into_inner());
-            s.done = Some(r.map_err(|e| e.to_string()));
-            if let Some(w) = s.waker.take() {
-                w.wake();
-            }
-        });
+        let state = Arc::new(Mutex::new(MapState {
+            pending: staging.len(),
+            ..MapState::default()
+        }));
+        for buffer in &staging {
+            let sink = state.clone();
+            buffer.map_async(wgpu::MapMode::Read, .., move |r| {
+                let mut s = sink.lock().unwrap_or_else(|e| e.into_inner());
+                s.pending -= 1;
+                match r {
+                    Err(e) if s.done.is_none() => s.done = Some(Err(e.to_string())),
+                    Ok(()) if s.pending == 0 && s.done.is_none() => s.done = Some(Ok(())),
+                    _ => return,
+                }
+                if let Some(w) = s.waker.take() {
+                    w.wake();
+                }
+            });
+        }
         Self {
-            staging: Some(staging),
+            staging,
             state,
             convert: Some(Box::new(convert)),
             early: None,
@@ -98,7 +113,7 @@ impl<T: 'static> Readback<T> {
             return Readback::ready(Err(Error::Readback("the result was already taken".into())));
         };
         Readback {
-            staging: self.staging.take(),
+            staging: std::mem::take(&mut self.staging),
             state: self.state.clone(),
             convert: Some(Box::new(move |b| convert(b).and_then(f))),
             early: None,
@@ -135,17 +150,33 @@ impl<T: 'static> Readback<T> {
             .unwrap_or_else(|e| e.into_inner())
             .done
             .take()?;
-        let (Some(staging), Some(convert)) = (self.staging.take(), self.convert.take()) else {
+        let staging = std::mem::take(&mut self.staging);
+        let Some(convert) = self.convert.take() else {
             return Some(Err(Error::Readback("the result was already taken".into())));
         };
         Some(done.map_err(Error::Readback).and_then(|()| {
-            let out = {
-                let view = staging
-                    .get_mapped_range(..)
-                    .map_err(|e| Error::Readback(format!("{e:?}")))?;
-                convert(&view)
+            let out = match staging.as_slice() {
+                // One buffer: its mapped bytes as they are, no copy.
+                [one] => {
+                    let view = one
+                        .get_mapped_range(..)
+                        .map_err(|e| Error::Readback(format!("{e:?}")))?;
+                    convert(&view)
+                }
+                several => {
+                    let mut bytes = Vec::new();
+                    for b in several {
+                        let view = b
+                            .get_mapped_range(..)
+                            .map_err(|e| Error::Readback(format!("{e:?}")))?;
+                        bytes.extend_from_slice(&view);
+                    }
+                    convert(&bytes)
+                }
             };
-            staging.unmap();
+            for b in &staging {
+                b.unmap();
+            }
             out
         }))
     }
@@ -185,19 +216,38 @@ pub fn readback_buffer(
     queue: &wgpu::Queue,
     buffer: &wgpu::Buffer,
 ) -> Readback<Vec<u8>> {
-    if !buffer.usage().contains(wgpu::BufferUsages::COPY_SRC) {
+    readback_buffers(device, queue, &[buffer])
+}
+
+/// Read several whole buffers (each needs `COPY_SRC` usage) as one run of bytes, buffer after
+/// buffer: one submission, one staging buffer each (so the total may exceed what one buffer
+/// holds, as a field split across bindings does).
+pub fn readback_buffers(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    buffers: &[&wgpu::Buffer],
+) -> Readback<Vec<u8>> {
+    if let Some(b) = buffers
+        .iter()
+        .find(|b| !b.usage().contains(wgpu::BufferUsages::COPY_SRC))
+    {
         return Readback::ready(Err(Error::Readback(format!(
             "buffer {:?} lacks COPY_SRC usage ({:?})",
-            buffer,
-            buffer.usage()
+            b,
+            b.usage()
         ))));
     }
-    let size = buffer.size();
-    let staging = staging(device, "fieldkit readback", size);
     let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
         label: Some("fieldkit readback"),
     });
-    enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
+    let staging: Vec<wgpu::Buffer> = buffers
+        .iter()
+        .map(|b| {
+            let s = staging(device, "fieldkit readback", b.size());
+            enc.copy_buffer_to_buffer(b, 0, &s, 0, b.size());
+            s
+        })
+        .collect();
     let submission = queue.submit([enc.finish()]);
     Readback::map(staging, submission, |b| Ok(b.to_vec()))
 }
@@ -260,7 +310,7 @@ pub fn readback_texture<T: bytemuck::Pod + Send>(
         size,
     );
     let submission = queue.submit([enc.finish()]);
-    Readback::map(staging, submission, move |bytes| {
+    Readback::map(vec![staging], submission, move |bytes| {
         let mut out =
             Vec::with_capacity((size.width * size.height * size.depth_or_array_layers) as usize);
         for chunk in bytes.chunks(padded as usize) {

@@ -84,8 +84,15 @@ pub fn run_3d(
         .expect("encode");
     ctx.submit_and_wait("test", enc).expect("run");
     (
-        field.nearest.read(ctx).unwrap(),
-        field.nearest_outside.as_ref().map(|s| s.read(ctx).unwrap()),
+        field
+            .nearest
+            .read(&ctx.device, &ctx.queue)
+            .wait(ctx)
+            .unwrap(),
+        field
+            .nearest_outside
+            .as_ref()
+            .map(|s| s.read(&ctx.device, &ctx.queue).wait(ctx).unwrap()),
         read_texture(ctx, &field.distance).unwrap(),
     )
 }

@@ -403,7 +403,11 @@ fn distance(args: &Args) -> Result<(), String> {
             ctx.submit_and_wait("bench", enc)
                 .map_err(|e| e.to_string())?;
             let d2 = d2_of(
-                &field.nearest.read(&ctx).map_err(|e| e.to_string())?,
+                &field
+                    .nearest
+                    .read(&ctx.device, &ctx.queue)
+                    .wait(&ctx)
+                    .map_err(|e| e.to_string())?,
                 size,
                 3,
             );
