@@ -102,6 +102,7 @@ fn options(method: Method, band: f32) -> Options3d {
         inside: Inside::Mask,
         voxel_size: 1.0,
         band: Some(band),
+        unreached: None,
     }
 }
 

@@ -16,6 +16,10 @@ struct ResolveParams {
     band: f32,
     // Inside test for `resolve_points_signed`: the volume's red channel ≥ threshold.
     threshold: f32,
+    // What a voxel no seed reached holds (±FAR before the band): −unreached_inside inside,
+    // unreached_outside outside (world units; the band by default).
+    unreached_inside: f32,
+    unreached_outside: f32,
 }
 
 @group(0) @binding(0) var<uniform> params: ResolveParams;
@@ -34,8 +38,15 @@ fn world(d_voxels: f32) -> f32 {
     return d_voxels * params.voxel_size;
 }
 
-// The narrow band: distances beyond it are clamped, as its JFA never looked farther.
+// The narrow band: distances beyond it are clamped, as its JFA never looked farther; a voxel no
+// seed reached takes the unreached values.
 fn banded(d: f32) -> f32 {
+    if d >= FAR {
+        return params.unreached_outside;
+    }
+    if d <= -FAR {
+        return -params.unreached_inside;
+    }
     return clamp(d, -params.band, params.band);
 }
 

@@ -47,6 +47,8 @@ struct TraceParams {
     ambient: f32,
     // How far inside the surface the shading samples the density, local units.
     inner_offset: f32,
+    // The colour piled-up density moves the base toward (w = 1), or lighten it (w = 0).
+    pile_colour: vec4<f32>,
 }
 
 struct Shaded {
@@ -230,10 +232,11 @@ fn trace(pixel: vec2<f32>) -> Shaded {
     out.depth = ndc_depth(params.view_proj, hit_world);
     let g = gradient(p);
     let n_local = select(vec3<f32>(0.0, 0.0, 1.0), -normalize(g), dot(g, g) > 1e-24);
-    let n = normalize((params.local_to_world * vec4<f32>(n_local, 0.0)).xyz);
+    // Normals go to world through the inverse transpose (v * M is transpose(M) * v).
+    let n = normalize((vec4<f32>(n_local, 0.0) * params.world_to_local).xyz);
     // Density just inside the surface: how deep the blobs pile up here.
     let inner = field(p - n_local * params.inner_offset);
-    out.colour = surface_colour(params.mode, n, inner, hit_world, near_w, params.light_dir, params.threshold, params.base_colour, params.rim_colour, params.ambient);
+    out.colour = surface_colour(params.mode, n, inner, hit_world, near_w, params.light_dir, params.threshold, params.base_colour, params.rim_colour, params.ambient, params.pile_colour);
     return out;
 }
 

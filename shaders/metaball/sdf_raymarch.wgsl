@@ -9,8 +9,8 @@
 // dispatch also covers just the box's screen rectangle.
 //
 // Rays come from the inverse view-projection through each pixel, from the near plane, so a camera
-// inside the volume works; they are moved into the volume's local space (a rigid transform keeps
-// distances) and clipped to its box. The step is the sampled distance × `safety`, and the hit
+// inside the volume works; they are moved into the volume's local space (any affine placement: the march
+// measures t in local units, as the SDF holds them) and clipped to its box. The step is the sampled distance × `safety`, and the hit
 // tolerance grows with distance (a pixel's footprint). A sample below the tolerance, or a sign
 // change, is refined by bisection on density − threshold, whose zero set the seeds came from.
 
@@ -51,6 +51,16 @@ struct RaymarchParams {
     ambient: f32,
     // Distances in the SDF are clamped to ±band (local units).
     band: f32,
+    // The colour piled-up density moves the base toward (w = 1), or lighten it (w = 0).
+    pile_colour: vec4<f32>,
+    // Step factor at distance 0, rising linearly to `safety` at one cell.
+    near_safety: f32,
+    // Shortest step, local units.
+    min_step: f32,
+    // 1: Hermite-weighted trilinear reads (weights 3f² − 2f³); 0: hardware trilinear.
+    hermite: u32,
+    // 1: density × saturate(10 × (distance to the box's faces in uvw + 0.05)).
+    edge_falloff: u32,
 }
 
 struct Shaded {
@@ -73,9 +83,25 @@ const BISECTIONS: u32 = 6u;
 
 // Distance (local units) in x, density in y, at local point `p`.
 fn field_at(p: vec3<f32>) -> vec2<f32> {
-    let uvw = (p - params.box_min) / (params.cell * vec3<f32>(textureDimensions(field)));
-    let v = textureSampleLevel(field, field_sampler, uvw, 0.0).rg;
-    return vec2<f32>(v.x * params.cell, v.y);
+    let dims = vec3<f32>(textureDimensions(field));
+    let uvw = (p - params.box_min) / (params.cell * dims);
+    var at = uvw;
+    if params.hermite != 0u {
+        // Hermite weights from one hardware fetch: between texel centres i and i + 1 the
+        // hardware weighs i + 1 by the fraction f; sampling at i + w(f), w = 3f² − 2f³, gives
+        // the Hermite weight instead.
+        let c = uvw * dims - 0.5;
+        let i = floor(c);
+        let f = c - i;
+        at = (i + 0.5 + f * f * (3.0 - 2.0 * f)) / dims;
+    }
+    let v = textureSampleLevel(field, field_sampler, at, 0.0).rg;
+    var density = v.y;
+    if params.edge_falloff != 0u {
+        let edge = min(min(uvw.x, min(uvw.y, uvw.z)), 1.0 - max(uvw.x, max(uvw.y, uvw.z)));
+        density *= saturate((edge + 0.05) * 10.0);
+    }
+    return vec2<f32>(v.x * params.cell, density);
 }
 
 fn density_at(p: vec3<f32>) -> f32 {
@@ -170,7 +196,9 @@ fn trace(pixel: vec2<f32>) -> Shaded {
             }
         }
         prev_t = t;
-        t += max(d * params.safety, tolerance);
+        // Step factor from near_safety at d = 0 to safety at one cell (both equal by default).
+        let k = mix(params.near_safety, params.safety, saturate(d / params.cell));
+        t += max(d * k, max(params.min_step, tolerance));
     }
 
     let entry_world = (params.local_to_world * vec4<f32>(o + t_enter * dir, 1.0)).xyz;
@@ -192,10 +220,11 @@ fn trace(pixel: vec2<f32>) -> Shaded {
     let hit_world = (params.local_to_world * vec4<f32>(p, 1.0)).xyz;
     out.depth = ndc_depth(params.view_proj, hit_world);
     let n_local = normal_at(p);
-    let n = normalize((params.local_to_world * vec4<f32>(n_local, 0.0)).xyz);
+    // Normals go to world through the inverse transpose (v * M is transpose(M) * v).
+    let n = normalize((vec4<f32>(n_local, 0.0) * params.world_to_local).xyz);
     // Density just inside the surface: how deep the blobs pile up here.
     let inner = density_at(p - n_local * params.cell);
-    out.colour = surface_colour(params.mode, n, inner, hit_world, near_w, params.light_dir, params.threshold, params.base_colour, params.rim_colour, params.ambient);
+    out.colour = surface_colour(params.mode, n, inner, hit_world, near_w, params.light_dir, params.threshold, params.base_colour, params.rim_colour, params.ambient, params.pile_colour);
     return out;
 }
 

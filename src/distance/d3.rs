@@ -495,6 +495,21 @@ pub struct Options3d {
     /// Narrow band, in voxels: distances are only needed up to this far. JFA then starts at the
     /// power of two at or above it instead of half the grid; every method clamps to it.
     pub band: Option<f32>,
+    /// What a voxel that no seed reached holds (an empty seed set; or, with a band, a voxel
+    /// farther than it): by default ±band, or `f32::MAX` without one. JFA only (the pass that
+    /// writes these is its resolve); other methods refuse it.
+    pub unreached: Option<Unreached>,
+}
+
+/// Distances for voxels no seed reached, world units: `-inside` inside and `outside` outside
+/// (the metaball source's full-volume field writes −one voxel and 1e6).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Unreached {
+    /// Magnitude given inside (the value written is its negation).
+    pub inside: f32,
+    /// Value given outside.
+    pub outside: f32,
 }
 
 impl Default for Options3d {
@@ -505,6 +520,7 @@ impl Default for Options3d {
             inside: Inside::Mask,
             voxel_size: 1.0,
             band: None,
+            unreached: None,
         }
     }
 }
@@ -532,6 +548,30 @@ impl Options3d {
                 stage: STAGE,
                 what: format!("band must be finite and positive, got {b}"),
             });
+        }
+        if let Some(u) = self.unreached {
+            if !(u.inside.is_finite()
+                && u.inside >= 0.0
+                && u.outside.is_finite()
+                && u.outside >= 0.0)
+            {
+                return Err(Error::Invalid {
+                    stage: STAGE,
+                    what: format!(
+                        "unreached inside ({}) and outside ({}) must be finite and ≥ 0",
+                        u.inside, u.outside
+                    ),
+                });
+            }
+            if !matches!(self.method, Method::Jfa(_)) {
+                return Err(Error::Invalid {
+                    stage: STAGE,
+                    what: format!(
+                        "unreached values are written by JFA's resolve; method {} does not take them",
+                        self.method.name()
+                    ),
+                });
+            }
         }
         if let Inside::Threshold(t) = self.inside
             && !t.is_finite()
@@ -1791,6 +1831,8 @@ impl Distance3d {
                 voxel_size: fuse.voxel_size,
                 band: fuse.band,
                 threshold: 0.0,
+                unreached_inside: fuse.band,
+                unreached_outside: fuse.band,
             },
         );
         let groups = ComputePipeline::<field_resolve::resolve_unsigned::Entry>::groups_for(size);
@@ -2590,6 +2632,10 @@ impl Distance3d {
         options: &Options3d,
     ) -> wgpu::Buffer {
         let band = options.world_band();
+        let unreached = options.unreached.unwrap_or(Unreached {
+            inside: band,
+            outside: band,
+        });
         uniform(
             device,
             "resolve params",
@@ -2598,6 +2644,8 @@ impl Distance3d {
                 voxel_size: options.voxel_size,
                 band,
                 threshold: options.inside.threshold(),
+                unreached_inside: unreached.inside,
+                unreached_outside: unreached.outside,
             },
         )
     }

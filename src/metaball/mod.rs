@@ -24,7 +24,9 @@ pub mod render;
 use glam::{Vec3, Vec4};
 
 use crate::bind::ComputePipeline;
-use crate::distance::{Distance3d, Grid3, Inside, MAX_POINTS, Method, Options3d};
+use crate::distance::{
+    Distance3d, Grid3, Inside, MAX_POINTS, Method, Options3d, Unreached, Variant,
+};
 use crate::error::Error;
 use crate::gpu::{Record, uniform_buffer as uniform};
 use crate::shaders::metaball::{bin_blobs, march_field, splat, surface_seeds};
@@ -42,13 +44,21 @@ pub fn fixed_scale(count: u32) -> f32 {
 }
 
 /// How the voxel set becomes a field.
+///
+/// [`Settings::default`] is fieldkit's choice; [`Settings::seed`] is the source's (the voxel
+/// actor: support radius × 1.5, a full-volume field by 26-neighbour JFA).
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(default))]
 pub struct Settings {
     /// Iso-level of the surface (the source used 0.5).
     pub threshold: f32,
-    /// Support radius = edge × scale × ½ × overlap.
+    /// Support radius = edge × scale × ½ × overlap × falloff_extend.
     pub overlap: f32,
+    /// Extra factor on the support radius, on top of `overlap`: 1 by default, 1.5 in the
+    /// source's `falloffExtend` ([`Settings::seed`]), whose blobs are 1.5 times as wide at equal
+    /// overlap.
+    pub falloff_extend: f32,
     /// Grid cells per voxel edge when the grid is fitted ([`Settings::fit_grid`]).
     pub cells_per_edge: f32,
     /// Distances the SDF must hold, in cells: the line passes scan this far, JFA starts at the
@@ -60,7 +70,16 @@ pub struct Settings {
     /// [`Method::Jfa`] (nearer seeds away from the surface). The exact transform takes integer
     /// seeds only and is refused.
     pub method: Method,
+    /// A field over the whole volume instead of the band: JFA from half the grid, no clamp, and
+    /// voxels no seed reached (an empty set) at −one cell inside and [`FULL_VOLUME_FAR`] outside,
+    /// as the source writes them. For users who read the SDF elsewhere; the raymarch needs only
+    /// the band. Needs [`Method::Jfa`] (the line passes scan a band).
+    pub full_volume: bool,
 }
+
+/// The distance the full-volume field gives a voxel outside that no seed reached (the source's
+/// 1e6, in local units).
+pub const FULL_VOLUME_FAR: f32 = 1.0e6;
 
 impl Default for Settings {
     fn default() -> Self {
@@ -70,11 +89,28 @@ impl Default for Settings {
             cells_per_edge: 4.0,
             band: 8.0,
             method: Method::Lines,
+            falloff_extend: 1.0,
+            full_volume: false,
         }
     }
 }
 
 impl Settings {
+    /// The source's voxel actor: the support radius × `falloffExtend` = 1.5 on top of the
+    /// overlap of 2, and its distance step, a full-volume field by plain 26-neighbour JFA
+    /// ([`Variant::Jfa`]). fieldkit's default keeps the radius without the extra factor (the
+    /// source's blobs merge into one lump at block spacing) and a band of 8 cells by the line
+    /// passes: the raymarch reads the field only within the band, and on the H100 the band
+    /// built by the line passes is 3.7× faster than JFA+2 over the volume (`docs/metaball.md`).
+    pub fn seed() -> Self {
+        Self {
+            falloff_extend: 1.5,
+            method: Method::Jfa(Variant::Jfa),
+            full_volume: true,
+            ..Self::default()
+        }
+    }
+
     fn check(&self) -> Result<(), Error> {
         let bad = |what: &str, v: f32| Error::Invalid {
             stage: STAGE,
@@ -88,6 +124,7 @@ impl Settings {
         }
         for (what, v) in [
             ("overlap", self.overlap),
+            ("falloff_extend", self.falloff_extend),
             ("cells_per_edge", self.cells_per_edge),
             ("band", self.band),
         ] {
@@ -103,12 +140,19 @@ impl Settings {
                     .into(),
             });
         }
+        if self.full_volume && self.method == Method::Lines {
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: "full_volume needs Method::Jfa: the line passes scan only the band".into(),
+            });
+        }
         Ok(())
     }
 
-    /// Support radius of an instance of scale `scale`.
+    /// Support radius of an instance of scale `scale`: edge × scale × ½ × overlap ×
+    /// falloff_extend.
     pub fn radius(&self, edge: f32, scale: f32) -> f32 {
-        edge * scale * 0.5 * self.overlap
+        edge * scale * 0.5 * self.overlap * self.falloff_extend
     }
 
     /// A grid fitted to the instances' support (plus one cell), with cells of
@@ -217,23 +261,176 @@ pub fn packed_grid(region: [u32; 3], block: f32) -> Result<Vec<Vec4>, Error> {
     Ok(v)
 }
 
-/// Per-frame animation of the source's demo: scales s₀·(0.5 + 0.5·sin(2π f t + 0.13 i)) and
-/// Lissajous offsets of the centres, `wobble` × edge at most.
+/// The source's grid builder from a region *extent* and a block size: NX = max(1,
+/// ⌊extent / block⌋) per axis, so a region smaller than one block still holds one voxel.
+/// Returns the voxel counts [`packed_grid`] takes. A negative or non-finite extent, or a
+/// non-finite or non-positive block, is a typed error.
+pub fn region_for_extent(extent: Vec3, block: f32) -> Result<[u32; 3], Error> {
+    if !(block.is_finite() && block > 0.0) {
+        return Err(Error::Invalid {
+            stage: STAGE,
+            what: format!("block size must be finite and positive, got {block}"),
+        });
+    }
+    if !(extent.is_finite() && extent.min_element() >= 0.0) {
+        return Err(Error::Invalid {
+            stage: STAGE,
+            what: format!("extent must be finite and ≥ 0, got {extent}"),
+        });
+    }
+    let count = |e: f32| {
+        let n = (e / block).floor();
+        // Past u32 the packed grid refuses it anyway (MAX_PACKED).
+        if n >= u32::MAX as f32 {
+            u32::MAX
+        } else {
+            (n as u32).max(1)
+        }
+    };
+    Ok([count(extent.x), count(extent.y), count(extent.z)])
+}
+
+/// [`packed_grid`] from an extent and a block size, as the source's actor takes them
+/// ([`region_for_extent`]): voxels of edge `block` (scale 1), centred on the origin.
+pub fn extent_grid(extent: Vec3, block: f32) -> Result<Vec<Vec4>, Error> {
+    packed_grid(region_for_extent(extent, block)?, block)
+}
+
+/// A per-frame animation of a voxel set: each instance's scale pulses and its centre moves on a
+/// Lissajous curve, instance `i` a phase `phase_step · i` behind instance 0.
+///
+/// - scale: s₀ · (1 − a + a · sin(2π · `scale_frequency` · t + `phase_step` · i)), a =
+///   `scale_amplitude`;
+/// - centre: c₀ + `offset_amplitude` · edge · (sin(rₓ·φ + pₓ), sin(r_y·φ + p_y), sin(r_z·φ +
+///   p_z)) with φ = 2π · `offset_frequency` · t + `phase_step` · i, r = `ratios`, p =
+///   `axis_phases`.
+///
+/// [`Animation::default`] is fieldkit's (ratios 1 : 2 : 3, phase step 0.13: a closed curve that
+/// repeats each period, so a looping GIF of one period has no seam); [`Animation::seed`] is the
+/// source's (ratios 1 : 1.37 : 1.91, phase step 0.19: a curve that never closes, so the motion
+/// does not visibly repeat).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(default))]
+pub struct Animation {
+    /// Fraction of the scale that pulses (0: none; 0.5: between 0 and s₀).
+    pub scale_amplitude: f32,
+    /// Pulses per second.
+    pub scale_frequency: f32,
+    /// Largest centre offset, in voxel edges.
+    pub offset_amplitude: f32,
+    /// Offset cycles per second (along x; the other axes × their ratio).
+    pub offset_frequency: f32,
+    /// Frequency of each axis's offset relative to x's.
+    pub ratios: [f32; 3],
+    /// Phase of each axis's offset, radians.
+    pub axis_phases: [f32; 3],
+    /// Phase between one instance and the next, radians.
+    pub phase_step: f32,
+}
+
+impl Default for Animation {
+    fn default() -> Self {
+        Self {
+            scale_amplitude: 0.5,
+            scale_frequency: 0.5,
+            offset_amplitude: 0.15,
+            offset_frequency: 0.5,
+            ratios: [1.0, 2.0, 3.0],
+            axis_phases: [0.0, 0.5, 1.0],
+            phase_step: 0.13,
+        }
+    }
+}
+
+impl Animation {
+    /// The source's animation: offset frequency ratios 1 : 1.37 : 1.91 and a phase step of
+    /// 0.19 per instance (amplitudes and frequencies as [`Animation::default`]).
+    pub fn seed() -> Self {
+        Self {
+            ratios: [1.0, 1.37, 1.91],
+            axis_phases: [0.0; 3],
+            phase_step: 0.19,
+            ..Self::default()
+        }
+    }
+
+    fn check(&self) -> Result<(), Error> {
+        let values = [
+            self.scale_amplitude,
+            self.scale_frequency,
+            self.offset_amplitude,
+            self.offset_frequency,
+            self.phase_step,
+        ]
+        .into_iter()
+        .chain(self.ratios)
+        .chain(self.axis_phases);
+        if values.into_iter().any(|v| !v.is_finite()) {
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: format!("animation parameters must be finite, got {self:?}"),
+            });
+        }
+        if !(0.0..=1.0).contains(&self.scale_amplitude) {
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: format!(
+                    "scale_amplitude must be in [0, 1] (scales stay ≥ 0), got {}",
+                    self.scale_amplitude
+                ),
+            });
+        }
+        Ok(())
+    }
+
+    /// The voxel set `base` (edge `edge`) at time `t` seconds. Non-finite parameters or time,
+    /// or a scale amplitude outside [0, 1], are a typed error.
+    pub fn apply(&self, base: &[Vec4], edge: f32, t: f32) -> Result<Vec<Vec4>, Error> {
+        self.check()?;
+        if !(t.is_finite() && edge.is_finite()) {
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: format!("time ({t}) and edge ({edge}) must be finite"),
+            });
+        }
+        Ok(self.apply_unchecked(base, edge, t))
+    }
+
+    fn apply_unchecked(&self, base: &[Vec4], edge: f32, t: f32) -> Vec<Vec4> {
+        let tau = std::f32::consts::TAU;
+        base.iter()
+            .enumerate()
+            .map(|(i, v)| {
+                let lag = self.phase_step * i as f32;
+                let pulse = (tau * self.scale_frequency * t + lag).sin();
+                let phi = tau * self.offset_frequency * t + lag;
+                let axis = |k: usize| (self.ratios[k] * phi + self.axis_phases[k]).sin();
+                let offset = Vec3::new(axis(0), axis(1), axis(2)) * self.offset_amplitude * edge;
+                let scale = v.w * (1.0 - self.scale_amplitude + self.scale_amplitude * pulse);
+                (v.truncate() + offset).extend(scale)
+            })
+            .collect()
+    }
+}
+
+/// Per-frame animation of the source's demo with fieldkit's defaults: scales
+/// s₀·(0.5 + 0.5·sin(2π f t + 0.13 i)) and Lissajous offsets (ratios 1 : 2 : 3) of the centres,
+/// `wobble` × edge at most. [`Animation`] holds every parameter, the source's among them.
 pub fn animate(base: &[Vec4], edge: f32, t: f32, frequency: f32, wobble: f32) -> Vec<Vec4> {
-    let tau = std::f32::consts::TAU;
-    base.iter()
-        .enumerate()
-        .map(|(i, v)| {
-            let phase = tau * frequency * t + 0.13 * i as f32;
-            let offset = Vec3::new(
-                (phase * 1.0).sin(),
-                (phase * 2.0 + 0.5).sin(),
-                (phase * 3.0 + 1.0).sin(),
-            ) * wobble
-                * edge;
-            (v.truncate() + offset).extend(v.w * (0.5 + 0.5 * phase.sin()))
-        })
-        .collect()
+    Animation {
+        scale_frequency: frequency,
+        offset_frequency: frequency,
+        offset_amplitude: wobble,
+        ..Animation::default()
+    }
+    .apply_unchecked(base, edge, t)
+}
+
+/// The band of a full-volume field: no distance between two voxels of `grid` is longer than its
+/// diagonal (what the SDF debug view scales by; unreached voxels lie beyond it).
+fn full_band(grid: &Grid3) -> f32 {
+    Vec3::from_array(grid.size.map(|s| s as f32)).length() * grid.voxel_size
 }
 
 /// Settings, voxel edge and grid placement, checked before any stage is encoded.
@@ -299,6 +496,16 @@ fn max_scale(voxels: &[Vec4]) -> f32 {
     voxels.iter().map(|v| v.w).fold(0.0, f32::max)
 }
 
+fn centre_bounds(voxels: &[Vec4]) -> [Vec3; 2] {
+    if voxels.is_empty() {
+        return [Vec3::ZERO; 2];
+    }
+    voxels.iter().fold(
+        [Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)],
+        |[lo, hi], v| [lo.min(v.truncate()), hi.max(v.truncate())],
+    )
+}
+
 fn check_voxels(voxels: &[Vec4], edge: f32) -> Result<(), Error> {
     if !(edge.is_finite() && edge > 0.0) {
         return Err(Error::Invalid {
@@ -332,6 +539,9 @@ pub struct Instances {
     pub count: u32,
     /// The largest scale uploaded: it sizes the bins of direct tracing.
     pub max_scale: f32,
+    /// Least and greatest centre uploaded (local units; both zero for an empty set): the debug
+    /// cubes' frustum culling.
+    pub centres: [Vec3; 2],
 }
 
 /// Everything a metaball field keeps on the GPU.
@@ -472,6 +682,7 @@ impl Metaballs {
             buffer,
             count: voxels.len() as u32,
             max_scale: max_scale(voxels),
+            centres: centre_bounds(voxels),
         })
     }
 
@@ -495,6 +706,7 @@ impl Metaballs {
         }
         queue.write_buffer(&instances.buffer, 0, bytemuck::cast_slice(voxels));
         instances.max_scale = max_scale(voxels);
+        instances.centres = centre_bounds(voxels);
         Ok(())
     }
 
@@ -515,7 +727,11 @@ impl Metaballs {
             signed: true,
             inside: Inside::Threshold(settings.threshold),
             voxel_size: grid.voxel_size,
-            band: Some(settings.band),
+            band: (!settings.full_volume).then_some(settings.band),
+            unreached: settings.full_volume.then_some(Unreached {
+                inside: grid.voxel_size,
+                outside: FULL_VOLUME_FAR,
+            }),
         };
         // The flood starts from the keys buffer and may leave intermediate steps in it.
         let mut field = self.distance.encode_keyed_points(
@@ -539,7 +755,11 @@ impl Metaballs {
             // transform splits.
             nearest: field.nearest.buffers.swap_remove(0),
             sdf: field.distance,
-            band: settings.band * grid.voxel_size,
+            band: if settings.full_volume {
+                full_band(grid)
+            } else {
+                settings.band * grid.voxel_size
+            },
             threshold: settings.threshold,
         })
     }
