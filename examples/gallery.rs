@@ -234,6 +234,7 @@ pub fn metaball_scene(
         view_proj: proj * glam::camera::rh::view::look_at_mat4(eye, Vec3::ZERO, Vec3::Y),
         viewport: [width, height],
         reversed_z: false,
+        origin: [0, 0],
     };
     let mut enc = ctx.encoder("gallery metaballs");
     let background = wgpu::Color {
@@ -482,6 +483,7 @@ pub fn cloud_scene(
         view_proj: proj * glam::camera::rh::view::look_at_mat4(eye, target, glam::Vec3::Y),
         viewport: [w, h],
         reversed_z: false,
+        origin: [0, 0],
     };
     let colour = ctx.device.create_texture(&wgpu::TextureDescriptor {
         label: Some("gallery cloud"),
@@ -586,6 +588,7 @@ pub fn ocean_scene(ctx: &Context, w: u32, h: u32, gbuffer: bool) -> Result<Vec<u
         view_proj: proj * camera.view.as_mat4(),
         viewport: [tw, th],
         reversed_z: false,
+        origin: [0, 0],
     };
     let mut enc = ctx.encoder("gallery ocean");
     let sky = wgpu::Color {

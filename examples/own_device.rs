@@ -46,6 +46,7 @@ pub fn camera() -> (OceanCamera, View) {
         view_proj: proj * camera.view.as_mat4(),
         viewport: FRAME,
         reversed_z: false,
+        origin: [0, 0],
     };
     (camera, view)
 }

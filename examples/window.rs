@@ -156,6 +156,7 @@ impl Scene {
                 * glam::camera::rh::view::look_at_mat4(eye, Vec3::new(0.0, -0.5, 0.0), Vec3::Y),
             viewport: size,
             reversed_z: false,
+            origin: [0, 0],
         };
         queue.write_buffer(&self.camera, 0, bytemuck::bytes_of(&view.view_proj));
         // The application's pass: clear, then the floor.

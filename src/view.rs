@@ -12,10 +12,16 @@ use crate::error::Error;
 pub struct View {
     /// World → clip space.
     pub view_proj: Mat4,
-    /// Target size in pixels.
+    /// Viewport size in pixels (the whole target where `origin` is [0, 0] and the target is
+    /// this size).
     pub viewport: [u32; 2],
     /// Reversed Z: the near plane at depth 1, far at 0 (depth test `Greater`).
     pub reversed_z: bool,
+    /// Top-left pixel of the viewport in the target (the metaball source's `ViewportMin`): a
+    /// view drawn into a sub-rectangle, for split screens and editor panels. Targets must be
+    /// at least `origin + viewport`. The metaball stages honour it; the volume renderer draws
+    /// whole targets and refuses a non-zero origin.
+    pub origin: [u32; 2],
 }
 
 impl View {
@@ -34,7 +40,24 @@ impl View {
                 what: format!("viewport {:?} has a zero side", self.viewport),
             });
         }
+        if (0..2).any(|k| self.origin[k].checked_add(self.viewport[k]).is_none()) {
+            return Err(Error::Invalid {
+                stage,
+                what: format!(
+                    "origin {:?} + viewport {:?} overflows u32",
+                    self.origin, self.viewport
+                ),
+            });
+        }
         Ok(())
+    }
+
+    /// The smallest target this view draws into: `origin + viewport`.
+    pub fn target_size(&self) -> [u32; 2] {
+        [
+            self.origin[0].saturating_add(self.viewport[0]),
+            self.origin[1].saturating_add(self.viewport[1]),
+        ]
     }
 }
 

@@ -147,6 +147,7 @@ fn camera_view(eye: Vec3, size: [u32; 2]) -> View {
         view_proj: proj * glam::camera::rh::view::look_at_mat4(eye, Vec3::ZERO, Vec3::Y),
         viewport: size,
         reversed_z: false,
+        origin: [0, 0],
     }
 }
 

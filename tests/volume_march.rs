@@ -24,6 +24,7 @@ fn view_from(eye: Vec3, target: Vec3, near: f32) -> View {
         view_proj: proj * glam::camera::rh::view::look_at_mat4(eye, target, Vec3::Y),
         viewport: [SIZE, SIZE],
         reversed_z: false,
+        origin: [0, 0],
     }
 }
 
@@ -645,6 +646,7 @@ fn rays_stop_at_the_scene_depth_standard_and_reversed() {
             view_proj: proj * glam::camera::rh::view::look_at_mat4(eye, Vec3::ZERO, Vec3::Y),
             viewport: [SIZE, SIZE],
             reversed_z: reversed,
+            origin: [0, 0],
         };
         // An opaque wall facing the camera 2 units away (view z = −2): through the box's middle.
         let wall =

@@ -83,6 +83,7 @@ impl Camera {
             view_proj: self.proj(aspect) * self.view_matrix(),
             viewport: size,
             reversed_z: self.reversed_z,
+            origin: [0, 0],
         }
     }
 

@@ -49,6 +49,9 @@ struct TraceParams {
     inner_offset: f32,
     // The colour piled-up density moves the base toward (w = 1), or lighten it (w = 0).
     pile_colour: vec4<f32>,
+    // Top-left pixel of the view's viewport in the target: pixels are traced in viewport
+    // coordinates and stored at + view_origin.
+    view_origin: vec2<u32>,
 }
 
 struct Shaded {
@@ -247,6 +250,7 @@ fn trace_blobs(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let xy = params.rect_origin + id.xy;
     let shaded = trace(vec2<f32>(xy) + 0.5);
-    textureStore(colour_out, xy, shaded.colour);
-    textureStore(depth_out, xy, vec4<f32>(shaded.depth, 0.0, 0.0, 0.0));
+    let at = xy + params.view_origin;
+    textureStore(colour_out, at, shaded.colour);
+    textureStore(depth_out, at, vec4<f32>(shaded.depth, 0.0, 0.0, 0.0));
 }

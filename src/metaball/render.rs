@@ -12,6 +12,7 @@
 //!     view_proj: proj * glam::camera::rh::view::look_at_mat4(Vec3::new(0.0, 2.0, 12.0), Vec3::ZERO, Vec3::Y),
 //!     viewport: [1920, 1080],
 //!     reversed_z: false,
+//!     origin: [0, 0],
 //! };
 //! let marcher = Raymarcher::new(
 //!     &ctx.device,
@@ -492,9 +493,10 @@ impl Raymarcher {
                 ambient: settings.ambient,
                 inner_offset: bins.cell,
                 pile_colour: pile(settings),
+                view_origin: glam::UVec2::from_array(view.origin),
             },
         );
-        let scratch = self.scratch(device, view.viewport);
+        let scratch = self.scratch(device, view.target_size());
         let bound = self.direct.bind(
             device,
             &blob_trace::trace_blobs::Resources {
@@ -512,6 +514,7 @@ impl Raymarcher {
             &self.direct,
             &bound,
             rect,
+            view.origin,
             scratch,
         )))
     }
@@ -594,9 +597,10 @@ impl Raymarcher {
                 min_step: settings.min_step(g.voxel_size),
                 hermite: (settings.filter == Filter::Hermite) as u32,
                 edge_falloff: settings.edge_falloff as u32,
+                view_origin: glam::UVec2::from_array(view.origin),
             },
         );
-        let scratch = self.scratch(device, view.viewport);
+        let scratch = self.scratch(device, view.target_size());
         let fv = field.march.create_view(&Default::default());
         let marched = self.march.bind(
             device,
@@ -614,6 +618,7 @@ impl Raymarcher {
             &self.march,
             &marched,
             rect,
+            view.origin,
             scratch,
         )))
     }
@@ -635,7 +640,8 @@ impl Raymarcher {
     }
 
     /// The draw half: write a march's hits into `colour` and `depth` (the formats this
-    /// raymarcher was made for, the size of the march's viewport) through the depth test.
+    /// raymarcher was made for, at least the view's `origin + viewport` in size) through the
+    /// depth test.
     pub fn encode_composite(
         &self,
         device: &wgpu::Device,
@@ -661,11 +667,13 @@ impl Raymarcher {
         }
         for (what, view) in [("colour", colour), ("depth", depth)] {
             let t = view.texture();
-            if [t.width(), t.height()] != marched.scratch.size {
+            let [w, h] = marched.scratch.size;
+            if t.width() < w || t.height() < h {
                 return Err(Error::Invalid {
                     stage,
                     what: format!(
-                        "{what} target is {}×{}, the march's viewport {:?}",
+                        "{what} target is {}×{}, smaller than the march's viewport (origin + \
+                         size) {:?}",
                         t.width(),
                         t.height(),
                         marched.scratch.size
@@ -721,17 +729,20 @@ pub struct Marched {
     number: u64,
 }
 
-/// Record a march over `rect` (8×8 pixels per workgroup) into `scratch`.
+/// Record a march over `rect` (viewport pixels, 8×8 per workgroup) into `scratch`, whose
+/// pixels lie at + `origin`.
 fn dispatch_rect<E: crate::bind::Entry>(
     rec: &mut impl crate::gpu::Record,
     label: &str,
     pipeline: &ComputePipeline<E>,
     bound: &crate::bind::Bound<E>,
     rect: [u32; 4],
+    origin: [u32; 2],
     scratch: std::sync::Arc<Scratch>,
 ) -> Marched {
     let mut rec = rec.recorder();
     let mut pass = rec.compute_pass(label, label);
+    let [ox, oy] = origin;
     let groups = [
         (rect[2] - rect[0]).div_ceil(8),
         (rect[3] - rect[1]).div_ceil(8),
@@ -743,7 +754,7 @@ fn dispatch_rect<E: crate::bind::Entry>(
         .fetch_add(1, std::sync::atomic::Ordering::Relaxed)
         + 1;
     Marched {
-        rect,
+        rect: [rect[0] + ox, rect[1] + oy, rect[2] + ox, rect[3] + oy],
         scratch,
         number,
     }

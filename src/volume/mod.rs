@@ -19,6 +19,7 @@
 //!     view_proj: proj * glam::camera::rh::view::look_at_mat4(Vec3::new(0.0, 0.3, 2.0), Vec3::ZERO, Vec3::Y),
 //!     viewport: [1920, 1080],
 //!     reversed_z: false,
+//!     origin: [0, 0],
 //! };
 //! let settings = MarchSettings::default();
 //! let mut encoder = ctx.encoder("frame");
@@ -821,6 +822,7 @@ impl VolumeRenderer {
             view_proj: Mat4::IDENTITY,
             viewport: [1, 1],
             reversed_z: false,
+            origin: [0, 0],
         };
         let params = self.params(
             device,
@@ -1180,6 +1182,12 @@ fn check_view(view: &View) -> Result<(), Error> {
     }
     if view.viewport[0] == 0 || view.viewport[1] == 0 {
         return Err(bad(format!("viewport {:?} has a zero side", view.viewport)));
+    }
+    if view.origin != [0, 0] {
+        return Err(bad(format!(
+            "origin {:?}: the volume renderer draws whole targets (origin [0, 0])",
+            view.origin
+        )));
     }
     let inv = view.view_proj.inverse();
     let (near_z, far_z) = if view.reversed_z {

@@ -164,6 +164,7 @@ fn bench(
             view_proj: proj * glam::camera::rh::view::look_at_mat4(eye, centre, Vec3::Y),
             viewport: [width, height],
             reversed_z: false,
+            origin: [0, 0],
         };
         let reference = Reference::new(&voxels, edge, &settings, &view, &fitted);
         let scene = Scene {

@@ -251,6 +251,7 @@ fn bench(
                 view_proj: proj * glam::camera::rh::view::look_at_mat4(eye, target, Vec3::Y),
                 viewport: [width, height],
                 reversed_z: false,
+                origin: [0, 0],
             };
             let scene = Scene {
                 ctx: &ctx,
