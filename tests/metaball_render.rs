@@ -8,7 +8,7 @@ mod common;
 
 use common::*;
 use fieldkit::gpu::{Context, read_texture};
-use fieldkit::metaball::render::{Direct, Output, RaymarchSettings, Raymarcher};
+use fieldkit::metaball::render::{Direct, Material, Output, RaymarchSettings, Raymarcher};
 use fieldkit::metaball::{self, BlobBins, MetaballField, Metaballs, Settings, cpu};
 use fieldkit::view::{Targets, View, box_visible};
 
@@ -516,6 +516,205 @@ fn viewport_origin_shifts_the_picture() {
         e.to_string().contains("smaller than the march's viewport"),
         "{e}"
     );
+}
+
+/// The G-buffer output (the source's stated limitation lifted): the same march writes depth
+/// to the bit, the world normal, the material given and the base colour, in the ocean's target
+/// order; pixels the surface misses keep what the targets held.
+#[test]
+fn gbuffer_holds_the_surface_for_the_scene_lighting() {
+    let ctx = Context::shared();
+    let (_, field) = one_blob(&ctx);
+    let view = camera(Vec3::new(0.3, 0.4, 2.5), Vec3::ZERO, false);
+    let forward = shoot(&ctx, &field, &view, Mat4::IDENTITY, &normals(), 1.0);
+    let f16 = wgpu::TextureFormat::Rgba16Float;
+    let marcher = Raymarcher::gbuffer(
+        &ctx.device,
+        [f16; 4],
+        wgpu::TextureFormat::Depth32Float,
+        false,
+    )
+    .unwrap();
+    let make = |format| {
+        ctx.device.create_texture(&wgpu::TextureDescriptor {
+            label: None,
+            size: wgpu::Extent3d {
+                width: W,
+                height: H,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        })
+    };
+    let gb: Vec<wgpu::Texture> = (0..4).map(|_| make(f16)).collect();
+    let depth = make(wgpu::TextureFormat::Depth32Float);
+    let views: Vec<wgpu::TextureView> = gb
+        .iter()
+        .map(|t| t.create_view(&Default::default()))
+        .collect();
+    let dv = depth.create_view(&Default::default());
+    let mut enc = ctx.encoder("gbuffer");
+    for v in &views {
+        enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: None,
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: v,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color {
+                        r: 0.25,
+                        g: 0.25,
+                        b: 0.25,
+                        a: 0.0,
+                    }),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+    }
+    enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: None,
+        color_attachments: &[],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: &dv,
+            depth_ops: Some(wgpu::Operations {
+                load: wgpu::LoadOp::Clear(1.0),
+                store: wgpu::StoreOp::Store,
+            }),
+            stencil_ops: None,
+        }),
+        timestamp_writes: None,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    });
+    let base = Vec3::new(0.8, 0.4, 0.2);
+    let settings = RaymarchSettings {
+        base_colour: base,
+        // The pile moves the base toward itself: the base colour stays as given.
+        pile_colour: Some(base),
+        ..RaymarchSettings::default()
+    };
+    let material = Material {
+        metallic: 0.25,
+        specular: 0.5,
+        roughness: 0.75,
+        shading_model: 3,
+    };
+    let refs = [&views[0], &views[1], &views[2], &views[3]];
+    let drawn = marcher
+        .encode_gbuffer(
+            &ctx.device,
+            &mut enc,
+            refs,
+            &dv,
+            &field,
+            Mat4::IDENTITY,
+            &view,
+            &settings,
+            &material,
+        )
+        .unwrap();
+    ctx.submit_and_wait("gbuffer", enc).unwrap();
+    assert!(drawn);
+    let read = |t: &wgpu::Texture| -> Vec<[f32; 4]> {
+        let bits: Vec<[u16; 4]> = read_texture(&ctx, t).unwrap();
+        bits.iter()
+            .map(|p| p.map(|h| half::f16::from_bits(h).to_f32()))
+            .collect()
+    };
+    let [scene, normal, mat, base_out] = [0, 1, 2, 3].map(|i| read(&gb[i]));
+    let depth: Vec<f32> = read_texture(&ctx, &depth).unwrap();
+    let mut hits = 0;
+    for i in 0..(W * H) as usize {
+        match forward.hits[i] {
+            Some((n, _)) => {
+                hits += 1;
+                // The same march: the same depth, to the bit.
+                assert_eq!(depth[i], forward.depth[i], "depth at {i}");
+                let got = Vec3::new(normal[i][0], normal[i][1], normal[i][2]) * 2.0 - 1.0;
+                // Rgba16Float keeps 11 bits: 1e-3 on [0, 1].
+                assert!(got.abs_diff_eq(n, 2e-3), "normal at {i}: {got} vs {n}");
+                assert_eq!(scene[i], [0.0, 0.0, 0.0, 1.0]);
+                let m = [0.25, 0.5, 0.75, 3.0 / 255.0];
+                assert!(
+                    (0..4).all(|k| (mat[i][k] - m[k]).abs() < 1e-3),
+                    "{:?}",
+                    mat[i]
+                );
+                // 8 bits in the march's packing, then half floats.
+                let b = Vec3::new(base_out[i][0], base_out[i][1], base_out[i][2]);
+                assert!(b.abs_diff_eq(base, 0.5 / 255.0 + 1e-3), "base at {i}: {b}");
+            }
+            None => {
+                assert_eq!(depth[i], 1.0, "depth written at a miss, {i}");
+                assert_eq!(
+                    normal[i],
+                    [0.25, 0.25, 0.25, 0.0],
+                    "normal written at a miss"
+                );
+            }
+        }
+    }
+    assert!(hits > 200, "{hits}");
+    // Each raymarcher draws its own kind of target; materials are checked.
+    let mut enc = ctx.encoder("gbuffer errors");
+    let e = marcher
+        .encode(
+            &ctx.device,
+            &mut enc,
+            &views[0],
+            &dv,
+            &field,
+            Mat4::IDENTITY,
+            &view,
+            &settings,
+        )
+        .unwrap_err();
+    assert!(e.to_string().contains("encode_gbuffer"), "{e}");
+    let bad = Material {
+        roughness: f32::NAN,
+        ..material
+    };
+    let e = marcher
+        .encode_gbuffer(
+            &ctx.device,
+            &mut enc,
+            refs,
+            &dv,
+            &field,
+            Mat4::IDENTITY,
+            &view,
+            &settings,
+            &bad,
+        )
+        .unwrap_err();
+    assert!(e.to_string().contains("roughness"), "{e}");
+    let forward_marcher =
+        Raymarcher::new(&ctx.device, f16, wgpu::TextureFormat::Depth32Float, false).unwrap();
+    let e = forward_marcher
+        .encode_gbuffer(
+            &ctx.device,
+            &mut enc,
+            refs,
+            &dv,
+            &field,
+            Mat4::IDENTITY,
+            &view,
+            &settings,
+            &material,
+        )
+        .unwrap_err();
+    assert!(e.to_string().contains("Raymarcher::gbuffer"), "{e}");
 }
 
 /// The source's edge falloff: density × saturate(10 × (distance to the box's faces in uvw +

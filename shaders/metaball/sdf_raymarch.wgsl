@@ -46,7 +46,8 @@ struct RaymarchParams {
     far_z: f32,
     // Step = distance × safety (≤ 1 keeps sphere tracing conservative on an approximate SDF).
     safety: f32,
-    // 0 shaded, 1 normal (rgb) and 1 + hit distance (a), 2 step count, 3 density, 4 SDF at entry.
+    // 0 shaded, 1 normal (rgb) and 1 + hit distance (a), 2 step count, 3 density, 4 SDF at entry,
+    // 5 G-buffer (normal and packed base colour).
     mode: u32,
     ambient: f32,
     // Distances in the SDF are clamped to ±band (local units).

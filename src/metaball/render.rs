@@ -226,6 +226,9 @@ impl RaymarchSettings {
     }
 }
 
+/// The march's output mode for a G-buffer: world normal and packed base colour.
+const GBUFFER_MODE: u32 = 5;
+
 /// The pile colour for the shaders: rgb, and w = 1 where it is set (0: lighten the base).
 fn pile(settings: &RaymarchSettings) -> Vec4 {
     settings.pile_colour.map_or(Vec4::ZERO, |c| c.extend(1.0))
@@ -291,13 +294,67 @@ impl Scratch {
     }
 }
 
+/// The surface's material in a G-buffer ([`Raymarcher::gbuffer`]): the third target holds
+/// (metallic, specular, roughness, shading model / 255), as the ocean's does.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(default))]
+pub struct Material {
+    /// 0 (dielectric) to 1.
+    pub metallic: f32,
+    /// Specular level, 0–1 (0.5 is a dielectric's 4%).
+    pub specular: f32,
+    /// 0 (mirror) to 1.
+    pub roughness: f32,
+    /// The renderer's shading-model id.
+    pub shading_model: u8,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Self {
+            metallic: 0.0,
+            specular: 0.5,
+            roughness: 0.5,
+            shading_model: 1,
+        }
+    }
+}
+
+impl Material {
+    fn check(&self) -> Result<(), Error> {
+        for (what, v) in [
+            ("metallic", self.metallic),
+            ("specular", self.specular),
+            ("roughness", self.roughness),
+        ] {
+            if !(0.0..=1.0).contains(&v) {
+                return Err(Error::Invalid {
+                    stage: composite::STAGE,
+                    what: format!("material {what} must be in [0, 1], got {v}"),
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Where the raymarcher's composite writes.
+enum Composite {
+    /// One lit colour target.
+    Forward(RenderPipeline<composite::fs_main::Entry>),
+    /// Four G-buffer targets.
+    GBuffer(RenderPipeline<composite::fs_gbuffer::Entry>),
+}
+
 /// The SDF raymarch for one colour and depth format: a compute pass marches and shades the
 /// box's screen rectangle, and a scissored full-screen draw writes the hits into the caller's
-/// targets through their depth test.
+/// targets through their depth test. [`Raymarcher::gbuffer`] writes a G-buffer instead, so the
+/// surface takes the scene's own lighting.
 pub struct Raymarcher {
     march: ComputePipeline<sdf_raymarch::march::Entry>,
     direct: ComputePipeline<blob_trace::trace_blobs::Entry>,
-    composite: RenderPipeline<composite::fs_main::Entry>,
+    composite: Composite,
     reversed_z: bool,
     sampler: wgpu::Sampler,
     scratch: std::sync::Mutex<Option<std::sync::Arc<Scratch>>>,
@@ -312,22 +369,60 @@ impl Raymarcher {
         depth: wgpu::TextureFormat,
         reversed_z: bool,
     ) -> Result<Self, Error> {
-        let composite = RenderPipeline::new(
+        let composite = Composite::Forward(RenderPipeline::new(
             device,
             &RenderTargets {
                 color: &[Some(colour.into())],
-                depth_stencil: Some(depth_state(
-                    composite::STAGE,
-                    depth,
-                    if reversed_z {
-                        wgpu::CompareFunction::Greater
-                    } else {
-                        wgpu::CompareFunction::Less
-                    },
-                )?),
+                depth_stencil: Some(Self::depth_test(depth, reversed_z)?),
                 ..Default::default()
             },
-        )?;
+        )?);
+        Self::with_composite(device, composite, reversed_z)
+    }
+
+    /// A raymarcher that writes a G-buffer, as the ocean's `Output::GBuffer` does: scene colour
+    /// (emissive: none; the rim is a forward look), world normal (× ½ + ½), material (metallic,
+    /// specular, roughness, shading model / 255) and base colour (the pile mix included), with
+    /// depth. The source's stated limitation, a surface that cannot receive the scene's
+    /// lighting, is what this lifts. Draw with [`Raymarcher::encode_gbuffer`].
+    pub fn gbuffer(
+        device: &wgpu::Device,
+        formats: [wgpu::TextureFormat; 4],
+        depth: wgpu::TextureFormat,
+        reversed_z: bool,
+    ) -> Result<Self, Error> {
+        let color = formats.map(|f| Some(wgpu::ColorTargetState::from(f)));
+        let composite = Composite::GBuffer(RenderPipeline::new(
+            device,
+            &RenderTargets {
+                color: &color,
+                depth_stencil: Some(Self::depth_test(depth, reversed_z)?),
+                ..Default::default()
+            },
+        )?);
+        Self::with_composite(device, composite, reversed_z)
+    }
+
+    fn depth_test(
+        depth: wgpu::TextureFormat,
+        reversed_z: bool,
+    ) -> Result<wgpu::DepthStencilState, Error> {
+        depth_state(
+            composite::STAGE,
+            depth,
+            if reversed_z {
+                wgpu::CompareFunction::Greater
+            } else {
+                wgpu::CompareFunction::Less
+            },
+        )
+    }
+
+    fn with_composite(
+        device: &wgpu::Device,
+        composite: Composite,
+        reversed_z: bool,
+    ) -> Result<Self, Error> {
         Ok(Self {
             march: ComputePipeline::new(device)?,
             direct: ComputePipeline::new(device)?,
@@ -589,7 +684,10 @@ impl Raymarcher {
                 near_z,
                 far_z,
                 safety: settings.safety,
-                mode: settings.output as u32,
+                mode: match self.composite {
+                    Composite::Forward(_) => settings.output as u32,
+                    Composite::GBuffer(_) => GBUFFER_MODE,
+                },
                 ambient: settings.ambient,
                 band: field.band,
                 pile_colour: pile(settings),
@@ -681,7 +779,13 @@ impl Raymarcher {
                 });
             }
         }
-        let bound = self.composite.bind(
+        let Composite::Forward(pipeline) = &self.composite else {
+            return Err(Error::Invalid {
+                stage,
+                what: "this raymarcher writes a G-buffer: draw with encode_gbuffer".into(),
+            });
+        };
+        let bound = pipeline.bind(
             device,
             &composite::fs_main::Resources {
                 marched_colour: (&marched.scratch.colour).into(),
@@ -690,11 +794,113 @@ impl Raymarcher {
         )?;
         let [x0, y0, x1, y1] = marched.rect;
         let mut pass = load_pass(encoder, composite::STAGE, colour, depth);
-        pass.set_pipeline(&self.composite.pipeline);
+        pass.set_pipeline(&pipeline.pipeline);
         bound.set_render(&mut pass);
         pass.set_scissor_rect(x0, y0, x1 - x0, y1 - y0);
         pass.draw(0..3, 0..1);
         Ok(())
+    }
+
+    /// March `field` and write its G-buffer into `targets` (scene colour, normal, material,
+    /// base colour; the formats given to [`Raymarcher::gbuffer`]) and `depth`, loading what they
+    /// hold, through the depth test. `settings` sets the march and the base colour (its
+    /// `output` is not used: the G-buffer is the output). Returns false, drawing nothing, when
+    /// the box is outside the frustum.
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode_gbuffer(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: [&wgpu::TextureView; 4],
+        depth: &wgpu::TextureView,
+        field: &MetaballField,
+        local_to_world: Mat4,
+        view: &View,
+        settings: &RaymarchSettings,
+        material: &Material,
+    ) -> Result<bool, Error> {
+        let stage = composite::STAGE;
+        material.check()?;
+        let Composite::GBuffer(pipeline) = &self.composite else {
+            return Err(Error::Invalid {
+                stage,
+                what: "this raymarcher writes one colour target: make it with \
+                       Raymarcher::gbuffer"
+                    .into(),
+            });
+        };
+        let Some(marched) =
+            self.encode_march(device, encoder, field, local_to_world, view, settings)?
+        else {
+            return Ok(false);
+        };
+        let [w, h] = marched.scratch.size;
+        for (i, t) in targets.iter().chain([&depth]).enumerate() {
+            let t = t.texture();
+            if t.width() < w || t.height() < h {
+                return Err(Error::Invalid {
+                    stage,
+                    what: format!(
+                        "G-buffer target {i} is {}×{}, smaller than the march's viewport \
+                         (origin + size) {:?}",
+                        t.width(),
+                        t.height(),
+                        marched.scratch.size
+                    ),
+                });
+            }
+        }
+        let params = uniform(
+            device,
+            "metaball material",
+            &composite::Material {
+                metallic: material.metallic,
+                specular: material.specular,
+                roughness: material.roughness,
+                shading_model: material.shading_model as u32,
+            },
+        );
+        let bound = pipeline.bind(
+            device,
+            &composite::fs_gbuffer::Resources {
+                marched_colour: (&marched.scratch.colour).into(),
+                marched_depth: (&marched.scratch.depth).into(),
+                material: (&params).into(),
+            },
+        )?;
+        let load = wgpu::Operations {
+            load: wgpu::LoadOp::Load,
+            store: wgpu::StoreOp::Store,
+        };
+        let attachments = targets.map(|view| {
+            Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: load,
+            })
+        });
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(stage),
+            color_attachments: &attachments,
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        let [x0, y0, x1, y1] = marched.rect;
+        pass.set_pipeline(&pipeline.pipeline);
+        bound.set_render(&mut pass);
+        pass.set_scissor_rect(x0, y0, x1 - x0, y1 - y0);
+        pass.draw(0..3, 0..1);
+        Ok(true)
     }
 }
 
