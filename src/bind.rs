@@ -549,6 +549,19 @@ fn view_dimension_of(t: &wgpu::Texture) -> wgpu::TextureViewDimension {
     }
 }
 
+/// Whether some view of `t` can have dimension `want`: a 2D texture's views are 2D arrays at
+/// any layer count (one layer included), 2D with one layer, cubes with six.
+fn view_fits(t: &wgpu::Texture, want: wgpu::TextureViewDimension) -> bool {
+    use wgpu::TextureViewDimension as V;
+    let layers = t.depth_or_array_layers();
+    match (t.dimension(), want) {
+        (wgpu::TextureDimension::D2, V::D2Array) => true,
+        (wgpu::TextureDimension::D2, V::Cube) => layers == 6,
+        (wgpu::TextureDimension::D2, V::CubeArray) => layers.is_multiple_of(6),
+        _ => view_dimension_of(t) == want,
+    }
+}
+
 /// Check one resource against its slot. `Err(problem)` says what is wrong, in words. A
 /// binding array takes exactly its count of elements, each checked as a single resource.
 fn check(slot: &Slot, res: &Resource<'_>, device: &wgpu::Device) -> Result<(), String> {
@@ -650,7 +663,7 @@ fn check_one(slot: &Slot, res: &Resource<'_>, device: &wgpu::Device) -> Result<(
                     t.usage()
                 ));
             }
-            if view_dimension_of(t) != *view_dimension {
+            if !view_fits(t, *view_dimension) {
                 return Err(format!(
                     "{:?} texture bound, the shader reads `{}`",
                     view_dimension_of(t),
@@ -665,8 +678,7 @@ fn check_one(slot: &Slot, res: &Resource<'_>, device: &wgpu::Device) -> Result<(
                 ));
             }
             let features = device.features();
-            let have = t.format().sample_type(None, Some(features));
-            let ok = match (sample_type, have) {
+            let fits = |have: Option<wgpu::TextureSampleType>| match (sample_type, have) {
                 (
                     wgpu::TextureSampleType::Float { filterable: true },
                     Some(wgpu::TextureSampleType::Float { filterable }),
@@ -678,6 +690,17 @@ fn check_one(slot: &Slot, res: &Resource<'_>, device: &wgpu::Device) -> Result<(
                 ) => true,
                 (want, Some(h)) => *want == h,
                 (_, None) => false,
+            };
+            // A combined depth-stencil format is read through a view of one aspect (the view
+            // does not say which): either aspect may fit.
+            let ok = match t.format().sample_type(None, Some(features)) {
+                Some(have) => fits(Some(have)),
+                None => [
+                    wgpu::TextureAspect::DepthOnly,
+                    wgpu::TextureAspect::StencilOnly,
+                ]
+                .into_iter()
+                .any(|a| fits(t.format().sample_type(Some(a), Some(features)))),
             };
             if !ok {
                 return Err(format!(
@@ -712,7 +735,7 @@ fn check_one(slot: &Slot, res: &Resource<'_>, device: &wgpu::Device) -> Result<(
                     format
                 ));
             }
-            if view_dimension_of(t) != *view_dimension {
+            if !view_fits(t, *view_dimension) {
                 return Err(format!(
                     "{:?} texture bound, the shader writes `{}`",
                     view_dimension_of(t),

@@ -1,7 +1,7 @@
 // The ocean surface: the Gerstner wave sum (`fieldkit::gerstner`) drawn as patches of a grid, with
 // scrolling height-map layers in the vertex stage, scrolling normal-map layers and depth fade in
-// the fragment stage, written to one forward-shaded colour target (`fs_forward`) or to four
-// G-buffer targets (`fs_gbuffer`). `displace_grid` evaluates the same sum on a grid for reading
+// the fragment stage, written to one forward-shaded colour target (`fs_forward`), to four
+// G-buffer targets (`fs_gbuffer`) or to five (`fs_gbuffer_subsurface`). `displace_grid` evaluates the same sum on a grid for reading
 // back (the f64 reference and the CPU query are tested against it).
 //
 // Positions are relative to the waves' origin (the host puts it at the camera), so f32 holds
@@ -87,8 +87,16 @@ struct FrameParams {
     // 1: the scene depth is read for the fade; 0: no fade (open sea).
     use_fade: u32,
     deep_colour: vec3<f32>,
+    // G-buffer material: metallic and specular (the material target's r and g).
+    metallic: f32,
     shallow_colour: vec3<f32>,
+    specular: f32,
     sky_colour: vec3<f32>,
+    // The fifth G-buffer target (`fs_gbuffer_subsurface`).
+    subsurface_colour: vec3<f32>,
+    // Per layer: the layer of the user's map array it samples, or −1 for the built-in detail.
+    height_maps: vec4<i32>,
+    normal_maps: vec4<i32>,
 }
 
 struct SurfaceOut {
@@ -111,12 +119,26 @@ struct GBuffer {
     @location(3) base_colour: vec4<f32>,
 }
 
+// The four targets and a fifth, subsurface colour (the source's order; UE's base pass puts its
+// velocity target before GBufferD when it writes velocity there).
+struct GBufferSubsurface {
+    @location(0) scene_colour: vec4<f32>,
+    @location(1) normal: vec4<f32>,
+    @location(2) material: vec4<f32>,
+    @location(3) base_colour: vec4<f32>,
+    @location(4) subsurface_colour: vec4<f32>,
+}
+
 @group(0) @binding(4) var<uniform> frame: FrameParams;
 // Tileable detail: height in r, its slope per texture unit in g (along u = x) and b (v = z).
 @group(0) @binding(5) var detail: texture_2d<f32>;
 @group(0) @binding(6) var detail_sampler: sampler;
 // A copy of the scene's depth (`ocean/depth_copy`), read as unfilterable float.
 @group(0) @binding(7) var scene_depth: texture_2d<f32>;
+// The user's height maps (height in r) and normal maps (tangent-space normal × ½ + ½ in rgb,
+// +y along +z), one layer each; 1×1 stand-ins when none are set.
+@group(0) @binding(8) var height_maps: texture_2d_array<f32>;
+@group(0) @binding(9) var normal_maps: texture_2d_array<f32>;
 
 // Undisplaced (x, z) of vertex `index` of the patch `square` (its smallest corner x, z, then
 // its largest) of n quads per side (the host draws it with an index buffer made for n), and
@@ -152,6 +174,35 @@ fn detail_at(layer: DetailLayer, rest: vec2<f32>) -> vec3<f32> {
     return textureSampleLevel(detail, detail_sampler, rest * layer.per_metre + layer.offset, 0.0).rgb;
 }
 
+// A height layer's height (r) and slope per texture unit (g along u, b along v): the built-in
+// detail holds all three; a user's height map holds the height, and its slope is a central
+// difference one texel wide.
+fn height_at(layer: DetailLayer, map: i32, rest: vec2<f32>) -> vec3<f32> {
+    if map < 0 {
+        return detail_at(layer, rest);
+    }
+    let uv = rest * layer.per_metre + layer.offset;
+    let texel = 1.0 / vec2<f32>(textureDimensions(height_maps));
+    let h = textureSampleLevel(height_maps, detail_sampler, uv, map, 0.0).r;
+    let du = textureSampleLevel(height_maps, detail_sampler, uv + vec2<f32>(texel.x, 0.0), map, 0.0).r
+        - textureSampleLevel(height_maps, detail_sampler, uv - vec2<f32>(texel.x, 0.0), map, 0.0).r;
+    let dv = textureSampleLevel(height_maps, detail_sampler, uv + vec2<f32>(0.0, texel.y), map, 0.0).r
+        - textureSampleLevel(height_maps, detail_sampler, uv - vec2<f32>(0.0, texel.y), map, 0.0).r;
+    return vec3<f32>(h, du / (2.0 * texel.x), dv / (2.0 * texel.y));
+}
+
+// A normal layer's slope per metre (along x, along z), before its strength: the built-in
+// detail's slopes per texture unit × repeats per metre, or a user's normal map's tilt
+// (−n.x / n.z, −n.y / n.z), which is per metre whatever the tiling.
+fn normal_slope(layer: DetailLayer, map: i32, rest: vec2<f32>) -> vec2<f32> {
+    if map < 0 {
+        return layer.per_metre * detail_at(layer, rest).gb;
+    }
+    let uv = rest * layer.per_metre + layer.offset;
+    let n = textureSampleLevel(normal_maps, detail_sampler, uv, map, 0.0).rgb * 2.0 - 1.0;
+    return -n.xy / max(n.z, 1e-3);
+}
+
 @vertex
 // Per instance: the patch's corners (`patch_vertex`) and its quads per side in x (y to w
 // unused: a whole vec4 keeps the instance 32 bytes with no padding).
@@ -166,7 +217,7 @@ fn vs_surface(@builtin(vertex_index) index: u32, @location(0) instance_patch: ve
     // Height-map layers: height and its slope per metre, added to the wave's frame.
     for (var l = 0u; l < frame.height_layer_count; l++) {
         let layer = frame.height_layers[l];
-        let h = detail_at(layer, p);
+        let h = height_at(layer, frame.height_maps[l], p);
         s.position.y += layer.strength * h.r;
         let slope = layer.strength * layer.per_metre * h.gb;
         s.binormal.y += slope.x;
@@ -204,7 +255,7 @@ fn shade(in: SurfaceOut) -> Shaded {
     var slope = vec2<f32>(0.0);
     for (var l = 0u; l < frame.normal_layer_count; l++) {
         let layer = frame.normal_layers[l];
-        slope += layer.strength * layer.per_metre * detail_at(layer, in.rest).gb;
+        slope += layer.strength * normal_slope(layer, frame.normal_maps[l], in.rest);
     }
     n = normalize(n - slope.x * b - slope.y * t);
     // Depth fade from the scene's depth behind this pixel.
@@ -243,7 +294,19 @@ fn fs_gbuffer(in: SurfaceOut) -> GBuffer {
     var out: GBuffer;
     out.scene_colour = vec4<f32>(s.emissive, 1.0);
     out.normal = vec4<f32>(s.normal * 0.5 + 0.5, 1.0);
-    out.material = vec4<f32>(0.0, 0.5, frame.roughness, f32(frame.shading_model) / 255.0);
+    out.material = vec4<f32>(frame.metallic, frame.specular, frame.roughness, f32(frame.shading_model) / 255.0);
     out.base_colour = vec4<f32>(s.base, 1.0);
+    return out;
+}
+
+@fragment
+fn fs_gbuffer_subsurface(in: SurfaceOut) -> GBufferSubsurface {
+    let s = shade(in);
+    var out: GBufferSubsurface;
+    out.scene_colour = vec4<f32>(s.emissive, 1.0);
+    out.normal = vec4<f32>(s.normal * 0.5 + 0.5, 1.0);
+    out.material = vec4<f32>(frame.metallic, frame.specular, frame.roughness, f32(frame.shading_model) / 255.0);
+    out.base_colour = vec4<f32>(s.base, 1.0);
+    out.subsurface_colour = vec4<f32>(frame.subsurface_colour, 1.0);
     return out;
 }

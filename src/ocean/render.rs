@@ -36,6 +36,67 @@ pub enum Output {
     /// Scene colour (emissive), world normal, metallic/specular/roughness/shading model, base
     /// colour: four targets, in that order.
     GBuffer([wgpu::TextureFormat; 4]),
+    /// The four G-buffer targets and a fifth, subsurface colour ([`Look::subsurface_colour`]):
+    /// the source's five, in its order (UE's base pass puts its velocity target before
+    /// GBufferD when velocity is written there).
+    GBufferSubsurface([wgpu::TextureFormat; 5]),
+}
+
+impl Output {
+    /// Colour targets the output writes.
+    pub fn targets(&self) -> usize {
+        match self {
+            Output::Forward(_) => 1,
+            Output::GBuffer(_) => 4,
+            Output::GBufferSubsurface(_) => 5,
+        }
+    }
+}
+
+/// The depth target the ocean tests (and, by default, writes).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct DepthMode {
+    /// `Depth32Float` (default), `Depth24Plus`, `Depth24PlusStencil8` or `Depth32FloatStencil8`
+    /// (the stencil is left as it is).
+    pub format: wgpu::TextureFormat,
+    /// Write depth (default). Off is the source's `bUseDepthBlend` choice: the water tests the
+    /// scene's depth and leaves it for what is drawn after.
+    pub write: bool,
+}
+
+impl Default for DepthMode {
+    fn default() -> Self {
+        Self {
+            format: wgpu::TextureFormat::Depth32Float,
+            write: true,
+        }
+    }
+}
+
+impl DepthMode {
+    /// The source's depth: tested, not written.
+    pub fn seed() -> Self {
+        Self {
+            write: false,
+            ..Self::default()
+        }
+    }
+
+    fn check(&self) -> Result<(), Error> {
+        use wgpu::TextureFormat as F;
+        if !matches!(
+            self.format,
+            F::Depth32Float | F::Depth24Plus | F::Depth24PlusStencil8 | F::Depth32FloatStencil8
+        ) {
+            return Err(Error::Format {
+                stage: STAGE,
+                format: self.format,
+                supported: "Depth32Float, Depth24Plus, Depth24PlusStencil8, Depth32FloatStencil8",
+            });
+        }
+        Ok(())
+    }
 }
 
 /// A square of ocean to draw: its world corner (x, z, smallest) and side, in metres, its
@@ -94,11 +155,19 @@ pub struct Layer {
     pub velocity: Vec2,
     /// Height layers: metres of height per unit of the texture. Normal layers: slope scale.
     pub strength: f32,
+    /// Which layer of the user's maps ([`OceanRenderer::set_maps`]) this layer scrolls: the
+    /// height-map array for a height layer, the normal-map array for a normal layer. `None`
+    /// (default) scrolls the built-in procedural detail.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub map: Option<u32>,
 }
 
 /// Colours, light and the detail layers.
+///
+/// [`Look::default`] is fieldkit's; [`Look::seed`] the source's (a 30 cm fade).
 #[derive(Clone, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(default))]
 pub struct Look {
     /// Height-map detail layers (at most [`MAX_LAYERS`]).
     pub height_layers: Vec<Layer>,
@@ -118,6 +187,12 @@ pub struct Look {
     pub roughness: f32,
     /// Metres of water over which the colour fades from shallow to deep.
     pub fade_distance: f32,
+    /// G-buffer metallic, 0–1 (0: water is a dielectric).
+    pub metallic: f32,
+    /// G-buffer specular level, 0–1 (0.5: a dielectric's 4%).
+    pub specular: f32,
+    /// The fifth G-buffer target's colour ([`Output::GBufferSubsurface`]).
+    pub subsurface_colour: Vec3,
     /// Written to the G-buffer's shading-model channel.
     pub shading_model: u8,
     /// Metres the skirts under patch edges reach down (hides cracks between levels).
@@ -132,11 +207,13 @@ impl Default for Look {
                     tile: 23.0,
                     velocity: Vec2::new(0.9, 0.4),
                     strength: 0.06,
+                    map: None,
                 },
                 Layer {
                     tile: 7.3,
                     velocity: Vec2::new(-0.5, 0.8),
                     strength: 0.02,
+                    map: None,
                 },
             ],
             normal_layers: vec![
@@ -144,11 +221,13 @@ impl Default for Look {
                     tile: 3.1,
                     velocity: Vec2::new(0.6, 0.2),
                     strength: 0.03,
+                    map: None,
                 },
                 Layer {
                     tile: 1.3,
                     velocity: Vec2::new(-0.3, 0.5),
                     strength: 0.01,
+                    map: None,
                 },
             ],
             sun_direction: Vec3::new(0.3, 0.6, -0.7),
@@ -158,6 +237,9 @@ impl Default for Look {
             sky_colour: Vec3::new(0.55, 0.7, 0.85),
             roughness: 0.15,
             fade_distance: 3.0,
+            metallic: 0.0,
+            specular: 0.5,
+            subsurface_colour: Vec3::new(0.1, 0.45, 0.45),
             shading_model: 1,
             skirt: 2.0,
         }
@@ -199,8 +281,12 @@ impl OceanCamera {
 pub struct OceanRenderer {
     output: Output,
     reversed_z: bool,
+    depth: DepthMode,
     forward: Option<RenderPipeline<stage::fs_forward::Entry>>,
     gbuffer: Option<RenderPipeline<stage::fs_gbuffer::Entry>>,
+    gbuffer_subsurface: Option<RenderPipeline<stage::fs_gbuffer_subsurface::Entry>>,
+    height_maps: Maps,
+    normal_maps: Maps,
     /// Index buffers per quad count, made on first use.
     indices: Mutex<std::collections::HashMap<u32, wgpu::Buffer>>,
     detail: wgpu::Texture,
@@ -312,6 +398,18 @@ fn layer_uniforms(layers: &[Layer], origin: DVec2, time: f64) -> [DetailLayer; M
 }
 
 impl Look {
+    /// The source's look: the depth fade over 30 cm of water (its sea is 2560 m across, as
+    /// [`super::lod::LodSettings::default`]). fieldkit's default fades over 3 m: at 30 cm the
+    /// shallow colour shows only in a thin line where the water meets the scene, and the
+    /// gallery's shelf (sloping 1 m in 10) shows none of its gradient (a 3 m band at the
+    /// default).
+    pub fn seed() -> Self {
+        Self {
+            fade_distance: 0.3,
+            ..Self::default()
+        }
+    }
+
     fn check(&self) -> Result<(), Error> {
         for (kind, layers) in [
             ("height", &self.height_layers),
@@ -371,8 +469,108 @@ impl Look {
         if !(self.skirt.is_finite() && self.skirt >= 0.0) {
             return Err(invalid(format!("skirt must be ≥ 0, got {}", self.skirt)));
         }
+        for (what, v) in [("metallic", self.metallic), ("specular", self.specular)] {
+            if !(0.0..=1.0).contains(&v) {
+                return Err(invalid(format!("{what} must be in [0, 1], got {v}")));
+            }
+        }
+        if !self.subsurface_colour.is_finite() {
+            return Err(invalid("subsurface colour must be finite".into()));
+        }
         Ok(())
     }
+}
+
+/// The user's detail maps: a 2D texture array, one layer per map, and what it may hold.
+struct Maps {
+    view: wgpu::TextureView,
+    layers: u32,
+}
+
+impl Maps {
+    /// A 1×1 stand-in bound where no maps are set.
+    fn none(device: &wgpu::Device, label: &str) -> Self {
+        let t = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width: 1,
+                height: 1,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba8Unorm,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        Self {
+            view: array_view(&t),
+            layers: 0,
+        }
+    }
+
+    fn user(
+        t: &wgpu::Texture,
+        kind: &str,
+        formats: &[wgpu::TextureFormat],
+        supported: &'static str,
+    ) -> Result<Self, Error> {
+        if t.dimension() != wgpu::TextureDimension::D2 {
+            return Err(invalid(format!(
+                "{kind} maps must be a 2D texture (array), got {:?}",
+                t.dimension()
+            )));
+        }
+        if !formats.contains(&t.format()) {
+            return Err(Error::Format {
+                stage: STAGE,
+                format: t.format(),
+                supported,
+            });
+        }
+        if !t.usage().contains(wgpu::TextureUsages::TEXTURE_BINDING) {
+            return Err(invalid(format!(
+                "{kind} maps need TEXTURE_BINDING, they have {:?}",
+                t.usage()
+            )));
+        }
+        if t.sample_count() != 1 {
+            return Err(invalid(format!(
+                "{kind} maps must not be multisampled ({} samples)",
+                t.sample_count()
+            )));
+        }
+        Ok(Self {
+            view: array_view(t),
+            layers: t.depth_or_array_layers(),
+        })
+    }
+}
+
+fn array_view(t: &wgpu::Texture) -> wgpu::TextureView {
+    t.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(wgpu::TextureViewDimension::D2Array),
+        ..Default::default()
+    })
+}
+
+/// Per layer, the user's map it samples (−1: the built-in detail), checked against the maps set.
+fn map_indices(layers: &[Layer], maps: &Maps, kind: &str) -> Result<glam::IVec4, Error> {
+    let mut out = [-1i32; MAX_LAYERS];
+    for (i, (slot, l)) in out.iter_mut().zip(layers).enumerate() {
+        if let Some(m) = l.map {
+            if m >= maps.layers {
+                return Err(invalid(format!(
+                    "{kind} layer {i} samples map {m}, but {} {kind} maps are set \
+                     (OceanRenderer::set_maps)",
+                    maps.layers
+                )));
+            }
+            *slot = m as i32;
+        }
+    }
+    Ok(glam::IVec4::from_array(out))
 }
 
 impl OceanRenderer {
@@ -384,9 +582,32 @@ impl OceanRenderer {
         output: Output,
         reversed_z: bool,
     ) -> Result<Self, Error> {
+        Self::with_depth(device, queue, output, reversed_z, DepthMode::default())
+    }
+
+    /// [`OceanRenderer::new`] for another depth format, or testing depth without writing it
+    /// ([`DepthMode::seed`]).
+    pub fn with_depth(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        output: Output,
+        reversed_z: bool,
+        depth: DepthMode,
+    ) -> Result<Self, Error> {
+        depth.check()?;
+        let needs = depth.format.required_features();
+        if !device.features().contains(needs) {
+            return Err(Error::Unsupported {
+                stage: STAGE,
+                what: format!(
+                    "{:?} depth needs the device feature {needs:?}",
+                    depth.format
+                ),
+            });
+        }
         let depth_stencil = Some(wgpu::DepthStencilState {
-            format: wgpu::TextureFormat::Depth32Float,
-            depth_write_enabled: Some(true),
+            format: depth.format,
+            depth_write_enabled: Some(depth.write),
             depth_compare: Some(if reversed_z {
                 wgpu::CompareFunction::Greater
             } else {
@@ -402,7 +623,7 @@ impl OceanRenderer {
                 write_mask: wgpu::ColorWrites::ALL,
             })
         };
-        let (mut forward, mut gbuffer) = (None, None);
+        let (mut forward, mut gbuffer, mut gbuffer_subsurface) = (None, None, None);
         match output {
             Output::Forward(f) => {
                 forward = Some(RenderPipeline::new(
@@ -416,6 +637,16 @@ impl OceanRenderer {
             }
             Output::GBuffer(fs) => {
                 gbuffer = Some(RenderPipeline::new(
+                    device,
+                    &RenderTargets {
+                        color: &fs.map(target),
+                        depth_stencil,
+                        ..Default::default()
+                    },
+                )?)
+            }
+            Output::GBufferSubsurface(fs) => {
+                gbuffer_subsurface = Some(RenderPipeline::new(
                     device,
                     &RenderTargets {
                         color: &fs.map(target),
@@ -453,8 +684,12 @@ impl OceanRenderer {
         Ok(Self {
             output,
             reversed_z,
+            depth,
             forward,
             gbuffer,
+            gbuffer_subsurface,
+            height_maps: Maps::none(device, "ocean height maps (none)"),
+            normal_maps: Maps::none(device, "ocean normal maps (none)"),
             indices: Mutex::new(Default::default()),
             detail,
             sampler: device.create_sampler(&wgpu::SamplerDescriptor {
@@ -478,6 +713,48 @@ impl OceanRenderer {
     /// Whether the depth test keeps the larger depth (reversed Z).
     pub fn reversed_z(&self) -> bool {
         self.reversed_z
+    }
+
+    /// The depth target's format and whether the water writes it.
+    pub fn depth_mode(&self) -> DepthMode {
+        self.depth
+    }
+
+    /// Your own detail maps, as the source scrolls its own textures: `heights` a 2D texture
+    /// (array) of heights in r (`R8Unorm`, `R16Float`, `Rgba8Unorm` or `Rgba16Float`), `normals`
+    /// one of tangent-space normals × ½ + ½ in rgb, +y along +z (`Rgba8Unorm` or
+    /// `Rgba16Float`), each with `TEXTURE_BINDING`; one map per array layer, sampled with
+    /// repeat and linear filtering. A layer picks its map with [`Layer::map`] (its tile,
+    /// velocity and strength as for the built-in detail); `None` keeps the built-in one. A
+    /// texture of another format or dimension is a typed error. Replaces earlier maps.
+    pub fn set_maps(
+        &mut self,
+        device: &wgpu::Device,
+        heights: Option<&wgpu::Texture>,
+        normals: Option<&wgpu::Texture>,
+    ) -> Result<(), Error> {
+        use wgpu::TextureFormat as F;
+        let heights = match heights {
+            Some(t) => Maps::user(
+                t,
+                "height",
+                &[F::R8Unorm, F::R16Float, F::Rgba8Unorm, F::Rgba16Float],
+                "R8Unorm, R16Float, Rgba8Unorm, Rgba16Float (height in r)",
+            )?,
+            None => Maps::none(device, "ocean height maps (none)"),
+        };
+        let normals = match normals {
+            Some(t) => Maps::user(
+                t,
+                "normal",
+                &[F::Rgba8Unorm, F::Rgba16Float],
+                "Rgba8Unorm, Rgba16Float (tangent-space normal × ½ + ½)",
+            )?,
+            None => Maps::none(device, "ocean normal maps (none)"),
+        };
+        self.height_maps = heights;
+        self.normal_maps = normals;
+        Ok(())
     }
 
     /// Draw `patches` of `waves` at `time` seen by `camera` into `targets` (one view for
@@ -517,23 +794,22 @@ impl OceanRenderer {
                 )));
             }
         }
-        let want = match self.output {
-            Output::Forward(_) => 1,
-            Output::GBuffer(_) => 4,
-        };
+        let want = self.output.targets();
         if targets.len() != want {
             return Err(invalid(format!(
                 "{} targets given, the output takes {want}",
                 targets.len()
             )));
         }
-        if depth.format() != wgpu::TextureFormat::Depth32Float {
-            return Err(Error::Format {
-                stage: STAGE,
-                format: depth.format(),
-                supported: "Depth32Float",
-            });
+        if depth.format() != self.depth.format {
+            return Err(invalid(format!(
+                "the depth target is {:?}; this renderer was made for {:?} (OceanRenderer::with_depth)",
+                depth.format(),
+                self.depth.format
+            )));
         }
+        let height_maps = map_indices(&look.height_layers, &self.height_maps, "height")?;
+        let normal_maps = map_indices(&look.normal_layers, &self.normal_maps, "normal")?;
         let needs = wgpu::TextureUsages::RENDER_ATTACHMENT
             | if fade {
                 wgpu::TextureUsages::TEXTURE_BINDING
@@ -578,8 +854,13 @@ impl OceanRenderer {
             sun_colour: look.sun_colour,
             use_fade: fade as u32,
             deep_colour: look.deep_colour,
+            metallic: look.metallic,
             shallow_colour: look.shallow_colour,
+            specular: look.specular,
             sky_colour: look.sky_colour,
+            subsurface_colour: look.subsurface_colour,
+            height_maps,
+            normal_maps,
         };
         // The copy of the scene's depth (a 1×1 stand-in without fade).
         let mut cache = self.depth_copy.lock().unwrap_or_else(|e| e.into_inner());
@@ -722,6 +1003,8 @@ impl OceanRenderer {
                         detail: (&detail_view).into(),
                         detail_sampler: (&self.sampler).into(),
                         scene_depth: (&copy_view).into(),
+                        height_maps: (&self.height_maps.view).into(),
+                        normal_maps: (&self.normal_maps.view).into(),
                     },
                 )?;
                 let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -729,10 +1012,12 @@ impl OceanRenderer {
                     color_attachments: &attachments,
                     depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                         view: &depth_view,
-                        depth_ops: Some(wgpu::Operations {
+                        // Read-only where the water does not write depth.
+                        depth_ops: self.depth.write.then_some(wgpu::Operations {
                             load: wgpu::LoadOp::Load,
                             store: wgpu::StoreOp::Store,
                         }),
+                        // The stencil (where the format has one) is left as it is.
                         stencil_ops: None,
                     }),
                     ..Default::default()
@@ -746,9 +1031,10 @@ impl OceanRenderer {
                 }
             }};
         }
-        match (&self.forward, &self.gbuffer) {
-            (Some(p), _) => draw!(p, fs_forward),
-            (_, Some(p)) => draw!(p, fs_gbuffer),
+        match (&self.forward, &self.gbuffer, &self.gbuffer_subsurface) {
+            (Some(p), _, _) => draw!(p, fs_forward),
+            (_, Some(p), _) => draw!(p, fs_gbuffer),
+            (_, _, Some(p)) => draw!(p, fs_gbuffer_subsurface),
             _ => unreachable!("one pipeline is made in new"),
         }
         Ok(())
