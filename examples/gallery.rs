@@ -199,6 +199,15 @@ pub enum MetaballView {
     Direct(fieldkit::metaball::render::Direct),
 }
 
+/// Whose settings a scene uses: fieldkit's defaults, or the source's (`seed()` presets).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Preset {
+    /// `Default::default()` everywhere.
+    Fieldkit,
+    /// Each technique's `seed()` preset: the system the source describes.
+    Seed,
+}
+
 /// The gallery's metaball scene: a packed 5×4×3 voxel set, animated to time `t` (seconds), seen
 /// from a fixed camera over a grey floor-coloured background, into RGBA8 pixels.
 pub fn metaball_scene(
@@ -208,15 +217,45 @@ pub fn metaball_scene(
     t: f32,
     what: MetaballView,
 ) -> Result<Vec<u8>, Error> {
+    metaball_scene_with(ctx, width, height, t, what, Preset::Fieldkit)
+}
+
+/// [`metaball_scene`] with `preset`'s settings: the seed preset builds the set from an extent
+/// and a block size, animates it with the source's ratios, widens the falloff, builds the
+/// full-volume field by plain JFA, marches and shades as the source does and draws its debug
+/// cubes as wireframes with depth read only.
+pub fn metaball_scene_with(
+    ctx: &Context,
+    width: u32,
+    height: u32,
+    t: f32,
+    what: MetaballView,
+    preset: Preset,
+) -> Result<Vec<u8>, Error> {
     use fieldkit::metaball::render::{CubeStyle, Cubes, RaymarchSettings, Raymarcher};
-    use fieldkit::metaball::{Metaballs, Settings, animate, packed_grid};
+    use fieldkit::metaball::{Animation, Metaballs, Settings, animate, extent_grid, packed_grid};
     use fieldkit::view::{Targets, View};
     use glam::{Mat4, Vec3};
     let device = &ctx.device;
     let edge = 1.0;
-    let base = packed_grid([5, 4, 3], edge)?;
-    let voxels = animate(&base, edge, t, 0.5, 0.15);
-    let settings = Settings::default();
+    let (voxels, settings, march, cube_style) = match preset {
+        Preset::Fieldkit => (
+            animate(&packed_grid([5, 4, 3], edge)?, edge, t, 0.5, 0.15),
+            Settings::default(),
+            RaymarchSettings::default(),
+            CubeStyle::default(),
+        ),
+        Preset::Seed => (
+            // Extent 5 × 4 × 3 in blocks of 1: the same 60 voxels, built the source's way.
+            Animation::seed().apply(&extent_grid(Vec3::new(5.0, 4.0, 3.0), edge)?, edge, t)?,
+            Settings::seed(),
+            RaymarchSettings::seed(),
+            CubeStyle {
+                wireframe: true,
+                ..CubeStyle::seed()
+            },
+        ),
+    };
     let balls = Metaballs::new(device)?;
     let instances = balls.upload(&ctx.device, &ctx.queue, &voxels)?;
     let colour_format = wgpu::TextureFormat::Rgba8Unorm;
@@ -246,7 +285,7 @@ pub fn metaball_scene(
     targets.clear(&mut enc, background, 1.0);
     match what {
         MetaballView::Cubes => {
-            let cubes = Cubes::new(device, colour_format, depth_format, CubeStyle::default())?;
+            let cubes = Cubes::new(device, colour_format, depth_format, cube_style)?;
             cubes.encode(
                 device,
                 &mut enc,
@@ -267,10 +306,7 @@ pub fn metaball_scene(
             };
             let field = balls.encode(device, &mut enc, &instances, &grid, edge, &settings)?;
             let marcher = Raymarcher::new(device, colour_format, depth_format, false)?;
-            let rs = RaymarchSettings {
-                output,
-                ..RaymarchSettings::default()
-            };
+            let rs = RaymarchSettings { output, ..march };
             marcher.encode(device, &mut enc, cv, dv, &field, Mat4::IDENTITY, &view, &rs)?;
         }
         MetaballView::Direct(method) => {
@@ -434,6 +470,51 @@ fn run(
         let rgba = ocean_scene(ctx, w, h, gbuffer)?;
         save(name, &rgba, w, h, &mut written)?;
     }
+    progress("seed presets: the sources' settings beside fieldkit's");
+    let mut presets = String::from(
+        "# Seed presets beside fieldkit's defaults\n\n\
+         Each technique's `seed()` preset is the system its source describes; the default is \
+         fieldkit's choice. Both rendered by the gallery on the same adapter.\n\n\
+         | fieldkit (default) | seed preset | the difference |\n|---|---|---|\n",
+    );
+    for (default, seed, what, sentence) in [
+        (
+            "metaball_surface.png",
+            "metaball_seed_surface.png",
+            MetaballView::Surface(Output::Shaded),
+            "The source's blobs reach 1.5× as far (`falloffExtend`), so the 60 voxels melt into \
+             one lump; its Hermite reads, 0.3–0.5·d steps, blue rim and darkening pile colour \
+             (`Settings::seed`, `RaymarchSettings::seed`, `Animation::seed`).",
+        ),
+        (
+            "metaball_cubes.png",
+            "metaball_seed_cubes.png",
+            MetaballView::Cubes,
+            "The source's debug cubes: both faces, depth `Always` and read only, here as \
+             wireframes (line-list edges where the adapter lacks `POLYGON_MODE_LINE`) \
+             (`CubeStyle::seed`).",
+        ),
+    ] {
+        let rgba = metaball_scene_with(ctx, w, h, 0.0, what, Preset::Seed)?;
+        save(seed, &rgba, w, h, &mut written)?;
+        presets.push_str(&format!(
+            "| ![{default}]({default}) | ![{seed}]({seed}) | {sentence} |\n"
+        ));
+    }
+    let rgba = ocean_scene_with(ctx, w, h, false, Preset::Seed)?;
+    save("ocean_seed_shore.png", &rgba, w, h, &mut written)?;
+    presets.push_str(
+        "| ![ocean_shore.png](ocean_shore.png) | ![ocean_seed_shore.png](ocean_seed_shore.png) | \
+         The source fades over 30 cm, so the shelf's turquoise shrinks to a line at the \
+         island; its water tests the scene's depth without writing it and hangs no skirts \
+         (`Look::seed`, `DepthMode::seed`). |\n",
+    );
+    let path = out_dir.join("presets.md");
+    std::fs::write(&path, presets).map_err(|e| Error::Invalid {
+        stage: "gallery",
+        what: format!("{}: {e}", path.display()),
+    })?;
+    written.push(path);
     let torus;
     let (mesh, what) = match bunny {
         Some(b) => (b, "the Stanford bunny"),
@@ -556,8 +637,21 @@ pub fn cloud_scene(
 /// G-buffer targets in a 2 × 2 grid (scene colour, normal; material, base colour) instead of the
 /// forward-shaded image; each quarter is `w/2 × h/2`.
 pub fn ocean_scene(ctx: &Context, w: u32, h: u32, gbuffer: bool) -> Result<Vec<u8>, Error> {
+    ocean_scene_with(ctx, w, h, gbuffer, Preset::Fieldkit)
+}
+
+/// [`ocean_scene`] with `preset`'s look: the seed preset fades over 30 cm and tests the scene's
+/// depth without writing it (the source's `bUseDepthBlend`).
+pub fn ocean_scene_with(
+    ctx: &Context,
+    w: u32,
+    h: u32,
+    gbuffer: bool,
+    preset: Preset,
+) -> Result<Vec<u8>, Error> {
     use fieldkit::metaball::render::{RaymarchSettings, Raymarcher};
     use fieldkit::metaball::{Metaballs, Settings, packed_grid};
+    use fieldkit::ocean::render::DepthMode;
     use fieldkit::ocean::render::{Look, OceanCamera, OceanRenderer, Output, Patch};
     use fieldkit::ocean::{Wave, Waves};
     use fieldkit::view::{Targets, View};
@@ -635,10 +729,13 @@ pub fn ocean_scene(ctx: &Context, w: u32, h: u32, gbuffer: bool) -> Result<Vec<u
         ],
         0.7,
     )?;
+    let (base_look, depth_mode) = match preset {
+        Preset::Fieldkit => (Look::default(), DepthMode::default()),
+        Preset::Seed => (Look::seed(), DepthMode::seed()),
+    };
     let look = Look {
-        fade_distance: 3.0,
         sun_direction: Vec3::new(-0.4, 0.5, -0.75),
-        ..Look::default()
+        ..base_look
     };
     let patches: Vec<Patch> = (0..100)
         .map(|k| {
@@ -653,7 +750,13 @@ pub fn ocean_scene(ctx: &Context, w: u32, h: u32, gbuffer: bool) -> Result<Vec<u
         .collect();
     let out = if gbuffer {
         let formats = [wgpu::TextureFormat::Rgba8Unorm; 4];
-        let renderer = OceanRenderer::new(device, &ctx.queue, Output::GBuffer(formats), false)?;
+        let renderer = OceanRenderer::with_depth(
+            device,
+            &ctx.queue,
+            Output::GBuffer(formats),
+            false,
+            depth_mode,
+        )?;
         let g: Vec<Targets> = (0..4)
             .map(|_| Targets::new(device, [tw, th], colour_format, depth_format))
             .collect();
@@ -691,8 +794,13 @@ pub fn ocean_scene(ctx: &Context, w: u32, h: u32, gbuffer: bool) -> Result<Vec<u
         }
         px
     } else {
-        let renderer =
-            OceanRenderer::new(device, &ctx.queue, Output::Forward(colour_format), false)?;
+        let renderer = OceanRenderer::with_depth(
+            device,
+            &ctx.queue,
+            Output::Forward(colour_format),
+            false,
+            depth_mode,
+        )?;
         renderer.encode(
             device,
             &mut enc,

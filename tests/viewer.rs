@@ -309,6 +309,34 @@ fn the_animation_advances_and_the_builder_counts_as_the_source() {
     assert_eq!(compare(&a.pixels, &b.pixels, 0), (0.0, 0));
 }
 
+/// The seed presets are a choice in the viewer: `Saved::seed` (and `--preset seed`) holds the
+/// sources' settings, and the actor and ocean render them, differently from the defaults.
+#[test]
+fn seed_presets_are_a_choice_and_render() {
+    let seed = Saved::seed();
+    assert_eq!(seed.actor.field, fieldkit::metaball::Settings::seed());
+    assert_eq!(
+        seed.actor.raymarch,
+        fieldkit::metaball::render::RaymarchSettings::seed()
+    );
+    assert_eq!(seed.actor.animation, fieldkit::metaball::Animation::seed());
+    assert_eq!(seed.ocean.look.fade_distance, 0.3);
+    assert_eq!(seed.ocean.depth_write, Some(false));
+    let (device, queue) = device();
+    for scene in ["actor", "ocean"] {
+        let mut s = Saved::seed();
+        s.voxelizer = settings().voxelizer;
+        let a = viewer::render_offscreen(&device, &queue, scene, &settings(), SIZE, 1).unwrap();
+        let b = viewer::render_offscreen(&device, &queue, scene, &s, SIZE, 1).unwrap();
+        assert!(b.report.error.is_none(), "{scene}: {:?}", b.report.error);
+        let (mean, off) = compare(&a.pixels, &b.pixels, 24);
+        assert!(
+            off > 50,
+            "{scene}: the seed preset moved {off} pixels (mean {mean})"
+        );
+    }
+}
+
 /// The CI soak: the four animated techniques for 300 frames each at a small size, in the
 /// viewer's own process (a test binary's resident memory would include the tests beside it),
 /// memory sampled after every frame. `cargo xtask soak` runs 10 000 frames.

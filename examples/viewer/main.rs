@@ -60,6 +60,8 @@ pub struct Args {
     pub sized: bool,
     /// Soak: frames per scene.
     pub soak: Option<u32>,
+    /// `--preset seed`: start from every scene's seed preset (the sources' settings).
+    pub seed: bool,
 }
 
 fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
@@ -76,6 +78,11 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
             "--settings" => a.settings = Some(value()?.into()),
             "--mesh" => a.mesh = Some(value()?),
             "--window" => a.window = true,
+            "--preset" => match value()?.as_str() {
+                "seed" => a.seed = true,
+                "fieldkit" => a.seed = false,
+                other => return Err(format!("--preset {other:?}: seed or fieldkit")),
+            },
             "--soak" => a.soak = Some(value()?.parse().map_err(|e| format!("--soak: {e}"))?),
             "--size" => {
                 let v = value()?;
@@ -102,7 +109,7 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
 }
 
 const HELP: &str = "viewer [--scene NAME] [--frames N] [--screenshot FILE.png] [--settings FILE.ron] \
-[--mesh FILE.obj] [--size WxH] [--window] [--soak FRAMES]";
+[--mesh FILE.obj] [--size WxH] [--window] [--soak FRAMES] [--preset seed|fieldkit]";
 
 /// Read a settings file (RON). Missing fields take their defaults.
 pub fn load_settings(path: &Path) -> Result<Saved, String> {
@@ -350,7 +357,11 @@ fn main() -> std::process::ExitCode {
             return std::process::ExitCode::from(2);
         }
     };
-    let mut saved = Saved::default();
+    let mut saved = if args.seed {
+        Saved::seed()
+    } else {
+        Saved::default()
+    };
     let mut load_error = None;
     if let Some(path) = &args.settings {
         match load_settings(path) {

@@ -404,6 +404,19 @@ fn vec3_row(ui: &mut Ui, label: &str, v: &mut Vec3, speed: f32) {
 fn actor_panel(ui: &mut Ui, s: &mut ActorSettings) {
     ui.heading("voxel actor (seed 000)");
     ui.horizontal(|ui| {
+        ui.label("preset");
+        if ui.button("fieldkit").clicked() {
+            *s = ActorSettings::default();
+        }
+        if ui
+            .button("seed")
+            .on_hover_text("the source's settings: falloffExtend 1.5, full-volume JFA, its march, cubes and animation")
+            .clicked()
+        {
+            *s = ActorSettings::seed();
+        }
+    });
+    ui.horizontal(|ui| {
         ui.label("Extent");
         for e in &mut s.extent {
             ui.add(DragValue::new(e).speed(0.1).range(0.0..=1000.0));
@@ -460,8 +473,13 @@ fn actor_panel(ui: &mut Ui, s: &mut ActorSettings) {
     ui.add(Slider::new(&mut s.raymarch.max_steps, 8..=512).text("max steps"));
     ui.add(Slider::new(&mut s.raymarch.safety, 0.3..=1.0).text("step safety"));
     ui.checkbox(&mut s.animate, "animate");
-    ui.add(Slider::new(&mut s.frequency, 0.0..=3.0).text("frequency"));
-    ui.add(Slider::new(&mut s.wobble, 0.0..=0.5).text("wobble"));
+    ui.add(Slider::new(&mut s.animation.scale_frequency, 0.0..=3.0).text("scale frequency"));
+    ui.add(Slider::new(&mut s.animation.scale_amplitude, 0.0..=1.0).text("scale amplitude"));
+    ui.add(Slider::new(&mut s.animation.offset_frequency, 0.0..=3.0).text("offset frequency"));
+    ui.add(Slider::new(&mut s.animation.offset_amplitude, 0.0..=0.5).text("offset amplitude"));
+    ui.add(Slider::new(&mut s.animation.phase_step, 0.0..=1.0).text("phase step"));
+    ui.checkbox(&mut s.field.full_volume, "full-volume field (JFA)");
+    ui.add(Slider::new(&mut s.field.falloff_extend, 1.0..=2.0).text("falloff extend"));
     ui.collapsing("debug cubes", |ui| {
         ComboBox::from_label("cull")
             .selected_text(format!("{:?}", s.cubes.cull))
@@ -481,16 +499,28 @@ fn actor_panel(ui: &mut Ui, s: &mut ActorSettings) {
                     ui.selectable_value(&mut s.cubes.depth_compare, c, format!("{c:?}"));
                 }
             });
-        ui.checkbox(
-            &mut s.cubes.wireframe,
-            "wireframe (needs POLYGON_MODE_LINE)",
-        );
+        ui.checkbox(&mut s.cubes.wireframe, "wireframe");
+        ui.checkbox(&mut s.cubes.depth_write, "depth write");
+        ui.checkbox(&mut s.cubes.frustum_cull, "frustum cull");
         ui.checkbox(&mut s.cubes.scale_size, "cube size follows the scale");
     });
 }
 
 fn ocean_panel(ui: &mut Ui, s: &mut OceanSettings) {
     ui.heading("ocean (seed 001)");
+    ui.horizontal(|ui| {
+        ui.label("preset");
+        if ui.button("fieldkit").clicked() {
+            *s = OceanSettings::default();
+        }
+        if ui
+            .button("seed")
+            .on_hover_text("the source's sea: a 30 cm fade, depth read only, no skirts")
+            .clicked()
+        {
+            *s = OceanSettings::seed();
+        }
+    });
     ui.label("waves: direction x, z · amplitude · wavelength · speed");
     let mut remove = None;
     for (i, w) in s.waves.iter_mut().enumerate() {

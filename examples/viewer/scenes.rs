@@ -6,7 +6,7 @@ use fieldkit::Error;
 use fieldkit::distance::{Distance2d, Method2d, Options2d, Variant, upload_mask};
 use fieldkit::gpu::{Readback, Recorder, readback_texture};
 use fieldkit::metaball::render::{CubeStyle, Cubes, Direct, RaymarchSettings, Raymarcher};
-use fieldkit::metaball::{Instances, Metaballs, Settings, animate, packed_grid};
+use fieldkit::metaball::{Animation, Instances, Metaballs, Settings, packed_grid};
 use fieldkit::ocean::lod::{LodSettings, select};
 use fieldkit::ocean::render::{Look, OceanRenderer, Output as OceanOutput};
 use fieldkit::ocean::{Wave, Waves};
@@ -64,6 +64,17 @@ impl Default for Saved {
             distance: DistanceSettings::default(),
             voxelizer: VoxelizerSettings::default(),
             cameras: NAMES.iter().map(|n| default_camera(n)).collect(),
+        }
+    }
+}
+
+impl Saved {
+    /// Every scene's seed preset where it has one (the sources' settings), default cameras.
+    pub fn seed() -> Self {
+        Self {
+            actor: ActorSettings::seed(),
+            ocean: OceanSettings::seed(),
+            ..Self::default()
         }
     }
 }
@@ -148,10 +159,8 @@ pub struct ActorSettings {
     pub draw: ActorDraw,
     /// Animate (scale pulse and Lissajous offsets).
     pub animate: bool,
-    /// Animation frequency, Hz.
-    pub frequency: f32,
-    /// Animation amplitude, × block.
-    pub wobble: f32,
+    /// The animation's frequencies, amplitudes, ratios and phase step.
+    pub animation: Animation,
 }
 
 impl Default for ActorSettings {
@@ -164,13 +173,24 @@ impl Default for ActorSettings {
             cubes: CubeStyle::default(),
             draw: ActorDraw::Surface,
             animate: true,
-            frequency: 0.5,
-            wobble: 0.15,
+            animation: Animation::default(),
         }
     }
 }
 
 impl ActorSettings {
+    /// The source's voxel actor: every `seed()` preset (field, march, cubes, animation), the
+    /// same extent and block.
+    pub fn seed() -> Self {
+        Self {
+            field: Settings::seed(),
+            raymarch: RaymarchSettings::seed(),
+            cubes: CubeStyle::seed(),
+            animation: Animation::seed(),
+            ..Self::default()
+        }
+    }
+
     /// Blocks per axis as the source's builder counts them: max(1, ⌊Extent / BlockSize⌋).
     pub fn counts(&self) -> Result<[u32; 3], Error> {
         if !(self.block.is_finite() && self.block > 0.0) {
@@ -235,7 +255,7 @@ impl Actor {
         }
         let base = &self.base.as_ref().expect("set above").2;
         let voxels = if s.animate {
-            animate(base, s.block, frame.time, s.frequency, s.wobble)
+            s.animation.apply(base, s.block, frame.time)?
         } else {
             base.clone()
         };
@@ -337,6 +357,9 @@ pub struct OceanSettings {
     pub gbuffer: Option<usize>,
     /// Draw the patch quadtree over the water.
     pub overlay: bool,
+    /// Depth target: written (default) or read only (the source's).
+    #[serde(default)]
+    pub depth_write: Option<bool>,
 }
 
 impl Default for OceanSettings {
@@ -363,13 +386,30 @@ impl Default for OceanSettings {
             fade: true,
             gbuffer: None,
             overlay: false,
+            depth_write: None,
+        }
+    }
+}
+
+impl OceanSettings {
+    /// The source's sea: `Look::seed` (30 cm fade, no skirts) and depth read only, the same
+    /// waves and sun.
+    pub fn seed() -> Self {
+        let d = Self::default();
+        Self {
+            look: Look {
+                sun_direction: d.look.sun_direction,
+                ..Look::seed()
+            },
+            depth_write: Some(false),
+            ..d
         }
     }
 }
 
 /// The ocean's GPU state.
 pub struct Ocean {
-    renderer: Option<((bool, bool), OceanRenderer)>,
+    renderer: Option<((bool, bool, bool), OceanRenderer)>,
     gbuffer: Option<([u32; 2], Vec<Targets>)>,
     lines: Lines,
 }
@@ -394,14 +434,22 @@ impl Ocean {
         let waves = Waves::new(s.waves.clone(), s.steepness)?;
         let camera = frame.camera.ocean(frame.size);
         let selection = select(&waves, &s.look, &camera, frame.size[1], &s.lod)?;
-        let key = (s.gbuffer.is_some(), frame.camera.reversed_z);
+        let write = s.depth_write.unwrap_or(true);
+        let key = (s.gbuffer.is_some(), frame.camera.reversed_z, write);
         if self.renderer.as_ref().map(|r| r.0) != Some(key) {
             let output = if key.0 {
                 OceanOutput::GBuffer([COLOUR; 4])
             } else {
                 OceanOutput::Forward(COLOUR)
             };
-            self.renderer = Some((key, OceanRenderer::new(device, queue, output, key.1)?));
+            let depth = fieldkit::ocean::render::DepthMode {
+                write,
+                ..Default::default()
+            };
+            self.renderer = Some((
+                key,
+                OceanRenderer::with_depth(device, queue, output, key.1, depth)?,
+            ));
         }
         let renderer = &self.renderer.as_ref().expect("set above").1;
         let time = frame.time as f64;

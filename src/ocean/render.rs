@@ -61,7 +61,9 @@ pub struct DepthMode {
     /// (the stencil is left as it is).
     pub format: wgpu::TextureFormat,
     /// Write depth (default). Off is the source's `bUseDepthBlend` choice: the water tests the
-    /// scene's depth and leaves it for what is drawn after.
+    /// scene's depth and leaves it for what is drawn after. The water then does not hide its
+    /// own far side: skirts (use [`Look::seed`]'s none) and the backs of steep waves seen at a
+    /// grazing angle show through.
     pub write: bool,
 }
 
@@ -399,13 +401,16 @@ fn layer_uniforms(layers: &[Layer], origin: DVec2, time: f64) -> [DetailLayer; M
 
 impl Look {
     /// The source's look: the depth fade over 30 cm of water (its sea is 2560 m across, as
-    /// [`super::lod::LodSettings::default`]). fieldkit's default fades over 3 m: at 30 cm the
-    /// shallow colour shows only in a thin line where the water meets the scene, and the
-    /// gallery's shelf (sloping 1 m in 10) shows none of its gradient (a 3 m band at the
-    /// default).
+    /// [`super::lod::LodSettings::default`]) and no skirts under patch edges. fieldkit's
+    /// default fades over 3 m: at 30 cm the shallow colour shows only in a thin line where the
+    /// water meets the scene, and the gallery's shelf shows none of its gradient. Skirts hide
+    /// the cracks between LOD levels through the depth test; with the source's depth read only
+    /// ([`DepthMode::seed`]) they would show through the water, so the preset has none (and the
+    /// cracks between levels show instead).
     pub fn seed() -> Self {
         Self {
             fade_distance: 0.3,
+            skirt: 0.0,
             ..Self::default()
         }
     }
