@@ -389,6 +389,30 @@ fn run(
     ctx.submit_and_wait("gallery distance", enc)?;
     let rgba = visualize_distance(ctx, &field.distance, 8.0, 60.0)?;
     save("distance_2d_signed.png", &rgba, w, h, &mut written)?;
+    // The source tool's exports: 16 bits with the scale in the file, floats, and 8 bits to look
+    // at.
+    let values: Vec<f32> = read_texture(ctx, &field.distance)?;
+    for (name, bytes) in [
+        (
+            "distance_2d_signed_16bit.png",
+            fieldkit::distance::export::png16(&values, w, h, 128.0)?,
+        ),
+        (
+            "distance_2d_signed.pfm",
+            fieldkit::distance::export::pfm(&values, w, h)?,
+        ),
+        (
+            "distance_2d_signed_8bit.png",
+            fieldkit::distance::export::png8(&values, w, h)?,
+        ),
+    ] {
+        let path = out_dir.join(name);
+        std::fs::write(&path, bytes).map_err(|e| Error::Invalid {
+            stage: "gallery",
+            what: format!("{}: {e}", path.display()),
+        })?;
+        written.push(path);
+    }
     let mask_rgba: Vec<u8> = mask.iter().flat_map(|&m| [m, m, m, 255]).collect();
     save("distance_2d_mask.png", &mask_rgba, w, h, &mut written)?;
 

@@ -62,6 +62,7 @@ fn distance_2d_refuses_bad_texel_sizes_for_both_methods() {
                         method,
                         signed: false,
                         texel_size,
+                        ..Options2d::default()
                     },
                 )
                 .err()

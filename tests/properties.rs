@@ -218,7 +218,7 @@ proptest! {
         if let Some(mask) = typed(upload_mask(&ctx.device, &ctx.queue, &vec![255u8; len], w, h)) {
             prop_assert_eq!((mask.width(), mask.height()), (w, h));
             let method = [Method2d::Exact, Method2d::Jfa(Variant::JfaPlus2), Method2d::Jfa(Variant::Jfa)][method];
-            let options = Options2d { method, signed, texel_size: texel };
+            let options = Options2d { method, signed, texel_size: texel, ..Options2d::default() };
             let mut enc = ctx.encoder("prop 2d");
             if let Some(f) = typed(n.d2.encode(&ctx.device, &mut enc, &mask, &options)) {
                 prop_assert_eq!((f.width, f.height), (w, h));

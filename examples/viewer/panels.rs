@@ -648,6 +648,28 @@ fn distance_panel(ui: &mut Ui, s: &mut DistanceSettings) {
             }
         });
     ui.checkbox(&mut s.options.signed, "signed");
+    ComboBox::from_label("seed rule")
+        .selected_text(format!("{:?}", s.options.seeds.channels))
+        .show_ui(ui, |ui| {
+            use fieldkit::distance::Channels;
+            for c in [Channels::Red, Channels::AnyColour, Channels::Alpha] {
+                ui.selectable_value(&mut s.options.seeds.channels, c, format!("{c:?}"));
+            }
+        });
+    ui.add(Slider::new(&mut s.options.seeds.above, 0.0..=1.0).text("seed above"));
+    ui.horizontal(|ui| {
+        ui.label("preset");
+        if ui.button("fieldkit").clicked() {
+            s.options.seeds = fieldkit::distance::SeedRule::default();
+        }
+        if ui
+            .button("seed")
+            .on_hover_text("the source's rule: every non-black texel is a seed")
+            .clicked()
+        {
+            s.options.seeds = fieldkit::distance::SeedRule::seed();
+        }
+    });
     ui.add(Slider::new(&mut s.brush, 0..=12).text("brush radius"));
     ui.add(Slider::new(&mut s.iso_period, 1.0..=32.0).text("iso-line period"));
     ui.horizontal(|ui| {

@@ -74,6 +74,13 @@ impl Saved {
         Self {
             actor: ActorSettings::seed(),
             ocean: OceanSettings::seed(),
+            distance: DistanceSettings {
+                options: Options2d {
+                    seeds: fieldkit::distance::SeedRule::seed(),
+                    ..Options2d::default()
+                },
+                ..DistanceSettings::default()
+            },
             ..Self::default()
         }
     }

@@ -14,14 +14,17 @@
 // word and the nearest marks on either side of it, which the y column pass reads in place of a
 // field (`tile_columns_words` in `edt_tile.wgsl`): 1.25 bytes per voxel moved where `rows` moves 5.
 
-import fieldkit::seed::{NO_SEED, pack_seed2, pack_seed3};
+import fieldkit::seed::{NO_SEED, pack_seed2, pack_seed3, seed_value};
 
 struct RowParams {
     size: vec3<u32>,
-    // A voxel is marked where its red channel is ≥ threshold.
+    // A voxel is marked where its value (`seed_value`: red unless `channels` says) is ≥
+    // threshold.
     threshold: f32,
     // 1: seeds are the unmarked voxels.
     invert: u32,
+    // Channel weights (0 or 1) of the value compared: (1, 0, 0, 0) reads red.
+    channels: vec4<f32>,
 }
 
 @group(0) @binding(0) var<uniform> params: RowParams;
@@ -97,7 +100,7 @@ fn rows(@builtin(local_invocation_id) lid: vec3<u32>, @builtin(workgroup_id) wg:
     let cells = r * w;
     for (var x = t; x < w; x += lanes) {
         if live {
-            row_cells[padded(cells + x)] = u32(is_seed(textureLoad(volume, vec3<u32>(x, y, z), 0).r));
+            row_cells[padded(cells + x)] = u32(is_seed(seed_value(textureLoad(volume, vec3<u32>(x, y, z), 0), params.channels)));
         }
     }
     workgroupBarrier();
@@ -163,7 +166,7 @@ fn mark_word(x0: u32, y: u32) -> u32 {
     var word = 0u;
     for (var b = 0u; b < 32u; b++) {
         let x = x0 + b;
-        if x < params.size.x && is_seed(textureLoad(mask_2d, vec2<u32>(x, y), 0).r) {
+        if x < params.size.x && is_seed(seed_value(textureLoad(mask_2d, vec2<u32>(x, y), 0), params.channels)) {
             word |= 1u << b;
         }
     }
@@ -252,7 +255,7 @@ fn row_words(@builtin(local_invocation_id) lid: vec3<u32>, @builtin(workgroup_id
         let y = wg.x * ROWS + e / row_cells_len;
         var marked = false;
         if x < params.size.x && y < params.size.y {
-            marked = is_seed(textureLoad(volume, vec3<u32>(x, y, z), 0).r);
+            marked = is_seed(seed_value(textureLoad(volume, vec3<u32>(x, y, z), 0), params.channels));
         }
         row_cells[word_cell(e)] = u32(marked);
     }

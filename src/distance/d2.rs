@@ -18,13 +18,101 @@ pub const NO_SEED: u32 = 0;
 /// Distance written where no seed exists (largest finite f32; `-FAR` inside a full mask).
 pub const FAR: f32 = f32::MAX;
 
-/// Seed texture formats the seed stage reads (red channel non-zero = seed).
+/// Common seed texture formats; any colour format read as float is taken ([`is_seed_format`]).
 pub const SEED_FORMATS: &[wgpu::TextureFormat] = &[
     wgpu::TextureFormat::R8Unorm,
     wgpu::TextureFormat::R16Float,
     wgpu::TextureFormat::R32Float,
     wgpu::TextureFormat::Rgba8Unorm,
 ];
+
+/// Which channels of a seed texture a texel's value is read from ([`SeedRule`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum Channels {
+    /// The red channel (default): a mask in any format.
+    #[default]
+    Red,
+    /// The largest of red, green and blue: "any non-black texel", the source's rule, for a
+    /// colour image of any format.
+    AnyColour,
+    /// The alpha channel: a sprite's coverage.
+    Alpha,
+}
+
+/// Which texels of a seed texture are seeds: those whose value in `channels` is above `above`.
+/// The default (red above 0) reads masks; [`SeedRule::seed`] is the source's rule (any channel
+/// of red, green and blue above 0: every non-black texel). Any float-sampled colour format is
+/// read (`R8Unorm`, `Rgba8UnormSrgb`, `Bgra8Unorm`, `Rgba16Float`, `Rgba32Float`, …); sRGB
+/// formats are read as the linear values the hardware decodes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct SeedRule {
+    /// Where the value comes from.
+    pub channels: Channels,
+    /// A texel is a seed where its value is greater than this.
+    pub above: f32,
+}
+
+impl Default for SeedRule {
+    fn default() -> Self {
+        Self {
+            channels: Channels::Red,
+            above: 0.0,
+        }
+    }
+}
+
+impl SeedRule {
+    /// The source's rule: any non-black texel (red, green or blue above 0), any format.
+    pub fn seed() -> Self {
+        Self {
+            channels: Channels::AnyColour,
+            above: 0.0,
+        }
+    }
+
+    pub(crate) fn check(&self) -> Result<(), Error> {
+        if !self.above.is_finite() {
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: format!("seed threshold must be finite, got {}", self.above),
+            });
+        }
+        Ok(())
+    }
+
+    /// The shaders' channel weights (the value is the largest weighted channel).
+    pub(crate) fn weights(&self) -> glam::Vec4 {
+        match self.channels {
+            Channels::Red => glam::Vec4::X,
+            Channels::AnyColour => glam::Vec4::new(1.0, 1.0, 1.0, 0.0),
+            Channels::Alpha => glam::Vec4::W,
+        }
+    }
+
+    /// The shaders' test is value ≥ threshold: the least f32 above `above`, kept a normal
+    /// number so a GPU that flushes subnormals to zero reads the same test.
+    pub(crate) fn threshold(&self) -> f32 {
+        let t = self.above.next_up();
+        if t > 0.0 && t < f32::MIN_POSITIVE {
+            f32::MIN_POSITIVE
+        } else if t < 0.0 && t > -f32::MIN_POSITIVE {
+            -0.0
+        } else {
+            t
+        }
+    }
+}
+
+/// Whether a texture format can hold seeds: any colour format read as float.
+pub fn is_seed_format(format: wgpu::TextureFormat) -> bool {
+    !format.is_depth_stencil_format()
+        && matches!(
+            format.sample_type(None, None),
+            Some(wgpu::TextureSampleType::Float { .. })
+        )
+}
 
 /// Pack a seed position as the shaders do.
 pub fn pack_seed(x: u32, y: u32) -> u32 {
@@ -105,6 +193,9 @@ pub struct Options {
     pub signed: bool,
     /// World units per texel; distances are multiplied by it.
     pub texel_size: f32,
+    /// Which texels are seeds (default: red above 0).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub seeds: SeedRule,
 }
 
 impl Default for Options {
@@ -113,6 +204,7 @@ impl Default for Options {
             variant: Variant::default(),
             signed: false,
             texel_size: 1.0,
+            seeds: SeedRule::default(),
         }
     }
 }
@@ -191,11 +283,12 @@ pub fn check_seed_texture(
             ),
         });
     }
-    if !SEED_FORMATS.contains(&seeds.format()) {
+    if !is_seed_format(seeds.format()) {
         return Err(Error::Format {
             stage: STAGE,
             format: seeds.format(),
-            supported: "R8Unorm, R16Float, R32Float, Rgba8Unorm",
+            supported: "a colour format read as float (R8Unorm, R16Float, R32Float, Rgba8Unorm, \
+                        Rgba8UnormSrgb, Bgra8Unorm, Rgba16Float, Rgba32Float, …)",
         });
     }
     check_size(device, seeds.width(), seeds.height())?;
@@ -283,7 +376,7 @@ impl Jfa2d {
         })
     }
 
-    /// Seed stage alone: a new `R32Uint` texture of packed seeds.
+    /// Seed stage alone: a new `R32Uint` texture of packed seeds (red above 0 marks a seed).
     pub fn encode_seed(
         &self,
         device: &wgpu::Device,
@@ -291,6 +384,19 @@ impl Jfa2d {
         seeds: &wgpu::Texture,
         invert: bool,
     ) -> Result<wgpu::Texture, Error> {
+        self.encode_seed_with(device, rec, seeds, invert, &SeedRule::default())
+    }
+
+    /// [`Jfa2d::encode_seed`] with `rule` choosing the seeds.
+    pub fn encode_seed_with(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        seeds: &wgpu::Texture,
+        invert: bool,
+        rule: &SeedRule,
+    ) -> Result<wgpu::Texture, Error> {
+        rule.check()?;
         let (w, h) = check_seed_texture(device, seeds)?;
         let out = texture(device, "jfa nearest", w, h, wgpu::TextureFormat::R32Uint);
         let params = uniform(
@@ -299,6 +405,8 @@ impl Jfa2d {
             &jfa_seed::SeedParams {
                 size: glam::uvec2(w, h),
                 invert: invert as u32,
+                threshold: rule.threshold(),
+                channels: rule.weights(),
             },
         );
         let (sv, ov) = (view(seeds), view(&out));
@@ -464,10 +572,10 @@ impl Jfa2d {
             });
         }
         let steps = options.variant.steps(w.max(h));
-        let inside = self.encode_seed(device, rec, seeds, false)?;
+        let inside = self.encode_seed_with(device, rec, seeds, false, &options.seeds)?;
         let nearest = self.encode_flood(device, rec, inside, &steps)?;
         let nearest_outside = if options.signed {
-            let outside = self.encode_seed(device, rec, seeds, true)?;
+            let outside = self.encode_seed_with(device, rec, seeds, true, &options.seeds)?;
             Some(self.encode_flood(device, rec, outside, &steps)?)
         } else {
             None

@@ -825,6 +825,7 @@ fn row_params(device: &wgpu::Device, size: [u32; 3], inside: Inside, invert: boo
             size: size.into(),
             threshold: inside.threshold(),
             invert: invert as u32,
+            channels: glam::Vec4::X,
         },
     )
 }
@@ -2507,7 +2508,29 @@ impl Distance3d {
         mask: &wgpu::Texture,
         options: &Options3d,
     ) -> Result<FieldBuf2d, Error> {
+        let rule = super::SeedRule {
+            above: match options.inside {
+                // Any value above 0 (the shaders compare ≥ the least normal f32 above it).
+                Inside::Mask => 0.0,
+                Inside::Threshold(t) => t.next_down(),
+            },
+            ..super::SeedRule::default()
+        };
+        self.encode_exact_2d_with(device, rec, mask, options, &rule)
+    }
+
+    /// [`Distance3d::encode_exact_2d`] with `rule` choosing the seeds (its `inside` is not
+    /// read).
+    pub fn encode_exact_2d_with(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        mask: &wgpu::Texture,
+        options: &Options3d,
+        rule: &super::SeedRule,
+    ) -> Result<FieldBuf2d, Error> {
         options.check()?;
+        rule.check()?;
         // The same checks as the 2D JFA's seed texture (the same formats work), then the exact
         // transform's own size limit.
         let (w, h) = super::check_seed_texture(device, mask)?;
@@ -2542,8 +2565,9 @@ impl Distance3d {
                 "edt rows params",
                 &edt_rows::RowParams {
                     size: size.into(),
-                    threshold: options.inside.threshold(),
+                    threshold: rule.threshold(),
                     invert: invert as u32,
+                    channels: rule.weights(),
                 },
             );
             self.rows_2d.record(

@@ -29,6 +29,7 @@
 pub mod cpu;
 mod d2;
 mod d3;
+pub mod export;
 
 pub use d2::*;
 pub use d3::*;
@@ -59,6 +60,10 @@ pub struct Options2d {
     pub signed: bool,
     /// World units per texel; distances are multiplied by it.
     pub texel_size: f32,
+    /// Which texels are seeds: red above 0 by default; [`SeedRule::seed`] takes every
+    /// non-black texel, as the source's tool does.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub seeds: SeedRule,
 }
 
 impl Default for Options2d {
@@ -67,6 +72,7 @@ impl Default for Options2d {
             method: Method2d::Exact,
             signed: false,
             texel_size: 1.0,
+            seeds: SeedRule::default(),
         }
     }
 }
@@ -137,7 +143,8 @@ impl Distance2d {
         })
     }
 
-    /// The distance field of `mask` (any of [`SEED_FORMATS`], red channel ≠ 0 marks a seed),
+    /// The distance field of `mask` (any colour format read as float; `options.seeds` says
+    /// which texels are seeds, red above 0 by default),
     /// recorded into `rec` (a command encoder, or [`crate::gpu::Profiler::record`] to time each
     /// pass).
     pub fn encode(
@@ -158,7 +165,7 @@ impl Distance2d {
         }
         match options.method {
             Method2d::Exact => {
-                let f = self.exact.encode_exact_2d(
+                let f = self.exact.encode_exact_2d_with(
                     device,
                     rec,
                     mask,
@@ -168,6 +175,7 @@ impl Distance2d {
                         inside: Inside::Mask,
                         ..Options3d::default()
                     },
+                    &options.seeds,
                 )?;
                 Ok(DistanceField2d {
                     width: f.width,
@@ -186,6 +194,7 @@ impl Distance2d {
                         variant,
                         signed: options.signed,
                         texel_size: options.texel_size,
+                        seeds: options.seeds,
                     },
                 )?;
                 Ok(DistanceField2d {
