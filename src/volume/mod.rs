@@ -38,6 +38,8 @@
 //!
 #![doc = include_str!("../../docs/volume.md")]
 
+pub mod load;
+
 use glam::{Mat4, Vec3};
 
 use crate::bind::{ComputePipeline, RenderPipeline, RenderTargets};
@@ -174,7 +176,9 @@ impl Volume {
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D3,
                 format,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING
+                    | wgpu::TextureUsages::COPY_DST
+                    | wgpu::TextureUsages::COPY_SRC,
                 view_formats: &[],
             });
             queue.write_texture(
