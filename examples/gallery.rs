@@ -552,6 +552,20 @@ fn run(
     ));
     let rgba = voxelize_scene(ctx, mesh, 96, w, h)?;
     save("voxelize_cubes.png", &rgba, w, h, &mut written)?;
+    let rgba = voxelize_scene_with(ctx, mesh, 96, w, h, Preset::Seed)?;
+    save("voxelize_seed_point_lit.png", &rgba, w, h, &mut written)?;
+    let mut presets = std::fs::read_to_string(out_dir.join("presets.md")).unwrap_or_default();
+    presets.push_str(
+        "| ![voxelize_cubes.png](voxelize_cubes.png) | \
+         ![voxelize_seed_point_lit.png](voxelize_seed_point_lit.png) | The source's demo \
+         scene lights the voxels with a point light, (1 − (d/range)²)² per cube corner \
+         (`voxelize::view::Light::Point`); fieldkit's default is a directional light. |\n",
+    );
+    let path = out_dir.join("presets.md");
+    std::fs::write(&path, presets).map_err(|e| Error::Invalid {
+        stage: "gallery",
+        what: format!("{}: {e}", path.display()),
+    })?;
     let (rgba, sw, sh) = voxelize_distance_slice(ctx, mesh, 128, 4)?;
     save("voxelize_distance_slice.png", &rgba, sw, sh, &mut written)?;
     Ok(written)
@@ -873,9 +887,22 @@ pub fn voxelize_scene(
     w: u32,
     h: u32,
 ) -> Result<Vec<u8>, Error> {
+    voxelize_scene_with(ctx, mesh, n, w, h, Preset::Fieldkit)
+}
+
+/// [`voxelize_scene`] with `preset`'s light: the seed preset is the source's demo scene, a
+/// point light near the mesh's top front corner.
+pub fn voxelize_scene_with(
+    ctx: &Context,
+    mesh: &fieldkit::voxelize::Mesh,
+    n: u32,
+    w: u32,
+    h: u32,
+    preset: Preset,
+) -> Result<Vec<u8>, Error> {
     use fieldkit::view::Targets;
     use fieldkit::voxelize::Voxelizer;
-    use fieldkit::voxelize::view::{ColourBy, VoxelView};
+    use fieldkit::voxelize::view::{ColourBy, Light, VoxelView};
     use glam::Vec3;
     let device = &ctx.device;
     let grid = fieldkit::voxelize::Grid::fit(mesh, n)?;
@@ -907,7 +934,14 @@ pub fn voxelize_scene(
         },
         1.0,
     );
-    view.encode(
+    let light = match preset {
+        Preset::Fieldkit => Light::Directional(Vec3::new(0.4, 0.8, 0.5)),
+        Preset::Seed => Light::Point {
+            position: centre + Vec3::new(0.6, 1.2, 1.0) * radius,
+            range: radius * 3.5,
+        },
+    };
+    view.encode_lit(
         device,
         &mut enc,
         &targets.colour_view,
@@ -915,7 +949,7 @@ pub fn voxelize_scene(
         &voxels,
         &grid,
         view_proj,
-        Vec3::new(0.4, 0.8, 0.5),
+        light,
         ColourBy::Normal,
     )?;
     ctx.submit_and_wait("gallery voxelize", enc)?;

@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 mod common;
 use std::process::Command;
 
-use viewer::scenes::{ActorSettings, NAMES, Saved};
+use viewer::scenes::{ActorSettings, NAMES, Saved, VoxelizerSettings};
 
 /// Small enough for lavapipe on two cores.
 const SIZE: [u32; 2] = [192, 108];
@@ -323,9 +323,13 @@ fn seed_presets_are_a_choice_and_render() {
     assert_eq!(seed.ocean.look.fade_distance, 0.3);
     assert_eq!(seed.ocean.depth_write, Some(false));
     let (device, queue) = device();
-    for scene in ["actor", "ocean"] {
+    assert!(seed.voxelizer.point_light);
+    for scene in ["actor", "ocean", "voxelizer"] {
         let mut s = Saved::seed();
-        s.voxelizer = settings().voxelizer;
+        s.voxelizer = VoxelizerSettings {
+            point_light: true,
+            ..settings().voxelizer
+        };
         let a = viewer::render_offscreen(&device, &queue, scene, &settings(), SIZE, 1).unwrap();
         let b = viewer::render_offscreen(&device, &queue, scene, &s, SIZE, 1).unwrap();
         assert!(b.report.error.is_none(), "{scene}: {:?}", b.report.error);

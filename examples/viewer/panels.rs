@@ -692,6 +692,7 @@ fn distance_panel(ui: &mut Ui, s: &mut DistanceSettings) {
 
 fn voxelizer_panel(ui: &mut Ui, s: &mut VoxelizerSettings) {
     ui.heading("voxelizer (seed 004)");
+    ui.checkbox(&mut s.point_light, "point light (the source's demo scene)");
     ui.horizontal(|ui| {
         ui.label("mesh");
         ui.text_edit_singleline(&mut s.mesh);

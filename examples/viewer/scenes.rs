@@ -81,6 +81,10 @@ impl Saved {
                 },
                 ..DistanceSettings::default()
             },
+            voxelizer: VoxelizerSettings {
+                point_light: true,
+                ..VoxelizerSettings::default()
+            },
             ..Self::default()
         }
     }
@@ -1010,6 +1014,10 @@ pub struct VoxelizerSettings {
     /// Radians the mesh turns about the y axis through its bounds' centre before voxelizing
     /// (the soak turns it every frame, so the mesh is voxelized again and again).
     pub spin: f32,
+    /// Light the cubes with a point light above the front of the grid, as the source's demo
+    /// scene (off: a directional light).
+    #[serde(default)]
+    pub point_light: bool,
 }
 
 /// The Stanford bunny of the benches, when this checkout sits beside `shared/`.
@@ -1028,6 +1036,7 @@ impl Default for VoxelizerSettings {
             colour_by: ColourBy::Normal,
             slice: true,
             spin: 0.0,
+            point_light: false,
         }
     }
 }
@@ -1279,7 +1288,18 @@ impl VoxelizerScene {
                         self.view = Some((reversed, v?));
                     }
                     let v = &self.view.as_ref().expect("set above").1;
-                    v.encode(
+                    let light = if s.point_light {
+                        let size = glam::DVec3::from(grid.size.map(f64::from)) * grid.voxel;
+                        let centre = (grid.origin + size * 0.5).as_vec3();
+                        let radius = size.max_element() as f32 * 0.5;
+                        fieldkit::voxelize::view::Light::Point {
+                            position: centre + Vec3::new(0.6, 1.2, 1.0) * radius,
+                            range: radius * 3.5,
+                        }
+                    } else {
+                        fieldkit::voxelize::view::Light::Directional(Vec3::new(0.4, 0.8, 0.5))
+                    };
+                    v.encode_lit(
                         device,
                         frame.rec.encoder,
                         cv,
@@ -1287,7 +1307,7 @@ impl VoxelizerScene {
                         attrs,
                         grid,
                         view.view_proj * model,
-                        Vec3::new(0.4, 0.8, 0.5),
+                        light,
                         key.colour_by,
                     )?;
                     stats.push(format!("occupied voxels: {}", attrs.count));

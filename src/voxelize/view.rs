@@ -21,6 +21,56 @@ pub enum ColourBy {
     Colour,
 }
 
+/// The light over the voxel cubes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum Light {
+    /// Toward a light at infinity (world direction, normalised on use).
+    Directional(Vec3),
+    /// The source's demo scene: a point light at `position` (world), its N·L weighted by
+    /// (1 − (d / range)²)² (0 past `range`), per cube corner.
+    Point {
+        /// World position.
+        position: Vec3,
+        /// Distance at which the light reaches 0.
+        range: f32,
+    },
+}
+
+impl Light {
+    /// Ambient 0.35 plus 0.65 × N·L × attenuation: what each cube corner gets (the shader's
+    /// formula, for tests and users).
+    pub fn shade(&self, normal: Vec3, world: Vec3) -> f32 {
+        let (l, atten) = match *self {
+            Light::Directional(d) => (d.normalize(), 1.0),
+            Light::Point { position, range } => {
+                let to = position - world;
+                let d = to.length();
+                let q = (1.0 - (d / range).powi(2)).max(0.0);
+                (to / d.max(1e-6), q * q)
+            }
+        };
+        0.35 + 0.65 * normal.dot(l).max(0.0) * atten
+    }
+
+    fn check(&self) -> Result<(), Error> {
+        let ok = match *self {
+            Light::Directional(d) => d.is_finite() && d.length_squared() > 0.0,
+            Light::Point { position, range } => {
+                position.is_finite() && range.is_finite() && range > 0.0
+            }
+        };
+        if ok {
+            Ok(())
+        } else {
+            Err(invalid(format!(
+                "light {self:?}: a direction finite and non-zero, or a point with a finite \
+                 position and a range > 0"
+            )))
+        }
+    }
+}
+
 /// Draws voxel attributes as cubes into a caller's colour and depth targets.
 pub struct VoxelView {
     pipeline: RenderPipeline<stage::fs_view::Entry>,
@@ -68,16 +118,42 @@ impl VoxelView {
         light: Vec3,
         by: ColourBy,
     ) -> Result<(), Error> {
+        self.encode_lit(
+            device,
+            encoder,
+            colour,
+            depth,
+            voxels,
+            grid,
+            view_proj,
+            Light::Directional(light),
+            by,
+        )
+    }
+
+    /// [`VoxelView::encode`] under any [`Light`]: a point light as the source's demo scene.
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode_lit(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        colour: &wgpu::TextureView,
+        depth: &wgpu::TextureView,
+        voxels: &Attributes,
+        grid: &Grid,
+        view_proj: Mat4,
+        light: Light,
+        by: ColourBy,
+    ) -> Result<(), Error> {
+        light.check()?;
         if voxels.surface.size != grid.size {
             return Err(invalid(format!(
                 "the voxels were made in a {:?} grid, not {:?}",
                 voxels.surface.size, grid.size
             )));
         }
-        if !(view_proj.is_finite() && light.is_finite() && light.length_squared() > 0.0) {
-            return Err(invalid(format!(
-                "view_proj must be finite and light ({light}) finite and non-zero"
-            )));
+        if !view_proj.is_finite() {
+            return Err(invalid("view_proj must be finite".into()));
         }
         if voxels.count == 0 {
             return Ok(());
@@ -90,7 +166,14 @@ impl VoxelView {
             &ViewParams {
                 view_proj,
                 grid_to_world,
-                light: light.normalize().extend(0.0),
+                light: match light {
+                    Light::Directional(d) => d.normalize().extend(0.0),
+                    Light::Point { position, .. } => position.extend(1.0),
+                },
+                light_range: match light {
+                    Light::Directional(_) => 0.0,
+                    Light::Point { range, .. } => range,
+                },
                 grid: grid.size.into(),
                 colour_by: (by == ColourBy::Colour) as u32,
             },
