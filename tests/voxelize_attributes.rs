@@ -274,3 +274,116 @@ fn attribute_volumes_hold_the_list() {
         }
     }
 }
+
+/// The source records its whole voxelization at once: `encode_attributes_in_one` sizes the
+/// list by a bound the CPU knows and leaves the true count on the GPU. The list reads back
+/// identical to the two-submission path's, the bound holds the count, the attribute volumes
+/// are the same bytes, and the view draws only the occupied voxels.
+#[test]
+fn one_encoder_gives_the_same_attributes() {
+    let ctx = Context::shared();
+    let mesh = painted_sphere();
+    let grid = sphere_grid();
+    let v = Voxelizer::new(&ctx.device).unwrap();
+    let (two, want) = run(&ctx, &mesh, &grid);
+    let mut enc = ctx.encoder("one encoder");
+    let one = v
+        .encode_attributes_in_one(&ctx.device, &mut enc, &mesh, &grid)
+        .unwrap();
+    let vol_one = v
+        .encode_attribute_volumes(&ctx.device, &mut enc, &one)
+        .unwrap();
+    let vol_two = v
+        .encode_attribute_volumes(&ctx.device, &mut enc, &two)
+        .unwrap();
+    ctx.submit_and_wait("one encoder", enc).unwrap();
+    let got = one.read(&ctx.device, &ctx.queue).wait(&ctx).unwrap();
+    assert_eq!(got, want);
+    // The bound: at least the occupied voxels, at most the grid's.
+    let total: u32 = bytemuck::pod_read_unaligned(&read_buffer(&ctx, &one.occupied).unwrap()[..4]);
+    assert_eq!(total as usize, want.len());
+    assert!(
+        one.count >= total && (one.count as u64) <= grid.voxels(),
+        "{} vs {total}",
+        one.count
+    );
+    println!(
+        "one encoder: {total} occupied, list sized {} ({:.1}×)",
+        one.count,
+        one.count as f64 / total as f64
+    );
+    for (a, b) in [
+        (&vol_one.colour, &vol_two.colour),
+        (&vol_one.normal, &vol_two.normal),
+    ] {
+        let a: Vec<[u8; 4]> = fieldkit::gpu::read_texture(&ctx, a).unwrap();
+        let b: Vec<[u8; 4]> = fieldkit::gpu::read_texture(&ctx, b).unwrap();
+        assert_eq!(a, b);
+    }
+    // The view draws the same picture from either list (the spare entries are not drawn).
+    use fieldkit::view::Targets;
+    use fieldkit::voxelize::view::{ColourBy, VoxelView};
+    let format = wgpu::TextureFormat::Rgba8Unorm;
+    let view = VoxelView::new(&ctx.device, format, wgpu::TextureFormat::Depth32Float).unwrap();
+    let proj = glam::camera::rh::proj::directx::perspective(0.9, 1.0, 0.1, 20.0);
+    let view_proj = proj
+        * glam::camera::rh::view::look_at_mat4(
+            glam::Vec3::new(1.5, 2.0, 3.0),
+            glam::Vec3::ZERO,
+            glam::Vec3::Y,
+        );
+    let draw = |a: &Attributes| {
+        let t = Targets::new(
+            &ctx.device,
+            [48, 48],
+            format,
+            wgpu::TextureFormat::Depth32Float,
+        );
+        let mut enc = ctx.encoder("view");
+        t.clear(&mut enc, wgpu::Color::BLACK, 1.0);
+        view.encode(
+            &ctx.device,
+            &mut enc,
+            &t.colour_view,
+            &t.depth_view,
+            a,
+            &grid,
+            view_proj,
+            glam::Vec3::Y,
+            ColourBy::Colour,
+        )
+        .unwrap();
+        ctx.submit_and_wait("view", enc).unwrap();
+        fieldkit::gpu::read_texture::<[u8; 4]>(&ctx, &t.colour).unwrap()
+    };
+    let (p1, p2) = (draw(&one), draw(&two));
+    assert_eq!(p1, p2);
+    assert!(p1.iter().filter(|p| p[..3] != [0, 0, 0]).count() > 300);
+}
+
+/// The bound is the sum of each triangle's box, widened by the GPU's slack, clipped to the grid.
+#[test]
+fn the_bound_counts_each_triangle_box() {
+    use fieldkit::voxelize::occupied_bound;
+    let mesh = Mesh {
+        positions: vec![
+            DVec3::new(0.5, 0.5, 0.5),
+            DVec3::new(2.5, 0.5, 0.5),
+            DVec3::new(0.5, 1.5, 0.5),
+            // Out past the grid's corner: clipped.
+            DVec3::new(3.5, 3.5, 3.5),
+            DVec3::new(9.5, 3.5, 3.5),
+            DVec3::new(3.5, 9.5, 3.5),
+        ],
+        triangles: vec![[0, 1, 2], [3, 4, 5]],
+        ..Mesh::default()
+    };
+    let grid = Grid {
+        origin: DVec3::ZERO,
+        voxel: 1.0,
+        size: [5, 5, 5],
+    };
+    let local = mesh.to_grid(&grid).unwrap();
+    // 3 × 2 × 1 voxels, then x 3..5 × y 3..5 × z 3: 2 × 2 × 1.
+    assert_eq!(occupied_bound(&local, grid.size), 6 + 4);
+}

@@ -7,7 +7,7 @@ import fieldkit::octahedral::decode_octahedral;
 
 struct AttributeVolumeParams {
     grid: vec3<u32>,
-    // Occupied voxels in the list.
+    // Entries the list has room for (the dispatch covers them).
     count: u32,
 }
 
@@ -16,13 +16,15 @@ struct AttributeVolumeParams {
 @group(0) @binding(1) var<storage, read> voxels: array<vec4<u32>>;
 @group(0) @binding(2) var colour: texture_storage_3d<rgba8unorm, write>;
 @group(0) @binding(3) var normal: texture_storage_3d<rgba8snorm, write>;
+// Entries that hold an occupied voxel (a list sized by a bound has room for more).
+@group(0) @binding(4) var<storage, read> occupied: u32;
 
 // A 2D dispatch: rows of 65535 workgroups.
 @compute @workgroup_size(64)
 fn to_volumes(@builtin(global_invocation_id) id: vec3<u32>,
               @builtin(num_workgroups) groups: vec3<u32>) {
     let j = id.y * groups.x * 64u + id.x;
-    if j >= params.count {
+    if j >= min(params.count, occupied) {
         return;
     }
     let v = voxels[j];

@@ -3,10 +3,13 @@
 //! list compacted to the occupied voxels in voxel order (`voxelize/compact`). Integer sums do
 //! not depend on the order the GPU runs threads in, so two runs give identical bytes.
 //!
-//! Sizing the compact list needs the number of occupied voxels, which only the GPU knows:
-//! [`Voxelizer::attributes`] reads it back between two submissions. Callers that keep their
-//! own encoders use [`Voxelizer::encode_attributes`], [`PendingAttributes::occupied`] and
-//! [`Voxelizer::encode_resolve_attributes`].
+//! Sizing the compact list exactly needs the number of occupied voxels, which only the GPU
+//! knows: [`Voxelizer::attributes`] reads it back between two submissions. Callers that keep
+//! their own encoders use [`Voxelizer::encode_attributes`], [`PendingAttributes::occupied`] and
+//! [`Voxelizer::encode_resolve_attributes`]; or [`Voxelizer::encode_attributes_in_one`], which
+//! records everything into one encoder with the list sized by a bound the CPU knows
+//! ([`occupied_bound`]) and the true count left on the GPU ([`Attributes::occupied`]), where
+//! the view draws and the reads read it.
 
 use std::sync::OnceLock;
 
@@ -55,6 +58,7 @@ pub struct AttributeVolumes {
 /// triangles' attributes on the GPU. [`PendingAttributes::occupied`] reads how many voxels
 /// the second half needs room for.
 pub struct PendingAttributes {
+    bound: u64,
     surface: Surface,
     grid: Grid,
     triangles: wgpu::Buffer,
@@ -79,8 +83,13 @@ impl PendingAttributes {
 pub struct Attributes {
     /// The conservative surface voxels the list covers.
     pub surface: Surface,
-    /// Occupied voxels: entries in `voxels`.
+    /// Entries `voxels` has room for: the occupied voxels where the count was read back
+    /// ([`Voxelizer::attributes`]), a bound on them where it was not
+    /// ([`Voxelizer::encode_attributes_in_one`]).
     pub count: u32,
+    /// The occupied voxels, a `u32` on the GPU: entries of `voxels` that hold one. Indirect
+    /// draws and dispatches read it there.
+    pub occupied: wgpu::Buffer,
     /// Per occupied voxel, in voxel order, a `vec4<u32>`: the voxel index
     /// ((z · ny + y) · nx + x), the RGBA8 colour, the normal as an octahedral pair of snorm16
     /// (0x80008000 where the normals cancel) and the number of triangles. 16 bytes per
@@ -125,20 +134,52 @@ impl Attributes {
         queue: &wgpu::Queue,
     ) -> Readback<Vec<VoxelAttributes>> {
         let [nx, ny, _] = self.surface.size;
-        let count = self.count as usize;
-        readback_buffer(device, queue, &self.voxels).then(move |bytes| {
-            let words: &[[u32; 4]] = bytemuck::cast_slice(&bytes);
-            Ok(words[..count]
-                .iter()
-                .map(|&[i, colour, normal, triangles]| VoxelAttributes {
-                    voxel: [i % nx, i / nx % ny, i / (nx * ny)],
-                    color: colour.to_le_bytes(),
-                    normal: decode_normal(normal),
-                    triangles,
-                })
-                .collect())
-        })
+        let room = self.count as usize;
+        let list_bytes = self.voxels.size() as usize;
+        crate::gpu::readback_buffers(device, queue, &[&self.occupied, &self.voxels]).then(
+            move |bytes| {
+                // The occupied count's buffer comes first, whole.
+                let head = bytes.len() - list_bytes;
+                let occupied: u32 = bytemuck::pod_read_unaligned(&bytes[..4]);
+                let count = (occupied as usize).min(room);
+                let words: &[[u32; 4]] = bytemuck::cast_slice(&bytes[head..]);
+                Ok(words[..count]
+                    .iter()
+                    .map(|&[i, colour, normal, triangles]| VoxelAttributes {
+                        voxel: [i % nx, i / nx % ny, i / (nx * ny)],
+                        color: colour.to_le_bytes(),
+                        normal: decode_normal(normal),
+                        triangles,
+                    })
+                    .collect())
+            },
+        )
     }
+}
+
+/// A bound on the occupied voxels of `local` (a grid of `size`) that the CPU knows before the GPU
+/// runs: a triangle's conservative voxels lie in its bounding box (widened by the GPU tests'
+/// slack), and the grid holds no more voxels than it has. Sizes the list of
+/// [`Voxelizer::encode_attributes_in_one`]: 48 bytes per bound voxel on the GPU.
+pub fn occupied_bound(local: &GridMesh, size: [u32; 3]) -> u64 {
+    let total = size.iter().map(|&n| n as u64).product::<u64>();
+    let mut sum = 0u64;
+    for t in local.vertices.chunks_exact(3) {
+        let lo = t[0].min(t[1]).min(t[2]).truncate();
+        let hi = t[0].max(t[1]).max(t[2]).truncate();
+        let mut n = 1u64;
+        for k in 0..3 {
+            let eps = 0.01 + 16.0 * f32::EPSILON * lo[k].abs().max(hi[k].abs());
+            let a = ((lo[k] - eps).floor().max(0.0) as u64).min(size[k] as u64);
+            let b = ((hi[k] + eps).floor().max(-1.0) as i64).min(size[k] as i64 - 1);
+            n *= (b - a as i64 + 1).max(0) as u64;
+        }
+        sum = sum.saturating_add(n);
+        if sum >= total {
+            return total;
+        }
+    }
+    sum.min(total)
 }
 
 /// Per triangle corner of `local`: the RGBA8 colour and the normal's f32 bits (the vertex
@@ -269,6 +310,7 @@ impl Voxelizer {
             &volume_stage::to_volumes::Resources {
                 params: (&params).into(),
                 voxels: (&attributes.voxels).into(),
+                occupied: (&attributes.occupied).into(),
                 colour: (&colour).into(),
                 normal: (&normal).into(),
             },
@@ -288,6 +330,7 @@ impl Voxelizer {
         grid: &Grid,
     ) -> Result<PendingAttributes, Error> {
         let local = mesh.to_grid(grid)?;
+        let bound = occupied_bound(&local, grid.size);
         let corner_data = corners(mesh, &local)?;
         let (occupancy, triangles) = self.bitset(device, rec, &local, grid)?;
         let heavy = self.surface_into(
@@ -371,6 +414,7 @@ impl Voxelizer {
             usage: wgpu::BufferUsages::STORAGE,
         });
         Ok(PendingAttributes {
+            bound,
             surface: Surface {
                 size: grid.size,
                 occupancy,
@@ -417,6 +461,7 @@ impl Voxelizer {
             block_offsets,
             words,
             count,
+            total,
             ..
         } = pending;
         let buffer = |label, size: u64, usage| {
@@ -518,7 +563,37 @@ impl Voxelizer {
         Ok(Attributes {
             surface,
             count: occupied,
+            occupied: total,
             voxels,
         })
+    }
+
+    /// Every stage of [`Voxelizer::attributes`] recorded into `rec` alone, no read-back in
+    /// between: the list is sized by [`occupied_bound`] and [`Attributes::occupied`] holds
+    /// the true count on the GPU, which [`super::view::VoxelView`], [`Attributes::read`] and
+    /// [`Voxelizer::encode_attribute_volumes`] read. A bound past the device's storage binding
+    /// (large triangles in a large grid) is [`Error::Size`]; use [`Voxelizer::attributes`]
+    /// there.
+    pub fn encode_attributes_in_one(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        mesh: &Mesh,
+        grid: &Grid,
+    ) -> Result<Attributes, Error> {
+        let pending = self.encode_attributes(device, rec, mesh, grid)?;
+        let bound = u32::try_from(pending.bound).map_err(|_| Error::Size {
+            stage: stage::STAGE,
+            what: "bound on occupied voxels (one list entry each)",
+            got: pending.bound,
+            max: u32::MAX as u64,
+        })?;
+        self.encode_resolve_attributes(device, rec, pending, bound)
+    }
+
+    /// The bound [`Voxelizer::encode_attributes_in_one`] sizes its list by, from the pending
+    /// first half.
+    pub fn pending_bound(pending: &PendingAttributes) -> u64 {
+        pending.bound
     }
 }

@@ -27,7 +27,9 @@ pub mod export;
 mod obj;
 pub mod view;
 
-pub use attributes::{AttributeVolumes, Attributes, PendingAttributes, VoxelAttributes};
+pub use attributes::{
+    AttributeVolumes, Attributes, PendingAttributes, VoxelAttributes, occupied_bound,
+};
 
 use glam::{DVec3, Vec4};
 

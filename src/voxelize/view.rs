@@ -185,10 +185,19 @@ impl VoxelView {
                 voxels: (&voxels.voxels).into(),
             },
         )?;
+        // One cube per occupied voxel: the count is on the GPU (a list sized by a bound has
+        // room for more), so the draw is indirect, its instance count copied from it.
+        use wgpu::util::DeviceExt;
+        let args = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("voxel view draw"),
+            contents: bytemuck::cast_slice(&[36u32, 0, 0, 0]),
+            usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
+        });
+        encoder.copy_buffer_to_buffer(&voxels.occupied, 0, &args, 4, 4);
         let mut pass = load_pass(encoder, stage::STAGE, colour, depth);
         pass.set_pipeline(&self.pipeline.pipeline);
         bound.set_render(&mut pass);
-        pass.draw(0..36, 0..voxels.count);
+        pass.draw_indirect(&args, 0);
         Ok(())
     }
 }
