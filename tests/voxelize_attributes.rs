@@ -387,3 +387,128 @@ fn the_bound_counts_each_triangle_box() {
     // 3 × 2 × 1 voxels, then x 3..5 × y 3..5 × z 3: 2 × 2 × 1.
     assert_eq!(occupied_bound(&local, grid.size), 6 + 4);
 }
+
+/// The source's vertex stage passes texture coordinates on: with an albedo texture each
+/// voxel's colour is the albedo at the texture coordinates of its centre's closest point on
+/// the triangle. One large triangle over the grid with u = ¼ + ½ · x / 8 and a 2 × 1 texture
+/// (red, blue): linear filtering between the texel centres gives red · (1 − x/8) + blue · x/8
+/// at voxel centre x, written out here.
+#[test]
+fn albedo_is_sampled_at_each_voxels_texture_coordinates() {
+    use glam::Vec2;
+    use wgpu::util::DeviceExt;
+    let ctx = Context::shared();
+    let u = |x: f64| 0.25 + 0.5 * x / 8.0;
+    let corners = [
+        DVec3::new(-10.0, -10.0, 1.5),
+        DVec3::new(30.0, -10.0, 1.5),
+        DVec3::new(-10.0, 30.0, 1.5),
+    ];
+    let mesh = Mesh {
+        positions: corners.to_vec(),
+        triangles: vec![[0, 1, 2]],
+        texcoords: vec![corners.map(|p| Vec2::new(u(p.x) as f32, 0.5))],
+        ..Mesh::default()
+    };
+    let grid = Grid {
+        origin: DVec3::ZERO,
+        voxel: 1.0,
+        size: [8, 4, 3],
+    };
+    let albedo = ctx.device.create_texture_with_data(
+        &ctx.queue,
+        &wgpu::TextureDescriptor {
+            label: Some("albedo"),
+            size: wgpu::Extent3d {
+                width: 2,
+                height: 1,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba8Unorm,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        },
+        wgpu::util::TextureDataOrder::LayerMajor,
+        &[255, 0, 0, 255, 0, 0, 255, 255],
+    );
+    let v = Voxelizer::new(&ctx.device).unwrap();
+    let mut enc = ctx.encoder("albedo");
+    let a = v
+        .encode_attributes_in_one_with(&ctx.device, &mut enc, &mesh, &grid, Some(&albedo))
+        .unwrap();
+    ctx.submit_and_wait("albedo", enc).unwrap();
+    let list = a.read(&ctx.device, &ctx.queue).wait(&ctx).unwrap();
+    // The plane z = 1.5 runs through the middle of layer 1: that layer alone.
+    assert_eq!(list.len(), 8 * 4);
+    let mut worst = 0i32;
+    for voxel in &list {
+        let x = voxel.voxel[0] as f64 + 0.5;
+        let want = [255.0 * (1.0 - x / 8.0), 0.0, 255.0 * x / 8.0, 255.0];
+        for (got, want) in voxel.color.iter().zip(want) {
+            worst = worst.max((*got as i32 - want.round() as i32).abs());
+        }
+    }
+    println!(
+        "albedo: {} voxels, colour within {worst} levels of the formula",
+        list.len()
+    );
+    // Linear filtering's weights are held to 8 fractional bits on some GPUs (a level of the
+    // red-to-blue ramp), and the mean is rounded: two levels. llvmpipe: 0.
+    assert!(worst <= 2, "{worst}");
+
+    // An albedo needs texture coordinates, and a filterable colour format.
+    let mut enc = ctx.encoder("bad albedo");
+    let bare = Mesh {
+        texcoords: vec![],
+        ..mesh.clone()
+    };
+    let e = v
+        .encode_attributes_with(&ctx.device, &mut enc, &bare, &grid, Some(&albedo))
+        .err()
+        .unwrap();
+    assert!(e.to_string().contains("texture coordinates"), "{e}");
+    let r32 = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: None,
+        size: wgpu::Extent3d {
+            width: 2,
+            height: 2,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::R32Uint,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING,
+        view_formats: &[],
+    });
+    assert!(matches!(
+        v.encode_attributes_with(&ctx.device, &mut enc, &mesh, &grid, Some(&r32)),
+        Err(Error::Format { .. })
+    ));
+    let short = Mesh {
+        texcoords: vec![[Vec2::ZERO; 3]; 2],
+        ..mesh.clone()
+    };
+    let e = v
+        .encode_attributes_with(&ctx.device, &mut enc, &short, &grid, Some(&albedo))
+        .err()
+        .unwrap();
+    assert!(e.to_string().contains("texcoords"), "{e}");
+}
+
+/// OBJ texture coordinates come through per triangle corner, seams included.
+#[test]
+fn obj_texture_coordinates_per_corner() {
+    let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n\
+               vt 0 0\nvt 1 0\nvt 0 1\nvt 0.5 0.5\n\
+               f 1/1 2/2 3/3\nf 2/4 4/2 3/3\n";
+    let mesh = Mesh::from_obj(&mut std::io::BufReader::new(obj.as_bytes())).unwrap();
+    assert_eq!(mesh.triangles.len(), 2);
+    let v = |x, y| glam::Vec2::new(x, y);
+    assert_eq!(mesh.texcoords[0], [v(0.0, 0.0), v(1.0, 0.0), v(0.0, 1.0)]);
+    // Vertex 2 has (1, 0) in the first face and (0.5, 0.5) in the second: a seam.
+    assert_eq!(mesh.texcoords[1], [v(0.5, 0.5), v(1.0, 0.0), v(0.0, 1.0)]);
+}

@@ -22,12 +22,16 @@ struct AttributeParams {
     capacity: u32,
     // Words in the occupancy bitset.
     words: u32,
+    // 1: the colour is the corners' colour × the albedo texture at the corners' texture
+    // coordinates, interpolated as the colour is.
+    textured: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: AttributeParams;
 // Three vertices per triangle, grid-local (w unused).
 @group(0) @binding(1) var<storage, read> triangles: array<vec4<f32>>;
-// Per triangle corner: RGBA8 colour, then the normal's x, y, z as f32 bits.
+// Two per triangle corner: (RGBA8 colour, the normal's x, y, z as f32 bits), then (u, v as f32
+// bits, 0, 0).
 @group(0) @binding(2) var<storage, read> corners: array<vec4<u32>>;
 // The surface pass's bitset and `voxelize/compact`'s offsets.
 @group(0) @binding(3) var<storage, read> occupancy: array<u32>;
@@ -42,6 +46,10 @@ struct AttributeParams {
 // Per occupied voxel in voxel order: (voxel index, RGBA8 colour, octahedral normal as two
 // snorm16 or NO_NORMAL, triangles).
 @group(0) @binding(9) var<storage, read_write> voxels: array<vec4<u32>>;
+// The albedo (a 1×1 stand-in unless `textured`), sampled with repeat and linear filtering at
+// (u, 1 − v): OBJ's v runs up, an image's rows down.
+@group(0) @binding(10) var albedo: texture_2d<f32>;
+@group(0) @binding(11) var albedo_sampler: sampler;
 
 const SUMS: u32 = 8u;
 // Sum units per 8-bit colour level: 4 bits below the output's precision. The sums hold
@@ -84,12 +92,18 @@ fn add_voxel(s: Setup, t: u32, p: vec3<i32>) {
     if b.x + b.y > 1.0 {
         b /= b.x + b.y;
     }
-    let c0 = corners[3u * t];
-    let c1 = corners[3u * t + 1u];
-    let c2 = corners[3u * t + 2u];
+    let c0 = corners[6u * t];
+    let c1 = corners[6u * t + 2u];
+    let c2 = corners[6u * t + 4u];
     let k0 = unpack4x8unorm(c0.x) * 255.0;
-    let colour = k0 + b.x * (unpack4x8unorm(c1.x) * 255.0 - k0)
+    var colour = k0 + b.x * (unpack4x8unorm(c1.x) * 255.0 - k0)
         + b.y * (unpack4x8unorm(c2.x) * 255.0 - k0);
+    if params.textured != 0u {
+        let t0 = bitcast<vec2<f32>>(corners[6u * t + 1u].xy);
+        let uv = t0 + b.x * (bitcast<vec2<f32>>(corners[6u * t + 3u].xy) - t0)
+            + b.y * (bitcast<vec2<f32>>(corners[6u * t + 5u].xy) - t0);
+        colour *= textureSampleLevel(albedo, albedo_sampler, vec2<f32>(uv.x, 1.0 - uv.y), 0.0);
+    }
     let n0 = bitcast<vec3<f32>>(c0.yzw);
     var n = n0 + b.x * (bitcast<vec3<f32>>(c1.yzw) - n0) + b.y * (bitcast<vec3<f32>>(c2.yzw) - n0);
     if dot(n, n) == 0.0 {

@@ -42,6 +42,10 @@ pub(super) struct AttributePipelines {
     accumulate_heavy: OnceLock<ComputePipeline<stage::accumulate_heavy::Entry>>,
     resolve: OnceLock<ComputePipeline<stage::resolve::Entry>>,
     to_volumes: OnceLock<ComputePipeline<volume_stage::to_volumes::Entry>>,
+    /// Repeat, linear: how the albedo is sampled.
+    albedo_sampler: OnceLock<wgpu::Sampler>,
+    /// A 1×1 albedo bound where there is none.
+    no_albedo: OnceLock<wgpu::TextureView>,
 }
 
 /// Voxel attributes as dense 3D textures (`voxelize/attribute_volume`), for stages that sample
@@ -59,6 +63,7 @@ pub struct AttributeVolumes {
 /// the second half needs room for.
 pub struct PendingAttributes {
     bound: u64,
+    albedo: Option<wgpu::TextureView>,
     surface: Surface,
     grid: Grid,
     triangles: wgpu::Buffer,
@@ -182,8 +187,9 @@ pub fn occupied_bound(local: &GridMesh, size: [u32; 3]) -> u64 {
     sum.min(total)
 }
 
-/// Per triangle corner of `local`: the RGBA8 colour and the normal's f32 bits (the vertex
-/// normal, or the triangle's own where the mesh has none).
+/// Per triangle corner of `local`, two words of four: the RGBA8 colour and the normal's f32
+/// bits (the vertex normal, or the triangle's own where the mesh has none), then the texture
+/// coordinates' f32 bits ((0, 0) where the mesh has none).
 fn corners(mesh: &Mesh, local: &GridMesh) -> Result<Vec<[u32; 4]>, Error> {
     let n = mesh.positions.len();
     for (what, len) in [
@@ -196,18 +202,40 @@ fn corners(mesh: &Mesh, local: &GridMesh) -> Result<Vec<[u32; 4]>, Error> {
             )));
         }
     }
+    let t = mesh.triangles.len();
+    if !mesh.texcoords.is_empty() && mesh.texcoords.len() != t {
+        return Err(invalid(format!(
+            "the mesh has {t} triangles but {} texcoords (give one [uv; 3] per triangle, or none)",
+            mesh.texcoords.len()
+        )));
+    }
     if let Some(i) = mesh.normals.iter().position(|v| !v.is_finite()) {
         return Err(invalid(format!(
             "normal {i} is not finite: {}",
             mesh.normals[i]
         )));
     }
-    let mut out = Vec::with_capacity(local.vertices.len());
+    if let Some(i) = mesh
+        .texcoords
+        .iter()
+        .position(|c| c.iter().any(|uv| !uv.is_finite()))
+    {
+        return Err(invalid(format!(
+            "texcoords of triangle {i} are not finite: {:?}",
+            mesh.texcoords[i]
+        )));
+    }
+    let mut out = Vec::with_capacity(2 * local.vertices.len());
     for &t in &local.source {
         let tri = mesh.triangles[t as usize];
         let [a, b, c] = tri.map(|i| mesh.positions[i as usize]);
         let face = (b - a).cross(c - a).normalize_or_zero();
-        for i in tri {
+        let uvs = mesh
+            .texcoords
+            .get(t as usize)
+            .copied()
+            .unwrap_or([glam::Vec2::ZERO; 3]);
+        for (k, i) in tri.into_iter().enumerate() {
             let colour = mesh.colors.get(i as usize).copied().unwrap_or([255; 4]);
             let normal: DVec3 = mesh.normals.get(i as usize).copied().unwrap_or(face);
             let normal = normal.as_vec3();
@@ -217,9 +245,40 @@ fn corners(mesh: &Mesh, local: &GridMesh) -> Result<Vec<[u32; 4]>, Error> {
                 normal.y.to_bits(),
                 normal.z.to_bits(),
             ]);
+            out.push([uvs[k].x.to_bits(), uvs[k].y.to_bits(), 0, 0]);
         }
     }
     Ok(out)
+}
+
+/// An albedo texture the attribute pass can sample: 2D, one layer, `TEXTURE_BINDING`, a
+/// filterable float format.
+fn check_albedo(device: &wgpu::Device, t: &wgpu::Texture) -> Result<(), Error> {
+    if t.dimension() != wgpu::TextureDimension::D2 || t.depth_or_array_layers() != 1 {
+        return Err(invalid(format!(
+            "the albedo must be one 2D texture, got {:?} × {} layers",
+            t.dimension(),
+            t.depth_or_array_layers()
+        )));
+    }
+    if !t.usage().contains(wgpu::TextureUsages::TEXTURE_BINDING) {
+        return Err(invalid(format!(
+            "the albedo needs TEXTURE_BINDING, it has {:?}",
+            t.usage()
+        )));
+    }
+    let filterable = matches!(
+        t.format().sample_type(None, Some(device.features())),
+        Some(wgpu::TextureSampleType::Float { filterable: true })
+    );
+    if !filterable || t.format().is_depth_stencil_format() || t.sample_count() != 1 {
+        return Err(Error::Format {
+            stage: stage::STAGE,
+            format: t.format(),
+            supported: "a filterable colour format (Rgba8Unorm, Rgba8UnormSrgb, Rgba16Float, …)",
+        });
+    }
+    Ok(())
 }
 
 impl Voxelizer {
@@ -329,6 +388,31 @@ impl Voxelizer {
         mesh: &Mesh,
         grid: &Grid,
     ) -> Result<PendingAttributes, Error> {
+        self.encode_attributes_with(device, rec, mesh, grid, None)
+    }
+
+    /// [`Voxelizer::encode_attributes`] with an `albedo` texture: each voxel's colour is the
+    /// corners' colour × the albedo at the corners' texture coordinates ([`Mesh::texcoords`]),
+    /// both interpolated at the voxel centre's closest point on the triangle, as the source's
+    /// vertex stage passes texture coordinates on. The mesh needs texture coordinates; the
+    /// texture a filterable colour format.
+    pub fn encode_attributes_with(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        mesh: &Mesh,
+        grid: &Grid,
+        albedo: Option<&wgpu::Texture>,
+    ) -> Result<PendingAttributes, Error> {
+        if let Some(t) = albedo {
+            check_albedo(device, t)?;
+            if mesh.texcoords.is_empty() {
+                return Err(invalid(
+                    "an albedo texture needs the mesh's texture coordinates (Mesh::texcoords)"
+                        .into(),
+                ));
+            }
+        }
         let local = mesh.to_grid(grid)?;
         let bound = occupied_bound(&local, grid.size);
         let corner_data = corners(mesh, &local)?;
@@ -415,6 +499,7 @@ impl Voxelizer {
         });
         Ok(PendingAttributes {
             bound,
+            albedo: albedo.map(|t| t.create_view(&Default::default())),
             surface: Surface {
                 size: grid.size,
                 occupancy,
@@ -462,6 +547,7 @@ impl Voxelizer {
             words,
             count,
             total,
+            albedo,
             ..
         } = pending;
         let buffer = |label, size: u64, usage| {
@@ -494,10 +580,42 @@ impl Voxelizer {
                     slack: SLACK,
                     capacity: heavy.capacity,
                     words,
+                    textured: albedo.is_some() as u32,
                 },
             )
         };
         let p = &self.attribute_pipelines;
+        let sampler = p.albedo_sampler.get_or_init(|| {
+            device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("voxel albedo"),
+                address_mode_u: wgpu::AddressMode::Repeat,
+                address_mode_v: wgpu::AddressMode::Repeat,
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                ..Default::default()
+            })
+        });
+        let albedo_view = match &albedo {
+            Some(v) => v,
+            None => p.no_albedo.get_or_init(|| {
+                device
+                    .create_texture(&wgpu::TextureDescriptor {
+                        label: Some("no voxel albedo"),
+                        size: wgpu::Extent3d {
+                            width: 1,
+                            height: 1,
+                            depth_or_array_layers: 1,
+                        },
+                        mip_level_count: 1,
+                        sample_count: 1,
+                        dimension: wgpu::TextureDimension::D2,
+                        format: wgpu::TextureFormat::Rgba8Unorm,
+                        usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                        view_formats: &[],
+                    })
+                    .create_view(&Default::default())
+            }),
+        };
         let accumulate = ComputePipeline::cached(&p.accumulate, device, &[])?;
         for (first, n) in batches(count) {
             let params = params_for(first, n);
@@ -513,6 +631,8 @@ impl Voxelizer {
                     word_offsets: (&word_offsets).into(),
                     block_offsets: (&block_offsets).into(),
                     sums: (&sums).into(),
+                    albedo: albedo_view.into(),
+                    albedo_sampler: sampler.into(),
                 },
                 [n.div_ceil(64), 1, 1],
                 stage::STAGE,
@@ -533,6 +653,8 @@ impl Voxelizer {
                     work: (&heavy.work).into(),
                     work_count: (&heavy.work_count).into(),
                     sums: (&sums).into(),
+                    albedo: albedo_view.into(),
+                    albedo_sampler: sampler.into(),
                 },
             )?;
             run_indirect(
@@ -581,7 +703,20 @@ impl Voxelizer {
         mesh: &Mesh,
         grid: &Grid,
     ) -> Result<Attributes, Error> {
-        let pending = self.encode_attributes(device, rec, mesh, grid)?;
+        self.encode_attributes_in_one_with(device, rec, mesh, grid, None)
+    }
+
+    /// [`Voxelizer::encode_attributes_in_one`] with an albedo texture
+    /// ([`Voxelizer::encode_attributes_with`]).
+    pub fn encode_attributes_in_one_with(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        mesh: &Mesh,
+        grid: &Grid,
+        albedo: Option<&wgpu::Texture>,
+    ) -> Result<Attributes, Error> {
+        let pending = self.encode_attributes_with(device, rec, mesh, grid, albedo)?;
         let bound = u32::try_from(pending.bound).map_err(|_| Error::Size {
             stage: stage::STAGE,
             what: "bound on occupied voxels (one list entry each)",

@@ -65,6 +65,10 @@ pub struct Mesh {
     /// Per-vertex normals, or empty when the mesh has none (each triangle's own normal is
     /// used). Need not be unit length.
     pub normals: Vec<DVec3>,
+    /// Texture coordinates per triangle corner (one `[uv; 3]` per triangle, as OBJ files give
+    /// them, seams included), or empty. OBJ's convention: v up, so an albedo image with its
+    /// first row at the top is sampled at (u, 1 − v).
+    pub texcoords: Vec<[glam::Vec2; 3]>,
 }
 
 /// Where the voxels are: the world position of voxel (0, 0, 0)'s min corner, the voxel edge and

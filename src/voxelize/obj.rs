@@ -55,6 +55,7 @@ fn read_obj(reader: &mut impl BufRead) -> Result<Mesh, tobj::LoadError> {
     let mut welded = HashMap::<[u64; 3], u32>::new();
     let any_colour = models.iter().any(|m| !m.mesh.vertex_color.is_empty());
     let any_normal = models.iter().any(|m| !m.mesh.normals.is_empty());
+    let any_uv = models.iter().any(|m| !m.mesh.texcoords.is_empty());
     let mut normal_sums = Vec::<DVec3>::new();
     let mut seen = std::collections::HashSet::new();
     for (model_index, model) in models.iter().enumerate() {
@@ -90,6 +91,16 @@ fn read_obj(reader: &mut impl BufRead) -> Result<Mesh, tobj::LoadError> {
         for (f, tri) in m.indices.chunks_exact(3).enumerate() {
             mesh.triangles
                 .push([0, 1, 2].map(|k| remap[tri[k] as usize]));
+            if any_uv {
+                // Texture coordinates per corner: their own indices where the file gives them
+                // (seams), the position's otherwise; (0, 0) for a model without any.
+                mesh.texcoords.push([0, 1, 2].map(|k| {
+                    let i = m.texcoord_indices.get(3 * f + k).copied().unwrap_or(tri[k]) as usize;
+                    m.texcoords
+                        .get(2 * i..2 * i + 2)
+                        .map_or(glam::Vec2::ZERO, |uv| glam::Vec2::new(uv[0], uv[1]))
+                }));
+            }
             if m.normals.is_empty() {
                 continue;
             }
