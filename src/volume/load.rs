@@ -575,7 +575,7 @@ pub fn dicom(files: &[&[u8]]) -> Result<VolumeData, Error> {
         .map(|w| (w[1].position - w[0].position).dot(normal))
         .collect();
     let dz = gaps.first().copied().unwrap_or(1.0);
-    if !(dz > 0.0) || gaps.iter().any(|g| (g - dz).abs() > 0.01 * dz) {
+    if dz.is_nan() || dz <= 0.0 || gaps.iter().any(|g| (g - dz).abs() > 0.01 * dz) {
         return Err(bad(format!(
             "DICOM slices are not evenly spaced (gaps {gaps:?}): resample the series"
         )));
