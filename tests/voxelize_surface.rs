@@ -443,3 +443,67 @@ fn raster_path_gives_the_compute_voxels() {
         );
     }
 }
+
+/// Several meshes placed by model matrices into one grid in one pass (issue 24, seed 004):
+/// the surface is the union of each mesh voxelized alone, placed by hand (positions moved in
+/// this test, not by `Mesh::transformed`); a mirroring matrix keeps the triangles facing out.
+#[test]
+fn placed_meshes_voxelize_into_one_grid() {
+    use glam::DMat4;
+    let ctx = Context::shared();
+    let v = Voxelizer::new(&ctx.device).unwrap();
+    let torus = Mesh::torus(DVec3::ZERO, 1.0, 0.35, 24, 12);
+    let ball = Mesh::uv_sphere(DVec3::ZERO, 0.6, 16, 8);
+    let a = DMat4::from_translation(DVec3::new(-1.0, 0.2, 0.0)) * DMat4::from_rotation_x(0.9);
+    let b = DMat4::from_translation(DVec3::new(1.4, -0.3, 0.4))
+        * DMat4::from_scale(DVec3::new(1.5, 0.8, 1.0));
+    let by_hand = |m: &Mesh, model: DMat4| Mesh {
+        positions: m
+            .positions
+            .iter()
+            .map(|&p| model.transform_point3(p))
+            .collect(),
+        ..m.clone()
+    };
+    let grid = Grid {
+        origin: DVec3::new(-2.6, -1.6, -1.6),
+        voxel: 0.1,
+        size: [52, 32, 32],
+    };
+    let bits = |m: &Mesh| {
+        let mut enc = ctx.encoder("placed");
+        let s = v.encode_surface(&ctx.device, &mut enc, m, &grid).unwrap();
+        ctx.submit_and_wait("placed", enc).unwrap();
+        s.read(&ctx.device, &ctx.queue).wait(&ctx).unwrap()
+    };
+    let combined = Mesh::combined(&[(&torus, a), (&ball, b)]).unwrap();
+    let both = bits(&combined);
+    let (one, two) = (bits(&by_hand(&torus, a)), bits(&by_hand(&ball, b)));
+    let union: Vec<bool> = one.iter().zip(&two).map(|(x, y)| *x || *y).collect();
+    assert_eq!(both, union);
+    let (n1, n2, n) = (
+        one.iter().filter(|&&b| b).count(),
+        two.iter().filter(|&&b| b).count(),
+        both.iter().filter(|&&b| b).count(),
+    );
+    println!("placed: {n1} + {n2} voxels apart, {n} together");
+    assert!(n1 > 500 && n2 > 300 && n >= n1.max(n2));
+    // A mirror keeps the signed volume positive (the triangles still face out).
+    let cube = Mesh::cuboid(DVec3::ZERO, DVec3::ONE);
+    let mirrored = cube
+        .transformed(DMat4::from_scale(DVec3::new(-2.0, 1.0, 1.0)))
+        .unwrap();
+    assert!(
+        (mirrored.volume() - 2.0).abs() < 1e-12,
+        "{}",
+        mirrored.volume()
+    );
+    assert!(
+        cube.transformed(DMat4::from_scale(DVec3::new(1.0, 0.0, 1.0)))
+            .is_err()
+    );
+    assert!(
+        cube.transformed(DMat4::from_scale(DVec3::splat(f64::NAN)))
+            .is_err()
+    );
+}

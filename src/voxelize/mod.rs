@@ -325,6 +325,82 @@ impl Mesh {
             .sum()
     }
 
+    /// The mesh placed by `model` (any affine, invertible transform: rotation, scale,
+    /// translation): positions transformed, normals by the inverse transpose, triangles
+    /// reversed where `model` mirrors so they stay counter-clockwise.
+    pub fn transformed(&self, model: glam::DMat4) -> Result<Mesh, Error> {
+        let det = glam::DMat3::from_mat4(model).determinant();
+        if !(model.is_finite() && det.is_finite() && det != 0.0)
+            || !model.row(3).abs_diff_eq(glam::DVec4::W, 1e-12)
+        {
+            return Err(invalid(format!(
+                "model matrix must be affine, finite and invertible, got {model} (determinant \
+                 {det})"
+            )));
+        }
+        let normal = glam::DMat3::from_mat4(model).inverse().transpose();
+        let mut out = self.clone();
+        out.positions = self
+            .positions
+            .iter()
+            .map(|&p| model.transform_point3(p))
+            .collect();
+        out.normals = self.normals.iter().map(|&n| normal * n).collect();
+        if det < 0.0 {
+            for t in &mut out.triangles {
+                t.swap(1, 2);
+            }
+            for c in &mut out.texcoords {
+                c.swap(1, 2);
+            }
+        }
+        Ok(out)
+    }
+
+    /// Several meshes, each placed by its model matrix, as one mesh to voxelize into one grid
+    /// in one pass. Colours, normals and texture coordinates are kept where every part has
+    /// them; where some part lacks colours it is white, texture coordinates (0, 0), and where
+    /// some part lacks normals every triangle uses its own.
+    pub fn combined(parts: &[(&Mesh, glam::DMat4)]) -> Result<Mesh, Error> {
+        let placed: Vec<Mesh> = parts
+            .iter()
+            .map(|(m, model)| m.transformed(*model))
+            .collect::<Result<_, _>>()?;
+        let any_colour = placed.iter().any(|m| !m.colors.is_empty());
+        let all_normals = placed.iter().all(|m| !m.normals.is_empty());
+        let any_uv = placed.iter().any(|m| !m.texcoords.is_empty());
+        let mut out = Mesh::default();
+        for m in &placed {
+            let base = u32::try_from(out.positions.len())
+                .map_err(|_| invalid("more than 2³² vertices in all".into()))?;
+            out.positions.extend(&m.positions);
+            out.triangles
+                .extend(m.triangles.iter().map(|t| t.map(|i| i + base)));
+            if any_colour {
+                if m.colors.is_empty() {
+                    out.colors
+                        .extend(std::iter::repeat_n([255; 4], m.positions.len()));
+                } else {
+                    out.colors.extend(&m.colors);
+                }
+            }
+            if all_normals {
+                out.normals.extend(&m.normals);
+            }
+            if any_uv {
+                if m.texcoords.is_empty() {
+                    out.texcoords.extend(std::iter::repeat_n(
+                        [glam::Vec2::ZERO; 3],
+                        m.triangles.len(),
+                    ));
+                } else {
+                    out.texcoords.extend(&m.texcoords);
+                }
+            }
+        }
+        Ok(out)
+    }
+
     /// Check the mesh and move it into `grid`'s local coordinates in f64, then round to f32.
     pub fn to_grid(&self, grid: &Grid) -> Result<GridMesh, Error> {
         check_grid(grid)?;
