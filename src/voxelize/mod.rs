@@ -330,9 +330,8 @@ impl Mesh {
     /// reversed where `model` mirrors so they stay counter-clockwise.
     pub fn transformed(&self, model: glam::DMat4) -> Result<Mesh, Error> {
         let det = glam::DMat3::from_mat4(model).determinant();
-        if !(model.is_finite() && det.is_finite() && det != 0.0)
-            || !model.row(3).abs_diff_eq(glam::DVec4::W, 1e-12)
-        {
+        let affine = model.row(3).abs_diff_eq(glam::DVec4::W, 1e-12);
+        if !(model.is_finite() && det.is_finite() && det != 0.0 && affine) {
             return Err(invalid(format!(
                 "model matrix must be affine, finite and invertible, got {model} (determinant \
                  {det})"
