@@ -77,6 +77,12 @@ pub struct PendingAttributes {
 }
 
 impl PendingAttributes {
+    /// The bound on occupied voxels ([`occupied_bound`]) that
+    /// [`Voxelizer::encode_attributes_in_one`] sizes its list by.
+    pub fn bound(&self) -> u64 {
+        self.bound
+    }
+
     /// Occupied voxels, read back once the encoder that recorded this has been submitted.
     pub fn occupied(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Readback<u32> {
         readback_buffer(device, queue, &self.total)
@@ -724,11 +730,5 @@ impl Voxelizer {
             max: u32::MAX as u64,
         })?;
         self.encode_resolve_attributes(device, rec, pending, bound)
-    }
-
-    /// The bound [`Voxelizer::encode_attributes_in_one`] sizes its list by, from the pending
-    /// first half.
-    pub fn pending_bound(pending: &PendingAttributes) -> u64 {
-        pending.bound
     }
 }
