@@ -98,6 +98,21 @@ fn prepare(root: &Path) -> Result<usize, String> {
         names.push(name.to_string());
     }
     names.sort();
+    // The viewer's process-level tests (soak, settings files) run its release binary, found
+    // beside the test binaries as `examples/viewer`.
+    let built = Command::new(&cargo)
+        .current_dir(root)
+        .args(["build", "--release", "--example", "viewer"])
+        .status()
+        .map_err(|e| format!("cargo build --example viewer: {e}"))?;
+    if !built.success() {
+        return Err("cargo build --release --example viewer failed".into());
+    }
+    std::fs::create_dir_all(staging.join("example-binaries")).map_err(|e| e.to_string())?;
+    let viewer = staging.join("example-binaries").join("viewer");
+    std::fs::copy(root.join("target/release/examples/viewer"), &viewer)
+        .map_err(|e| format!("the viewer example: {e}"))?;
+    let _ = Command::new("strip").arg(&viewer).status();
     let skip: String = NEEDS_DISPLAY
         .iter()
         .map(|(bin, test)| format!("    {bin}) skip=\"--skip {test}\" ;;\n"))
@@ -108,7 +123,8 @@ fn prepare(root: &Path) -> Result<usize, String> {
 adapter="$1"; out="${{2:-.}}"; logs=/tmp/fieldkit-test-logs; mkdir -p "$logs"
 built="{built}"
 if [ "$(pwd)" != "$built" ] && [ ! -e "$built" ]; then mkdir -p "$(dirname "$built")"; ln -s "$(pwd)" "$built"; fi
-mkdir -p .gpu/bin/tests && tar -xJf .gpu/tests.tar.xz -C .gpu/bin/tests
+mkdir -p .gpu/bin/tests .gpu/bin/examples && tar -xJf .gpu/tests.tar.xz -C .gpu/bin/tests
+cp .gpu/bin/tests/example-binaries/* .gpu/bin/examples/
 pass=0; fail=0
 for name in {names}; do
   skip=""
@@ -133,6 +149,7 @@ tar -cJf "$out/test-logs.tar.xz" -C "$logs" .
         .arg("-cJf")
         .arg(gpu.join("tests.tar.xz"))
         .args(&names)
+        .arg("example-binaries/viewer")
         .status()
         .map_err(|e| format!("tar: {e}"))?;
     if !status.success() {
