@@ -372,6 +372,37 @@ proptest! {
         ctx.queue.submit([enc.finish()]);
         clean(ctx)?;
     }
+
+    /// Resident meshes placed by any matrices (singular, NaN, huge, tiny) in any grid.
+    #[test]
+    fn placed_meshes_encode_or_refuse(
+        points in proptest::collection::vec((f32_edge(), f32_edge(), f32_edge()), 0..9),
+        models in proptest::collection::vec(mat4_edge(), 0..3),
+        n in prop_oneof![Just(0u32), Just(1), 1u32..40, Just(4097)],
+        voxel in prop_oneof![Just(0.1f64), Just(0.0), Just(f64::NAN), Just(1e-300), Just(1e300)],
+        six in any::<bool>(),
+    ) {
+        use fieldkit::voxelize::{GpuMesh, Separation};
+        let nn = noop();
+        let ctx = &nn.ctx;
+        let positions: Vec<DVec3> = points.iter().map(|&(x, y, z)| DVec3::new(x as f64, y as f64, z as f64)).collect();
+        let k = positions.len() as u32;
+        let triangles = (0..k / 3).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
+        let mesh = Mesh { positions, triangles, ..Mesh::default() };
+        let Some(gpu) = typed(GpuMesh::upload(&ctx.device, &mesh)) else {
+            return Ok(());
+        };
+        prop_assert!(gpu.triangles() as usize + gpu.degenerate() == mesh.triangles.len());
+        let grid = Grid { origin: DVec3::splat(-1.0), voxel, size: [n.clamp(0, 4097), 8, 8] };
+        let parts: Vec<_> = models.iter().map(|m| (&gpu, m.as_dmat4())).collect();
+        let sep = if six { Separation::Six } else { Separation::Conservative };
+        let mut enc = ctx.encoder("prop placed");
+        if let Some(s) = typed(nn.vox.encode_surface_placed(&ctx.device, &mut enc, &parts, &grid, sep)) {
+            prop_assert_eq!(s.size, grid.size);
+        }
+        ctx.queue.submit([enc.finish()]);
+        clean(ctx)?;
+    }
 }
 
 proptest! {

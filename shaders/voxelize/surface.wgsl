@@ -1,6 +1,9 @@
 // Conservative surface voxelization (Schwarz & Seidel 2010): every voxel a triangle touches,
-// closed boxes, written to an occupancy bitset with atomicOr. Vertices arrive in grid-local
-// coordinates (origin 0, voxel size 1; the host transforms them in f64). The overlap tests are
+// closed boxes, written to an occupancy bitset with atomicOr. Vertices are moved into grid-local
+// coordinates (origin 0, voxel size 1) by `to_grid`: the identity when the host moved them in
+// f64, a mesh's placement when the mesh stays on the GPU (`GpuMesh`) and only the matrix
+// changes. A triangle with no area after the move is skipped (`setup` gives it no columns).
+// The overlap tests are
 // in `fieldkit::triangle_box`: a voxel passes exactly when the triangle and the box overlap (the
 // 13-axis separating-axis test says the same), widened by `slack` against rounding.
 //
@@ -15,11 +18,16 @@
 import fieldkit::triangle_box::{CHUNK, LIGHT, Setup, column, overlaps, setup};
 
 struct SurfaceParams {
+    // Mesh coordinates to grid-local ones (affine; composed in f64 on the host).
+    to_grid: mat4x4<f32>,
     grid: vec3<u32>,
     first: u32,
     count: u32,
     // Relative rounding bound for the tests (a few ulp of f32).
     slack: f32,
+    // How far f32 rounding of `to_grid`'s product can move a vertex, in voxels (0 for the
+    // identity): the tests are widened by this much on top of `slack`.
+    moved: f32,
     // Entries the work list holds (the host sizes it for every chunk there can be).
     capacity: u32,
 }
@@ -27,7 +35,7 @@ struct SurfaceParams {
 override SIX_SEPARATING: bool = false;
 
 @group(0) @binding(0) var<uniform> params: SurfaceParams;
-// Three vertices per triangle, grid-local (w unused).
+// Three vertices per triangle, in the coordinates `to_grid` moves (w unused).
 @group(0) @binding(1) var<storage, read> triangles: array<vec4<f32>>;
 // Occupancy, one bit per voxel, x fastest: voxel (x, y, z) is bit i % 32 of word i / 32 with
 // i = (z · ny + y) · nx + x.
@@ -45,9 +53,20 @@ fn set_voxel(p: vec3<i32>) {
     atomicOr(&occupancy[i / 32u], 1u << (i % 32u));
 }
 
+fn vertex(i: u32) -> vec3<f32> {
+    return (params.to_grid * vec4<f32>(triangles[i].xyz, 1.0)).xyz;
+}
+
 fn load(t: u32) -> Setup {
-    return setup(triangles[3u * t].xyz, triangles[3u * t + 1u].xyz, triangles[3u * t + 2u].xyz,
-                 vec3<i32>(params.grid), params.slack, SIX_SEPARATING);
+    let a = vertex(3u * t);
+    let b = vertex(3u * t + 1u);
+    let c = vertex(3u * t + 2u);
+    // `setup` scales the relative slack by the largest coordinate + 2 (as here), so adding
+    // moved / scale widens every test by `moved` more.
+    let m = max(max(abs(a), abs(b)), abs(c));
+    let scale = max(max(m.x, m.y), m.z) + 2.0;
+    return setup(a, b, c, vec3<i32>(params.grid), params.slack + params.moved / scale,
+                 SIX_SEPARATING);
 }
 
 // Test the voxels of columns [first, first + count) of the triangle.

@@ -25,11 +25,13 @@ mod attributes;
 pub mod cpu;
 pub mod export;
 mod obj;
+mod placed;
 pub mod view;
 
 pub use attributes::{
     AttributeVolumes, Attributes, PendingAttributes, VoxelAttributes, occupied_bound,
 };
+pub use placed::GpuMesh;
 
 use glam::{DVec3, Vec4};
 
@@ -329,14 +331,7 @@ impl Mesh {
     /// translation): positions transformed, normals by the inverse transpose, triangles
     /// reversed where `model` mirrors so they stay counter-clockwise.
     pub fn transformed(&self, model: glam::DMat4) -> Result<Mesh, Error> {
-        let det = glam::DMat3::from_mat4(model).determinant();
-        let affine = model.row(3).abs_diff_eq(glam::DVec4::W, 1e-12);
-        if !(model.is_finite() && det.is_finite() && det != 0.0 && affine) {
-            return Err(invalid(format!(
-                "model matrix must be affine, finite and invertible, got {model} (determinant \
-                 {det})"
-            )));
-        }
+        let det = check_model(model)?;
         let normal = glam::DMat3::from_mat4(model).inverse().transpose();
         let mut out = self.clone();
         out.positions = self
@@ -403,30 +398,11 @@ impl Mesh {
     /// Check the mesh and move it into `grid`'s local coordinates in f64, then round to f32.
     pub fn to_grid(&self, grid: &Grid) -> Result<GridMesh, Error> {
         check_grid(grid)?;
-        if self.triangles.is_empty() {
-            return Err(Error::Size {
-                stage: STAGE,
-                what: "number of triangles",
-                got: 0,
-                max: u32::MAX as u64 / 3,
-            });
-        }
-        if let Some(i) = self.positions.iter().position(|p| !p.is_finite()) {
-            return Err(invalid(format!(
-                "vertex {i} is not finite: {}",
-                self.positions[i]
-            )));
-        }
-        let n = self.positions.len() as u32;
+        self.check()?;
         let mut vertices = Vec::with_capacity(self.triangles.len() * 3);
         let mut degenerate = 0;
         let mut source = Vec::with_capacity(self.triangles.len());
         for (t, tri) in self.triangles.iter().enumerate() {
-            if let Some(&bad) = tri.iter().find(|&&i| i >= n) {
-                return Err(invalid(format!(
-                    "triangle {t} names vertex {bad}, the mesh has {n}"
-                )));
-            }
             let v =
                 tri.map(|i| ((self.positions[i as usize] - grid.origin) / grid.voxel).as_vec3());
             if (v[1] - v[0]).cross(v[2] - v[0]).length_squared() == 0.0 {
@@ -442,6 +418,46 @@ impl Mesh {
             source,
         })
     }
+
+    /// A mesh the voxelizer can take: triangles, finite positions, indices in range.
+    fn check(&self) -> Result<(), Error> {
+        if self.triangles.is_empty() {
+            return Err(Error::Size {
+                stage: STAGE,
+                what: "number of triangles",
+                got: 0,
+                max: u32::MAX as u64 / 3,
+            });
+        }
+        if let Some(i) = self.positions.iter().position(|p| !p.is_finite()) {
+            return Err(invalid(format!(
+                "vertex {i} is not finite: {}",
+                self.positions[i]
+            )));
+        }
+        let n = u32::try_from(self.positions.len()).unwrap_or(u32::MAX);
+        for (t, tri) in self.triangles.iter().enumerate() {
+            if let Some(&bad) = tri.iter().find(|&&i| i >= n) {
+                return Err(invalid(format!(
+                    "triangle {t} names vertex {bad}, the mesh has {n}"
+                )));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A model matrix's determinant, once it is known to be affine, finite and invertible.
+fn check_model(model: glam::DMat4) -> Result<f64, Error> {
+    let det = glam::DMat3::from_mat4(model).determinant();
+    let affine = model.row(3).abs_diff_eq(glam::DVec4::W, 1e-12);
+    if !(model.is_finite() && det.is_finite() && det != 0.0 && affine) {
+        return Err(invalid(format!(
+            "model matrix must be affine, finite and invertible, got {model} (determinant \
+             {det})"
+        )));
+    }
+    Ok(det)
 }
 
 fn check_grid(grid: &Grid) -> Result<(), Error> {
@@ -475,6 +491,35 @@ fn check_grid(grid: &Grid) -> Result<(), Error> {
         });
     }
     Ok(())
+}
+
+/// A cleared occupancy bitset for `grid`, recorded into `rec`.
+fn cleared_bitset(
+    device: &wgpu::Device,
+    rec: &mut impl Record,
+    grid: &Grid,
+) -> Result<wgpu::Buffer, Error> {
+    let voxels = grid.voxels();
+    let words = voxels.div_ceil(32).max(1);
+    let limit = device.limits().max_storage_buffer_binding_size;
+    if words * 4 > limit {
+        return Err(Error::Size {
+            stage: STAGE,
+            what: "occupancy bitset bytes",
+            got: words * 4,
+            max: limit,
+        });
+    }
+    let occupancy = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("voxel occupancy"),
+        size: words * 4,
+        usage: wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_SRC
+            | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    rec.recorder().encoder.clear_buffer(&occupancy, 0, None);
+    Ok(occupancy)
 }
 
 /// Chunks of [`CHUNK`] columns the heavy triangles of `local` can need at most: whichever axis
@@ -620,6 +665,17 @@ fn batches(count: u32) -> impl Iterator<Item = (u32, u32)> {
         .map(move |first| (first, (count - first).min(PER_DISPATCH)))
 }
 
+/// The triangles of one surface pass: a buffer of `count` triangles (three `vec4<f32>` each),
+/// the work-list entries their heavy triangles can need, the move into grid-local coordinates
+/// and how far its f32 rounding can move a vertex (voxels).
+struct SurfaceRun<'a> {
+    triangles: &'a wgpu::Buffer,
+    count: u32,
+    capacity: u32,
+    to_grid: glam::Mat4,
+    moved: f32,
+}
+
 /// The heavy triangles' chunks a surface pass listed, and the indirect dispatch that walks
 /// them.
 struct HeavyWork {
@@ -747,26 +803,7 @@ impl Voxelizer {
         local: &GridMesh,
         grid: &Grid,
     ) -> Result<(wgpu::Buffer, wgpu::Buffer), Error> {
-        let voxels = grid.voxels();
-        let words = voxels.div_ceil(32).max(1);
-        let limit = device.limits().max_storage_buffer_binding_size;
-        if words * 4 > limit {
-            return Err(Error::Size {
-                stage: STAGE,
-                what: "occupancy bitset bytes",
-                got: words * 4,
-                max: limit,
-            });
-        }
-        let occupancy = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("voxel occupancy"),
-            size: words * 4,
-            usage: wgpu::BufferUsages::STORAGE
-                | wgpu::BufferUsages::COPY_SRC
-                | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        rec.recorder().encoder.clear_buffer(&occupancy, 0, None);
+        let occupancy = cleared_bitset(device, rec, grid)?;
         use wgpu::util::DeviceExt;
         // One padding vertex keeps the buffer non-empty when every triangle was degenerate.
         let mut vertices = local.vertices.clone();
@@ -798,6 +835,48 @@ impl Voxelizer {
     ) -> Result<HeavyWork, Error> {
         let count = (local.vertices.len() / 3) as u32;
         let capacity = heavy_chunk_bound(local, grid.size);
+        self.surface_pass(
+            device,
+            rec,
+            pipelines,
+            occupancy,
+            &SurfaceRun {
+                triangles,
+                count,
+                capacity,
+                to_grid: glam::Mat4::IDENTITY,
+                moved: 0.0,
+            },
+            grid,
+        )
+    }
+
+    /// One surface pass of `run`'s triangles into `occupancy` (see [`Self::surface_into`]).
+    fn surface_pass(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        pipelines: &SurfacePipelines,
+        occupancy: &wgpu::Buffer,
+        run: &SurfaceRun,
+        grid: &Grid,
+    ) -> Result<HeavyWork, Error> {
+        let &SurfaceRun {
+            triangles,
+            count,
+            capacity,
+            to_grid,
+            moved,
+        } = run;
+        let limit = device.limits().max_storage_buffer_binding_size;
+        if capacity as u64 * 8 > limit {
+            return Err(Error::Size {
+                stage: STAGE,
+                what: "heavy-triangle work list bytes",
+                got: capacity as u64 * 8,
+                max: limit,
+            });
+        }
         let buffer = |label, size: u64, usage| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -837,10 +916,12 @@ impl Voxelizer {
                 device,
                 "voxelize params",
                 &SurfaceParams {
+                    to_grid,
                     grid: grid.size.into(),
                     first,
                     count: n,
                     slack: SLACK,
+                    moved,
                     capacity,
                 },
             )
