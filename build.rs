@@ -13,5 +13,7 @@ fn main() {
         .runtime("crate")
         // fieldkit's own stages keep every lint (or say why a file does not).
         .deny_lints()
+        // The volume march over the procedural cloud as a function (seed 002).
+        .density_march("volume::cloud_march", "shared::fbm_cloud")
         .build_or_exit();
 }

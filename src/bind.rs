@@ -376,6 +376,7 @@ fn layout_of(device: &wgpu::Device, slots: &[Slot], label: &str) -> wgpu::BindGr
 }
 
 /// A resource handed to a slot, before it is checked against the slot.
+#[derive(Clone)]
 pub enum Resource<'a> {
     /// A uniform or storage buffer range.
     Buffer(wgpu::BufferBinding<'a>),

@@ -31,6 +31,7 @@ pub(crate) fn relink(info: &EntryInfo, crate_root: &Path) -> Result<String, Erro
         name,
         rel_path: info.path.to_string(),
         abs_path: crate_root.join(info.path),
+        source: None,
     };
     let shaders = fieldkit_build::ShaderDir::new(crate_root, dir);
     let new = fieldkit_build::build_stage(&shaders, &stage_file).map_err(refuse)?;

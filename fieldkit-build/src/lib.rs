@@ -75,9 +75,20 @@ pub struct StageFile {
     /// Path relative to the crate root, with forward slashes ("shaders/distance/jfa_step.wgsl").
     pub rel_path: String,
     pub abs_path: PathBuf,
+    /// The stage's text where it is not a file of its own (a density march made from
+    /// [`DENSITY_MARCH_TEMPLATE`] by [`Builder::density_march`]); `None` reads `abs_path`.
+    pub source: Option<String>,
 }
 
 impl StageFile {
+    /// The stage's text: [`Self::source`], or the file.
+    pub fn text(&self) -> std::io::Result<String> {
+        match &self.source {
+            Some(s) => Ok(s.clone()),
+            None => std::fs::read_to_string(&self.abs_path),
+        }
+    }
+
     /// `room::name`, as used in messages and generated module paths.
     pub fn id(&self) -> String {
         format!("{}::{}", self.room, self.name)
@@ -129,6 +140,7 @@ pub fn discover(shaders: &ShaderDir) -> std::io::Result<Vec<StageFile>> {
                 room: room_name.clone(),
                 name,
                 abs_path: p,
+                source: None,
             });
         }
     }
@@ -192,11 +204,12 @@ fn link(shaders: &ShaderDir, stage: &StageFile) -> Result<Linked, String> {
     let mut resolver = wesl::StandardResolver::new(shaders.root());
     // fieldkit's helpers, for `import fieldkit::…` (the `fieldkit-wesl` crate).
     resolver.add_package(&fieldkit_wesl::PACKAGE);
-    let original_text = std::fs::read_to_string(&stage.abs_path).unwrap_or_default();
+    let original_text = stage.text().unwrap_or_default();
     let binding_arrays = binding_array_vars(&original_text);
     let mut compiler = wesl::Wesl::new(shaders.root()).set_custom_resolver(BindingArrays {
         inner: resolver,
         root: root.clone(),
+        overlay: stage.source.clone(),
     });
     // Keep every declaration of the stage file itself, used or not: stripping it would drop an
     // unused binding (or a broken unused function) without a word, where the lints and naga
@@ -211,7 +224,7 @@ fn link(shaders: &ShaderDir, stage: &StageFile) -> Result<Linked, String> {
         Err(e) => {
             // A file that imports nothing needs no link: WGSL the pinned WESL parser does not
             // read (`binding_array` is a reserved word to wesl 0.4.0) goes to naga as it is.
-            let original = std::fs::read_to_string(&stage.abs_path).unwrap_or_default();
+            let original = stage.text().unwrap_or_default();
             if !original.is_empty() && !imports_anything(&original) {
                 return Ok(Linked {
                     origins: vec![DeclOrigin {
@@ -325,6 +338,8 @@ fn binding_array_vars(source: &str) -> Vec<String> {
 struct BindingArrays {
     inner: wesl::StandardResolver,
     root: wesl::ModulePath,
+    /// The root module's text where it is not a file ([`StageFile::source`]).
+    overlay: Option<String>,
 }
 
 impl wesl::Resolver for BindingArrays {
@@ -332,7 +347,10 @@ impl wesl::Resolver for BindingArrays {
         &'a self,
         path: &wesl::ModulePath,
     ) -> Result<std::borrow::Cow<'a, str>, wesl::ResolveError> {
-        let source = self.inner.resolve_source(path)?;
+        let source = match &self.overlay {
+            Some(text) if *path == self.root => std::borrow::Cow::Borrowed(text.as_str()),
+            _ => self.inner.resolve_source(path)?,
+        };
         if *path == self.root && source.contains("binding_array<") {
             return Ok(source.replace("binding_array<", "        array<").into());
         }
@@ -550,8 +568,9 @@ fn render(
 pub fn build_stage(shaders: &ShaderDir, stage: &StageFile) -> Result<Stage, String> {
     let crate_root = shaders.base.as_path();
     let linked = link(shaders, stage)?;
-    let original =
-        std::fs::read_to_string(&stage.abs_path).map_err(|e| format!("{}: {e}", stage.rel_path))?;
+    let original = stage
+        .text()
+        .map_err(|e| format!("{}: {e}", stage.rel_path))?;
     let module = naga::front::wgsl::parse_str(&linked.text).map_err(|e| {
         let labels: Vec<_> = e
             .labels()
@@ -789,6 +808,21 @@ pub struct Builder {
     dynamic_offsets: Vec<String>,
     deny_lints: bool,
     portability: bool,
+    density_marches: Vec<(String, String)>,
+}
+
+/// fieldkit's volume march over a density function (see [`Builder::density_march`]): WESL that
+/// imports `density` from [`DENSITY_MARCH_IMPORT`], which the builder replaces.
+pub const DENSITY_MARCH_TEMPLATE: &str = include_str!("../templates/density_march.wesl");
+
+/// The module [`DENSITY_MARCH_TEMPLATE`] imports `density` from, as written in it.
+pub const DENSITY_MARCH_IMPORT: &str = "package::shared::density";
+
+/// The stage text of a density march over `module` (a module path in the shader folder, as
+/// `shared::cloud` or `clouds::cumulus`).
+pub fn density_march_source(module: &str) -> String {
+    let line = format!("import {DENSITY_MARCH_IMPORT}::density;");
+    DENSITY_MARCH_TEMPLATE.replacen(&line, &format!("import package::{module}::density;"), 1)
 }
 
 impl Builder {
@@ -801,7 +835,30 @@ impl Builder {
             dynamic_offsets: Vec::new(),
             deny_lints: false,
             portability: false,
+            density_marches: Vec::new(),
         }
+    }
+
+    /// Add a stage `room::name` (e.g. `"clouds::cumulus_march"`) that raymarches the density
+    /// function `fn density(p: vec3<f32>) -> f32` of `module` (a WESL/WGSL module of the
+    /// shader folder, written as a path: `"shared::cumulus"` for `shaders/shared/cumulus.wesl`;
+    /// `p` is a point in the volume's local space). The stage is fieldkit's volume march
+    /// ([`DENSITY_MARCH_TEMPLATE`]) with every sample taken from the function, linked and
+    /// validated here like any stage, and generated as `shaders::room::name` with the entry
+    /// points `march`, `bricks` and `bake`; `fieldkit::volume::DensityMarch` runs it. Keep the
+    /// module out of the technique folders (under `shared/`) unless it has entry points of its
+    /// own: every file there is a stage.
+    ///
+    /// ```no_run
+    /// // build.rs
+    /// fieldkit_build::Builder::new("shaders")
+    ///     .density_march("clouds::cumulus_march", "shared::cumulus")
+    ///     .build_or_exit();
+    /// ```
+    pub fn density_march(mut self, stage: &str, module: &str) -> Self {
+        self.density_marches
+            .push((stage.to_string(), module.to_string()));
+        self
     }
 
     /// Also translate every stage to SPIR-V, MSL, HLSL and GLSL (the languages wgpu's backends
@@ -877,8 +934,58 @@ impl Builder {
         crate_root: &Path,
         out: &Path,
     ) -> Result<(PathBuf, Vec<String>), Vec<String>> {
-        let mut stages = build_dir(&ShaderDir::new(crate_root, &self.dir))?;
+        let shaders = ShaderDir::new(crate_root, &self.dir);
+        let mut stages = build_dir(&shaders)?;
         let mut errors = Vec::new();
+        for (id, module) in &self.density_marches {
+            let valid = |s: &str| {
+                !s.is_empty()
+                    && s.split("::").all(|p| {
+                        !p.is_empty()
+                            && p.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+                            && !p.starts_with(|c: char| c.is_ascii_digit())
+                    })
+            };
+            let Some((room, name)) = id
+                .split_once("::")
+                .filter(|(r, n)| valid(r) && valid(n) && !n.contains("::") && *r != SHARED_DIR)
+            else {
+                errors.push(format!(
+                    "error: density_march(\"{id}\", …): name the stage room::name (a technique \
+                     folder and a stage name, not under {SHARED_DIR}/)"
+                ));
+                continue;
+            };
+            if !valid(module) {
+                errors.push(format!(
+                    "error: density_march(…, \"{module}\"): name the density module by its path \
+                     in {}/, as shared::cloud",
+                    self.dir
+                ));
+                continue;
+            }
+            if stages.iter().any(|s| s.file.id() == *id) {
+                errors.push(format!(
+                    "error: density_march(\"{id}\", …): {}/{room}/{name} is already a stage file",
+                    self.dir
+                ));
+                continue;
+            }
+            let file = StageFile {
+                room: room.to_string(),
+                name: name.to_string(),
+                rel_path: format!("{}/{room}/{name}.wesl", self.dir),
+                abs_path: shaders.root().join(room).join(format!("{name}.wesl")),
+                source: Some(density_march_source(module)),
+            };
+            match build_stage(&shaders, &file) {
+                Ok(stage) => stages.push(stage),
+                Err(e) => errors.push(format!(
+                    "{e}\n(in the density march `{id}` over the module `{module}`)"
+                )),
+            }
+        }
+        stages.sort_by(|a, b| a.file.rel_path.cmp(&b.file.rel_path));
         for name in &self.dynamic_offsets {
             let (stage_id, binding) = name.rsplit_once("::").unwrap_or(("", name));
             let Some(stage) = stages.iter_mut().find(|s| s.file.id() == stage_id) else {
@@ -993,6 +1100,63 @@ mod tests {
             std::fs::write(root.join(format!("shaders/room/{name}.wgsl")), src).unwrap();
         }
         root
+    }
+
+    /// A density march links the module's `density` into the template and generates its three
+    /// entry points; a bad name, a clash with a stage file and a density of the wrong type are
+    /// errors that say which.
+    #[test]
+    fn density_marches_link_the_users_function() {
+        let root = tree(&[]);
+        std::fs::write(
+            root.join("shaders/shared/fog.wesl"),
+            "// A fog.\nfn density(p: vec3<f32>) -> f32 {\n    return exp(-p.y);\n}\n",
+        )
+        .unwrap();
+        std::fs::write(
+            root.join("shaders/shared/wrong.wesl"),
+            "// Not a density.\nfn density(p: vec3<f32>) -> vec2<f32> {\n    return p.xy;\n}\n",
+        )
+        .unwrap();
+        // The template's own helper module is broken on purpose in `tree`: unused, unlinked.
+        let out = root.join("shaders.rs");
+        Builder::new("shaders")
+            .deny_lints()
+            .density_march("room::fog_march", "shared::fog")
+            .build_to(&root, &out)
+            .expect("builds");
+        let code = std::fs::read_to_string(&out).unwrap();
+        for entry in [
+            "pub mod march",
+            "pub mod bricks",
+            "pub mod bake",
+            "fog_density",
+        ] {
+            assert!(code.contains(entry), "{entry} missing");
+        }
+        let err = |stage: &str, module: &str| {
+            Builder::new("shaders")
+                .density_march(stage, module)
+                .build_to(&root, &out)
+                .unwrap_err()
+                .join("\n")
+        };
+        assert!(err("fog_march", "shared::fog").contains("name the stage room::name"));
+        assert!(err("shared::fog_march", "shared::fog").contains("name the stage room::name"));
+        assert!(err("room::fog_march", "shared/fog").contains("name the density module"));
+        std::fs::write(
+            root.join("shaders/room/taken.wgsl"),
+            "// Taken.\n@compute @workgroup_size(1)\nfn main() {}\n",
+        )
+        .unwrap();
+        assert!(err("room::taken", "shared::fog").contains("already a stage file"));
+        let wrong = err("room::wrong_march", "shared::wrong");
+        assert!(
+            wrong.contains("density march `room::wrong_march` over the module `shared::wrong`"),
+            "{wrong}"
+        );
+        let missing = err("room::none_march", "shared::nothing");
+        assert!(missing.contains("none_march"), "{missing}");
     }
 
     /// `Builder` writes bindings that reach fieldkit's runtime through the path asked for, and

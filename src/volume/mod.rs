@@ -38,7 +38,10 @@
 //!
 #![doc = include_str!("../../docs/volume.md")]
 
+mod function;
 pub mod load;
+
+pub use function::{CloudMarch, DensityMarch, FunctionVolume};
 
 use glam::{Mat4, Vec3};
 
@@ -677,35 +680,15 @@ impl VolumeRenderer {
         let (lo, hi) = volume.bounds();
         let world_to_local = local_to_world.inverse();
         let light_local = world_to_local.transform_vector3(settings.light_dir.normalize());
-        let diagonal_world = local_to_world.transform_vector3(hi - lo).length()
-            + local_to_world
-                .transform_vector3(Vec3::new(hi.x - lo.x, lo.y - hi.y, hi.z - lo.z))
-                .length()
-            + local_to_world
-                .transform_vector3(Vec3::new(lo.x - hi.x, hi.y - lo.y, hi.z - lo.z))
-                .length()
-            + local_to_world
-                .transform_vector3(Vec3::new(hi.x - lo.x, hi.y - lo.y, lo.z - hi.z))
-                .length();
-        // The longest chord through a parallelepiped is one of its four diagonals; their sum
-        // bounds it generously.
-        let guard = |step: f32| ((diagonal_world / step).ceil() + 2.0).min(u32::MAX as f32) as u32;
-        let iso = match settings.mode {
-            Mode::IsoSurface { iso } => iso,
-            _ => 0.0,
-        };
-        let shadow_step = match settings.shadow {
-            Shadow::None => 1.0,
-            Shadow::Rays { step } | Shadow::LightVolume { step } => step,
-        };
-        // Density to entry position: entry i lies at i.
-        let tf_scale =
-            ((tf.entries.len() - 1) as f64 / (tf.range[1] as f64 - tf.range[0] as f64)) as f32;
-        let (near_z, far_z) = if view.reversed_z {
-            (1.0, 0.0)
-        } else {
-            (0.0, 1.0)
-        };
+        let guard = step_guard(local_to_world, lo, hi);
+        let MarchScalars {
+            iso,
+            shadow_step,
+            tf_scale,
+            tf_offset,
+            near_z,
+            far_z,
+        } = MarchScalars::new(settings, tf, view);
         Ok(uniform(
             device,
             "volume march params",
@@ -736,7 +719,7 @@ impl VolumeRenderer {
                 near_z,
                 far_z,
                 tf_count: tf.entries.len() as u32,
-                tf_offset: (-tf_scale as f64 * tf.range[0] as f64) as f32,
+                tf_offset,
                 skip_below: tf.clear_below().clamp(f32::MIN, f32::MAX),
                 iso,
                 min_transmittance: settings.min_transmittance,
@@ -991,31 +974,11 @@ impl VolumeRenderer {
             }
             _ => (&volume.texture, &self.no_light),
         };
-        if let Some(d) = scene_depth {
-            let t = d.texture();
-            if t.format() != wgpu::TextureFormat::Depth32Float
-                || [t.width(), t.height()] != view.viewport
-            {
-                return Err(Error::Invalid {
-                    stage: STAGE,
-                    what: format!(
-                        "scene depth must be Depth32Float of the viewport's size {:?}, got {:?} {}×{}",
-                        view.viewport,
-                        t.format(),
-                        t.width(),
-                        t.height()
-                    ),
-                });
-            }
-        }
+        check_scene_depth(scene_depth, view)?;
         let (lo, hi) = volume.bounds();
-        if !box_visible(view.view_proj, local_to_world, lo, hi) {
+        let Some(rect) = march_rect(view, local_to_world, lo, hi) else {
             return Ok(None);
-        }
-        let rect = screen_rect(view, local_to_world, lo, hi);
-        if rect[2] <= rect[0] || rect[3] <= rect[1] {
-            return Ok(None);
-        }
+        };
         let params = self.params(
             device,
             volume,
@@ -1027,22 +990,7 @@ impl VolumeRenderer {
             rect,
             scene_depth.is_some(),
         )?;
-        let colour = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("volume march"),
-            size: wgpu::Extent3d {
-                width: view.viewport[0],
-                height: view.viewport[1],
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Rgba16Float,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING
-                | wgpu::TextureUsages::STORAGE_BINDING
-                | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
+        let colour = march_target(device, view);
         let tf_buffer = tf_buffer(device, tf);
         let no_depth = self.no_depth.create_view(&Default::default());
         let (dv, lv, cv) = (
@@ -1165,6 +1113,113 @@ fn tf_buffer(device: &wgpu::Device, tf: &TransferFunction) -> wgpu::Buffer {
     })
 }
 
+/// Segments a ray through the box [lo, hi] under `local_to_world` can need at a given step:
+/// the longest chord through a parallelepiped is one of its four diagonals, and their sum bounds
+/// it generously; two more for the partial ends.
+fn step_guard(local_to_world: Mat4, lo: Vec3, hi: Vec3) -> impl Fn(f32) -> u32 {
+    let d = hi - lo;
+    let diagonal_world: f32 = [
+        d,
+        Vec3::new(d.x, -d.y, d.z),
+        Vec3::new(-d.x, d.y, d.z),
+        Vec3::new(d.x, d.y, -d.z),
+    ]
+    .iter()
+    .map(|&v| local_to_world.transform_vector3(v).length())
+    .sum();
+    move |step: f32| ((diagonal_world / step).ceil() + 2.0).min(u32::MAX as f32) as u32
+}
+
+/// The march's scalar parameters that come from the settings, transfer function and view alone.
+struct MarchScalars {
+    iso: f32,
+    shadow_step: f32,
+    /// Density to transfer-function entry position (entry i at i): f = d × scale + offset.
+    tf_scale: f32,
+    tf_offset: f32,
+    /// NDC depth of the near and far planes.
+    near_z: f32,
+    far_z: f32,
+}
+
+impl MarchScalars {
+    fn new(settings: &MarchSettings, tf: &TransferFunction, view: &View) -> Self {
+        let tf_scale =
+            ((tf.entries.len() - 1) as f64 / (tf.range[1] as f64 - tf.range[0] as f64)) as f32;
+        let (near_z, far_z) = if view.reversed_z {
+            (1.0, 0.0)
+        } else {
+            (0.0, 1.0)
+        };
+        Self {
+            iso: match settings.mode {
+                Mode::IsoSurface { iso } => iso,
+                _ => 0.0,
+            },
+            shadow_step: match settings.shadow {
+                Shadow::None => 1.0,
+                Shadow::Rays { step } | Shadow::LightVolume { step } => step,
+            },
+            tf_scale,
+            tf_offset: (-tf_scale as f64 * tf.range[0] as f64) as f32,
+            near_z,
+            far_z,
+        }
+    }
+}
+
+/// A caller's depth target must be `Depth32Float` of the viewport's size.
+fn check_scene_depth(scene_depth: Option<&wgpu::TextureView>, view: &View) -> Result<(), Error> {
+    if let Some(d) = scene_depth {
+        let t = d.texture();
+        if t.format() != wgpu::TextureFormat::Depth32Float
+            || [t.width(), t.height()] != view.viewport
+        {
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: format!(
+                    "scene depth must be Depth32Float of the viewport's size {:?}, got {:?} {}×{}",
+                    view.viewport,
+                    t.format(),
+                    t.width(),
+                    t.height()
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The screen rectangle of the box [lo, hi] under `local_to_world`, `None` when it is off
+/// screen.
+fn march_rect(view: &View, local_to_world: Mat4, lo: Vec3, hi: Vec3) -> Option<[u32; 4]> {
+    if !box_visible(view.view_proj, local_to_world, lo, hi) {
+        return None;
+    }
+    let rect = screen_rect(view, local_to_world, lo, hi);
+    (rect[2] > rect[0] && rect[3] > rect[1]).then_some(rect)
+}
+
+/// The premultiplied image a march writes: viewport-sized `Rgba16Float`.
+fn march_target(device: &wgpu::Device, view: &View) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("volume march"),
+        size: wgpu::Extent3d {
+            width: view.viewport[0],
+            height: view.viewport[1],
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba16Float,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::STORAGE_BINDING
+            | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    })
+}
+
 fn check_transform(m: Mat4) -> Result<(), Error> {
     let det = m.determinant();
     if !m.is_finite() || det == 0.0 || !det.is_finite() || !m.inverse().is_finite() {
@@ -1214,9 +1269,11 @@ fn check_view(view: &View) -> Result<(), Error> {
     Ok(())
 }
 
-/// A procedural cloud: fBm of value noise (5 octaves) shaped by a soft ellipsoid, in [0, 1],
-/// x fastest. Deterministic for a `seed`.
-pub fn fbm_cloud(dims: [u32; 3], seed: u32) -> Vec<f32> {
+/// The procedural cloud at texture coordinate `u` of the unit box: fBm of value noise (5
+/// octaves, lacunarity 2.03, gain ½) shaped by a soft ellipsoid, in [0, 1]. The function
+/// [`fbm_cloud`] samples at voxel centres and `shaders/shared/fbm_cloud.wesl` evaluates on the
+/// GPU ([`CloudMarch`], seed 0).
+pub fn fbm_cloud_at(u: Vec3, seed: u32) -> f32 {
     let hash = |x: i32, y: i32, z: i32, o: u32| -> f32 {
         let mut h = (x as u32).wrapping_mul(0x8da6_b343)
             ^ (y as u32).wrapping_mul(0xd816_3841)
@@ -1241,22 +1298,28 @@ pub fn fbm_cloud(dims: [u32; 3], seed: u32) -> Vec<f32> {
         let x11 = lerp(c(0, 1, 1), c(1, 1, 1), s.x);
         lerp(lerp(x00, x10, s.y), lerp(x01, x11, s.y), s.z)
     };
+    let q = (u - 0.5) * Vec3::new(2.0, 2.6, 2.0);
+    let shape = (1.0 - q.length_squared()).max(0.0);
+    let mut sum = 0.0;
+    let mut amp = 0.5;
+    let mut p = u * 4.0;
+    for o in 0..5 {
+        sum += amp * noise(p, o);
+        p *= 2.03;
+        amp *= 0.5;
+    }
+    ((sum - 0.35) * 2.2 * shape.sqrt()).clamp(0.0, 1.0)
+}
+
+/// The procedural cloud ([`fbm_cloud_at`]) at the voxel centres of a `dims` grid over the unit
+/// box, x fastest. Deterministic for a `seed`.
+pub fn fbm_cloud(dims: [u32; 3], seed: u32) -> Vec<f32> {
     let slice = (dims[0] * dims[1]) as usize;
     let mut out = vec![0.0f32; slice * dims[2] as usize];
     let voxel = |x: u32, y: u32, z: u32| {
         let u = (Vec3::new(x as f32, y as f32, z as f32) + 0.5)
             / Vec3::new(dims[0] as f32, dims[1] as f32, dims[2] as f32);
-        let q = (u - 0.5) * Vec3::new(2.0, 2.6, 2.0);
-        let shape = (1.0 - q.length_squared()).max(0.0);
-        let mut sum = 0.0;
-        let mut amp = 0.5;
-        let mut p = u * 4.0;
-        for o in 0..5 {
-            sum += amp * noise(p, o);
-            p *= 2.03;
-            amp *= 0.5;
-        }
-        ((sum - 0.35) * 2.2 * shape.sqrt()).clamp(0.0, 1.0)
+        fbm_cloud_at(u, seed)
     };
     // Slabs of z on every core: 512³ is 134 M voxels.
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());

@@ -188,6 +188,7 @@ pub(crate) mod test_util {
                 name: "t".into(),
                 rel_path: "shaders/test/t.wgsl".into(),
                 abs_path: "t.wgsl".into(),
+                source: None,
             },
             source: src.into(),
             module,

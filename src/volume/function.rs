@@ -1,0 +1,474 @@
+//! The volume march over a density *function*: `fn density(p: vec3<f32>) -> f32` linked into
+//! fieldkit's march at build time by `fieldkit_build::Builder::density_march`, run here.
+
+use std::marker::PhantomData;
+
+use glam::{Mat4, UVec3, Vec3};
+
+use super::{
+    Bricks, MarchScalars, MarchSettings, Shadow, TransferFunction, VolumeMarched,
+    check_scene_depth, check_transform, check_view, march_rect, march_target, step_guard,
+    tf_buffer,
+};
+use crate::bind::{ComputePipeline, Entry, EntryInfo, Resource};
+use crate::error::Error;
+use crate::gpu::{Record, uniform_buffer as uniform};
+use crate::shaders::volume::cloud_march;
+use crate::view::View;
+
+const STAGE: &str = cloud_march::STAGE;
+
+/// Where a density function is marched: the box it fills in local space, and a lattice of
+/// `dims` cells over it on which bricks are bounded, the function baked and iso-surface normals
+/// differentiated (a cell plays a voxel's part).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct FunctionVolume {
+    /// Local-space corner of the box.
+    pub min: Vec3,
+    /// Opposite corner.
+    pub max: Vec3,
+    /// Lattice cells per axis.
+    pub dims: [u32; 3],
+}
+
+impl FunctionVolume {
+    /// The unit box [0, 1]³ with `n`³ cells (the built-in cloud's box).
+    pub fn unit(n: u32) -> Self {
+        Self {
+            min: Vec3::ZERO,
+            max: Vec3::ONE,
+            dims: [n; 3],
+        }
+    }
+
+    fn check(&self) -> Result<(), Error> {
+        if !(self.min.is_finite() && self.max.is_finite() && self.min.cmplt(self.max).all()) {
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: format!(
+                    "the box needs finite corners with min < max on every axis, got {} and {}",
+                    self.min, self.max
+                ),
+            });
+        }
+        for (axis, &d) in self.dims.iter().enumerate() {
+            if d == 0 || d > 1 << 16 {
+                return Err(Error::Size {
+                    stage: STAGE,
+                    what: [
+                        "lattice cells along x",
+                        "lattice cells along y",
+                        "lattice cells along z",
+                    ][axis],
+                    got: d as u64,
+                    max: 1 << 16,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    fn cell(&self) -> Vec3 {
+        (self.max - self.min) / Vec3::from_array(self.dims.map(|d| d as f32))
+    }
+
+    fn bricks(&self) -> [u32; 3] {
+        self.dims.map(|d| d.div_ceil(super::BRICK))
+    }
+}
+
+/// The bindings of a density march stage (`fieldkit_build::DENSITY_MARCH_TEMPLATE`), by name,
+/// and the entry points that use each.
+const SLOTS: &[(&str, &str)] = &[
+    ("params", "march bricks bake"),
+    ("tf", "march"),
+    ("ranges", "march"),
+    ("scene_depth", "march"),
+    ("colour_out", "march"),
+    ("ranges_out", "bricks"),
+    ("baked", "bake"),
+];
+
+/// One entry point of a density march stage generated in any crate, bound by binding name
+/// (every such stage has the template's bindings; [`DensityMarch::new`] checks).
+struct ByName<E>(PhantomData<E>);
+
+impl<E: Entry> Entry for ByName<E> {
+    type Resources<'a> = Vec<(&'static str, Resource<'a>)>;
+    const INFO: &'static EntryInfo = E::INFO;
+
+    fn resources<'a>(r: &Self::Resources<'a>) -> Vec<Resource<'a>> {
+        E::INFO
+            .slots
+            .iter()
+            .filter_map(|s| r.iter().find(|(n, _)| *n == s.name).map(|(_, r)| r.clone()))
+            .collect()
+    }
+}
+
+/// The entry point `name` of a density march stage, its slots checked against the template's.
+fn check_entry(info: &EntryInfo, name: &str) -> Result<(), Error> {
+    let bad = |what: String| Error::Invalid {
+        stage: info.stage,
+        what: format!("not a density march stage (fieldkit_build::Builder::density_march): {what}"),
+    };
+    if info.entry_point != name {
+        return Err(bad(format!(
+            "expected the entry point `{name}`, got `{}`",
+            info.entry_point
+        )));
+    }
+    for slot in info.slots {
+        let used_by = SLOTS.iter().find(|(n, _)| *n == slot.name);
+        if !used_by.is_some_and(|(_, users)| users.split(' ').any(|u| u == name)) {
+            return Err(bad(format!(
+                "`{name}` binds `{}`, which the template's `{name}` does not",
+                slot.name
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// The march over one density function: the three entry points of a stage that
+/// `fieldkit_build::Builder::density_march` made (`M` its `march::Entry`, `B` its
+/// `bricks::Entry`, `K` its `bake::Entry`; name them with [`crate::density_march!`]).
+/// [`DensityMarch::cloud`] is the built-in one, over seed 002's fBm cloud.
+///
+/// Settings, transfer functions, views and compositing are the texture march's
+/// ([`super::VolumeRenderer`]): the same [`MarchSettings`] (shadowing by shadow rays, or none:
+/// a light volume needs a texture, which [`Self::encode_bake`] can give), and the
+/// [`VolumeMarched`] it returns blends with [`super::VolumeRenderer::encode_composite`].
+pub struct DensityMarch<M, B, K> {
+    /// One pipeline per mode × shadow × skip × sample count, made on first use.
+    march: Vec<std::sync::OnceLock<ComputePipeline<ByName<M>>>>,
+    bricks: ComputePipeline<ByName<B>>,
+    bake: ComputePipeline<ByName<K>>,
+    no_depth: wgpu::Texture,
+}
+
+/// The density march over seed 002's procedural cloud (`shaders/shared/fbm_cloud.wesl`: the
+/// function [`super::fbm_cloud`] samples at voxel centres), in the unit box.
+pub type CloudMarch =
+    DensityMarch<cloud_march::march::Entry, cloud_march::bricks::Entry, cloud_march::bake::Entry>;
+
+/// The [`DensityMarch`] type of a stage made by `fieldkit_build::Builder::density_march`, from
+/// the path of its generated module.
+///
+/// ```ignore
+/// // build.rs: Builder::new("shaders").density_march("clouds::cumulus_march", "shared::cumulus")
+/// type Cumulus = fieldkit::density_march!(crate::shaders::clouds::cumulus_march);
+/// let march = Cumulus::new(&device)?;
+/// ```
+#[macro_export]
+macro_rules! density_march {
+    ($($stage:ident)::+) => {
+        $crate::volume::DensityMarch<
+            $($stage)::+::march::Entry,
+            $($stage)::+::bricks::Entry,
+            $($stage)::+::bake::Entry,
+        >
+    };
+}
+
+impl CloudMarch {
+    /// The built-in cloud's march.
+    pub fn cloud(device: &wgpu::Device) -> Result<Self, Error> {
+        Self::new(device)
+    }
+}
+
+impl<M: Entry, B: Entry, K: Entry> DensityMarch<M, B, K> {
+    /// Check the stage's entry points against the template and make the bricks and bake
+    /// pipelines (march pipelines on first use).
+    pub fn new(device: &wgpu::Device) -> Result<Self, Error> {
+        check_entry(M::INFO, "march")?;
+        check_entry(B::INFO, "bricks")?;
+        check_entry(K::INFO, "bake")?;
+        let no_depth = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("no scene depth"),
+            size: wgpu::Extent3d {
+                width: 1,
+                height: 1,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Depth32Float,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        Ok(Self {
+            march: (0..24).map(|_| std::sync::OnceLock::new()).collect(),
+            bricks: ComputePipeline::new(device)?,
+            bake: ComputePipeline::new(device)?,
+            no_depth,
+        })
+    }
+
+    /// The parameters every entry point reads: the box and lattice, and for the march the
+    /// view, light and transfer function.
+    #[allow(clippy::too_many_arguments)]
+    fn params(
+        &self,
+        device: &wgpu::Device,
+        volume: &FunctionVolume,
+        tf: &TransferFunction,
+        local_to_world: Mat4,
+        view: &View,
+        settings: &MarchSettings,
+        rect: [u32; 4],
+        use_depth: bool,
+    ) -> wgpu::Buffer {
+        let world_to_local = local_to_world.inverse();
+        let guard = step_guard(local_to_world, volume.min, volume.max);
+        let s = MarchScalars::new(settings, tf, view);
+        let bricks = volume.bricks();
+        let brick_size = volume.cell() * super::BRICK as f32;
+        uniform(
+            device,
+            "density march params",
+            &cloud_march::DensityMarchParams {
+                inv_view_proj: view.view_proj.inverse(),
+                world_to_local,
+                box_min: volume.min,
+                step: settings.step,
+                box_max: volume.max,
+                reference_step: settings.reference_step,
+                dims: UVec3::from_array(volume.dims),
+                frame: settings.frame,
+                cell: volume.cell(),
+                brick: super::BRICK,
+                bricks: UVec3::from_array(bricks),
+                jitter: settings.jitter as u32,
+                brick_scale: brick_size.recip(),
+                brick_size,
+                light_local: world_to_local.transform_vector3(settings.light_dir.normalize()),
+                light_colour: settings.light_colour,
+                ambient: settings.ambient,
+                viewport: glam::Vec2::new(view.viewport[0] as f32, view.viewport[1] as f32),
+                rect_origin: glam::UVec2::new(rect[0], rect[1]),
+                rect_size: glam::UVec2::new(rect[2] - rect[0], rect[3] - rect[1]),
+                near_z: s.near_z,
+                far_z: s.far_z,
+                tf_count: tf.entries.len() as u32,
+                tf_offset: s.tf_offset,
+                tf_scale: s.tf_scale,
+                skip_below: tf.clear_below().clamp(f32::MIN, f32::MAX),
+                iso: s.iso,
+                min_transmittance: settings.min_transmittance,
+                max_steps: guard(settings.step),
+                shadow_step: s.shadow_step,
+                shadow_max_steps: guard(s.shadow_step),
+                use_depth: use_depth as u32,
+                inv_reference_step: settings.reference_step.recip(),
+            },
+        )
+    }
+
+    /// Parameters for the bricks and bake passes, which read only the box and lattice.
+    fn lattice_params(&self, device: &wgpu::Device, volume: &FunctionVolume) -> wgpu::Buffer {
+        let view = View {
+            view_proj: Mat4::IDENTITY,
+            viewport: [1, 1],
+            reversed_z: false,
+            origin: [0, 0],
+        };
+        self.params(
+            device,
+            volume,
+            &TransferFunction::constant(Vec3::ONE, 0.0),
+            Mat4::IDENTITY,
+            &view,
+            &MarchSettings::default(),
+            [0, 0, 1, 1],
+            false,
+        )
+    }
+
+    /// The min-max brick grid of the function: per brick of [`super::BRICK`]³ cells, the
+    /// function's smallest and largest value at the centres of its cells dilated by one cell
+    /// (once per function and box; a function that varies within a cell can exceed it, see the
+    /// module docs).
+    pub fn encode_bricks(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        volume: &FunctionVolume,
+    ) -> Result<Bricks, Error> {
+        volume.check()?;
+        let count = volume.bricks();
+        let n = count.iter().map(|&c| c as u64).product::<u64>();
+        let ranges = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("density function bricks"),
+            size: n * 8,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let params = self.lattice_params(device, volume);
+        self.bricks.record(
+            device,
+            rec,
+            &vec![
+                (
+                    "params",
+                    Resource::Buffer(params.as_entire_buffer_binding()),
+                ),
+                (
+                    "ranges_out",
+                    Resource::Buffer(ranges.as_entire_buffer_binding()),
+                ),
+            ],
+            ComputePipeline::<ByName<B>>::groups_for(count),
+            "density function bricks",
+        )?;
+        Ok(Bricks { ranges, count })
+    }
+
+    /// The function at every lattice cell centre, x fastest, in a new `f32` storage buffer
+    /// (`COPY_SRC`): to read back, or to upload as a [`super::Volume`] for a light volume.
+    pub fn encode_bake(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        volume: &FunctionVolume,
+    ) -> Result<wgpu::Buffer, Error> {
+        volume.check()?;
+        let n = volume.dims.iter().map(|&c| c as u64).product::<u64>();
+        let limit = device.limits().max_storage_buffer_binding_size;
+        if n * 4 > limit {
+            return Err(Error::Size {
+                stage: STAGE,
+                what: "baked function bytes (4 per lattice cell)",
+                got: n * 4,
+                max: limit,
+            });
+        }
+        let baked = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("baked density function"),
+            size: n * 4,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let params = self.lattice_params(device, volume);
+        self.bake.record(
+            device,
+            rec,
+            &vec![
+                (
+                    "params",
+                    Resource::Buffer(params.as_entire_buffer_binding()),
+                ),
+                ("baked", Resource::Buffer(baked.as_entire_buffer_binding())),
+            ],
+            ComputePipeline::<ByName<K>>::groups_for(volume.dims),
+            "density function bake",
+        )?;
+        Ok(baked)
+    }
+
+    /// March the function over `volume`'s box under `local_to_world` for `view`, as
+    /// [`super::VolumeRenderer::encode_march`] marches a texture (same settings, same image);
+    /// `bricks` from [`Self::encode_bricks`] for the same box. `None` when the box is off
+    /// screen. [`Shadow::LightVolume`] is refused: march a baked texture for it.
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode_march(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        volume: &FunctionVolume,
+        bricks: &Bricks,
+        tf: &TransferFunction,
+        local_to_world: Mat4,
+        view: &View,
+        scene_depth: Option<&wgpu::TextureView>,
+        settings: &MarchSettings,
+    ) -> Result<Option<VolumeMarched>, Error> {
+        volume.check()?;
+        settings.check()?;
+        tf.check()?;
+        check_transform(local_to_world)?;
+        check_view(view)?;
+        check_scene_depth(scene_depth, view)?;
+        if bricks.count != volume.bricks() {
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: "the brick grid was built for another lattice".into(),
+            });
+        }
+        let shadow = match settings.shadow {
+            Shadow::None => 0,
+            Shadow::Rays { .. } => 1,
+            Shadow::LightVolume { .. } => {
+                return Err(Error::Invalid {
+                    stage: STAGE,
+                    what: "a density function is shadowed by Shadow::Rays or not at all; for a \
+                           light volume, bake it (encode_bake) and march the texture"
+                        .into(),
+                });
+            }
+        };
+        let Some(rect) = march_rect(view, local_to_world, volume.min, volume.max) else {
+            return Ok(None);
+        };
+        let params = self.params(
+            device,
+            volume,
+            tf,
+            local_to_world,
+            view,
+            settings,
+            rect,
+            scene_depth.is_some(),
+        );
+        let colour = march_target(device, view);
+        let tf_buffer = tf_buffer(device, tf);
+        let no_depth = self.no_depth.create_view(&Default::default());
+        let cv = colour.create_view(&Default::default());
+        let mode = match settings.mode {
+            super::Mode::EmissionAbsorption => 0,
+            super::Mode::MaximumIntensity => 1,
+            super::Mode::IsoSurface { .. } => 2,
+        };
+        let march = ComputePipeline::cached(
+            &self.march[((mode * 2 + shadow) * 2 + settings.skip as usize) * 2
+                + settings.count_samples as usize],
+            device,
+            &[
+                ("MODE", mode as f64),
+                ("SHADOW", shadow as f64),
+                ("SKIP", settings.skip as u32 as f64),
+                ("COUNT_SAMPLES", settings.count_samples as u32 as f64),
+            ],
+        )?;
+        march.record(
+            device,
+            rec,
+            &vec![
+                (
+                    "params",
+                    Resource::Buffer(params.as_entire_buffer_binding()),
+                ),
+                ("tf", Resource::Buffer(tf_buffer.as_entire_buffer_binding())),
+                (
+                    "ranges",
+                    Resource::Buffer(bricks.ranges.as_entire_buffer_binding()),
+                ),
+                (
+                    "scene_depth",
+                    Resource::Texture(scene_depth.unwrap_or(&no_depth)),
+                ),
+                ("colour_out", Resource::StorageTexture(&cv)),
+            ],
+            [
+                (rect[2] - rect[0]).div_ceil(8),
+                (rect[3] - rect[1]).div_ceil(8),
+                1,
+            ],
+            STAGE,
+        )?;
+        Ok(Some(VolumeMarched { rect, colour }))
+    }
+}
