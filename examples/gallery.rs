@@ -527,6 +527,23 @@ fn run(
     }
     let rgba = ocean_scene_with(ctx, w, h, false, Preset::Seed)?;
     save("ocean_seed_shore.png", &rgba, w, h, &mut written)?;
+    let rgba = cloud_scene_with(
+        ctx,
+        w,
+        h,
+        glam::Vec3::new(0.9, 0.45, 1.4),
+        glam::Vec3::ZERO,
+        Preset::Seed,
+    )?;
+    save("volume_seed_cloud_function.png", &rgba, w, h, &mut written)?;
+    presets.push_str(
+        "| ![volume_cloud_outside.png](volume_cloud_outside.png) | \
+         ![volume_seed_cloud_function.png](volume_seed_cloud_function.png) | The source \
+         evaluates its fBm at every sample: the same cloud as a function linked into the march \
+         (`CloudMarch`, `Builder::density_march`), finer than the 96³ texture and shadowed by \
+         rays through the function; fieldkit's default bakes it into a texture lit through a \
+         light volume, several times cheaper per frame. |\n",
+    );
     presets.push_str(
         "| ![ocean_shore.png](ocean_shore.png) | ![ocean_seed_shore.png](ocean_seed_shore.png) | \
          The source fades over 30 cm, so the shelf's turquoise shrinks to a line at the \
@@ -579,13 +596,30 @@ pub fn cloud_scene(
     eye: glam::Vec3,
     target: glam::Vec3,
 ) -> Result<Vec<u8>, Error> {
+    cloud_scene_with(ctx, w, h, eye, target, Preset::Fieldkit)
+}
+
+/// [`cloud_scene`] with `preset`'s cloud: the seed preset evaluates the fBm function at every
+/// sample (`CloudMarch`, the function linked into the march at build time), shadowed by shadow
+/// rays through it, instead of a baked 96³ texture and its light volume.
+pub fn cloud_scene_with(
+    ctx: &Context,
+    w: u32,
+    h: u32,
+    eye: glam::Vec3,
+    target: glam::Vec3,
+    preset: Preset,
+) -> Result<Vec<u8>, Error> {
     use fieldkit::view::View;
-    use fieldkit::volume::{MarchSettings, TransferFunction, Volume, VolumeRenderer, fbm_cloud};
+    use fieldkit::volume::{
+        CloudMarch, FunctionVolume, MarchSettings, Shadow, TransferFunction, Volume,
+        VolumeRenderer, fbm_cloud,
+    };
     let dims = [96; 3];
     let volume = Volume::upload(
         &ctx.device,
         &ctx.queue,
-        &fbm_cloud(dims, 7),
+        &fbm_cloud(dims, 0),
         dims,
         wgpu::TextureFormat::R8Unorm,
         glam::Vec3::splat(1.0 / 96.0),
@@ -641,28 +675,55 @@ pub fn cloud_scene(
         occlusion_query_set: None,
         multiview_mask: None,
     });
-    let bricks = renderer.encode_bricks(&ctx.device, &mut enc, &volume)?;
-    let light = renderer.encode_light(
-        &ctx.device,
-        &mut enc,
-        &volume,
-        &bricks,
-        &tf,
-        glam::Mat4::IDENTITY,
-        &settings,
-    )?;
-    if let Some(m) = renderer.encode_march(
-        &ctx.device,
-        &mut enc,
-        &volume,
-        &bricks,
-        Some(&light),
-        &tf,
-        glam::Mat4::IDENTITY,
-        &view,
-        None,
-        &settings,
-    )? {
+    let marched = match preset {
+        Preset::Fieldkit => {
+            let bricks = renderer.encode_bricks(&ctx.device, &mut enc, &volume)?;
+            let light = renderer.encode_light(
+                &ctx.device,
+                &mut enc,
+                &volume,
+                &bricks,
+                &tf,
+                glam::Mat4::IDENTITY,
+                &settings,
+            )?;
+            renderer.encode_march(
+                &ctx.device,
+                &mut enc,
+                &volume,
+                &bricks,
+                Some(&light),
+                &tf,
+                glam::Mat4::IDENTITY,
+                &view,
+                None,
+                &settings,
+            )?
+        }
+        Preset::Seed => {
+            // The function's box is the unit cube of its texture coordinates; moved to where
+            // the texture's box is.
+            let cloud = CloudMarch::cloud(&ctx.device)?;
+            let box_ = FunctionVolume::unit(96);
+            let bricks = cloud.encode_bricks(&ctx.device, &mut enc, &box_)?;
+            let settings = MarchSettings {
+                shadow: Shadow::Rays { step: 1.0 / 32.0 },
+                ..settings
+            };
+            cloud.encode_march(
+                &ctx.device,
+                &mut enc,
+                &box_,
+                &bricks,
+                &tf,
+                glam::Mat4::from_translation(glam::Vec3::splat(-0.5)),
+                &view,
+                None,
+                &settings,
+            )?
+        }
+    };
+    if let Some(m) = marched {
         renderer.encode_composite(&ctx.device, &mut enc, &cv, &m)?;
     }
     ctx.submit_and_wait("gallery cloud", enc)?;

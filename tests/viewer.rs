@@ -310,7 +310,8 @@ fn the_animation_advances_and_the_builder_counts_as_the_source() {
 }
 
 /// The seed presets are a choice in the viewer: `Saved::seed` (and `--preset seed`) holds the
-/// sources' settings, and the actor and ocean render them, differently from the defaults.
+/// sources' settings, and the actor, ocean, volume and voxelizer render them, differently from
+/// the defaults.
 #[test]
 fn seed_presets_are_a_choice_and_render() {
     let seed = Saved::seed();
@@ -322,9 +323,10 @@ fn seed_presets_are_a_choice_and_render() {
     assert_eq!(seed.actor.animation, fieldkit::metaball::Animation::seed());
     assert_eq!(seed.ocean.look.fade_distance, 0.3);
     assert_eq!(seed.ocean.depth_write, Some(false));
+    assert!(seed.volume.function);
     let (device, queue) = device();
     assert!(seed.voxelizer.point_light);
-    for scene in ["actor", "ocean", "voxelizer"] {
+    for scene in ["actor", "ocean", "volume", "voxelizer"] {
         let mut s = Saved::seed();
         s.voxelizer = VoxelizerSettings {
             point_light: true,

@@ -588,6 +588,19 @@ fn ocean_panel(ui: &mut Ui, s: &mut OceanSettings) {
 
 fn volume_panel(ui: &mut Ui, s: &mut VolumeSettings) {
     ui.heading("volume (seed 002)");
+    ui.horizontal(|ui| {
+        ui.checkbox(
+            &mut s.function,
+            "the cloud as a function, per sample (seed 0)",
+        );
+        if ui
+            .button("seed")
+            .on_hover_text("the source's cloud: the fBm evaluated per sample, shadow rays")
+            .clicked()
+        {
+            *s = VolumeSettings::seed();
+        }
+    });
     ui.add(Slider::new(&mut s.size, 16..=256).text("cloud voxels per side"));
     ui.add(DragValue::new(&mut s.seed).prefix("seed "));
     ui.add(

@@ -74,6 +74,7 @@ impl Saved {
         Self {
             actor: ActorSettings::seed(),
             ocean: OceanSettings::seed(),
+            volume: VolumeSettings::seed(),
             distance: DistanceSettings {
                 options: Options2d {
                     seeds: fieldkit::distance::SeedRule::seed(),
@@ -565,11 +566,31 @@ pub struct VolumeSettings {
     pub tf: TransferFunction,
     /// Step, shadows, mode, skipping.
     pub march: MarchSettings,
+    /// March the cloud as a function evaluated at every sample, as the source does
+    /// (`CloudMarch`: seed 0, `size` cells per side for its bricks; a light volume becomes
+    /// shadow rays), instead of the baked texture.
+    pub function: bool,
+}
+
+impl VolumeSettings {
+    /// The source's cloud: the fBm function evaluated per sample, shadowed by rays through it.
+    pub fn seed() -> Self {
+        let d = Self::default();
+        Self {
+            function: true,
+            march: MarchSettings {
+                shadow: fieldkit::volume::Shadow::Rays { step: 1.0 / 32.0 },
+                ..d.march
+            },
+            ..d
+        }
+    }
 }
 
 impl Default for VolumeSettings {
     fn default() -> Self {
         Self {
+            function: false,
             size: 96,
             seed: 7,
             tf: TransferFunction::cloud(),
@@ -585,6 +606,9 @@ impl Default for VolumeSettings {
 pub struct VolumeScene {
     renderer: VolumeRenderer,
     volume: Option<((u32, u32), Volume, fieldkit::volume::Bricks)>,
+    /// The cloud as a function, made on first use, and its bricks for a lattice size.
+    cloud: Option<fieldkit::volume::CloudMarch>,
+    cloud_bricks: Option<(u32, fieldkit::volume::Bricks)>,
 }
 
 impl VolumeScene {
@@ -592,7 +616,60 @@ impl VolumeScene {
         Ok(Self {
             renderer: VolumeRenderer::new(device, COLOUR)?,
             volume: None,
+            cloud: None,
+            cloud_bricks: None,
         })
+    }
+
+    /// March the cloud *function* (`VolumeSettings::function`) into the frame.
+    fn draw_function(
+        &mut self,
+        device: &wgpu::Device,
+        s: &VolumeSettings,
+        local_to_world: Mat4,
+        frame: &mut Frame,
+    ) -> Result<Vec<String>, Error> {
+        use fieldkit::volume::{CloudMarch, FunctionVolume, Shadow};
+        if self.cloud.is_none() {
+            self.cloud = Some(CloudMarch::cloud(device)?);
+        }
+        let cloud = self.cloud.as_ref().expect("set above");
+        let lattice = FunctionVolume::unit(s.size.clamp(4, 512));
+        if self.cloud_bricks.as_ref().map(|b| b.0) != Some(lattice.dims[0]) {
+            let bricks = cloud.encode_bricks(device, frame.rec, &lattice)?;
+            self.cloud_bricks = Some((lattice.dims[0], bricks));
+        }
+        let (_, bricks) = self.cloud_bricks.as_ref().expect("set above");
+        let mut march = s.march;
+        march.frame = frame.number;
+        if let Shadow::LightVolume { step } = march.shadow {
+            march.shadow = Shadow::Rays { step };
+        }
+        let view = frame.camera.view(frame.size);
+        // The function's box is its unit cube of texture coordinates, centred as the texture.
+        let placed = local_to_world * Mat4::from_translation(Vec3::splat(-0.5));
+        if let Some(m) = cloud.encode_march(
+            device,
+            frame.rec,
+            &lattice,
+            bricks,
+            &s.tf,
+            placed,
+            &view,
+            Some(&frame.targets.depth_view),
+            &march,
+        )? {
+            self.renderer.encode_composite(
+                device,
+                frame.rec.encoder,
+                &frame.targets.colour_view,
+                &m,
+            )?;
+        }
+        Ok(vec![format!(
+            "volume: the fBm function per sample (seed 0), bricks over {0}³ cells, {1:?}",
+            lattice.dims[0], march.shadow
+        )])
     }
 
     /// March the cloud under `local_to_world` into the frame, stopping at its depth.
@@ -604,6 +681,9 @@ impl VolumeScene {
         local_to_world: Mat4,
         frame: &mut Frame,
     ) -> Result<Vec<String>, Error> {
+        if s.function {
+            return self.draw_function(device, s, local_to_world, frame);
+        }
         if self.volume.as_ref().map(|v| v.0) != Some((s.size, s.seed)) {
             if !(4..=512).contains(&s.size) {
                 return Err(Error::Size {

@@ -1,8 +1,10 @@
 //! `cargo xtask bench volume`: time per frame against image error for the volume raymarch of an
 //! fBm cloud, 256³ and 512³ (64³ and 128³ with `--quick`), at 1920×1080 (480×270 quick), with
 //! the camera outside the box and inside it; across step length, brick skipping on and off,
-//! jitter on and off, and shadowing by shadow rays against the precomputed light volume.
-//! `--sizes 256,384` times those volume sizes instead.
+//! jitter on and off, shadowing by shadow rays against the precomputed light volume, and the
+//! same cloud as a density function evaluated per sample (`CloudMarch`, issue 24's seed 002:
+//! what the source does), shadow rays and unshadowed. `--sizes 256,384` times those volume
+//! sizes instead.
 //!
 //! Time: GPU timestamps around the march and the composite into an 8-bit target, median of the
 //! timed runs, each after a 20 ms spin kernel on a hardware adapter so the clocks are up
@@ -16,8 +18,8 @@ use std::process::ExitCode;
 use fieldkit::gpu::{Context, read_texture};
 use fieldkit::view::View;
 use fieldkit::volume::{
-    Bricks, LightVolume, MarchSettings, Shadow, TransferFunction, Volume, VolumeMarched,
-    VolumeRenderer, fbm_cloud, folds,
+    Bricks, CloudMarch, FunctionVolume, LightVolume, MarchSettings, Shadow, TransferFunction,
+    Volume, VolumeMarched, VolumeRenderer, fbm_cloud, folds,
 };
 use glam::{Mat4, Vec3};
 
@@ -54,6 +56,8 @@ struct Scene<'a> {
     light: &'a LightVolume,
     /// The light volume built the other way (folded into the density or not).
     other_light: &'a LightVolume,
+    /// The cloud as a function, its lattice (the texture's voxels) and bricks.
+    function: (&'a CloudMarch, FunctionVolume, &'a Bricks),
     tf: &'a TransferFunction,
     view: &'a View,
     target: &'a wgpu::TextureView,
@@ -65,9 +69,31 @@ impl Scene<'_> {
         &self,
         enc: &mut wgpu::CommandEncoder,
         s: &MarchSettings,
-        other: bool,
+        source: Source,
     ) -> Result<Option<VolumeMarched>, String> {
-        let light = if other { self.other_light } else { self.light };
+        if source == Source::Function {
+            let (cloud, lattice, bricks) = self.function;
+            // The function's box is the unit cube of texture coordinates: moved onto the
+            // texture's box.
+            return cloud
+                .encode_march(
+                    &self.ctx.device,
+                    enc,
+                    &lattice,
+                    bricks,
+                    self.tf,
+                    Mat4::from_translation(Vec3::splat(-0.5)),
+                    self.view,
+                    None,
+                    s,
+                )
+                .map_err(|e| e.to_string());
+        }
+        let light = if source == Source::OtherLight {
+            self.other_light
+        } else {
+            self.light
+        };
         let light = matches!(s.shadow, Shadow::LightVolume { .. }).then_some(light);
         self.renderer
             .encode_march(
@@ -86,10 +112,10 @@ impl Scene<'_> {
     }
 
     /// The march's premultiplied RGBA.
-    fn image(&self, s: &MarchSettings, other: bool) -> Result<Vec<[f32; 4]>, String> {
+    fn image(&self, s: &MarchSettings, source: Source) -> Result<Vec<[f32; 4]>, String> {
         let mut enc = self.ctx.encoder("bench volume image");
         let m = self
-            .march(&mut enc, s, other)?
+            .march(&mut enc, s, source)?
             .ok_or("the volume is off screen")?;
         self.ctx
             .submit_and_wait("bench volume image", enc)
@@ -105,7 +131,7 @@ impl Scene<'_> {
         &self,
         stamps: &Stamps,
         s: &MarchSettings,
-        other: bool,
+        source: Source,
         warmup: usize,
         reps: usize,
     ) -> Result<f64, String> {
@@ -113,7 +139,7 @@ impl Scene<'_> {
         for i in 0..warmup + reps {
             let ms = stamps.time_after(self.ctx, self.heater, |enc| {
                 let m = self
-                    .march(enc, s, other)?
+                    .march(enc, s, source)?
                     .ok_or("the volume is off screen")?;
                 self.renderer
                     .encode_composite(&self.ctx.device, enc, self.target, &m)
@@ -125,6 +151,15 @@ impl Scene<'_> {
         }
         Ok(median(times))
     }
+}
+
+/// What a row marches: the texture with its light volume as `encode_light` builds it, with the
+/// light volume built the other way, or the cloud as a function.
+#[derive(Clone, Copy, PartialEq)]
+enum Source {
+    Texture,
+    OtherLight,
+    Function,
 }
 
 fn bench(
@@ -156,6 +191,7 @@ fn bench(
     let (width, height) = if quick { (480, 270) } else { (1920, 1080) };
     let renderer = VolumeRenderer::new(&ctx.device, wgpu::TextureFormat::Rgba8Unorm)
         .map_err(|e| e.to_string())?;
+    let cloud = CloudMarch::cloud(&ctx.device).map_err(|e| e.to_string())?;
     let target = ctx.device.create_texture(&wgpu::TextureDescriptor {
         label: Some("bench volume target"),
         size: wgpu::Extent3d {
@@ -192,7 +228,8 @@ fn bench(
         let volume = Volume::upload(
             &ctx.device,
             &ctx.queue,
-            &fbm_cloud(dims, 7),
+            // Seed 0: the cloud the function rows evaluate.
+            &fbm_cloud(dims, 0),
             dims,
             wgpu::TextureFormat::R8Unorm,
             Vec3::splat(voxel),
@@ -215,6 +252,17 @@ fn bench(
             Ok(())
         })?;
         let bricks = made.ok_or("no bricks")?;
+        let lattice = FunctionVolume::unit(n);
+        let mut made = None;
+        let function_bricks_ms = stamps.time_after(&ctx, heater.as_ref(), |enc| {
+            made = Some(
+                cloud
+                    .encode_bricks(&ctx.device, enc, &lattice)
+                    .map_err(|e| e.to_string())?,
+            );
+            Ok(())
+        })?;
+        let function_bricks = made.ok_or("no function bricks")?;
         // The light volume as `encode_light` builds it (folded into the density up to
         // FOLD_MAX_BYTES), and the other way, for one row.
         let build = |fold: bool| -> Result<(LightVolume, f64), String> {
@@ -244,7 +292,7 @@ fn bench(
             ("light not folded", "light folded")
         };
         println!(
-            "| {n}³ | — | brick grid build {bricks_ms:.3} ms, light volume build {light_ms:.3} ms ({how}), {other_ms:.3} ms ({other_how}) | | | |"
+            "| {n}³ | — | brick grid build {bricks_ms:.3} ms, light volume build {light_ms:.3} ms ({how}), {other_ms:.3} ms ({other_how}); function bricks {function_bricks_ms:.3} ms | | | |"
         );
         for (camera, eye, target) in cameras {
             let view = View {
@@ -260,6 +308,7 @@ fn bench(
                 bricks: &bricks,
                 light: &light,
                 other_light: &other_light,
+                function: (&cloud, lattice, &function_bricks),
                 tf: &tf,
                 view: &view,
                 target: &target_view,
@@ -272,10 +321,10 @@ fn bench(
                     jitter: false,
                     ..base
                 },
-                false,
+                Source::Texture,
             )?;
-            // (row, settings, shadowing, with the other light volume)
-            let mut configs: Vec<(String, MarchSettings, &'static str, bool)> = Vec::new();
+            // (row, settings, shadowing, what is marched)
+            let mut configs: Vec<(String, MarchSettings, &'static str, Source)> = Vec::new();
             for k in [0.5f32, 1.0, 2.0] {
                 configs.push((
                     format!("step {k} voxel"),
@@ -284,7 +333,7 @@ fn bench(
                         ..base
                     },
                     how,
-                    false,
+                    Source::Texture,
                 ));
             }
             configs.push((
@@ -294,7 +343,7 @@ fn bench(
                     ..base
                 },
                 how,
-                false,
+                Source::Texture,
             ));
             configs.push((
                 "step 1, no jitter".into(),
@@ -303,7 +352,7 @@ fn bench(
                     ..base
                 },
                 how,
-                false,
+                Source::Texture,
             ));
             configs.push((
                 "step 1, shadow rays".into(),
@@ -312,7 +361,7 @@ fn bench(
                     ..base
                 },
                 "shadow rays",
-                false,
+                Source::Texture,
             ));
             configs.push((
                 "step 1, unshadowed".into(),
@@ -321,9 +370,32 @@ fn bench(
                     ..base
                 },
                 "none",
-                false,
+                Source::Texture,
             ));
-            configs.push((format!("step 1, {other_how}"), base, other_how, true));
+            configs.push((
+                format!("step 1, {other_how}"),
+                base,
+                other_how,
+                Source::OtherLight,
+            ));
+            configs.push((
+                "function, step 1, shadow rays".into(),
+                MarchSettings {
+                    shadow: Shadow::Rays { step: 2.0 * voxel },
+                    ..base
+                },
+                "function, shadow rays",
+                Source::Function,
+            ));
+            configs.push((
+                "function, step 1, unshadowed".into(),
+                MarchSettings {
+                    shadow: Shadow::None,
+                    ..base
+                },
+                "function, none",
+                Source::Function,
+            ));
             // Density samples per ray (the march's sample-count output), as the issue's CPU model
             // counted them: plain, with brick skipping, with early termination, with both.
             let mut counts = Vec::new();
@@ -336,7 +408,7 @@ fn bench(
                         count_samples: true,
                         ..base
                     },
-                    false,
+                    Source::Texture,
                 )?;
                 counts.push(img.iter().map(|p| p[0] as f64).sum::<f64>() / img.len() as f64);
             }
@@ -347,9 +419,9 @@ fn bench(
                 counts[0] / counts[2],
                 counts[0] / counts[3]
             );
-            for (name, s, shadow, other) in configs {
-                let frame_ms = scene.frame_ms(&stamps, &s, other, warmup, reps)?;
-                let img = scene.image(&s, other)?;
+            for (name, s, shadow, source) in configs {
+                let frame_ms = scene.frame_ms(&stamps, &s, source, warmup, reps)?;
+                let img = scene.image(&s, source)?;
                 let (mut sum, mut max) = (0.0f64, 0.0f64);
                 for (p, q) in img.iter().zip(&reference) {
                     for c in 0..4 {
