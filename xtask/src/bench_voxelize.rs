@@ -1,8 +1,10 @@
 //! `cargo xtask bench voxelize`: GPU time of conservative surface voxelization (compute and
-//! the write-up's raster path), solid fill and averaged attributes, for the Stanford bunny
-//! (`scripts/fetch-bunny.sh`, passed with `--mesh`; also split twice, 59 k triangles) and a
-//! procedural torus of about a million triangles, in grids of 128³ to 1024³ fitted to each
-//! mesh. Time: GPU timestamps around the whole encode (clear, passes, heavy-triangle work
+//! the write-up's raster path; `resident`: a `GpuMesh` uploaded once, the passes alone, as
+//! cuda_voxelizer's kernel is timed), solid fill and averaged attributes, for the mesh given
+//! with `--mesh` (an OBJ file, read by tobj: the 69 451-triangle Stanford bunny the peers were
+//! measured on; or the npm `bunny`'s `index.js` from `scripts/fetch-bunny.sh`, also split twice,
+//! 59 k triangles) and a procedural torus of about a million triangles, in grids of 128³ to
+//! 1024³ fitted to each mesh. Time: GPU timestamps around the whole encode (clear, passes, heavy-triangle work
 //! list; for attributes both halves, without the read-back between them), median of the
 //! timed runs. On a hardware adapter each timed submission follows a 20 ms spin kernel
 //! (`heater`): the CPU side of a run leaves the GPU idle long enough for its clocks to fall.
@@ -33,8 +35,11 @@ pub fn run(args: &crate::measure::Args) -> ExitCode {
     }
 }
 
-/// The npm package `bunny`'s `index.js`.
+/// An OBJ file (tobj), or the npm package `bunny`'s `index.js`.
 fn load_bunny(path: &std::path::Path) -> Result<Mesh, String> {
+    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj")) {
+        return Mesh::load_obj(path).map_err(|e| e.to_string());
+    }
     let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
     Mesh::from_positions_cells(&text).map_err(|e| format!("{}: {e}", path.display()))
 }
@@ -78,6 +83,13 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
     let v = Voxelizer::new(&ctx.device).map_err(|e| e.to_string())?;
     let mut meshes = Vec::new();
     match &args.mesh {
+        Some(path) if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj")) => {
+            let mesh = load_bunny(path)?;
+            let name = path
+                .file_stem()
+                .map_or("mesh".into(), |s| s.to_string_lossy().into_owned());
+            meshes.push((name, mesh));
+        }
         Some(path) => {
             let bunny = load_bunny(path)?;
             // The npm bunny is the 3.7 k-triangle scan; split twice it is the same surface in
@@ -99,7 +111,8 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
             meshes.push(("bunny, split twice".to_string(), fine));
         }
         None => println!(
-            "no --mesh: run scripts/fetch-bunny.sh and pass --mesh target/bunny/index.js for the bunny"
+            "no --mesh: pass --mesh stanford-bunny.obj (the peers' mesh), or run \
+             scripts/fetch-bunny.sh and pass --mesh target/bunny/index.js"
         ),
     }
     let (segments, sides) = if args.quick { (200, 100) } else { (1000, 500) };
@@ -125,7 +138,10 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
     for (name, mesh) in &meshes {
         for &n in &sizes {
             let grid = fieldkit::voxelize::Grid::fit(mesh, n).map_err(|e| e.to_string())?;
-            for mode in ["surface", "raster", "solid", "attributes"] {
+            // Uploaded once: the `resident` rows time the passes alone.
+            let resident = fieldkit::voxelize::GpuMesh::upload(&ctx.device, mesh)
+                .map_err(|e| e.to_string())?;
+            for mode in ["surface", "resident", "raster", "solid", "attributes"] {
                 if !args.modes.is_empty() && !args.modes.iter().any(|m| m == mode) {
                     continue;
                 }
@@ -144,6 +160,13 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
                 let encode = |enc: &mut wgpu::CommandEncoder| -> Result<Surface, String> {
                     match mode {
                         "surface" => v.encode_surface(&ctx.device, enc, mesh, &grid),
+                        "resident" => v.encode_surface_placed(
+                            &ctx.device,
+                            enc,
+                            &[(&resident, glam::DMat4::IDENTITY)],
+                            &grid,
+                            fieldkit::voxelize::Separation::Conservative,
+                        ),
                         "raster" => v.encode_surface_raster(&ctx.device, enc, mesh, &grid),
                         "solid" => v.encode_solid(&ctx.device, enc, mesh, &grid, true),
                         _ => v
@@ -180,7 +203,7 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
                     batched.push(total / BATCH as f64);
                 }
                 let ms_batched = median(batched);
-                if mode == "surface" || mode == "solid" {
+                if mode == "surface" || mode == "resident" || mode == "solid" {
                     // Each pass on its own (the clears between them are not passes).
                     let (total, _, _, passes) = crate::measure::time_runs(
                         &ctx,
@@ -193,6 +216,14 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
                                     &ctx.device,
                                     &mut prof.record(enc),
                                     mesh,
+                                    &grid,
+                                    fieldkit::voxelize::Separation::Conservative,
+                                )
+                            } else if mode == "resident" {
+                                v.encode_surface_placed(
+                                    &ctx.device,
+                                    &mut prof.record(enc),
+                                    &[(&resident, glam::DMat4::IDENTITY)],
                                     &grid,
                                     fieldkit::voxelize::Separation::Conservative,
                                 )
@@ -300,7 +331,7 @@ fn read_table(path: &std::path::Path) -> Result<(String, Vec<Row>), String> {
         let [a, mesh, triangles, n, mode, ms, ms_batched, voxels] = &fields[..] else {
             return Err(bad());
         };
-        let mode = ["surface", "raster", "solid", "attributes"]
+        let mode = ["surface", "resident", "raster", "solid", "attributes"]
             .into_iter()
             .find(|m| m == mode)
             .ok_or_else(bad)?;
