@@ -147,7 +147,7 @@ fn failure_modes_miss_nothing() {
         println!("{name}: {misses} missed, {extras} extra");
         assert_eq!(misses, 0, "{name}");
         if name == "larger than the grid" || name == "more than 1024 voxels along x" {
-            // These go through the heavy triangles' work list and the indirect dispatch.
+            // These have heavy triangles: chunks listed by the host (`surface_listed`).
             assert!(
                 fieldkit::voxelize::heavy_chunk_bound(&local, grid.size) > 0,
                 "{name}"

@@ -46,6 +46,8 @@ override SIX_SEPARATING: bool = false;
 @group(0) @binding(4) var<storage, read_write> work_count: atomic<u32>;
 // Indirect dispatch arguments for `surface_heavy`.
 @group(0) @binding(5) var<storage, read_write> heavy_dispatch: array<u32, 3>;
+// `surface_listed`: the heavy triangles' chunks, listed by the host.
+@group(0) @binding(6) var<storage, read> listed: array<vec2<u32>>;
 
 fn set_voxel(p: vec3<i32>) {
     let g = vec3<i32>(params.grid);
@@ -118,4 +120,21 @@ fn surface_heavy(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let item = work[id.x];
     voxelize_columns(load(item.x), item.y, CHUNK);
+}
+
+// One pass when the host has sorted the triangles (`encode_surface`, `encode_solid`): the
+// first `count` triangles are light (their box's largest face has at most LIGHT columns), one
+// per thread; the next `capacity` threads take one listed chunk of a heavy triangle each. No
+// work-list counter, no second pass, no indirect dispatch.
+@compute @workgroup_size(64)
+fn surface_listed(@builtin(global_invocation_id) id: vec3<u32>,
+                  @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = id.x + id.y * groups.x * 64u;
+    if i < params.count {
+        let s = load(params.first + i);
+        voxelize_columns(s, 0u, s.columns);
+    } else if i - params.count < params.capacity {
+        let item = listed[i - params.count];
+        voxelize_columns(load(item.x), item.y, CHUNK);
+    }
 }

@@ -422,7 +422,7 @@ impl Voxelizer {
         let local = mesh.to_grid(grid)?;
         let bound = occupied_bound(&local, grid.size);
         let corner_data = corners(mesh, &local)?;
-        let (occupancy, triangles) = self.bitset(device, rec, &local, grid)?;
+        let (occupancy, triangles) = self.bitset(device, &local, grid)?;
         let heavy = self.surface_into(
             device,
             rec,

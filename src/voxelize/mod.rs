@@ -493,12 +493,10 @@ fn check_grid(grid: &Grid) -> Result<(), Error> {
     Ok(())
 }
 
-/// A cleared occupancy bitset for `grid`, recorded into `rec`.
-fn cleared_bitset(
-    device: &wgpu::Device,
-    rec: &mut impl Record,
-    grid: &Grid,
-) -> Result<wgpu::Buffer, Error> {
+/// An empty occupancy bitset for `grid`: a new buffer, which wgpu hands over zeroed (it clears
+/// new buffers before their first use, outside the passes that fill them), so no clear is
+/// recorded here.
+fn zeroed_bitset(device: &wgpu::Device, grid: &Grid) -> Result<wgpu::Buffer, Error> {
     let voxels = grid.voxels();
     let words = voxels.div_ceil(32).max(1);
     let limit = device.limits().max_storage_buffer_binding_size;
@@ -518,31 +516,61 @@ fn cleared_bitset(
             | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
-    rec.recorder().encoder.clear_buffer(&occupancy, 0, None);
     Ok(occupancy)
 }
 
-/// Chunks of [`CHUNK`] columns the heavy triangles of `local` can need at most: whichever axis
-/// is dominant, a triangle's columns are at most the largest product of two of its box's
-/// sides (clamped to the grid).
+/// Columns triangle `t` (three grid-local vertices) can have at most: whichever axis is
+/// dominant, the largest product of two of its box's sides (clamped to a grid of `size`).
+fn box_columns(t: &[Vec4], size: [u32; 3]) -> u64 {
+    let lo = t[0].min(t[1]).min(t[2]).truncate();
+    let hi = t[0].max(t[1]).max(t[2]).truncate();
+    // Saturating: a vertex far outside the grid (f32 → i64 saturates) clamps to it.
+    let side = |a: usize| {
+        let l = (lo[a].ceil() as i64).saturating_sub(1).max(0);
+        let h = (hi[a].floor() as i64).min(size[a] as i64 - 1);
+        h.saturating_sub(l).saturating_add(1).max(0) as u64
+    };
+    let (x, y, z) = (side(0), side(1), side(2));
+    (x * y).max(y * z).max(z * x)
+}
+
+/// Chunks of [`CHUNK`] columns the heavy triangles of `local` can need at most (see
+/// [`box_columns`]).
 pub fn heavy_chunk_bound(local: &GridMesh, size: [u32; 3]) -> u32 {
-    let mut total: u64 = 0;
+    let total: u64 = local
+        .vertices
+        .chunks(3)
+        .map(|t| box_columns(t, size))
+        .filter(|&most| most > LIGHT as u64)
+        .map(|most| most.div_ceil(CHUNK as u64))
+        .sum();
+    total.min(u32::MAX as u64) as u32
+}
+
+/// `local`'s triangles sorted for `surface_listed`: the light ones (at most [`LIGHT`] columns
+/// by [`box_columns`]) first, then the heavy ones, and each heavy triangle's chunks of
+/// [`CHUNK`] columns as (triangle, first column). Returns the vertices, the light count and
+/// the chunks.
+fn listed(local: &GridMesh, size: [u32; 3]) -> (Vec<Vec4>, u32, Vec<[u32; 2]>) {
+    let chunk = CHUNK as u64;
+    let mut vertices = Vec::with_capacity(local.vertices.len());
+    let mut heavy = Vec::new();
     for t in local.vertices.chunks(3) {
-        let lo = t[0].min(t[1]).min(t[2]).truncate();
-        let hi = t[0].max(t[1]).max(t[2]).truncate();
-        // Saturating: a vertex far outside the grid (f32 → i64 saturates) clamps to it.
-        let side = |a: usize| {
-            let l = (lo[a].ceil() as i64).saturating_sub(1).max(0);
-            let h = (hi[a].floor() as i64).min(size[a] as i64 - 1);
-            h.saturating_sub(l).saturating_add(1).max(0) as u64
-        };
-        let (x, y, z) = (side(0), side(1), side(2));
-        let most = (x * y).max(y * z).max(z * x);
+        let most = box_columns(t, size);
         if most > LIGHT as u64 {
-            total += most.div_ceil(CHUNK as u64);
+            heavy.push((t, most));
+        } else {
+            vertices.extend_from_slice(t);
         }
     }
-    total.min(u32::MAX as u64) as u32
+    let light = (vertices.len() / 3) as u32;
+    let mut chunks = Vec::new();
+    for (i, (t, most)) in heavy.into_iter().enumerate() {
+        vertices.extend_from_slice(t);
+        let at = light + i as u32;
+        chunks.extend((0..most.div_ceil(chunk)).map(|c| [at, (c * chunk) as u32]));
+    }
+    (vertices, light, chunks)
 }
 
 /// Surface voxels on the GPU: one bit per voxel.
@@ -585,6 +613,7 @@ struct SurfacePipelines {
     light: ComputePipeline<stage::surface::Entry>,
     heavy: ComputePipeline<stage::surface_heavy::Entry>,
     args: ComputePipeline<stage::heavy_args::Entry>,
+    listed: ComputePipeline<stage::surface_listed::Entry>,
 }
 
 impl SurfacePipelines {
@@ -594,6 +623,7 @@ impl SurfacePipelines {
             light: ComputePipeline::with_overrides(device, &o)?,
             heavy: ComputePipeline::with_overrides(device, &o)?,
             args: ComputePipeline::new(device)?,
+            listed: ComputePipeline::with_overrides(device, &o)?,
         })
     }
 }
@@ -676,6 +706,43 @@ struct SurfaceRun<'a> {
     moved: f32,
 }
 
+/// Triangles sorted on the host for `surface_listed` (see [`listed`]): light ones first, then
+/// heavy ones, and the heavy ones' chunks.
+struct Listed {
+    triangles: wgpu::Buffer,
+    chunks: wgpu::Buffer,
+    light: u32,
+    chunk_count: u32,
+}
+
+impl Listed {
+    fn new(device: &wgpu::Device, local: &GridMesh, grid: &Grid) -> Listed {
+        use wgpu::util::DeviceExt;
+        let (mut vertices, light, mut chunks) = listed(local, grid.size);
+        let chunk_count = chunks.len() as u32;
+        // Padding keeps the buffers non-empty.
+        if vertices.is_empty() {
+            vertices.push(Vec4::ZERO);
+        }
+        if chunks.is_empty() {
+            chunks.push([0, 0]);
+        }
+        let buffer = |label, contents: &[u8]| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage: wgpu::BufferUsages::STORAGE,
+            })
+        };
+        Listed {
+            triangles: buffer("voxelize triangles", bytemuck::cast_slice(&vertices)),
+            chunks: buffer("voxelize heavy chunks", bytemuck::cast_slice(&chunks)),
+            light,
+            chunk_count,
+        }
+    }
+}
+
 /// The heavy triangles' chunks a surface pass listed, and the indirect dispatch that walks
 /// them.
 struct HeavyWork {
@@ -717,7 +784,10 @@ impl Voxelizer {
             )));
         }
         let local = mesh.to_grid(grid)?;
-        let (occupancy, triangles) = self.bitset(device, rec, &local, grid)?;
+        let occupancy = zeroed_bitset(device, grid)?;
+        // The parity fill takes the triangles in any order: the surface pass's sorted ones.
+        let listed = Listed::new(device, &local, grid);
+        let triangles = &listed.triangles;
         let count = (local.vertices.len() / 3) as u32;
         for (first, n) in batches(count) {
             let params = uniform(
@@ -734,7 +804,7 @@ impl Voxelizer {
                 rec,
                 &solid_stage::solid::Resources {
                     params: (&params).into(),
-                    triangles: (&triangles).into(),
+                    triangles: triangles.into(),
                     occupancy: (&occupancy).into(),
                 },
                 [n.div_ceil(64), 1, 1],
@@ -742,15 +812,7 @@ impl Voxelizer {
             )?;
         }
         if with_surface {
-            let _ = self.surface_into(
-                device,
-                rec,
-                &self.surface,
-                &occupancy,
-                &triangles,
-                &local,
-                grid,
-            )?;
+            self.listed_pass(device, rec, &self.surface, &occupancy, &listed, grid)?;
         }
         Ok(Surface {
             size: grid.size,
@@ -799,11 +861,10 @@ impl Voxelizer {
     fn bitset(
         &self,
         device: &wgpu::Device,
-        rec: &mut impl Record,
         local: &GridMesh,
         grid: &Grid,
     ) -> Result<(wgpu::Buffer, wgpu::Buffer), Error> {
-        let occupancy = cleared_bitset(device, rec, grid)?;
+        let occupancy = zeroed_bitset(device, grid)?;
         use wgpu::util::DeviceExt;
         // One padding vertex keeps the buffer non-empty when every triangle was degenerate.
         let mut vertices = local.vertices.clone();
@@ -848,6 +909,69 @@ impl Voxelizer {
                 moved: 0.0,
             },
             grid,
+        )
+    }
+
+    /// The surface of `listed`'s triangles in one pass (`surface_listed`), ORed into
+    /// `occupancy`: a light triangle per thread, then a heavy triangle's chunk per thread.
+    fn listed_pass(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        pipelines: &SurfacePipelines,
+        occupancy: &wgpu::Buffer,
+        listed: &Listed,
+        grid: &Grid,
+    ) -> Result<(), Error> {
+        let threads = listed.light as u64 + listed.chunk_count as u64;
+        if threads == 0 {
+            return Ok(());
+        }
+        let limit = device.limits().max_storage_buffer_binding_size;
+        if listed.chunk_count as u64 * 8 > limit {
+            return Err(Error::Size {
+                stage: STAGE,
+                what: "heavy-triangle chunk list bytes",
+                got: listed.chunk_count as u64 * 8,
+                max: limit,
+            });
+        }
+        let params = uniform(
+            device,
+            "voxelize params",
+            &SurfaceParams {
+                to_grid: glam::Mat4::IDENTITY,
+                grid: grid.size.into(),
+                first: 0,
+                count: listed.light,
+                slack: SLACK,
+                moved: 0.0,
+                capacity: listed.chunk_count,
+            },
+        );
+        // More than 65535 workgroups: rows of 65535 (the shader reads `num_workgroups`).
+        let groups = threads.div_ceil(64);
+        let rows = groups.div_ceil(65535);
+        let wide = groups.min(65535);
+        if rows > 65535 {
+            return Err(Error::Size {
+                stage: STAGE,
+                what: "surface threads (triangles and heavy chunks)",
+                got: threads,
+                max: 65535 * 65535 * 64,
+            });
+        }
+        pipelines.listed.record(
+            device,
+            rec,
+            &stage::surface_listed::Resources {
+                params: (&params).into(),
+                triangles: (&listed.triangles).into(),
+                occupancy: occupancy.into(),
+                listed: (&listed.chunks).into(),
+            },
+            [wide as u32, rows as u32, 1],
+            STAGE,
         )
     }
 
@@ -905,9 +1029,7 @@ impl Voxelizer {
             dispatch,
             ..
         } = &heavy_work;
-        let r = rec.recorder();
-        r.encoder.clear_buffer(work_count, 0, None);
-        r.encoder.clear_buffer(dispatch, 0, None);
+        // New buffers: zeroed by wgpu (the count starts at 0).
         if count == 0 {
             return Ok(heavy_work);
         }
@@ -1002,7 +1124,7 @@ impl Voxelizer {
             });
         }
         let local = mesh.to_grid(grid)?;
-        let (occupancy, triangles) = self.bitset(device, rec, &local, grid)?;
+        let (occupancy, triangles) = self.bitset(device, &local, grid)?;
         let format = wgpu::TextureFormat::R8Unorm;
         let pipeline = if let Some(p) = self.raster.get() {
             p
@@ -1106,12 +1228,13 @@ impl Voxelizer {
         separation: Separation,
     ) -> Result<Surface, Error> {
         let local = mesh.to_grid(grid)?;
-        let (occupancy, triangles) = self.bitset(device, rec, &local, grid)?;
+        let occupancy = zeroed_bitset(device, grid)?;
         let pipelines = match separation {
             Separation::Conservative => &self.surface,
             Separation::Six => &self.surface_six,
         };
-        let _ = self.surface_into(device, rec, pipelines, &occupancy, &triangles, &local, grid)?;
+        let listed = Listed::new(device, &local, grid);
+        self.listed_pass(device, rec, pipelines, &occupancy, &listed, grid)?;
         Ok(Surface {
             size: grid.size,
             occupancy,

@@ -6,7 +6,7 @@ use glam::{DMat4, DVec3, Vec4};
 
 use super::{
     CHUNK, Error, Grid, LIGHT, Mesh, Separation, Surface, SurfaceRun, Voxelizer, check_grid,
-    check_model, cleared_bitset, invalid,
+    check_model, invalid, zeroed_bitset,
 };
 use crate::gpu::Record;
 
@@ -231,7 +231,7 @@ impl Voxelizer {
                 })?;
             runs.push((mesh, placed, capacity, moved as f32));
         }
-        let occupancy = cleared_bitset(device, rec, grid)?;
+        let occupancy = zeroed_bitset(device, grid)?;
         let pipelines = match separation {
             Separation::Conservative => &self.surface,
             Separation::Six => &self.surface_six,

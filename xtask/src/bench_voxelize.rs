@@ -37,7 +37,10 @@ pub fn run(args: &crate::measure::Args) -> ExitCode {
 
 /// An OBJ file (tobj), or the npm package `bunny`'s `index.js`.
 fn load_bunny(path: &std::path::Path) -> Result<Mesh, String> {
-    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj")) {
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("obj"))
+    {
         return Mesh::load_obj(path).map_err(|e| e.to_string());
     }
     let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
@@ -83,7 +86,11 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
     let v = Voxelizer::new(&ctx.device).map_err(|e| e.to_string())?;
     let mut meshes = Vec::new();
     match &args.mesh {
-        Some(path) if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj")) => {
+        Some(path)
+            if path
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("obj")) =>
+        {
             let mesh = load_bunny(path)?;
             let name = path
                 .file_stem()
@@ -126,7 +133,7 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
         &[128, 256, 512, 1024]
     };
     println!(
-        "| mesh | triangles | grid | mode | ms | ms, {BATCH} back to back | voxels |\n|---|---|---|---|---|---|---|"
+        "| mesh | triangles | grid | mode | ms (min–max) | ms, {BATCH} back to back | voxels |\n|---|---|---|---|---|---|---|"
     );
     let mut rows = Vec::new();
     // `--sizes` picks sizes and their order (a size may repeat).
@@ -192,6 +199,9 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
                         stamps.time_after(&ctx, heater.as_ref(), |enc| encode(enc).map(|_| ()))?,
                     );
                 }
+                let (lo, hi) = times
+                    .iter()
+                    .fold((f64::MAX, 0.0f64), |(l, h), &t| (l.min(t), h.max(t)));
                 let ms = median(times);
                 // The same encode BATCH times in one submission: the GPU never idles between
                 // runs, so this is the steady rate, free of clock ramps and submit gaps.
@@ -260,7 +270,7 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
                     .filter(|&&o| o)
                     .count();
                 println!(
-                    "| {name} | {} | {:?} | {mode} | {ms:.3} | {ms_batched:.3} | {voxels} |",
+                    "| {name} | {} | {:?} | {mode} | {ms:.3} ({lo:.3}–{hi:.3}) | {ms_batched:.3} | {voxels} |",
                     mesh.triangles.len(),
                     grid.size
                 );
