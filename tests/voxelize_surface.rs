@@ -617,3 +617,64 @@ fn resident_meshes_move_by_matrices_on_the_gpu() {
     flat.positions[0].x = f64::INFINITY;
     assert!(GpuMesh::upload(&ctx.device, &flat).is_err());
 }
+
+/// More threads than one dispatch row holds (65 535 workgroups of 64): two triangles covering a
+/// 4096² square at z = 1.5 list 2 × 4096² / 4 chunks, so `surface_listed` runs in two rows of
+/// workgroups. The plane lies inside voxel layer 1, so exactly that layer is set.
+#[test]
+fn more_chunks_than_one_dispatch_row_holds() {
+    let ctx = Context::shared();
+    let n = 4096.0;
+    let m = mesh(
+        vec![
+            DVec3::new(0.0, 0.0, 1.5),
+            DVec3::new(n, 0.0, 1.5),
+            DVec3::new(n, n, 1.5),
+            DVec3::new(0.0, n, 1.5),
+        ],
+        vec![[0, 1, 2], [0, 2, 3]],
+    );
+    let grid = unit_grid([4096, 4096, 2]);
+    let local = m.to_grid(&grid).unwrap();
+    let chunks = fieldkit::voxelize::heavy_chunk_bound(&local, grid.size) as u64;
+    assert!(chunks > 65_535 * 64, "{chunks} chunks fit one row");
+    let v = Voxelizer::new(&ctx.device).unwrap();
+    let mut enc = ctx.encoder("voxelize");
+    let s = v.encode_surface(&ctx.device, &mut enc, &m, &grid).unwrap();
+    ctx.submit_and_wait("voxelize", enc).unwrap();
+    let gpu = s.read(&ctx.device, &ctx.queue).wait(&ctx).unwrap();
+    let layer = 4096 * 4096;
+    let missing = gpu[layer..].iter().filter(|&&o| !o).count();
+    let stray = gpu[..layer].iter().filter(|&&o| o).count();
+    assert_eq!((missing, stray), (0, 0), "layer 1 missing, layer 0 set");
+}
+
+/// Many triangles each as large as the grid: their chunk list would need gigabytes. The host
+/// sums the chunks before it allocates them and gives a typed error instead.
+#[test]
+fn a_chunk_list_too_large_is_refused_before_it_is_made() {
+    let ctx = Context::shared();
+    let n = 4096.0;
+    let mut positions = Vec::new();
+    let mut triangles = Vec::new();
+    for k in 0..100u32 {
+        let z = 0.25 + k as f64 * 0.01;
+        positions.extend([
+            DVec3::new(0.0, 0.0, z),
+            DVec3::new(n, 0.0, z),
+            DVec3::new(0.0, n, z),
+        ]);
+        triangles.push([3 * k, 3 * k + 1, 3 * k + 2]);
+    }
+    let m = mesh(positions, triangles);
+    let v = Voxelizer::new(&ctx.device).unwrap();
+    let mut enc = ctx.encoder("voxelize");
+    match v.encode_surface(&ctx.device, &mut enc, &m, &unit_grid([4096, 4096, 2])) {
+        Err(Error::Size { what, got, max, .. }) => {
+            assert_eq!(what, "heavy-triangle chunk list bytes");
+            assert!(got > max, "{got} ≤ {max}");
+        }
+        Err(e) => panic!("another error: {e}"),
+        Ok(_) => panic!("a chunk list of gigabytes was accepted"),
+    }
+}

@@ -549,14 +549,33 @@ pub fn heavy_chunk_bound(local: &GridMesh, size: [u32; 3]) -> u32 {
 
 /// `local`'s triangles sorted for `surface_listed`: the light ones (at most [`LIGHT`] columns
 /// by [`box_columns`]) first, then the heavy ones, and each heavy triangle's chunks of
-/// [`CHUNK`] columns as (triangle, first column). Returns the vertices, the light count and
-/// the chunks.
-fn listed(local: &GridMesh, size: [u32; 3]) -> (Vec<Vec4>, u32, Vec<[u32; 2]>) {
+/// [`CHUNK`] columns as (triangle, first column); a list larger than `limit` bytes is refused
+/// before it is made.
+fn listed(local: &GridMesh, size: [u32; 3], limit: u64) -> Result<Sorted, Error> {
     let chunk = CHUNK as u64;
+    let most: Vec<u64> = local
+        .vertices
+        .chunks(3)
+        .map(|t| box_columns(t, size))
+        .collect();
+    // Sized before anything is allocated: a few huge triangles can need more entries than a
+    // buffer may hold (or the host has memory for).
+    let total: u64 = most
+        .iter()
+        .filter(|&&m| m > LIGHT as u64)
+        .map(|m| m.div_ceil(chunk))
+        .sum();
+    if total.saturating_mul(8) > limit {
+        return Err(Error::Size {
+            stage: STAGE,
+            what: "heavy-triangle chunk list bytes",
+            got: total.saturating_mul(8),
+            max: limit,
+        });
+    }
     let mut vertices = Vec::with_capacity(local.vertices.len());
     let mut heavy = Vec::new();
-    for t in local.vertices.chunks(3) {
-        let most = box_columns(t, size);
+    for (t, &most) in local.vertices.chunks(3).zip(&most) {
         if most > LIGHT as u64 {
             heavy.push((t, most));
         } else {
@@ -564,13 +583,25 @@ fn listed(local: &GridMesh, size: [u32; 3]) -> (Vec<Vec4>, u32, Vec<[u32; 2]>) {
         }
     }
     let light = (vertices.len() / 3) as u32;
-    let mut chunks = Vec::new();
+    let mut chunks = Vec::with_capacity(total as usize);
     for (i, (t, most)) in heavy.into_iter().enumerate() {
         vertices.extend_from_slice(t);
         let at = light + i as u32;
         chunks.extend((0..most.div_ceil(chunk)).map(|c| [at, (c * chunk) as u32]));
     }
-    (vertices, light, chunks)
+    Ok(Sorted {
+        vertices,
+        light,
+        chunks,
+    })
+}
+
+/// [`listed`]'s result: vertices with the light triangles first, how many are light, and the
+/// heavy ones' chunks as (triangle, first column).
+struct Sorted {
+    vertices: Vec<Vec4>,
+    light: u32,
+    chunks: Vec<[u32; 2]>,
 }
 
 /// Surface voxels on the GPU: one bit per voxel.
@@ -716,9 +747,14 @@ struct Listed {
 }
 
 impl Listed {
-    fn new(device: &wgpu::Device, local: &GridMesh, grid: &Grid) -> Listed {
+    fn new(device: &wgpu::Device, local: &GridMesh, grid: &Grid) -> Result<Listed, Error> {
         use wgpu::util::DeviceExt;
-        let (mut vertices, light, mut chunks) = listed(local, grid.size);
+        let limit = device.limits().max_storage_buffer_binding_size;
+        let Sorted {
+            mut vertices,
+            light,
+            mut chunks,
+        } = listed(local, grid.size, limit)?;
         let chunk_count = chunks.len() as u32;
         // Padding keeps the buffers non-empty.
         if vertices.is_empty() {
@@ -734,12 +770,12 @@ impl Listed {
                 usage: wgpu::BufferUsages::STORAGE,
             })
         };
-        Listed {
+        Ok(Listed {
             triangles: buffer("voxelize triangles", bytemuck::cast_slice(&vertices)),
             chunks: buffer("voxelize heavy chunks", bytemuck::cast_slice(&chunks)),
             light,
             chunk_count,
-        }
+        })
     }
 }
 
@@ -786,7 +822,7 @@ impl Voxelizer {
         let local = mesh.to_grid(grid)?;
         let occupancy = zeroed_bitset(device, grid)?;
         // The parity fill takes the triangles in any order: the surface pass's sorted ones.
-        let listed = Listed::new(device, &local, grid);
+        let listed = Listed::new(device, &local, grid)?;
         let triangles = &listed.triangles;
         let count = (local.vertices.len() / 3) as u32;
         for (first, n) in batches(count) {
@@ -926,15 +962,6 @@ impl Voxelizer {
         let threads = listed.light as u64 + listed.chunk_count as u64;
         if threads == 0 {
             return Ok(());
-        }
-        let limit = device.limits().max_storage_buffer_binding_size;
-        if listed.chunk_count as u64 * 8 > limit {
-            return Err(Error::Size {
-                stage: STAGE,
-                what: "heavy-triangle chunk list bytes",
-                got: listed.chunk_count as u64 * 8,
-                max: limit,
-            });
         }
         let params = uniform(
             device,
@@ -1233,7 +1260,7 @@ impl Voxelizer {
             Separation::Conservative => &self.surface,
             Separation::Six => &self.surface_six,
         };
-        let listed = Listed::new(device, &local, grid);
+        let listed = Listed::new(device, &local, grid)?;
         self.listed_pass(device, rec, pipelines, &occupancy, &listed, grid)?;
         Ok(Surface {
             size: grid.size,
