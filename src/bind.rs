@@ -647,6 +647,23 @@ fn check_one(slot: &Slot, res: &Resource<'_>, device: &wgpu::Device) -> Result<(
                     min.get()
                 ));
             }
+            // wgpu would reject the bind group with a validation error (a panic in an app
+            // without an error handler): say which binding and which limit instead.
+            let (max, limit) = match ty {
+                wgpu::BufferBindingType::Uniform => (
+                    device.limits().max_uniform_buffer_binding_size,
+                    "max_uniform_buffer_binding_size",
+                ),
+                _ => (
+                    device.limits().max_storage_buffer_binding_size,
+                    "max_storage_buffer_binding_size",
+                ),
+            };
+            if size > max {
+                return Err(format!(
+                    "{size} bytes bound, more than the device's {limit} ({max})"
+                ));
+            }
             Ok(())
         }
         (

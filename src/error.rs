@@ -1,6 +1,8 @@
 //! Typed errors. Library code returns these on bad input; it does not panic.
 
-/// A resource that does not fit the slot the shader declares.
+/// A resource that does not fit the slot the shader declares: the wrong kind, format, sample
+/// type or dimension, a missing usage, a buffer smaller than the shader needs or larger than
+/// the device's binding limit, an offset off its alignment.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error(
     "stage {stage}, entry point `{entry_point}`, binding `{binding}` (@group({group}) @binding({index})): {problem}"
