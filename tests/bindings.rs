@@ -153,33 +153,11 @@ fn missing_usage_and_small_uniform_are_typed_errors() {
     );
 }
 
-/// The noop backend with wgpu's default limits (a 64 KiB uniform binding), which its adapter
-/// raises to the largest values otherwise.
-fn noop_with_default_limits() -> Context {
-    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
-        backends: wgpu::Backends::NOOP,
-        backend_options: wgpu::BackendOptions {
-            noop: wgpu::NoopBackendOptions {
-                enable: true,
-                ..Default::default()
-            },
-            ..Default::default()
-        },
-        ..wgpu::InstanceDescriptor::new_without_display_handle()
-    });
-    let adapter = pollster::block_on(instance.request_adapter(&Default::default()))
-        .expect("wgpu's noop backend is compiled in (feature `noop`)");
-    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-        required_limits: wgpu::Limits::default(),
-        ..Default::default()
-    }))
-    .expect("a noop device with the default limits");
-    Context::from_device(device, queue)
-}
-
 #[test]
 fn a_buffer_past_the_device_limit_is_a_typed_error() {
-    let ctx = noop_with_default_limits();
+    // wgpu's default limits: a 64 KiB uniform binding (the noop adapter offers far more).
+    let ctx = Context::noop_with_limits(wgpu::Limits::default())
+        .expect("wgpu's noop backend is compiled in (feature `noop`)");
     let t = || texture(&ctx, wgpu::TextureFormat::R32Uint, TEX);
     let max = ctx.device.limits().max_uniform_buffer_binding_size;
     assert_eq!(max, 64 << 10);

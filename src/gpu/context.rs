@@ -57,6 +57,16 @@ impl Context {
     /// wgpu's noop backend: accepts every call and runs nothing. Enough to prove that pipelines
     /// and layouts are valid without a GPU.
     pub fn noop() -> Result<Self, Error> {
+        Self::noop_limited(None)
+    }
+
+    /// [`Context::noop`] with a device of `limits` (the noop adapter otherwise offers the
+    /// largest values): to test what a stage does on a device with smaller ones.
+    pub fn noop_with_limits(limits: wgpu::Limits) -> Result<Self, Error> {
+        Self::noop_limited(Some(limits))
+    }
+
+    fn noop_limited(limits: Option<wgpu::Limits>) -> Result<Self, Error> {
         let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
             backends: wgpu::Backends::NOOP,
             backend_options: wgpu::BackendOptions {
@@ -68,7 +78,12 @@ impl Context {
             },
             ..wgpu::InstanceDescriptor::new_without_display_handle()
         });
-        pollster::block_on(Self::from_instance(instance, wgpu::Backends::NOOP, None))
+        pollster::block_on(Self::from_instance(
+            instance,
+            wgpu::Backends::NOOP,
+            None,
+            limits,
+        ))
     }
 
     /// [`Context::new`] without blocking: the adapter whose name contains `name`, if given.
@@ -78,13 +93,14 @@ impl Context {
             backends,
             ..wgpu::InstanceDescriptor::new_without_display_handle()
         });
-        Self::from_instance(instance, backends, name).await
+        Self::from_instance(instance, backends, name, None).await
     }
 
     async fn from_instance(
         instance: wgpu::Instance,
         backends: wgpu::Backends,
         name: Option<&str>,
+        limits: Option<wgpu::Limits>,
     ) -> Result<Self, Error> {
         let adapters = instance.enumerate_adapters(backends).await;
         let names: Vec<String> = adapters.iter().map(|a| describe(&a.get_info())).collect();
@@ -121,7 +137,7 @@ impl Context {
             .request_device(&wgpu::DeviceDescriptor {
                 label: Some("fieldkit"),
                 required_features: adapter.features() & wanted,
-                required_limits: adapter.limits(),
+                required_limits: limits.unwrap_or_else(|| adapter.limits()),
                 ..Default::default()
             })
             .await
