@@ -250,7 +250,31 @@ fn link(shaders: &ShaderDir, stage: &StageFile) -> Result<Linked, String> {
     }
     let mut origins = Vec::new();
     let mut shared = Vec::new();
-    for decl in &result.syntax.global_declarations {
+    // Declarations from imported modules carry mangled names the sourcemap knows; the root
+    // module's own declarations are not mangled.
+    use wesl::SourceMap as _;
+    use wgsl_parse::SyntaxNode as _;
+    let mut decls: Vec<_> = result
+        .syntax
+        .global_declarations
+        .iter()
+        .map(|decl| {
+            let found = decl.ident().and_then(|id| {
+                sourcemap.and_then(|m| {
+                    m.get_decl(&id.name())
+                        .map(|(p, n)| (id.name().to_string(), p.clone(), n.to_string()))
+                })
+            });
+            (decl, found)
+        })
+        .collect();
+    // WESL 0.4.0 appends imported modules in hash-map order, which differs from run to run of
+    // the same build (the linked WGSL, and so the generated file, changed between two builds
+    // of one commit). Module-scope declarations may come in any order in WGSL, so print the
+    // stage's own declarations first, then each imported module's in the order of its path;
+    // within a module, WESL's order (the source's) is kept by the stable sort.
+    decls.sort_by_cached_key(|(_, found)| found.as_ref().map(|(_, path, _)| path.to_string()));
+    for (decl, found) in decls {
         if !text.is_empty() {
             text.push('\n');
         }
@@ -268,16 +292,6 @@ fn link(shaders: &ShaderDir, stage: &StageFile) -> Result<Linked, String> {
         let end = text.len();
         text.push('\n');
         let span = decl.span().range();
-        // Declarations from imported modules carry mangled names the sourcemap knows;
-        // the root module's own declarations are not mangled.
-        use wesl::SourceMap as _;
-        use wgsl_parse::SyntaxNode as _;
-        let found = decl.ident().and_then(|id| {
-            sourcemap.and_then(|m| {
-                m.get_decl(&id.name())
-                    .map(|(p, n)| (id.name().to_string(), p.clone(), n.to_string()))
-            })
-        });
         if let Some((linked, path, name)) = &found {
             let text = path.to_string();
             if let Some(rest) = text.strip_prefix(&format!("package::{SHARED_DIR}::")) {
@@ -1157,6 +1171,35 @@ mod tests {
         );
         let missing = err("room::none_march", "shared::nothing");
         assert!(missing.contains("none_march"), "{missing}");
+    }
+
+    /// One build writes one file: the linked WGSL of a stage importing from two packages (the
+    /// crate's own `shared::fog` and `fieldkit::…`, whose modules WESL appends in hash-map
+    /// order) is the same on every build — CI once rebuilt a snapshotted file in the other
+    /// order. Hash-map seeds change per map, so a dozen builds in one process see both orders.
+    #[test]
+    fn linking_is_deterministic() {
+        let root = tree(&[]);
+        std::fs::write(
+            root.join("shaders/shared/fog.wesl"),
+            "// A fog.\nfn density(p: vec3<f32>) -> f32 {\n    return exp(-p.y);\n}\n",
+        )
+        .unwrap();
+        let out = root.join("shaders.rs");
+        let build = || {
+            Builder::new("shaders")
+                .density_march("room::fog_march", "shared::fog")
+                .build_to(&root, &out)
+                .expect("builds");
+            std::fs::read_to_string(&out).unwrap()
+        };
+        let first = build();
+        for run in 1..12 {
+            assert!(
+                build() == first,
+                "build {run} wrote another file than build 0"
+            );
+        }
     }
 
     /// `Builder` writes bindings that reach fieldkit's runtime through the path asked for, and
