@@ -21,6 +21,8 @@ pub mod metaball;
 #[cfg(feature = "techniques")]
 pub mod ocean;
 #[cfg(feature = "techniques")]
+pub mod octree;
+#[cfg(feature = "techniques")]
 pub mod view;
 #[cfg(feature = "techniques")]
 pub mod volume;

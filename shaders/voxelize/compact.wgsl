@@ -5,6 +5,8 @@
 //   block_offsets[w / BLOCK_WORDS] + word_offsets[w] + countOneBits(word w's bits below i),
 // which is what the attribute stage computes.
 
+import package::shared::scan::{SCAN_THREADS, scan_total, scan_workgroup};
+
 struct CompactParams {
     // Words in the bitset.
     words: u32,
@@ -20,29 +22,10 @@ struct CompactParams {
 // Occupied voxels in all.
 @group(0) @binding(4) var<storage, read_write> total: array<u32, 1>;
 
-const THREADS: u32 = 256u;
+const THREADS: u32 = SCAN_THREADS;
 const WORDS_PER_THREAD: u32 = 4u;
 // Words one workgroup of `scan_words` covers.
 const BLOCK_WORDS: u32 = 1024u;
-
-var<workgroup> partial: array<u32, THREADS>;
-
-// Inclusive sum over the workgroup's threads up to `local` (Hillis–Steele); every thread must
-// call it. partial[THREADS − 1] holds the workgroup's total afterwards.
-fn scan_workgroup(local: u32, v: u32) -> u32 {
-    partial[local] = v;
-    workgroupBarrier();
-    for (var d = 1u; d < THREADS; d <<= 1u) {
-        var x = 0u;
-        if local >= d {
-            x = partial[local - d];
-        }
-        workgroupBarrier();
-        partial[local] += x;
-        workgroupBarrier();
-    }
-    return partial[local];
-}
 
 @compute @workgroup_size(256)
 fn scan_words(@builtin(workgroup_id) group: vec3<u32>,
@@ -81,7 +64,7 @@ fn scan_blocks(@builtin(local_invocation_index) local: u32) {
         if i < blocks {
             block_offsets[i] = carry + inclusive - v;
         }
-        carry += partial[THREADS - 1u];
+        carry += scan_total();
         // Every thread has read the total before the next round overwrites it.
         workgroupBarrier();
     }

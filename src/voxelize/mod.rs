@@ -24,6 +24,7 @@
 mod attributes;
 pub mod cpu;
 pub mod export;
+mod fragments;
 mod obj;
 mod placed;
 pub mod view;
@@ -31,6 +32,7 @@ pub mod view;
 pub use attributes::{
     AttributeVolumes, Attributes, PendingAttributes, VoxelAttributes, occupied_bound,
 };
+pub use fragments::{Fragments, fragment_estimate};
 pub use placed::GpuMesh;
 
 use glam::{DVec3, Vec4};
@@ -50,6 +52,10 @@ pub const MAX_SIDE: u32 = 4096;
 
 /// Most voxels in a grid: the shaders index voxels with u32.
 pub const MAX_VOXELS: u64 = 1 << 32;
+
+/// Largest side of a grid that is never held densely (voxel fragments, the octree): 2¹³, as
+/// fragments store a coordinate in 16 bits and the octree's levels stay within 13.
+pub const MAX_SPARSE_SIDE: u32 = 8192;
 
 /// Relative slack on the GPU's tests: a few f32 ulp, so rounding only ever adds voxels within
 /// about this fraction of the coordinates' size.
@@ -398,6 +404,17 @@ impl Mesh {
     /// Check the mesh and move it into `grid`'s local coordinates in f64, then round to f32.
     pub fn to_grid(&self, grid: &Grid) -> Result<GridMesh, Error> {
         check_grid(grid)?;
+        self.local(grid)
+    }
+
+    /// [`Mesh::to_grid`] for a grid that is never held densely ([`Voxelizer::encode_fragments`]
+    /// and the octree): sides up to [`MAX_SPARSE_SIDE`], any number of voxels.
+    pub fn to_sparse_grid(&self, grid: &Grid) -> Result<GridMesh, Error> {
+        check_sides(grid, MAX_SPARSE_SIDE)?;
+        self.local(grid)
+    }
+
+    fn local(&self, grid: &Grid) -> Result<GridMesh, Error> {
         self.check()?;
         let mut vertices = Vec::with_capacity(self.triangles.len() * 3);
         let mut degenerate = 0;
@@ -461,25 +478,7 @@ fn check_model(model: glam::DMat4) -> Result<f64, Error> {
 }
 
 fn check_grid(grid: &Grid) -> Result<(), Error> {
-    if !(grid.origin.is_finite() && grid.voxel.is_finite() && grid.voxel > 0.0) {
-        return Err(invalid(format!(
-            "the grid needs a finite origin and a voxel edge > 0, got {grid:?}"
-        )));
-    }
-    for (axis, &n) in ["x", "y", "z"].iter().zip(&grid.size) {
-        if n == 0 || n > MAX_SIDE {
-            return Err(Error::Size {
-                stage: STAGE,
-                what: match *axis {
-                    "x" => "grid side x",
-                    "y" => "grid side y",
-                    _ => "grid side z",
-                },
-                got: n as u64,
-                max: MAX_SIDE as u64,
-            });
-        }
-    }
+    check_sides(grid, MAX_SIDE)?;
     // Voxel indices are u32 in the shaders.
     let voxels = grid.voxels();
     if voxels > MAX_VOXELS {
@@ -489,6 +488,30 @@ fn check_grid(grid: &Grid) -> Result<(), Error> {
             got: voxels,
             max: MAX_VOXELS,
         });
+    }
+    Ok(())
+}
+
+/// A finite origin, a voxel edge > 0 and sides from 1 to `max_side`.
+fn check_sides(grid: &Grid, max_side: u32) -> Result<(), Error> {
+    if !(grid.origin.is_finite() && grid.voxel.is_finite() && grid.voxel > 0.0) {
+        return Err(invalid(format!(
+            "the grid needs a finite origin and a voxel edge > 0, got {grid:?}"
+        )));
+    }
+    for (axis, &n) in ["x", "y", "z"].iter().zip(&grid.size) {
+        if n == 0 || n > max_side {
+            return Err(Error::Size {
+                stage: STAGE,
+                what: match *axis {
+                    "x" => "grid side x",
+                    "y" => "grid side y",
+                    _ => "grid side z",
+                },
+                got: n as u64,
+                max: max_side as u64,
+            });
+        }
     }
     Ok(())
 }
@@ -672,6 +695,7 @@ pub struct Voxelizer {
     solid: ComputePipeline<solid_stage::solid::Entry>,
     to_volume: ComputePipeline<volume_stage::to_volume::Entry>,
     attribute_pipelines: attributes::AttributePipelines,
+    fragment_pipelines: fragments::FragmentPipelines,
     raster: std::sync::OnceLock<crate::bind::RenderPipeline<raster_stage::fs_raster::Entry>>,
 }
 
@@ -797,6 +821,7 @@ impl Voxelizer {
             solid: ComputePipeline::new(device)?,
             to_volume: ComputePipeline::new(device)?,
             attribute_pipelines: Default::default(),
+            fragment_pipelines: Default::default(),
             raster: Default::default(),
         })
     }

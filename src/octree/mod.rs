@@ -1,0 +1,533 @@
+//! Sparse voxel octrees (`shaders/octree/`; OpenGL Insights ch. 22, Crassin & Green, part 2):
+//! a voxelization whose memory grows with its occupied voxels, not with the grid, built on the
+//! GPU level by level from the voxelizer's fragment list ([`crate::voxelize::Fragments`]).
+//!
+//! The tree covers a cube of 2^`log_side` voxels (the grid's largest side rounded up to a power
+//! of two, at least 8). Its nodes are entries of two `u32` in one pool, breadth first:
+//!
+//! - an inner node is (child mask, entry of its first child): child octant `o` (x + 2y + 4z) is
+//!   there when bit `o` is set, at entry `first + popcount(mask & ((1 << o) - 1))`;
+//! - the nodes of the last level ([`Octree::leaf_level`]) cover 4³ voxels and are bricks of 64
+//!   occupancy bits, voxel (x, y, z) of the brick at bit x + 4y + 16z.
+//!
+//! Level `l` is entries `starts[l] .. starts[l + 1]` (the root is entry 0); the children of a
+//! level come in their parents' order, each parent's in octant order, so the layout is a
+//! function of the voxels alone: two builds give the same bytes, and [`OctreeData::from_voxels`]
+//! builds the same tree on the CPU.
+//!
+//! ```
+//! # fn f(ctx: &fieldkit::gpu::Context) -> Result<(), fieldkit::Error> {
+//! use fieldkit::octree::OctreeBuilder;
+//! use fieldkit::voxelize::{Grid, Mesh, Separation, Voxelizer};
+//! use glam::DVec3;
+//! let mesh = Mesh::uv_sphere(DVec3::splat(20.0), 15.0, 32, 16);
+//! let grid = Grid { origin: DVec3::ZERO, voxel: 1.0, size: [40, 40, 40] };
+//! let voxelizer = Voxelizer::new(&ctx.device)?;
+//! let builder = OctreeBuilder::new(&ctx.device)?;
+//! let octree = ctx.block_on(builder.voxelize(
+//!     &ctx.device, &ctx.queue, &voxelizer, &mesh, &grid, Separation::Conservative,
+//! ))?;
+//! let tree = octree.read(&ctx.device, &ctx.queue).wait(ctx)?;
+//! assert!(tree.occupied([20, 20, 5]) && !tree.occupied([20, 20, 20]));
+//! # Ok(()) }
+//! ```
+
+use std::sync::OnceLock;
+
+use crate::bind::ComputePipeline;
+use crate::error::Error;
+use crate::gpu::{Readback, Record, readback_buffers, uniform_buffer as uniform};
+use crate::shaders::octree::build::{self as stage, BuildParams};
+use crate::voxelize::{Fragments, Grid, Mesh, Separation, Voxelizer};
+
+/// Nodes one workgroup of `scan_nodes` covers (the shader's `BLOCK_NODES`).
+const BLOCK_NODES: u64 = 1024;
+/// Bytes per pool entry.
+const ENTRY_BYTES: u64 = 8;
+/// Smallest side of the tree's cube: a root above one level of bricks.
+const MIN_LOG_SIDE: u32 = 3;
+
+/// The octree build pipelines. Create once, build many times.
+pub struct OctreeBuilder {
+    flag: OnceLock<ComputePipeline<stage::flag::Entry>>,
+    scan_nodes: OnceLock<ComputePipeline<stage::scan_nodes::Entry>>,
+    scan_blocks: OnceLock<ComputePipeline<stage::scan_blocks::Entry>>,
+    link: OnceLock<ComputePipeline<stage::link::Entry>>,
+}
+
+/// A sparse voxel octree on the GPU (see the [module docs](self) for the layout).
+pub struct Octree {
+    /// Voxels per axis of the grid it was built from.
+    pub size: [u32; 3],
+    /// log2 of the side of the cube the tree covers.
+    pub log_side: u32,
+    /// The level of the 4³ bricks (`log_side − 2`); the root is level 0.
+    pub leaf_level: u32,
+    /// Entries `pool` holds.
+    pub capacity: u32,
+    /// Two `u32` per entry: inner nodes (child mask, first child), then bricks (64 bits).
+    pub pool: wgpu::Buffer,
+    /// `leaf_level + 2` `u32`: the first entry of each level, then the entries the tree
+    /// needs (more than `capacity` when the pool was too small).
+    pub starts: wgpu::Buffer,
+}
+
+/// An octree read back to the CPU ([`Octree::read`]), or built there
+/// ([`OctreeData::from_voxels`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct OctreeData {
+    /// Voxels per axis of the grid.
+    pub size: [u32; 3],
+    /// log2 of the side of the cube the tree covers.
+    pub log_side: u32,
+    /// The level of the bricks.
+    pub leaf_level: u32,
+    /// The first entry of each level, then the number of entries.
+    pub starts: Vec<u32>,
+    /// The entries (see the [module docs](self)).
+    pub pool: Vec<[u32; 2]>,
+}
+
+/// log2 of the tree's cube for a grid of `size`.
+pub fn log_side(size: [u32; 3]) -> u32 {
+    let side = size.into_iter().max().unwrap_or(1).max(1);
+    side.next_power_of_two().trailing_zeros().max(MIN_LOG_SIDE)
+}
+
+/// Octant x + 2y + 4z of the child of a level-(l − 1) node that holds voxel `v`.
+fn octant(v: [u32; 3], log_side: u32, l: u32) -> u32 {
+    let s = log_side - l;
+    ((v[0] >> s) & 1) | (((v[1] >> s) & 1) << 1) | (((v[2] >> s) & 1) << 2)
+}
+
+fn brick_bit(v: [u32; 3]) -> u32 {
+    (v[0] & 3) | ((v[1] & 3) << 2) | ((v[2] & 3) << 4)
+}
+
+impl OctreeData {
+    /// The octree of a dense voxel grid (one `bool` per voxel, x fastest), built on the CPU
+    /// with the GPU's layout: the reference the GPU build is tested against.
+    pub fn from_voxels(occupied: &[bool], size: [u32; 3]) -> Result<OctreeData, Error> {
+        let voxels = size.iter().map(|&n| n as u64).product::<u64>();
+        if occupied.len() as u64 != voxels {
+            return Err(Error::Invalid {
+                stage: stage::STAGE,
+                what: format!(
+                    "{} voxels given for a grid of {size:?} ({voxels})",
+                    occupied.len()
+                ),
+            });
+        }
+        let log_side = log_side(size);
+        let leaf_level = log_side - 2;
+        let [nx, ny, _] = size.map(|n| n as usize);
+        let list: Vec<[u32; 3]> = occupied
+            .iter()
+            .enumerate()
+            .filter(|(_, o)| **o)
+            .map(|(i, _)| {
+                [
+                    (i % nx) as u32,
+                    ((i / nx) % ny) as u32,
+                    (i / (nx * ny)) as u32,
+                ]
+            })
+            .collect();
+        // Breadth first: each level's nodes as (cell, voxels in it), in entry order.
+        let mut pool = vec![[0u32; 2]];
+        let mut starts = vec![0u32, 1];
+        let mut level: Vec<Vec<[u32; 3]>> = vec![list];
+        for l in 0..leaf_level {
+            let next_start = *starts.last().unwrap();
+            let mut next = Vec::new();
+            for (k, voxels) in level.iter().enumerate() {
+                let mut children: [Vec<[u32; 3]>; 8] = Default::default();
+                for &v in voxels {
+                    children[octant(v, log_side, l + 1) as usize].push(v);
+                }
+                let mask = (0..8)
+                    .filter(|&o| !children[o].is_empty())
+                    .fold(0u32, |m, o| m | (1 << o));
+                let e = starts[l as usize] as usize + k;
+                pool[e] = [mask, next_start + next.len() as u32];
+                next.extend(children.into_iter().filter(|c| !c.is_empty()));
+            }
+            pool.resize(pool.len() + next.len(), [0, 0]);
+            starts.push(next_start + next.len() as u32);
+            level = next;
+        }
+        let first = starts[leaf_level as usize] as usize;
+        for (k, voxels) in level.iter().enumerate() {
+            for &v in voxels {
+                let bit = brick_bit(v);
+                pool[first + k][(bit / 32) as usize] |= 1 << (bit % 32);
+            }
+        }
+        Ok(OctreeData {
+            size,
+            log_side,
+            leaf_level,
+            starts,
+            pool,
+        })
+    }
+
+    /// Whether voxel `v` is occupied: a walk from the root.
+    pub fn occupied(&self, v: [u32; 3]) -> bool {
+        if (0..3).any(|k| v[k] >= self.size[k]) {
+            return false;
+        }
+        let mut node = 0usize;
+        for l in 1..=self.leaf_level {
+            let [mask, first] = self.pool[node];
+            let o = octant(v, self.log_side, l);
+            if mask & (1 << o) == 0 {
+                return false;
+            }
+            node = (first + (mask & ((1 << o) - 1)).count_ones()) as usize;
+        }
+        let bit = brick_bit(v);
+        self.pool[node][(bit / 32) as usize] & (1 << (bit % 32)) != 0
+    }
+
+    /// The tree as a dense grid: one `bool` per voxel, x fastest.
+    pub fn voxels(&self) -> Vec<bool> {
+        let [nx, ny, nz] = self.size;
+        let mut out = Vec::with_capacity(nx as usize * ny as usize * nz as usize);
+        for z in 0..nz {
+            for y in 0..ny {
+                for x in 0..nx {
+                    out.push(self.occupied([x, y, z]));
+                }
+            }
+        }
+        out
+    }
+
+    /// Nodes at each level, root first, bricks last.
+    pub fn nodes_per_level(&self) -> Vec<u32> {
+        self.starts.windows(2).map(|w| w[1] - w[0]).collect()
+    }
+
+    /// Bytes the tree takes on the GPU (8 per node, bricks included).
+    pub fn bytes(&self) -> u64 {
+        self.pool.len() as u64 * ENTRY_BYTES
+    }
+}
+
+/// The pool entries a tree over `fragments` fragments can need at most: one node per fragment
+/// per level, and no more than the level has cells.
+pub fn pool_bound(fragments: u64, log_side: u32) -> u64 {
+    (0..=log_side - 2)
+        .map(|l| 8u64.saturating_pow(l).min(fragments.max(1)))
+        .fold(0u64, u64::saturating_add)
+}
+
+fn pool_error(needed: u64, capacity: u32) -> Error {
+    Error::Size {
+        stage: stage::STAGE,
+        what: "octree pool entries (8 bytes each; `got` is what the levels built so far need)",
+        got: needed,
+        max: capacity as u64,
+    }
+}
+
+impl Octree {
+    /// The first entry of each level and the entries the tree needs, read back once the
+    /// encoder that built it has been submitted; [`Error::Size`] where the pool was too small
+    /// (the levels past the one that ran out were not built, so the size it names is a lower
+    /// bound; [`OctreeBuilder::voxelize`] retries until the tree fits).
+    pub fn starts(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Readback<Vec<u32>> {
+        let capacity = self.capacity;
+        readback_buffers(device, queue, &[&self.starts]).then(move |bytes| {
+            let starts: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes);
+            let needed = *starts.last().unwrap_or(&0);
+            if needed > capacity {
+                return Err(pool_error(needed as u64, capacity));
+            }
+            Ok(starts)
+        })
+    }
+
+    /// The whole tree, read back (checked as [`Octree::starts`] checks it).
+    pub fn read(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Readback<OctreeData> {
+        let (capacity, size, log_side, leaf_level) =
+            (self.capacity, self.size, self.log_side, self.leaf_level);
+        let levels = (leaf_level + 2) as usize;
+        readback_buffers(device, queue, &[&self.starts, &self.pool]).then(move |bytes| {
+            let starts: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes[..levels * 4]);
+            let needed = starts[levels - 1];
+            if needed > capacity {
+                return Err(pool_error(needed as u64, capacity));
+            }
+            let pool: Vec<[u32; 2]> = bytemuck::pod_collect_to_vec(
+                &bytes[levels * 4..levels * 4 + needed as usize * ENTRY_BYTES as usize],
+            );
+            Ok(OctreeData {
+                size,
+                log_side,
+                leaf_level,
+                starts,
+                pool,
+            })
+        })
+    }
+}
+
+impl OctreeBuilder {
+    /// The builder (pipelines are made on first use).
+    pub fn new(_device: &wgpu::Device) -> Result<Self, Error> {
+        Ok(Self {
+            flag: OnceLock::new(),
+            scan_nodes: OnceLock::new(),
+            scan_blocks: OnceLock::new(),
+            link: OnceLock::new(),
+        })
+    }
+
+    /// Record the octree of `fragments` into `rec`, in a pool of `capacity` entries (8 bytes
+    /// each): per level a pass over the fragments and three over the level's nodes, nothing
+    /// read back. [`Octree::starts`] says afterwards whether the pool was large enough;
+    /// [`OctreeBuilder::voxelize`] sizes it for you.
+    pub fn encode(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        fragments: &Fragments,
+        capacity: u32,
+    ) -> Result<Octree, Error> {
+        let limits = device.limits();
+        let log_side = log_side(fragments.size);
+        let leaf_level = log_side - 2;
+        let most = (limits.max_storage_buffer_binding_size / ENTRY_BYTES).min(u32::MAX as u64);
+        if capacity == 0 || capacity as u64 > most {
+            return Err(Error::Size {
+                stage: stage::STAGE,
+                what: "octree pool entries (8 bytes each, the storage binding limit)",
+                got: capacity as u64,
+                max: most,
+            });
+        }
+        let count = fragments.capacity as u64;
+        // The most nodes any level can have, which the scans are sized and dispatched for.
+        let widest = (0..leaf_level)
+            .map(|l| 8u64.saturating_pow(l).min(count).min(capacity as u64))
+            .max()
+            .unwrap_or(1)
+            .max(1);
+        let blocks = widest.div_ceil(BLOCK_NODES);
+        let row = limits.max_compute_workgroups_per_dimension as u64;
+        let threads = count.max(widest);
+        if threads.div_ceil(64) > row * row || blocks > row * row {
+            return Err(Error::Size {
+                stage: stage::STAGE,
+                what: "octree build threads (fragments)",
+                got: threads,
+                max: row * row * 64,
+            });
+        }
+        let buffer = |label, size: u64, usage| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: size.max(4),
+                usage: wgpu::BufferUsages::STORAGE | usage,
+                mapped_at_creation: false,
+            })
+        };
+        let none = wgpu::BufferUsages::empty();
+        let pool = buffer(
+            "octree pool",
+            capacity as u64 * ENTRY_BYTES,
+            wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+        );
+        let starts = {
+            use wgpu::util::DeviceExt;
+            let mut init = vec![0u32; leaf_level as usize + 2];
+            init[1] = 1;
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("octree level starts"),
+                contents: bytemuck::cast_slice(&init),
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            })
+        };
+        let cursor = buffer("octree fragment cursors", count * 4, none);
+        let node_offsets = buffer("octree node offsets", widest * 4, none);
+        let block_offsets = buffer("octree block offsets", blocks * 4, none);
+        let octree = Octree {
+            size: fragments.size,
+            log_side,
+            leaf_level,
+            capacity,
+            pool,
+            starts,
+        };
+        let flag = ComputePipeline::cached(&self.flag, device, &[])?;
+        let scan_nodes = ComputePipeline::cached(&self.scan_nodes, device, &[])?;
+        let scan_blocks = ComputePipeline::cached(&self.scan_blocks, device, &[])?;
+        let link = ComputePipeline::cached(&self.link, device, &[])?;
+        let grid = |n: u64| [n.min(row) as u32, n.div_ceil(row) as u32, 1];
+        for level in 0..=leaf_level {
+            let params = uniform(
+                device,
+                "octree build params",
+                &BuildParams {
+                    log_side,
+                    level,
+                    leaf_level,
+                    fragments: fragments.capacity,
+                    capacity,
+                },
+            );
+            flag.record(
+                device,
+                rec,
+                &stage::flag::Resources {
+                    params: (&params).into(),
+                    fragments: (&fragments.list).into(),
+                    fragment_count: (&fragments.total).into(),
+                    cursor: (&cursor).into(),
+                    pool: (&octree.pool).into(),
+                },
+                grid(count.div_ceil(64).max(1)),
+                stage::STAGE,
+            )?;
+            if level == leaf_level {
+                break;
+            }
+            let nodes = 8u64.saturating_pow(level).min(widest);
+            scan_nodes.record(
+                device,
+                rec,
+                &stage::scan_nodes::Resources {
+                    params: (&params).into(),
+                    pool: (&octree.pool).into(),
+                    starts: (&octree.starts).into(),
+                    node_offsets: (&node_offsets).into(),
+                    block_offsets: (&block_offsets).into(),
+                },
+                grid(nodes.div_ceil(BLOCK_NODES)),
+                stage::STAGE,
+            )?;
+            scan_blocks.record(
+                device,
+                rec,
+                &stage::scan_blocks::Resources {
+                    params: (&params).into(),
+                    starts: (&octree.starts).into(),
+                    block_offsets: (&block_offsets).into(),
+                },
+                [1, 1, 1],
+                stage::STAGE,
+            )?;
+            link.record(
+                device,
+                rec,
+                &stage::link::Resources {
+                    params: (&params).into(),
+                    pool: (&octree.pool).into(),
+                    starts: (&octree.starts).into(),
+                    node_offsets: (&node_offsets).into(),
+                    block_offsets: (&block_offsets).into(),
+                },
+                grid(nodes.div_ceil(64)),
+                stage::STAGE,
+            )?;
+        }
+        Ok(octree)
+    }
+
+    /// `octree` in a pool of the `needed` entries it uses (the estimate it was built in is
+    /// larger): one copy, submitted.
+    fn shrunk(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        octree: Octree,
+        needed: u32,
+    ) -> Octree {
+        if needed >= octree.capacity {
+            return octree;
+        }
+        let pool = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("octree pool"),
+            size: needed as u64 * ENTRY_BYTES,
+            usage: octree.pool.usage(),
+            mapped_at_creation: false,
+        });
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("octree shrink"),
+        });
+        encoder.copy_buffer_to_buffer(&octree.pool, 0, &pool, 0, pool.size());
+        queue.submit([encoder.finish()]);
+        Octree {
+            pool,
+            capacity: needed,
+            ..octree
+        }
+    }
+
+    /// The octree of `mesh`'s surface voxels in `grid` (sides up to
+    /// [`crate::voxelize::MAX_SPARSE_SIDE`]), its fragment list and pool sized for it: built
+    /// with estimates, read back, and built again with the sizes the GPU counted where an
+    /// estimate was short (the fragment count is exact; the pool grows at least a level per
+    /// try); the pool is then copied into one of the entries the tree uses, so what stays
+    /// allocated is 8 bytes per node. Submits its own work and waits for the counts, so the
+    /// future finishes only as the device is polled.
+    pub async fn voxelize(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        voxelizer: &Voxelizer,
+        mesh: &Mesh,
+        grid: &Grid,
+        separation: Separation,
+    ) -> Result<Octree, Error> {
+        let mut fragment_capacity = None;
+        let mut pool_capacity = None;
+        let most = (device.limits().max_storage_buffer_binding_size / ENTRY_BYTES)
+            .min(u32::MAX as u64) as u32;
+        let log_side = log_side(grid.size);
+        // A try builds at least one more level than the last, and the fragment list is sized
+        // exactly after one: the levels and two more tries.
+        for _ in 0..log_side + 2 {
+            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("octree voxelize"),
+            });
+            let fragments = voxelizer.encode_fragments(
+                device,
+                &mut encoder,
+                mesh,
+                grid,
+                separation,
+                fragment_capacity,
+            )?;
+            let capacity = pool_capacity.unwrap_or_else(|| {
+                let f = fragments.capacity as u64;
+                pool_bound(f, log_side).min(f / 8 + 4096).min(most as u64) as u32
+            });
+            let octree = self.encode(device, &mut encoder, &fragments, capacity)?;
+            queue.submit([encoder.finish()]);
+            let bytes =
+                readback_buffers(device, queue, &[&fragments.total, &octree.starts]).await?;
+            let counts: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes);
+            let (total, needed) = (counts[0], *counts.last().unwrap());
+            if total > fragments.capacity {
+                fragment_capacity = Some(total);
+                pool_capacity = None;
+                continue;
+            }
+            if needed > capacity {
+                if capacity == most {
+                    return Err(pool_error(needed as u64, capacity));
+                }
+                pool_capacity = Some((needed as u64 * 2).min(most as u64) as u32);
+                continue;
+            }
+            return Ok(self.shrunk(device, queue, octree, needed));
+        }
+        Err(Error::Invalid {
+            stage: stage::STAGE,
+            what: "the octree's sizes did not settle (a bug: please report it)".into(),
+        })
+    }
+}
