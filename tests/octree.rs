@@ -398,3 +398,253 @@ fn the_cpu_tree_holds_its_voxels() {
         Err(Error::Invalid { .. })
     ));
 }
+
+/// A DDA through a dense grid of cells (Amanatides & Woo, each boundary's distance computed as
+/// (k · cell − start) · inv in f32, x before y before z on ties), the reference the octree's
+/// casts are held to: the first occupied cell and the axis crossed into it.
+fn dense_dda(
+    occupied: &dyn Fn([i32; 3]) -> bool,
+    extent: [i32; 3],
+    cell: f32,
+    start: glam::Vec3,
+    inv: glam::Vec3,
+) -> Option<([i32; 3], Option<u32>)> {
+    let boundary = |k: i32, s: f32, inv: f32| {
+        if inv.abs() > 3.0e38 {
+            3.4e38
+        } else {
+            (k as f32 * cell - s) * inv
+        }
+    };
+    let step: [i32; 3] = std::array::from_fn(|a| if inv[a] >= 0.0 { 1 } else { -1 });
+    let ahead: [i32; 3] = std::array::from_fn(|a| (step[a] > 0) as i32);
+    let mut c: [i32; 3] =
+        std::array::from_fn(|a| ((start[a] / cell).floor() as i32).clamp(0, extent[a] - 1));
+    let mut t_max: [f32; 3] = std::array::from_fn(|a| boundary(c[a] + ahead[a], start[a], inv[a]));
+    let mut axis = None;
+    loop {
+        if (0..3).any(|a| c[a] < 0 || c[a] >= extent[a]) {
+            return None;
+        }
+        if occupied(c) {
+            return Some((c, axis));
+        }
+        let a = if t_max[0] <= t_max[1] && t_max[0] <= t_max[2] {
+            0
+        } else if t_max[1] <= t_max[2] {
+            1
+        } else {
+            2
+        };
+        c[a] += step[a];
+        t_max[a] = boundary(c[a] + ahead[a], start[a], inv[a]);
+        axis = Some(a as u32);
+    }
+}
+
+/// Cells of level `m` of a tree over `log_side`: occupied where any voxel in them is.
+fn coarse(voxels: &[bool], size: [u32; 3], log_side: u32, m: u32) -> (Vec<bool>, [i32; 3]) {
+    let shift = log_side - m;
+    let extent = size.map(|n| n.div_ceil(1 << shift) as i32);
+    let [ex, ey, ez] = extent.map(|e| e as usize);
+    let mut out = vec![false; ex * ey * ez];
+    let [nx, ny, _] = size.map(|n| n as usize);
+    for (i, &o) in voxels.iter().enumerate() {
+        if o {
+            let (x, y, z) = (i % nx, (i / nx) % ny, i / (nx * ny));
+            out[((z >> shift) * ey + (y >> shift)) * ex + (x >> shift)] = true;
+        }
+    }
+    (out, extent)
+}
+
+/// Rays cast through the octree at every level meet exactly the cells a DDA through the dense
+/// grid of that level meets first (random rays, axis-aligned ones, ones starting in a full
+/// cell), and lookups give each level's occupancy.
+#[test]
+fn casts_hit_what_a_dense_dda_hits() {
+    let ctx = Context::shared();
+    let mut mesh = Mesh::torus(DVec3::new(24.5, 23.2, 20.9), 14.0, 5.3, 48, 16);
+    let sphere = Mesh::uv_sphere(DVec3::new(30.3, 27.7, 31.1), 9.37, 32, 16);
+    let base = mesh.positions.len() as u32;
+    mesh.positions.extend(&sphere.positions);
+    mesh.triangles
+        .extend(sphere.triangles.iter().map(|t| t.map(|i| i + base)));
+    let grid = unit_grid([48, 44, 46]);
+    let want = dense(&ctx, &mesh, &grid, Separation::Conservative);
+    let (octree, _) = build(&ctx, &mesh, &grid, Separation::Conservative);
+    let caster = fieldkit::octree::OctreeCaster::new();
+
+    let mut state = 0x1234_5678_9abc_def1u64;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 40) as f32 / (1u64 << 24) as f32
+    };
+    let size = glam::Vec3::new(48.0, 44.0, 46.0);
+    let mut rays = Vec::new();
+    for level in 2..=octree.log_side {
+        for i in 0..600 {
+            let start = glam::Vec3::new(next(), next(), next()) * size;
+            let mut dir = glam::Vec3::new(next() - 0.5, next() - 0.5, next() - 0.5);
+            // Every sixth ray along an axis or in an axis plane (infinite reciprocals), and
+            // every sixth a diagonal from a voxel's centre, which reaches the boundaries of two
+            // or three axes at once (the tie rule decides).
+            let mut start = start;
+            match i % 6 {
+                0 => dir = glam::Vec3::new(0.0, 0.0, dir.z.signum()),
+                1 => dir.y = 0.0,
+                2 => {
+                    start = start.floor() + 0.5;
+                    dir = dir.signum();
+                    if i % 12 == 2 {
+                        dir.z *= 0.5;
+                    }
+                }
+                _ => {}
+            }
+            if dir == glam::Vec3::ZERO {
+                dir = glam::Vec3::X;
+            }
+            rays.push(fieldkit::octree::Ray { start, dir, level });
+        }
+    }
+    let mut enc = ctx.encoder("casts");
+    let casts = caster
+        .encode_cast(&ctx.device, &mut enc, &octree, &rays)
+        .unwrap();
+    ctx.submit_and_wait("casts", enc).unwrap();
+    let hits = casts.read(&ctx.device, &ctx.queue).wait(&ctx).unwrap();
+    let mut hit_count = 0;
+    for (ray, got) in rays.iter().zip(&hits) {
+        let (cells, extent) = coarse(&want, grid.size, octree.log_side, ray.level);
+        let occupied = |c: [i32; 3]| cells[((c[2] * extent[1] + c[1]) * extent[0] + c[0]) as usize];
+        let cell = (1u32 << (octree.log_side - ray.level)) as f32;
+        let reference = dense_dda(&occupied, extent, cell, ray.start, ray.dir.recip());
+        let got = got.map(|h| (h.cell, h.axis));
+        assert_eq!(got, reference, "{ray:?}");
+        hit_count += got.is_some() as usize;
+    }
+    assert!(
+        hit_count > rays.len() / 4 && hit_count < rays.len(),
+        "{hit_count} of {} hit",
+        rays.len()
+    );
+
+    let points: Vec<[u32; 3]> = (0..2000)
+        .map(|_| {
+            [
+                (next() * 50.0) as u32,
+                (next() * 46.0) as u32,
+                (next() * 46.0) as u32,
+            ]
+        })
+        .collect();
+    for level in [octree.log_side, octree.log_side - 1, 3, 0] {
+        let mut enc = ctx.encoder("lookups");
+        let lookups = caster
+            .encode_lookup(&ctx.device, &mut enc, &octree, &points, level)
+            .unwrap();
+        ctx.submit_and_wait("lookups", enc).unwrap();
+        let got = lookups
+            .read_occupied(&ctx.device, &ctx.queue)
+            .wait(&ctx)
+            .unwrap();
+        let (cells, extent) = coarse(&want, grid.size, octree.log_side, level);
+        let shift = octree.log_side - level;
+        for (p, g) in points.iter().zip(got) {
+            let inside = (0..3).all(|k| p[k] < grid.size[k]);
+            let c = p.map(|v| (v >> shift) as i32);
+            let w = inside && cells[((c[2] * extent[1] + c[1]) * extent[0] + c[0]) as usize];
+            assert_eq!(g, w, "point {p:?} at level {level}");
+        }
+    }
+}
+
+/// The render at a coarser level covers every pixel a finer one does, no farther away (a
+/// coarse cell holds the fine cells inside it); the footprint picks a level in between.
+#[test]
+fn coarser_levels_cover_finer_ones() {
+    use fieldkit::octree::{Lod, OctreeCaster, RenderSettings};
+    use glam::Vec3;
+    let ctx = Context::shared();
+    let torus = Mesh::torus(DVec3::new(32.0, 32.0, 32.0), 20.0, 7.0, 64, 24);
+    let grid = Grid {
+        origin: DVec3::splat(-1.0),
+        voxel: 2.0 / 64.0,
+        size: [64, 64, 64],
+    };
+    let torus = torus
+        .transformed(glam::DMat4::from_scale_rotation_translation(
+            DVec3::splat(2.0 / 64.0),
+            glam::DQuat::IDENTITY,
+            DVec3::splat(-1.0),
+        ))
+        .unwrap();
+    let (octree, _) = build(&ctx, &torus, &grid, Separation::Conservative);
+    let view = fieldkit::view::View {
+        view_proj: glam::camera::rh::proj::directx::perspective(0.9, 1.0, 0.1, 10.0)
+            * glam::camera::rh::view::look_at_mat4(Vec3::new(1.2, 1.9, 2.3), Vec3::ZERO, Vec3::Y),
+        viewport: [64, 64],
+        reversed_z: false,
+        origin: [0, 0],
+    };
+    let caster = OctreeCaster::new();
+    let render = |lod| {
+        let mut enc = ctx.encoder("octree render");
+        let settings = RenderSettings {
+            lod,
+            ..Default::default()
+        };
+        let image = caster
+            .encode_render(&ctx.device, &mut enc, &octree, &grid, &view, &settings)
+            .unwrap();
+        ctx.submit_and_wait("octree render", enc).unwrap();
+        let colour: Vec<[u8; 4]> =
+            fieldkit::gpu::readback_texture(&ctx.device, &ctx.queue, &image.colour)
+                .wait(&ctx)
+                .unwrap();
+        let depth: Vec<f32> =
+            fieldkit::gpu::readback_texture(&ctx.device, &ctx.queue, &image.depth)
+                .wait(&ctx)
+                .unwrap();
+        (colour, depth)
+    };
+    let levels: Vec<_> = (3..=octree.log_side)
+        .map(|l| render(Lod::Level(l)))
+        .collect();
+    let covered = |img: &(Vec<[u8; 4]>, Vec<f32>)| img.0.iter().filter(|c| c[3] == 255).count();
+    for pair in levels.windows(2) {
+        let (coarse, fine) = (&pair[0], &pair[1]);
+        for i in 0..fine.0.len() {
+            if fine.0[i][3] == 255 {
+                assert_eq!(
+                    coarse.0[i][3], 255,
+                    "pixel {i} covered at the finer level only"
+                );
+                assert!(
+                    coarse.1[i] <= fine.1[i] + 1e-6,
+                    "pixel {i}: the coarse hit is behind"
+                );
+            }
+        }
+        assert!(covered(coarse) >= covered(fine));
+    }
+    let finest = covered(levels.last().unwrap());
+    assert!(
+        finest > 300 && finest < 64 * 64 - 300,
+        "{finest} pixels covered"
+    );
+    let by_footprint = covered(&render(Lod::Footprint(1.0)));
+    assert!(by_footprint >= finest, "{by_footprint} < {finest}");
+    let mut enc = ctx.encoder("bad lod");
+    let settings = RenderSettings {
+        lod: Lod::Level(octree.log_side + 1),
+        ..Default::default()
+    };
+    assert!(matches!(
+        caster.encode_render(&ctx.device, &mut enc, &octree, &grid, &view, &settings),
+        Err(Error::Size { .. })
+    ));
+}

@@ -18,6 +18,7 @@
 //! | `fieldkit::octahedral` | unit vectors packed as two snorm16 by the octahedral map (`NO_NORMAL` for none) |
 //! | `fieldkit::triangle_box` | Schwarz & Seidel's triangle/voxel overlap |
 //! | `fieldkit::field` | trilinear field sampling by `textureLoad` and ray/box helpers |
+//! | `fieldkit::octree` | the sparse voxel octree's layout: octants, children, brick bits (`octree_child`, `brick_has`) |
 //!
 //! Each module is the file of the same name in this crate's `shaders/`, and fieldkit's own
 //! stages import them from here too (`import fieldkit::seed::…`): one source, so the package
@@ -41,11 +42,19 @@ static GERSTNER: CodegenModule = module!(gerstner);
 static OCTAHEDRAL: CodegenModule = module!(octahedral);
 static TRIANGLE_BOX: CodegenModule = module!(triangle_box);
 static FIELD: CodegenModule = module!(field);
+static OCTREE: CodegenModule = module!(octree);
 
 static ROOT: CodegenModule = CodegenModule {
     name: "fieldkit",
     source: "",
-    submodules: &[&SEED, &GERSTNER, &OCTAHEDRAL, &TRIANGLE_BOX, &FIELD],
+    submodules: &[
+        &SEED,
+        &GERSTNER,
+        &OCTAHEDRAL,
+        &TRIANGLE_BOX,
+        &FIELD,
+        &OCTREE,
+    ],
 };
 
 /// The `fieldkit` WESL package.

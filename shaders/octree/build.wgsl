@@ -22,6 +22,7 @@
 // A pool too small: entries from `capacity` on are not written, and `starts` still says how
 // many the levels built so far need (a lower bound on the whole tree's, which the host reads).
 
+import fieldkit::octree::{brick_bit, octree_octant};
 import package::shared::scan::{SCAN_THREADS, scan_total, scan_workgroup};
 
 struct BuildParams {
@@ -65,10 +66,8 @@ fn voxel(f: u32) -> vec3<u32> {
     return vec3<u32>(v.x & 0xffffu, v.x >> 16u, v.y);
 }
 
-// The octant, within its parent, of the level-l node that holds voxel v.
 fn octant(v: vec3<u32>, l: u32) -> u32 {
-    let b = (v >> vec3<u32>(params.log_side - l)) & vec3<u32>(1u);
-    return b.x | (b.y << 1u) | (b.z << 2u);
+    return octree_octant(v, params.log_side, l);
 }
 
 fn child(parent: u32, o: u32) -> u32 {
@@ -97,7 +96,7 @@ fn flag(@builtin(global_invocation_id) id: vec3<u32>,
         }
     }
     if params.level == params.leaf_level {
-        let bit = (v.x & 3u) | ((v.y & 3u) << 2u) | ((v.z & 3u) << 4u);
+        let bit = brick_bit(v);
         atomicOr(&pool[2u * node + bit / 32u], 1u << (bit % 32u));
         return;
     }

@@ -32,6 +32,10 @@
 //! # Ok(()) }
 //! ```
 
+mod cast;
+
+pub use cast::{Casts, CellHit, Lod, OctreeCaster, OctreeImage, Ray, RenderSettings};
+
 use std::sync::OnceLock;
 
 use crate::bind::ComputePipeline;
