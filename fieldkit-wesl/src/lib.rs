@@ -69,7 +69,14 @@ pub static PACKAGE: CodegenPkg = CodegenPkg {
 pub const SOURCE_DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/shaders");
 
 /// The package's public modules, by name.
-pub const MODULES: &[&str] = &["seed", "gerstner", "octahedral", "triangle_box", "field"];
+pub const MODULES: &[&str] = &[
+    "seed",
+    "gerstner",
+    "octahedral",
+    "triangle_box",
+    "field",
+    "octree",
+];
 
 #[cfg(test)]
 mod tests {
