@@ -585,7 +585,114 @@ fn run(
     })?;
     let (rgba, sw, sh) = voxelize_distance_slice(ctx, mesh, 128, 4)?;
     save("voxelize_distance_slice.png", &rgba, sw, sh, &mut written)?;
+
+    // The sparse voxel octree: 2048³ where the device's buffers hold the build, else the
+    // largest grid that fits, by footprint and at three fixed levels of detail.
+    let mut n = 2048;
+    let (octree, grid) = loop {
+        match octree_of(ctx, mesh, n) {
+            Ok(built) => break built,
+            Err(Error::Size { what, got, max, .. }) if n > 128 => {
+                progress(&format!(
+                    "octree: {n}³ does not fit this device ({what}: {got} > {max}); trying {}³",
+                    n / 2
+                ));
+                n /= 2;
+            }
+            Err(e) => return Err(e),
+        }
+    };
+    progress(&format!(
+        "octree: {what} at {n}³ through the sparse voxel octree ({} nodes, {:.1} MiB; a dense \
+         bitset would be {:.1} MiB), by footprint and at levels {}, {}, {}",
+        octree.capacity,
+        octree.capacity as f64 * 8.0 / (1 << 20) as f64,
+        grid.voxels() as f64 / 8.0 / (1 << 20) as f64,
+        octree.log_side - 6,
+        octree.log_side - 4,
+        octree.log_side - 2,
+    ));
+    use fieldkit::octree::Lod;
+    for (name, lod) in [
+        ("octree_bunny.png".to_string(), Lod::Footprint(1.0)),
+        (
+            format!("octree_bunny_level_{}.png", octree.log_side - 6),
+            Lod::Level(octree.log_side - 6),
+        ),
+        (
+            format!("octree_bunny_level_{}.png", octree.log_side - 4),
+            Lod::Level(octree.log_side - 4),
+        ),
+        (
+            format!("octree_bunny_level_{}.png", octree.log_side - 2),
+            Lod::Level(octree.log_side - 2),
+        ),
+    ] {
+        let rgba = octree_scene(ctx, &octree, &grid, lod, w, h)?;
+        save(&name, &rgba, w, h, &mut written)?;
+    }
     Ok(written)
+}
+
+/// The sparse voxel octree of `mesh`'s surface in a grid of `n` along its longest side.
+pub fn octree_of(
+    ctx: &Context,
+    mesh: &fieldkit::voxelize::Mesh,
+    n: u32,
+) -> Result<(fieldkit::octree::Octree, fieldkit::voxelize::Grid), Error> {
+    use fieldkit::octree::OctreeBuilder;
+    use fieldkit::voxelize::{Grid, Separation, Voxelizer};
+    let grid = Grid::fit(mesh, n)?;
+    let octree = ctx.block_on(OctreeBuilder::new(&ctx.device)?.voxelize(
+        &ctx.device,
+        &ctx.queue,
+        &Voxelizer::new(&ctx.device)?,
+        mesh,
+        &grid,
+        Separation::Conservative,
+    ))?;
+    Ok((octree, grid))
+}
+
+/// A first-hit render of `octree` at `lod` over a dark background, into RGBA8 pixels.
+pub fn octree_scene(
+    ctx: &Context,
+    octree: &fieldkit::octree::Octree,
+    grid: &fieldkit::voxelize::Grid,
+    lod: fieldkit::octree::Lod,
+    w: u32,
+    h: u32,
+) -> Result<Vec<u8>, Error> {
+    use fieldkit::octree::{OctreeCaster, RenderSettings};
+    use glam::Vec3;
+    let centre =
+        (grid.origin + glam::DVec3::from(grid.size.map(f64::from)) * grid.voxel * 0.5).as_vec3();
+    let radius = grid.size.into_iter().max().unwrap_or(1) as f32 * grid.voxel as f32 * 0.5;
+    let eye = centre + Vec3::new(0.75, 0.45, 1.0).normalize() * radius * 3.4;
+    let view = fieldkit::view::View {
+        view_proj: glam::camera::rh::proj::directx::perspective(
+            0.7,
+            w as f32 / h as f32,
+            radius * 0.1,
+            radius * 10.0,
+        ) * glam::camera::rh::view::look_at_mat4(eye, centre, Vec3::Y),
+        viewport: [w, h],
+        reversed_z: false,
+        origin: [0, 0],
+    };
+    let settings = RenderSettings {
+        lod,
+        ..Default::default()
+    };
+    let mut enc = ctx.encoder("gallery octree");
+    let image =
+        OctreeCaster::new().encode_render(&ctx.device, &mut enc, octree, grid, &view, &settings)?;
+    ctx.submit_and_wait("gallery octree", enc)?;
+    let px: Vec<[u8; 4]> = read_texture(ctx, &image.colour)?;
+    Ok(px
+        .into_iter()
+        .flat_map(|p| if p[3] == 0 { [41, 43, 51, 255] } else { p })
+        .collect())
 }
 
 /// A 96³ fBm cloud under a sky-blue background, lit through the light volume, seen from `eye`.

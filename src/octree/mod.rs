@@ -31,6 +31,8 @@
 //! assert!(tree.occupied([20, 20, 5]) && !tree.occupied([20, 20, 20]));
 //! # Ok(()) }
 //! ```
+//!
+#![doc = include_str!("../../docs/octree.md")]
 
 mod cast;
 

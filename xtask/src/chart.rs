@@ -89,3 +89,80 @@ pub(crate) fn time_vs_error(
     root.present().map_err(|x| e(&x))?;
     Ok(())
 }
+
+/// A named line of (x, y) points.
+pub(crate) type Series = (String, Vec<(f64, f64)>);
+
+/// Lines on log-log axes, one colour per series, each point marked.
+pub(crate) fn log_log(
+    path: &std::path::Path,
+    caption: &str,
+    x_desc: &str,
+    y_desc: &str,
+    series: &[Series],
+) -> Result<(), String> {
+    use plotters::prelude::*;
+    let e = |e: &dyn std::fmt::Display| e.to_string();
+    let _ =
+        plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular());
+    let all: Vec<(f64, f64)> = series
+        .iter()
+        .flat_map(|s| s.1.iter().copied())
+        .filter(|p| p.0 > 0.0 && p.1 > 0.0)
+        .collect();
+    if all.is_empty() {
+        return Err(format!("{}: nothing to draw", path.display()));
+    }
+    let (xmin, xmax, ymin, ymax) = all.iter().fold(
+        (f64::INFINITY, 0f64, f64::INFINITY, 0f64),
+        |(a, b, c, d), p| (a.min(p.0), b.max(p.0), c.min(p.1), d.max(p.1)),
+    );
+    let root = BitMapBackend::new(path, (900, 560)).into_drawing_area();
+    root.fill(&WHITE).map_err(|x| e(&x))?;
+    let mut c = ChartBuilder::on(&root)
+        .caption(caption, ("sans-serif", 15))
+        .margin(12)
+        .x_label_area_size(38)
+        .y_label_area_size(60)
+        .build_cartesian_2d(
+            (xmin / 1.3..xmax * 1.3).log_scale(),
+            (ymin / 2.0..ymax * 3.0).log_scale(),
+        )
+        .map_err(|x| e(&x))?;
+    c.configure_mesh()
+        .x_desc(x_desc)
+        .y_desc(y_desc)
+        .x_label_formatter(&|v| format!("{v:.0}"))
+        .y_label_formatter(&|v| format!("{v:.0e}"))
+        .label_style(("sans-serif", 11))
+        .draw()
+        .map_err(|x| e(&x))?;
+    for (k, (name, pts)) in series.iter().enumerate() {
+        let pts: Vec<(f64, f64)> = pts
+            .iter()
+            .copied()
+            .filter(|p| p.0 > 0.0 && p.1 > 0.0)
+            .collect();
+        if pts.is_empty() {
+            continue;
+        }
+        let color = Palette99::pick(k).to_rgba();
+        c.draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
+            .map_err(|x| e(&x))?
+            .label(name.as_str())
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 16, y)], color.stroke_width(2))
+            });
+        c.draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
+            .map_err(|x| e(&x))?;
+    }
+    c.configure_series_labels()
+        .position(SeriesLabelPosition::UpperLeft)
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 11))
+        .draw()
+        .map_err(|x| e(&x))?;
+    root.present().map_err(|x| e(&x))?;
+    Ok(())
+}

@@ -7,6 +7,7 @@ mod bench_build;
 mod bench_distance;
 mod bench_metaball;
 mod bench_ocean;
+mod bench_octree;
 mod bench_volume;
 mod bench_voxelize;
 mod chart;
@@ -164,6 +165,8 @@ enum Technique {
     Volume,
     Ocean,
     Voxelize,
+    /// The sparse voxel octree against the dense grid: memory, build and render time.
+    Octree,
 }
 
 fn crate_root() -> PathBuf {
@@ -264,6 +267,7 @@ fn main() -> ExitCode {
                 Technique::Volume => bench_volume::run(&args),
                 Technique::Ocean => bench_ocean::run(&args),
                 Technique::Voxelize => bench_voxelize::run(&args),
+                Technique::Octree => bench_octree::run(&args),
             }
         }
     }
