@@ -10,8 +10,8 @@
 // closest point on the triangle's plane (barycentrics clamped to the triangle),
 // written as a0 + b1·(a1 − a0) + b2·(a2 − a0) so a constant attribute stays exact.
 
-import fieldkit::octahedral::{NO_NORMAL, encode_octahedral};
 import fieldkit::triangle_box::{CHUNK, LIGHT, Setup, column, overlaps, setup};
+import package::shared::voxel_attribute::{SUMS, average, closest_weights, contribution, corner_colour, corner_normal};
 
 struct AttributeParams {
     grid: vec3<u32>,
@@ -51,11 +51,6 @@ struct AttributeParams {
 @group(0) @binding(10) var albedo: texture_2d<f32>;
 @group(0) @binding(11) var albedo_sampler: sampler;
 
-const SUMS: u32 = 8u;
-// Sum units per 8-bit colour level: 4 bits below the output's precision. The sums hold
-// 2^32 / (255 · 16) ≈ 1 M contributions per voxel, the normal's 2^31 / 4096 = 512 k.
-const COLOR_SCALE: f32 = 16.0;
-const NORMAL_SCALE: f32 = 4096.0;
 const BLOCK_WORDS: u32 = 1024u;
 
 fn compact_index(i: u32) -> u32 {
@@ -64,53 +59,24 @@ fn compact_index(i: u32) -> u32 {
     return block_offsets[w / BLOCK_WORDS] + word_offsets[w] + countOneBits(below);
 }
 
-// p on the (u, w) axes.
-fn flat(s: Setup, p: vec3<f32>) -> vec2<f32> {
-    return vec2<f32>(dot(p, vec3<f32>(s.eu)), dot(p, vec3<f32>(s.ew)));
-}
-
-fn cross2(a: vec2<f32>, b: vec2<f32>) -> f32 {
-    return a.x * b.y - a.y * b.x;
-}
-
 fn add_voxel(s: Setup, t: u32, p: vec3<i32>) {
-    // Barycentrics of the voxel centre's closest point on the plane, computed in the
-    // projection that drops k (the triangle's largest, never degenerate for a triangle with
-    // area). The closest point does not depend on k, so neither does the result where two
-    // axes tie.
-    let v0 = triangles[3u * t].xyz;
-    let v1 = triangles[3u * t + 1u].xyz;
-    let v2 = triangles[3u * t + 2u].xyz;
-    let centre = vec3<f32>(p) + 0.5;
-    let q = centre - s.n * (dot(s.n, centre - v0) / dot(s.n, s.n));
-    let a = flat(s, v0);
-    let e1 = flat(s, v1) - a;
-    let e2 = flat(s, v2) - a;
-    let r = flat(s, q) - a;
-    let area = cross2(e1, e2);
-    var b = max(vec2<f32>(cross2(r, e2), cross2(e1, r)) / area, vec2<f32>(0.0));
-    if b.x + b.y > 1.0 {
-        b /= b.x + b.y;
-    }
+    let b = closest_weights(s, triangles[3u * t].xyz, triangles[3u * t + 1u].xyz,
+                            triangles[3u * t + 2u].xyz, p);
     let c0 = corners[6u * t];
     let c1 = corners[6u * t + 2u];
     let c2 = corners[6u * t + 4u];
-    let k0 = unpack4x8unorm(c0.x) * 255.0;
-    var colour = k0 + b.x * (unpack4x8unorm(c1.x) * 255.0 - k0)
-        + b.y * (unpack4x8unorm(c2.x) * 255.0 - k0);
+    var colour = corner_colour(b, c0.x, c1.x, c2.x);
     if params.textured != 0u {
         let t0 = bitcast<vec2<f32>>(corners[6u * t + 1u].xy);
         let uv = t0 + b.x * (bitcast<vec2<f32>>(corners[6u * t + 3u].xy) - t0)
             + b.y * (bitcast<vec2<f32>>(corners[6u * t + 5u].xy) - t0);
         colour *= textureSampleLevel(albedo, albedo_sampler, vec2<f32>(uv.x, 1.0 - uv.y), 0.0);
     }
-    let n0 = bitcast<vec3<f32>>(c0.yzw);
-    var n = n0 + b.x * (bitcast<vec3<f32>>(c1.yzw) - n0) + b.y * (bitcast<vec3<f32>>(c2.yzw) - n0);
-    if dot(n, n) == 0.0 {
-        n = s.n;
-    }
-    let rgba = vec4<u32>(round(colour * COLOR_SCALE));
-    let nq = bitcast<vec3<u32>>(vec3<i32>(round(normalize(n) * NORMAL_SCALE)));
+    let n = corner_normal(b, bitcast<vec3<f32>>(c0.yzw), bitcast<vec3<f32>>(c1.yzw),
+                          bitcast<vec3<f32>>(c2.yzw), s.n);
+    let add = contribution(colour, n);
+    let rgba = add.rgba;
+    let nq = add.normal;
     let g = vec3<i32>(params.grid);
     let at = SUMS * compact_index(u32((p.z * g.y + p.y) * g.x + p.x));
     atomicAdd(&sums[at], rgba.x);
@@ -178,18 +144,12 @@ fn resolve(@builtin(global_invocation_id) id: vec3<u32>,
         bits &= bits - 1u;
         let at = SUMS * j;
         let n = atomicLoad(&sums[at + 7u]);
-        let div = max(n, 1u) * u32(COLOR_SCALE);
-        let half = div / 2u;
-        let rgba = (vec4<u32>(atomicLoad(&sums[at]), atomicLoad(&sums[at + 1u]),
-                              atomicLoad(&sums[at + 2u]), atomicLoad(&sums[at + 3u])) + half) / div;
-        let normal = vec3<f32>(bitcast<vec3<i32>>(vec3<u32>(atomicLoad(&sums[at + 4u]),
-                                                           atomicLoad(&sums[at + 5u]),
-                                                           atomicLoad(&sums[at + 6u]))));
-        var packed_normal = NO_NORMAL;
-        if dot(normal, normal) > 0.0 {
-            packed_normal = encode_octahedral(normalize(normal));
-        }
-        let colour = rgba.x | (rgba.y << 8u) | (rgba.z << 16u) | (rgba.w << 24u);
+        let avg = average(vec4<u32>(atomicLoad(&sums[at]), atomicLoad(&sums[at + 1u]),
+                                    atomicLoad(&sums[at + 2u]), atomicLoad(&sums[at + 3u])),
+                          vec3<u32>(atomicLoad(&sums[at + 4u]), atomicLoad(&sums[at + 5u]),
+                                    atomicLoad(&sums[at + 6u])), n);
+        let colour = avg.x;
+        let packed_normal = avg.y;
         voxels[j] = vec4<u32>(w * 32u + bit, colour, packed_normal, n);
         j++;
     }

@@ -597,34 +597,40 @@ fn listed(local: &GridMesh, size: [u32; 3], limit: u64) -> Result<Sorted, Error>
         });
     }
     let mut vertices = Vec::with_capacity(local.vertices.len());
+    let mut order = Vec::with_capacity(most.len());
     let mut heavy = Vec::new();
-    for (t, &most) in local.vertices.chunks(3).zip(&most) {
+    for (i, (t, &most)) in local.vertices.chunks(3).zip(&most).enumerate() {
         if most > LIGHT as u64 {
-            heavy.push((t, most));
+            heavy.push((i, t, most));
         } else {
             vertices.extend_from_slice(t);
+            order.push(i as u32);
         }
     }
     let light = (vertices.len() / 3) as u32;
     let mut chunks = Vec::with_capacity(total as usize);
-    for (i, (t, most)) in heavy.into_iter().enumerate() {
+    for (k, (i, t, most)) in heavy.into_iter().enumerate() {
         vertices.extend_from_slice(t);
-        let at = light + i as u32;
+        order.push(i as u32);
+        let at = light + k as u32;
         chunks.extend((0..most.div_ceil(chunk)).map(|c| [at, (c * chunk) as u32]));
     }
     Ok(Sorted {
         vertices,
         light,
         chunks,
+        order,
     })
 }
 
-/// [`listed`]'s result: vertices with the light triangles first, how many are light, and the
-/// heavy ones' chunks as (triangle, first column).
+/// [`listed`]'s result: vertices with the light triangles first, how many are light, the
+/// heavy ones' chunks as (triangle, first column), and for each sorted triangle its index in
+/// the [`GridMesh`].
 struct Sorted {
     vertices: Vec<Vec4>,
     light: u32,
     chunks: Vec<[u32; 2]>,
+    order: Vec<u32>,
 }
 
 /// Surface voxels on the GPU: one bit per voxel.
@@ -768,6 +774,8 @@ struct Listed {
     chunks: wgpu::Buffer,
     light: u32,
     chunk_count: u32,
+    /// Per sorted triangle, its index in the [`GridMesh`].
+    order: Vec<u32>,
 }
 
 impl Listed {
@@ -778,6 +786,7 @@ impl Listed {
             mut vertices,
             light,
             mut chunks,
+            order,
         } = listed(local, grid.size, limit)?;
         let chunk_count = chunks.len() as u32;
         // Padding keeps the buffers non-empty.
@@ -799,6 +808,7 @@ impl Listed {
             chunks: buffer("voxelize heavy chunks", bytemuck::cast_slice(&chunks)),
             light,
             chunk_count,
+            order,
         })
     }
 }

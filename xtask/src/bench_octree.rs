@@ -11,6 +11,9 @@
 //! each level of detail and by footprint. Median of `--reps` runs (GPU timestamps), min–max beside;
 //! on a hardware adapter a 20 ms spin before each timed submission keeps the clocks up.
 //!
+//! `--modes` limits the run to some of `build` (the build and dense timings), `render` and
+//! `torus` (the procedural mesh); all by default.
+//!
 //! Writes `octree.csv`, `octree_render.csv`, `octree_memory.png` (bytes against grid side),
 //! `octree_build.png` (build time against grid side) and `octree_render.png` (frame time
 //! against level).
@@ -105,11 +108,14 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
     } else {
         println!("no --mesh: pass --mesh stanford-bunny.obj for the bunny");
     }
+    let wants = |m: &str| args.modes.is_empty() || args.modes.iter().any(|x| x == m);
     let (segments, sides) = if args.quick { (200, 100) } else { (1000, 500) };
-    meshes.push((
-        format!("torus {segments}×{sides}"),
-        Mesh::torus(DVec3::ZERO, 1.0, 0.35, segments, sides),
-    ));
+    if wants("torus") {
+        meshes.push((
+            format!("torus {segments}×{sides}"),
+            Mesh::torus(DVec3::ZERO, 1.0, 0.35, segments, sides),
+        ));
+    }
     let sizes: Vec<u32> = if !args.sizes.is_empty() {
         args.sizes.iter().map(|&n| n as u32).collect()
     } else if args.quick {
@@ -162,23 +168,28 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
             };
             drop(fragments);
             let pool = tree.pool.len() as u32;
-            let build = timed(&ctx, &stamps, heater.as_ref(), args, |enc| {
-                let f = voxelizer
-                    .encode_fragments(
-                        &ctx.device,
-                        enc,
-                        mesh,
-                        &grid,
-                        Separation::Conservative,
-                        Some(count.max(1)),
-                    )
-                    .map_err(|e| e.to_string())?;
-                builder
-                    .encode(&ctx.device, enc, &f, pool)
-                    .map(|_| ())
-                    .map_err(|e| e.to_string())
-            })?;
-            let dense = if grid.voxels() <= fieldkit::voxelize::MAX_VOXELS
+            let build = if !wants("build") {
+                (0.0, 0.0, 0.0)
+            } else {
+                timed(&ctx, &stamps, heater.as_ref(), args, |enc| {
+                    let f = voxelizer
+                        .encode_fragments(
+                            &ctx.device,
+                            enc,
+                            mesh,
+                            &grid,
+                            Separation::Conservative,
+                            Some(count.max(1)),
+                        )
+                        .map_err(|e| e.to_string())?;
+                    builder
+                        .encode(&ctx.device, enc, &f, pool)
+                        .map(|_| ())
+                        .map_err(|e| e.to_string())
+                })?
+            };
+            let dense = if wants("build")
+                && grid.voxels() <= fieldkit::voxelize::MAX_VOXELS
                 && grid.size.iter().all(|&s| s <= fieldkit::voxelize::MAX_SIDE)
                 && grid.voxels() / 8 <= ctx.device.limits().max_storage_buffer_binding_size
             {
@@ -231,6 +242,9 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
         let Some((n, grid, octree)) = largest else {
             continue;
         };
+        if !wants("render") {
+            continue;
+        }
         let extent = grid.size.map(|s| s as f64 * grid.voxel);
         let centre = (grid.origin + DVec3::from(extent) * 0.5).as_vec3();
         let radius = DVec3::from(extent).length() as f32 * 0.5;
@@ -383,6 +397,9 @@ fn charts(
         "GPU ms (log)",
         &times,
     )?;
+    if renders.is_empty() {
+        return Ok(());
+    }
     let mut series: Vec<crate::chart::Series> = Vec::new();
     for mesh in meshes {
         let pts: Vec<(f64, f64)> = renders
