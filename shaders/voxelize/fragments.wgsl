@@ -25,6 +25,9 @@ struct FragmentParams {
 }
 
 override SIX_SEPARATING: bool = false;
+// Also list each fragment's triangle (its index in the sorted list) in `triangle_ids`, for
+// attributes.
+override TRIANGLE_IDS: bool = false;
 
 @group(0) @binding(0) var<uniform> params: FragmentParams;
 // Three grid-local vertices per triangle (w unused), light triangles first.
@@ -34,6 +37,7 @@ override SIX_SEPARATING: bool = false;
 // Voxel (x, y, z) as (x | y << 16, z).
 @group(0) @binding(3) var<storage, read_write> fragments: array<vec2<u32>>;
 @group(0) @binding(4) var<storage, read_write> total: atomic<u32>;
+@group(0) @binding(5) var<storage, read_write> triangle_ids: array<u32>;
 
 var<workgroup> group_count: atomic<u32>;
 var<workgroup> group_base: u32;
@@ -45,7 +49,7 @@ fn load(t: u32) -> Setup {
 
 // The voxels of columns [first, first + count) of the triangle: counted, and written from
 // list entry `at` on when `emit`.
-fn walk(s: Setup, first: u32, count: u32, emit: bool, at: u32) -> u32 {
+fn walk(s: Setup, t: u32, first: u32, count: u32, emit: bool, at: u32) -> u32 {
     var n = 0u;
     let end = min(first + count, s.columns);
     for (var j = first; j < end; j++) {
@@ -55,6 +59,9 @@ fn walk(s: Setup, first: u32, count: u32, emit: bool, at: u32) -> u32 {
             if overlaps(s, p, SIX_SEPARATING) {
                 if emit && at + n < params.capacity {
                     fragments[at + n] = vec2<u32>(u32(p.x) | (u32(p.y) << 16u), u32(p.z));
+                    if TRIANGLE_IDS {
+                        triangle_ids[at + n] = t;
+                    }
                 }
                 n++;
             }
@@ -69,20 +76,23 @@ fn fragments_listed(@builtin(global_invocation_id) id: vec3<u32>,
                     @builtin(local_invocation_index) local: u32) {
     let i = id.x + id.y * groups.x * 64u;
     var s: Setup;
+    var t = 0u;
     var first = 0u;
     var columns = 0u;
     if i < params.count {
+        t = i;
         s = load(i);
         columns = s.columns;
     } else if i - params.count < params.chunks {
         let item = listed[i - params.count];
+        t = item.x;
         s = load(item.x);
         first = item.y;
         columns = CHUNK;
     }
     var n = 0u;
     if columns > 0u {
-        n = walk(s, first, columns, false, 0u);
+        n = walk(s, t, first, columns, false, 0u);
     }
     let offset = atomicAdd(&group_count, n);
     workgroupBarrier();
@@ -91,6 +101,6 @@ fn fragments_listed(@builtin(global_invocation_id) id: vec3<u32>,
     }
     let base = workgroupUniformLoad(&group_base);
     if n > 0u {
-        walk(s, first, columns, true, base + offset);
+        walk(s, t, first, columns, true, base + offset);
     }
 }

@@ -196,7 +196,7 @@ pub fn occupied_bound(local: &GridMesh, size: [u32; 3]) -> u64 {
 /// Per triangle corner of `local`, two words of four: the RGBA8 colour and the normal's f32
 /// bits (the vertex normal, or the triangle's own where the mesh has none), then the texture
 /// coordinates' f32 bits ((0, 0) where the mesh has none).
-fn corners(mesh: &Mesh, local: &GridMesh) -> Result<Vec<[u32; 4]>, Error> {
+pub(super) fn corners(mesh: &Mesh, local: &GridMesh) -> Result<Vec<[u32; 4]>, Error> {
     let n = mesh.positions.len();
     for (what, len) in [
         ("colors", mesh.colors.len()),

@@ -13,10 +13,10 @@ use crate::shaders::voxelize::fragments::{self as stage, FragmentParams};
 /// Bytes per fragment: (x | y << 16, z).
 const FRAGMENT_BYTES: u64 = 8;
 
+/// Per separation (conservative, six), without and with triangle ids.
 #[derive(Default)]
 pub(super) struct FragmentPipelines {
-    conservative: OnceLock<ComputePipeline<stage::fragments_listed::Entry>>,
-    six: OnceLock<ComputePipeline<stage::fragments_listed::Entry>>,
+    variants: [OnceLock<ComputePipeline<stage::fragments_listed::Entry>>; 4],
 }
 
 /// The voxels of a mesh's surface as a list on the GPU, one entry per (triangle, voxel) it
@@ -33,6 +33,20 @@ pub struct Fragments {
     pub total: wgpu::Buffer,
     /// Triangles left out for having no area.
     pub degenerate: usize,
+    /// With [`Voxelizer::encode_fragments_with_attributes`]: what the octree's attributes need.
+    pub attributes: Option<FragmentAttributes>,
+}
+
+/// Each fragment's triangle and the triangles' corner attributes
+/// ([`Voxelizer::encode_fragments_with_attributes`]).
+pub struct FragmentAttributes {
+    /// A `u32` per fragment of [`Fragments::list`]: its triangle in `triangles`.
+    pub triangle_ids: wgpu::Buffer,
+    /// Three grid-local `vec4<f32>` vertices per triangle, in the order the ids count.
+    pub triangles: wgpu::Buffer,
+    /// Six `vec4<u32>` per triangle: per corner (RGBA8 colour, the normal's f32 bits), then
+    /// (u, v, 0, 0), as the dense attribute pass reads them.
+    pub corners: wgpu::Buffer,
 }
 
 impl Fragments {
@@ -120,7 +134,41 @@ impl Voxelizer {
         separation: Separation,
         capacity: Option<u32>,
     ) -> Result<Fragments, Error> {
+        self.fragments(device, rec, mesh, grid, separation, capacity, false)
+    }
+
+    /// [`Voxelizer::encode_fragments`] (conservative) with each fragment's triangle and the
+    /// triangles' vertex colours and normals, for the octree's attributes
+    /// ([`crate::octree::OctreeBuilder::encode_attributes`]); 4 more bytes per fragment.
+    pub fn encode_fragments_with_attributes(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        mesh: &Mesh,
+        grid: &Grid,
+        capacity: Option<u32>,
+    ) -> Result<Fragments, Error> {
+        self.fragments(device, rec, mesh, grid, Separation::Conservative, capacity, true)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn fragments(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        mesh: &Mesh,
+        grid: &Grid,
+        separation: Separation,
+        capacity: Option<u32>,
+        ids: bool,
+    ) -> Result<Fragments, Error> {
         let local = mesh.to_sparse_grid(grid)?;
+        // Checked before anything runs: corners for every triangle kept.
+        let corner_data = if ids {
+            Some(super::attributes::corners(mesh, &local)?)
+        } else {
+            None
+        };
         let limit = device.limits().max_storage_buffer_binding_size;
         let most = (limit / FRAGMENT_BYTES).min(u32::MAX as u64);
         let capacity = match capacity {
@@ -153,6 +201,31 @@ impl Voxelizer {
             })
         };
         // New buffers: zeroed by wgpu (the total starts at 0).
+        let attributes = corner_data.map(|corners| {
+            use wgpu::util::DeviceExt;
+            // The corners in the order the triangles were sorted in.
+            let mut sorted: Vec<[u32; 4]> = listed
+                .order
+                .iter()
+                .flat_map(|&t| corners[6 * t as usize..6 * t as usize + 6].iter().copied())
+                .collect();
+            if sorted.is_empty() {
+                sorted.push([0; 4]);
+            }
+            FragmentAttributes {
+                triangle_ids: buffer(
+                    "voxel fragment triangles",
+                    capacity as u64 * 4,
+                    wgpu::BufferUsages::empty(),
+                ),
+                triangles: listed.triangles.clone(),
+                corners: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("voxel fragment corners"),
+                    contents: bytemuck::cast_slice(&sorted),
+                    usage: wgpu::BufferUsages::STORAGE,
+                }),
+            }
+        });
         let fragments = Fragments {
             size: grid.size,
             capacity,
@@ -163,6 +236,7 @@ impl Voxelizer {
             ),
             total: buffer("voxel fragment count", 4, wgpu::BufferUsages::COPY_SRC),
             degenerate: local.degenerate,
+            attributes,
         };
         let threads = listed.light as u64 + listed.chunk_count as u64;
         if threads == 0 {
@@ -178,12 +252,23 @@ impl Voxelizer {
                 max: 65535 * 65535 * 64,
             });
         }
-        let (slot, six) = match separation {
-            Separation::Conservative => (&self.fragment_pipelines.conservative, false),
-            Separation::Six => (&self.fragment_pipelines.six, true),
+        let six = separation == Separation::Six;
+        let pipeline = ComputePipeline::cached(
+            &self.fragment_pipelines.variants[six as usize * 2 + ids as usize],
+            device,
+            &[
+                ("SIX_SEPARATING", six as u32 as f64),
+                ("TRIANGLE_IDS", ids as u32 as f64),
+            ],
+        )?;
+        let no_ids;
+        let triangle_ids = match &fragments.attributes {
+            Some(a) => &a.triangle_ids,
+            None => {
+                no_ids = buffer("no fragment triangles", 4, wgpu::BufferUsages::empty());
+                &no_ids
+            }
         };
-        let pipeline =
-            ComputePipeline::cached(slot, device, &[("SIX_SEPARATING", six as u32 as f64)])?;
         let params = uniform(
             device,
             "voxel fragment params",
@@ -204,6 +289,7 @@ impl Voxelizer {
                 listed: (&listed.chunks).into(),
                 fragments: (&fragments.list).into(),
                 total: (&fragments.total).into(),
+                triangle_ids: triangle_ids.into(),
             },
             [wide as u32, rows as u32, 1],
             stage::STAGE,

@@ -32,7 +32,7 @@ pub mod view;
 pub use attributes::{
     AttributeVolumes, Attributes, PendingAttributes, VoxelAttributes, occupied_bound,
 };
-pub use fragments::{Fragments, fragment_estimate};
+pub use fragments::{FragmentAttributes, Fragments, fragment_estimate};
 pub use placed::GpuMesh;
 
 use glam::{DVec3, Vec4};
