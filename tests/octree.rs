@@ -648,3 +648,143 @@ fn coarser_levels_cover_finer_ones() {
         Err(Error::Size { .. })
     ));
 }
+
+/// A mesh with a colour and a normal per vertex that vary over it.
+fn painted_torus() -> Mesh {
+    let mut torus = Mesh::torus(DVec3::new(24.5, 23.2, 20.9), 14.0, 5.3, 48, 16);
+    torus.colors = torus
+        .positions
+        .iter()
+        .map(|p| {
+            [
+                (p.x * 9.0) as u8,
+                (p.y * 7.0) as u8,
+                (p.z * 11.0) as u8,
+                200 + (p.x as u8 % 50),
+            ]
+        })
+        .collect();
+    torus.normals = torus
+        .positions
+        .iter()
+        .map(|p| (*p - DVec3::new(24.5, 23.2, 20.9)).normalize())
+        .collect();
+    torus
+}
+
+fn octahedral(packed: u32) -> Option<glam::Vec3> {
+    if packed == 0x8000_8000 {
+        return None;
+    }
+    let s = |v: u32| ((v & 0xffff) as u16 as i16 as f32 / 32767.0).max(-1.0);
+    let (x, y) = (s(packed), s(packed >> 16));
+    let z = 1.0 - x.abs() - y.abs();
+    let (x, y) = if z < 0.0 {
+        ((1.0 - y.abs()) * x.signum(), (1.0 - x.abs()) * y.signum())
+    } else {
+        (x, y)
+    };
+    Some(glam::Vec3::new(x, y, z).normalize())
+}
+
+fn build_with_attributes(ctx: &Context, mesh: &Mesh, grid: &Grid) -> OctreeData {
+    let voxelizer = Voxelizer::new(&ctx.device).unwrap();
+    let builder = OctreeBuilder::new(&ctx.device).unwrap();
+    let octree = ctx
+        .block_on(builder.voxelize_with_attributes(&ctx.device, &ctx.queue, &voxelizer, mesh, grid))
+        .unwrap();
+    octree.read(&ctx.device, &ctx.queue).wait(ctx).unwrap()
+}
+
+/// Every voxel's colour and normal in the tree's bricks are the dense attribute list's, byte
+/// for byte (the same sums of the same contributions), and two builds give the same bytes.
+#[test]
+fn voxel_attributes_equal_the_dense_list() {
+    let ctx = Context::shared();
+    let mesh = painted_torus();
+    let grid = unit_grid([48, 48, 44]);
+    let tree = build_with_attributes(&ctx, &mesh, &grid);
+    let voxelizer = Voxelizer::new(&ctx.device).unwrap();
+    let dense = ctx
+        .block_on(voxelizer.attributes(&ctx.device, &ctx.queue, &mesh, &grid))
+        .unwrap();
+    let raw: Vec<[u32; 4]> = bytemuck::pod_collect_to_vec(
+        &fieldkit::gpu::readback_buffer(&ctx.device, &ctx.queue, &dense.voxels)
+            .wait(&ctx)
+            .unwrap(),
+    );
+    let raw = &raw[..dense.count as usize];
+    assert_eq!(tree.voxel_attributes.len(), raw.len(), "occupied voxels");
+    let [nx, ny, _] = grid.size;
+    let mut colours = std::collections::HashSet::new();
+    for &[i, colour, normal, _] in raw {
+        let v = [i % nx, i / nx % ny, i / (nx * ny)];
+        assert_eq!(
+            tree.voxel_attribute(v),
+            Some([colour, normal]),
+            "voxel {v:?}"
+        );
+        colours.insert(colour);
+    }
+    assert!(colours.len() > 100, "the colours vary: {}", colours.len());
+    let again = build_with_attributes(&ctx, &mesh, &grid);
+    assert!(again.voxel_attributes == tree.voxel_attributes);
+    assert!(again.node_attributes == tree.node_attributes);
+}
+
+/// Each brick holds the mean of its voxels' attributes and each inner node the mean of its
+/// children's: colours the integer mean rounded to nearest (exact), normals the direction of
+/// the sum (to the octahedral code's precision).
+#[test]
+fn nodes_hold_the_mean_of_their_children() {
+    let ctx = Context::shared();
+    let tree = build_with_attributes(&ctx, &painted_torus(), &unit_grid([48, 48, 44]));
+    let mean = |items: &[[u32; 2]]| -> ([u32; 4], Option<glam::Vec3>) {
+        let n = items.len() as u32;
+        let mut c = [0u32; 4];
+        let mut normal = glam::Vec3::ZERO;
+        for &[colour, packed] in items {
+            for (k, b) in colour.to_le_bytes().into_iter().enumerate() {
+                c[k] += b as u32;
+            }
+            if let Some(d) = octahedral(packed) {
+                normal += d;
+            }
+        }
+        (
+            c.map(|s| (s + n / 2) / n),
+            (normal.length_squared() > 0.0).then(|| normal.normalize()),
+        )
+    };
+    let check = |e: usize, want: ([u32; 4], Option<glam::Vec3>)| {
+        let [colour, packed] = tree.node_attributes[e];
+        assert_eq!(
+            colour.to_le_bytes().map(|b| b as u32),
+            want.0,
+            "entry {e}'s colour"
+        );
+        match (octahedral(packed), want.1) {
+            (Some(a), Some(b)) => assert!(a.dot(b) > 0.9999, "entry {e}: {a} against {b}"),
+            (None, None) => {}
+            other => panic!("entry {e}: {other:?}"),
+        }
+    };
+    let leaf = tree.leaf_level as usize;
+    let mut checked = 0;
+    for e in tree.starts[leaf] as usize..tree.starts[leaf + 1] as usize {
+        let [lo, hi] = tree.pool[e];
+        let n = (lo.count_ones() + hi.count_ones()) as usize;
+        let first = tree.brick_voxels[e] as usize;
+        check(e, mean(&tree.voxel_attributes[first..first + n]));
+        checked += 1;
+    }
+    for e in 0..tree.starts[leaf] as usize {
+        let [mask, first] = tree.pool[e];
+        let n = mask.count_ones() as usize;
+        let children: Vec<[u32; 2]> =
+            tree.node_attributes[first as usize..first as usize + n].to_vec();
+        check(e, mean(&children));
+        checked += 1;
+    }
+    assert_eq!(checked, tree.pool.len());
+}

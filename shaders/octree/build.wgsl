@@ -19,6 +19,8 @@
 //   `scan_nodes`   children before each node of level l, per block of 1024 nodes;
 //   `scan_blocks`  children before each block, and starts[l + 2];
 //   `link`         each node's first child entry.
+// With attributes, the three node passes run once more over the bricks: `brick_voxels` gets
+// where each brick's voxels start in a list of the occupied voxels, brick by brick in bit order.
 // A pool too small: entries from `capacity` on are not written, and `starts` still says how
 // many the levels built so far need (a lower bound on the whole tree's, which the host reads).
 
@@ -47,12 +49,16 @@ struct BuildParams {
 // Two u32 per entry (see above).
 @group(0) @binding(4) var<storage, read_write> pool: array<atomic<u32>>;
 // starts[l]: the first entry of level l, for l = 0 ..= leaf_level + 1 (the last is the number
-// of entries the tree needs). The host sets starts[0] = 0, starts[1] = 1.
+// of entries the tree needs); then, where the bricks' voxels were counted (for attributes),
+// starts[leaf_level + 1] + the occupied voxels. The host sets starts[0] = 0, starts[1] = 1.
 @group(0) @binding(5) var<storage, read_write> starts: array<u32>;
 // Per node of the level: children before it in its block; per block: its children, then the
 // children before it.
 @group(0) @binding(6) var<storage, read_write> node_offsets: array<u32>;
 @group(0) @binding(7) var<storage, read_write> block_offsets: array<u32>;
+// Per entry, for the bricks: where the brick's voxels' attributes start (written by `link` at
+// the leaf level).
+@group(0) @binding(8) var<storage, read_write> brick_voxels: array<u32>;
 
 const NONE: u32 = 0xffffffffu;
 const NODES_PER_THREAD: u32 = 4u;
@@ -79,7 +85,14 @@ fn child(parent: u32, o: u32) -> u32 {
 fn flag(@builtin(global_invocation_id) id: vec3<u32>,
         @builtin(num_workgroups) groups: vec3<u32>) {
     let f = id.x + id.y * groups.x * 64u;
-    if f >= min(fragment_count, params.fragments) {
+    if f >= params.fragments {
+        return;
+    }
+    if f >= fragment_count {
+        // Past the list's fragments: no brick (the attribute pass reads every cursor).
+        if params.level == 0u {
+            cursor[f] = NONE;
+        }
         return;
     }
     let v = voxel(f);
@@ -95,12 +108,12 @@ fn flag(@builtin(global_invocation_id) id: vec3<u32>,
             return;
         }
     }
+    cursor[f] = node;
     if params.level == params.leaf_level {
         let bit = brick_bit(v);
         atomicOr(&pool[2u * node + bit / 32u], 1u << (bit % 32u));
         return;
     }
-    cursor[f] = node;
     atomicOr(&pool[2u * node], 1u << octant(v, params.level + 1u));
 }
 
@@ -112,13 +125,17 @@ fn load_level_nodes(local: u32) -> u32 {
     return workgroupUniformLoad(&level_nodes);
 }
 
-// Children of node i of the level (none past the pool's end).
+// Children of node i of the level (none past the pool's end); a brick's occupied voxels.
 fn children(i: u32) -> u32 {
     let e = starts[params.level] + i;
     if e >= params.capacity {
         return 0u;
     }
-    return countOneBits(atomicLoad(&pool[2u * e]));
+    var n = countOneBits(atomicLoad(&pool[2u * e]));
+    if params.level == params.leaf_level {
+        n += countOneBits(atomicLoad(&pool[2u * e + 1u]));
+    }
+    return n;
 }
 
 @compute @workgroup_size(256)
@@ -182,6 +199,10 @@ fn link(@builtin(global_invocation_id) id: vec3<u32>,
     if e >= starts[params.level + 1u] || e >= params.capacity {
         return;
     }
-    let first = starts[params.level + 1u] + block_offsets[i / BLOCK_NODES] + node_offsets[i];
-    atomicStore(&pool[2u * e + 1u], first);
+    let before = block_offsets[i / BLOCK_NODES] + node_offsets[i];
+    if params.level == params.leaf_level {
+        brick_voxels[e] = before;
+    } else {
+        atomicStore(&pool[2u * e + 1u], starts[params.level + 1u] + before);
+    }
 }

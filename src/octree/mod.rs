@@ -34,6 +34,7 @@
 //!
 #![doc = include_str!("../../docs/octree.md")]
 
+mod attributes;
 mod cast;
 
 pub use cast::{Casts, CellHit, Lod, OctreeCaster, OctreeImage, Ray, RenderSettings};
@@ -59,6 +60,7 @@ pub struct OctreeBuilder {
     scan_nodes: OnceLock<ComputePipeline<stage::scan_nodes::Entry>>,
     scan_blocks: OnceLock<ComputePipeline<stage::scan_blocks::Entry>>,
     link: OnceLock<ComputePipeline<stage::link::Entry>>,
+    attributes: attributes::AttributePipelines,
 }
 
 /// A sparse voxel octree on the GPU (see the [module docs](self) for the layout).
@@ -73,9 +75,33 @@ pub struct Octree {
     pub capacity: u32,
     /// Two `u32` per entry: inner nodes (child mask, first child), then bricks (64 bits).
     pub pool: wgpu::Buffer,
-    /// `leaf_level + 2` `u32`: the first entry of each level, then the entries the tree
-    /// needs (more than `capacity` when the pool was too small).
+    /// `leaf_level + 3` `u32`: the first entry of each level, then the entries the tree
+    /// needs (more than `capacity` when the pool was too small), then that plus the occupied
+    /// voxels where the tree was built for attributes.
     pub starts: wgpu::Buffer,
+    /// Colour and normal per voxel and per node, where they were built
+    /// ([`OctreeBuilder::encode_attributes`], [`OctreeBuilder::voxelize_with_attributes`]).
+    pub attributes: Option<OctreeAttributes>,
+    /// Per brick, its first voxel among the occupied voxels (built with attributes).
+    brick_voxels: Option<wgpu::Buffer>,
+    /// Per fragment, its brick (built with attributes).
+    cursor: Option<wgpu::Buffer>,
+}
+
+/// An octree's attributes: each occupied voxel's averaged colour and normal, and each node's
+/// filtered from its children's.
+pub struct OctreeAttributes {
+    /// Occupied voxels.
+    pub voxels: u32,
+    /// Per occupied voxel, brick by brick in bit order, a `vec2<u32>`: RGBA8 colour and the
+    /// normal as an octahedral pair of snorm16 (`0x80008000` where the normals cancel).
+    pub voxel_attributes: wgpu::Buffer,
+    /// Per pool entry, the node's (colour, normal) as above: a brick's the mean of its voxels',
+    /// an inner node's the mean of its children's.
+    pub node_attributes: wgpu::Buffer,
+    /// Per pool entry, a `u32`; for a brick, the slot of its first voxel in
+    /// `voxel_attributes`.
+    pub brick_voxels: wgpu::Buffer,
 }
 
 /// An octree read back to the CPU ([`Octree::read`]), or built there
@@ -92,6 +118,14 @@ pub struct OctreeData {
     pub starts: Vec<u32>,
     /// The entries (see the [module docs](self)).
     pub pool: Vec<[u32; 2]>,
+    /// Per occupied voxel, brick by brick in bit order: (RGBA8 colour, octahedral normal).
+    /// Empty where the tree has no attributes.
+    pub voxel_attributes: Vec<[u32; 2]>,
+    /// Per entry: the node's filtered (colour, normal). Empty without attributes.
+    pub node_attributes: Vec<[u32; 2]>,
+    /// Per entry (bricks only), its first voxel's slot in `voxel_attributes`. Empty without
+    /// attributes.
+    pub brick_voxels: Vec<u32>,
 }
 
 /// log2 of the tree's cube for a grid of `size`.
@@ -175,7 +209,41 @@ impl OctreeData {
             leaf_level,
             starts,
             pool,
+            voxel_attributes: Vec::new(),
+            node_attributes: Vec::new(),
+            brick_voxels: Vec::new(),
         })
+    }
+
+    /// The entry of the brick that holds voxel `v`, if the tree has one.
+    pub fn brick_of(&self, v: [u32; 3]) -> Option<usize> {
+        if (0..3).any(|k| v[k] >= self.size[k]) {
+            return None;
+        }
+        let mut node = 0usize;
+        for l in 1..=self.leaf_level {
+            let [mask, first] = self.pool[node];
+            let o = octant(v, self.log_side, l);
+            if mask & (1 << o) == 0 {
+                return None;
+            }
+            node = (first + (mask & ((1 << o) - 1)).count_ones()) as usize;
+        }
+        Some(node)
+    }
+
+    /// Voxel `v`'s (colour, normal), where it is occupied and the tree has attributes.
+    pub fn voxel_attribute(&self, v: [u32; 3]) -> Option<[u32; 2]> {
+        let e = self.brick_of(v)?;
+        let bit = brick_bit(v);
+        let [lo, hi] = self.pool[e];
+        let bits = lo as u64 | (hi as u64) << 32;
+        if bits & (1 << bit) == 0 {
+            return None;
+        }
+        let first = *self.brick_voxels.get(e)?;
+        let slot = first as usize + (bits & ((1u64 << bit) - 1)).count_ones() as usize;
+        self.voxel_attributes.get(slot).copied()
     }
 
     /// Whether voxel `v` is occupied: a walk from the root.
@@ -244,10 +312,11 @@ impl Octree {
     /// (the levels past the one that ran out were not built, so the size it names is a lower
     /// bound; [`OctreeBuilder::voxelize`] retries until the tree fits).
     pub fn starts(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Readback<Vec<u32>> {
-        let capacity = self.capacity;
+        let (capacity, levels) = (self.capacity, self.leaf_level as usize + 2);
         readback_buffers(device, queue, &[&self.starts]).then(move |bytes| {
-            let starts: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes);
-            let needed = *starts.last().unwrap_or(&0);
+            let mut starts: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes);
+            starts.truncate(levels);
+            let needed = starts[levels - 1];
             if needed > capacity {
                 return Err(pool_error(needed as u64, capacity));
             }
@@ -260,21 +329,46 @@ impl Octree {
         let (capacity, size, log_side, leaf_level) =
             (self.capacity, self.size, self.log_side, self.leaf_level);
         let levels = (leaf_level + 2) as usize;
-        readback_buffers(device, queue, &[&self.starts, &self.pool]).then(move |bytes| {
-            let starts: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes[..levels * 4]);
-            let needed = starts[levels - 1];
-            if needed > capacity {
+        let mut buffers = vec![&self.starts, &self.pool];
+        if let Some(a) = &self.attributes {
+            buffers.extend([&a.voxel_attributes, &a.node_attributes, &a.brick_voxels]);
+        }
+        let sizes: Vec<usize> = buffers.iter().map(|b| b.size() as usize).collect();
+        let voxels = self.attributes.as_ref().map(|a| a.voxels as usize);
+        readback_buffers(device, queue, &buffers).then(move |bytes| {
+            let mut parts = Vec::new();
+            let mut at = 0;
+            for n in sizes {
+                parts.push(&bytes[at..at + n]);
+                at += n;
+            }
+            let mut starts: Vec<u32> = bytemuck::pod_collect_to_vec(parts[0]);
+            starts.truncate(levels);
+            let needed = starts[levels - 1] as usize;
+            if needed > capacity as usize {
                 return Err(pool_error(needed as u64, capacity));
             }
-            let pool: Vec<[u32; 2]> = bytemuck::pod_collect_to_vec(
-                &bytes[levels * 4..levels * 4 + needed as usize * ENTRY_BYTES as usize],
-            );
+            let pairs = |b: &[u8], n: usize| -> Vec<[u32; 2]> {
+                bytemuck::pod_collect_to_vec(&b[..n * ENTRY_BYTES as usize])
+            };
+            let pool = pairs(parts[1], needed);
+            let (voxel_attributes, node_attributes, brick_voxels) = match voxels {
+                Some(v) => (
+                    pairs(parts[2], v),
+                    pairs(parts[3], needed),
+                    bytemuck::pod_collect_to_vec(&parts[4][..needed * 4]),
+                ),
+                None => Default::default(),
+            };
             Ok(OctreeData {
                 size,
                 log_side,
                 leaf_level,
                 starts,
                 pool,
+                voxel_attributes,
+                node_attributes,
+                brick_voxels,
             })
         })
     }
@@ -288,6 +382,7 @@ impl OctreeBuilder {
             scan_nodes: OnceLock::new(),
             scan_blocks: OnceLock::new(),
             link: OnceLock::new(),
+            attributes: Default::default(),
         })
     }
 
@@ -316,7 +411,10 @@ impl OctreeBuilder {
         }
         let count = fragments.capacity as u64;
         // The most nodes any level can have, which the scans are sized and dispatched for.
-        let widest = (0..leaf_level)
+        // With attributes, the bricks' voxels are counted too: one more level of scans.
+        let with_attributes = fragments.attributes.is_some();
+        let scanned = leaf_level + with_attributes as u32;
+        let widest = (0..scanned)
             .map(|l| 8u64.saturating_pow(l).min(count).min(capacity as u64))
             .max()
             .unwrap_or(1)
@@ -348,7 +446,7 @@ impl OctreeBuilder {
         );
         let starts = {
             use wgpu::util::DeviceExt;
-            let mut init = vec![0u32; leaf_level as usize + 2];
+            let mut init = vec![0u32; leaf_level as usize + 3];
             init[1] = 1;
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("octree level starts"),
@@ -359,6 +457,21 @@ impl OctreeBuilder {
         let cursor = buffer("octree fragment cursors", count * 4, none);
         let node_offsets = buffer("octree node offsets", widest * 4, none);
         let block_offsets = buffer("octree block offsets", blocks * 4, none);
+        let brick_voxels = with_attributes.then(|| {
+            buffer(
+                "octree brick voxels",
+                capacity as u64 * 4,
+                wgpu::BufferUsages::COPY_SRC,
+            )
+        });
+        let no_bricks;
+        let brick_slot = match &brick_voxels {
+            Some(b) => b,
+            None => {
+                no_bricks = buffer("no octree brick voxels", 4, none);
+                &no_bricks
+            }
+        };
         let octree = Octree {
             size: fragments.size,
             log_side,
@@ -366,6 +479,9 @@ impl OctreeBuilder {
             capacity,
             pool,
             starts,
+            attributes: None,
+            brick_voxels: brick_voxels.clone(),
+            cursor: None,
         };
         let flag = ComputePipeline::cached(&self.flag, device, &[])?;
         let scan_nodes = ComputePipeline::cached(&self.scan_nodes, device, &[])?;
@@ -397,7 +513,7 @@ impl OctreeBuilder {
                 grid(count.div_ceil(64).max(1)),
                 stage::STAGE,
             )?;
-            if level == leaf_level {
+            if level == leaf_level && !with_attributes {
                 break;
             }
             let nodes = 8u64.saturating_pow(level).min(widest);
@@ -434,12 +550,16 @@ impl OctreeBuilder {
                     starts: (&octree.starts).into(),
                     node_offsets: (&node_offsets).into(),
                     block_offsets: (&block_offsets).into(),
+                    brick_voxels: brick_slot.into(),
                 },
                 grid(nodes.div_ceil(64)),
                 stage::STAGE,
             )?;
         }
-        Ok(octree)
+        Ok(Octree {
+            cursor: with_attributes.then_some(cursor),
+            ..octree
+        })
     }
 
     /// `octree` in a pool of the `needed` entries it uses (the estimate it was built in is
@@ -488,25 +608,75 @@ impl OctreeBuilder {
         grid: &Grid,
         separation: Separation,
     ) -> Result<Octree, Error> {
+        self.voxelize_inner(device, queue, voxelizer, mesh, grid, separation, false)
+            .await
+    }
+
+    /// [`OctreeBuilder::voxelize`] (conservative) with attributes: each occupied voxel's
+    /// colour and normal averaged over the triangles that touch it (the mesh's vertex colours
+    /// and normals, as [`Voxelizer::attributes`] averages them: the same bytes for the same
+    /// voxel), and every node's filtered from its children's ([`Octree::attributes`]).
+    pub async fn voxelize_with_attributes(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        voxelizer: &Voxelizer,
+        mesh: &Mesh,
+        grid: &Grid,
+    ) -> Result<Octree, Error> {
+        self.voxelize_inner(
+            device,
+            queue,
+            voxelizer,
+            mesh,
+            grid,
+            Separation::Conservative,
+            true,
+        )
+        .await
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    async fn voxelize_inner(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        voxelizer: &Voxelizer,
+        mesh: &Mesh,
+        grid: &Grid,
+        separation: Separation,
+        attributes: bool,
+    ) -> Result<Octree, Error> {
         let mut fragment_capacity = None;
         let mut pool_capacity = None;
         let most = (device.limits().max_storage_buffer_binding_size / ENTRY_BYTES)
             .min(u32::MAX as u64) as u32;
         let log_side = log_side(grid.size);
+        let leaf_level = log_side - 2;
         // A try builds at least one more level than the last, and the fragment list is sized
         // exactly after one: the levels and two more tries.
         for _ in 0..log_side + 2 {
             let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("octree voxelize"),
             });
-            let fragments = voxelizer.encode_fragments(
-                device,
-                &mut encoder,
-                mesh,
-                grid,
-                separation,
-                fragment_capacity,
-            )?;
+            let fragments = if attributes {
+                voxelizer.encode_fragments_with_attributes(
+                    device,
+                    &mut encoder,
+                    mesh,
+                    grid,
+                    fragment_capacity,
+                )?
+            } else {
+                voxelizer.encode_fragments(
+                    device,
+                    &mut encoder,
+                    mesh,
+                    grid,
+                    separation,
+                    fragment_capacity,
+                )?
+            };
             let capacity = pool_capacity.unwrap_or_else(|| {
                 let f = fragments.capacity as u64;
                 pool_bound(f, log_side).min(f / 8 + 4096).min(most as u64) as u32
@@ -516,7 +686,7 @@ impl OctreeBuilder {
             let bytes =
                 readback_buffers(device, queue, &[&fragments.total, &octree.starts]).await?;
             let counts: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes);
-            let (total, needed) = (counts[0], *counts.last().unwrap());
+            let (total, needed) = (counts[0], counts[1 + leaf_level as usize + 1]);
             if total > fragments.capacity {
                 fragment_capacity = Some(total);
                 pool_capacity = None;
@@ -529,7 +699,16 @@ impl OctreeBuilder {
                 pool_capacity = Some((needed as u64 * 2).min(most as u64) as u32);
                 continue;
             }
-            return Ok(self.shrunk(device, queue, octree, needed));
+            let mut octree = self.shrunk(device, queue, octree, needed);
+            if attributes {
+                let voxels = counts[1 + leaf_level as usize + 2] - needed;
+                let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("octree attributes"),
+                });
+                self.encode_attributes(device, &mut encoder, &mut octree, &fragments, voxels)?;
+                queue.submit([encoder.finish()]);
+            }
+            return Ok(octree);
         }
         Err(Error::Invalid {
             stage: stage::STAGE,

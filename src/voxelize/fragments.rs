@@ -148,7 +148,15 @@ impl Voxelizer {
         grid: &Grid,
         capacity: Option<u32>,
     ) -> Result<Fragments, Error> {
-        self.fragments(device, rec, mesh, grid, Separation::Conservative, capacity, true)
+        self.fragments(
+            device,
+            rec,
+            mesh,
+            grid,
+            Separation::Conservative,
+            capacity,
+            true,
+        )
     }
 
     #[allow(clippy::too_many_arguments)]

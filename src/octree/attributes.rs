@@ -1,0 +1,191 @@
+//! An octree's attributes (`octree/attributes`): each occupied voxel's colour and normal, and
+//! every node's filtered from its children's.
+
+use std::sync::OnceLock;
+
+use super::{ENTRY_BYTES, Octree, OctreeAttributes, OctreeBuilder};
+use crate::bind::ComputePipeline;
+use crate::error::Error;
+use crate::gpu::{Readback, Record, readback_buffer, uniform_buffer as uniform};
+use crate::shaders::octree::attributes::{self as stage, AttributeParams};
+use crate::voxelize::{Fragments, SLACK};
+
+/// `u32` sums per occupied voxel (the shader's `SUMS`).
+const SUMS: u64 = 8;
+
+#[derive(Default)]
+pub(super) struct AttributePipelines {
+    accumulate: OnceLock<ComputePipeline<stage::accumulate::Entry>>,
+    resolve: OnceLock<ComputePipeline<stage::resolve::Entry>>,
+    filter: OnceLock<ComputePipeline<stage::filter_level::Entry>>,
+}
+
+impl Octree {
+    /// The occupied voxels, read back once the encoder that built the tree from fragments with
+    /// attributes ([`crate::voxelize::Voxelizer::encode_fragments_with_attributes`]) has been
+    /// submitted: what [`OctreeBuilder::encode_attributes`] sizes its lists by.
+    pub fn voxel_count(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Readback<u32> {
+        let leaf = self.leaf_level as usize;
+        let built = self.brick_voxels.is_some();
+        readback_buffer(device, queue, &self.starts).then(move |bytes| {
+            if !built {
+                return Err(Error::Invalid {
+                    stage: stage::STAGE,
+                    what: "the octree was built from fragments without attributes \
+                           (Voxelizer::encode_fragments_with_attributes)"
+                        .into(),
+                });
+            }
+            let starts: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes);
+            Ok(starts[leaf + 2] - starts[leaf + 1])
+        })
+    }
+}
+
+impl OctreeBuilder {
+    /// Record `octree`'s attributes from `fragments` (made by
+    /// [`crate::voxelize::Voxelizer::encode_fragments_with_attributes`], the tree built from
+    /// them by [`OctreeBuilder::encode`]) for its `voxels` occupied voxels
+    /// ([`Octree::voxel_count`]): integer sums per voxel (32 bytes each while they are
+    /// summed), then each voxel's average and each brick's, then every level's means up to
+    /// the root. Sets [`Octree::attributes`].
+    pub fn encode_attributes(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        octree: &mut Octree,
+        fragments: &Fragments,
+        voxels: u32,
+    ) -> Result<(), Error> {
+        let (Some(inputs), Some(brick_voxels), Some(cursor)) =
+            (&fragments.attributes, &octree.brick_voxels, &octree.cursor)
+        else {
+            return Err(Error::Invalid {
+                stage: stage::STAGE,
+                what: "attributes need fragments with attributes \
+                       (Voxelizer::encode_fragments_with_attributes) and the tree built from them"
+                    .into(),
+            });
+        };
+        if fragments.size != octree.size {
+            return Err(Error::Invalid {
+                stage: stage::STAGE,
+                what: format!(
+                    "the fragments are of a {:?} grid, the octree of {:?}",
+                    fragments.size, octree.size
+                ),
+            });
+        }
+        let limit = device.limits().max_storage_buffer_binding_size;
+        let sum_bytes = voxels as u64 * SUMS * 4;
+        if sum_bytes > limit {
+            return Err(Error::Size {
+                stage: stage::STAGE,
+                what: "octree attribute sum bytes (32 per occupied voxel)",
+                got: sum_bytes,
+                max: limit,
+            });
+        }
+        let buffer = |label, size: u64, usage| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: size.max(16),
+                usage: wgpu::BufferUsages::STORAGE | usage,
+                mapped_at_creation: false,
+            })
+        };
+        let sums = buffer(
+            "octree attribute sums",
+            sum_bytes,
+            wgpu::BufferUsages::empty(),
+        );
+        let attributes = OctreeAttributes {
+            voxels,
+            voxel_attributes: buffer(
+                "octree voxel attributes",
+                voxels as u64 * ENTRY_BYTES,
+                wgpu::BufferUsages::COPY_SRC,
+            ),
+            node_attributes: buffer(
+                "octree node attributes",
+                octree.capacity as u64 * ENTRY_BYTES,
+                wgpu::BufferUsages::COPY_SRC,
+            ),
+            brick_voxels: brick_voxels.clone(),
+        };
+        let row = device.limits().max_compute_workgroups_per_dimension as u64;
+        let grid = |n: u64| {
+            let groups = n.div_ceil(64).max(1);
+            [groups.min(row) as u32, groups.div_ceil(row) as u32, 1]
+        };
+        let params = |level| {
+            uniform(
+                device,
+                "octree attribute params",
+                &AttributeParams {
+                    grid: octree.size.into(),
+                    level,
+                    leaf_level: octree.leaf_level,
+                    fragments: fragments.capacity,
+                    capacity: octree.capacity,
+                    voxels,
+                    slack: SLACK,
+                },
+            )
+        };
+        let p = &self.attributes;
+        let leaf = params(octree.leaf_level);
+        ComputePipeline::cached(&p.accumulate, device, &[])?.record(
+            device,
+            rec,
+            &stage::accumulate::Resources {
+                params: (&leaf).into(),
+                fragments: (&fragments.list).into(),
+                triangle_ids: (&inputs.triangle_ids).into(),
+                triangles: (&inputs.triangles).into(),
+                corners: (&inputs.corners).into(),
+                cursor: cursor.into(),
+                pool: (&octree.pool).into(),
+                brick_voxels: brick_voxels.into(),
+                sums: (&sums).into(),
+            },
+            grid(fragments.capacity as u64),
+            stage::STAGE,
+        )?;
+        // Each level's nodes are at most the pool's entries and the level's cells.
+        let nodes = |l: u32| 8u64.saturating_pow(l).min(octree.capacity as u64);
+        ComputePipeline::cached(&p.resolve, device, &[])?.record(
+            device,
+            rec,
+            &stage::resolve::Resources {
+                params: (&leaf).into(),
+                pool: (&octree.pool).into(),
+                starts: (&octree.starts).into(),
+                brick_voxels: brick_voxels.into(),
+                sums: (&sums).into(),
+                voxel_attributes: (&attributes.voxel_attributes).into(),
+                node_attributes: (&attributes.node_attributes).into(),
+            },
+            grid(nodes(octree.leaf_level)),
+            stage::STAGE,
+        )?;
+        let filter = ComputePipeline::cached(&p.filter, device, &[])?;
+        for level in (0..octree.leaf_level).rev() {
+            let params = params(level);
+            filter.record(
+                device,
+                rec,
+                &stage::filter_level::Resources {
+                    params: (&params).into(),
+                    pool: (&octree.pool).into(),
+                    starts: (&octree.starts).into(),
+                    node_attributes: (&attributes.node_attributes).into(),
+                },
+                grid(nodes(level)),
+                stage::STAGE,
+            )?;
+        }
+        octree.attributes = Some(attributes);
+        Ok(())
+    }
+}
