@@ -586,28 +586,41 @@ fn run(
     let (rgba, sw, sh) = voxelize_distance_slice(ctx, mesh, 128, 4)?;
     save("voxelize_distance_slice.png", &rgba, sw, sh, &mut written)?;
 
-    // The sparse voxel octree: 2048³ where the device's buffers hold the build, else the
-    // largest grid that fits, by footprint and at three fixed levels of detail.
+    // The sparse voxel octree: 2048³ with attributes where the device's buffers hold the
+    // build, else 2048³ shaded by the hit faces, else the largest grid that fits; by footprint
+    // and at three fixed levels of detail.
     let mut n = 2048;
+    let mut attributes = true;
     let (octree, grid) = loop {
-        match octree_of(ctx, mesh, n) {
+        match octree_of(ctx, mesh, n, attributes) {
             Ok(built) => break built,
             Err(Error::Size { what, got, max, .. }) if n > 128 => {
+                let next = if attributes {
+                    attributes = false;
+                    format!("{n}³ without attributes")
+                } else {
+                    n /= 2;
+                    attributes = true;
+                    format!("{n}³")
+                };
                 progress(&format!(
-                    "octree: {n}³ does not fit this device ({what}: {got} > {max}); trying {}³",
-                    n / 2
+                    "octree: does not fit this device ({what}: {got} > {max}); trying {next}"
                 ));
-                n /= 2;
             }
             Err(e) => return Err(e),
         }
     };
     progress(&format!(
         "octree: {what} at {n}³ through the sparse voxel octree ({} nodes, {:.1} MiB; a dense \
-         bitset would be {:.1} MiB), by footprint and at levels {}, {}, {}",
+         bitset would be {:.1} MiB), shaded by {}, by footprint and at levels {}, {}, {}",
         octree.capacity,
         octree.capacity as f64 * 8.0 / (1 << 20) as f64,
         grid.voxels() as f64 / 8.0 / (1 << 20) as f64,
+        if attributes {
+            "the filtered normals"
+        } else {
+            "the hit faces"
+        },
         octree.log_side - 6,
         octree.log_side - 4,
         octree.log_side - 2,
@@ -634,23 +647,34 @@ fn run(
     Ok(written)
 }
 
-/// The sparse voxel octree of `mesh`'s surface in a grid of `n` along its longest side.
+/// The sparse voxel octree of `mesh`'s surface in a grid of `n` along its longest side; with
+/// `attributes`, each voxel's averaged colour and normal filtered up the tree.
 pub fn octree_of(
     ctx: &Context,
     mesh: &fieldkit::voxelize::Mesh,
     n: u32,
+    attributes: bool,
 ) -> Result<(fieldkit::octree::Octree, fieldkit::voxelize::Grid), Error> {
     use fieldkit::octree::OctreeBuilder;
     use fieldkit::voxelize::{Grid, Separation, Voxelizer};
     let grid = Grid::fit(mesh, n)?;
-    let octree = ctx.block_on(OctreeBuilder::new(&ctx.device)?.voxelize(
-        &ctx.device,
-        &ctx.queue,
-        &Voxelizer::new(&ctx.device)?,
-        mesh,
-        &grid,
-        Separation::Conservative,
-    ))?;
+    let (builder, voxelizer) = (
+        OctreeBuilder::new(&ctx.device)?,
+        Voxelizer::new(&ctx.device)?,
+    );
+    let (device, queue) = (&ctx.device, &ctx.queue);
+    let octree = if attributes {
+        ctx.block_on(builder.voxelize_with_attributes(device, queue, &voxelizer, mesh, &grid))?
+    } else {
+        ctx.block_on(builder.voxelize(
+            device,
+            queue,
+            &voxelizer,
+            mesh,
+            &grid,
+            Separation::Conservative,
+        ))?
+    };
     Ok((octree, grid))
 }
 

@@ -788,3 +788,115 @@ fn nodes_hold_the_mean_of_their_children() {
     }
     assert_eq!(checked, tree.pool.len());
 }
+
+/// With attributes the render shades each hit with its cell's filtered colour: a mesh of one
+/// colour gives pixels of that hue, lit to varying degrees, at the voxels and at coarse levels;
+/// without them, the settings' colour.
+#[test]
+fn the_render_shades_the_filtered_attributes() {
+    use fieldkit::octree::{Lod, OctreeCaster, RenderSettings};
+    use glam::Vec3;
+    let ctx = Context::shared();
+    let mut mesh = painted_torus();
+    mesh.colors = vec![[200, 40, 90, 255]; mesh.positions.len()];
+    let grid = unit_grid([48, 48, 44]);
+    let voxelizer = Voxelizer::new(&ctx.device).unwrap();
+    let builder = OctreeBuilder::new(&ctx.device).unwrap();
+    let octree = ctx
+        .block_on(builder.voxelize_with_attributes(
+            &ctx.device,
+            &ctx.queue,
+            &voxelizer,
+            &mesh,
+            &grid,
+        ))
+        .unwrap();
+    let view = fieldkit::view::View {
+        view_proj: glam::camera::rh::proj::directx::perspective(0.9, 1.0, 1.0, 400.0)
+            * glam::camera::rh::view::look_at_mat4(
+                Vec3::new(60.0, 80.0, 90.0),
+                Vec3::new(24.0, 23.0, 21.0),
+                Vec3::Y,
+            ),
+        viewport: [64, 64],
+        reversed_z: false,
+        origin: [0, 0],
+    };
+    let caster = OctreeCaster::new();
+    let render = |lod, attributes| {
+        let mut enc = ctx.encoder("octree render");
+        let settings = RenderSettings {
+            lod,
+            attributes,
+            colour: Vec3::new(0.2, 0.9, 0.3),
+            ..Default::default()
+        };
+        let image = caster
+            .encode_render(&ctx.device, &mut enc, &octree, &grid, &view, &settings)
+            .unwrap();
+        ctx.submit_and_wait("octree render", enc).unwrap();
+        fieldkit::gpu::readback_texture::<[u8; 4]>(&ctx.device, &ctx.queue, &image.colour)
+            .wait(&ctx)
+            .unwrap()
+    };
+    for lod in [Lod::Level(octree.log_side), Lod::Level(3)] {
+        let px = render(lod, true);
+        let hit: Vec<_> = px.iter().filter(|p| p[3] == 255).collect();
+        assert!(hit.len() > 200, "{lod:?}: {} pixels", hit.len());
+        // 8-bit rounding of r and b: |r·90 − b·200| ≤ ½·90 + ½·200.
+        for p in &hit {
+            let (r, b) = (p[0] as i32, p[2] as i32);
+            assert!(
+                (r * 90 - b * 200).abs() <= 145,
+                "{lod:?}: pixel {p:?} is not the mesh's hue"
+            );
+            assert!(p[1] < p[2], "{lod:?}: pixel {p:?}");
+        }
+        let shades: std::collections::HashSet<u8> = hit.iter().map(|p| p[0]).collect();
+        assert!(shades.len() > 10, "{lod:?}: the light does not vary");
+    }
+    let plain = render(Lod::Level(octree.log_side), false);
+    assert!(
+        plain.iter().filter(|p| p[3] == 255).all(|p| p[1] > p[0]),
+        "the settings' green"
+    );
+}
+
+/// Where the attribute sums of every voxel (32 bytes each) do not fit one storage binding, they
+/// are summed in batches: a device whose bindings hold 8 192 voxels' sums gives the same bytes
+/// as the adapter's own limits.
+#[test]
+fn attributes_in_batches_give_the_same_bytes() {
+    let shared = Context::shared();
+    let adapter = shared
+        .adapter
+        .as_ref()
+        .expect("Context::shared opens an adapter");
+    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        label: Some("small bindings"),
+        required_limits: wgpu::Limits {
+            max_storage_buffer_binding_size: 256 << 10,
+            ..adapter.limits()
+        },
+        ..Default::default()
+    }))
+    .expect("smaller limits than the adapter's");
+    let small = Context::from_device(device, queue);
+    // Large triangles: few fragments per voxel, so the fragment list fits the small bindings.
+    let mut mesh = Mesh::uv_sphere(DVec3::new(28.2, 27.9, 28.4), 25.0, 24, 12);
+    mesh.colors = mesh
+        .positions
+        .iter()
+        .map(|p| [(p.x * 9.0) as u8, (p.y * 7.0) as u8, (p.z * 5.0) as u8, 255])
+        .collect();
+    let grid = unit_grid([57, 57, 57]);
+    let whole = build_with_attributes(&shared, &mesh, &grid);
+    let batched = build_with_attributes(&small, &mesh, &grid);
+    assert!(
+        whole.voxel_attributes.len() > 8192,
+        "{} voxels: one batch would do",
+        whole.voxel_attributes.len()
+    );
+    assert!(batched.voxel_attributes == whole.voxel_attributes);
+    assert!(batched.node_attributes == whole.node_attributes);
+}

@@ -6,8 +6,10 @@
 //                of the dense attribute pass, `shared/voxel_attribute`) added into the voxel's
 //                integer sums; the voxel's slot is its brick's first (`brick_voxels`) plus the
 //                brick's occupied voxels below it.
-//   `resolve`    one thread per brick: each voxel's average, in bit order, and the brick's own
-//                attribute, the mean of its voxels'.
+//   `average`    one thread per voxel: its sums' average.
+//   Both run once per batch of `batch` voxels from `first_voxel` on, the sums cleared between
+//   batches, so the sums (32 bytes a voxel) need only one batch's room.
+//   `resolve`    one thread per brick: the brick's own attribute, the mean of its voxels'.
 //   `filter_level` one thread per node of a level, deepest inner level first: the mean of its
 //                children's attributes.
 //
@@ -29,7 +31,10 @@ struct AttributeParams {
     fragments: u32,
     // Entries the pool holds.
     capacity: u32,
-    // Occupied voxels the sums hold.
+    // The batch: its first voxel slot and its voxels (the sums hold `batch`).
+    first_voxel: u32,
+    batch: u32,
+    // Occupied voxels in all.
     voxels: u32,
     slack: f32,
 }
@@ -78,7 +83,7 @@ fn accumulate(@builtin(global_invocation_id) id: vec3<u32>,
     let packed = fragments[f];
     let v = vec3<u32>(packed.x & 0xffffu, packed.x >> 16u, packed.y);
     let slot = voxel_slot(e, pool[e], brick_bit(v));
-    if slot >= params.voxels {
+    if slot < params.first_voxel || slot - params.first_voxel >= params.batch {
         return;
     }
     let t = triangle_ids[f];
@@ -94,7 +99,7 @@ fn accumulate(@builtin(global_invocation_id) id: vec3<u32>,
     let add = contribution(corner_colour(b, c0.x, c1.x, c2.x),
                            corner_normal(b, bitcast<vec3<f32>>(c0.yzw), bitcast<vec3<f32>>(c1.yzw),
                                          bitcast<vec3<f32>>(c2.yzw), s.n));
-    let at = SUMS * slot;
+    let at = SUMS * (slot - params.first_voxel);
     atomicAdd(&sums[at], add.rgba.x);
     atomicAdd(&sums[at + 1u], add.rgba.y);
     atomicAdd(&sums[at + 2u], add.rgba.z);
@@ -133,6 +138,22 @@ fn mean_of(m: Mean) -> vec2<u32> {
 }
 
 @compute @workgroup_size(64)
+fn average_voxels(@builtin(global_invocation_id) id: vec3<u32>,
+                  @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = id.x + id.y * groups.x * 64u;
+    if i >= params.batch || params.first_voxel + i >= params.voxels {
+        return;
+    }
+    let at = SUMS * i;
+    voxel_attributes[params.first_voxel + i] =
+        average(vec4<u32>(atomicLoad(&sums[at]), atomicLoad(&sums[at + 1u]),
+                          atomicLoad(&sums[at + 2u]), atomicLoad(&sums[at + 3u])),
+                vec3<u32>(atomicLoad(&sums[at + 4u]), atomicLoad(&sums[at + 5u]),
+                          atomicLoad(&sums[at + 6u])),
+                atomicLoad(&sums[at + 7u]));
+}
+
+@compute @workgroup_size(64)
 fn resolve(@builtin(global_invocation_id) id: vec3<u32>,
            @builtin(num_workgroups) groups: vec3<u32>) {
     let e = starts[params.leaf_level] + id.x + id.y * groups.x * 64u;
@@ -140,23 +161,12 @@ fn resolve(@builtin(global_invocation_id) id: vec3<u32>,
         return;
     }
     let brick = pool[e];
-    var slot = brick_voxels[e];
+    let first = brick_voxels[e];
+    let count = countOneBits(brick.x) + countOneBits(brick.y);
     var m = Mean(vec4<u32>(0u), vec3<f32>(0.0), 0u);
-    for (var word = 0u; word < 2u; word++) {
-        var bits = brick[word];
-        while bits != 0u {
-            bits &= bits - 1u;
-            if slot < params.voxels {
-                let at = SUMS * slot;
-                let a = average(vec4<u32>(atomicLoad(&sums[at]), atomicLoad(&sums[at + 1u]),
-                                          atomicLoad(&sums[at + 2u]), atomicLoad(&sums[at + 3u])),
-                                vec3<u32>(atomicLoad(&sums[at + 4u]), atomicLoad(&sums[at + 5u]),
-                                          atomicLoad(&sums[at + 6u])),
-                                atomicLoad(&sums[at + 7u]));
-                voxel_attributes[slot] = a;
-                m = add_to(m, a);
-            }
-            slot++;
+    for (var k = 0u; k < count; k++) {
+        if first + k < params.voxels {
+            m = add_to(m, voxel_attributes[first + k]);
         }
     }
     node_attributes[e] = mean_of(m);

@@ -12,10 +12,13 @@
 //
 // The render chooses the level per pixel from its footprint: the finest level whose cell is at
 // least `footprint` pixels wide where the ray enters the grid (or a fixed level), shades the hit
-// face with one light, and writes the colour and the hit's depth.
+// with one light, and writes the colour and the hit's depth. With ATTRIBUTES it shades the hit
+// cell's filtered colour and normal (`octree/attributes`: the voxel's own at the voxel level, the
+// node's above it, the brick's for 2³ blocks); without, the hit face in one colour.
 
 import fieldkit::field::{ndc_depth, pixel_ray, ray_box};
-import fieldkit::octree::{brick_block, brick_has, octree_child, octree_has_child, octree_octant};
+import fieldkit::octahedral::decode_octahedral;
+import fieldkit::octree::{brick_bit, brick_block, brick_has, octree_child, octree_has_child, octree_octant};
 
 struct CastParams {
     inv_view_proj: mat4x4<f32>,
@@ -52,33 +55,42 @@ struct CastParams {
 @group(0) @binding(4) var<storage, read> points: array<vec4<u32>>;
 @group(0) @binding(5) var colour_out: texture_storage_2d<rgba8unorm, write>;
 @group(0) @binding(6) var depth_out: texture_storage_2d<r32float, write>;
+// With ATTRIBUTES: per entry the node's (RGBA8 colour, octahedral normal), per occupied voxel
+// the same, and per brick entry its first voxel's slot.
+@group(0) @binding(7) var<storage, read> node_attributes: array<vec2<u32>>;
+@group(0) @binding(8) var<storage, read> voxel_attributes: array<vec2<u32>>;
+@group(0) @binding(9) var<storage, read> brick_voxels: array<u32>;
+
+override ATTRIBUTES: bool = false;
 
 const NONE: u32 = 0xffffffffu;
 const LOD_BY_FOOTPRINT: u32 = 0xffffffffu;
 const MISS: i32 = 3;
 
-// The shallowest level j ≤ m whose node holding cell c (of level m) is empty, NONE where the
-// cell is occupied.
-fn probe(c: vec3<u32>, m: u32) -> u32 {
+// x: the shallowest level j ≤ m whose node holding cell c (of level m) is empty, NONE where the
+// cell is occupied; y: the deepest entry reached (the cell's node, or its brick).
+fn probe(c: vec3<u32>, m: u32) -> vec2<u32> {
     let leaf = params.log_side - 2u;
     let v = c << vec3<u32>(params.log_side - m);
+    var entry = 0u;
     var node = pool[0];
     for (var j = 1u; j <= min(m, leaf); j++) {
         let o = octree_octant(v, params.log_side, j);
         if !octree_has_child(node, o) {
-            return j;
+            return vec2<u32>(j, entry);
         }
-        node = pool[octree_child(node, o)];
+        entry = octree_child(node, o);
+        node = pool[entry];
     }
     if m > leaf {
         if !brick_block(node, v) {
-            return leaf + 1u;
+            return vec2<u32>(leaf + 1u, entry);
         }
         if m > leaf + 1u && !brick_has(node, v) {
-            return m;
+            return vec2<u32>(m, entry);
         }
     }
-    return NONE;
+    return vec2<u32>(NONE, entry);
 }
 
 struct Hit {
@@ -87,6 +99,8 @@ struct Hit {
     axis: i32,
     // Distance from the start to the cell's entry.
     t: f32,
+    // The cell's node, or its brick below the bricks' level.
+    entry: u32,
 }
 
 // Distance from `start` to boundary k × cell along one axis.
@@ -120,9 +134,10 @@ fn walk(start: vec3<f32>, inv: vec3<f32>, m: u32) -> Hit {
             break;
         }
         if any(c < lo) || any(c >= hi) {
-            let j = probe(vec3<u32>(c), m);
+            let found = probe(vec3<u32>(c), m);
+            let j = found.x;
             if j == NONE {
-                return Hit(c, axis, t);
+                return Hit(c, axis, t, found.y);
             }
             let span = m - j;
             lo = (c >> vec3<u32>(span)) << vec3<u32>(span);
@@ -146,7 +161,7 @@ fn walk(start: vec3<f32>, inv: vec3<f32>, m: u32) -> Hit {
             t_max.z = boundary(c.z + ahead.z, cell, start.z, inv.z);
         }
     }
-    return Hit(vec3<i32>(-1), MISS, t);
+    return Hit(vec3<i32>(-1), MISS, t, 0u);
 }
 
 @compute @workgroup_size(64)
@@ -168,7 +183,7 @@ fn lookup(@builtin(global_invocation_id) id: vec3<u32>) {
     let p = points[id.x];
     let m = min(p.w, params.log_side);
     var occupied = 0;
-    if all(p.xyz < params.size) && probe(p.xyz >> vec3<u32>(params.log_side - m), m) == NONE {
+    if all(p.xyz < params.size) && probe(p.xyz >> vec3<u32>(params.log_side - m), m).x == NONE {
         occupied = 1;
     }
     hits[id.x] = vec4<i32>(occupied, 0, 0, 0);
@@ -211,8 +226,26 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
                 n[hit.axis] = -sign(ray.dir[hit.axis]);
                 normal = n;
             }
+            var base = params.colour;
+            if ATTRIBUTES {
+                var a = node_attributes[hit.entry];
+                if m == params.log_side {
+                    // The voxel's own: its brick's first slot and the brick's voxels below it.
+                    let brick = pool[hit.entry];
+                    let bit = brick_bit(vec3<u32>(hit.cell));
+                    let below = select((1u << bit) - 1u, 0xffffffffu, bit >= 32u);
+                    let above = select(0u, (1u << (bit - 32u)) - 1u, bit >= 32u);
+                    a = voxel_attributes[brick_voxels[hit.entry] + countOneBits(brick.x & below)
+                        + countOneBits(brick.y & above)];
+                }
+                base = unpack4x8unorm(a.x).rgb;
+                let n = decode_octahedral(a.y);
+                if dot(n, n) > 0.0 {
+                    normal = n;
+                }
+            }
             let lambert = max(dot(normal, params.light), 0.0);
-            colour = vec4<f32>(params.colour * (0.25 + 0.75 * lambert), 1.0);
+            colour = vec4<f32>(base * (0.25 + 0.75 * lambert), 1.0);
             let world = (params.local_to_world * vec4<f32>(start + ray.dir * hit.t, 1.0)).xyz;
             depth = ndc_depth(params.view_proj, world);
         }

@@ -16,6 +16,7 @@ const SUMS: u64 = 8;
 #[derive(Default)]
 pub(super) struct AttributePipelines {
     accumulate: OnceLock<ComputePipeline<stage::accumulate::Entry>>,
+    average: OnceLock<ComputePipeline<stage::average_voxels::Entry>>,
     resolve: OnceLock<ComputePipeline<stage::resolve::Entry>>,
     filter: OnceLock<ComputePipeline<stage::filter_level::Entry>>,
 }
@@ -47,8 +48,9 @@ impl OctreeBuilder {
     /// [`crate::voxelize::Voxelizer::encode_fragments_with_attributes`], the tree built from
     /// them by [`OctreeBuilder::encode`]) for its `voxels` occupied voxels
     /// ([`Octree::voxel_count`]): integer sums per voxel (32 bytes each while they are
-    /// summed), then each voxel's average and each brick's, then every level's means up to
-    /// the root. Sets [`Octree::attributes`].
+    /// summed, in batches of voxels that each fit the device's storage binding), then each
+    /// voxel's average and each brick's, then every level's means up to the root. Sets
+    /// [`Octree::attributes`].
     pub fn encode_attributes(
         &self,
         device: &wgpu::Device,
@@ -77,12 +79,13 @@ impl OctreeBuilder {
             });
         }
         let limit = device.limits().max_storage_buffer_binding_size;
-        let sum_bytes = voxels as u64 * SUMS * 4;
-        if sum_bytes > limit {
+        // Voxels whose sums one binding holds: the batches.
+        let batch = (limit / (SUMS * 4)).min(voxels.max(1) as u64) as u32;
+        if voxels as u64 * ENTRY_BYTES > limit {
             return Err(Error::Size {
                 stage: stage::STAGE,
-                what: "octree attribute sum bytes (32 per occupied voxel)",
-                got: sum_bytes,
+                what: "octree voxel attribute bytes (8 per occupied voxel)",
+                got: voxels as u64 * ENTRY_BYTES,
                 max: limit,
             });
         }
@@ -96,8 +99,8 @@ impl OctreeBuilder {
         };
         let sums = buffer(
             "octree attribute sums",
-            sum_bytes,
-            wgpu::BufferUsages::empty(),
+            batch as u64 * SUMS * 4,
+            wgpu::BufferUsages::COPY_DST,
         );
         let attributes = OctreeAttributes {
             voxels,
@@ -118,7 +121,7 @@ impl OctreeBuilder {
             let groups = n.div_ceil(64).max(1);
             [groups.min(row) as u32, groups.div_ceil(row) as u32, 1]
         };
-        let params = |level| {
+        let params = |level, first_voxel| {
             uniform(
                 device,
                 "octree attribute params",
@@ -128,30 +131,51 @@ impl OctreeBuilder {
                     leaf_level: octree.leaf_level,
                     fragments: fragments.capacity,
                     capacity: octree.capacity,
+                    first_voxel,
+                    batch,
                     voxels,
                     slack: SLACK,
                 },
             )
         };
         let p = &self.attributes;
-        let leaf = params(octree.leaf_level);
-        ComputePipeline::cached(&p.accumulate, device, &[])?.record(
-            device,
-            rec,
-            &stage::accumulate::Resources {
-                params: (&leaf).into(),
-                fragments: (&fragments.list).into(),
-                triangle_ids: (&inputs.triangle_ids).into(),
-                triangles: (&inputs.triangles).into(),
-                corners: (&inputs.corners).into(),
-                cursor: cursor.into(),
-                pool: (&octree.pool).into(),
-                brick_voxels: brick_voxels.into(),
-                sums: (&sums).into(),
-            },
-            grid(fragments.capacity as u64),
-            stage::STAGE,
-        )?;
+        let accumulate = ComputePipeline::cached(&p.accumulate, device, &[])?;
+        let average = ComputePipeline::cached(&p.average, device, &[])?;
+        for first in (0..voxels).step_by(batch as usize) {
+            if first > 0 {
+                rec.recorder().encoder.clear_buffer(&sums, 0, None);
+            }
+            let params = params(octree.leaf_level, first);
+            accumulate.record(
+                device,
+                rec,
+                &stage::accumulate::Resources {
+                    params: (&params).into(),
+                    fragments: (&fragments.list).into(),
+                    triangle_ids: (&inputs.triangle_ids).into(),
+                    triangles: (&inputs.triangles).into(),
+                    corners: (&inputs.corners).into(),
+                    cursor: cursor.into(),
+                    pool: (&octree.pool).into(),
+                    brick_voxels: brick_voxels.into(),
+                    sums: (&sums).into(),
+                },
+                grid(fragments.capacity as u64),
+                stage::STAGE,
+            )?;
+            average.record(
+                device,
+                rec,
+                &stage::average_voxels::Resources {
+                    params: (&params).into(),
+                    sums: (&sums).into(),
+                    voxel_attributes: (&attributes.voxel_attributes).into(),
+                },
+                grid(batch as u64),
+                stage::STAGE,
+            )?;
+        }
+        let leaf = params(octree.leaf_level, 0);
         // Each level's nodes are at most the pool's entries and the level's cells.
         let nodes = |l: u32| 8u64.saturating_pow(l).min(octree.capacity as u64);
         ComputePipeline::cached(&p.resolve, device, &[])?.record(
@@ -162,7 +186,6 @@ impl OctreeBuilder {
                 pool: (&octree.pool).into(),
                 starts: (&octree.starts).into(),
                 brick_voxels: brick_voxels.into(),
-                sums: (&sums).into(),
                 voxel_attributes: (&attributes.voxel_attributes).into(),
                 node_attributes: (&attributes.node_attributes).into(),
             },
@@ -171,7 +194,7 @@ impl OctreeBuilder {
         )?;
         let filter = ComputePipeline::cached(&p.filter, device, &[])?;
         for level in (0..octree.leaf_level).rev() {
-            let params = params(level);
+            let params = params(level, 0);
             filter.record(
                 device,
                 rec,

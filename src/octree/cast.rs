@@ -37,6 +37,10 @@ pub struct RenderSettings {
     pub colour: Vec3,
     /// Towards the light, world space.
     pub light: Vec3,
+    /// Shade each hit cell's filtered colour and normal where the octree has attributes
+    /// ([`super::OctreeBuilder::voxelize_with_attributes`]); otherwise, or with `false`, the
+    /// hit face in `colour`.
+    pub attributes: bool,
 }
 
 impl Default for RenderSettings {
@@ -45,6 +49,7 @@ impl Default for RenderSettings {
             lod: Lod::Footprint(1.0),
             colour: Vec3::new(0.85, 0.8, 0.72),
             light: Vec3::new(0.4, 0.8, 0.45),
+            attributes: true,
         }
     }
 }
@@ -122,7 +127,8 @@ impl Casts {
 /// The cast pipelines. Create once, cast many times.
 #[derive(Default)]
 pub struct OctreeCaster {
-    render: OnceLock<ComputePipeline<stage::render::Entry>>,
+    /// Without and with attributes.
+    render: [OnceLock<ComputePipeline<stage::render::Entry>>; 2],
     cast_rays: OnceLock<ComputePipeline<stage::cast_rays::Entry>>,
     lookup: OnceLock<ComputePipeline<stage::lookup::Entry>>,
 }
@@ -279,7 +285,18 @@ impl OctreeCaster {
             image.colour.create_view(&Default::default()),
             image.depth.create_view(&Default::default()),
         );
-        let pipeline = ComputePipeline::cached(&self.render, device, &[])?;
+        let attributes = octree.attributes.as_ref().filter(|_| settings.attributes);
+        let pipeline = ComputePipeline::cached(
+            &self.render[attributes.is_some() as usize],
+            device,
+            &[("ATTRIBUTES", attributes.is_some() as u32 as f64)],
+        )?;
+        let none = storage(
+            device,
+            "no octree attributes",
+            16,
+            wgpu::BufferUsages::empty(),
+        );
         pipeline.record(
             device,
             rec,
@@ -288,6 +305,9 @@ impl OctreeCaster {
                 pool: (&octree.pool).into(),
                 colour_out: (&cv).into(),
                 depth_out: (&dv).into(),
+                node_attributes: attributes.map_or(&none, |a| &a.node_attributes).into(),
+                voxel_attributes: attributes.map_or(&none, |a| &a.voxel_attributes).into(),
+                brick_voxels: attributes.map_or(&none, |a| &a.brick_voxels).into(),
             },
             [
                 view.viewport[0].div_ceil(8),
