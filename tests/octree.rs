@@ -900,3 +900,31 @@ fn attributes_in_batches_give_the_same_bytes() {
     assert!(batched.voxel_attributes == whole.voxel_attributes);
     assert!(batched.node_attributes == whole.node_attributes);
 }
+
+/// A level expanded to a dense bitset (`expand`) holds exactly that level's cells: at the voxels
+/// the dense voxelization itself, above them each cell where any of its voxels is.
+#[test]
+fn a_level_expands_to_the_dense_cells() {
+    let ctx = Context::shared();
+    let mesh = painted_torus();
+    let grid = unit_grid([48, 44, 46]);
+    let want = dense(&ctx, &mesh, &grid, Separation::Conservative);
+    let (octree, _) = build(&ctx, &mesh, &grid, Separation::Conservative);
+    let caster = fieldkit::octree::OctreeCaster::new();
+    for level in [octree.log_side, octree.log_side - 1, 2, 0] {
+        let mut enc = ctx.encoder("expand");
+        let surface = caster
+            .encode_dense(&ctx.device, &mut enc, &octree, level)
+            .unwrap();
+        ctx.submit_and_wait("expand", enc).unwrap();
+        let got = surface.read(&ctx.device, &ctx.queue).wait(&ctx).unwrap();
+        let (cells, extent) = coarse(&want, grid.size, octree.log_side, level);
+        assert_eq!(surface.size, extent.map(|e| e as u32));
+        assert!(got == cells, "level {level}");
+    }
+    let mut enc = ctx.encoder("expand");
+    assert!(matches!(
+        caster.encode_dense(&ctx.device, &mut enc, &octree, octree.log_side + 1),
+        Err(Error::Size { .. })
+    ));
+}

@@ -1,6 +1,7 @@
 // Ray casts through a sparse voxel octree (`octree/build`): the first occupied cell a ray
 // meets at a level of detail, for a first-hit render (`render`, one thread per pixel) and for
-// other stages and tests (`cast_rays`, a list of rays; `lookup`, occupancy at a list of points).
+// other stages and tests (`cast_rays`, a list of rays; `lookup`, occupancy at a list of points;
+// `expand`, a level as a dense bitset for the stages that take one).
 //
 // A ray walks the cells of its level — voxels at level log_side, nodes of 2^(log_side − m) voxels
 // at level m — one cell at a time (Amanatides & Woo), each boundary's distance computed as
@@ -60,6 +61,9 @@ struct CastParams {
 @group(0) @binding(7) var<storage, read> node_attributes: array<vec2<u32>>;
 @group(0) @binding(8) var<storage, read> voxel_attributes: array<vec2<u32>>;
 @group(0) @binding(9) var<storage, read> brick_voxels: array<u32>;
+
+// `expand`: the level's cells, one bit each, x fastest (`params.count` words).
+@group(0) @binding(10) var<storage, read_write> dense: array<u32>;
 
 override ATTRIBUTES: bool = false;
 
@@ -252,4 +256,26 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     textureStore(colour_out, px, colour);
     textureStore(depth_out, px, vec4<f32>(depth, 0.0, 0.0, 0.0));
+}
+
+// One thread per 32 cells of level `params.level` (a bitset word of its grid of cells).
+@compute @workgroup_size(64)
+fn expand(@builtin(global_invocation_id) id: vec3<u32>,
+          @builtin(num_workgroups) groups: vec3<u32>) {
+    let w = id.x + id.y * groups.x * 64u;
+    if w >= params.count {
+        return;
+    }
+    let m = params.level;
+    let shift = params.log_side - m;
+    let extent = (params.size + vec3<u32>((1u << shift) - 1u)) >> vec3<u32>(shift);
+    var word = 0u;
+    for (var b = 0u; b < 32u; b++) {
+        let i = w * 32u + b;
+        let c = vec3<u32>(i % extent.x, (i / extent.x) % extent.y, i / (extent.x * extent.y));
+        if c.z < extent.z && probe(c, m).x == NONE {
+            word |= 1u << b;
+        }
+    }
+    dense[w] = word;
 }

@@ -131,6 +131,7 @@ pub struct OctreeCaster {
     render: [OnceLock<ComputePipeline<stage::render::Entry>>; 2],
     cast_rays: OnceLock<ComputePipeline<stage::cast_rays::Entry>>,
     lookup: OnceLock<ComputePipeline<stage::lookup::Entry>>,
+    expand: OnceLock<ComputePipeline<stage::expand::Entry>>,
 }
 
 fn invalid(what: String) -> Error {
@@ -389,6 +390,74 @@ impl OctreeCaster {
             points.len(),
             false,
         )
+    }
+
+    /// Record level `level` of `octree` as a dense bitset of its cells (cells of
+    /// 2^(log_side − level) voxels; at [`Octree::log_side`], the voxels): a
+    /// [`crate::voxelize::Surface`], so what takes a voxelization takes a tree's level —
+    /// [`crate::voxelize::Voxelizer::encode_volume`] makes it the 3D mask the distance stages
+    /// read. The grid of cells must fit a dense grid (at most 2³² cells and one storage
+    /// binding of bits).
+    pub fn encode_dense(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        octree: &Octree,
+        level: u32,
+    ) -> Result<crate::voxelize::Surface, Error> {
+        if level > octree.log_side {
+            return Err(Error::Size {
+                stage: stage::STAGE,
+                what: "dense level (0 the root, log_side the voxels)",
+                got: level as u64,
+                max: octree.log_side as u64,
+            });
+        }
+        let shift = octree.log_side - level;
+        let size = octree.size.map(|n| n.div_ceil(1 << shift));
+        let cells = size.iter().map(|&n| n as u64).product::<u64>();
+        let words = cells.div_ceil(32);
+        let limit = device.limits().max_storage_buffer_binding_size;
+        if cells > crate::voxelize::MAX_VOXELS || words * 4 > limit {
+            return Err(Error::Size {
+                stage: stage::STAGE,
+                what: "cells of the dense level (a bit each, one binding)",
+                got: cells,
+                max: (limit * 8).min(crate::voxelize::MAX_VOXELS),
+            });
+        }
+        let occupancy = storage(
+            device,
+            "octree dense level",
+            words * 4,
+            wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+        );
+        let params = uniform(
+            device,
+            "octree dense params",
+            &CastParams {
+                level,
+                ..self.params(octree, words as u32)
+            },
+        );
+        let groups = words.div_ceil(64);
+        let row = device.limits().max_compute_workgroups_per_dimension as u64;
+        ComputePipeline::cached(&self.expand, device, &[])?.record(
+            device,
+            rec,
+            &stage::expand::Resources {
+                params: (&params).into(),
+                pool: (&octree.pool).into(),
+                dense: (&occupancy).into(),
+            },
+            [groups.min(row) as u32, groups.div_ceil(row) as u32, 1],
+            stage::STAGE,
+        )?;
+        Ok(crate::voxelize::Surface {
+            size,
+            occupancy,
+            degenerate: 0,
+        })
     }
 
     fn run(
