@@ -248,20 +248,10 @@ impl OctreeData {
 
     /// Whether voxel `v` is occupied: a walk from the root.
     pub fn occupied(&self, v: [u32; 3]) -> bool {
-        if (0..3).any(|k| v[k] >= self.size[k]) {
-            return false;
-        }
-        let mut node = 0usize;
-        for l in 1..=self.leaf_level {
-            let [mask, first] = self.pool[node];
-            let o = octant(v, self.log_side, l);
-            if mask & (1 << o) == 0 {
-                return false;
-            }
-            node = (first + (mask & ((1 << o) - 1)).count_ones()) as usize;
-        }
-        let bit = brick_bit(v);
-        self.pool[node][(bit / 32) as usize] & (1 << (bit % 32)) != 0
+        self.brick_of(v).is_some_and(|node| {
+            let bit = brick_bit(v);
+            self.pool[node][(bit / 32) as usize] & (1 << (bit % 32)) != 0
+        })
     }
 
     /// The tree as a dense grid: one `bool` per voxel, x fastest.
@@ -574,20 +564,30 @@ impl OctreeBuilder {
         if needed >= octree.capacity {
             return octree;
         }
-        let pool = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("octree pool"),
-            size: needed as u64 * ENTRY_BYTES,
-            usage: octree.pool.usage(),
-            mapped_at_creation: false,
-        });
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("octree shrink"),
         });
-        encoder.copy_buffer_to_buffer(&octree.pool, 0, &pool, 0, pool.size());
+        let mut copy = |from: &wgpu::Buffer, label, bytes| {
+            let to = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: bytes,
+                usage: from.usage() | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            encoder.copy_buffer_to_buffer(from, 0, &to, 0, bytes);
+            to
+        };
+        let pool = copy(&octree.pool, "octree pool", needed as u64 * ENTRY_BYTES);
+        // The bricks' first voxels, one u32 per entry, for attributes.
+        let brick_voxels = octree
+            .brick_voxels
+            .as_ref()
+            .map(|b| copy(b, "octree brick voxels", needed as u64 * 4));
         queue.submit([encoder.finish()]);
         Octree {
             pool,
             capacity: needed,
+            brick_voxels,
             ..octree
         }
     }
