@@ -184,7 +184,9 @@ fn single_triangle_far_mesh_and_node_boundaries() {
 }
 
 /// A pool too small is a typed error naming how many entries the levels built need; a
-/// fragment list too short, one naming the exact count. With those sizes, the tree builds.
+/// fragment list too short, one naming the part's exact count. With those sizes, the tree
+/// builds, and a tree of many fragment lists (the split a device's bindings force) is the tree
+/// of one.
 #[test]
 fn a_pool_or_list_too_small_says_what_it_needs() {
     let ctx = Context::shared();
@@ -221,7 +223,24 @@ fn a_pool_or_list_too_small_says_what_it_needs() {
         Err(Error::Size { .. })
     ));
 
-    let mut enc = ctx.encoder("short list");
+    // The whole list in one part: the count every split must add up to.
+    let mut enc = ctx.encoder("one list");
+    let one = voxelizer
+        .encode_fragments(
+            &ctx.device,
+            &mut enc,
+            &sphere,
+            &grid,
+            Separation::Conservative,
+            None,
+        )
+        .unwrap();
+    ctx.submit_and_wait("one list", enc).unwrap();
+    assert_eq!(one.parts.len(), 1);
+    let all = one.count(&ctx.device, &ctx.queue).wait(&ctx).unwrap();
+
+    // Parts of at most 10 fragments: a light triangle alone has more, so some lists are short.
+    let mut enc = ctx.encoder("short lists");
     let fragments = voxelizer
         .encode_fragments(
             &ctx.device,
@@ -232,12 +251,26 @@ fn a_pool_or_list_too_small_says_what_it_needs() {
             Some(10),
         )
         .unwrap();
-    ctx.submit_and_wait("short list", enc).unwrap();
-    let total = match fragments.count(&ctx.device, &ctx.queue).wait(&ctx) {
-        Err(Error::Size { got, max: 10, .. }) => got as u32,
+    ctx.submit_and_wait("short lists", enc).unwrap();
+    assert!(
+        fragments.parts.len() > 10,
+        "{} parts",
+        fragments.parts.len()
+    );
+    match fragments.count(&ctx.device, &ctx.queue).wait(&ctx) {
+        Err(Error::Size { got, max: 10, .. }) => assert!(got > 10),
         other => panic!("expected a fragment-count error, got {other:?}"),
     };
-    let mut enc = ctx.encoder("exact list");
+    let totals = fragments
+        .totals(&ctx.device, &ctx.queue)
+        .wait(&ctx)
+        .unwrap();
+    assert_eq!(totals.iter().map(|&t| t as u64).sum::<u64>(), all);
+    let longest = totals.into_iter().max().unwrap();
+
+    // Every part as long as the longest count: nothing lost, and the tree of the many lists is
+    // byte for byte the tree of the one.
+    let mut enc = ctx.encoder("long enough");
     let fragments = voxelizer
         .encode_fragments(
             &ctx.device,
@@ -245,16 +278,17 @@ fn a_pool_or_list_too_small_says_what_it_needs() {
             &sphere,
             &grid,
             Separation::Conservative,
-            Some(total),
+            Some(longest),
         )
         .unwrap();
     let octree = builder
         .encode(&ctx.device, &mut enc, &fragments, entries as u32)
         .unwrap();
-    ctx.submit_and_wait("exact list", enc).unwrap();
+    ctx.submit_and_wait("long enough", enc).unwrap();
+    assert!(fragments.parts.len() > 1, "{} parts", fragments.parts.len());
     assert_eq!(
         fragments.count(&ctx.device, &ctx.queue).wait(&ctx).unwrap(),
-        total
+        all
     );
     assert!(octree.read(&ctx.device, &ctx.queue).wait(&ctx).unwrap() == full);
 }

@@ -22,6 +22,10 @@ struct FragmentParams {
     chunks: u32,
     // Fragments the list holds.
     capacity: u32,
+    // This dispatch's threads: `threads` of them from `first_thread` on (the triangles are split
+    // into parts whose lists each fit one binding).
+    first_thread: u32,
+    threads: u32,
 }
 
 override SIX_SEPARATING: bool = false;
@@ -74,16 +78,18 @@ fn walk(s: Setup, t: u32, first: u32, count: u32, emit: bool, at: u32) -> u32 {
 fn fragments_listed(@builtin(global_invocation_id) id: vec3<u32>,
                     @builtin(num_workgroups) groups: vec3<u32>,
                     @builtin(local_invocation_index) local: u32) {
-    let i = id.x + id.y * groups.x * 64u;
+    let own = id.x + id.y * groups.x * 64u;
+    let mine = own < params.threads;
+    let i = params.first_thread + own;
     var s: Setup;
     var t = 0u;
     var first = 0u;
     var columns = 0u;
-    if i < params.count {
+    if mine && i < params.count {
         t = i;
         s = load(i);
         columns = s.columns;
-    } else if i - params.count < params.chunks {
+    } else if mine && i - params.count < params.chunks {
         let item = listed[i - params.count];
         t = item.x;
         s = load(item.x);

@@ -59,7 +59,7 @@ impl OctreeBuilder {
         fragments: &Fragments,
         voxels: u32,
     ) -> Result<(), Error> {
-        let (Some(inputs), Some(brick_voxels), Some(cursor)) =
+        let (Some(inputs), Some(brick_voxels), Some(cursors)) =
             (&fragments.attributes, &octree.brick_voxels, &octree.cursor)
         else {
             return Err(Error::Invalid {
@@ -121,7 +121,15 @@ impl OctreeBuilder {
             let groups = n.div_ceil(64).max(1);
             [groups.min(row) as u32, groups.div_ceil(row) as u32, 1]
         };
-        let params = |level, first_voxel| {
+        if cursors.len() != fragments.parts.len()
+            || fragments.parts.iter().any(|p| p.triangle_ids.is_none())
+        {
+            return Err(Error::Invalid {
+                stage: stage::STAGE,
+                what: "the octree was built from other fragments than these".into(),
+            });
+        }
+        let params = |level, first_voxel, fragments| {
             uniform(
                 device,
                 "octree attribute params",
@@ -129,7 +137,7 @@ impl OctreeBuilder {
                     grid: octree.size.into(),
                     level,
                     leaf_level: octree.leaf_level,
-                    fragments: fragments.capacity,
+                    fragments,
                     capacity: octree.capacity,
                     first_voxel,
                     batch,
@@ -145,24 +153,30 @@ impl OctreeBuilder {
             if first > 0 {
                 rec.recorder().encoder.clear_buffer(&sums, 0, None);
             }
-            let params = params(octree.leaf_level, first);
-            accumulate.record(
-                device,
-                rec,
-                &stage::accumulate::Resources {
-                    params: (&params).into(),
-                    fragments: (&fragments.list).into(),
-                    triangle_ids: (&inputs.triangle_ids).into(),
-                    triangles: (&inputs.triangles).into(),
-                    corners: (&inputs.corners).into(),
-                    cursor: cursor.into(),
-                    pool: (&octree.pool).into(),
-                    brick_voxels: brick_voxels.into(),
-                    sums: (&sums).into(),
-                },
-                grid(fragments.capacity as u64),
-                stage::STAGE,
-            )?;
+            for (part, cursor) in fragments.parts.iter().zip(cursors) {
+                let params = params(octree.leaf_level, first, part.capacity);
+                let Some(ids) = &part.triangle_ids else {
+                    continue;
+                };
+                accumulate.record(
+                    device,
+                    rec,
+                    &stage::accumulate::Resources {
+                        params: (&params).into(),
+                        fragments: (&part.list).into(),
+                        triangle_ids: ids.into(),
+                        triangles: (&inputs.triangles).into(),
+                        corners: (&inputs.corners).into(),
+                        cursor: cursor.into(),
+                        pool: (&octree.pool).into(),
+                        brick_voxels: brick_voxels.into(),
+                        sums: (&sums).into(),
+                    },
+                    grid(part.capacity as u64),
+                    stage::STAGE,
+                )?;
+            }
+            let params = params(octree.leaf_level, first, 0);
             average.record(
                 device,
                 rec,
@@ -175,7 +189,7 @@ impl OctreeBuilder {
                 stage::STAGE,
             )?;
         }
-        let leaf = params(octree.leaf_level, 0);
+        let leaf = params(octree.leaf_level, 0, 0);
         // Each level's nodes are at most the pool's entries and the level's cells.
         let nodes = |l: u32| 8u64.saturating_pow(l).min(octree.capacity as u64);
         ComputePipeline::cached(&p.resolve, device, &[])?.record(
@@ -194,7 +208,7 @@ impl OctreeBuilder {
         )?;
         let filter = ComputePipeline::cached(&p.filter, device, &[])?;
         for level in (0..octree.leaf_level).rev() {
-            let params = params(level, 0);
+            let params = params(level, 0, 0);
             filter.record(
                 device,
                 rec,

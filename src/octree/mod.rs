@@ -84,8 +84,8 @@ pub struct Octree {
     pub attributes: Option<OctreeAttributes>,
     /// Per brick, its first voxel among the occupied voxels (built with attributes).
     brick_voxels: Option<wgpu::Buffer>,
-    /// Per fragment, its brick (built with attributes).
-    cursor: Option<wgpu::Buffer>,
+    /// Per fragment of each part, its brick (built with attributes).
+    cursor: Option<Vec<wgpu::Buffer>>,
 }
 
 /// An octree's attributes: each occupied voxel's averaged colour and normal, and each node's
@@ -399,7 +399,7 @@ impl OctreeBuilder {
                 max: most,
             });
         }
-        let count = fragments.capacity as u64;
+        let count = fragments.capacity();
         // The most nodes any level can have, which the scans are sized and dispatched for.
         // With attributes, the bricks' voxels are counted too: one more level of scans.
         let with_attributes = fragments.attributes.is_some();
@@ -444,7 +444,11 @@ impl OctreeBuilder {
                 usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             })
         };
-        let cursor = buffer("octree fragment cursors", count * 4, none);
+        let cursors: Vec<wgpu::Buffer> = fragments
+            .parts
+            .iter()
+            .map(|p| buffer("octree fragment cursors", p.capacity as u64 * 4, none))
+            .collect();
         let node_offsets = buffer("octree node offsets", widest * 4, none);
         let block_offsets = buffer("octree block offsets", blocks * 4, none);
         let brick_voxels = with_attributes.then(|| {
@@ -478,31 +482,37 @@ impl OctreeBuilder {
         let scan_blocks = ComputePipeline::cached(&self.scan_blocks, device, &[])?;
         let link = ComputePipeline::cached(&self.link, device, &[])?;
         let grid = |n: u64| [n.min(row) as u32, n.div_ceil(row) as u32, 1];
-        for level in 0..=leaf_level {
-            let params = uniform(
+        let params_for = |level, fragments| {
+            uniform(
                 device,
                 "octree build params",
                 &BuildParams {
                     log_side,
                     level,
                     leaf_level,
-                    fragments: fragments.capacity,
+                    fragments,
                     capacity,
                 },
-            );
-            flag.record(
-                device,
-                rec,
-                &stage::flag::Resources {
-                    params: (&params).into(),
-                    fragments: (&fragments.list).into(),
-                    fragment_count: (&fragments.total).into(),
-                    cursor: (&cursor).into(),
-                    pool: (&octree.pool).into(),
-                },
-                grid(count.div_ceil(64).max(1)),
-                stage::STAGE,
-            )?;
+            )
+        };
+        for level in 0..=leaf_level {
+            for (part, cursor) in fragments.parts.iter().zip(&cursors) {
+                let params = params_for(level, part.capacity);
+                flag.record(
+                    device,
+                    rec,
+                    &stage::flag::Resources {
+                        params: (&params).into(),
+                        fragments: (&part.list).into(),
+                        fragment_count: (&part.total).into(),
+                        cursor: cursor.into(),
+                        pool: (&octree.pool).into(),
+                    },
+                    grid((part.capacity as u64).div_ceil(64).max(1)),
+                    stage::STAGE,
+                )?;
+            }
+            let params = params_for(level, 0);
             if level == leaf_level && !with_attributes {
                 break;
             }
@@ -547,7 +557,7 @@ impl OctreeBuilder {
             )?;
         }
         Ok(Octree {
-            cursor: with_attributes.then_some(cursor),
+            cursor: with_attributes.then_some(cursors),
             ..octree
         })
     }
@@ -678,17 +688,31 @@ impl OctreeBuilder {
                 )?
             };
             let capacity = pool_capacity.unwrap_or_else(|| {
-                let f = fragments.capacity as u64;
+                let f = fragments.capacity();
                 pool_bound(f, log_side).min(f / 8 + 4096).min(most as u64) as u32
             });
             let octree = self.encode(device, &mut encoder, &fragments, capacity)?;
             queue.submit([encoder.finish()]);
-            let bytes =
-                readback_buffers(device, queue, &[&fragments.total, &octree.starts]).await?;
+            let mut buffers: Vec<&wgpu::Buffer> =
+                fragments.parts.iter().map(|p| &p.total).collect();
+            buffers.push(&octree.starts);
+            let bytes = readback_buffers(device, queue, &buffers).await?;
             let counts: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes);
-            let (total, needed) = (counts[0], counts[1 + leaf_level as usize + 1]);
-            if total > fragments.capacity {
-                fragment_capacity = Some(total);
+            let (totals, starts) = counts.split_at(fragments.parts.len());
+            let needed = starts[leaf_level as usize + 1];
+            let short = fragments
+                .parts
+                .iter()
+                .zip(totals)
+                .filter(|(p, t)| **t > p.capacity)
+                .map(|(_, &t)| t)
+                .max();
+            if let Some(total) = short {
+                // Every part's list as long as the longest count (within one binding, where
+                // the parts are cut again by the estimates).
+                let most_fragments = (device.limits().max_storage_buffer_binding_size / 8)
+                    .min(u32::MAX as u64) as u32;
+                fragment_capacity = Some(total.min(most_fragments));
                 pool_capacity = None;
                 continue;
             }
@@ -701,7 +725,7 @@ impl OctreeBuilder {
             }
             let mut octree = self.shrunk(device, queue, octree, needed);
             if attributes {
-                let voxels = counts[1 + leaf_level as usize + 2] - needed;
+                let voxels = starts[leaf_level as usize + 2] - needed;
                 let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
                     label: Some("octree attributes"),
                 });

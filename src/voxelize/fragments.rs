@@ -4,10 +4,10 @@
 
 use std::sync::OnceLock;
 
-use super::{Grid, GridMesh, Listed, Mesh, SLACK, Separation, Voxelizer, box_columns};
+use super::{CHUNK, Grid, GridMesh, Listed, Mesh, SLACK, Separation, Voxelizer, box_columns};
 use crate::bind::ComputePipeline;
 use crate::error::Error;
-use crate::gpu::{Readback, Record, readback_buffer, uniform_buffer as uniform};
+use crate::gpu::{Readback, Record, uniform_buffer as uniform};
 use crate::shaders::voxelize::fragments::{self as stage, FragmentParams};
 
 /// Bytes per fragment: (x | y << 16, z).
@@ -19,29 +19,37 @@ pub(super) struct FragmentPipelines {
     variants: [OnceLock<ComputePipeline<stage::fragments_listed::Entry>>; 4],
 }
 
-/// The voxels of a mesh's surface as a list on the GPU, one entry per (triangle, voxel) it
-/// touches: a voxel several triangles touch is listed once for each.
+/// The voxels of a mesh's surface as lists on the GPU, one entry per (triangle, voxel) it
+/// touches: a voxel several triangles touch is listed once for each. The triangles are split
+/// into parts whose lists each fit one storage binding (one part unless the surface is large
+/// for the device), so the whole list may exceed what one buffer holds.
 pub struct Fragments {
     /// Voxels per axis of the grid.
     pub size: [u32; 3],
+    /// The lists, each of a run of the triangles.
+    pub parts: Vec<FragmentPart>,
+    /// Triangles left out for having no area.
+    pub degenerate: usize,
+    /// With [`Voxelizer::encode_fragments_with_attributes`]: the triangles and their corner
+    /// attributes, which each part's `triangle_ids` index.
+    pub attributes: Option<FragmentAttributes>,
+}
+
+/// One part of [`Fragments`].
+pub struct FragmentPart {
     /// Entries `list` holds.
     pub capacity: u32,
     /// A `vec2<u32>` per fragment: voxel (x, y, z) as (x | y << 16, z), in no particular order.
     pub list: wgpu::Buffer,
-    /// A `u32`: the fragments the mesh has, also those past `capacity`, which are not in
-    /// `list`. [`Fragments::count`] reads it.
+    /// A `u32`: the part's fragments, also those past `capacity`, which are not in `list`.
     pub total: wgpu::Buffer,
-    /// Triangles left out for having no area.
-    pub degenerate: usize,
-    /// With [`Voxelizer::encode_fragments_with_attributes`]: what the octree's attributes need.
-    pub attributes: Option<FragmentAttributes>,
+    /// With attributes, a `u32` per fragment: its triangle in [`FragmentAttributes::triangles`].
+    pub triangle_ids: Option<wgpu::Buffer>,
 }
 
-/// Each fragment's triangle and the triangles' corner attributes
+/// The triangles and their corner attributes
 /// ([`Voxelizer::encode_fragments_with_attributes`]).
 pub struct FragmentAttributes {
-    /// A `u32` per fragment of [`Fragments::list`]: its triangle in `triangles`.
-    pub triangle_ids: wgpu::Buffer,
     /// Three grid-local `vec4<f32>` vertices per triangle, in the order the ids count.
     pub triangles: wgpu::Buffer,
     /// Six `vec4<u32>` per triangle: per corner (RGBA8 colour, the normal's f32 bits), then
@@ -50,30 +58,52 @@ pub struct FragmentAttributes {
 }
 
 impl Fragments {
+    /// Entries the parts' lists hold in all.
+    pub fn capacity(&self) -> u64 {
+        self.parts.iter().map(|p| p.capacity as u64).sum()
+    }
+
+    /// Each part's fragments, read back once the encoder that recorded them has been
+    /// submitted, as they were counted (also past a part's capacity).
+    pub fn totals(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Readback<Vec<u32>> {
+        let totals: Vec<&wgpu::Buffer> = self.parts.iter().map(|p| &p.total).collect();
+        crate::gpu::readback_buffers(device, queue, &totals)
+            .then(|bytes| Ok(bytemuck::pod_collect_to_vec(&bytes)))
+    }
+
     /// The number of fragments, read back once the encoder that recorded them has been
-    /// submitted: [`Error::Size`] when it is past [`Fragments::capacity`] (the list lost some;
-    /// the error says how many there are, the capacity to ask for).
-    pub fn count(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Readback<u32> {
-        let capacity = self.capacity;
-        readback_buffer(device, queue, &self.total).then(move |bytes| {
-            let total: u32 = bytemuck::pod_read_unaligned(&bytes[..4]);
-            check_total(total, capacity)?;
-            Ok(total)
+    /// submitted: [`Error::Size`] when a part counted more than its capacity (its list lost
+    /// some; the error names the part's count, the capacity to ask for).
+    pub fn count(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Readback<u64> {
+        let capacities: Vec<u32> = self.parts.iter().map(|p| p.capacity).collect();
+        self.totals(device, queue).then(move |totals| {
+            for (&t, &c) in totals.iter().zip(&capacities) {
+                check_total(t, c)?;
+            }
+            Ok(totals.iter().map(|&t| t as u64).sum())
         })
     }
 
-    /// The fragments' voxels, as [`Fragments::count`] checks them.
+    /// The fragments' voxels, part after part, as [`Fragments::count`] checks them.
     pub fn read(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Readback<Vec<[u32; 3]>> {
-        let capacity = self.capacity;
-        crate::gpu::readback_buffers(device, queue, &[&self.total, &self.list]).then(move |bytes| {
-            let total: u32 = bytemuck::pod_read_unaligned(&bytes[..4]);
-            check_total(total, capacity)?;
-            let list: &[[u32; 2]] =
-                bytemuck::cast_slice(&bytes[4..4 + total as usize * FRAGMENT_BYTES as usize]);
-            Ok(list
-                .iter()
-                .map(|&[xy, z]| [xy & 0xffff, xy >> 16, z])
-                .collect())
+        let capacities: Vec<u32> = self.parts.iter().map(|p| p.capacity).collect();
+        let mut buffers: Vec<&wgpu::Buffer> = self.parts.iter().map(|p| &p.total).collect();
+        buffers.extend(self.parts.iter().map(|p| &p.list));
+        let sizes: Vec<usize> = self.parts.iter().map(|p| p.list.size() as usize).collect();
+        crate::gpu::readback_buffers(device, queue, &buffers).then(move |bytes| {
+            let n = capacities.len();
+            let totals: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes[..n * 4]);
+            let mut at = n * 4;
+            let mut out = Vec::new();
+            for ((&total, &capacity), size) in totals.iter().zip(&capacities).zip(sizes) {
+                check_total(total, capacity)?;
+                let list: Vec<[u32; 2]> = bytemuck::pod_collect_to_vec(
+                    &bytes[at..at + total as usize * FRAGMENT_BYTES as usize],
+                );
+                out.extend(list.iter().map(|&[xy, z]| [xy & 0xffff, xy >> 16, z]));
+                at += size;
+            }
+            Ok(out)
         })
     }
 }
@@ -82,7 +112,7 @@ fn check_total(total: u32, capacity: u32) -> Result<(), Error> {
     if total > capacity {
         return Err(Error::Size {
             stage: stage::STAGE,
-            what: "voxel fragments (the list's capacity)",
+            what: "voxel fragments of a part (its list's capacity)",
             got: total as u64,
             max: capacity as u64,
         });
@@ -106,9 +136,11 @@ impl Voxelizer {
     /// Record the surface voxels of `mesh` in `grid` as a list of fragments (see
     /// [`Fragments`]), as thick as `separation` says: the same voxels as
     /// [`Voxelizer::encode_surface_with`], with no dense grid, so sides up to
-    /// [`super::MAX_SPARSE_SIDE`]. The list holds `capacity` fragments, by default
-    /// [`fragment_estimate`] (at most the device's storage binding); [`Fragments::count`] says
-    /// whether that was enough.
+    /// [`super::MAX_SPARSE_SIDE`]. The triangles are cut into parts whose estimated fragments
+    /// ([`fragment_estimate`]'s four per column) fit `capacity`, or one storage binding by
+    /// default; each part's list holds `capacity`, or by default its estimate.
+    /// [`Fragments::count`] says whether that was enough, [`Fragments::totals`] what each part
+    /// needs.
     ///
     /// ```
     /// # fn f(ctx: &fieldkit::gpu::Context) -> Result<(), fieldkit::Error> {
@@ -179,36 +211,48 @@ impl Voxelizer {
         };
         let limit = device.limits().max_storage_buffer_binding_size;
         let most = (limit / FRAGMENT_BYTES).min(u32::MAX as u64);
-        let capacity = match capacity {
-            Some(0) => {
-                return Err(Error::Size {
-                    stage: stage::STAGE,
-                    what: "voxel fragment capacity",
-                    got: 0,
-                    max: most,
-                });
-            }
-            Some(c) if c as u64 > most => {
-                return Err(Error::Size {
-                    stage: stage::STAGE,
-                    what: "voxel fragment capacity (8 bytes each, the storage binding limit)",
-                    got: c as u64,
-                    max: most,
-                });
-            }
-            Some(c) => c,
-            None => fragment_estimate(&local, grid.size).clamp(1, most) as u32,
-        };
+        if let Some(c) = capacity
+            && (c == 0 || c as u64 > most)
+        {
+            return Err(Error::Size {
+                stage: stage::STAGE,
+                what: "voxel fragment capacity of a part (8 bytes each, one storage binding)",
+                got: c as u64,
+                max: most,
+            });
+        }
         let listed = Listed::new(device, &local, grid)?;
+        let threads = listed.light as u64 + listed.chunk_count as u64;
+        // Parts of consecutive threads whose estimated fragments fit a list: a light
+        // triangle's estimate is 4 per column of its box, a heavy chunk's 4 per column.
+        let budget = capacity.map_or(most, |c| c as u64);
+        let mut parts: Vec<(u32, u32, u64)> = Vec::new();
+        let (mut first, mut sum) = (0u32, 0u64);
+        for i in 0..threads as u32 {
+            let estimate = if i < listed.light {
+                let t = listed.order[i as usize] as usize;
+                4 * box_columns(&local.vertices[3 * t..3 * t + 3], grid.size)
+            } else {
+                4 * CHUNK as u64
+            };
+            if i > first && sum + estimate > budget {
+                parts.push((first, i - first, sum));
+                (first, sum) = (i, 0);
+            }
+            sum += estimate;
+        }
+        if threads as u32 > first || parts.is_empty() {
+            parts.push((first, threads as u32 - first, sum));
+        }
         let buffer = |label, size: u64, usage| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
-                size,
+                size: size.max(4),
                 usage: wgpu::BufferUsages::STORAGE | usage,
                 mapped_at_creation: false,
             })
         };
-        // New buffers: zeroed by wgpu (the total starts at 0).
+        // New buffers: zeroed by wgpu (each total starts at 0).
         let attributes = corner_data.map(|corners| {
             use wgpu::util::DeviceExt;
             // The corners in the order the triangles were sorted in.
@@ -221,11 +265,6 @@ impl Voxelizer {
                 sorted.push([0; 4]);
             }
             FragmentAttributes {
-                triangle_ids: buffer(
-                    "voxel fragment triangles",
-                    capacity as u64 * 4,
-                    wgpu::BufferUsages::empty(),
-                ),
                 triangles: listed.triangles.clone(),
                 corners: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                     label: Some("voxel fragment corners"),
@@ -234,25 +273,8 @@ impl Voxelizer {
                 }),
             }
         });
-        let fragments = Fragments {
-            size: grid.size,
-            capacity,
-            list: buffer(
-                "voxel fragments",
-                capacity as u64 * FRAGMENT_BYTES,
-                wgpu::BufferUsages::COPY_SRC,
-            ),
-            total: buffer("voxel fragment count", 4, wgpu::BufferUsages::COPY_SRC),
-            degenerate: local.degenerate,
-            attributes,
-        };
-        let threads = listed.light as u64 + listed.chunk_count as u64;
-        if threads == 0 {
-            return Ok(fragments);
-        }
         let groups = threads.div_ceil(64);
-        let (wide, rows) = (groups.min(65535), groups.div_ceil(65535));
-        if rows > 65535 {
+        if groups.div_ceil(65535) > 65535 {
             return Err(Error::Size {
                 stage: stage::STAGE,
                 what: "fragment threads (triangles and heavy chunks)",
@@ -269,39 +291,64 @@ impl Voxelizer {
                 ("TRIANGLE_IDS", ids as u32 as f64),
             ],
         )?;
-        let no_ids;
-        let triangle_ids = match &fragments.attributes {
-            Some(a) => &a.triangle_ids,
-            None => {
-                no_ids = buffer("no fragment triangles", 4, wgpu::BufferUsages::empty());
-                &no_ids
-            }
+        let no_ids = buffer("no fragment triangles", 4, wgpu::BufferUsages::empty());
+        let mut fragments = Fragments {
+            size: grid.size,
+            parts: Vec::with_capacity(parts.len()),
+            degenerate: local.degenerate,
+            attributes,
         };
-        let params = uniform(
-            device,
-            "voxel fragment params",
-            &FragmentParams {
-                grid: grid.size.into(),
-                count: listed.light,
-                slack: SLACK,
-                chunks: listed.chunk_count,
-                capacity,
-            },
-        );
-        pipeline.record(
-            device,
-            rec,
-            &stage::fragments_listed::Resources {
-                params: (&params).into(),
-                triangles: (&listed.triangles).into(),
-                listed: (&listed.chunks).into(),
-                fragments: (&fragments.list).into(),
-                total: (&fragments.total).into(),
-                triangle_ids: triangle_ids.into(),
-            },
-            [wide as u32, rows as u32, 1],
-            stage::STAGE,
-        )?;
+        for (first_thread, count, estimate) in parts {
+            // Exactly the capacity asked for, else the estimate (within one binding).
+            let part_capacity = capacity.unwrap_or(estimate.clamp(1, most) as u32);
+            let part = FragmentPart {
+                capacity: part_capacity,
+                list: buffer(
+                    "voxel fragments",
+                    part_capacity as u64 * FRAGMENT_BYTES,
+                    wgpu::BufferUsages::COPY_SRC,
+                ),
+                total: buffer("voxel fragment count", 4, wgpu::BufferUsages::COPY_SRC),
+                triangle_ids: ids.then(|| {
+                    buffer(
+                        "voxel fragment triangles",
+                        part_capacity as u64 * 4,
+                        wgpu::BufferUsages::empty(),
+                    )
+                }),
+            };
+            if count > 0 {
+                let params = uniform(
+                    device,
+                    "voxel fragment params",
+                    &FragmentParams {
+                        grid: grid.size.into(),
+                        count: listed.light,
+                        slack: SLACK,
+                        chunks: listed.chunk_count,
+                        capacity: part_capacity,
+                        first_thread,
+                        threads: count,
+                    },
+                );
+                let groups = (count as u64).div_ceil(64);
+                pipeline.record(
+                    device,
+                    rec,
+                    &stage::fragments_listed::Resources {
+                        params: (&params).into(),
+                        triangles: (&listed.triangles).into(),
+                        listed: (&listed.chunks).into(),
+                        fragments: (&part.list).into(),
+                        total: (&part.total).into(),
+                        triangle_ids: part.triangle_ids.as_ref().unwrap_or(&no_ids).into(),
+                    },
+                    [groups.min(65535) as u32, groups.div_ceil(65535) as u32, 1],
+                    stage::STAGE,
+                )?;
+            }
+            fragments.parts.push(part);
+        }
         Ok(fragments)
     }
 }

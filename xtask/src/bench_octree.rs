@@ -40,7 +40,7 @@ pub fn run(args: &crate::measure::Args) -> ExitCode {
 struct Row {
     mesh: String,
     n: u32,
-    fragments: u32,
+    fragments: u64,
     voxels: u64,
     nodes: u64,
     pool_bytes: u64,
@@ -161,11 +161,13 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
                 )
                 .map_err(e)?;
             ctx.submit_and_wait("fragment count", enc).map_err(e)?;
-            let count = match fragments.count(&ctx.device, &ctx.queue).wait(&ctx) {
-                Ok(c) => c,
-                Err(fieldkit::Error::Size { got, .. }) => got as u32,
-                Err(err) => return Err(err.to_string()),
-            };
+            // Every part's exact count: the longest sizes each part's list in the timed runs.
+            let totals = fragments
+                .totals(&ctx.device, &ctx.queue)
+                .wait(&ctx)
+                .map_err(e)?;
+            let count: u64 = totals.iter().map(|&t| t as u64).sum();
+            let longest = totals.iter().copied().max().unwrap_or(1).max(1);
             drop(fragments);
             let pool = tree.pool.len() as u32;
             let build = if !wants("build") {
@@ -179,7 +181,7 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
                             mesh,
                             &grid,
                             Separation::Conservative,
-                            Some(count.max(1)),
+                            Some(longest),
                         )
                         .map_err(|e| e.to_string())?;
                     builder
@@ -216,7 +218,7 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
                 voxels,
                 nodes: pool as u64,
                 pool_bytes: pool as u64 * 8,
-                peak_bytes: count as u64 * 12 + pool as u64 * 8,
+                peak_bytes: count * 12 + pool as u64 * 8,
                 dense_bytes: grid.voxels().div_ceil(8),
                 build,
                 dense,
