@@ -678,3 +678,80 @@ fn a_chunk_list_too_large_is_refused_before_it_is_made() {
         Ok(_) => panic!("a chunk list of gigabytes was accepted"),
     }
 }
+
+/// However the triangles are cut into threads (light or in chunks, sorted or not, any
+/// workgroup size; `Listing::auto` picks per mesh), the voxels are the same, and they are the
+/// SAT's: a sphere of small triangles and a few triangles of many columns each.
+#[test]
+fn every_way_of_cutting_triangles_gives_the_same_voxels() {
+    use fieldkit::voxelize::Listing;
+    let ctx = Context::shared();
+    let mut m = Mesh::uv_sphere(DVec3::new(21.3, 19.8, 17.1), 12.7, 40, 20);
+    let base = m.positions.len() as u32;
+    m.positions.extend([
+        DVec3::new(1.2, 2.3, 3.1),
+        DVec3::new(44.7, 6.1, 30.2),
+        DVec3::new(9.4, 38.8, 12.6),
+        DVec3::new(40.2, 37.9, 2.2),
+    ]);
+    m.triangles
+        .extend([[base, base + 1, base + 2], [base + 1, base + 3, base + 2]]);
+    let grid = unit_grid([46, 40, 33]);
+    let listings = [
+        None,
+        Some(Listing::default()),
+        Some(Listing::auto(1 << 20)),
+        Some(Listing {
+            light: 4,
+            chunk: 2,
+            sort: true,
+            workgroup: 32,
+        }),
+        Some(Listing {
+            light: 1,
+            chunk: 1,
+            sort: false,
+            workgroup: 256,
+        }),
+        Some(Listing {
+            light: 64,
+            chunk: 16,
+            sort: true,
+            workgroup: 128,
+        }),
+    ];
+    let mut v = Voxelizer::new(&ctx.device).unwrap();
+    for separation in [Separation::Conservative, Separation::Six] {
+        let mut first: Option<Vec<bool>> = None;
+        for listing in listings {
+            v.set_listing(&ctx.device, listing).unwrap();
+            let mut enc = ctx.encoder("voxelize");
+            let s = v
+                .encode_surface_with(&ctx.device, &mut enc, &m, &grid, separation)
+                .unwrap();
+            ctx.submit_and_wait("voxelize", enc).unwrap();
+            let got = s.read(&ctx.device, &ctx.queue).wait(&ctx).unwrap();
+            match &first {
+                None => {
+                    if separation == Separation::Conservative {
+                        let (misses, _, _) = check_against_sat(&got, &m, &grid);
+                        assert_eq!(misses, 0, "voxels the SAT has and the GPU missed");
+                    }
+                    first = Some(got);
+                }
+                Some(want) => {
+                    let differ = got.iter().zip(want).filter(|(a, b)| a != b).count();
+                    assert_eq!(differ, 0, "{separation:?}, {listing:?}: voxels differ");
+                }
+            }
+        }
+    }
+    let bad = Listing {
+        chunk: 0,
+        ..Listing::default()
+    };
+    assert!(matches!(
+        v.set_listing(&ctx.device, Some(bad)),
+        Err(Error::Invalid { .. })
+    ));
+}

@@ -30,9 +30,13 @@ struct SurfaceParams {
     moved: f32,
     // Entries the work list holds (the host sizes it for every chunk there can be).
     capacity: u32,
+    // Columns per listed chunk (`surface_listed`; the others walk CHUNK).
+    chunk: u32,
 }
 
 override SIX_SEPARATING: bool = false;
+// Invocations per workgroup of `surface_listed`.
+override LISTED_WORKGROUP: u32 = 64u;
 
 @group(0) @binding(0) var<uniform> params: SurfaceParams;
 // Three vertices per triangle, in the coordinates `to_grid` moves (w unused).
@@ -126,15 +130,15 @@ fn surface_heavy(@builtin(global_invocation_id) id: vec3<u32>) {
 // first `count` triangles are light (their box's largest face has at most LIGHT columns), one
 // per thread; the next `capacity` threads take one listed chunk of a heavy triangle each. No
 // work-list counter, no second pass, no indirect dispatch.
-@compute @workgroup_size(64)
+@compute @workgroup_size(LISTED_WORKGROUP)
 fn surface_listed(@builtin(global_invocation_id) id: vec3<u32>,
                   @builtin(num_workgroups) groups: vec3<u32>) {
-    let i = id.x + id.y * groups.x * 64u;
+    let i = id.x + id.y * groups.x * LISTED_WORKGROUP;
     if i < params.count {
         let s = load(params.first + i);
         voxelize_columns(s, 0u, s.columns);
     } else if i - params.count < params.capacity {
         let item = listed[i - params.count];
-        voxelize_columns(load(item.x), item.y, CHUNK);
+        voxelize_columns(load(item.x), item.y, params.chunk);
     }
 }

@@ -221,7 +221,7 @@ impl Voxelizer {
                 max: most,
             });
         }
-        let listed = Listed::new(device, &local, grid)?;
+        let listed = Listed::new(device, &local, grid, super::Listing::default())?;
         let threads = listed.light as u64 + listed.chunk_count as u64;
         // Parts of consecutive threads whose estimated fragments fit a list: a light
         // triangle's estimate is 4 per column of its box, a heavy chunk's 4 per column.

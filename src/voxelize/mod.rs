@@ -574,8 +574,9 @@ pub fn heavy_chunk_bound(local: &GridMesh, size: [u32; 3]) -> u32 {
 /// by [`box_columns`]) first, then the heavy ones, and each heavy triangle's chunks of
 /// [`CHUNK`] columns as (triangle, first column); a list larger than `limit` bytes is refused
 /// before it is made.
-fn listed(local: &GridMesh, size: [u32; 3], limit: u64) -> Result<Sorted, Error> {
-    let chunk = CHUNK as u64;
+fn listed(local: &GridMesh, size: [u32; 3], limit: u64, listing: Listing) -> Result<Sorted, Error> {
+    let chunk = listing.chunk.max(1) as u64;
+    let light_most = listing.light as u64;
     let most: Vec<u64> = local
         .vertices
         .chunks(3)
@@ -585,7 +586,7 @@ fn listed(local: &GridMesh, size: [u32; 3], limit: u64) -> Result<Sorted, Error>
     // buffer may hold (or the host has memory for).
     let total: u64 = most
         .iter()
-        .filter(|&&m| m > LIGHT as u64)
+        .filter(|&&m| m > light_most)
         .map(|m| m.div_ceil(chunk))
         .sum();
     if total.saturating_mul(8) > limit {
@@ -599,13 +600,19 @@ fn listed(local: &GridMesh, size: [u32; 3], limit: u64) -> Result<Sorted, Error>
     let mut vertices = Vec::with_capacity(local.vertices.len());
     let mut order = Vec::with_capacity(most.len());
     let mut heavy = Vec::new();
-    for (i, (t, &most)) in local.vertices.chunks(3).zip(&most).enumerate() {
-        if most > LIGHT as u64 {
-            heavy.push((i, t, most));
+    for (i, &most) in most.iter().enumerate() {
+        if most > light_most {
+            heavy.push((i, &local.vertices[3 * i..3 * i + 3], most));
         } else {
-            vertices.extend_from_slice(t);
             order.push(i as u32);
         }
+    }
+    if listing.sort {
+        // Most columns first: threads of a warp then walk about as many columns each.
+        order.sort_by_key(|&i| std::cmp::Reverse(most[i as usize]));
+    }
+    for &i in &order {
+        vertices.extend_from_slice(&local.vertices[3 * i as usize..3 * i as usize + 3]);
     }
     let light = (vertices.len() / 3) as u32;
     let mut chunks = Vec::with_capacity(total as usize);
@@ -690,6 +697,49 @@ impl SurfacePipelines {
 
 /// Columns per chunk of a heavy triangle (the shader's `CHUNK`).
 pub const CHUNK: u32 = 4;
+
+/// How `encode_surface`/`encode_solid` cut the triangles into threads: a triangle whose box
+/// has at most `light` columns is one thread, a heavier one is cut into chunks of `chunk`
+/// columns; `sort` orders the light ones by columns, most first; `workgroup` invocations per
+/// workgroup. Bench knob: by default [`Listing::auto`] picks per mesh.
+#[doc(hidden)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Listing {
+    pub light: u32,
+    pub chunk: u32,
+    pub sort: bool,
+    pub workgroup: u32,
+}
+
+impl Default for Listing {
+    fn default() -> Self {
+        Self {
+            light: LIGHT,
+            chunk: CHUNK,
+            sort: false,
+            workgroup: 64,
+        }
+    }
+}
+
+impl Listing {
+    /// Fewer triangles than one wave of a large GPU's threads: the pass takes as long as its
+    /// slowest warp, so no thread walks more than 8 columns and the light triangles are sorted
+    /// by columns (warps of equal work). More: throughput counts, and cutting more triangles
+    /// would repeat their setup; the default. Chosen from the H100 measurements in
+    /// docs/voxelize.md.
+    pub fn auto(triangles: usize) -> Self {
+        if triangles <= 1 << 18 {
+            Self {
+                light: 8,
+                sort: true,
+                ..Self::default()
+            }
+        } else {
+            Self::default()
+        }
+    }
+}
 /// Most columns a triangle walks in its own thread; heavier ones go through the work list (the
 /// shader's `LIGHT`).
 pub const LIGHT: u32 = 16;
@@ -703,6 +753,7 @@ pub struct Voxelizer {
     attribute_pipelines: attributes::AttributePipelines,
     fragment_pipelines: fragments::FragmentPipelines,
     raster: std::sync::OnceLock<crate::bind::RenderPipeline<raster_stage::fs_raster::Entry>>,
+    listing: Option<Listing>,
 }
 
 /// One compute pass of `pipeline` with its workgroup counts read from `args` (three u32).
@@ -774,12 +825,19 @@ struct Listed {
     chunks: wgpu::Buffer,
     light: u32,
     chunk_count: u32,
+    /// Columns per chunk.
+    chunk: u32,
     /// Per sorted triangle, its index in the [`GridMesh`].
     order: Vec<u32>,
 }
 
 impl Listed {
-    fn new(device: &wgpu::Device, local: &GridMesh, grid: &Grid) -> Result<Listed, Error> {
+    fn new(
+        device: &wgpu::Device,
+        local: &GridMesh,
+        grid: &Grid,
+        listing: Listing,
+    ) -> Result<Listed, Error> {
         use wgpu::util::DeviceExt;
         let limit = device.limits().max_storage_buffer_binding_size;
         let Sorted {
@@ -787,7 +845,7 @@ impl Listed {
             light,
             mut chunks,
             order,
-        } = listed(local, grid.size, limit)?;
+        } = listed(local, grid.size, limit, listing)?;
         let chunk_count = chunks.len() as u32;
         // Padding keeps the buffers non-empty.
         if vertices.is_empty() {
@@ -808,6 +866,7 @@ impl Listed {
             chunks: buffer("voxelize heavy chunks", bytemuck::cast_slice(&chunks)),
             light,
             chunk_count,
+            chunk: listing.chunk,
             order,
         })
     }
@@ -833,7 +892,39 @@ impl Voxelizer {
             attribute_pipelines: Default::default(),
             fragment_pipelines: Default::default(),
             raster: Default::default(),
+            listing: None,
         })
+    }
+
+    /// Bench knob: how the surface pass cuts triangles into threads (see [`Listing`]; `None`:
+    /// [`Listing::auto`] per mesh).
+    #[doc(hidden)]
+    pub fn set_listing(
+        &mut self,
+        device: &wgpu::Device,
+        listing: Option<Listing>,
+    ) -> Result<(), Error> {
+        let workgroup = listing.map_or(64, |l| l.workgroup);
+        if listing.is_some_and(|l| l.chunk == 0) || !workgroup.is_power_of_two() || workgroup > 256
+        {
+            return Err(invalid(format!("listing {listing:?}")));
+        }
+        for (pipelines, six) in [(&mut self.surface, false), (&mut self.surface_six, true)] {
+            pipelines.listed = ComputePipeline::with_overrides(
+                device,
+                &[
+                    ("SIX_SEPARATING", six as u32 as f64),
+                    ("LISTED_WORKGROUP", workgroup as f64),
+                ],
+            )?;
+        }
+        self.listing = listing;
+        Ok(())
+    }
+
+    fn listing_for(&self, local: &GridMesh) -> Listing {
+        self.listing
+            .unwrap_or_else(|| Listing::auto(local.vertices.len() / 3))
     }
 
     /// Solid voxels of a closed mesh: every voxel whose centre is inside, by parity along x
@@ -857,7 +948,7 @@ impl Voxelizer {
         let local = mesh.to_grid(grid)?;
         let occupancy = zeroed_bitset(device, grid)?;
         // The parity fill takes the triangles in any order: the surface pass's sorted ones.
-        let listed = Listed::new(device, &local, grid)?;
+        let listed = Listed::new(device, &local, grid, self.listing_for(&local))?;
         let triangles = &listed.triangles;
         let count = (local.vertices.len() / 3) as u32;
         for (first, n) in batches(count) {
@@ -1009,10 +1100,12 @@ impl Voxelizer {
                 slack: SLACK,
                 moved: 0.0,
                 capacity: listed.chunk_count,
+                chunk: listed.chunk,
             },
         );
         // More than 65535 workgroups: rows of 65535 (the shader reads `num_workgroups`).
-        let groups = threads.div_ceil(64);
+        let wg = self.listing.map_or(64, |l| l.workgroup) as u64;
+        let groups = threads.div_ceil(wg);
         let rows = groups.div_ceil(65535);
         let wide = groups.min(65535);
         if rows > 65535 {
@@ -1020,7 +1113,7 @@ impl Voxelizer {
                 stage: STAGE,
                 what: "surface threads (triangles and heavy chunks)",
                 got: threads,
-                max: 65535 * 65535 * 64,
+                max: 65535 * 65535 * wg,
             });
         }
         pipelines.listed.record(
@@ -1107,6 +1200,7 @@ impl Voxelizer {
                     slack: SLACK,
                     moved,
                     capacity,
+                    chunk: CHUNK,
                 },
             )
         };
@@ -1295,7 +1389,7 @@ impl Voxelizer {
             Separation::Conservative => &self.surface,
             Separation::Six => &self.surface_six,
         };
-        let listed = Listed::new(device, &local, grid)?;
+        let listed = Listed::new(device, &local, grid, self.listing_for(&local))?;
         self.listed_pass(device, rec, pipelines, &occupancy, &listed, grid)?;
         Ok(Surface {
             size: grid.size,

@@ -83,7 +83,11 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
     } else {
         Some(crate::heater::Heater::new(&ctx, 20.0)?)
     };
-    let v = Voxelizer::new(&ctx.device).map_err(|e| e.to_string())?;
+    let mut v = Voxelizer::new(&ctx.device).map_err(|e| e.to_string())?;
+    // `FIELDKIT_BENCH_LISTINGS=auto,16:4:0:64,4:4:1:32`: time the surface rows with each way
+    // of cutting triangles into threads (light columns : chunk columns : sorted : workgroup;
+    // `auto`, the default, picks per mesh).
+    let listings = listings()?;
     let mut meshes = Vec::new();
     match &args.mesh {
         Some(path)
@@ -123,10 +127,13 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
         ),
     }
     let (segments, sides) = if args.quick { (200, 100) } else { (1000, 500) };
-    meshes.push((
-        format!("torus {segments}×{sides}"),
-        Mesh::torus(DVec3::ZERO, 1.0, 0.35, segments, sides),
-    ));
+    // `FIELDKIT_BENCH_NO_TORUS`: the given mesh alone.
+    if std::env::var_os("FIELDKIT_BENCH_NO_TORUS").is_none() {
+        meshes.push((
+            format!("torus {segments}×{sides}"),
+            Mesh::torus(DVec3::ZERO, 1.0, 0.35, segments, sides),
+        ));
+    }
     let sizes: &[u32] = if args.quick {
         &[64, 128]
     } else {
@@ -142,147 +149,154 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
     } else {
         args.sizes.iter().map(|&n| n as u32).collect()
     };
-    for (name, mesh) in &meshes {
-        for &n in &sizes {
-            let grid = fieldkit::voxelize::Grid::fit(mesh, n).map_err(|e| e.to_string())?;
-            // Uploaded once: the `resident` rows time the passes alone.
-            let resident = fieldkit::voxelize::GpuMesh::upload(&ctx.device, mesh)
-                .map_err(|e| e.to_string())?;
-            for mode in ["surface", "resident", "raster", "solid", "attributes"] {
-                if !args.modes.is_empty() && !args.modes.iter().any(|m| m == mode) {
-                    continue;
-                }
-                // The attribute list is sized from the occupied count, read once here.
-                let occupied = if mode == "attributes" {
-                    match ctx.block_on(v.attributes(&ctx.device, &ctx.queue, mesh, &grid)) {
-                        Ok(a) => a.count,
-                        Err(e) => {
-                            println!("| {name} | {:?} | {mode} | skipped: {e} |", grid.size);
-                            continue;
-                        }
-                    }
-                } else {
-                    0
-                };
-                let encode = |enc: &mut wgpu::CommandEncoder| -> Result<Surface, String> {
-                    match mode {
-                        "surface" => v.encode_surface(&ctx.device, enc, mesh, &grid),
-                        "resident" => v.encode_surface_placed(
-                            &ctx.device,
-                            enc,
-                            &[(&resident, glam::DMat4::IDENTITY)],
-                            &grid,
-                            fieldkit::voxelize::Separation::Conservative,
-                        ),
-                        "raster" => v.encode_surface_raster(&ctx.device, enc, mesh, &grid),
-                        "solid" => v.encode_solid(&ctx.device, enc, mesh, &grid, true),
-                        _ => v
-                            .encode_attributes(&ctx.device, enc, mesh, &grid)
-                            .and_then(|p| {
-                                v.encode_resolve_attributes(&ctx.device, enc, p, occupied)
-                                    .map(|a| a.surface)
-                            }),
-                    }
-                    .map_err(|e| e.to_string())
-                };
-                // Warm up for at least WARMUP_TIME: sub-millisecond rows read up to 3× slow
-                // after a few runs while the clocks are still low.
-                let start = std::time::Instant::now();
-                let mut warm = 0;
-                while warm < args.warmup.max(3) || start.elapsed() < crate::measure::WARMUP_TIME {
-                    stamps.time_after(&ctx, heater.as_ref(), |enc| encode(enc).map(|_| ()))?;
-                    warm += 1;
-                }
-                let mut times = Vec::new();
-                for _ in 0..args.reps {
-                    times.push(
-                        stamps.time_after(&ctx, heater.as_ref(), |enc| encode(enc).map(|_| ()))?,
-                    );
-                }
-                let (lo, hi) = times
-                    .iter()
-                    .fold((f64::MAX, 0.0f64), |(l, h), &t| (l.min(t), h.max(t)));
-                let ms = median(times);
-                // The same encode BATCH times in one submission: the GPU never idles between
-                // runs, so this is the steady rate, free of clock ramps and submit gaps.
-                let mut batched = Vec::new();
-                for _ in 0..args.reps.div_ceil(BATCH).max(3) {
-                    let total = stamps.time_after(&ctx, heater.as_ref(), |enc| {
-                        (0..BATCH).try_for_each(|_| encode(enc).map(|_| ()))
-                    })?;
-                    batched.push(total / BATCH as f64);
-                }
-                let ms_batched = median(batched);
-                if mode == "surface" || mode == "resident" || mode == "solid" {
-                    // Each pass on its own (the clears between them are not passes).
-                    let (total, _, _, passes) = crate::measure::time_runs(
-                        &ctx,
-                        args.warmup,
-                        args.reps,
-                        heater.as_ref(),
-                        |enc, prof| {
-                            let r = if mode == "surface" {
-                                v.encode_surface_with(
-                                    &ctx.device,
-                                    &mut prof.record(enc),
-                                    mesh,
-                                    &grid,
-                                    fieldkit::voxelize::Separation::Conservative,
-                                )
-                            } else if mode == "resident" {
-                                v.encode_surface_placed(
-                                    &ctx.device,
-                                    &mut prof.record(enc),
-                                    &[(&resident, glam::DMat4::IDENTITY)],
-                                    &grid,
-                                    fieldkit::voxelize::Separation::Conservative,
-                                )
-                            } else {
-                                v.encode_solid(
-                                    &ctx.device,
-                                    &mut prof.record(enc),
-                                    mesh,
-                                    &grid,
-                                    true,
-                                )
-                            };
-                            r.expect("encode");
-                        },
-                    )?;
-                    let list: Vec<String> = passes
-                        .iter()
-                        .map(|(n, ms)| format!("{n} {ms:.4}"))
-                        .collect();
-                    println!(
-                        "  passes ({total:.4} ms first to last): {}",
-                        list.join(", ")
-                    );
-                }
-                let mut enc = ctx.encoder("count");
-                let s = encode(&mut enc)?;
-                ctx.submit_and_wait("count", enc)
+    for (listing, suffix) in &listings {
+        v.set_listing(&ctx.device, *listing)
+            .map_err(|e| e.to_string())?;
+        for (name, mesh) in &meshes {
+            let name = &format!("{name}{suffix}");
+            for &n in &sizes {
+                let grid = fieldkit::voxelize::Grid::fit(mesh, n).map_err(|e| e.to_string())?;
+                // Uploaded once: the `resident` rows time the passes alone.
+                let resident = fieldkit::voxelize::GpuMesh::upload(&ctx.device, mesh)
                     .map_err(|e| e.to_string())?;
-                let voxels = s
-                    .read(&ctx.device, &ctx.queue)
-                    .wait(&ctx)
-                    .map_err(|e| e.to_string())?
-                    .iter()
-                    .filter(|&&o| o)
-                    .count();
-                println!(
-                    "| {name} | {} | {:?} | {mode} | {ms:.3} ({lo:.3}–{hi:.3}) | {ms_batched:.3} | {voxels} |",
-                    mesh.triangles.len(),
-                    grid.size
-                );
-                rows.push(Row {
-                    mesh: name.clone(),
-                    triangles: mesh.triangles.len(),
-                    n,
-                    mode,
-                    ms,
-                    ms_batched,
-                    voxels,
-                });
+                for mode in ["surface", "resident", "raster", "solid", "attributes"] {
+                    if !args.modes.is_empty() && !args.modes.iter().any(|m| m == mode) {
+                        continue;
+                    }
+                    // The attribute list is sized from the occupied count, read once here.
+                    let occupied = if mode == "attributes" {
+                        match ctx.block_on(v.attributes(&ctx.device, &ctx.queue, mesh, &grid)) {
+                            Ok(a) => a.count,
+                            Err(e) => {
+                                println!("| {name} | {:?} | {mode} | skipped: {e} |", grid.size);
+                                continue;
+                            }
+                        }
+                    } else {
+                        0
+                    };
+                    let encode = |enc: &mut wgpu::CommandEncoder| -> Result<Surface, String> {
+                        match mode {
+                            "surface" => v.encode_surface(&ctx.device, enc, mesh, &grid),
+                            "resident" => v.encode_surface_placed(
+                                &ctx.device,
+                                enc,
+                                &[(&resident, glam::DMat4::IDENTITY)],
+                                &grid,
+                                fieldkit::voxelize::Separation::Conservative,
+                            ),
+                            "raster" => v.encode_surface_raster(&ctx.device, enc, mesh, &grid),
+                            "solid" => v.encode_solid(&ctx.device, enc, mesh, &grid, true),
+                            _ => v
+                                .encode_attributes(&ctx.device, enc, mesh, &grid)
+                                .and_then(|p| {
+                                    v.encode_resolve_attributes(&ctx.device, enc, p, occupied)
+                                        .map(|a| a.surface)
+                                }),
+                        }
+                        .map_err(|e| e.to_string())
+                    };
+                    // Warm up for at least WARMUP_TIME: sub-millisecond rows read up to 3× slow
+                    // after a few runs while the clocks are still low.
+                    let start = std::time::Instant::now();
+                    let mut warm = 0;
+                    while warm < args.warmup.max(3) || start.elapsed() < crate::measure::WARMUP_TIME
+                    {
+                        stamps.time_after(&ctx, heater.as_ref(), |enc| encode(enc).map(|_| ()))?;
+                        warm += 1;
+                    }
+                    let mut times = Vec::new();
+                    for _ in 0..args.reps {
+                        times
+                            .push(stamps.time_after(&ctx, heater.as_ref(), |enc| {
+                                encode(enc).map(|_| ())
+                            })?);
+                    }
+                    let (lo, hi) = times
+                        .iter()
+                        .fold((f64::MAX, 0.0f64), |(l, h), &t| (l.min(t), h.max(t)));
+                    let ms = median(times);
+                    // The same encode BATCH times in one submission: the GPU never idles between
+                    // runs, so this is the steady rate, free of clock ramps and submit gaps.
+                    let mut batched = Vec::new();
+                    for _ in 0..args.reps.div_ceil(BATCH).max(3) {
+                        let total = stamps.time_after(&ctx, heater.as_ref(), |enc| {
+                            (0..BATCH).try_for_each(|_| encode(enc).map(|_| ()))
+                        })?;
+                        batched.push(total / BATCH as f64);
+                    }
+                    let ms_batched = median(batched);
+                    if mode == "surface" || mode == "resident" || mode == "solid" {
+                        // Each pass on its own (the clears between them are not passes).
+                        let (total, _, _, passes) = crate::measure::time_runs(
+                            &ctx,
+                            args.warmup,
+                            args.reps,
+                            heater.as_ref(),
+                            |enc, prof| {
+                                let r = if mode == "surface" {
+                                    v.encode_surface_with(
+                                        &ctx.device,
+                                        &mut prof.record(enc),
+                                        mesh,
+                                        &grid,
+                                        fieldkit::voxelize::Separation::Conservative,
+                                    )
+                                } else if mode == "resident" {
+                                    v.encode_surface_placed(
+                                        &ctx.device,
+                                        &mut prof.record(enc),
+                                        &[(&resident, glam::DMat4::IDENTITY)],
+                                        &grid,
+                                        fieldkit::voxelize::Separation::Conservative,
+                                    )
+                                } else {
+                                    v.encode_solid(
+                                        &ctx.device,
+                                        &mut prof.record(enc),
+                                        mesh,
+                                        &grid,
+                                        true,
+                                    )
+                                };
+                                r.expect("encode");
+                            },
+                        )?;
+                        let list: Vec<String> = passes
+                            .iter()
+                            .map(|(n, ms)| format!("{n} {ms:.4}"))
+                            .collect();
+                        println!(
+                            "  passes ({total:.4} ms first to last): {}",
+                            list.join(", ")
+                        );
+                    }
+                    let mut enc = ctx.encoder("count");
+                    let s = encode(&mut enc)?;
+                    ctx.submit_and_wait("count", enc)
+                        .map_err(|e| e.to_string())?;
+                    let voxels = s
+                        .read(&ctx.device, &ctx.queue)
+                        .wait(&ctx)
+                        .map_err(|e| e.to_string())?
+                        .iter()
+                        .filter(|&&o| o)
+                        .count();
+                    println!(
+                        "| {name} | {} | {:?} | {mode} | {ms:.3} ({lo:.3}–{hi:.3}) | {ms_batched:.3} | {voxels} |",
+                        mesh.triangles.len(),
+                        grid.size
+                    );
+                    rows.push(Row {
+                        mesh: name.clone(),
+                        triangles: mesh.triangles.len(),
+                        n,
+                        mode,
+                        ms,
+                        ms_batched,
+                        voxels,
+                    });
+                }
             }
         }
     }
@@ -300,6 +314,42 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
     chart(&args.out, &adapter, &rows)?;
     println!("wrote {} and voxelize.png", csv.display());
     Ok(())
+}
+
+/// `FIELDKIT_BENCH_LISTINGS`, or the default listing alone (no suffix on the mesh names).
+fn listings() -> Result<Vec<(Option<fieldkit::voxelize::Listing>, String)>, String> {
+    let Ok(text) = std::env::var("FIELDKIT_BENCH_LISTINGS") else {
+        return Ok(vec![(None, String::new())]);
+    };
+    text.split(',')
+        .map(|item| {
+            if item.trim() == "auto" {
+                return Ok((None, " [auto]".to_string()));
+            }
+            let f: Vec<u32> = item
+                .split(':')
+                .map(|x| x.trim().parse::<u32>())
+                .collect::<Result<_, _>>()
+                .map_err(|e| format!("FIELDKIT_BENCH_LISTINGS {item:?}: {e}"))?;
+            let [light, chunk, sort, workgroup] = f[..] else {
+                return Err(format!(
+                    "FIELDKIT_BENCH_LISTINGS {item:?}: light:chunk:sort:workgroup"
+                ));
+            };
+            Ok((
+                Some(fieldkit::voxelize::Listing {
+                    light,
+                    chunk,
+                    sort: sort != 0,
+                    workgroup,
+                }),
+                format!(
+                    " [L{light} C{chunk}{} wg{workgroup}]",
+                    if sort != 0 { " sorted" } else { "" }
+                ),
+            ))
+        })
+        .collect()
 }
 
 fn chart(out: &std::path::Path, adapter: &str, rows: &[Row]) -> Result<(), String> {
