@@ -7,9 +7,14 @@
 // at level m — one cell at a time (Amanatides & Woo), each boundary's distance computed as
 // (boundary − start) × (1 / direction), so the cells visited are those of a DDA through the dense
 // grid of that level, exactly. It looks the tree up only on entering a cell outside the last
-// empty node it found: inside an empty node it steps with no memory reads, so a ray through
-// empty space costs arithmetic, not loads. Level m's cell is occupied where the tree has its
-// node (below the bricks: where the brick has a voxel of the cell's 2³ block or the voxel).
+// empty node it found, and leaves an empty node in one step: the DDA's steps are the three axes'
+// boundary crossings merged in order of distance (x before y before z on ties), so the crossing
+// that leaves the node is the least of its three far faces' (computed by the same formula), and
+// on the other axes the walk is then in the cell whose entering boundary comes before that
+// crossing and whose leaving one does not (found from the ray's position there, corrected by
+// those boundaries). A ray through empty space costs a probe and a jump per empty node, not a
+// step per cell. Level m's cell is occupied where the tree has its node (below the bricks: where
+// the brick has a voxel of the cell's 2³ block or the voxel).
 //
 // The render chooses the level per pixel from its footprint: the finest level whose cell is at
 // least `footprint` pixels wide where the ray enters the grid (or a fixed level), shades the hit
@@ -115,6 +120,34 @@ fn boundary(k: i32, cell: f32, start: f32, inv: f32) -> f32 {
     return (f32(k) * cell - start) * inv;
 }
 
+// Whether a crossing on axis b at distance tb comes before one on axis a at ta in the walk's
+// order: by distance, then x before y before z.
+fn before(tb: f32, b: i32, ta: f32, a: i32) -> bool {
+    return tb < ta || (tb == ta && b < a);
+}
+
+// Axis b's cell (of a box `cells` wide) when the walk leaves the box on axis a at distance te:
+// between `here` (the current cell) and `last` (the box's last along the ray), the cell whose
+// entering boundary comes before (te, a) and whose leaving boundary does not.
+fn cell_at(b: i32, te: f32, a: i32, here: i32, last: i32, step: i32, ahead: i32, cell: f32,
+           start: f32, inv: f32, cells: i32) -> i32 {
+    var g = i32(clamp(floor((start + te / inv) / cell), -1.0e9, 1.0e9));
+    g = select(clamp(g, last, here), clamp(g, here, last), step > 0);
+    for (var i = 0; i < cells && g != here; i++) {
+        if before(boundary(g - step + ahead, cell, start, inv), b, te, a) {
+            break;
+        }
+        g -= step;
+    }
+    for (var i = 0; i < cells && g != last; i++) {
+        if !before(boundary(g + ahead, cell, start, inv), b, te, a) {
+            break;
+        }
+        g += step;
+    }
+    return g;
+}
+
 // The first occupied cell of level m along the ray from `start` (inside the grid) with
 // reciprocal direction `inv`.
 fn walk(start: vec3<f32>, inv: vec3<f32>, m: u32) -> Hit {
@@ -124,9 +157,6 @@ fn walk(start: vec3<f32>, inv: vec3<f32>, m: u32) -> Hit {
     let step = select(vec3<i32>(-1), vec3<i32>(1), inv >= vec3<f32>(0.0));
     var c = clamp(vec3<i32>(floor(start / cell)), vec3<i32>(0), extent - 1);
     let ahead = select(vec3<i32>(0), vec3<i32>(1), step > vec3<i32>(0));
-    var t_max = vec3<f32>(boundary(c.x + ahead.x, cell, start.x, inv.x),
-                          boundary(c.y + ahead.y, cell, start.y, inv.y),
-                          boundary(c.z + ahead.z, cell, start.z, inv.z));
     var axis = -1;
     var t = 0.0;
     // The last empty node found, as a box of level-m cells [lo, hi).
@@ -147,22 +177,31 @@ fn walk(start: vec3<f32>, inv: vec3<f32>, m: u32) -> Hit {
             lo = (c >> vec3<u32>(span)) << vec3<u32>(span);
             hi = lo + vec3<i32>(1 << span);
         }
-        // Step along the axis whose boundary comes first (x, then y, then z on ties).
-        if t_max.x <= t_max.y && t_max.x <= t_max.z {
+        // c is in the empty box [lo, hi): leave it. Its far faces' crossings; the least (x,
+        // then y, then z on ties) is where the walk leaves it.
+        let last = select(lo, hi - 1, step > vec3<i32>(0));
+        let far = vec3<f32>(boundary(last.x + ahead.x, cell, start.x, inv.x),
+                            boundary(last.y + ahead.y, cell, start.y, inv.y),
+                            boundary(last.z + ahead.z, cell, start.z, inv.z));
+        let cells = hi.x - lo.x;
+        if far.x <= far.y && far.x <= far.z {
             axis = 0;
-            t = t_max.x;
-            c.x += step.x;
-            t_max.x = boundary(c.x + ahead.x, cell, start.x, inv.x);
-        } else if t_max.y <= t_max.z {
+            t = far.x;
+            c.y = cell_at(1, t, 0, c.y, last.y, step.y, ahead.y, cell, start.y, inv.y, cells);
+            c.z = cell_at(2, t, 0, c.z, last.z, step.z, ahead.z, cell, start.z, inv.z, cells);
+            c.x = last.x + step.x;
+        } else if far.y <= far.z {
             axis = 1;
-            t = t_max.y;
-            c.y += step.y;
-            t_max.y = boundary(c.y + ahead.y, cell, start.y, inv.y);
+            t = far.y;
+            c.x = cell_at(0, t, 1, c.x, last.x, step.x, ahead.x, cell, start.x, inv.x, cells);
+            c.z = cell_at(2, t, 1, c.z, last.z, step.z, ahead.z, cell, start.z, inv.z, cells);
+            c.y = last.y + step.y;
         } else {
             axis = 2;
-            t = t_max.z;
-            c.z += step.z;
-            t_max.z = boundary(c.z + ahead.z, cell, start.z, inv.z);
+            t = far.z;
+            c.x = cell_at(0, t, 2, c.x, last.x, step.x, ahead.x, cell, start.x, inv.x, cells);
+            c.y = cell_at(1, t, 2, c.y, last.y, step.y, ahead.y, cell, start.y, inv.y, cells);
+            c.z = last.z + step.z;
         }
     }
     return Hit(vec3<i32>(-1), MISS, t, 0u);

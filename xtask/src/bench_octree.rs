@@ -354,9 +354,13 @@ fn charts(
     let mut series: Vec<crate::chart::Series> = Vec::new();
     let mut times: Vec<crate::chart::Series> = Vec::new();
     let mut meshes: Vec<&str> = Vec::new();
-    for r in rows {
-        if !meshes.contains(&r.mesh.as_str()) {
-            meshes.push(&r.mesh);
+    for mesh in rows
+        .iter()
+        .map(|r| r.mesh.as_str())
+        .chain(renders.iter().map(|r| r.mesh.as_str()))
+    {
+        if !meshes.contains(&mesh) {
+            meshes.push(mesh);
         }
     }
     for mesh in &meshes {
@@ -385,20 +389,23 @@ fn charts(
             .map(|r| (r.n as f64, r.dense_bytes as f64 / (1u64 << 20) as f64))
             .collect(),
     ));
-    crate::chart::log_log(
-        &out.join("octree_memory.png"),
-        &format!("sparse voxel octree vs dense bitset: MiB kept, {adapter}"),
-        "grid side (voxels, log)",
-        "MiB (log)",
-        &series,
-    )?;
-    crate::chart::log_log(
-        &out.join("octree_build.png"),
-        &format!("octree build vs dense surface: GPU ms (median), {adapter}"),
-        "grid side (voxels, log)",
-        "GPU ms (log)",
-        &times,
-    )?;
+    // `--modes render` alone: no build rows to chart.
+    if !rows.is_empty() {
+        crate::chart::log_log(
+            &out.join("octree_memory.png"),
+            &format!("sparse voxel octree vs dense bitset: MiB kept, {adapter}"),
+            "grid side (voxels, log)",
+            "MiB (log)",
+            &series,
+        )?;
+        crate::chart::log_log(
+            &out.join("octree_build.png"),
+            &format!("octree build vs dense surface: GPU ms (median), {adapter}"),
+            "grid side (voxels, log)",
+            "GPU ms (log)",
+            &times,
+        )?;
+    }
     if renders.is_empty() {
         return Ok(());
     }
