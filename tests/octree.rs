@@ -929,6 +929,148 @@ fn voxel_attributes_equal_the_dense_list() {
     assert!(again.node_attributes == tree.node_attributes);
 }
 
+/// With an albedo texture (the mesh's texture coordinates, a 4 × 4 texture of 16 colours), every
+/// voxel's colour and normal in the tree are the dense attribute list's with the same albedo,
+/// byte for byte, and differ from the untextured tree's; an albedo without texture coordinates
+/// or in a format that cannot be filtered is a typed error.
+#[test]
+fn albedo_attributes_equal_the_dense_list() {
+    use wgpu::util::DeviceExt;
+    let ctx = Context::shared();
+    let mut mesh = painted_torus();
+    let uv = |p: DVec3| {
+        let d = p - DVec3::new(24.5, 23.2, 20.9);
+        glam::Vec2::new(
+            (d.y.atan2(d.x) / std::f64::consts::TAU) as f32 * 3.0,
+            (d.z / 5.3) as f32 * 0.5 + 0.5,
+        )
+    };
+    mesh.texcoords = mesh
+        .triangles
+        .iter()
+        .map(|t| t.map(|i| uv(mesh.positions[i as usize])))
+        .collect();
+    let grid = unit_grid([48, 48, 44]);
+    let texels: Vec<u8> = (0..16u32)
+        .flat_map(|i| {
+            [
+                (i * 53 % 256) as u8,
+                (i * 97 % 256) as u8,
+                (i * 31 % 256) as u8,
+                255,
+            ]
+        })
+        .collect();
+    let albedo = ctx.device.create_texture_with_data(
+        &ctx.queue,
+        &wgpu::TextureDescriptor {
+            label: Some("albedo"),
+            size: wgpu::Extent3d {
+                width: 4,
+                height: 4,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba8Unorm,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        },
+        wgpu::util::TextureDataOrder::LayerMajor,
+        &texels,
+    );
+    let voxelizer = Voxelizer::new(&ctx.device).unwrap();
+    let builder = OctreeBuilder::new(&ctx.device).unwrap();
+    let tree = ctx
+        .block_on(builder.voxelize_with_albedo(
+            &ctx.device,
+            &ctx.queue,
+            &voxelizer,
+            &mesh,
+            &grid,
+            &albedo,
+        ))
+        .unwrap()
+        .read(&ctx.device, &ctx.queue)
+        .wait(&ctx)
+        .unwrap();
+    let mut enc = ctx.encoder("dense albedo");
+    let dense = voxelizer
+        .encode_attributes_in_one_with(&ctx.device, &mut enc, &mesh, &grid, Some(&albedo))
+        .unwrap();
+    ctx.submit_and_wait("dense albedo", enc).unwrap();
+    let count = dense.count.min(dense.voxels.size() as u32 / 16);
+    let raw: Vec<[u32; 4]> = bytemuck::pod_collect_to_vec(
+        &fieldkit::gpu::readback_buffer(&ctx.device, &ctx.queue, &dense.voxels)
+            .wait(&ctx)
+            .unwrap(),
+    );
+    let plain = build_with_attributes(&ctx, &mesh, &grid);
+    let [nx, ny, _] = grid.size;
+    let mut textured = 0;
+    let mut listed = 0;
+    for &[i, colour, normal, triangles] in &raw[..count as usize] {
+        if triangles == 0 {
+            continue;
+        }
+        listed += 1;
+        let v = [i % nx, i / nx % ny, i / (nx * ny)];
+        assert_eq!(
+            tree.voxel_attribute(v),
+            Some([colour, normal]),
+            "voxel {v:?}"
+        );
+        textured += (plain.voxel_attribute(v).map(|a| a[0]) != Some(colour)) as usize;
+    }
+    assert_eq!(listed, tree.voxel_attributes.len(), "occupied voxels");
+    assert!(
+        textured * 2 > listed,
+        "only {textured} of {listed} voxels changed colour with the albedo"
+    );
+
+    let bare = Mesh {
+        texcoords: vec![],
+        ..mesh.clone()
+    };
+    let e = ctx.block_on(builder.voxelize_with_albedo(
+        &ctx.device,
+        &ctx.queue,
+        &voxelizer,
+        &bare,
+        &grid,
+        &albedo,
+    ));
+    assert!(
+        matches!(&e, Err(Error::Invalid { what, .. }) if what.contains("texture coordinates")),
+        "{:?}",
+        e.err()
+    );
+    let integer = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("integer albedo"),
+        size: wgpu::Extent3d {
+            width: 4,
+            height: 4,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba8Uint,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING,
+        view_formats: &[],
+    });
+    let e = ctx.block_on(builder.voxelize_with_albedo(
+        &ctx.device,
+        &ctx.queue,
+        &voxelizer,
+        &mesh,
+        &grid,
+        &integer,
+    ));
+    assert!(matches!(e, Err(Error::Format { .. })), "{:?}", e.err());
+}
+
 /// Each brick holds the mean of its voxels' attributes and each inner node the mean of its
 /// children's: colours the integer mean rounded to nearest (exact), normals the direction of
 /// the sum (to the octahedral code's precision).

@@ -3,7 +3,8 @@
 // brick, then filtered up the tree (mipmapping) so every node holds the mean of its children.
 //
 //   `accumulate` one thread per fragment: its triangle's attributes at its voxel (the arithmetic
-//                of the dense attribute pass, `shared/voxel_attribute`) added into the voxel's
+//                of the dense attribute pass, `shared/voxel_attribute`, the albedo
+//                texture's colour included) added into the voxel's
 //                integer sums; the voxel's slot is its brick's first (`brick_voxels`) plus the
 //                brick's occupied voxels below it.
 //   `average`    one thread per voxel: its sums' average.
@@ -20,7 +21,7 @@
 import fieldkit::octahedral::{NO_NORMAL, decode_octahedral, encode_octahedral};
 import fieldkit::octree::brick_bit;
 import fieldkit::triangle_box::setup;
-import package::shared::voxel_attribute::{SUMS, average, closest_weights, contribution, corner_colour, corner_normal};
+import package::shared::voxel_attribute::{SUMS, average, closest_weights, contribution, corner_colour, corner_normal, corner_uv};
 
 struct AttributeParams {
     grid: vec3<u32>,
@@ -37,6 +38,9 @@ struct AttributeParams {
     // Occupied voxels in all.
     voxels: u32,
     slack: f32,
+    // 1: the colour is the corners' colour × the albedo at the corners' texture coordinates,
+    // interpolated as the colour is (as the dense attribute pass does).
+    textured: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: AttributeParams;
@@ -58,6 +62,9 @@ struct AttributeParams {
 @group(0) @binding(10) var<storage, read_write> voxel_attributes: array<vec2<u32>>;
 // Per pool entry: the node's filtered (RGBA8 colour, octahedral normal).
 @group(0) @binding(11) var<storage, read_write> node_attributes: array<vec2<u32>>;
+// The albedo (a 1×1 stand-in unless `textured`), sampled with repeat and linear filtering.
+@group(0) @binding(12) var albedo: texture_2d<f32>;
+@group(0) @binding(13) var albedo_sampler: sampler;
 
 const NONE: u32 = 0xffffffffu;
 
@@ -96,7 +103,13 @@ fn accumulate(@builtin(global_invocation_id) id: vec3<u32>,
     let c0 = corners[6u * t];
     let c1 = corners[6u * t + 2u];
     let c2 = corners[6u * t + 4u];
-    let add = contribution(corner_colour(b, c0.x, c1.x, c2.x),
+    var colour = corner_colour(b, c0.x, c1.x, c2.x);
+    if params.textured != 0u {
+        let uv = corner_uv(b, corners[6u * t + 1u].xy, corners[6u * t + 3u].xy,
+                           corners[6u * t + 5u].xy);
+        colour *= textureSampleLevel(albedo, albedo_sampler, uv, 0.0);
+    }
+    let add = contribution(colour,
                            corner_normal(b, bitcast<vec3<f32>>(c0.yzw), bitcast<vec3<f32>>(c1.yzw),
                                          bitcast<vec3<f32>>(c2.yzw), s.n));
     let at = SUMS * (slot - params.first_voxel);

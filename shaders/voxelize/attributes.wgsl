@@ -11,7 +11,7 @@
 // written as a0 + b1·(a1 − a0) + b2·(a2 − a0) so a constant attribute stays exact.
 
 import fieldkit::triangle_box::{CHUNK, LIGHT, Setup, column, overlaps, setup};
-import package::shared::voxel_attribute::{SUMS, average, closest_weights, contribution, corner_colour, corner_normal};
+import package::shared::voxel_attribute::{SUMS, average, closest_weights, contribution, corner_colour, corner_normal, corner_uv};
 
 struct AttributeParams {
     grid: vec3<u32>,
@@ -67,10 +67,9 @@ fn add_voxel(s: Setup, t: u32, p: vec3<i32>) {
     let c2 = corners[6u * t + 4u];
     var colour = corner_colour(b, c0.x, c1.x, c2.x);
     if params.textured != 0u {
-        let t0 = bitcast<vec2<f32>>(corners[6u * t + 1u].xy);
-        let uv = t0 + b.x * (bitcast<vec2<f32>>(corners[6u * t + 3u].xy) - t0)
-            + b.y * (bitcast<vec2<f32>>(corners[6u * t + 5u].xy) - t0);
-        colour *= textureSampleLevel(albedo, albedo_sampler, vec2<f32>(uv.x, 1.0 - uv.y), 0.0);
+        let uv = corner_uv(b, corners[6u * t + 1u].xy, corners[6u * t + 3u].xy,
+                           corners[6u * t + 5u].xy);
+        colour *= textureSampleLevel(albedo, albedo_sampler, uv, 0.0);
     }
     let n = corner_normal(b, bitcast<vec3<f32>>(c0.yzw), bitcast<vec3<f32>>(c1.yzw),
                           bitcast<vec3<f32>>(c2.yzw), s.n);

@@ -8,6 +8,7 @@ use crate::bind::ComputePipeline;
 use crate::error::Error;
 use crate::gpu::{Readback, Record, readback_buffer, uniform_buffer as uniform};
 use crate::shaders::octree::attributes::{self as stage, AttributeParams};
+use crate::voxelize::attributes::AlbedoBinding;
 use crate::voxelize::{Fragments, SLACK};
 
 /// `u32` sums per occupied voxel (the shader's `SUMS`).
@@ -19,6 +20,7 @@ pub(super) struct AttributePipelines {
     average: OnceLock<ComputePipeline<stage::average_voxels::Entry>>,
     resolve: OnceLock<ComputePipeline<stage::resolve::Entry>>,
     filter: OnceLock<ComputePipeline<stage::filter_level::Entry>>,
+    albedo: AlbedoBinding,
 }
 
 impl Octree {
@@ -59,6 +61,23 @@ impl OctreeBuilder {
         fragments: &Fragments,
         voxels: u32,
     ) -> Result<(), Error> {
+        self.encode_attributes_with(device, rec, octree, fragments, voxels, None)
+    }
+
+    /// [`OctreeBuilder::encode_attributes`] with an `albedo` texture: each fragment's colour
+    /// is the corners' colour × the albedo at the corners' texture coordinates, as
+    /// [`crate::voxelize::Voxelizer::encode_attributes_with`] samples it (the same bytes for the
+    /// same voxel). The mesh the fragments came from needs texture coordinates; the texture a
+    /// filterable colour format.
+    pub fn encode_attributes_with(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        octree: &mut Octree,
+        fragments: &Fragments,
+        voxels: u32,
+        albedo: Option<&wgpu::Texture>,
+    ) -> Result<(), Error> {
         let (Some(inputs), Some(brick_voxels), Some(cursors)) =
             (&fragments.attributes, &octree.brick_voxels, &octree.cursor)
         else {
@@ -69,6 +88,7 @@ impl OctreeBuilder {
                     .into(),
             });
         };
+        let albedo = AlbedoBinding::check(device, stage::STAGE, albedo, inputs.textured)?;
         if fragments.size != octree.size {
             return Err(Error::Invalid {
                 stage: stage::STAGE,
@@ -143,12 +163,14 @@ impl OctreeBuilder {
                     batch,
                     voxels,
                     slack: SLACK,
+                    textured: albedo.is_some() as u32,
                 },
             )
         };
         let p = &self.attributes;
         let accumulate = ComputePipeline::cached(&p.accumulate, device, &[])?;
         let average = ComputePipeline::cached(&p.average, device, &[])?;
+        let (albedo_view, sampler) = p.albedo.bind(device, albedo.as_ref());
         for first in (0..voxels).step_by(batch as usize) {
             if first > 0 {
                 rec.recorder().encoder.clear_buffer(&sums, 0, None);
@@ -171,6 +193,8 @@ impl OctreeBuilder {
                         pool: (&octree.pool).into(),
                         brick_voxels: brick_voxels.into(),
                         sums: (&sums).into(),
+                        albedo: albedo_view.into(),
+                        albedo_sampler: sampler.into(),
                     },
                     grid(part.capacity as u64),
                     stage::STAGE,

@@ -618,7 +618,7 @@ impl OctreeBuilder {
         grid: &Grid,
         separation: Separation,
     ) -> Result<Octree, Error> {
-        self.voxelize_inner(device, queue, voxelizer, mesh, grid, separation, false)
+        self.voxelize_inner(device, queue, voxelizer, mesh, grid, separation, None)
             .await
     }
 
@@ -641,7 +641,40 @@ impl OctreeBuilder {
             mesh,
             grid,
             Separation::Conservative,
-            true,
+            Some(None),
+        )
+        .await
+    }
+
+    /// [`OctreeBuilder::voxelize_with_attributes`] with an `albedo` texture: each voxel's
+    /// colour is the corners' colour × the albedo at the corners' texture coordinates
+    /// ([`Mesh::texcoords`](crate::voxelize::Mesh::texcoords)), averaged over the triangles
+    /// that touch it, as [`Voxelizer::encode_attributes_with`] gives it (the same bytes for the
+    /// same voxel). The mesh needs texture coordinates; the texture a filterable colour format.
+    pub async fn voxelize_with_albedo(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        voxelizer: &Voxelizer,
+        mesh: &Mesh,
+        grid: &Grid,
+        albedo: &wgpu::Texture,
+    ) -> Result<Octree, Error> {
+        // Refused before anything is built.
+        crate::voxelize::attributes::AlbedoBinding::check(
+            device,
+            crate::shaders::octree::attributes::STAGE,
+            Some(albedo),
+            !mesh.texcoords.is_empty(),
+        )?;
+        self.voxelize_inner(
+            device,
+            queue,
+            voxelizer,
+            mesh,
+            grid,
+            Separation::Conservative,
+            Some(Some(albedo)),
         )
         .await
     }
@@ -655,7 +688,8 @@ impl OctreeBuilder {
         mesh: &Mesh,
         grid: &Grid,
         separation: Separation,
-        attributes: bool,
+        // With attributes: Some(the albedo, if any).
+        attributes: Option<Option<&wgpu::Texture>>,
     ) -> Result<Octree, Error> {
         let mut fragment_capacity = None;
         let mut pool_capacity = None;
@@ -669,7 +703,7 @@ impl OctreeBuilder {
             let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("octree voxelize"),
             });
-            let fragments = if attributes {
+            let fragments = if attributes.is_some() {
                 voxelizer.encode_fragments_with_attributes(
                     device,
                     &mut encoder,
@@ -724,12 +758,19 @@ impl OctreeBuilder {
                 continue;
             }
             let mut octree = self.shrunk(device, queue, octree, needed);
-            if attributes {
+            if let Some(albedo) = attributes {
                 let voxels = starts[leaf_level as usize + 2] - needed;
                 let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
                     label: Some("octree attributes"),
                 });
-                self.encode_attributes(device, &mut encoder, &mut octree, &fragments, voxels)?;
+                self.encode_attributes_with(
+                    device,
+                    &mut encoder,
+                    &mut octree,
+                    &fragments,
+                    voxels,
+                    albedo,
+                )?;
                 queue.submit([encoder.finish()]);
             }
             return Ok(octree);

@@ -42,10 +42,79 @@ pub(super) struct AttributePipelines {
     accumulate_heavy: OnceLock<ComputePipeline<stage::accumulate_heavy::Entry>>,
     resolve: OnceLock<ComputePipeline<stage::resolve::Entry>>,
     to_volumes: OnceLock<ComputePipeline<volume_stage::to_volumes::Entry>>,
-    /// Repeat, linear: how the albedo is sampled.
-    albedo_sampler: OnceLock<wgpu::Sampler>,
-    /// A 1×1 albedo bound where there is none.
-    no_albedo: OnceLock<wgpu::TextureView>,
+    albedo: AlbedoBinding,
+}
+
+/// How the attribute passes (`voxelize/attributes`, `octree/attributes`) bind an albedo: a
+/// sampler (repeat, linear) and a 1×1 stand-in where there is none.
+#[derive(Default)]
+pub(crate) struct AlbedoBinding {
+    sampler: OnceLock<wgpu::Sampler>,
+    none: OnceLock<wgpu::TextureView>,
+}
+
+impl AlbedoBinding {
+    /// `albedo` checked for `mesh` (its texture coordinates) and `stage`'s pass: the view to
+    /// bind, or `None`.
+    pub(crate) fn check(
+        device: &wgpu::Device,
+        stage: &'static str,
+        albedo: Option<&wgpu::Texture>,
+        textured: bool,
+    ) -> Result<Option<wgpu::TextureView>, Error> {
+        let Some(t) = albedo else {
+            return Ok(None);
+        };
+        check_albedo(device, stage, t)?;
+        if !textured {
+            return Err(Error::Invalid {
+                stage,
+                what: "an albedo texture needs the mesh's texture coordinates (Mesh::texcoords)"
+                    .into(),
+            });
+        }
+        Ok(Some(t.create_view(&Default::default())))
+    }
+
+    /// The view and sampler to bind for `albedo`.
+    pub(crate) fn bind<'a>(
+        &'a self,
+        device: &wgpu::Device,
+        albedo: Option<&'a wgpu::TextureView>,
+    ) -> (&'a wgpu::TextureView, &'a wgpu::Sampler) {
+        let sampler = self.sampler.get_or_init(|| {
+            device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("voxel albedo"),
+                address_mode_u: wgpu::AddressMode::Repeat,
+                address_mode_v: wgpu::AddressMode::Repeat,
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                ..Default::default()
+            })
+        });
+        let view = match albedo {
+            Some(v) => v,
+            None => self.none.get_or_init(|| {
+                device
+                    .create_texture(&wgpu::TextureDescriptor {
+                        label: Some("no voxel albedo"),
+                        size: wgpu::Extent3d {
+                            width: 1,
+                            height: 1,
+                            depth_or_array_layers: 1,
+                        },
+                        mip_level_count: 1,
+                        sample_count: 1,
+                        dimension: wgpu::TextureDimension::D2,
+                        format: wgpu::TextureFormat::Rgba8Unorm,
+                        usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                        view_formats: &[],
+                    })
+                    .create_view(&Default::default())
+            }),
+        };
+        (view, sampler)
+    }
 }
 
 /// Voxel attributes as dense 3D textures (`voxelize/attribute_volume`), for stages that sample
@@ -259,19 +328,26 @@ pub(super) fn corners(mesh: &Mesh, local: &GridMesh) -> Result<Vec<[u32; 4]>, Er
 
 /// An albedo texture the attribute pass can sample: 2D, one layer, `TEXTURE_BINDING`, a
 /// filterable float format.
-fn check_albedo(device: &wgpu::Device, t: &wgpu::Texture) -> Result<(), Error> {
+fn check_albedo(
+    device: &wgpu::Device,
+    stage: &'static str,
+    t: &wgpu::Texture,
+) -> Result<(), Error> {
     if t.dimension() != wgpu::TextureDimension::D2 || t.depth_or_array_layers() != 1 {
-        return Err(invalid(format!(
-            "the albedo must be one 2D texture, got {:?} × {} layers",
-            t.dimension(),
-            t.depth_or_array_layers()
-        )));
+        return Err(Error::Invalid {
+            stage,
+            what: format!(
+                "the albedo must be one 2D texture, got {:?} × {} layers",
+                t.dimension(),
+                t.depth_or_array_layers()
+            ),
+        });
     }
     if !t.usage().contains(wgpu::TextureUsages::TEXTURE_BINDING) {
-        return Err(invalid(format!(
-            "the albedo needs TEXTURE_BINDING, it has {:?}",
-            t.usage()
-        )));
+        return Err(Error::Invalid {
+            stage,
+            what: format!("the albedo needs TEXTURE_BINDING, it has {:?}", t.usage()),
+        });
     }
     let filterable = matches!(
         t.format().sample_type(None, Some(device.features())),
@@ -279,7 +355,7 @@ fn check_albedo(device: &wgpu::Device, t: &wgpu::Texture) -> Result<(), Error> {
     );
     if !filterable || t.format().is_depth_stencil_format() || t.sample_count() != 1 {
         return Err(Error::Format {
-            stage: stage::STAGE,
+            stage,
             format: t.format(),
             supported: "a filterable colour format (Rgba8Unorm, Rgba8UnormSrgb, Rgba16Float, …)",
         });
@@ -410,15 +486,8 @@ impl Voxelizer {
         grid: &Grid,
         albedo: Option<&wgpu::Texture>,
     ) -> Result<PendingAttributes, Error> {
-        if let Some(t) = albedo {
-            check_albedo(device, t)?;
-            if mesh.texcoords.is_empty() {
-                return Err(invalid(
-                    "an albedo texture needs the mesh's texture coordinates (Mesh::texcoords)"
-                        .into(),
-                ));
-            }
-        }
+        let albedo_view =
+            AlbedoBinding::check(device, stage::STAGE, albedo, !mesh.texcoords.is_empty())?;
         let local = mesh.to_grid(grid)?;
         let bound = occupied_bound(&local, grid.size);
         let corner_data = corners(mesh, &local)?;
@@ -505,7 +574,7 @@ impl Voxelizer {
         });
         Ok(PendingAttributes {
             bound,
-            albedo: albedo.map(|t| t.create_view(&Default::default())),
+            albedo: albedo_view,
             surface: Surface {
                 size: grid.size,
                 occupancy,
@@ -591,37 +660,7 @@ impl Voxelizer {
             )
         };
         let p = &self.attribute_pipelines;
-        let sampler = p.albedo_sampler.get_or_init(|| {
-            device.create_sampler(&wgpu::SamplerDescriptor {
-                label: Some("voxel albedo"),
-                address_mode_u: wgpu::AddressMode::Repeat,
-                address_mode_v: wgpu::AddressMode::Repeat,
-                mag_filter: wgpu::FilterMode::Linear,
-                min_filter: wgpu::FilterMode::Linear,
-                ..Default::default()
-            })
-        });
-        let albedo_view = match &albedo {
-            Some(v) => v,
-            None => p.no_albedo.get_or_init(|| {
-                device
-                    .create_texture(&wgpu::TextureDescriptor {
-                        label: Some("no voxel albedo"),
-                        size: wgpu::Extent3d {
-                            width: 1,
-                            height: 1,
-                            depth_or_array_layers: 1,
-                        },
-                        mip_level_count: 1,
-                        sample_count: 1,
-                        dimension: wgpu::TextureDimension::D2,
-                        format: wgpu::TextureFormat::Rgba8Unorm,
-                        usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                        view_formats: &[],
-                    })
-                    .create_view(&Default::default())
-            }),
-        };
+        let (albedo_view, sampler) = p.albedo.bind(device, albedo.as_ref());
         let accumulate = ComputePipeline::cached(&p.accumulate, device, &[])?;
         for (first, n) in batches(count) {
             let params = params_for(first, n);

@@ -55,6 +55,8 @@ pub struct FragmentAttributes {
     /// Six `vec4<u32>` per triangle: per corner (RGBA8 colour, the normal's f32 bits), then
     /// (u, v, 0, 0), as the dense attribute pass reads them.
     pub corners: wgpu::Buffer,
+    /// Whether the mesh had texture coordinates (an albedo can be sampled).
+    pub textured: bool,
 }
 
 impl Fragments {
@@ -271,6 +273,7 @@ impl Voxelizer {
                     contents: bytemuck::cast_slice(&sorted),
                     usage: wgpu::BufferUsages::STORAGE,
                 }),
+                textured: !mesh.texcoords.is_empty(),
             }
         });
         let groups = threads.div_ceil(64);

@@ -21,7 +21,7 @@
 //!
 #![doc = include_str!("../../docs/voxelize.md")]
 
-mod attributes;
+pub(crate) mod attributes;
 pub mod cpu;
 pub mod export;
 mod fragments;
