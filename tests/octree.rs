@@ -167,27 +167,7 @@ fn the_bunny_at_256() {
         }
     }
     let caster = OctreeCaster::new();
-    let mut enc = ctx.encoder("bunny casts");
-    let casts = caster
-        .encode_cast(&ctx.device, &mut enc, &octree, &rays)
-        .unwrap();
-    ctx.submit_and_wait("bunny casts", enc).unwrap();
-    let hits = casts.read(&ctx.device, &ctx.queue).wait(&ctx).unwrap();
-    let mut hit_count = 0;
-    for (ray, got) in rays.iter().zip(&hits) {
-        let (cells, extent) = coarse(&want, grid.size, octree.log_side, ray.level);
-        let occupied = |c: [i32; 3]| cells[((c[2] * extent[1] + c[1]) * extent[0] + c[0]) as usize];
-        let cell = (1u32 << (octree.log_side - ray.level)) as f32;
-        let reference = dense_dda(&occupied, extent, cell, ray.start, ray.dir.recip());
-        let got = got.map(|h| (h.cell, h.axis));
-        assert_eq!(got, reference, "{ray:?}");
-        hit_count += got.is_some() as usize;
-    }
-    assert!(
-        hit_count > rays.len() / 4 && hit_count < rays.len(),
-        "{hit_count} of {} hit",
-        rays.len()
-    );
+    check_casts(&ctx, &caster, &octree, &rays, &want, grid.size);
 
     // The render at the leaves against a DDA per pixel through the dense voxels.
     let centre = grid.origin + glam::DVec3::from(grid.size.map(|n| n as f64)) * grid.voxel / 2.0;
@@ -655,6 +635,39 @@ fn coarse(voxels: &[bool], size: [u32; 3], log_side: u32, m: u32) -> (Vec<bool>,
     (out, extent)
 }
 
+/// `rays` cast through `octree` hit exactly what a DDA through the dense cells of each ray's
+/// level (from the voxels `want`) hits, and some but not all of them hit.
+fn check_casts(
+    ctx: &Context,
+    caster: &fieldkit::octree::OctreeCaster,
+    octree: &Octree,
+    rays: &[fieldkit::octree::Ray],
+    want: &[bool],
+    size: [u32; 3],
+) {
+    let mut enc = ctx.encoder("casts");
+    let casts = caster
+        .encode_cast(&ctx.device, &mut enc, octree, rays)
+        .unwrap();
+    ctx.submit_and_wait("casts", enc).unwrap();
+    let hits = casts.read(&ctx.device, &ctx.queue).wait(ctx).unwrap();
+    let mut hit_count = 0;
+    for (ray, got) in rays.iter().zip(&hits) {
+        let (cells, extent) = coarse(want, size, octree.log_side, ray.level);
+        let occupied = |c: [i32; 3]| cells[((c[2] * extent[1] + c[1]) * extent[0] + c[0]) as usize];
+        let cell = (1u32 << (octree.log_side - ray.level)) as f32;
+        let reference = dense_dda(&occupied, extent, cell, ray.start, ray.dir.recip());
+        let got = got.map(|h| (h.cell, h.axis));
+        assert_eq!(got, reference, "{ray:?}");
+        hit_count += got.is_some() as usize;
+    }
+    assert!(
+        hit_count > rays.len() / 4 && hit_count < rays.len(),
+        "{hit_count} of {} hit",
+        rays.len()
+    );
+}
+
 /// Rays cast through the octree at every level meet exactly the cells a DDA through the dense
 /// grid of that level meets first (random rays, axis-aligned ones, ones starting in a full
 /// cell), and lookups give each level's occupancy.
@@ -707,27 +720,7 @@ fn casts_hit_what_a_dense_dda_hits() {
             rays.push(fieldkit::octree::Ray { start, dir, level });
         }
     }
-    let mut enc = ctx.encoder("casts");
-    let casts = caster
-        .encode_cast(&ctx.device, &mut enc, &octree, &rays)
-        .unwrap();
-    ctx.submit_and_wait("casts", enc).unwrap();
-    let hits = casts.read(&ctx.device, &ctx.queue).wait(&ctx).unwrap();
-    let mut hit_count = 0;
-    for (ray, got) in rays.iter().zip(&hits) {
-        let (cells, extent) = coarse(&want, grid.size, octree.log_side, ray.level);
-        let occupied = |c: [i32; 3]| cells[((c[2] * extent[1] + c[1]) * extent[0] + c[0]) as usize];
-        let cell = (1u32 << (octree.log_side - ray.level)) as f32;
-        let reference = dense_dda(&occupied, extent, cell, ray.start, ray.dir.recip());
-        let got = got.map(|h| (h.cell, h.axis));
-        assert_eq!(got, reference, "{ray:?}");
-        hit_count += got.is_some() as usize;
-    }
-    assert!(
-        hit_count > rays.len() / 4 && hit_count < rays.len(),
-        "{hit_count} of {} hit",
-        rays.len()
-    );
+    check_casts(&ctx, &caster, &octree, &rays, &want, grid.size);
 
     let points: Vec<[u32; 3]> = (0..2000)
         .map(|_| {
