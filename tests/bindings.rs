@@ -190,18 +190,27 @@ fn unknown_override_is_an_error() {
 
 /// A stage's `Overrides` hold the shader's defaults (`override ROWS: u32 = 1u;` in
 /// `edt_rows.wgsl`; `PACK_2D`, `AXIS`, `Y_AFTER_Z`, `SOURCE_APART` and `CELLS = 3840u` in
-/// `edt_tile.wgsl`), and their `constants()` make pipelines.
+/// `edt_tile.wgsl`; `SEED_X_BITS = SEED_Y_BITS = 11u` in both), and their `constants()` make
+/// pipelines.
 #[test]
 fn typed_overrides_hold_the_shader_defaults_and_make_pipelines() {
     use fieldkit::shaders::distance::{edt_rows, edt_tile};
     let ctx = noop();
     assert_eq!(
         edt_rows::Overrides::default(),
-        edt_rows::Overrides { rows: 1 }
+        edt_rows::Overrides {
+            rows: 1,
+            seed_x_bits: 11,
+            seed_y_bits: 11
+        }
     );
+    let rows = edt_rows::Overrides {
+        rows: 4,
+        ..Default::default()
+    };
     assert_eq!(
-        edt_rows::Overrides { rows: 4 }.constants(),
-        vec![("ROWS", 4.0)]
+        rows.constants(),
+        vec![("ROWS", 4.0), ("SEED_X_BITS", 11.0), ("SEED_Y_BITS", 11.0)]
     );
     let tile = edt_tile::Overrides {
         cells: 2336,
@@ -214,14 +223,13 @@ fn typed_overrides_hold_the_shader_defaults_and_make_pipelines() {
             ("AXIS", 1.0),
             ("Y_AFTER_Z", 0.0),
             ("SOURCE_APART", 0.0),
-            ("CELLS", 2336.0)
+            ("CELLS", 2336.0),
+            ("SEED_X_BITS", 11.0),
+            ("SEED_Y_BITS", 11.0)
         ]
     );
-    edt_rows::row_words::Pipeline::with_overrides(
-        &ctx.device,
-        &edt_rows::Overrides { rows: 4 }.constants(),
-    )
-    .expect("a pipeline from typed overrides");
+    edt_rows::row_words::Pipeline::with_overrides(&ctx.device, &rows.constants())
+        .expect("a pipeline from typed overrides");
     edt_tile::tile_columns::Pipeline::with_overrides(&ctx.device, &tile.constants())
         .expect("a pipeline from typed overrides");
 }

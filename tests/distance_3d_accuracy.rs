@@ -573,3 +573,148 @@ fn fields_split_across_bindings_are_exact() {
     }
     d3.set_split_columns(None).unwrap();
 }
+
+/// Grids past the standard packing's 2048 × 2048 × 1024 (a side of 2048 along z): the exact
+/// transform packs their seeds with the bits each side needs (`SeedPacking::for_size`), on every
+/// column path, whole and split across bindings, unsigned and signed, at WebGPU's default
+/// limits too; every voxel's seed is a seed at the CPU transform's squared distance. The JFA
+/// passes, which keep the standard packing, refuse such a grid with a typed error.
+#[test]
+fn tall_grids_pack_seeds_with_the_bits_they_need() {
+    use fieldkit::distance::SeedPacking;
+    let shared = Context::shared();
+    let defaults = default_limits(&shared);
+    let cases: Vec<([usize; 3], Vec<bool>)> = vec![
+        ([3, 2, 2048], random_mask_3d([3, 2, 2048], 2e-3, 21)),
+        (
+            [1, 1, 1500],
+            mask_3d([1, 1, 1500], &[[0, 0, 3], [0, 0, 1400]]),
+        ),
+        ([80, 2, 1100], random_mask_3d([80, 2, 1100], 1e-3, 22)),
+    ];
+    let packing = |size: [usize; 3]| {
+        SeedPacking::for_size([size[0] as u32, size[1] as u32, size[2] as u32]).unwrap()
+    };
+    assert_eq!(
+        packing([3, 2, 2048]),
+        SeedPacking {
+            x_bits: 2,
+            y_bits: 1
+        }
+    );
+    assert_eq!(
+        packing([80, 2, 1100]),
+        SeedPacking {
+            x_bits: 7,
+            y_bits: 1
+        }
+    );
+    for (size, mask) in &cases {
+        let p = packing(*size);
+        let exact = cpu::edt_3d_squared(mask, *size);
+        let signed = cpu::signed_3d(mask, *size);
+        let [w, h, _] = *size;
+        for (device_name, ctx) in [("adapter limits", &shared), ("default limits", &defaults)] {
+            let mut d3 = Distance3d::new(&ctx.device).unwrap();
+            let mut runs = vec![
+                (ColumnPasses::Auto, None),
+                (ColumnPasses::Workgroup, None),
+                (ColumnPasses::Global, None),
+            ];
+            // Split across bindings where the field is wide enough for parts of whole tiles.
+            if w >= 64 {
+                runs.push((ColumnPasses::Auto, Some((w * h * size[2] * 4 / 3) as u64)));
+            }
+            for (passes, split) in runs {
+                d3.set_column_passes(passes);
+                d3.set_split_bytes(split);
+                for is_signed in [false, true] {
+                    let what = format!(
+                        "{size:?} ({device_name}, {passes:?}, split {split:?}, signed {is_signed})"
+                    );
+                    let volume = fieldkit::distance::upload_volume(
+                        &ctx.device,
+                        &ctx.queue,
+                        &to_bytes(mask),
+                        [w as u32, h as u32, size[2] as u32],
+                    )
+                    .unwrap();
+                    let options = Options3d {
+                        signed: is_signed,
+                        ..Options3d::default()
+                    };
+                    let mut enc = ctx.encoder("tall");
+                    let field = d3
+                        .encode(&ctx.device, &mut enc, &volume, &options)
+                        .unwrap_or_else(|e| panic!("{what}: {e}"));
+                    ctx.submit_and_wait("tall", enc).unwrap();
+                    assert_eq!(field.packing, p, "{what}");
+                    let nearest = field
+                        .nearest
+                        .read(&ctx.device, &ctx.queue)
+                        .wait(ctx)
+                        .unwrap();
+                    let dist: Vec<f32> = fieldkit::gpu::read_texture(ctx, &field.distance).unwrap();
+                    for i in 0..nearest.len() {
+                        let (x, y, z) = (i % w, i / w % h, i / (w * h));
+                        if is_signed {
+                            let want = signed[i];
+                            let far = want.abs() > 1e30;
+                            assert!(
+                                (!far
+                                    && (dist[i] as f64 - want).abs() <= 1e-5 * (1.0 + want.abs()))
+                                    || (far
+                                        && dist[i].abs() > 1e30
+                                        && (dist[i] < 0.0) == (want < 0.0)),
+                                "{what}: voxel {i}: {} vs {want}",
+                                dist[i]
+                            );
+                            continue;
+                        }
+                        let Some([sx, sy, sz]) = field.packing.unpack(nearest[i]) else {
+                            assert_eq!(exact[i], cpu::NONE, "{what}: voxel {i} has no seed");
+                            continue;
+                        };
+                        let [sx, sy, sz] = [sx as usize, sy as usize, sz as usize];
+                        assert!(
+                            sx < w && sy < h && sz < size[2] && mask[(sz * h + sy) * w + sx],
+                            "{what}: voxel {i} names ({sx},{sy},{sz}), not a seed"
+                        );
+                        let d2 = [(sx, x), (sy, y), (sz, z)]
+                            .iter()
+                            .map(|&(a, b)| (a as i64 - b as i64).pow(2) as u64)
+                            .sum::<u64>();
+                        assert_eq!(d2, exact[i], "{what}: voxel {i}");
+                        assert!(
+                            (dist[i] as f64 - (d2 as f64).sqrt()).abs()
+                                <= 1e-6 * (1.0 + (d2 as f64).sqrt()),
+                            "{what}: voxel {i}: distance {}",
+                            dist[i]
+                        );
+                    }
+                }
+            }
+        }
+    }
+    // The JFA passes keep the standard packing: z past 1024 is refused.
+    let (size, mask) = &cases[0];
+    let volume = fieldkit::distance::upload_volume(
+        &shared.device,
+        &shared.queue,
+        &to_bytes(mask),
+        [size[0] as u32, size[1] as u32, size[2] as u32],
+    )
+    .unwrap();
+    let d3 = Distance3d::new(&shared.device).unwrap();
+    let mut enc = shared.encoder("tall jfa");
+    let jfa = Options3d {
+        method: Method::Jfa(Variant::JfaPlus2),
+        ..Options3d::default()
+    };
+    match d3.encode(&shared.device, &mut enc, &volume, &jfa) {
+        Err(fieldkit::Error::Size { got, max, .. }) => assert_eq!((got, max), (2048, 1024)),
+        other => panic!("expected Error::Size, got {:?}", other.err()),
+    }
+    assert!(shared.take_uncaptured().is_empty());
+    assert!(defaults.take_uncaptured().is_empty());
+}

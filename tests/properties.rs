@@ -455,3 +455,70 @@ fn real_d2() -> &'static Distance2d {
     static D2: OnceLock<Distance2d> = OnceLock::new();
     D2.get_or_init(|| Distance2d::new(&real().device).unwrap())
 }
+
+/// The exact transform on grids no seed packing names (on the noop device: no memory is
+/// touched): 2048 × 1024 × 2048 needs 11 + 10 + 11 bits, and its last voxel's code + 1 wraps;
+/// past 2048 on a side is a size error; 16 × 16 × 2048 packs 4/4/24 and records.
+#[test]
+fn exact_grids_past_every_packing_are_refused() {
+    let n = noop();
+    let ctx = &n.ctx;
+    let texture = |size: [u32; 3]| {
+        ctx.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("large volume"),
+            size: wgpu::Extent3d {
+                width: size[0],
+                height: size[1],
+                depth_or_array_layers: size[2],
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D3,
+            format: wgpu::TextureFormat::R8Unorm,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        })
+    };
+    let options = fieldkit::distance::Options3d::default();
+    let mut enc = ctx.encoder("large exact");
+    let wraps =
+        n.d3.encode(
+            &ctx.device,
+            &mut enc,
+            &texture([2048, 1024, 2048]),
+            &options,
+        )
+        .unwrap_err();
+    assert!(
+        matches!(&wraps, fieldkit::Error::Invalid { what, .. } if what.contains("11, 10 and 11 bits")),
+        "{wraps}"
+    );
+    if ctx.device.limits().max_texture_dimension_3d > 2048 {
+        let long =
+            n.d3.encode(&ctx.device, &mut enc, &texture([4, 4, 2049]), &options)
+                .unwrap_err();
+        assert!(
+            matches!(
+                long,
+                fieldkit::Error::Size {
+                    got: 2049,
+                    max: 2048,
+                    ..
+                }
+            ),
+            "{long}"
+        );
+    }
+    let field =
+        n.d3.encode(&ctx.device, &mut enc, &texture([16, 16, 2048]), &options)
+            .unwrap();
+    assert_eq!(
+        field.packing,
+        fieldkit::distance::SeedPacking {
+            x_bits: 4,
+            y_bits: 4
+        }
+    );
+    drop(enc);
+    let _ = ctx.take_uncaptured();
+}

@@ -26,7 +26,7 @@
 // The last pass of a 3D transform can resolve distances as `field_resolve.wgsl` would, in the
 // same sweep (`columns_resolve`, `columns_resolve_signed`): that saves reading the field again.
 
-import fieldkit::seed::{NO_SEED, answer_distance, dist2, dist2_3, signed_at2, signed_at3, unpack_seed2, unpack_seed3};
+import fieldkit::seed::{NO_SEED, answer_distance, dist2, dist2_3, signed_at2, signed_at3_bits, unpack_seed2, unpack_seed3_bits};
 
 struct ColumnParams {
     size: vec3<u32>,
@@ -51,6 +51,10 @@ struct ColumnParams {
 override PACK_2D: bool = false;
 // Bands per column; 256 / BANDS columns per workgroup. At most MAX_BANDS, a power of two.
 override BANDS: u32 = 8u;
+// 3D seeds' widths (`SeedPacking`): x in the low SEED_X_BITS bits, y in the next SEED_Y_BITS,
+// z above; 11 and 11 for every grid up to 2048 × 2048 × 1024.
+override SEED_X_BITS: u32 = 11u;
+override SEED_Y_BITS: u32 = 11u;
 
 // "Nothing found yet": above any squared distance in range.
 const FAR_D2: i32 = 0x7fffffff;
@@ -69,7 +73,7 @@ fn cost(s: u32, p: vec3<i32>) -> i32 {
     if PACK_2D {
         return i32(dist2(unpack_seed2(s), p.xy));
     }
-    return dist2_3(unpack_seed3(s), p);
+    return dist2_3(unpack_seed3_bits(s, SEED_X_BITS, SEED_Y_BITS), p);
 }
 
 // A site's position along the column.
@@ -78,7 +82,7 @@ fn position(s: u32) -> i32 {
         return unpack_seed2(s).y;
     }
     // No vector indexed at run time: that can be lowered to a private array in memory.
-    let p = unpack_seed3(s);
+    let p = unpack_seed3_bits(s, SEED_X_BITS, SEED_Y_BITS);
     return select(p.z, p.y, params.axis == 1u);
 }
 
@@ -414,7 +418,8 @@ fn columns_resolve_signed(@builtin(local_invocation_index) li: u32, @builtin(wor
         let at = c.base + i * c.stride;
         nearest[at] = found.x;
         let p = vec3<u32>(voxel(c.x, c.other, i));
-        let d = signed_at3(nearest_inside[at], p, answer_distance(found, params.voxel_size), found.x, params.voxel_size);
+        let d = signed_at3_bits(nearest_inside[at], p, answer_distance(found, params.voxel_size), found.x,
+                                params.voxel_size, SEED_X_BITS, SEED_Y_BITS);
         textureStore(distance, p, vec4<f32>(banded(d), 0.0, 0.0, 0.0));
     }
 }

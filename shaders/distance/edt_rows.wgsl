@@ -14,7 +14,7 @@
 // word and the nearest marks on either side of it, which the y column pass reads in place of a
 // field (`tile_columns_words` in `edt_tile.wgsl`): 1.25 bytes per voxel moved where `rows` moves 5.
 
-import fieldkit::seed::{NO_SEED, pack_seed2, pack_seed3, seed_value};
+import fieldkit::seed::{NO_SEED, pack_seed2, pack_seed3_bits, seed_value};
 
 struct RowParams {
     size: vec3<u32>,
@@ -45,6 +45,10 @@ const MAX_ROW: u32 = 2048u;
 // `rows`: rows per workgroup (a power of two; ROWS × width ≤ MAX_ROW). Short rows share a
 // workgroup so that each barrier serves several rows and each thread sweeps a few cells.
 override ROWS: u32 = 1u;
+// 3D seeds' widths (`SeedPacking`): x in the low SEED_X_BITS bits, y in the next SEED_Y_BITS,
+// z above; 11 and 11 for every grid up to 2048 × 2048 × 1024.
+override SEED_X_BITS: u32 = 11u;
+override SEED_Y_BITS: u32 = 11u;
 
 // `rows`: the rows' marks, then their packed nearest seeds.
 // One pad cell after every 8: a thread sweeps a segment of (usually) 8 cells, so without the
@@ -142,7 +146,7 @@ fn rows(@builtin(local_invocation_id) lid: vec3<u32>, @builtin(workgroup_id) wg:
             }
             let rc = cell & 0x7fffffffu;
             let near = nearer(x, left, select(NONE_RIGHT, rc - 1u, rc != 0u));
-            row_cells[padded(cells + x)] = select(NO_SEED, pack_seed3(vec3<u32>(near - 1u, y, z)), near != 0u);
+            row_cells[padded(cells + x)] = select(NO_SEED, pack_seed3_bits(vec3<u32>(near - 1u, y, z), SEED_X_BITS, SEED_Y_BITS), near != 0u);
         }
     }
     workgroupBarrier();

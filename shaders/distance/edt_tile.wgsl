@@ -17,7 +17,7 @@
 // cell per band, and a column stride that keeps a warp's threads in different banks), columns and bands come from
 // shifts and masks, and the separator is an f32 division corrected to the exact integer floor.
 
-import fieldkit::seed::{NO_SEED, answer_distance, pack_seed3, signed_at2, signed_at3, unpack_seed2, unpack_seed3};
+import fieldkit::seed::{NO_SEED, answer_distance, pack_seed3_bits, signed_at2, signed_at3_bits, unpack_seed2, unpack_seed3_bits};
 
 // Where voxel (x, y, z) sits in a buffer: (x - origin.x) + row · (y - origin.y) + plane ·
 // (z - origin.z). A whole field has origin 0, row = size.x and plane = size.x · size.y; a part of
@@ -81,6 +81,10 @@ override SOURCE_APART: bool = false;
 // The default is the most WebGPU's default 16 KiB of workgroup memory holds beside
 // `envelope_size`.
 override CELLS: u32 = 3840u;
+// 3D seeds' widths (`SeedPacking`): x in the low SEED_X_BITS bits, y in the next SEED_Y_BITS,
+// z above; 11 and 11 for every grid up to 2048 × 2048 × 1024.
+override SEED_X_BITS: u32 = 11u;
+override SEED_Y_BITS: u32 = 11u;
 
 const THREADS: u32 = 256u;
 // "Nothing found yet": above any squared distance in range.
@@ -151,7 +155,7 @@ fn own_cost(s: u32, l: Lane) -> i32 {
         let d = unpack_seed2(s).x - i32(l.x);
         return d * d;
     }
-    let p = unpack_seed3(s);
+    let p = unpack_seed3_bits(s, SEED_X_BITS, SEED_Y_BITS);
     let dx = p.x - i32(l.x);
     if AXIS == 1u && !Y_AFTER_Z {
         return dx * dx;
@@ -168,7 +172,7 @@ fn position(s: u32) -> i32 {
     if PACK_2D {
         return unpack_seed2(s).y;
     }
-    let p = unpack_seed3(s);
+    let p = unpack_seed3_bits(s, SEED_X_BITS, SEED_Y_BITS);
     return select(p.z, p.y, AXIS == 1u);
 }
 
@@ -321,7 +325,7 @@ fn put_word(ld: WordLoader, e: u32, word: vec2<u32>) {
     if right != 0u && (left == 0u || right - 1u - x < x + 1u - left) {
         near = right;
     }
-    let s = select(NO_SEED, pack_seed3(vec3<u32>(near - 1u, r.x, r.y)), near != 0u);
+    let s = select(NO_SEED, pack_seed3_bits(vec3<u32>(near - 1u, r.x, r.y), SEED_X_BITS, SEED_Y_BITS), near != 0u);
     tile[cell((e & ld.mask) * params.column_cells, e >> params.lg_columns)] = s;
 }
 
@@ -698,7 +702,8 @@ fn tile_columns_resolve_signed(@builtin(local_invocation_index) li: u32, @builti
         let at = l.at + i * l.stride;
         nearest[at] = found.x;
         let p = voxel(l, i);
-        let d = signed_at3(nearest_inside[at], p, answer_distance(found, params.voxel_size), found.x, params.voxel_size);
+        let d = signed_at3_bits(nearest_inside[at], p, answer_distance(found, params.voxel_size), found.x,
+                                params.voxel_size, SEED_X_BITS, SEED_Y_BITS);
         textureStore(distance, p, vec4<f32>(banded(d), 0.0, 0.0, 0.0));
     }
 }

@@ -2,8 +2,9 @@
 //! the JFA family, sub-voxel seeds, and resolve to unsigned or signed distance in world units.
 //!
 //! Seeds and nearest-seed fields are storage buffers, x fastest, one `u32` per voxel: a packed
-//! integer seed (11/11/10 bits, [`pack_seed3`]) or, for sub-voxel seeds, a key into a table of
-//! points. Distances are written to an `R32Float` 3D texture for sampling.
+//! integer seed (11/11/10 bits, [`pack_seed3`]; the exact transform packs grids past 2048 ×
+//! 2048 × 1024 with the bits their sides need, [`SeedPacking`]) or, for sub-voxel seeds, a key
+//! into a table of points. Distances are written to an `R32Float` 3D texture for sampling.
 //!
 //! ```no_run
 //! # fn main() -> Result<(), fieldkit::Error> {
@@ -36,9 +37,10 @@ use crate::shaders::distance::{
 
 const STAGE: &str = "distance::d3";
 
-/// Largest sides the 3D packing can name: x and y in 11 bits, z in 10 ([`pack_seed3`]). The
-/// one grid at all three (2048 × 2048 × 1024, whose last voxel's code + 1 would wrap to 0) is
-/// refused too.
+/// Largest sides the standard 3D packing can name: x and y in 11 bits, z in 10
+/// ([`pack_seed3`]); JFA and the point seeds take these. The one grid at all three (2048 × 2048
+/// × 1024, whose last voxel's code + 1 would wrap to 0) is refused too. The exact transform
+/// takes more ([`SeedPacking::for_size`], [`MAX_SIDE_EXACT_3D`]).
 pub const MAX_SIDE_3D: [u32; 3] = [2048, 2048, 1024];
 /// Largest side of a 2D exact transform: keeps the integer separators inside i32.
 pub const MAX_SIDE_2D_EXACT: u32 = 16384;
@@ -224,7 +226,7 @@ impl TileGeometry {
         fuse: Option<&Fuse>,
         span: &Span,
         source_apart: bool,
-    ) -> (wgpu::Buffer, [(&'static str, f64); 5]) {
+    ) -> (wgpu::Buffer, [(&'static str, f64); 7]) {
         let params = uniform(
             device,
             "edt tile params",
@@ -242,12 +244,15 @@ impl TileGeometry {
                 dst: span.dst,
             },
         );
+        let [x_bits, y_bits] = packing_of(size).overrides();
         let overrides = [
             ("PACK_2D", pack_2d as u32 as f64),
             ("AXIS", axis as f64),
             ("CELLS", (self.column_cells << self.lg_columns) as f64),
             ("Y_AFTER_Z", span.y_after_z as u32 as f64),
             ("SOURCE_APART", source_apart as u32 as f64),
+            x_bits,
+            y_bits,
         ];
         (params, overrides)
     }
@@ -390,6 +395,107 @@ pub fn unpack_seed3(s: u32) -> Option<[u32; 3]> {
         let c = s - 1;
         [c & 0x7ff, (c >> 11) & 0x7ff, c >> 22]
     })
+}
+
+/// Longest side of any axis of a 3D exact transform: the separators' arithmetic stays exact in
+/// f32 and i32 up to 2048 (squared distances below 2^24).
+pub const MAX_SIDE_EXACT_3D: u32 = 2048;
+
+/// How a 3D field names a voxel's nearest seed: x in the low `x_bits` bits of a code, y in the
+/// next `y_bits`, z in the rest, and the whole code + 1, so that 0 is [`super::NO_SEED`].
+/// [`SeedPacking::STANDARD`] (11/11/10, [`pack_seed3`]) for every grid up to 2048 × 2048 × 1024
+/// and every method; the exact transform also takes grids past that — any side up to
+/// [`MAX_SIDE_EXACT_3D`], as long as the voxels' codes fit 32 bits (64 × 64 × 2048 takes
+/// 6/6/20) — with as many bits per axis as its sides need ([`SeedPacking::for_size`]).
+///
+/// ```
+/// use fieldkit::distance::SeedPacking;
+/// let tall = SeedPacking::for_size([64, 64, 2048]).unwrap();
+/// assert_eq!((tall.x_bits, tall.y_bits), (6, 6));
+/// assert_eq!(tall.unpack(tall.pack(63, 5, 2047)), Some([63, 5, 2047]));
+/// assert_eq!(SeedPacking::for_size([512, 512, 512]), Some(SeedPacking::STANDARD));
+/// assert_eq!(SeedPacking::for_size([2048, 2048, 2048]), None); // 33 bits
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct SeedPacking {
+    /// Bits of x, the lowest.
+    pub x_bits: u32,
+    /// Bits of y, above x's; z takes the rest of 32.
+    pub y_bits: u32,
+}
+
+impl SeedPacking {
+    /// 11 bits for x and y, 10 for z: [`pack_seed3`].
+    pub const STANDARD: Self = Self {
+        x_bits: 11,
+        y_bits: 11,
+    };
+
+    /// The packing the exact transform gives a grid of `size`: [`Self::STANDARD`] where it
+    /// holds every voxel, otherwise the fewest bits for x and y; `None` where a side is 0 or
+    /// past [`MAX_SIDE_EXACT_3D`], or the voxels' codes do not fit 32 bits.
+    pub fn for_size(size: [u32; 3]) -> Option<Self> {
+        if size.iter().any(|&n| n == 0 || n > MAX_SIDE_EXACT_3D) {
+            return None;
+        }
+        if Self::STANDARD.holds(size) {
+            return Some(Self::STANDARD);
+        }
+        let bits = |n: u32| 32 - (n - 1).leading_zeros();
+        let tight = Self {
+            x_bits: bits(size[0]),
+            y_bits: bits(size[1]),
+        };
+        tight.holds(size).then_some(tight)
+    }
+
+    /// Whether every voxel of a grid of `size` gets a code of its own, none of them wrapping to
+    /// [`super::NO_SEED`].
+    pub fn holds(&self, size: [u32; 3]) -> bool {
+        if self.x_bits + self.y_bits > 31 || size.contains(&0) {
+            return false;
+        }
+        let z_bits = 32 - self.x_bits - self.y_bits;
+        size[0] as u64 <= 1 << self.x_bits
+            && size[1] as u64 <= 1 << self.y_bits
+            && size[2] as u64 <= 1 << z_bits
+            && self.code(size[0] - 1, size[1] - 1, size[2] - 1) < u32::MAX as u64
+    }
+
+    fn code(&self, x: u32, y: u32, z: u32) -> u64 {
+        x as u64 | (y as u64) << self.x_bits | (z as u64) << (self.x_bits + self.y_bits)
+    }
+
+    /// The seed at voxel (x, y, z) (the coordinates within the grid the packing holds).
+    pub fn pack(&self, x: u32, y: u32, z: u32) -> u32 {
+        (self.code(x, y, z) + 1) as u32
+    }
+
+    /// The voxel a seed names; `None` for [`super::NO_SEED`].
+    pub fn unpack(&self, s: u32) -> Option<[u32; 3]> {
+        (s != super::NO_SEED).then(|| {
+            let c = s - 1;
+            [
+                c & ((1u32 << self.x_bits) - 1),
+                (c >> self.x_bits) & ((1u32 << self.y_bits) - 1),
+                c >> (self.x_bits + self.y_bits),
+            ]
+        })
+    }
+
+    /// The shaders' `SEED_X_BITS` and `SEED_Y_BITS` (`edt_rows`, `edt_tile`, `edt_columns`).
+    fn overrides(&self) -> [(&'static str, f64); 2] {
+        [
+            ("SEED_X_BITS", self.x_bits as f64),
+            ("SEED_Y_BITS", self.y_bits as f64),
+        ]
+    }
+}
+
+/// The packing of a grid the exact transform runs on (`size` passed [`exact_volume_size`] or
+/// [`check_size_3d`]), [`SeedPacking::STANDARD`] for 2D fields (which do not read it).
+fn packing_of(size: [u32; 3]) -> SeedPacking {
+    SeedPacking::for_size(size).unwrap_or(SeedPacking::STANDARD)
 }
 
 /// Table index named by a sub-voxel seed key; `None` for no seed.
@@ -698,7 +804,11 @@ impl Slabs {
 pub struct Field3d {
     /// Voxels per axis.
     pub size: [u32; 3],
-    /// Nearest seed per voxel: packed ([`unpack_seed3`]), or a key into `points` ([`key_index`]).
+    /// How `nearest` names integer seeds: [`SeedPacking::STANDARD`] ([`unpack_seed3`]) for
+    /// every grid up to 2048 × 2048 × 1024, wider per axis where the exact transform took a
+    /// grid past that (`packing.unpack(s)` decodes either).
+    pub packing: SeedPacking,
+    /// Nearest seed per voxel: packed (`packing`), or a key into `points` ([`key_index`]).
     /// For a signed field of integer seeds, the nearest *inside* voxel. One buffer
     /// ([`Slabs::whole`]) except where the exact transform split a field too large for one.
     pub nearest: Slabs,
@@ -734,22 +844,19 @@ pub struct Distance3d {
     lines_y: ComputePipeline<point_lines::lines_y::Entry>,
     lines_z: ComputePipeline<point_lines::lines_z::Entry>,
     lines_z_signed: ComputePipeline<point_lines::lines_z_signed::Entry>,
-    /// By rows per workgroup: 1, 2, 4, ..., 32 (`rows_per_group`).
-    rows: [std::sync::OnceLock<ComputePipeline<edt_rows::rows::Entry>>; 6],
+    /// By rows per workgroup (`rows_per_group`) and seed widths.
+    rows: Variants<edt_rows::rows::Entry>,
     rows_2d: ComputePipeline<edt_rows::rows_2d::Entry>,
     /// The 3D row pass as words of marks, per rows per workgroup (`ROWS`).
     row_words: Variants<edt_rows::row_words::Entry>,
-    /// Column pass per band count (3D packing, then 2D), made on first use.
-    columns: [std::sync::OnceLock<ComputePipeline<edt_columns::columns::Entry>>; 12],
-    /// The last 3D column pass with the resolve folded in, per band count.
-    columns_resolve: [std::sync::OnceLock<ComputePipeline<edt_columns::columns_resolve::Entry>>; 6],
-    columns_resolve_signed:
-        [std::sync::OnceLock<ComputePipeline<edt_columns::columns_resolve_signed::Entry>>; 6],
+    /// Column pass per band count, packing and seed widths, made on first use.
+    columns: Variants<edt_columns::columns::Entry>,
+    /// The last 3D column pass with the resolve folded in.
+    columns_resolve: Variants<edt_columns::columns_resolve::Entry>,
+    columns_resolve_signed: Variants<edt_columns::columns_resolve_signed::Entry>,
     /// The same for the column pass of a 2D field.
-    columns_resolve_2d:
-        [std::sync::OnceLock<ComputePipeline<edt_columns::columns_resolve_2d::Entry>>; 6],
-    columns_resolve_signed_2d:
-        [std::sync::OnceLock<ComputePipeline<edt_columns::columns_resolve_signed_2d::Entry>>; 6],
+    columns_resolve_2d: Variants<edt_columns::columns_resolve_2d::Entry>,
+    columns_resolve_signed_2d: Variants<edt_columns::columns_resolve_signed_2d::Entry>,
     /// Bands per column chosen by the caller; `None` picks by grid size.
     column_bands: Option<u32>,
     /// The column passes in workgroup memory (`edt_tile.wgsl`), per tile size.
@@ -908,6 +1015,46 @@ fn check_volume(device: &wgpu::Device, volume: &wgpu::Texture) -> Result<[u32; 3
     Ok(size)
 }
 
+/// A volume's size for the exact transform: as [`volume_size`], but its sides checked against
+/// [`SeedPacking::for_size`] (any side up to [`MAX_SIDE_EXACT_3D`] where the codes fit) and the
+/// device's 3D textures.
+fn exact_volume_size(device: &wgpu::Device, volume: &wgpu::Texture) -> Result<[u32; 3], Error> {
+    if volume.dimension() != wgpu::TextureDimension::D3
+        || !VOLUME_FORMATS.contains(&volume.format())
+    {
+        return volume_size(device, volume);
+    }
+    let size = [
+        volume.width(),
+        volume.height(),
+        volume.depth_or_array_layers(),
+    ];
+    let tex = device.limits().max_texture_dimension_3d;
+    for (i, what) in ["width", "height", "depth"].into_iter().enumerate() {
+        let max = MAX_SIDE_EXACT_3D.min(tex) as u64;
+        if size[i] == 0 || size[i] as u64 > max {
+            return Err(Error::Size {
+                stage: STAGE,
+                what,
+                got: size[i] as u64,
+                max,
+            });
+        }
+    }
+    if SeedPacking::for_size(size).is_none() {
+        let bits = size.map(|n| 32 - (n - 1).leading_zeros());
+        return Err(Error::Invalid {
+            stage: STAGE,
+            what: format!(
+                "a {}×{}×{} grid: its sides need {}, {} and {} bits, and a seed's code + 1 \
+                 (0 is \"no seed\") must fit the field's 32; take voxels off a side",
+                size[0], size[1], size[2], bits[0], bits[1], bits[2]
+            ),
+        });
+    }
+    Ok(size)
+}
+
 /// A volume's size, its dimension, format and sides checked (not its field's bytes).
 fn volume_size(device: &wgpu::Device, volume: &wgpu::Texture) -> Result<[u32; 3], Error> {
     if volume.dimension() != wgpu::TextureDimension::D3 {
@@ -936,14 +1083,29 @@ fn volume_size(device: &wgpu::Device, volume: &wgpu::Texture) -> Result<[u32; 3]
 }
 
 /// Upload a CPU volume (`x` fastest, then `y`, then `z`; one byte per voxel) as an `R8Unorm`
-/// 3D texture. Non-zero bytes are marked under [`Inside::Mask`].
+/// 3D texture. Non-zero bytes are marked under [`Inside::Mask`]. Sides up to
+/// [`MAX_SIDE_EXACT_3D`] (and the device's 3D textures): the method checks its own range when it
+/// runs.
 pub fn upload_volume(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
     data: &[u8],
     size: [u32; 3],
 ) -> Result<wgpu::Texture, Error> {
-    check_sides_3d(device, size)?;
+    // Any side a method takes: the exact transform's (the others refuse past theirs when
+    // they run).
+    let tex = device.limits().max_texture_dimension_3d;
+    for (i, what) in ["width", "height", "depth"].into_iter().enumerate() {
+        let max = MAX_SIDE_EXACT_3D.min(tex) as u64;
+        if size[i] == 0 || size[i] as u64 > max {
+            return Err(Error::Size {
+                stage: STAGE,
+                what,
+                got: size[i] as u64,
+                max,
+            });
+        }
+    }
     if data.len() as u64 != voxels(size) {
         return Err(Error::Invalid {
             stage: STAGE,
@@ -1223,7 +1385,7 @@ impl Distance3d {
         options.check()?;
         let size = match options.method {
             // Checked against the split it takes where the field is larger than one binding.
-            Method::Exact => volume_size(device, volume)?,
+            Method::Exact => exact_volume_size(device, volume)?,
             _ => check_volume(device, volume)?,
         };
         let rec = &mut rec.recorder();
@@ -1282,6 +1444,7 @@ impl Distance3d {
             };
             return Ok(Field3d {
                 size,
+                packing: SeedPacking::for_size(size).expect("checked by exact_volume_size"),
                 nearest,
                 nearest_outside,
                 distance,
@@ -1303,6 +1466,7 @@ impl Distance3d {
         )?;
         Ok(Field3d {
             size,
+            packing: SeedPacking::STANDARD,
             nearest: Slabs::one(nearest, size[2]),
             nearest_outside: nearest_outside.map(|b| Slabs::one(b, size[2])),
             distance,
@@ -1444,6 +1608,7 @@ impl Distance3d {
                     self.encode_lines(device, rec, keys, points, size, inside, options, band)?;
                 return Ok(Field3d {
                     size,
+                    packing: SeedPacking::STANDARD,
                     nearest: Slabs::one(nearest, size[2]),
                     nearest_outside: None,
                     distance,
@@ -1495,6 +1660,7 @@ impl Distance3d {
         }
         Ok(Field3d {
             size,
+            packing: SeedPacking::STANDARD,
             nearest: Slabs::one(nearest, size[2]),
             nearest_outside: None,
             distance,
@@ -1755,7 +1921,7 @@ impl Distance3d {
         invert: bool,
         fuse: Option<Fuse>,
     ) -> Result<Slabs, Error> {
-        let size = volume_size(device, volume)?;
+        let size = exact_volume_size(device, volume)?;
         if let Some(split) = self.split_for(device, size)? {
             return self.encode_exact_split(device, rec, volume, inside, invert, fuse, split);
         }
@@ -1878,16 +2044,16 @@ impl Distance3d {
         inside: Inside,
         invert: bool,
     ) -> Result<wgpu::Buffer, Error> {
-        let size = check_volume(device, volume)?;
+        let size = exact_volume_size(device, volume)?;
+        check_bytes(&device.limits(), voxels(size) * 4)?;
         let nearest = field_buffer(device, "nearest seed", size);
         let params = row_params(device, size, inside, invert);
         let vv = view(volume);
         let per_group = rows_per_group(size[0], size[1]);
-        let rows = ComputePipeline::cached(
-            &self.rows[per_group.trailing_zeros() as usize],
-            device,
-            &[("ROWS", per_group as f64)],
-        )?;
+        let [x_bits, y_bits] = packing_of(size).overrides();
+        let rows = self
+            .rows
+            .get(device, &[("ROWS", per_group as f64), x_bits, y_bits], true)?;
         rows.record(
             device,
             rec,
@@ -1913,7 +2079,7 @@ impl Distance3d {
         inside: Inside,
         invert: bool,
     ) -> Result<wgpu::Buffer, Error> {
-        let size = volume_size(device, volume)?;
+        let size = exact_volume_size(device, volume)?;
         let count = size[0].div_ceil(32);
         let words = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("edt row words"),
@@ -2113,7 +2279,7 @@ impl Distance3d {
         fuse: Option<Fuse>,
         split: Split,
     ) -> Result<Slabs, Error> {
-        let size = volume_size(device, volume)?;
+        let size = exact_volume_size(device, volume)?;
         let [w, h, d] = size;
         let words = self.encode_row_words(device, rec, volume, inside, invert)?;
         let slabs: Vec<(u32, u32)> = (0..d)
@@ -2267,7 +2433,13 @@ impl Distance3d {
             None => bands_for(size[0] * others, size[axis as usize]),
         };
         let bands = BAND_CHOICES[choice];
-        let overrides = [("PACK_2D", pack_2d as u32 as f64), ("BANDS", bands as f64)];
+        let [x_bits, y_bits] = packing_of(size).overrides();
+        let overrides = [
+            ("PACK_2D", pack_2d as u32 as f64),
+            ("BANDS", bands as f64),
+            x_bits,
+            y_bits,
+        ];
         let params = uniform(
             device,
             "edt columns params",
@@ -2288,7 +2460,7 @@ impl Distance3d {
         // One arm per entry point: the same resources, plus what its resolve writes.
         macro_rules! record {
             ($cache:expr, $entry:ident { $($field:ident: $value:expr),* }) => {
-                ComputePipeline::cached(&$cache, device, &overrides)?.record(
+                $cache.get(device, &overrides, true)?.record(
                     device,
                     rec,
                     &edt_columns::$entry::Resources {
@@ -2303,17 +2475,14 @@ impl Distance3d {
             };
         }
         match fuse {
-            None => record!(
-                self.columns[choice + if pack_2d { 6 } else { 0 }],
-                columns {}
-            ),
+            None => record!(self.columns, columns {}),
             Some(Fuse {
                 distance,
                 flat: true,
                 inside_field: None,
                 ..
             }) => record!(
-                self.columns_resolve_2d[choice],
+                self.columns_resolve_2d,
                 columns_resolve_2d {
                     distance_2d: distance
                 }
@@ -2324,7 +2493,7 @@ impl Distance3d {
                 inside_field: Some(inside),
                 ..
             }) => record!(
-                self.columns_resolve_signed_2d[choice],
+                self.columns_resolve_signed_2d,
                 columns_resolve_signed_2d {
                     nearest_inside: &inside[0],
                     distance_2d: distance
@@ -2334,16 +2503,13 @@ impl Distance3d {
                 distance,
                 inside_field: None,
                 ..
-            }) => record!(
-                self.columns_resolve[choice],
-                columns_resolve { distance: distance }
-            ),
+            }) => record!(self.columns_resolve, columns_resolve { distance: distance }),
             Some(Fuse {
                 distance,
                 inside_field: Some(inside),
                 ..
             }) => record!(
-                self.columns_resolve_signed[choice],
+                self.columns_resolve_signed,
                 columns_resolve_signed {
                     nearest_inside: &inside[0],
                     distance: distance
