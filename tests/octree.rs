@@ -184,19 +184,11 @@ fn the_bunny_at_256() {
         reversed_z: false,
         origin: [0, 0],
     };
-    let mut enc = ctx.encoder("bunny render");
     let settings = RenderSettings {
         lod: Lod::Level(octree.log_side),
         ..Default::default()
     };
-    let image = caster
-        .encode_render(&ctx.device, &mut enc, &octree, &grid, &view, &settings)
-        .unwrap();
-    ctx.submit_and_wait("bunny render", enc).unwrap();
-    let colour: Vec<[u8; 4]> =
-        fieldkit::gpu::readback_texture(&ctx.device, &ctx.queue, &image.colour)
-            .wait(&ctx)
-            .unwrap();
+    let (colour, _) = render_image(&ctx, &caster, &octree, &grid, &view, &settings);
     let inverse = view_proj.inverse();
     let origin = grid.origin.as_vec3();
     let to_grid = |p: Vec3| (p - origin) / grid.voxel as f32;
@@ -635,6 +627,29 @@ fn coarse(voxels: &[bool], size: [u32; 3], log_side: u32, m: u32) -> (Vec<bool>,
     (out, extent)
 }
 
+/// A first-hit render of `octree`, read back: colour and depth per pixel.
+fn render_image(
+    ctx: &Context,
+    caster: &fieldkit::octree::OctreeCaster,
+    octree: &Octree,
+    grid: &Grid,
+    view: &fieldkit::view::View,
+    settings: &fieldkit::octree::RenderSettings,
+) -> (Vec<[u8; 4]>, Vec<f32>) {
+    let mut enc = ctx.encoder("octree render");
+    let image = caster
+        .encode_render(&ctx.device, &mut enc, octree, grid, view, settings)
+        .unwrap();
+    ctx.submit_and_wait("octree render", enc).unwrap();
+    let colour = fieldkit::gpu::readback_texture(&ctx.device, &ctx.queue, &image.colour)
+        .wait(ctx)
+        .unwrap();
+    let depth = fieldkit::gpu::readback_texture(&ctx.device, &ctx.queue, &image.depth)
+        .wait(ctx)
+        .unwrap();
+    (colour, depth)
+}
+
 /// `rays` cast through `octree` hit exactly what a DDA through the dense cells of each ray's
 /// level (from the voxels `want`) hits, and some but not all of them hit.
 fn check_casts(
@@ -782,24 +797,11 @@ fn coarser_levels_cover_finer_ones() {
     };
     let caster = OctreeCaster::new();
     let render = |lod| {
-        let mut enc = ctx.encoder("octree render");
         let settings = RenderSettings {
             lod,
             ..Default::default()
         };
-        let image = caster
-            .encode_render(&ctx.device, &mut enc, &octree, &grid, &view, &settings)
-            .unwrap();
-        ctx.submit_and_wait("octree render", enc).unwrap();
-        let colour: Vec<[u8; 4]> =
-            fieldkit::gpu::readback_texture(&ctx.device, &ctx.queue, &image.colour)
-                .wait(&ctx)
-                .unwrap();
-        let depth: Vec<f32> =
-            fieldkit::gpu::readback_texture(&ctx.device, &ctx.queue, &image.depth)
-                .wait(&ctx)
-                .unwrap();
-        (colour, depth)
+        render_image(&ctx, &caster, &octree, &grid, &view, &settings)
     };
     let levels: Vec<_> = (3..=octree.log_side)
         .map(|l| render(Lod::Level(l)))
@@ -1156,20 +1158,13 @@ fn the_render_shades_the_filtered_attributes() {
     };
     let caster = OctreeCaster::new();
     let render = |lod, attributes| {
-        let mut enc = ctx.encoder("octree render");
         let settings = RenderSettings {
             lod,
             attributes,
             colour: Vec3::new(0.2, 0.9, 0.3),
             ..Default::default()
         };
-        let image = caster
-            .encode_render(&ctx.device, &mut enc, &octree, &grid, &view, &settings)
-            .unwrap();
-        ctx.submit_and_wait("octree render", enc).unwrap();
-        fieldkit::gpu::readback_texture::<[u8; 4]>(&ctx.device, &ctx.queue, &image.colour)
-            .wait(&ctx)
-            .unwrap()
+        render_image(&ctx, &caster, &octree, &grid, &view, &settings).0
     };
     for lod in [Lod::Level(octree.log_side), Lod::Level(3)] {
         let px = render(lod, true);

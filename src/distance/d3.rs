@@ -951,19 +951,7 @@ pub fn check_size_3d(device: &wgpu::Device, size: [u32; 3]) -> Result<(), Error>
 
 /// Check a 3D grid's sides against the packing and the device's 3D textures.
 fn check_sides_3d(device: &wgpu::Device, size: [u32; 3]) -> Result<(), Error> {
-    let limits = device.limits();
-    let tex = limits.max_texture_dimension_3d;
-    for (i, what) in ["width", "height", "depth"].into_iter().enumerate() {
-        let max = MAX_SIDE_3D[i].min(tex) as u64;
-        if size[i] == 0 || size[i] as u64 > max {
-            return Err(Error::Size {
-                stage: STAGE,
-                what,
-                got: size[i] as u64,
-                max,
-            });
-        }
-    }
+    check_sides(device, size, MAX_SIDE_3D)?;
     if size == MAX_SIDE_3D {
         return Err(Error::Invalid {
             stage: STAGE,
@@ -973,6 +961,23 @@ fn check_sides_3d(device: &wgpu::Device, size: [u32; 3]) -> Result<(), Error> {
                 size[0], size[1], size[2]
             ),
         });
+    }
+    Ok(())
+}
+
+/// Each side of `size` from 1 to its entry of `max` and the device's 3D textures.
+fn check_sides(device: &wgpu::Device, size: [u32; 3], max: [u32; 3]) -> Result<(), Error> {
+    let tex = device.limits().max_texture_dimension_3d;
+    for (i, what) in ["width", "height", "depth"].into_iter().enumerate() {
+        let max = max[i].min(tex) as u64;
+        if size[i] == 0 || size[i] as u64 > max {
+            return Err(Error::Size {
+                stage: STAGE,
+                what,
+                got: size[i] as u64,
+                max,
+            });
+        }
     }
     Ok(())
 }
@@ -1029,18 +1034,7 @@ fn exact_volume_size(device: &wgpu::Device, volume: &wgpu::Texture) -> Result<[u
         volume.height(),
         volume.depth_or_array_layers(),
     ];
-    let tex = device.limits().max_texture_dimension_3d;
-    for (i, what) in ["width", "height", "depth"].into_iter().enumerate() {
-        let max = MAX_SIDE_EXACT_3D.min(tex) as u64;
-        if size[i] == 0 || size[i] as u64 > max {
-            return Err(Error::Size {
-                stage: STAGE,
-                what,
-                got: size[i] as u64,
-                max,
-            });
-        }
-    }
+    check_sides(device, size, [MAX_SIDE_EXACT_3D; 3])?;
     if SeedPacking::for_size(size).is_none() {
         let bits = size.map(|n| 32 - (n - 1).leading_zeros());
         return Err(Error::Invalid {
@@ -1094,18 +1088,7 @@ pub fn upload_volume(
 ) -> Result<wgpu::Texture, Error> {
     // Any side a method takes: the exact transform's (the others refuse past theirs when
     // they run).
-    let tex = device.limits().max_texture_dimension_3d;
-    for (i, what) in ["width", "height", "depth"].into_iter().enumerate() {
-        let max = MAX_SIDE_EXACT_3D.min(tex) as u64;
-        if size[i] == 0 || size[i] as u64 > max {
-            return Err(Error::Size {
-                stage: STAGE,
-                what,
-                got: size[i] as u64,
-                max,
-            });
-        }
-    }
+    check_sides(device, size, [MAX_SIDE_EXACT_3D; 3])?;
     if data.len() as u64 != voxels(size) {
         return Err(Error::Invalid {
             stage: STAGE,
