@@ -38,8 +38,9 @@ fn the_largest_grid_runs_one_larger_is_refused_and_the_device_stays_usable() {
     );
 
     // One larger: the next cube is refused by its bytes (one binding, what JFA needs), and on
-    // each axis (the others 1) the longest side accepted plus one is refused by the side limit,
-    // by the upload too — typed, before wgpu.
+    // each axis (the others 1) the longest side accepted plus one is refused by the side limit
+    // — typed, before wgpu. The upload takes any side the exact transform takes (2048 on every
+    // axis, `SeedPacking`) and refuses one past that.
     let refused = |size: [u32; 3], upload: bool| {
         match check_size_3d(&ctx.device, size) {
             // A zero side is out of range too (got 0 against the minimum of 1).
@@ -78,8 +79,15 @@ fn the_largest_grid_runs_one_larger_is_refused_and_the_device_stays_usable() {
             }
         }
         eprintln!("axis {axis}: longest side {lo}");
-        refused(side(lo + 1), true);
+        refused(side(lo + 1), false);
         refused(side(0), true);
+        let exact = fieldkit::distance::MAX_SIDE_EXACT_3D.min(limits.max_texture_dimension_3d);
+        match upload_volume(&ctx.device, &ctx.queue, &[0], side(exact + 1)) {
+            Err(Error::Size { got, max, .. }) => {
+                assert_eq!((got, max), (exact as u64 + 1, exact as u64))
+            }
+            other => panic!("upload of {:?}: {other:?}", side(exact + 1)),
+        }
     }
 
     // The largest, three at once, in one submission: each made and recorded without error.
