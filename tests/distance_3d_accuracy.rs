@@ -169,6 +169,20 @@ fn score(case: &Case, nearest: &[u32], dist: &[f32], exact: &[u64]) -> Errors {
     e
 }
 
+/// A signed field against the CPU's signed transform. The distance is an f32 square root of an
+/// exact integer, less half a voxel: a few ulps (Vulkan lets sqrt be that loose on any GPU), far
+/// inside 1e-5. No seed on the other side is ±FAR, sign included.
+fn check_signed(what: &str, dist: &[f32], signed: &[f64]) {
+    for (i, (&got, &want)) in dist.iter().zip(signed).enumerate() {
+        let far = want.abs() > 1e30;
+        assert!(
+            (!far && (got as f64 - want).abs() <= 1e-5 * (1.0 + want.abs()))
+                || (far && got.abs() > 1e30 && (got < 0.0) == (want < 0.0)),
+            "{what}: voxel {i}: {got} vs {want}"
+        );
+    }
+}
+
 fn methods() -> Vec<Method> {
     std::iter::once(Method::Exact)
         .chain(Variant::ALL.into_iter().map(Method::Jfa))
@@ -400,22 +414,7 @@ fn every_column_path_is_exact() {
                     };
                     let what = format!("{name} ({device_name}, {passes:?}, signed {is_signed})");
                     if is_signed {
-                        // The distance is an f32 square root of an exact integer, less half a
-                        // voxel: a few ulps (Vulkan lets sqrt be that loose on any GPU), far
-                        // inside 1e-5. No seed on the other side is ±FAR, sign included.
-                        for i in 0..dist.len() {
-                            let want = signed[i];
-                            let far = want.abs() > 1e30;
-                            assert!(
-                                (!far
-                                    && (dist[i] as f64 - want).abs() <= 1e-5 * (1.0 + want.abs()))
-                                    || (far
-                                        && dist[i].abs() > 1e30
-                                        && (dist[i] < 0.0) == (want < 0.0)),
-                                "{what}: voxel {i}: {} vs {want}",
-                                dist[i]
-                            );
-                        }
+                        check_signed(&what, &dist, signed);
                     } else {
                         let e = score(&case, &nearest, &dist, exact);
                         assert_eq!(e.wrong, 0, "{what}: {} wrong voxels", e.wrong);
@@ -655,22 +654,12 @@ fn tall_grids_pack_seeds_with_the_bits_they_need() {
                         .wait(ctx)
                         .unwrap();
                     let dist: Vec<f32> = fieldkit::gpu::read_texture(ctx, &field.distance).unwrap();
+                    if is_signed {
+                        check_signed(&what, &dist, &signed);
+                        continue;
+                    }
                     for i in 0..nearest.len() {
                         let (x, y, z) = (i % w, i / w % h, i / (w * h));
-                        if is_signed {
-                            let want = signed[i];
-                            let far = want.abs() > 1e30;
-                            assert!(
-                                (!far
-                                    && (dist[i] as f64 - want).abs() <= 1e-5 * (1.0 + want.abs()))
-                                    || (far
-                                        && dist[i].abs() > 1e30
-                                        && (dist[i] < 0.0) == (want < 0.0)),
-                                "{what}: voxel {i}: {} vs {want}",
-                                dist[i]
-                            );
-                            continue;
-                        }
                         let Some([sx, sy, sz]) = field.packing.unpack(nearest[i]) else {
                             assert_eq!(exact[i], cpu::NONE, "{what}: voxel {i} has no seed");
                             continue;
