@@ -337,13 +337,16 @@ fn every_column_path_is_exact() {
         defaults.device.limits().max_compute_workgroup_storage_size,
         16384
     );
-    // What Auto takes at these lengths (forced to workgroup memory at 16 KiB, 300, 600 and 1000
-    // take 4, 2 and 2 columns per tile, bands of 8): the test covers each of them.
+    // What Auto takes along z at these lengths (forced to workgroup memory at 16 KiB, 300, 600
+    // and 1000 take 4, 2 and 2 columns per tile, bands of 8): the test covers each of them.
+    // Along y Auto holds columns up to 128 in workgroup memory.
     assert_eq!(tile_columns(16384, 37, 3), Some(16));
     assert_eq!(tile_columns(16384, 200, 3), Some(8));
-    assert_eq!(tile_columns(16384, 300, 3), Some(4));
+    assert_eq!(tile_columns(16384, 256, 3), Some(8));
+    assert_eq!(tile_columns(16384, 257, 3), None);
+    assert_eq!(tile_columns(16384, 300, 3), None);
     assert_eq!(tile_columns(16384, 300, 2), None);
-    assert_eq!(tile_columns(16384, 512, 3), Some(4));
+    assert_eq!(tile_columns(16384, 512, 3), None);
     assert_eq!(tile_columns(16384, 600, 3), None);
     assert_eq!(tile_columns(16384, 1000, 3), None);
     let mut extra = vec![
@@ -370,11 +373,17 @@ fn every_column_path_is_exact() {
             [2000, 5, 2],
             random_mask_3d([2000, 5, 2], 2e-3, 15),
         ),
-        // Auto: y and z (400: 4 columns per tile) in workgroup memory.
+        // Auto: y in workgroup memory, z (400) in global memory.
         (
             "6×3×400",
             [6, 3, 400],
             random_mask_3d([6, 3, 400], 5e-3, 14),
+        ),
+        // Auto: y (200) in global memory, z in workgroup memory.
+        (
+            "6×200×40",
+            [6, 200, 40],
+            random_mask_3d([6, 200, 40], 5e-3, 16),
         ),
     ];
     let mut all: Vec<(String, [usize; 3], Vec<bool>)> = cases()

@@ -338,6 +338,10 @@ fn exact_2d_matches_cpu() {
         (33, 4, 0.1, 6, ColumnPasses::Auto),
         (200, 3, 0.004, 7, ColumnPasses::Auto),
         (16384, 2, 2e-4, 8, ColumnPasses::Global),
+        // Columns whose separators' numerators pass 2^24 (sites more than 4096 texels off the
+        // column), where the f32 quotient rounds and is walked back to the exact floor.
+        (5000, 40, 3e-4, 9, ColumnPasses::Global),
+        (5000, 40, 3e-4, 9, ColumnPasses::Workgroup),
     ] {
         d3.set_column_passes(passes);
         let m = random_mask(w, h, density, seed);

@@ -26,7 +26,7 @@
 // The last pass of a 3D transform can resolve distances as `field_resolve.wgsl` would, in the
 // same sweep (`columns_resolve`, `columns_resolve_signed`): that saves reading the field again.
 
-import fieldkit::seed::{NO_SEED, answer_distance, dist2, dist2_3, signed_at2, signed_at3_bits, unpack_seed2, unpack_seed3_bits};
+import fieldkit::seed::{NO_SEED, answer_distance, dist2, dist2_3, separator, signed_at2, signed_at3_bits, unpack_seed2, unpack_seed3_bits};
 
 struct ColumnParams {
     size: vec3<u32>,
@@ -86,19 +86,10 @@ fn position(s: u32) -> i32 {
     return select(p.z, p.y, params.axis == 1u);
 }
 
-fn floor_div(a: i32, b: i32) -> i32 {
-    let q = a / b;
-    return select(q, q - 1, a % b != 0 && a < 0);
-}
-
-// Meijster's separator: the first integer position where site `b` (after `a`) is at least as
-// near as `a`, given their costs at their own positions.
-fn start_of(a: u32, b: u32, x: u32, other: u32) -> i32 {
-    let pa = position(a);
-    let pb = position(b);
-    let ga = cost(a, voxel(x, other, u32(pa)));
-    let gb = cost(b, voxel(x, other, u32(pb)));
-    return 1 + floor_div(pb * pb - pa * pa + gb - ga, 2 * (pb - pa));
+// A site's cost within the plane through its own position (the squared distance from the
+// column there to its seed).
+fn own_cost(s: u32, x: u32, other: u32) -> i32 {
+    return cost(s, voxel(x, other, u32(position(s))));
 }
 
 // Nearest site of one band's envelope to `p`: the first k whose successor is not strictly
@@ -190,9 +181,14 @@ fn column_of(li: u32, wg: vec3<u32>) -> Column {
 // Build: Meijster's stack over this band's sites, valid for the whole column [0, n); returns
 // its size. Every thread of the workgroup calls it, then records the size in `band_size`.
 fn build(c: Column) -> u32 {
+    // The top two sites' positions and own costs, and where the top one starts to be the
+    // nearest, stay in registers: only a pop reads the stack.
     var top = -1;
-    var s_top = NO_SEED;
-    var s_below = NO_SEED;
+    var p_top = 0;
+    var g_top = 0;
+    var t_top = 0;
+    var p_below = 0;
+    var g_below = 0;
     if !c.valid {
         return 0u;
     }
@@ -224,28 +220,34 @@ fn build(c: Column) -> u32 {
         if s == NO_SEED {
             continue;
         }
+        let gs = own_cost(s, c.x, c.other);
+        let pi = i32(i);
         loop {
-            if top < 0 {
-                break;
-            }
-            var t = 0;
-            if top > 0 {
-                t = start_of(s_below, s_top, c.x, c.other);
-            }
-            let pt = voxel(c.x, c.other, u32(t));
-            if cost(s_top, pt) <= cost(s, pt) {
+            if top < 0 || g_top + (p_top - t_top) * (p_top - t_top) <= gs + (pi - t_top) * (pi - t_top) {
                 break;
             }
             top -= 1;
-            s_top = s_below;
+            p_top = p_below;
+            g_top = g_below;
+            t_top = 0;
             if top > 0 {
-                s_below = stack[at + u32(top - 1) * c.stride];
+                let below = stack[at + u32(top - 1) * c.stride];
+                p_below = position(below);
+                g_below = own_cost(below, c.x, c.other);
+                t_top = separator(p_below, g_below, p_top, g_top);
             }
         }
-        if top < 0 || start_of(s_top, s, c.x, c.other) < i32(c.n) {
+        var t = 0;
+        if top >= 0 {
+            t = separator(p_top, g_top, pi, gs);
+        }
+        if t < i32(c.n) {
             top += 1;
-            s_below = s_top;
-            s_top = s;
+            p_below = p_top;
+            g_below = g_top;
+            p_top = pi;
+            g_top = gs;
+            t_top = t;
             stack[at + u32(top) * c.stride] = s;
         }
     }

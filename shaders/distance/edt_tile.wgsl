@@ -17,7 +17,7 @@
 // cell per band, and a column stride that keeps a warp's threads in different banks), columns and bands come from
 // shifts and masks, and the separator is an f32 division corrected to the exact integer floor.
 
-import fieldkit::seed::{NO_SEED, answer_distance, pack_seed3_bits, signed_at2, signed_at3_bits, unpack_seed2, unpack_seed3_bits};
+import fieldkit::seed::{NO_SEED, answer_distance, pack_seed3_bits, separator, signed_at2, signed_at3_bits, unpack_seed2, unpack_seed3_bits};
 
 // Where voxel (x, y, z) sits in a buffer: (x - origin.x) + row · (y - origin.y) + plane ·
 // (z - origin.z). A whole field has origin 0, row = size.x and plane = size.x · size.y; a part of
@@ -184,33 +184,6 @@ fn cost_at(g: i32, p: i32, i: i32) -> i32 {
 
 fn cost(s: u32, l: Lane, i: i32) -> i32 {
     return cost_at(own_cost(s, l), position(s), i);
-}
-
-// Meijster's separator: the first integer position where site b (after a) is at least as near
-// as a. floor(num / den) as an f32 division, then corrected to the exact integer floor by its
-// remainder: num is exact in f32 in 3D (|num| < 2^24 for sides ≤ 2048), and the separators that
-// matter lie in [0, n), where the quotient is within one of the truth; in 2D (16-bit sides) num
-// may round, and the loops walk the few steps back.
-fn separator(pa: i32, ga: i32, pb: i32, gb: i32) -> i32 {
-    let num = pb * pb - pa * pa + gb - ga;
-    let den = 2 * (pb - pa);
-    var q = i32(floor(f32(num) / f32(den)));
-    var r = num - q * den;
-    loop {
-        if r < den {
-            break;
-        }
-        q += 1;
-        r -= den;
-    }
-    loop {
-        if r >= 0 {
-            break;
-        }
-        q -= 1;
-        r += den;
-    }
-    return q + 1;
 }
 
 // Load the tile: column c's position i at cell(c · column_cells, i). Positions past the grid's x

@@ -44,21 +44,29 @@ const STAGE: &str = "distance::d3";
 pub const MAX_SIDE_3D: [u32; 3] = [2048, 2048, 1024];
 /// Largest side of a 2D exact transform: keeps the integer separators inside i32.
 pub const MAX_SIDE_2D_EXACT: u32 = 16384;
-/// Bands per column in the exact column passes (`edt_columns.wgsl`): enough that columns × bands
-/// reaches about this many threads (a full H100 holds 270k), and enough that no band walks more
-/// than `MAX_BAND_LEN` positions (each band's walk is sequential). Measured on the H100 in one
-/// command (whole exact transform): 512³ took 10.2, 8.2, 10.7 and 11.9 ms with 4, 8, 16 and 32
-/// bands; 256³ and 128³ were within 6% from 4 to 32 bands; 2D sizes are fastest with 32.
-const TARGET_THREADS: u32 = 1 << 18;
-const MAX_BAND_LEN: u32 = 64;
+/// Bands per column in the exact column passes in global memory (`edt_columns.wgsl`): enough
+/// that columns × bands reaches about `TARGET_THREADS_3D` threads in 3D and `TARGET_THREADS_2D`
+/// in 2D, and in 3D enough that no band walks more than `MAX_BAND_LEN_3D` positions, 32 at
+/// most. Measured on the H100 in one command (`cargo xtask bench distance --exact-only
+/// --column-bands B`, 1% seeds, clocks held, 2026-11-26): 512³ took 4.51, 3.96 and 4.47 ms with
+/// 4, 8 and 16 bands; z + resolve at 256³ 0.327, 0.284 and 0.271 ms, y 0.198, 0.200 and 0.238;
+/// 16384² 8.44, 6.82 and 5.67 ms with 32, 16 and 8 bands, 8192² 1.86, 1.47 and 1.77, 4096²
+/// 0.443 and 0.533 with 32 and 16.
+const TARGET_THREADS_3D: u32 = 1 << 19;
+const TARGET_THREADS_2D: u32 = 1 << 17;
+const MAX_BAND_LEN_3D: u32 = 64;
 const BAND_CHOICES: [u32; 6] = [1, 2, 4, 8, 16, 32];
 
-fn bands_for(columns: u32, length: u32) -> usize {
-    let want = TARGET_THREADS
-        .div_ceil(columns.max(1))
-        .max(length.div_ceil(MAX_BAND_LEN))
-        .next_power_of_two()
-        .min(32);
+fn bands_for(columns: u32, length: u32, flat: bool) -> usize {
+    let want = if flat {
+        TARGET_THREADS_2D.div_ceil(columns.max(1))
+    } else {
+        TARGET_THREADS_3D
+            .div_ceil(columns.max(1))
+            .max(length.div_ceil(MAX_BAND_LEN_3D))
+    }
+    .next_power_of_two()
+    .min(32);
     BAND_CHOICES.iter().position(|&b| b == want).unwrap()
 }
 
@@ -80,8 +88,9 @@ fn rows_per_group(width: u32, rows: u32) -> u32 {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum ColumnPasses {
-    /// Workgroup memory for columns up to [`AUTO_TILE_MAX_LENGTH`] long (where it was measured
-    /// faster), global memory for longer ones (see [`tile_columns`]).
+    /// Workgroup memory for columns up to [`AUTO_TILE_MAX_LENGTH_Y`] long along y and
+    /// [`AUTO_TILE_MAX_LENGTH`] along z (where it was measured faster), global memory for longer
+    /// ones (see [`tile_columns`]).
     #[default]
     Auto,
     /// Workgroup memory at every length: `256 · 8 / n` columns per tile (bands of 8 positions,
@@ -97,16 +106,19 @@ pub enum ColumnPasses {
 pub const MIN_TILE_COLUMNS: u32 = 4;
 /// Most columns per tile (256 threads: 16 bands per column at 16 columns).
 pub const MAX_TILE_COLUMNS: u32 = 16;
-/// Longest column of a 3D field (y or z) [`ColumnPasses::Auto`] holds in workgroup memory.
-/// Measured on the H100 (`cargo xtask bench distance --exact-only`, 1% seeds, clocks held,
-/// 2026-11-24), per pass at 256³: y 0.290 ms in workgroup memory (8 columns per tile) against
-/// 0.303 in global memory, z + resolve 0.278 against 0.426; at 512³ (4 columns per tile): y
-/// 2.41 against 2.27 to 2.47, z + resolve 2.31 against 3.29, and the whole transform 5.36 ms
-/// in two runs (spread 1.09) against 5.31 and 5.61 (spread 1.13) with y in global memory.
-/// With 16 columns per tile 512³ took 4.48 ms for y: bands of 8 positions
+/// Longest column of a 3D field along z (the last pass, which also resolves the distance)
+/// [`ColumnPasses::Auto`] holds in workgroup memory. Measured on the H100 (`cargo xtask bench
+/// distance --exact-only`, 1% seeds, clocks held, 2026-11-26), z + resolve: 0.266 ms at 256³ in
+/// workgroup memory against 0.284 in global memory (8 bands), 2.24 against 1.88 at 512³.
+/// (With 16 columns per tile 512³ took 4.48 ms for y: bands of 8 positions
 /// ([`AUTO_TILE_BAND`]) were fastest at every length measured, and 512 or 1024 threads per
-/// workgroup instead of 256 gave nothing (2.82 and 2.93 ms for y at 512³).
-pub const AUTO_TILE_MAX_LENGTH: u32 = 512;
+/// workgroup instead of 256 gave nothing.)
+pub const AUTO_TILE_MAX_LENGTH: u32 = 256;
+/// Longest column of a 3D field along y [`ColumnPasses::Auto`] holds in workgroup memory
+/// (where it also takes the row pass in, from the row words). Measured as above, row pass and y
+/// pass together: 0.049 ms at 128³ in workgroup memory against 0.061 in global memory, 0.316
+/// against 0.290 at 256³, 2.53 against 2.08 at 512³.
+pub const AUTO_TILE_MAX_LENGTH_Y: u32 = 128;
 /// Longest column of a 2D field [`ColumnPasses::Auto`] holds in workgroup memory: 2048² took
 /// 0.323 ms with 4 columns per tile against 0.257 in global memory; lengths from 257 to 512
 /// were not measured, so they stay in global memory.
@@ -171,13 +183,13 @@ impl TileGeometry {
             .unwrap_or(0)
     }
 
-    /// What [`ColumnPasses::Auto`] takes for columns of length `n` of a field of `dims` (2 or
-    /// 3) dimensions.
-    fn auto(n: u32, storage: u32, dims: u32) -> Option<Self> {
-        let longest = if dims == 2 {
-            AUTO_TILE_MAX_LENGTH_2D
-        } else {
-            AUTO_TILE_MAX_LENGTH
+    /// What [`ColumnPasses::Auto`] takes for columns of length `n` along `axis` (1: y, 2: z)
+    /// of a 3D field, or along y of a 2D field where `flat`.
+    fn auto(n: u32, storage: u32, axis: u32, flat: bool) -> Option<Self> {
+        let longest = match (flat, axis) {
+            (true, _) => AUTO_TILE_MAX_LENGTH_2D,
+            (false, 1) => AUTO_TILE_MAX_LENGTH_Y,
+            (false, _) => AUTO_TILE_MAX_LENGTH,
         };
         if n > longest {
             return None;
@@ -340,23 +352,25 @@ impl Span {
     }
 }
 
-/// Columns per workgroup-memory tile that [`ColumnPasses::Auto`] takes for columns of length `n`
-/// of a field of `dims` dimensions (2 or 3) on a device with `storage` bytes of workgroup
-/// memory (`max_compute_workgroup_storage_size`), or `None` where it takes the global-memory
-/// passes: 3D columns up to [`AUTO_TILE_MAX_LENGTH`] long, 2D columns up to
+/// Columns per workgroup-memory tile that [`ColumnPasses::Auto`] takes for the last column
+/// pass (along z in 3D, along y in 2D) over columns of length `n` of a field of `dims`
+/// dimensions (2 or 3) on a device with `storage` bytes of workgroup memory
+/// (`max_compute_workgroup_storage_size`), or `None` where it takes the global-memory pass:
+/// 3D columns up to [`AUTO_TILE_MAX_LENGTH`] long, 2D columns up to
 /// [`AUTO_TILE_MAX_LENGTH_2D`], with up to `256 · 8 / n` columns per tile (bands of 8
-/// positions), 16 at most, 4 at least. WebGPU's default 16 KiB holds every tile this takes.
+/// positions), 16 at most, 4 at least. The 3D y pass takes the same tile up to
+/// [`AUTO_TILE_MAX_LENGTH_Y`]. WebGPU's default 16 KiB holds every tile this takes.
 ///
 /// ```
 /// use fieldkit::distance::tile_columns;
 /// assert_eq!(tile_columns(16 << 10, 128, 3), Some(16));
 /// assert_eq!(tile_columns(16 << 10, 256, 3), Some(8));
-/// assert_eq!(tile_columns(16 << 10, 512, 3), Some(4));
-/// assert_eq!(tile_columns(48 << 10, 513, 3), None);
+/// assert_eq!(tile_columns(48 << 10, 257, 3), None);
+/// assert_eq!(tile_columns(48 << 10, 512, 3), None);
 /// assert_eq!(tile_columns(48 << 10, 512, 2), None);
 /// ```
 pub fn tile_columns(storage: u32, n: u32, dims: u32) -> Option<u32> {
-    TileGeometry::auto(n, storage, dims).map(|g| 1 << g.lg_columns)
+    TileGeometry::auto(n, storage, 2, dims == 2).map(|g| 1 << g.lg_columns)
 }
 
 /// Where the last exact column pass writes distances (`columns_resolve*` in `edt_columns.wgsl`).
@@ -835,6 +849,12 @@ pub struct FieldBuf2d {
 }
 
 /// All 3D distance pipelines. Create once, encode many times.
+///
+/// Besides its pipelines it keeps one buffer between calls: the envelope stack of the exact
+/// transform's column passes in global memory (4 bytes per voxel of the largest field whose
+/// columns ran there; 512 MiB after a 512³ field), so that a transform run every frame does
+/// not allocate, and have wgpu zero, a buffer that size each time. Drop the `Distance3d` to
+/// free it.
 pub struct Distance3d {
     seed: ComputePipeline<jfa3_seed::seed::Entry>,
     seed_points: ComputePipeline<jfa3_seed_points::seed_points::Entry>,
@@ -874,6 +894,9 @@ pub struct Distance3d {
     split_bytes: Option<u64>,
     /// Fewest columns per tile of a split field's passes.
     split_columns: u32,
+    /// The global-memory column passes' envelope stack, kept from call to call (the largest
+    /// made so far): a new one each call would be allocated, and zeroed by wgpu, every frame.
+    stack: std::sync::Mutex<Option<wgpu::Buffer>>,
     /// Bound as `edt_tile.wgsl`'s `source` where a pass reads the buffer it writes (a binding
     /// must be there; the shader does not read it then).
     no_source: wgpu::Buffer,
@@ -1342,6 +1365,7 @@ impl Distance3d {
             fold_rows: true,
             split_bytes: None,
             split_columns: MIN_TILE_COLUMNS,
+            stack: Default::default(),
             no_source: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("edt tile: no source"),
                 size: 4,
@@ -1911,7 +1935,7 @@ impl Distance3d {
         // Along y in workgroup memory, and not the last pass: the row pass folds into the y
         // pass's load (`row_words`, then `tile_columns_words`); else rows, then columns.
         let y_tile = if self.fold_rows && size[1] > 1 && size[2] > 1 {
-            self.tile_for(device, size[1], false)?
+            self.tile_for(device, size[1], 1, false)?
         } else {
             None
         };
@@ -1938,9 +1962,11 @@ impl Distance3d {
         // The envelope stack only where a pass runs in global memory.
         let mut global = false;
         for &axis in &axes {
-            global |= self.tile_for(device, size[axis as usize], false)?.is_none();
+            global |= self
+                .tile_for(device, size[axis as usize], axis, false)?
+                .is_none();
         }
-        let stack = global.then(|| field_buffer(device, "edt envelope stack", size));
+        let stack = global.then(|| self.stack_for(device, size));
         let mut fuse = fuse;
         for (k, &axis) in axes.iter().enumerate() {
             let last = k + 1 == axes.len();
@@ -2125,7 +2151,7 @@ impl Distance3d {
             }
         }
         // The tile the exact transform takes; where that is global memory, the widest that fits.
-        let tile = match self.tile_for(device, size[1], false)? {
+        let tile = match self.tile_for(device, size[1], 1, false)? {
             Some(tile) => tile,
             None => {
                 TileGeometry::forced(size[1], device.limits().max_compute_workgroup_storage_size)?
@@ -2386,7 +2412,7 @@ impl Distance3d {
         others: u32,
         fuse: Option<Fuse>,
     ) -> Result<(), Error> {
-        let tile = self.tile_for(device, size[axis as usize], pack_2d)?;
+        let tile = self.tile_for(device, size[axis as usize], axis, pack_2d)?;
         if let Some(tile) = tile {
             return self.encode_tile_columns(
                 device,
@@ -2404,7 +2430,7 @@ impl Distance3d {
         let stack = match stack {
             Some(s) => s,
             None => {
-                owned = field_buffer(device, "edt envelope stack", size);
+                owned = self.stack_for(device, size);
                 &owned
             }
         };
@@ -2413,7 +2439,7 @@ impl Distance3d {
                 .iter()
                 .position(|&c| c == b)
                 .expect("checked when set"),
-            None => bands_for(size[0] * others, size[axis as usize]),
+            None => bands_for(size[0] * others, size[axis as usize], pack_2d),
         };
         let bands = BAND_CHOICES[choice];
         let [x_bits, y_bits] = packing_of(size).overrides();
@@ -2502,19 +2528,36 @@ impl Distance3d {
         Ok(())
     }
 
-    /// The workgroup-memory tile the column passes take for columns of length `n` (of a 2D
-    /// field where `flat`), or `None` for the global-memory passes (as
+    /// The envelope stack of the global-memory column passes for a field of `size`: the one
+    /// kept from an earlier call where it is large enough, else a new one, kept for the next.
+    /// Every pass writes the stack's entries before it reads them, so passes recorded one after
+    /// another may share it (wgpu orders their use of it).
+    fn stack_for(&self, device: &wgpu::Device, size: [u32; 3]) -> wgpu::Buffer {
+        let mut kept = self.stack.lock().unwrap_or_else(|e| e.into_inner());
+        match kept.as_ref() {
+            Some(b) if b.size() >= voxels(size) * 4 => b.clone(),
+            _ => {
+                let b = field_buffer(device, "edt envelope stack", size);
+                *kept = Some(b.clone());
+                b
+            }
+        }
+    }
+
+    /// The workgroup-memory tile the column passes take for columns of length `n` along `axis`
+    /// (1: y, 2: z; of a 2D field where `flat`), or `None` for the global-memory passes (as
     /// [`Self::set_column_passes`] chose).
     fn tile_for(
         &self,
         device: &wgpu::Device,
         n: u32,
+        axis: u32,
         flat: bool,
     ) -> Result<Option<TileGeometry>, Error> {
         let storage = device.limits().max_compute_workgroup_storage_size;
         Ok(match self.column_passes {
             ColumnPasses::Global => None,
-            ColumnPasses::Auto => TileGeometry::auto(n, storage, if flat { 2 } else { 3 }),
+            ColumnPasses::Auto => TileGeometry::auto(n, storage, axis, flat),
             ColumnPasses::Workgroup => Some(TileGeometry::forced(n, storage)?),
         })
     }
@@ -2532,7 +2575,7 @@ impl Distance3d {
         size: [u32; 3],
         axis: u32,
     ) -> Result<Option<()>, Error> {
-        let Some(tile) = self.tile_for(device, size[axis as usize], false)? else {
+        let Some(tile) = self.tile_for(device, size[axis as usize], axis, false)? else {
             return Ok(None);
         };
         let span = Span::whole(size);
@@ -2687,9 +2730,9 @@ impl Distance3d {
         let size = [w, h, 1];
         let mv = view(mask);
         let stack = self
-            .tile_for(device, h, true)?
+            .tile_for(device, h, 1, true)?
             .is_none()
-            .then(|| field_buffer(device, "edt envelope stack", size));
+            .then(|| self.stack_for(device, size));
         let rec = &mut rec.recorder();
         let distance = distance_texture(device, size, wgpu::TextureDimension::D2);
         let dv = view(&distance);

@@ -11,7 +11,8 @@ use std::path::Path;
 use std::process::ExitCode;
 
 use fieldkit::distance::{
-    ColumnPasses, Distance3d, Method, Options3d, tile_columns, upload_volume,
+    AUTO_TILE_MAX_LENGTH_Y, ColumnPasses, Distance3d, Method, Options3d, tile_columns,
+    upload_volume,
 };
 use fieldkit::distance::{Jfa2d, Options, Variant, cpu, upload_mask};
 use fieldkit::gpu::{Context, read_buffer, read_texture};
@@ -381,12 +382,13 @@ fn distance(args: &Args) -> Result<(), String> {
                 bar.inc(1);
                 continue;
             }
-            // Where no tile fits (or the path is the one Auto takes anyway), no row.
+            // Where no tile fits (or the path is the one Auto takes anyway: both passes in
+            // workgroup memory), no row.
             if name == WORKGROUP
                 && (d3
                     .encode(&ctx.device, &mut ctx.encoder("probe"), &volume, opts)
                     .is_err()
-                    || tile_columns(storage, n as u32, 3).is_some())
+                    || n as u32 <= AUTO_TILE_MAX_LENGTH_Y)
             {
                 bar.inc(1);
                 continue;
