@@ -483,6 +483,13 @@ fn fields_split_across_bindings_are_exact() {
             mask_3d([40, 9, 30], &[[39, 0, 29]]),
             40 * 9 * 30 * 4 / 2,
         ),
+        // Columns of z past 256: Auto runs the z pass in global memory, the y pass in tiles.
+        (
+            "40×12×300",
+            [40, 12, 300],
+            random_mask_3d([40, 12, 300], 3e-3, 23),
+            40 * 12 * 300 * 4 / 2,
+        ),
     ];
     for (name, size, mask, split) in &cases {
         let exact = cpu::edt_3d_squared(mask, *size);
@@ -521,43 +528,44 @@ fn fields_split_across_bindings_are_exact() {
             }
             assert!(field.nearest.plane(size[2] as u32).is_none());
             drop(enc);
-            for is_signed in [false, true] {
-                let options = Options3d {
-                    signed: is_signed,
-                    ..Options3d::default()
-                };
-                let what = format!("{name} ({device_name}, split, signed {is_signed})");
-                let (nearest, _, dist) = run_3d(ctx, &d3, mask, *size, &options);
-                if is_signed {
-                    for i in 0..dist.len() {
-                        let want = signed[i];
-                        // As in every_column_path_is_exact: a few ulps of sqrt (lavapipe).
-                        let ok = if want.abs() > 1e30 {
-                            dist[i].abs() > 1e30 && (dist[i] < 0.0) == (want < 0.0)
-                        } else {
-                            (dist[i] as f64 - want).abs() <= 1e-5 * (1.0 + want.abs())
-                        };
-                        assert!(ok, "{what}: voxel {i}: {} vs {want}", dist[i]);
-                    }
-                } else {
-                    let case = Case {
-                        name: Box::leak(what.clone().into_boxed_str()),
-                        size: *size,
-                        mask: mask.clone(),
-                        jfa: false,
+            // Each pass in workgroup or global memory, and as Auto mixes them (z past 256 in
+            // global memory, y in workgroup memory).
+            for passes in [
+                ColumnPasses::Auto,
+                ColumnPasses::Workgroup,
+                ColumnPasses::Global,
+            ] {
+                d3.set_column_passes(passes);
+                for is_signed in [false, true] {
+                    let options = Options3d {
+                        signed: is_signed,
+                        ..Options3d::default()
                     };
-                    let e = score(&case, &nearest, &dist, &exact);
-                    assert_eq!(e.wrong, 0, "{what}: {} wrong voxels", e.wrong);
+                    let what =
+                        format!("{name} ({device_name}, split, {passes:?}, signed {is_signed})");
+                    let (nearest, _, dist) = run_3d(ctx, &d3, mask, *size, &options);
+                    if is_signed {
+                        for i in 0..dist.len() {
+                            let want = signed[i];
+                            // As in every_column_path_is_exact: a few ulps of sqrt (lavapipe).
+                            let ok = if want.abs() > 1e30 {
+                                dist[i].abs() > 1e30 && (dist[i] < 0.0) == (want < 0.0)
+                            } else {
+                                (dist[i] as f64 - want).abs() <= 1e-5 * (1.0 + want.abs())
+                            };
+                            assert!(ok, "{what}: voxel {i}: {} vs {want}", dist[i]);
+                        }
+                    } else {
+                        let case = Case {
+                            name: Box::leak(what.clone().into_boxed_str()),
+                            size: *size,
+                            mask: mask.clone(),
+                            jfa: false,
+                        };
+                        let e = score(&case, &nearest, &dist, &exact);
+                        assert_eq!(e.wrong, 0, "{what}: {} wrong voxels", e.wrong);
+                    }
                 }
-            }
-            // Only the workgroup-memory passes split: the global ones say so.
-            d3.set_column_passes(ColumnPasses::Global);
-            let mut enc = ctx.encoder("split, global");
-            match d3.encode(&ctx.device, &mut enc, &volume, &Options3d::default()) {
-                Err(fieldkit::Error::Invalid { what, .. }) => {
-                    assert!(what.contains("split across bindings"), "{what}")
-                }
-                other => panic!("{name}: expected Error::Invalid, got {other:?}"),
             }
             // A binding too small for even one tile of whole columns: a typed error naming it.
             d3.set_column_passes(ColumnPasses::Auto);

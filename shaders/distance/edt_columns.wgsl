@@ -26,7 +26,16 @@
 // The last pass of a 3D transform can resolve distances as `field_resolve.wgsl` would, in the
 // same sweep (`columns_resolve`, `columns_resolve_signed`): that saves reading the field again.
 
-import fieldkit::seed::{NO_SEED, answer_distance, dist2, dist2_3, separator, signed_at2, signed_at3_bits, unpack_seed2, unpack_seed3_bits};
+import fieldkit::seed::{NO_SEED, answer_distance, dist2, dist2_3, pack_seed3_bits, row_word_mark, separator, signed_at2, signed_at3_bits, unpack_seed2, unpack_seed3_bits};
+
+// Where voxel (x, y, z) sits in a buffer: (x - origin.x) + row · (y - origin.y) + plane ·
+// (z - origin.z). A whole field has origin 0, row = size.x and plane = size.x · size.y; a part of
+// a field too large for one binding has its own (as in `edt_tile.wgsl`).
+struct Placement {
+    origin: vec3<u32>,
+    row: u32,
+    plane: u32,
+}
 
 struct ColumnParams {
     size: vec3<u32>,
@@ -36,6 +45,16 @@ struct ColumnParams {
     // clamped to (FAR when none).
     voxel_size: f32,
     band: f32,
+    // This dispatch's first column: the x of workgroup 0's first column and the other
+    // coordinate (z for y columns, y for z columns) of workgroup row 0; and the x where its
+    // columns end (size.x, or the end of its part of a field split across bindings).
+    first: vec2<u32>,
+    x_end: u32,
+    // Where the pass reads its sites (`source`, `nearest` or, from the row words, nowhere) and
+    // keeps its envelopes (`stack`), and where it writes its answers (`nearest`,
+    // `nearest_inside`).
+    src: Placement,
+    dst: Placement,
 }
 
 @group(0) @binding(0) var<uniform> params: ColumnParams;
@@ -46,11 +65,22 @@ struct ColumnParams {
 @group(0) @binding(4) var distance: texture_storage_3d<r32float, write>;
 // The resolving entries of a 2D field write here.
 @group(0) @binding(5) var distance_2d: texture_storage_2d<r32float, write>;
+// What the pass reads where it is not `nearest` itself (SOURCE_APART): a part of a field too
+// large for one binding. In place, a placeholder is bound here.
+@group(0) @binding(6) var<storage, read> source: array<u32>;
+// The row words (`edt_rows.wgsl`'s `row_words`) the pass makes its sites from where FROM_WORDS
+// (the z pass of a field split across bindings); a placeholder elsewhere.
+@group(0) @binding(7) var<storage, read> words: array<vec2<u32>>;
 
 // 2D fields pack 16/16 bits (sides to 16384 keep every separator numerator in i32).
 override PACK_2D: bool = false;
 // Bands per column; 256 / BANDS columns per workgroup. At most MAX_BANDS, a power of two.
 override BANDS: u32 = 8u;
+// The pass reads `source`, not `nearest` (a field split across bindings).
+override SOURCE_APART: bool = false;
+// The pass makes each site from the row words as it reads it (3D only): the row pass's answers
+// never go through memory.
+override FROM_WORDS: bool = false;
 // 3D seeds' widths (`SeedPacking`): x in the low SEED_X_BITS bits, y in the next SEED_Y_BITS,
 // z above; 11 and 11 for every grid up to 2048 × 2048 × 1024.
 override SEED_X_BITS: u32 = 11u;
@@ -149,14 +179,22 @@ struct Column {
     band: u32,
     lane: u32,
     columns_per_group: u32,
-    // Column length, first element, element stride; the band is [lo, hi).
+    // Column length, first element and element stride where the sites are read and the
+    // envelopes kept (`source` or `nearest`, and `stack`), and where the answers go; the band
+    // is [lo, hi).
     n: u32,
     base: u32,
     stride: u32,
+    out: u32,
+    out_stride: u32,
     band_len: u32,
     lo: u32,
     hi: u32,
     valid: bool,
+}
+
+fn place(p: Placement, v: vec3<u32>) -> u32 {
+    return (v.x - p.origin.x) + p.row * (v.y - p.origin.y) + p.plane * (v.z - p.origin.z);
 }
 
 fn column_of(li: u32, wg: vec3<u32>) -> Column {
@@ -164,18 +202,33 @@ fn column_of(li: u32, wg: vec3<u32>) -> Column {
     c.columns_per_group = 256u / BANDS;
     c.lane = li % c.columns_per_group;
     c.band = li / c.columns_per_group;
-    c.x = wg.x * c.columns_per_group + c.lane;
-    c.other = wg.y;
+    c.x = params.first.x + wg.x * c.columns_per_group + c.lane;
+    c.other = params.first.y + wg.y;
     c.n = select(params.size.z, params.size.y, params.axis == 1u);
-    let row = params.size.x;
-    let plane = params.size.x * params.size.y;
-    c.base = select(c.other * row + c.x, c.other * plane + c.x, params.axis == 1u);
-    c.stride = select(plane, row, params.axis == 1u);
+    c.valid = c.x < params.x_end;
+    let start = vec3<u32>(voxel(min(c.x, params.x_end - 1u), c.other, 0u));
+    c.base = place(params.src, start);
+    c.stride = select(params.src.plane, params.src.row, params.axis == 1u);
+    c.out = place(params.dst, start);
+    c.out_stride = select(params.dst.plane, params.dst.row, params.axis == 1u);
     c.band_len = (c.n + BANDS - 1u) / BANDS;
     c.lo = min(c.n, c.band * c.band_len);
     c.hi = min(c.n, c.lo + c.band_len);
-    c.valid = c.x < params.size.x;
     return c;
+}
+
+// The site at position i of the column: read, or made from the row word that holds the voxel.
+fn site_at(c: Column, i: u32) -> u32 {
+    if FROM_WORDS {
+        let v = vec3<u32>(voxel(c.x, c.other, i));
+        let count = (params.size.x + 31u) / 32u;
+        let near = row_word_mark(words[(v.z * params.size.y + v.y) * count + (v.x >> 5u)], v.x);
+        return select(NO_SEED, pack_seed3_bits(vec3<u32>(near - 1u, v.y, v.z), SEED_X_BITS, SEED_Y_BITS), near != 0u);
+    }
+    if SOURCE_APART {
+        return source[c.base + i * c.stride];
+    }
+    return nearest[c.base + i * c.stride];
 }
 
 // Build: Meijster's stack over this band's sites, valid for the whole column [0, n); returns
@@ -201,17 +254,17 @@ fn build(c: Column) -> u32 {
     var q2 = NO_SEED;
     var q3 = NO_SEED;
     if c.lo < c.hi {
-        q0 = nearest[c.base + c.lo * c.stride];
+        q0 = site_at(c, c.lo);
     }
     if c.lo + 1u < c.hi {
-        q1 = nearest[c.base + (c.lo + 1u) * c.stride];
+        q1 = site_at(c, c.lo + 1u);
     }
     if c.lo + 2u < c.hi {
-        q2 = nearest[c.base + (c.lo + 2u) * c.stride];
+        q2 = site_at(c, c.lo + 2u);
     }
     for (var i = c.lo; i < c.hi; i++) {
         if i + 3u < c.hi {
-            q3 = nearest[c.base + (i + 3u) * c.stride];
+            q3 = site_at(c, i + 3u);
         }
         let s = q0;
         q0 = q1;
@@ -381,10 +434,10 @@ fn columns(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: 
     if !c.valid {
         return;
     }
-    // The answer overwrites `nearest` in place; all of it was read before the barrier.
+    // In place, the answer overwrites `nearest`; all of it was read before the barrier.
     var walk = s.walk;
     for (var i = c.lo; i < c.hi; i++) {
-        nearest[c.base + i * c.stride] = query(c, &walk, i).x;
+        nearest[c.out + i * c.out_stride] = query(c, &walk, i).x;
     }
 }
 
@@ -399,7 +452,7 @@ fn columns_resolve(@builtin(local_invocation_index) li: u32, @builtin(workgroup_
     var walk = s.walk;
     for (var i = c.lo; i < c.hi; i++) {
         let found = query(c, &walk, i);
-        nearest[c.base + i * c.stride] = found.x;
+        nearest[c.out + i * c.out_stride] = found.x;
         let p = vec3<u32>(voxel(c.x, c.other, i));
         textureStore(distance, p, vec4<f32>(banded(answer_distance(found, params.voxel_size)), 0.0, 0.0, 0.0));
     }
@@ -417,7 +470,7 @@ fn columns_resolve_signed(@builtin(local_invocation_index) li: u32, @builtin(wor
     var walk = s.walk;
     for (var i = c.lo; i < c.hi; i++) {
         let found = query(c, &walk, i);
-        let at = c.base + i * c.stride;
+        let at = c.out + i * c.out_stride;
         nearest[at] = found.x;
         let p = vec3<u32>(voxel(c.x, c.other, i));
         let d = signed_at3_bits(nearest_inside[at], p, answer_distance(found, params.voxel_size), found.x,
@@ -437,7 +490,7 @@ fn columns_resolve_2d(@builtin(local_invocation_index) li: u32, @builtin(workgro
     var walk = s.walk;
     for (var i = c.lo; i < c.hi; i++) {
         let found = query(c, &walk, i);
-        let at = c.base + i * c.stride;
+        let at = c.out + i * c.out_stride;
         nearest[at] = found.x;
         let p = vec3<u32>(voxel(c.x, c.other, i)).xy;
         textureStore(distance_2d, p, vec4<f32>(banded(answer_distance(found, params.voxel_size)), 0.0, 0.0, 0.0));
@@ -455,7 +508,7 @@ fn columns_resolve_signed_2d(@builtin(local_invocation_index) li: u32, @builtin(
     var walk = s.walk;
     for (var i = c.lo; i < c.hi; i++) {
         let found = query(c, &walk, i);
-        let at = c.base + i * c.stride;
+        let at = c.out + i * c.out_stride;
         nearest[at] = found.x;
         let p = vec3<u32>(voxel(c.x, c.other, i)).xy;
         let d = signed_at2(nearest_inside[at], p, answer_distance(found, params.voxel_size), found.x, params.voxel_size);

@@ -17,7 +17,7 @@
 // cell per band, and a column stride that keeps a warp's threads in different banks), columns and bands come from
 // shifts and masks, and the separator is an f32 division corrected to the exact integer floor.
 
-import fieldkit::seed::{NO_SEED, answer_distance, pack_seed3_bits, separator, signed_at2, signed_at3_bits, unpack_seed2, unpack_seed3_bits};
+import fieldkit::seed::{NO_SEED, answer_distance, pack_seed3_bits, row_word_mark, separator, signed_at2, signed_at3_bits, unpack_seed2, unpack_seed3_bits};
 
 // Where voxel (x, y, z) sits in a buffer: (x - origin.x) + row · (y - origin.y) + plane ·
 // (z - origin.z). A whole field has origin 0, row = size.x and plane = size.x · size.y; a part of
@@ -273,31 +273,13 @@ fn word_of(ld: WordLoader, e: u32) -> vec2<u32> {
 }
 
 // The nearest mark along x to tile element e's voxel (x, y, z), packed (NO_SEED: none), from
-// the row word that holds it: in the word itself by firstLeadingBit / firstTrailingBit, else the
-// word's nearest marks before and after it. On a tie the mark to the left wins, as in `rows`.
+// the row word that holds it (`row_word_mark`; a column past the grid has a zero word: no seed).
 fn put_word(ld: WordLoader, e: u32, word: vec2<u32>) {
     if e >= ld.total {
         return;
     }
     let r = word_row(ld, e);
-    let x = ld.x0 + (e & ld.mask);
-    let b = x & 31u;
-    let base = x & ~31u;
-    // Both as the mark + 1, 0 for none (a column past the grid has a zero word: no seed).
-    var left = word.y & 0xffffu;
-    let below = word.x & (0xffffffffu >> (31u - b));
-    if below != 0u {
-        left = base + firstLeadingBit(below) + 1u;
-    }
-    var right = word.y >> 16u;
-    let above = word.x & (0xffffffffu << b);
-    if above != 0u {
-        right = base + firstTrailingBit(above) + 1u;
-    }
-    var near = left;
-    if right != 0u && (left == 0u || right - 1u - x < x + 1u - left) {
-        near = right;
-    }
+    let near = row_word_mark(word, ld.x0 + (e & ld.mask));
     let s = select(NO_SEED, pack_seed3_bits(vec3<u32>(near - 1u, r.x, r.y), SEED_X_BITS, SEED_Y_BITS), near != 0u);
     tile[cell((e & ld.mask) * params.column_cells, e >> params.lg_columns)] = s;
 }

@@ -302,9 +302,9 @@ struct Split {
     part_width: u32,
     /// Planes (z) of the field per binding of the y pass.
     slab_depth: u32,
-    /// The y and z passes' tiles.
-    y: TileGeometry,
-    z: TileGeometry,
+    /// The y and z passes' tiles, or `None` for a pass in global memory.
+    y: Option<TileGeometry>,
+    z: Option<TileGeometry>,
 }
 
 /// A buffer holding the voxels from `origin` on, `row` elements per row, `plane` per plane.
@@ -324,6 +324,27 @@ struct TileIo<'a> {
     nearest: &'a wgpu::Buffer,
     slab: usize,
     span: Span,
+}
+
+/// What one dispatch of a global-memory column pass reads and writes, as [`TileIo`] says it
+/// for a workgroup pass, plus the envelope stack (in `span.src`'s layout) and, for the z pass
+/// of a split field, the row words it makes its sites from.
+struct ColumnsIo<'a> {
+    source: Option<&'a wgpu::Buffer>,
+    words: Option<&'a wgpu::Buffer>,
+    nearest: &'a wgpu::Buffer,
+    stack: &'a wgpu::Buffer,
+    slab: usize,
+    span: Span,
+}
+
+/// The same placement as `edt_columns.wgsl` declares it.
+fn columns_placement(p: &edt_tile::Placement) -> edt_columns::Placement {
+    edt_columns::Placement {
+        origin: p.origin,
+        row: p.row,
+        plane: p.plane,
+    }
 }
 
 impl<'a> TileIo<'a> {
@@ -1367,8 +1388,8 @@ impl Distance3d {
             split_columns: MIN_TILE_COLUMNS,
             stack: Default::default(),
             no_source: device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("edt tile: no source"),
-                size: 4,
+                label: Some("edt: no source, no words"),
+                size: 16,
                 usage: wgpu::BufferUsages::STORAGE,
                 mapped_at_creation: false,
             }),
@@ -2216,26 +2237,35 @@ impl Distance3d {
         if bytes <= binding {
             return Ok(None);
         }
-        if matches!(self.column_passes, ColumnPasses::Global) {
-            return Err(Error::Invalid {
-                stage: STAGE,
-                what: format!(
-                    "a {size:?} field ({bytes} bytes) is larger than one storage binding \
-                     ({binding} bytes) and is split across bindings, which only the \
-                     workgroup-memory column passes do: use ColumnPasses::Auto or Workgroup"
-                ),
-            });
-        }
         let storage = limits.max_compute_workgroup_storage_size;
-        let (y, z) = (
-            TileGeometry::split(size[1], storage, self.split_columns)?,
-            // Bands of 8 for the z pass from the words: at 1024³ on the H100 it took 7.95 ms
-            // per part with 2 columns per tile against 8.70 with 4 (the y pass took 2.87 ms per
-            // slab with 4, 3.15 with 2; the whole transform 54.4 ms with 4 for both).
-            TileGeometry::split(size[2], storage, 1)?,
-        );
+        // The z pass in workgroup memory where the unsplit transform would hold it there. The
+        // y pass, which reads its part from a binding of its own, in workgroup memory unless
+        // forced into global memory: at 1024³ on the H100 (2026-11-26, one command) it took
+        // 2.83 to 2.89 ms per slab there against 2.29 to 3.50 in global memory (25.9 ms
+        // against 27.3 for the nine), where the z pass from the words took 4.70 to 4.74 ms per
+        // part in global memory against 7.72 to 7.91 in workgroup memory.
+        let y = match self.column_passes {
+            ColumnPasses::Global => None,
+            ColumnPasses::Auto => TileGeometry::split(size[1], storage, self.split_columns).ok(),
+            ColumnPasses::Workgroup => {
+                Some(TileGeometry::split(size[1], storage, self.split_columns)?)
+            }
+        };
+        // Bands of 8 for the z pass from the words in workgroup memory: at 1024³ on the H100
+        // it took 7.95 ms per part with 2 columns per tile against 8.70 with 4 (the y pass took
+        // 2.87 ms per slab with 4, 3.15 with 2; the whole transform 54.4 ms with 4 for both).
+        let z = match self.tile_for(device, size[2], 2, false)? {
+            Some(_) => Some(TileGeometry::split(size[2], storage, 1)?),
+            None => None,
+        };
         // Parts are whole tiles wide for both passes.
-        let columns = 1u64 << y.lg_columns.max(z.lg_columns);
+        let columns = 1u64
+            << [y, z]
+                .iter()
+                .flatten()
+                .map(|t| t.lg_columns)
+                .max()
+                .unwrap_or(0);
         let column_bytes = size[1] as u64 * size[2] as u64 * 4;
         let widest = binding / column_bytes / columns * columns;
         if widest == 0 {
@@ -2305,6 +2335,9 @@ impl Distance3d {
             [split.part_width, h, d],
         );
         let part_at = |x0: u32| placement([x0, 0, 0], split.part_width, split.part_width * h);
+        // The envelope stack of a pass in global memory: one part's worth, in the part's layout.
+        let stack = (split.y.is_none() || split.z.is_none())
+            .then(|| self.stack_for(device, [split.part_width, h, d]));
         for x0 in (0..w).step_by(split.part_width as usize) {
             let x_end = (x0 + split.part_width).min(w);
             let span = Span {
@@ -2320,31 +2353,72 @@ impl Distance3d {
                 slab: 0,
                 span,
             };
-            self.encode_tile_columns_words(device, rec, &words, io, size, 2, split.z)?;
-            for (k, &(z0, z_end)) in slabs.iter().enumerate() {
-                let io = TileIo {
-                    source: Some(&part),
-                    nearest: &nearest[k],
-                    slab: k,
-                    span: Span {
-                        first: [x0, z0],
-                        x_end,
-                        y_after_z: true,
-                        src: part_at(x0),
-                        dst: placement([0, 0, z0], w, w * h),
-                    },
-                };
-                self.encode_tile_columns(
+            match split.z {
+                Some(tile) => {
+                    self.encode_tile_columns_words(device, rec, &words, io, size, 2, tile)?
+                }
+                None => self.encode_global_columns(
                     device,
                     rec,
                     false,
-                    io,
+                    ColumnsIo {
+                        source: None,
+                        words: Some(&words),
+                        nearest: &part,
+                        stack: stack.as_ref().expect("made where a pass is global"),
+                        slab: 0,
+                        span: io.span,
+                    },
                     size,
-                    1,
-                    z_end - z0,
-                    split.y,
-                    fuse,
-                )?;
+                    2,
+                    h,
+                    None,
+                )?,
+            }
+            for (k, &(z0, z_end)) in slabs.iter().enumerate() {
+                let span = Span {
+                    first: [x0, z0],
+                    x_end,
+                    y_after_z: true,
+                    src: part_at(x0),
+                    dst: placement([0, 0, z0], w, w * h),
+                };
+                match split.y {
+                    Some(tile) => self.encode_tile_columns(
+                        device,
+                        rec,
+                        false,
+                        TileIo {
+                            source: Some(&part),
+                            nearest: &nearest[k],
+                            slab: k,
+                            span,
+                        },
+                        size,
+                        1,
+                        z_end - z0,
+                        tile,
+                        fuse,
+                    )?,
+                    // The stack in the part's layout, as the z pass used it.
+                    None => self.encode_global_columns(
+                        device,
+                        rec,
+                        false,
+                        ColumnsIo {
+                            source: Some(&part),
+                            words: None,
+                            nearest: &nearest[k],
+                            stack: stack.as_ref().expect("made where a pass is global"),
+                            slab: k,
+                            span,
+                        },
+                        size,
+                        1,
+                        z_end - z0,
+                        fuse,
+                    )?,
+                }
             }
         }
         Ok(Slabs {
@@ -2434,18 +2508,47 @@ impl Distance3d {
                 &owned
             }
         };
+        let io = ColumnsIo {
+            source: None,
+            words: None,
+            nearest,
+            stack,
+            slab: 0,
+            span: Span::whole(size),
+        };
+        self.encode_global_columns(device, rec, pack_2d, io, size, axis, others, fuse)
+    }
+
+    /// One column pass in global memory (`edt_columns.wgsl`) over the columns `io.span` names ×
+    /// `others`, resolving into `fuse` where given.
+    #[allow(clippy::too_many_arguments)]
+    fn encode_global_columns(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        pack_2d: bool,
+        io: ColumnsIo,
+        size: [u32; 3],
+        axis: u32,
+        others: u32,
+        fuse: Option<Fuse>,
+    ) -> Result<(), Error> {
+        let span = &io.span;
+        let width = span.x_end - span.first[0];
         let choice = match self.column_bands {
             Some(b) => BAND_CHOICES
                 .iter()
                 .position(|&c| c == b)
                 .expect("checked when set"),
-            None => bands_for(size[0] * others, size[axis as usize], pack_2d),
+            None => bands_for(width * others, size[axis as usize], pack_2d),
         };
         let bands = BAND_CHOICES[choice];
         let [x_bits, y_bits] = packing_of(size).overrides();
         let overrides = [
             ("PACK_2D", pack_2d as u32 as f64),
             ("BANDS", bands as f64),
+            ("SOURCE_APART", io.source.is_some() as u32 as f64),
+            ("FROM_WORDS", io.words.is_some() as u32 as f64),
             x_bits,
             y_bits,
         ];
@@ -2457,15 +2560,24 @@ impl Distance3d {
                 axis,
                 voxel_size: fuse.as_ref().map_or(1.0, |f| f.voxel_size),
                 band: fuse.as_ref().map_or(f32::MAX, |f| f.band),
+                first: span.first.into(),
+                x_end: span.x_end,
+                src: columns_placement(&span.src),
+                dst: columns_placement(&span.dst),
             },
         );
-        let groups = [size[0].div_ceil(256 / bands), others, 1];
-        let name = match (axis, &fuse) {
-            (1, None) => "columns (y)",
-            (1, Some(_)) => "columns (y) + resolve",
-            (_, None) => "columns (z)",
-            (_, Some(_)) => "columns (z) + resolve",
+        let groups = [width.div_ceil(256 / bands), others, 1];
+        let name = match (axis, &fuse, io.words.is_some()) {
+            (_, _, true) => "columns (z) from row words",
+            (1, None, _) => "columns (y)",
+            (1, Some(_), _) => "columns (y) + resolve",
+            (_, None, _) => "columns (z)",
+            (_, Some(_), _) => "columns (z) + resolve",
         };
+        let (nearest, stack, slab) = (io.nearest, io.stack, io.slab);
+        let source = io.source.unwrap_or(&self.no_source);
+        let words = io.words.unwrap_or(&self.no_source);
+
         // One arm per entry point: the same resources, plus what its resolve writes.
         macro_rules! record {
             ($cache:expr, $entry:ident { $($field:ident: $value:expr),* }) => {
@@ -2476,6 +2588,8 @@ impl Distance3d {
                         params: (&params).into(),
                         nearest: nearest.into(),
                         stack: stack.into(),
+                        source: source.into(),
+                        words: words.into(),
                         $($field: $value.into()),*
                     },
                     groups,
@@ -2504,7 +2618,7 @@ impl Distance3d {
             }) => record!(
                 self.columns_resolve_signed_2d,
                 columns_resolve_signed_2d {
-                    nearest_inside: &inside[0],
+                    nearest_inside: &inside[slab],
                     distance_2d: distance
                 }
             ),
@@ -2520,7 +2634,7 @@ impl Distance3d {
             }) => record!(
                 self.columns_resolve_signed,
                 columns_resolve_signed {
-                    nearest_inside: &inside[0],
+                    nearest_inside: &inside[slab],
                     distance: distance
                 }
             ),

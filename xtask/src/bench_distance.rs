@@ -374,11 +374,8 @@ fn distance(args: &Args) -> Result<(), String> {
                 ROWS_PASS => &d3_rows,
                 _ => &d3,
             };
-            // JFA takes fields of one binding only.
-            if split
-                && ([GLOBAL, WORKGROUP, ROWS_PASS].contains(&name.as_str())
-                    || opts.method != Method::Exact)
-            {
+            // JFA takes fields of one binding only; a split field has no row pass of its own.
+            if split && (name == ROWS_PASS || opts.method != Method::Exact) {
                 bar.inc(1);
                 continue;
             }
