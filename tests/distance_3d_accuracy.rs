@@ -528,8 +528,8 @@ fn fields_split_across_bindings_are_exact() {
             }
             assert!(field.nearest.plane(size[2] as u32).is_none());
             drop(enc);
-            // Each pass in workgroup or global memory, and as Auto mixes them (z past 256 in
-            // global memory, y in workgroup memory).
+            // Each pass in workgroup or global memory, and as Auto mixes them (y past 128 and
+            // z past 256 in global memory).
             for passes in [
                 ColumnPasses::Auto,
                 ColumnPasses::Workgroup,

@@ -45,25 +45,23 @@ pub const MAX_SIDE_3D: [u32; 3] = [2048, 2048, 1024];
 /// Largest side of a 2D exact transform: keeps the integer separators inside i32.
 pub const MAX_SIDE_2D_EXACT: u32 = 16384;
 /// Bands per column in the exact column passes in global memory (`edt_columns.wgsl`): enough
-/// that columns × bands reaches about `TARGET_THREADS_3D` threads in 3D and `TARGET_THREADS_2D`
-/// in 2D, and in 3D enough that no band walks more than `MAX_BAND_LEN_3D` positions, 32 at
-/// most. Measured on the H100 in one command (`cargo xtask bench distance --exact-only
-/// --column-bands B`, 1% seeds, clocks held, 2026-11-26): 512³ took 4.51, 3.96 and 4.47 ms with
-/// 4, 8 and 16 bands; z + resolve at 256³ 0.327, 0.284 and 0.271 ms, y 0.198, 0.200 and 0.238;
-/// 16384² 8.44, 6.82 and 5.67 ms with 32, 16 and 8 bands, 8192² 1.86, 1.47 and 1.77, 4096²
-/// 0.443 and 0.533 with 32 and 16.
+/// that columns × bands reaches about `TARGET_THREADS_3D` threads in 3D, and never fewer than
+/// `MIN_BANDS_3D`; about `TARGET_THREADS_2D` in 2D; 32 at most. Measured on the H100 in one
+/// command per setting (`cargo xtask bench distance --exact-only --column-bands B`, 1% seeds,
+/// clocks held, 2026-11-26): 512³ took 4.51, 3.96 and 4.47 ms with 4, 8 and 16 bands; z +
+/// resolve at 256³ 0.327, 0.284 and 0.271 ms, y 0.198, 0.200 and 0.238; 1024³ (split, every
+/// pass in global memory) 41.5, 39.1 and 44.3 ms; 16384² 8.44, 6.82 and 5.67 ms with 32, 16 and
+/// 8 bands, 8192² 1.86, 1.47 and 1.77, 4096² 0.443 and 0.533 with 32 and 16.
 const TARGET_THREADS_3D: u32 = 1 << 19;
+const MIN_BANDS_3D: u32 = 8;
 const TARGET_THREADS_2D: u32 = 1 << 17;
-const MAX_BAND_LEN_3D: u32 = 64;
 const BAND_CHOICES: [u32; 6] = [1, 2, 4, 8, 16, 32];
 
-fn bands_for(columns: u32, length: u32, flat: bool) -> usize {
+fn bands_for(columns: u32, flat: bool) -> usize {
     let want = if flat {
         TARGET_THREADS_2D.div_ceil(columns.max(1))
     } else {
-        TARGET_THREADS_3D
-            .div_ceil(columns.max(1))
-            .max(length.div_ceil(MAX_BAND_LEN_3D))
+        TARGET_THREADS_3D.div_ceil(columns.max(1)).max(MIN_BANDS_3D)
     }
     .next_power_of_two()
     .min(32);
@@ -2238,18 +2236,13 @@ impl Distance3d {
             return Ok(None);
         }
         let storage = limits.max_compute_workgroup_storage_size;
-        // The z pass in workgroup memory where the unsplit transform would hold it there. The
-        // y pass, which reads its part from a binding of its own, in workgroup memory unless
-        // forced into global memory: at 1024³ on the H100 (2026-11-26, one command) it took
-        // 2.83 to 2.89 ms per slab there against 2.29 to 3.50 in global memory (25.9 ms
-        // against 27.3 for the nine), where the z pass from the words took 4.70 to 4.74 ms per
-        // part in global memory against 7.72 to 7.91 in workgroup memory.
-        let y = match self.column_passes {
-            ColumnPasses::Global => None,
-            ColumnPasses::Auto => TileGeometry::split(size[1], storage, self.split_columns).ok(),
-            ColumnPasses::Workgroup => {
-                Some(TileGeometry::split(size[1], storage, self.split_columns)?)
-            }
+        // Each pass in workgroup memory where the unsplit transform would hold it there. At
+        // 1024³ on the H100 (2026-11-26, one command, 8 bands in global memory) the y pass took
+        // 23.4 ms for the nine slabs in global memory against 26.0 in workgroup memory, the z
+        // pass from the words 4.27 to 4.33 ms per part against 7.72 to 7.91.
+        let y = match self.tile_for(device, size[1], 1, false)? {
+            Some(_) => Some(TileGeometry::split(size[1], storage, self.split_columns)?),
+            None => None,
         };
         // Bands of 8 for the z pass from the words in workgroup memory: at 1024³ on the H100
         // it took 7.95 ms per part with 2 columns per tile against 8.70 with 4 (the y pass took
@@ -2540,7 +2533,7 @@ impl Distance3d {
                 .iter()
                 .position(|&c| c == b)
                 .expect("checked when set"),
-            None => bands_for(width * others, size[axis as usize], pack_2d),
+            None => bands_for(width * others, pack_2d),
         };
         let bands = BAND_CHOICES[choice];
         let [x_bits, y_bits] = packing_of(size).overrides();
