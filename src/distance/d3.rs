@@ -907,7 +907,8 @@ pub struct Distance3d {
     tile_columns_resolve_signed_2d: Variants<edt_tile::tile_columns_resolve_signed_2d::Entry>,
     tile_copy: Variants<edt_tile::tile_copy::Entry>,
     column_passes: ColumnPasses,
-    /// Fold the 3D row pass into the y pass where it runs in workgroup memory.
+    /// Fold the 3D row pass into the y pass (its sites made from the row words) where y is
+    /// not the last pass.
     fold_rows: bool,
     /// The largest field the exact transform binds whole (below the device's limit: for tests).
     split_bytes: Option<u64>,
@@ -1951,18 +1952,14 @@ impl Distance3d {
         if let Some(split) = self.split_for(device, size)? {
             return self.encode_exact_split(device, rec, volume, inside, invert, fuse, split);
         }
-        // Along y in workgroup memory, and not the last pass: the row pass folds into the y
-        // pass's load (`row_words`, then `tile_columns_words`); else rows, then columns.
-        let y_tile = if self.fold_rows && size[1] > 1 && size[2] > 1 {
-            self.tile_for(device, size[1], 1, false)?
-        } else {
-            None
-        };
-        let (nearest, first_axis) = match y_tile {
-            Some(tile) => {
-                let words = self.encode_row_words(device, rec, volume, inside, invert)?;
-                let nearest = field_buffer(device, "nearest seed", size);
-                self.encode_tile_columns_words(
+        // Along y, and not the last pass: the row pass folds into the y pass, which makes its
+        // sites from the row words (`row_words`, then `tile_columns_words` in workgroup memory
+        // or `edt_columns.wgsl` with FROM_WORDS in global memory); else rows, then columns.
+        let (nearest, first_axis) = if self.fold_rows && size[1] > 1 && size[2] > 1 {
+            let words = self.encode_row_words(device, rec, volume, inside, invert)?;
+            let nearest = field_buffer(device, "nearest seed", size);
+            match self.tile_for(device, size[1], 1, false)? {
+                Some(tile) => self.encode_tile_columns_words(
                     device,
                     rec,
                     &words,
@@ -1970,10 +1967,28 @@ impl Distance3d {
                     size,
                     1,
                     tile,
-                )?;
-                (nearest, 2)
+                )?,
+                None => self.encode_global_columns(
+                    device,
+                    rec,
+                    false,
+                    ColumnsIo {
+                        source: None,
+                        words: Some(&words),
+                        nearest: &nearest,
+                        stack: &self.stack_for(device, size),
+                        slab: 0,
+                        span: Span::whole(size),
+                    },
+                    size,
+                    1,
+                    size[2],
+                    None,
+                )?,
             }
-            None => (self.encode_rows(device, rec, volume, inside, invert)?, 1),
+            (nearest, 2)
+        } else {
+            (self.encode_rows(device, rec, volume, inside, invert)?, 1)
         };
         let axes: Vec<u32> = (first_axis..=2u32)
             .filter(|&a| size[a as usize] > 1)
@@ -2561,6 +2576,7 @@ impl Distance3d {
         );
         let groups = [width.div_ceil(256 / bands), others, 1];
         let name = match (axis, &fuse, io.words.is_some()) {
+            (1, _, true) => "columns (y) from row words",
             (_, _, true) => "columns (z) from row words",
             (1, None, _) => "columns (y)",
             (1, Some(_), _) => "columns (y) + resolve",

@@ -69,9 +69,12 @@ fn pass_bytes(name: &str, cells: u64, dims: u32) -> f64 {
     let per = if name.starts_with("row words") {
         // Mask read once, 8 bytes written per 32 voxels.
         1.0 + 8.0 / 32.0
-    } else if name.ends_with("from row words") {
+    } else if name.ends_with("from row words") && name.contains("workgroup") {
         // Each row word read once (the tile's columns share it), each answer written once.
         8.0 / 32.0 + 4.0
+    } else if name.ends_with("from row words") {
+        // As above, plus the envelope stack written and read back.
+        8.0 / 32.0 + 4.0 + 8.0
     } else if name.starts_with("rows") && dims == 3 {
         // The row is held in workgroup memory: mask read once, seed written once.
         1.0 + 4.0
