@@ -6,7 +6,7 @@ mod common;
 use common::*;
 use fieldkit::distance::cpu;
 use fieldkit::distance::{
-    Distance3d, Grid3, Inside, Options3d, key_index, upload_points, upload_volume,
+    ColumnPasses, Distance3d, Grid3, Inside, Options3d, key_index, upload_points, upload_volume,
 };
 use fieldkit::gpu::{Context, read_buffer, read_texture};
 use fieldkit::harness::Summary;
@@ -131,14 +131,22 @@ fn exact_rows_then_columns() {
 
 /// The row pass as words, then the y pass reading them: the words against a CPU model (bits,
 /// nearest marks before and after), the y pass against the 2D transform of every slice and
-/// against the row pass followed by the y pass (the same ties, so the same seeds).
+/// against the row pass followed by the y pass (the same ties, so the same seeds); with the y
+/// pass in workgroup memory (as `Auto` takes it at this length) and in global memory.
 #[test]
 fn exact_row_words_then_y() {
+    for passes in [ColumnPasses::Auto, ColumnPasses::Global] {
+        row_words_then_y(passes);
+    }
+}
+
+fn row_words_then_y(passes: ColumnPasses) {
     // Rows of 70 voxels: three words, the last one partial.
     let size = [70usize, 13, 5];
     let [w, h, d] = size;
     let ctx = Context::shared();
-    let d3 = Distance3d::new(&ctx.device).unwrap();
+    let mut d3 = Distance3d::new(&ctx.device).unwrap();
+    d3.set_column_passes(passes);
     let m = random_mask_3d(size, 0.03, 5);
     let volume = upload_volume(&ctx.device, &ctx.queue, &to_bytes(&m), size_u32(size)).unwrap();
     let mut enc = ctx.encoder("row words");
@@ -189,7 +197,10 @@ fn exact_row_words_then_y() {
         for (j, &want) in exact.iter().enumerate() {
             let i = z * w * h + j;
             let got = cpu::seed_d2_3(after_y[i], i, size).unwrap_or(cpu::NONE);
-            assert_eq!(got, want, "y pass from words, slice {z}, texel {j}");
+            assert_eq!(
+                got, want,
+                "{passes:?}: y pass from words, slice {z}, texel {j}"
+            );
         }
     }
     let mut enc = ctx.encoder("rows, columns y");
@@ -208,7 +219,7 @@ fn exact_row_words_then_y() {
     assert_eq!(
         after_y,
         words(&ctx, &by_rows),
-        "the same seeds as rows, then y"
+        "{passes:?}: the same seeds as rows, then y"
     );
 }
 

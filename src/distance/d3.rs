@@ -1958,34 +1958,9 @@ impl Distance3d {
         let (nearest, first_axis) = if self.fold_rows && size[1] > 1 && size[2] > 1 {
             let words = self.encode_row_words(device, rec, volume, inside, invert)?;
             let nearest = field_buffer(device, "nearest seed", size);
-            match self.tile_for(device, size[1], 1, false)? {
-                Some(tile) => self.encode_tile_columns_words(
-                    device,
-                    rec,
-                    &words,
-                    TileIo::in_place(&nearest, size),
-                    size,
-                    1,
-                    tile,
-                )?,
-                None => self.encode_global_columns(
-                    device,
-                    rec,
-                    false,
-                    ColumnsIo {
-                        source: None,
-                        words: Some(&words),
-                        nearest: &nearest,
-                        stack: &self.stack_for(device, size),
-                        slab: 0,
-                        span: Span::whole(size),
-                    },
-                    size,
-                    1,
-                    size[2],
-                    None,
-                )?,
-            }
+            let tile = self.tile_for(device, size[1], 1, false)?;
+            let io = TileIo::in_place(&nearest, size);
+            self.encode_from_words(device, rec, &words, io, size, 1, tile, size)?;
             (nearest, 2)
         } else {
             (self.encode_rows(device, rec, volume, inside, invert)?, 1)
@@ -2151,11 +2126,11 @@ impl Distance3d {
         Ok(words)
     }
 
-    /// The y column pass (in workgroup memory) of a 3D field of `size` from the row words of
-    /// [`Self::encode_row_words`]: writes the nearest seed of every voxel within its xy plane
-    /// into `nearest`, as [`Self::encode_rows`] followed by the y pass of
-    /// [`Self::encode_column_pass`] would. [`Error::Size`] where y columns of this length do
-    /// not fit the device's workgroup memory.
+    /// The y column pass of a 3D field of `size` from the row words of
+    /// [`Self::encode_row_words`], in workgroup or global memory as the exact transform takes
+    /// it ([`Self::set_column_passes`]): writes the nearest seed of every voxel within its xy
+    /// plane into `nearest`, as [`Self::encode_rows`] followed by the y pass of
+    /// [`Self::encode_column_pass`] would.
     pub fn encode_columns_from_words(
         &self,
         device: &wgpu::Device,
@@ -2184,22 +2159,46 @@ impl Distance3d {
                 });
             }
         }
-        // The tile the exact transform takes; where that is global memory, the widest that fits.
-        let tile = match self.tile_for(device, size[1], 1, false)? {
-            Some(tile) => tile,
-            None => {
-                TileGeometry::forced(size[1], device.limits().max_compute_workgroup_storage_size)?
-            }
-        };
-        self.encode_tile_columns_words(
-            device,
-            rec,
-            words,
-            TileIo::in_place(nearest, size),
-            size,
-            1,
-            tile,
-        )
+        let tile = self.tile_for(device, size[1], 1, false)?;
+        let io = TileIo::in_place(nearest, size);
+        self.encode_from_words(device, rec, words, io, size, 1, tile, size)
+    }
+
+    /// The column pass along `axis` (1: y, 2: z) that makes its sites from the row words, into
+    /// `io.nearest` where `io.span` places it: in workgroup memory where `tile` is given, else
+    /// in global memory with the envelope stack kept for a field of `stack_size`.
+    #[allow(clippy::too_many_arguments)]
+    fn encode_from_words(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        words: &wgpu::Buffer,
+        io: TileIo,
+        size: [u32; 3],
+        axis: u32,
+        tile: Option<TileGeometry>,
+        stack_size: [u32; 3],
+    ) -> Result<(), Error> {
+        match tile {
+            Some(tile) => self.encode_tile_columns_words(device, rec, words, io, size, axis, tile),
+            None => self.encode_global_columns(
+                device,
+                rec,
+                false,
+                ColumnsIo {
+                    source: None,
+                    words: Some(words),
+                    nearest: io.nearest,
+                    stack: &self.stack_for(device, stack_size),
+                    slab: 0,
+                    span: io.span,
+                },
+                size,
+                axis,
+                size[3 - axis as usize],
+                None,
+            ),
+        }
     }
 
     /// The column pass along `axis` from the row words, writing where `io` says (its `source`
@@ -2343,9 +2342,8 @@ impl Distance3d {
             [split.part_width, h, d],
         );
         let part_at = |x0: u32| placement([x0, 0, 0], split.part_width, split.part_width * h);
-        // The envelope stack of a pass in global memory: one part's worth, in the part's layout.
-        let stack = (split.y.is_none() || split.z.is_none())
-            .then(|| self.stack_for(device, [split.part_width, h, d]));
+        // A pass in global memory keeps its envelopes in the part's layout: a part's worth.
+        let part_size = [split.part_width, h, d];
         for x0 in (0..w).step_by(split.part_width as usize) {
             let x_end = (x0 + split.part_width).min(w);
             let span = Span {
@@ -2361,28 +2359,7 @@ impl Distance3d {
                 slab: 0,
                 span,
             };
-            match split.z {
-                Some(tile) => {
-                    self.encode_tile_columns_words(device, rec, &words, io, size, 2, tile)?
-                }
-                None => self.encode_global_columns(
-                    device,
-                    rec,
-                    false,
-                    ColumnsIo {
-                        source: None,
-                        words: Some(&words),
-                        nearest: &part,
-                        stack: stack.as_ref().expect("made where a pass is global"),
-                        slab: 0,
-                        span: io.span,
-                    },
-                    size,
-                    2,
-                    h,
-                    None,
-                )?,
-            }
+            self.encode_from_words(device, rec, &words, io, size, 2, split.z, part_size)?;
             for (k, &(z0, z_end)) in slabs.iter().enumerate() {
                 let span = Span {
                     first: [x0, z0],
@@ -2417,7 +2394,7 @@ impl Distance3d {
                             source: Some(&part),
                             words: None,
                             nearest: &nearest[k],
-                            stack: stack.as_ref().expect("made where a pass is global"),
+                            stack: &self.stack_for(device, part_size),
                             slab: k,
                             span,
                         },
