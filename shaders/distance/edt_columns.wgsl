@@ -1,19 +1,24 @@
-// Exact EDT, column passes (y, then z): the lower envelope of parabolas along each column, with
-// integer separators (Meijster, Roerdink & Hesselink 2000) so every comparison is exact.
+// Exact EDT, column passes in global memory (y, then z; z, then y for a field split across
+// bindings): the lower envelope of parabolas along each column, with integer separators
+// (Meijster, Roerdink & Hesselink 2000) so every comparison is exact.
 //
 // Parallelism and coalescing: a workgroup of 256 threads takes 256 / BANDS neighbouring columns
 // (consecutive x, so a warp's reads and writes are contiguous runs) and splits every column into
 // BANDS bands, one thread each, as the Parallel Banding Algorithm does (Cao et al. 2010). The host
-// picks BANDS so that there are enough threads: 1 for 512³, up to 32 for 2D fields. A band builds the envelope of
-// its own sites over the whole column, kept as a stack in `stack` at the band's own positions.
+// picks BANDS so that there are enough threads (about 2^19 in 3D, at least 8 bands; about 2^17
+// in 2D). A band builds the envelope of its own sites over the whole column, kept as a stack in
+// `stack` at the band's own positions.
 // After a barrier each thread answers the positions of its band: the nearest site is on some
 // band's envelope, so it evaluates its own band's envelope and those of the other bands that are
 // not already farther away than the best so far. Along one envelope the cost is unimodal and its
 // minimum only moves forward with the query position, so a pointer per band walks each envelope
-// once. The answer overwrites `nearest` in place; all of it was read before the barrier.
+// once. The answer overwrites `nearest` in place (all of it was read before the barrier), or,
+// for a field split across bindings, goes from the part it was read from into its slab.
 //
 // A site's cost at a query position is the full squared distance from that voxel to the site's
-// seed, because the seed of a site at position i of a column lies in the plane through i.
+// seed (the seed of a site at position i lies in the plane through i, or off it in z too where
+// y runs after z); separators are exact integers, from an f32 quotient corrected by its
+// remainder (`separator`), so no integer division runs.
 //
 // Latency, not bandwidth, bounds a sequential walk: the build keeps four loads of its band in
 // flight and the top two stack entries in registers;
