@@ -74,7 +74,8 @@ struct ColumnParams {
 // large for one binding. In place, a placeholder is bound here.
 @group(0) @binding(6) var<storage, read> source: array<u32>;
 // The row words (`edt_rows.wgsl`'s `row_words`) the pass makes its sites from where FROM_WORDS
-// (the z pass of a field split across bindings); a placeholder elsewhere.
+// (the y pass where it is not the last, the z pass of a field split across bindings); a
+// placeholder elsewhere.
 @group(0) @binding(7) var<storage, read> words: array<vec2<u32>>;
 
 // 2D fields pack 16/16 bits (sides to 16384 keep every separator numerator in i32).
