@@ -113,9 +113,9 @@ pub const MAX_TILE_COLUMNS: u32 = 16;
 /// workgroup instead of 256 gave nothing.)
 pub const AUTO_TILE_MAX_LENGTH: u32 = 256;
 /// Longest column of a 3D field along y [`ColumnPasses::Auto`] holds in workgroup memory
-/// (where it also takes the row pass in, from the row words). Measured as above, row pass and y
-/// pass together: 0.049 ms at 128³ in workgroup memory against 0.061 in global memory, 0.316
-/// against 0.290 at 256³, 2.53 against 2.08 at 512³.
+/// (in either memory the y pass makes its sites from the row words). Measured as above, row
+/// words and y pass together: 0.049 ms at 128³ in workgroup memory against 0.069 in global
+/// memory, 0.315 against 0.277 at 256³, 2.53 against 1.92 at 512³.
 pub const AUTO_TILE_MAX_LENGTH_Y: u32 = 128;
 /// Longest column of a 2D field [`ColumnPasses::Auto`] holds in workgroup memory: 2048² took
 /// 0.323 ms with 4 columns per tile against 0.257 in global memory; lengths from 257 to 512
