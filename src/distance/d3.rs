@@ -406,6 +406,53 @@ struct Fuse<'a> {
     inside_field: Option<&'a [wgpu::Buffer]>,
 }
 
+/// Which entry point of a column-pass family a pass takes, and what its resolve writes.
+enum Resolve<'a> {
+    /// The nearest seeds alone (`columns`, `tile_columns`).
+    No,
+    /// Unsigned distances into a 2D (`*_resolve_2d`) or 3D (`*_resolve`) view.
+    Flat(&'a wgpu::TextureView),
+    Volume(&'a wgpu::TextureView),
+    /// Signed (`*_resolve_signed_2d`, `*_resolve_signed`): the inside seeds' field beside it.
+    SignedFlat(&'a wgpu::Buffer, &'a wgpu::TextureView),
+    SignedVolume(&'a wgpu::Buffer, &'a wgpu::TextureView),
+}
+
+impl<'a> Fuse<'a> {
+    /// The entry point a column pass writing slab `slab` takes for `fuse`.
+    fn resolve(fuse: Option<&Fuse<'a>>, slab: usize) -> Resolve<'a> {
+        match fuse {
+            None => Resolve::No,
+            Some(f) => match (f.flat, f.inside_field) {
+                (true, None) => Resolve::Flat(f.distance),
+                (false, None) => Resolve::Volume(f.distance),
+                (true, Some(inside)) => Resolve::SignedFlat(&inside[slab], f.distance),
+                (false, Some(inside)) => Resolve::SignedVolume(&inside[slab], f.distance),
+            },
+        }
+    }
+}
+
+/// Records the entry point of a column-pass family that `$resolve` (a [`Resolve`]) names,
+/// through the caller's `$record!(cache, entry { extra resources })`: the five entries in the
+/// order No, Flat, SignedFlat, Volume, SignedVolume, each `cache => entry`.
+macro_rules! record_resolved {
+    ($record:ident, $resolve:expr, $($cache:expr => $entry:ident),* $(,)?) => {
+        record_resolved!(@arms $record, $resolve, $($cache => $entry),*)
+    };
+    (@arms $record:ident, $resolve:expr,
+        $c0:expr => $e0:ident, $c1:expr => $e1:ident, $c2:expr => $e2:ident,
+        $c3:expr => $e3:ident, $c4:expr => $e4:ident) => {
+        match $resolve {
+            Resolve::No => $record!($c0, $e0 {}),
+            Resolve::Flat(d) => $record!($c1, $e1 { distance_2d: d }),
+            Resolve::SignedFlat(i, d) => $record!($c2, $e2 { nearest_inside: i, distance_2d: d }),
+            Resolve::Volume(d) => $record!($c3, $e3 { distance: d }),
+            Resolve::SignedVolume(i, d) => $record!($c4, $e4 { nearest_inside: i, distance: d }),
+        }
+    };
+}
+
 /// Most sub-voxel seeds one table may hold (24-bit index in the key).
 pub const MAX_POINTS: u32 = 0xfffffe;
 
@@ -1025,6 +1072,45 @@ fn check_sides(device: &wgpu::Device, size: [u32; 3], max: [u32; 3]) -> Result<(
     Ok(())
 }
 
+/// [`Error::Invalid`] from `stage` unless the `what` buffer holds exactly `bytes` (what a field
+/// of `size` needs).
+fn check_len(
+    stage: &'static str,
+    what: &str,
+    buffer: &wgpu::Buffer,
+    bytes: u64,
+    size: [u32; 3],
+) -> Result<(), Error> {
+    if buffer.size() == bytes {
+        return Ok(());
+    }
+    Err(Error::Invalid {
+        stage,
+        what: format!(
+            "{what} buffer has {} bytes, {size:?} needs {bytes}",
+            buffer.size()
+        ),
+    })
+}
+
+/// [`Error::Invalid`] unless the `inside` volume (where given) is a volume of `size`.
+fn check_inside(
+    device: &wgpu::Device,
+    inside: Option<&wgpu::Texture>,
+    size: [u32; 3],
+) -> Result<(), Error> {
+    if let Some(v) = inside {
+        let vs = check_volume(device, v)?;
+        if vs != size {
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: format!("inside volume is {vs:?}, the field {size:?}"),
+            });
+        }
+    }
+    Ok(())
+}
+
 fn check_bytes(limits: &wgpu::Limits, bytes: u64) -> Result<(), Error> {
     let max = limits
         .max_storage_buffer_binding_size
@@ -1526,15 +1612,7 @@ impl Distance3d {
                 max: (points.buffer.size() / 16).min(MAX_POINTS as u64),
             });
         }
-        if let Some(v) = inside {
-            let vs = check_volume(device, v)?;
-            if vs != size {
-                return Err(Error::Invalid {
-                    stage: STAGE,
-                    what: format!("inside volume is {vs:?}, the field {size:?}"),
-                });
-            }
-        }
+        check_inside(device, inside, size)?;
         let seeds = field_buffer(device, "nearest seed", size);
         rec.recorder().encoder.clear_buffer(&seeds, 0, None);
         if let Some(h) = &points.homes
@@ -1605,25 +1683,8 @@ impl Distance3d {
         options.check()?;
         check_size_3d(device, size)?;
         options.check_points()?;
-        if keys.size() != voxels(size) * 4 {
-            return Err(Error::Invalid {
-                stage: STAGE,
-                what: format!(
-                    "keys buffer has {} bytes, {size:?} needs {}",
-                    keys.size(),
-                    voxels(size) * 4
-                ),
-            });
-        }
-        if let Some(v) = inside {
-            let vs = check_volume(device, v)?;
-            if vs != size {
-                return Err(Error::Invalid {
-                    stage: STAGE,
-                    what: format!("inside volume is {vs:?}, the field {size:?}"),
-                });
-            }
-        }
+        check_len(STAGE, "keys", &keys, voxels(size) * 4, size)?;
+        check_inside(device, inside, size)?;
         let nearest = match (options.method, options.band) {
             (Method::Jfa(variant), _) => {
                 let steps = options.steps(variant, size.into_iter().max().unwrap());
@@ -1862,16 +1923,7 @@ impl Distance3d {
         points: Option<&wgpu::Buffer>,
     ) -> Result<wgpu::Buffer, Error> {
         check_size_3d(device, size)?;
-        if nearest.size() != voxels(size) * 4 {
-            return Err(Error::Invalid {
-                stage: jfa3_step::STAGE,
-                what: format!(
-                    "field buffer has {} bytes, {size:?} needs {}",
-                    nearest.size(),
-                    voxels(size) * 4
-                ),
-            });
-        }
+        check_len(jfa3_step::STAGE, "field", &nearest, voxels(size) * 4, size)?;
         if steps.contains(&0) {
             return Err(Error::Invalid {
                 stage: jfa3_step::STAGE,
@@ -2149,15 +2201,7 @@ impl Distance3d {
             ("nearest", nearest, voxels(size) * 4),
         ];
         for (what, b, bytes) in need {
-            if b.size() != bytes {
-                return Err(Error::Invalid {
-                    stage: edt_tile::STAGE,
-                    what: format!(
-                        "{what} buffer has {} bytes, {size:?} needs {bytes}",
-                        b.size()
-                    ),
-                });
-            }
+            check_len(edt_tile::STAGE, what, b, bytes, size)?;
         }
         let tile = self.tile_for(device, size[1], 1, false)?;
         let io = TileIo::in_place(nearest, size);
@@ -2433,16 +2477,7 @@ impl Distance3d {
             });
         }
         for (what, b) in [("nearest", nearest), ("stack", stack)] {
-            if b.size() != voxels(size) * 4 {
-                return Err(Error::Invalid {
-                    stage: edt_columns::STAGE,
-                    what: format!(
-                        "{what} buffer has {} bytes, {size:?} needs {}",
-                        b.size(),
-                        voxels(size) * 4
-                    ),
-                });
-            }
+            check_len(edt_columns::STAGE, what, b, voxels(size) * 4, size)?;
         }
         let others = if axis == 1 { size[2] } else { size[1] };
         self.encode_columns(
@@ -2583,47 +2618,14 @@ impl Distance3d {
                 )?
             };
         }
-        match fuse {
-            None => record!(self.columns, columns {}),
-            Some(Fuse {
-                distance,
-                flat: true,
-                inside_field: None,
-                ..
-            }) => record!(
-                self.columns_resolve_2d,
-                columns_resolve_2d {
-                    distance_2d: distance
-                }
-            ),
-            Some(Fuse {
-                distance,
-                flat: true,
-                inside_field: Some(inside),
-                ..
-            }) => record!(
-                self.columns_resolve_signed_2d,
-                columns_resolve_signed_2d {
-                    nearest_inside: &inside[slab],
-                    distance_2d: distance
-                }
-            ),
-            Some(Fuse {
-                distance,
-                inside_field: None,
-                ..
-            }) => record!(self.columns_resolve, columns_resolve { distance: distance }),
-            Some(Fuse {
-                distance,
-                inside_field: Some(inside),
-                ..
-            }) => record!(
-                self.columns_resolve_signed,
-                columns_resolve_signed {
-                    nearest_inside: &inside[slab],
-                    distance: distance
-                }
-            ),
+        record_resolved! {
+            record,
+            Fuse::resolve(fuse.as_ref(), slab),
+            self.columns => columns,
+            self.columns_resolve_2d => columns_resolve_2d,
+            self.columns_resolve_signed_2d => columns_resolve_signed_2d,
+            self.columns_resolve => columns_resolve,
+            self.columns_resolve_signed => columns_resolve_signed,
         }
         Ok(())
     }
@@ -2745,50 +2747,14 @@ impl Distance3d {
                 )
             };
         }
-        match fuse {
-            None => record!(self.tile_columns, tile_columns {}),
-            Some(Fuse {
-                distance,
-                flat: true,
-                inside_field: None,
-                ..
-            }) => record!(
-                self.tile_columns_resolve_2d,
-                tile_columns_resolve_2d {
-                    distance_2d: distance
-                }
-            ),
-            Some(Fuse {
-                distance,
-                flat: true,
-                inside_field: Some(inside_field),
-                ..
-            }) => record!(
-                self.tile_columns_resolve_signed_2d,
-                tile_columns_resolve_signed_2d {
-                    nearest_inside: &inside_field[slab],
-                    distance_2d: distance
-                }
-            ),
-            Some(Fuse {
-                distance,
-                inside_field: None,
-                ..
-            }) => record!(
-                self.tile_columns_resolve,
-                tile_columns_resolve { distance: distance }
-            ),
-            Some(Fuse {
-                distance,
-                inside_field: Some(inside_field),
-                ..
-            }) => record!(
-                self.tile_columns_resolve_signed,
-                tile_columns_resolve_signed {
-                    nearest_inside: &inside_field[slab],
-                    distance: distance
-                }
-            ),
+        record_resolved! {
+            record,
+            Fuse::resolve(fuse.as_ref(), slab),
+            self.tile_columns => tile_columns,
+            self.tile_columns_resolve_2d => tile_columns_resolve_2d,
+            self.tile_columns_resolve_signed_2d => tile_columns_resolve_signed_2d,
+            self.tile_columns_resolve => tile_columns_resolve,
+            self.tile_columns_resolve_signed => tile_columns_resolve_signed,
         }
     }
 
