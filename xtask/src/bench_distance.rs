@@ -288,18 +288,24 @@ fn distance(args: &Args) -> Result<(), String> {
     let mut d3_rows = Distance3d::new(&ctx.device).map_err(|e| e.to_string())?;
     d3_rows.set_fold_rows(false);
     let storage = ctx.device.limits().max_compute_workgroup_storage_size;
+    // What Auto takes per pass: 3D y up to AUTO_TILE_MAX_LENGTH_Y, 3D z and 2D by `tile_columns`.
+    let path = |c: Option<u32>| c.map_or("global".to_string(), |c| format!("{c} columns"));
     println!(
-        "workgroup memory: {storage} bytes; columns per tile by length: {}",
+        "workgroup memory: {storage} bytes; column passes by length: {}",
         sizes3
             .iter()
-            .chain(&sizes2)
-            .map(|&n| format!(
-                "{n}: {}",
-                tile_columns(storage, n as u32, if sizes2.contains(&n) { 2 } else { 3 })
-                    .map_or("global".into(), |c| c.to_string())
-            ))
+            .map(|&n| {
+                let z = tile_columns(storage, n as u32, 3);
+                let y = z.filter(|_| n as u32 <= AUTO_TILE_MAX_LENGTH_Y);
+                format!("{n}³ y {}, z {}", path(y), path(z))
+            })
+            .chain(
+                sizes2
+                    .iter()
+                    .map(|&n| format!("{n}² {}", path(tile_columns(storage, n as u32, 2))))
+            )
             .collect::<Vec<_>>()
-            .join(", ")
+            .join("; ")
     );
     // Clocks held up as the volume and voxelize benches hold them: a 20 ms spin before every
     // run (outside the timestamps), on hardware adapters.
