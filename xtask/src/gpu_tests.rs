@@ -113,6 +113,25 @@ fn prepare(root: &Path) -> Result<usize, String> {
     std::fs::copy(root.join("target/release/examples/viewer"), &viewer)
         .map_err(|e| format!("the viewer example: {e}"))?;
     let _ = Command::new("strip").arg(&viewer).status();
+    // The octree test voxelizes the npm bunny (`target/bunny/index.js`, which
+    // `scripts/fetch-bunny.sh` fetches); the GPU machine has no network, so it travels along.
+    let bunny = root.join("target/bunny/index.js");
+    if !bunny.exists() {
+        let _ = Command::new("bash")
+            .arg(root.join("scripts/fetch-bunny.sh"))
+            .status();
+    }
+    let mut data = Vec::new();
+    if bunny.exists() {
+        std::fs::create_dir_all(staging.join("data")).map_err(|e| e.to_string())?;
+        std::fs::copy(&bunny, staging.join("data/bunny-index.js"))
+            .map_err(|e| format!("{}: {e}", bunny.display()))?;
+        data.push("data/bunny-index.js");
+    } else {
+        eprintln!(
+            "gpu-tests: no target/bunny/index.js (npm unreachable?): the octree test will fail there"
+        );
+    }
     let skip: String = NEEDS_DISPLAY
         .iter()
         .map(|(bin, test)| format!("    {bin}) skip=\"--skip {test}\" ;;\n"))
@@ -125,6 +144,9 @@ built="{built}"
 if [ "$(pwd)" != "$built" ] && [ ! -e "$built" ]; then mkdir -p "$(dirname "$built")"; ln -s "$(pwd)" "$built"; fi
 mkdir -p .gpu/bin/tests .gpu/bin/examples && tar -xJf .gpu/tests.tar.xz -C .gpu/bin/tests
 cp .gpu/bin/tests/example-binaries/* .gpu/bin/examples/
+if [ -f .gpu/bin/tests/data/bunny-index.js ] && [ ! -f "$built/target/bunny/index.js" ]; then
+  mkdir -p "$built/target/bunny" && cp .gpu/bin/tests/data/bunny-index.js "$built/target/bunny/index.js"
+fi
 pass=0; fail=0
 for name in {names}; do
   skip=""
@@ -150,6 +172,7 @@ tar -cJf "$out/test-logs.tar.xz" -C "$logs" .
         .arg(gpu.join("tests.tar.xz"))
         .args(&names)
         .arg("example-binaries/viewer")
+        .args(&data)
         .status()
         .map_err(|e| format!("tar: {e}"))?;
     if !status.success() {
