@@ -453,6 +453,61 @@ macro_rules! record_resolved {
     };
 }
 
+/// Parts (columns along x) and slabs (planes along z) of a field of `size` that the exact
+/// transform splits across bindings of `binding` bytes, buffers of `max_buffer_size` (each slab
+/// is one), with parts whole tiles of `columns` wide: `(part_width, slab_depth)`, as few and as
+/// even as fit, parts on 128-byte row boundaries where a binding holds that much.
+fn split_layout(
+    size: [u32; 3],
+    binding: u64,
+    max_buffer_size: u64,
+    columns: u64,
+) -> Result<(u32, u32), Error> {
+    let column_bytes = size[1] as u64 * size[2] as u64 * 4;
+    let columns_fit = binding / column_bytes;
+    // Parts start on a 128-byte boundary of a row (32 columns) wherever a binding holds 32
+    // columns: at 1024³ on the H100 (2026-11-26, parts of 342 columns) the y pass of the
+    // parts starting at x = 342 and 684 took 2.79–2.90 ms per slab against 2.11–2.13 for
+    // the part at 0, which writes its rows from an aligned start.
+    let aligned = columns.max(ALIGNED_COLUMNS);
+    let columns = if columns_fit >= aligned {
+        aligned
+    } else {
+        columns
+    };
+    let widest = columns_fit / columns * columns;
+    if widest == 0 {
+        return Err(Error::Size {
+            stage: STAGE,
+            what: "one tile of columns (bytes) of a field split across bindings",
+            got: column_bytes * columns,
+            max: binding,
+        });
+    }
+    // Each slab is a buffer of its own.
+    let plane = size[0] as u64 * size[1] as u64 * 4;
+    let deepest = binding.min(max_buffer_size) / plane;
+    if deepest == 0 {
+        return Err(Error::Size {
+            stage: STAGE,
+            what: "one plane (bytes) of a field split across bindings",
+            got: plane,
+            max: binding,
+        });
+    }
+    // As few parts and slabs as fit, of even sizes (no last dispatch of a few columns).
+    let even = |total: u64, most: u64, unit: u64| {
+        total
+            .div_ceil(total.div_ceil(most))
+            .next_multiple_of(unit)
+            .min(most) as u32
+    };
+    Ok((
+        even(size[0] as u64, widest, columns),
+        even(size[2] as u64, deepest, 1),
+    ))
+}
+
 /// Columns (x) per 128 bytes of a field's row: where the exact transform splits a field into
 /// parts, each part starts on a multiple of this where a binding holds that many.
 const ALIGNED_COLUMNS: u64 = 32;
@@ -2321,53 +2376,15 @@ impl Distance3d {
                 .map(|t| t.lg_columns)
                 .max()
                 .unwrap_or(0);
-        let column_bytes = size[1] as u64 * size[2] as u64 * 4;
-        let columns_fit = binding / column_bytes;
-        // Parts start on a 128-byte boundary of a row (32 columns) wherever a binding holds 32
-        // columns: at 1024³ on the H100 (2026-11-26, parts of 342 columns) the y pass of the
-        // parts starting at x = 342 and 684 took 2.79–2.90 ms per slab against 2.11–2.13 for
-        // the part at 0, which writes its rows from an aligned start.
-        let aligned = columns.max(ALIGNED_COLUMNS);
-        let columns = if columns_fit >= aligned {
-            aligned
-        } else {
-            columns
-        };
-        let widest = columns_fit / columns * columns;
-        if widest == 0 {
-            return Err(Error::Size {
-                stage: STAGE,
-                what: "one tile of columns (bytes) of a field split across bindings",
-                got: column_bytes * columns,
-                max: binding,
-            });
-        }
-        // Each slab is a buffer of its own.
-        let plane = size[0] as u64 * size[1] as u64 * 4;
-        let deepest = binding.min(limits.max_buffer_size) / plane;
-        if deepest == 0 {
-            return Err(Error::Size {
-                stage: STAGE,
-                what: "one plane (bytes) of a field split across bindings",
-                got: plane,
-                max: binding,
-            });
-        }
-        // As few parts and slabs as fit, of even sizes (no last dispatch of a few columns).
-        let even = |total: u64, most: u64, unit: u64| {
-            total
-                .div_ceil(total.div_ceil(most))
-                .next_multiple_of(unit)
-                .min(most) as u32
-        };
+        let (part_width, slab_depth) =
+            split_layout(size, binding, limits.max_buffer_size, columns)?;
         Ok(Some(Split {
-            part_width: even(size[0] as u64, widest, columns),
-            slab_depth: even(size[2] as u64, deepest, 1),
+            part_width,
+            slab_depth,
             y,
             z,
         }))
     }
-
     /// The exact transform of a field too large for one binding. The row words as always; then
     /// per part of `split.part_width` columns (x), the z pass from the words into a buffer that
     /// holds that part alone; then per slab of `split.slab_depth` planes of the field, the y
@@ -2972,5 +2989,49 @@ impl Distance3d {
         };
         self.resolve_into(device, rec, size, nearest_outside.unwrap_or(nearest), fuse)?;
         Ok(distance)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// wgpu's storage binding (2 GiB − 1) and NVIDIA's largest buffer (4 GiB − 2 MiB).
+    const BINDING: u64 = (1 << 31) - 1;
+    const BUFFER: u64 = (1 << 32) - (2 << 20);
+
+    #[test]
+    fn split_parts_start_on_row_boundaries_where_they_can() {
+        // 1024³: three parts, each starting on a multiple of 32 columns (342 each, evenly, put
+        // two of them off the boundary), and three slabs.
+        assert_eq!(
+            split_layout([1024; 3], BINDING, BUFFER, 1).unwrap(),
+            (352, 342)
+        );
+        // Wider tiles keep their own multiple where it is larger.
+        assert_eq!(
+            split_layout([1024; 3], BINDING, BUFFER, 64).unwrap(),
+            (384, 342)
+        );
+        // A binding that holds fewer than 32 columns: whole tiles, as evenly as they fit.
+        let size = [40, 12, 300];
+        let binding = 40 * 12 * 300 * 4 / 2;
+        assert_eq!(split_layout(size, binding, BUFFER, 4).unwrap(), (20, 150));
+        assert_eq!(split_layout(size, binding, BUFFER, 1).unwrap(), (20, 150));
+        // 40 columns fit: parts of 32 (the last one 4 wide) rather than 34 off the boundary; 3
+        // planes of 3200 bytes fit, so 3 slabs of 3 planes.
+        assert_eq!(
+            split_layout([100, 8, 8], 40 * 8 * 8 * 4, BUFFER, 1).unwrap(),
+            (32, 3)
+        );
+        // Not one tile of columns, or not one plane: typed errors naming which.
+        match split_layout([40, 12, 300], 64, BUFFER, 4) {
+            Err(Error::Size { what, .. }) => assert!(what.contains("tile of columns"), "{what}"),
+            other => panic!("{other:?}"),
+        }
+        match split_layout([4096, 4096, 2], 1 << 20, BUFFER, 1) {
+            Err(Error::Size { what, .. }) => assert!(what.contains("one plane"), "{what}"),
+            other => panic!("{other:?}"),
+        }
     }
 }
