@@ -37,6 +37,8 @@ struct RowParams {
 @group(0) @binding(4) var<storage, read_write> words: array<vec2<u32>>;
 
 const CHUNK: u32 = 256u;
+// `row_words`: cells of workgroup memory each thread loads (MAX_ROW / CHUNK).
+const WORD_LOADS: u32 = 8u;
 // "Nothing to the right yet" for the min-scan.
 const NONE_RIGHT: u32 = 0xffffffffu;
 
@@ -254,14 +256,21 @@ fn row_words(@builtin(local_invocation_id) lid: vec3<u32>, @builtin(workgroup_id
     // Cells per row in workgroup memory (a power of two), so a cell's row is a shift away.
     let row_cells_len = lanes * 32u;
     let z = wg.y;
-    for (var e = lid.x; e < ROWS * row_cells_len; e += CHUNK) {
+    // ROWS · row_cells_len is always MAX_ROW: WORD_LOADS cells per thread, a count known when
+    // the shader is compiled, so every load is issued before the first one is waited on (with
+    // the count read from the parameters, each load waited for its store).
+    var values: array<f32, WORD_LOADS>;
+    for (var k = 0u; k < WORD_LOADS; k++) {
+        let e = lid.x + k * CHUNK;
+        let x = min(e & (row_cells_len - 1u), params.size.x - 1u);
+        let y = min(wg.x * ROWS + e / row_cells_len, params.size.y - 1u);
+        values[k] = seed_value(textureLoad(volume, vec3<u32>(x, y, z), 0), params.channels);
+    }
+    for (var k = 0u; k < WORD_LOADS; k++) {
+        let e = lid.x + k * CHUNK;
         let x = e & (row_cells_len - 1u);
         let y = wg.x * ROWS + e / row_cells_len;
-        var marked = false;
-        if x < params.size.x && y < params.size.y {
-            marked = is_seed(seed_value(textureLoad(volume, vec3<u32>(x, y, z), 0), params.channels));
-        }
-        row_cells[word_cell(e)] = u32(marked);
+        row_cells[word_cell(e)] = u32(x < params.size.x && y < params.size.y && is_seed(values[k]));
     }
     workgroupBarrier();
     let t = lid.x & (lanes - 1u);
