@@ -447,6 +447,20 @@ fn columns(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: 
     }
 }
 
+// The floor of a global column pass, for `bench distance` to compare with: each band's sites
+// read as the pass reads them (from the field, a part, or the row words) and written where the
+// pass writes its answers, with no envelope and no stack.
+@compute @workgroup_size(32, 8)
+fn columns_copy(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
+    let c = column_of(li, wg);
+    if !c.valid {
+        return;
+    }
+    for (var i = c.lo; i < c.hi; i++) {
+        nearest[c.out + i * c.out_stride] = site_at(c, i);
+    }
+}
+
 // `columns`, and the unsigned distance of every voxel it answers (3D).
 @compute @workgroup_size(32, 8)
 fn columns_resolve(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {

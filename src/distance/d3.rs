@@ -996,6 +996,7 @@ pub struct Distance3d {
     row_words: Variants<edt_rows::row_words::Entry>,
     /// Column pass per band count, packing and seed widths, made on first use.
     columns: Variants<edt_columns::columns::Entry>,
+    columns_copy: Variants<edt_columns::columns_copy::Entry>,
     /// The last 3D column pass with the resolve folded in.
     columns_resolve: Variants<edt_columns::columns_resolve::Entry>,
     columns_resolve_signed: Variants<edt_columns::columns_resolve_signed::Entry>,
@@ -1514,6 +1515,7 @@ impl Distance3d {
             rows_2d: ComputePipeline::new(device)?,
             row_words: Default::default(),
             columns: Default::default(),
+            columns_copy: Default::default(),
             columns_resolve: Default::default(),
             columns_resolve_signed: Default::default(),
             columns_resolve_2d: Default::default(),
@@ -2585,40 +2587,8 @@ impl Distance3d {
         others: u32,
         fuse: Option<Fuse>,
     ) -> Result<(), Error> {
-        let span = &io.span;
-        let width = span.x_end - span.first[0];
-        let choice = match self.column_bands {
-            Some(b) => BAND_CHOICES
-                .iter()
-                .position(|&c| c == b)
-                .expect("checked when set"),
-            None => bands_for(width * others, pack_2d),
-        };
-        let bands = BAND_CHOICES[choice];
-        let [x_bits, y_bits] = packing_of(size).overrides();
-        let overrides = [
-            ("PACK_2D", pack_2d as u32 as f64),
-            ("BANDS", bands as f64),
-            ("SOURCE_APART", io.source.is_some() as u32 as f64),
-            ("FROM_WORDS", io.words.is_some() as u32 as f64),
-            x_bits,
-            y_bits,
-        ];
-        let params = uniform(
-            device,
-            "edt columns params",
-            &edt_columns::ColumnParams {
-                size: size.into(),
-                axis,
-                voxel_size: fuse.as_ref().map_or(1.0, |f| f.voxel_size),
-                band: fuse.as_ref().map_or(f32::MAX, |f| f.band),
-                first: span.first.into(),
-                x_end: span.x_end,
-                src: columns_placement(&span.src),
-                dst: columns_placement(&span.dst),
-            },
-        );
-        let groups = [width.div_ceil(256 / bands), others, 1];
+        let (params, overrides, groups) =
+            self.global_columns_setup(device, &io, size, axis, others, pack_2d, fuse.as_ref());
         let name = match (axis, &fuse, io.words.is_some()) {
             (1, _, true) => "columns (y) from row words",
             (_, _, true) => "columns (z) from row words",
@@ -2660,6 +2630,103 @@ impl Distance3d {
             self.columns_resolve_signed => columns_resolve_signed,
         }
         Ok(())
+    }
+
+    /// The parameters, override constants and workgroup count of a global-memory column pass
+    /// along `axis` over `io.span`'s columns × `others`, reading and writing as `io` says and
+    /// resolving as `fuse` says.
+    #[allow(clippy::too_many_arguments)]
+    fn global_columns_setup(
+        &self,
+        device: &wgpu::Device,
+        io: &ColumnsIo,
+        size: [u32; 3],
+        axis: u32,
+        others: u32,
+        pack_2d: bool,
+        fuse: Option<&Fuse>,
+    ) -> (wgpu::Buffer, [(&'static str, f64); 6], [u32; 3]) {
+        let span = &io.span;
+        let width = span.x_end - span.first[0];
+        let choice = match self.column_bands {
+            Some(b) => BAND_CHOICES
+                .iter()
+                .position(|&c| c == b)
+                .expect("checked when set"),
+            None => bands_for(width * others, pack_2d),
+        };
+        let bands = BAND_CHOICES[choice];
+        let [x_bits, y_bits] = packing_of(size).overrides();
+        let overrides = [
+            ("PACK_2D", pack_2d as u32 as f64),
+            ("BANDS", bands as f64),
+            ("SOURCE_APART", io.source.is_some() as u32 as f64),
+            ("FROM_WORDS", io.words.is_some() as u32 as f64),
+            x_bits,
+            y_bits,
+        ];
+        let params = uniform(
+            device,
+            "edt columns params",
+            &edt_columns::ColumnParams {
+                size: size.into(),
+                axis,
+                voxel_size: fuse.map_or(1.0, |f| f.voxel_size),
+                band: fuse.map_or(f32::MAX, |f| f.band),
+                first: span.first.into(),
+                x_end: span.x_end,
+                src: columns_placement(&span.src),
+                dst: columns_placement(&span.dst),
+            },
+        );
+        (params, overrides, [width.div_ceil(256 / bands), others, 1])
+    }
+
+    /// For benchmarks: the loads and stores of the global-memory column pass along `axis` (1:
+    /// y, 2: z) of a 3D field of `size` in `nearest` (from the row words `words` where given, as
+    /// the y pass reads them), without the envelopes and their stack: the floor that pass is
+    /// measured against. `None` where the pass runs in workgroup memory
+    /// ([`Self::encode_tile_copy`]).
+    #[doc(hidden)]
+    pub fn encode_global_copy(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        nearest: &wgpu::Buffer,
+        words: Option<&wgpu::Buffer>,
+        size: [u32; 3],
+        axis: u32,
+    ) -> Result<Option<()>, Error> {
+        if self
+            .tile_for(device, size[axis as usize], axis, false)?
+            .is_some()
+        {
+            return Ok(None);
+        }
+        let io = ColumnsIo {
+            source: None,
+            words,
+            nearest,
+            stack: &self.no_source,
+            slab: 0,
+            span: Span::whole(size),
+        };
+        let others = size[3 - axis as usize];
+        let (params, overrides, groups) =
+            self.global_columns_setup(device, &io, size, axis, others, false, None);
+        self.columns_copy.get(device, &overrides, true)?.record(
+            device,
+            rec,
+            &edt_columns::columns_copy::Resources {
+                params: (&params).into(),
+                nearest: nearest.into(),
+                source: (&self.no_source).into(),
+                words: words.unwrap_or(&self.no_source).into(),
+            },
+            groups,
+            if axis == 1 { "copy (y)" } else { "copy (z)" },
+        )?;
+        Ok(Some(()))
     }
 
     /// The envelope stack of the global-memory column passes for a field of `size`: the one

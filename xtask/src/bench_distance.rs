@@ -354,8 +354,9 @@ fn distance(args: &Args) -> Result<(), String> {
         indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} {elapsed} {msg}").unwrap(),
     );
     let mut rows: Vec<Row> = Vec::new();
-    // (size, axis, median ms) of the workgroup column passes' load/store floor.
-    let mut floors: Vec<(String, u32, f64)> = Vec::new();
+    // (size, the pass's name as the per-pass table has it, median ms) of the column passes'
+    // load/store floor.
+    let mut floors: Vec<(String, &str, f64)> = Vec::new();
 
     // Fields larger than one storage binding (1024³ is 4 GiB) are split across bindings, which
     // only the exact transform's workgroup-memory passes do, always from the row words: the
@@ -460,30 +461,50 @@ fn distance(args: &Args) -> Result<(), String> {
             });
             bar.inc(1);
         }
-        // The floor of each workgroup column pass: its loads and stores alone (of a field in one
-        // binding).
-        for axis in [1u32, 2].into_iter().filter(|_| !split) {
+        // The floor of each column pass: its loads and stores alone, without the envelopes
+        // (of a field in one binding): the tile copy where the pass runs in workgroup memory,
+        // else the global copy, which reads the row words as the y pass does.
+        if !split {
             let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("bench tile copy"),
+                label: Some("bench copy"),
                 size: cells * 4,
                 usage: wgpu::BufferUsages::STORAGE,
                 mapped_at_creation: false,
             });
-            let mut any = false;
-            let timing = time_runs(&ctx, args.warmup, args.reps, heater, |enc, prof| {
-                any = d3
-                    .encode_tile_copy(
-                        &ctx.device,
-                        &mut prof.record(enc),
-                        &buffer,
-                        [n as u32; 3],
-                        axis,
-                    )
-                    .expect("encode")
-                    .is_some();
-            })?;
-            if any {
-                floors.push((format!("{n}³"), axis, timing.0));
+            let mut enc = ctx.encoder("bench row words");
+            let words = d3
+                .encode_row_words(
+                    &ctx.device,
+                    &mut enc,
+                    &volume,
+                    Options3d::default().inside,
+                    false,
+                )
+                .map_err(|e| e.to_string())?;
+            ctx.submit_and_wait("bench row words", enc)
+                .map_err(|e| e.to_string())?;
+            for axis in [1u32, 2] {
+                let edge = [n as u32; 3];
+                let mut tile = false;
+                let timing = time_runs(&ctx, args.warmup, args.reps, heater, |enc, prof| {
+                    let rec = &mut prof.record(enc);
+                    tile = d3
+                        .encode_tile_copy(&ctx.device, rec, &buffer, edge, axis)
+                        .expect("encode")
+                        .is_some();
+                    if !tile {
+                        let words = (axis == 1).then_some(&words);
+                        d3.encode_global_copy(&ctx.device, rec, &buffer, words, edge, axis)
+                            .expect("encode");
+                    }
+                })?;
+                let tag = match (axis, tile) {
+                    (1, true) => "columns (y, workgroup)",
+                    (_, true) => "columns (z, workgroup)",
+                    (1, false) => "columns (y) from row words",
+                    (_, false) => "columns (z)",
+                };
+                floors.push((format!("{n}³"), tag, timing.0));
             }
         }
         if let Some(p) = &peer {
@@ -619,14 +640,10 @@ fn distance(args: &Args) -> Result<(), String> {
     chart(&args.out.join("distance.png"), &adapter, &rows, (1000, 640))?;
     print_table(&rows);
     println!();
-    println!("| size | workgroup column pass | ms (median) | load/store only ms | ratio |");
+    println!("| size | column pass | ms (median) | load/store only ms | ratio |");
     println!("|---|---|---|---|---|");
-    for (size, axis, floor) in &floors {
-        let tag = if *axis == 1 {
-            "columns (y, workgroup)"
-        } else {
-            "columns (z, workgroup)"
-        };
+    for (size, tag, floor) in &floors {
+        // "columns (z)" also names "columns (z) + resolve", not "columns (z, workgroup)".
         if let Some(ms) = rows
             .iter()
             .filter(|r| &r.size == size && r.method == "exact")
