@@ -275,6 +275,42 @@ fn bad_options_and_textures() {
         d3.encode_column_pass(&ctx.device, &mut enc, &buf(256), &buf(128), [4, 4, 4], 1),
         Err(Error::Invalid { .. })
     ));
+    // The benchmarks' copies check their buffers as the passes do.
+    for axis in [1, 2] {
+        let e = d3
+            .encode_tile_copy(&ctx.device, &mut enc, &buf(128), [4, 4, 4], axis)
+            .unwrap_err();
+        assert!(
+            matches!(&e, Error::Invalid { what, .. } if what.contains("nearest buffer has 128 bytes")),
+            "{e}"
+        );
+        let e = d3
+            .encode_global_copy(&ctx.device, &mut enc, &buf(128), None, [4, 4, 4], axis)
+            .unwrap_err();
+        assert!(
+            matches!(&e, Error::Invalid { what, .. } if what.contains("nearest")),
+            "{e}"
+        );
+        // Words of a 4 × 4 × 4 field: one per row, 8 bytes each.
+        let e = d3
+            .encode_global_copy(
+                &ctx.device,
+                &mut enc,
+                &buf(256),
+                Some(&buf(64)),
+                [4, 4, 4],
+                axis,
+            )
+            .unwrap_err();
+        assert!(
+            matches!(&e, Error::Invalid { what, .. } if what.contains("words buffer has 64 bytes, [4, 4, 4] needs 128")),
+            "{e}"
+        );
+    }
+    assert!(matches!(
+        d3.encode_global_copy(&ctx.device, &mut enc, &buf(256), None, [4, 4, 4], 3),
+        Err(Error::Invalid { .. })
+    ));
     // Nothing bad reached wgpu: the encoder still submits cleanly.
     ctx.submit_and_wait("bad", enc).unwrap();
     assert!(ctx.take_uncaptured().is_empty());

@@ -1153,6 +1153,31 @@ fn check_len(
     })
 }
 
+/// The checks of the benchmarks' copies (`encode_global_copy`, `encode_tile_copy`): a grid the
+/// transform takes, axis 1 or 2, and buffers of the size the grid needs.
+fn check_copy(
+    device: &wgpu::Device,
+    stage: &'static str,
+    nearest: &wgpu::Buffer,
+    words: Option<&wgpu::Buffer>,
+    size: [u32; 3],
+    axis: u32,
+) -> Result<(), Error> {
+    check_size_3d(device, size)?;
+    if !(axis == 1 || axis == 2) {
+        return Err(Error::Invalid {
+            stage,
+            what: format!("axis must be 1 (y) or 2 (z), got {axis}"),
+        });
+    }
+    check_len(stage, "nearest", nearest, voxels(size) * 4, size)?;
+    if let Some(w) = words {
+        let bytes = size[0].div_ceil(32) as u64 * (size[1] * size[2]) as u64 * 8;
+        check_len(stage, "words", w, bytes, size)?;
+    }
+    Ok(())
+}
+
 /// [`Error::Invalid`] unless the `inside` volume (where given) is a volume of `size`.
 fn check_inside(
     device: &wgpu::Device,
@@ -2697,6 +2722,7 @@ impl Distance3d {
         size: [u32; 3],
         axis: u32,
     ) -> Result<Option<()>, Error> {
+        check_copy(device, edt_columns::STAGE, nearest, words, size, axis)?;
         if self
             .tile_for(device, size[axis as usize], axis, false)?
             .is_some()
@@ -2776,6 +2802,7 @@ impl Distance3d {
         size: [u32; 3],
         axis: u32,
     ) -> Result<Option<()>, Error> {
+        check_copy(device, edt_tile::STAGE, nearest, None, size, axis)?;
         let Some(tile) = self.tile_for(device, size[axis as usize], axis, false)? else {
             return Ok(None);
         };
