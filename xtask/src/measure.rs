@@ -64,6 +64,9 @@ pub(crate) fn write_table(
 /// followed the 512³ sweep, and 0.26 ms once warmed up for longer.
 pub(crate) const WARMUP_TIME: std::time::Duration = std::time::Duration::from_millis(500);
 
+/// A timed run this many times the median is reported as slow.
+const SLOW: f64 = 1.25;
+
 /// Median, fastest and slowest total ms, and each pass's median ms.
 pub(crate) type Timing = (f64, f64, f64, Vec<(String, f64)>);
 
@@ -79,6 +82,7 @@ pub(crate) fn time_runs(
     let mut prof = Profiler::new(&ctx.device, &ctx.queue, 64)
         .ok_or("the adapter has no timestamp queries; the benchmark needs them")?;
     let mut totals = Vec::new();
+    let mut times = Vec::new();
     let mut per_pass: Vec<(String, Vec<f64>)> = Vec::new();
     let start = std::time::Instant::now();
     let mut warm = 0;
@@ -102,6 +106,7 @@ pub(crate) fn time_runs(
         }
         timed += 1;
         totals.push(total);
+        times.push(start.elapsed().as_secs_f64());
         if per_pass.is_empty() {
             per_pass = passes
                 .iter()
@@ -115,6 +120,20 @@ pub(crate) fn time_runs(
     let min = totals.iter().cloned().fold(f64::INFINITY, f64::min);
     let max = totals.iter().cloned().fold(0.0, f64::max);
     let med = median(totals.clone());
+    // Where a run is far off the median, say which: its index among the timed runs, and when it
+    // ran. On the H100 (2026-11-26, four commands of `bench distance --sizes 512`) every such
+    // run was one of the first three timed runs of a variant that followed another at the same
+    // size, never in the first (the default path); warming up for half a second after the first
+    // run instead of from the start moved nothing.
+    for (i, (&t, at)) in totals.iter().zip(&times).enumerate() {
+        if t > SLOW * med {
+            eprintln!(
+                "  slow run: #{i} of {reps}, {t:.3} ms against a median of {med:.3} \
+                 ({:.2} s after the first timed run)",
+                at - times[0]
+            );
+        }
+    }
     Ok((
         med,
         min,
