@@ -1163,6 +1163,21 @@ fn check_copy(
     size: [u32; 3],
     axis: u32,
 ) -> Result<(), Error> {
+    check_column_axis(device, stage, size, axis)?;
+    check_len(stage, "nearest", nearest, voxels(size) * 4, size)?;
+    if let Some(w) = words {
+        check_len(stage, "words", w, row_words_bytes(size), size)?;
+    }
+    Ok(())
+}
+
+/// A grid the exact transform takes and a column axis: 1 (y) or 2 (z).
+fn check_column_axis(
+    device: &wgpu::Device,
+    stage: &'static str,
+    size: [u32; 3],
+    axis: u32,
+) -> Result<(), Error> {
     check_size_3d(device, size)?;
     if !(axis == 1 || axis == 2) {
         return Err(Error::Invalid {
@@ -1170,12 +1185,13 @@ fn check_copy(
             what: format!("axis must be 1 (y) or 2 (z), got {axis}"),
         });
     }
-    check_len(stage, "nearest", nearest, voxels(size) * 4, size)?;
-    if let Some(w) = words {
-        let bytes = size[0].div_ceil(32) as u64 * (size[1] * size[2]) as u64 * 8;
-        check_len(stage, "words", w, bytes, size)?;
-    }
     Ok(())
+}
+
+/// Bytes of the row words (`edt_rows.wgsl`'s `row_words`) of a field of `size`: 8 per 32 voxels
+/// of a row, rows rounded up.
+fn row_words_bytes(size: [u32; 3]) -> u64 {
+    size[0].div_ceil(32) as u64 * size[1] as u64 * size[2] as u64 * 8
 }
 
 /// [`Error::Invalid`] unless the `inside` volume (where given) is a volume of `size`.
@@ -2239,7 +2255,7 @@ impl Distance3d {
         let count = size[0].div_ceil(32);
         let words = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("edt row words"),
-            size: count as u64 * size[1] as u64 * size[2] as u64 * 8,
+            size: row_words_bytes(size),
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
@@ -2279,11 +2295,7 @@ impl Distance3d {
     ) -> Result<(), Error> {
         check_size_3d(device, size)?;
         let need = [
-            (
-                "words",
-                words,
-                size[0].div_ceil(32) as u64 * (size[1] * size[2]) as u64 * 8,
-            ),
+            ("words", words, row_words_bytes(size)),
             ("nearest", nearest, voxels(size) * 4),
         ];
         for (what, b, bytes) in need {
@@ -2528,13 +2540,7 @@ impl Distance3d {
         size: [u32; 3],
         axis: u32,
     ) -> Result<(), Error> {
-        check_size_3d(device, size)?;
-        if !(axis == 1 || axis == 2) {
-            return Err(Error::Invalid {
-                stage: edt_columns::STAGE,
-                what: format!("axis must be 1 (y) or 2 (z), got {axis}"),
-            });
-        }
+        check_column_axis(device, edt_columns::STAGE, size, axis)?;
         for (what, b) in [("nearest", nearest), ("stack", stack)] {
             check_len(edt_columns::STAGE, what, b, voxels(size) * 4, size)?;
         }
