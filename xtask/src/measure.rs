@@ -121,7 +121,7 @@ pub(crate) fn time_runs(
     let max = totals.iter().cloned().fold(0.0, f64::max);
     let med = median(totals.clone());
     // Where a run is far off the median, say which: its index among the timed runs, and when it
-    // ran. On the H100 (2026-11-26, four commands of `bench distance --sizes 512`) every such
+    // ran. On the H100 (2026-11-26, four runs of `bench distance --sizes 512`) every such
     // run was one of the first three timed runs of a variant that followed another at the same
     // size, never in the first (the default path); warming up for half a second after the first
     // run instead of from the start moved nothing.
