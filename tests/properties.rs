@@ -419,17 +419,13 @@ proptest! {
     ) {
         let ctx = real();
         let d2 = real_d2();
-        let mut x = seed | 1;
-        let mask: Vec<u8> = (0..w * h).map(|_| {
-            x ^= x << 13; x ^= x >> 7; x ^= x << 17;
-            if ((x >> 11) as f64 / (1u64 << 53) as f64) < density { 255 } else { 0 }
-        }).collect();
+        let inside = random_mask((w * h) as usize, density, seed);
+        let mask = mask_bytes(&inside);
         let tex = upload_mask(&ctx.device, &ctx.queue, &mask, w, h).unwrap();
         let mut enc = ctx.encoder("prop exact 2d");
         let f = d2.encode(&ctx.device, &mut enc, &tex, &Options2d { signed: true, ..Options2d::default() }).unwrap();
         ctx.submit_and_wait("prop exact 2d", enc).unwrap();
         let got: Vec<f32> = fieldkit::gpu::read_texture(ctx, &f.distance).unwrap();
-        let inside: Vec<bool> = mask.iter().map(|&m| m != 0).collect();
         let want = cpu::signed_2d(&inside, w as usize, h as usize);
         for (i, (&g, &e)) in got.iter().zip(&want).enumerate() {
             // With no seed of a kind the field is ±∞ or the format's far value on both sides.
@@ -461,12 +457,8 @@ proptest! {
         bands in prop_oneof![Just(None), (0u32..6).prop_map(|k| Some(1u32 << k))],
     ) {
         let ctx = real();
-        let mut x = seed | 1;
-        let mask: Vec<bool> = (0..w * h * d).map(|_| {
-            x ^= x << 13; x ^= x >> 7; x ^= x << 17;
-            ((x >> 11) as f64 / (1u64 << 53) as f64) < density
-        }).collect();
-        let bytes: Vec<u8> = mask.iter().map(|&m| if m { 255 } else { 0 }).collect();
+        let mask = random_mask((w * h * d) as usize, density, seed);
+        let bytes = mask_bytes(&mask);
         let volume = upload_volume(&ctx.device, &ctx.queue, &bytes, [w, h, d]).unwrap();
         let passes = [ColumnPasses::Auto, ColumnPasses::Workgroup, ColumnPasses::Global][path];
         let field = {
@@ -491,6 +483,25 @@ proptest! {
             }
         }
     }
+}
+
+/// `cells` marks, each set with probability `density`, from a xorshift stream of `seed` (the
+/// same mask for the same seed, so a kept regression reproduces).
+fn random_mask(cells: usize, density: f64, seed: u64) -> Vec<bool> {
+    let mut x = seed | 1;
+    (0..cells)
+        .map(|_| {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            ((x >> 11) as f64 / (1u64 << 53) as f64) < density
+        })
+        .collect()
+}
+
+/// A mask as the seed textures and volumes take it: 255 marked, 0 not.
+fn mask_bytes(mask: &[bool]) -> Vec<u8> {
+    mask.iter().map(|&m| if m { 255 } else { 0 }).collect()
 }
 
 /// One `Distance3d` for the 3D property (its pipelines are kept between cases), set to each
