@@ -1,6 +1,7 @@
 //! Bad input to the drop-in API gets a typed error naming what was wrong: fitting a grid to an
 //! unusable mesh, a 2D distance with a bad texel size, reading back a buffer that cannot be
-//! copied, taking a readback twice.
+//! copied, taking a readback twice, a command buffer wgpu rejects at submission (its message,
+//! not a lost device).
 
 use fieldkit::Error;
 use fieldkit::distance::{Distance2d, Method2d, Options2d, Variant, upload_mask};
@@ -107,4 +108,29 @@ fn readbacks_say_what_is_wrong() {
     let first = readback.try_take().expect("mapped after the poll");
     assert_eq!(first.unwrap(), vec![1, 2, 3, 4, 5, 6, 7, 8]);
     assert!(matches!(readback.try_take(), Some(Err(Error::Readback(_)))));
+}
+
+#[test]
+fn a_rejected_submission_reports_wgpu_s_message_not_a_lost_device() {
+    // A device of its own: the uncaptured error below must not reach the other tests' waits.
+    let ctx = Context::new().expect(
+        "no GPU adapter: install a Vulkan driver (on Debian: apt-get install mesa-vulkan-drivers)",
+    );
+    let no_clear = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("storage only"),
+        size: 16,
+        usage: wgpu::BufferUsages::STORAGE,
+        mapped_at_creation: false,
+    });
+    // clear_buffer needs COPY_DST: wgpu rejects the command buffer at submission.
+    let mut enc = ctx.encoder("clear without COPY_DST");
+    enc.clear_buffer(&no_clear, 0, None);
+    let err = ctx.submit_and_wait("test clear", enc).unwrap_err();
+    assert!(
+        matches!(&err, Error::Wgpu { stage: "test clear", message } if message.contains("COPY_DST")),
+        "{err}"
+    );
+    // Nothing is left over for the next wait, and the device still works.
+    let enc = ctx.encoder("empty");
+    ctx.submit_and_wait("test empty", enc).unwrap();
 }

@@ -202,11 +202,21 @@ impl Context {
                 submission_index: Some(index),
                 timeout: None,
             })
-            .map_err(|_| Error::DeviceLost { stage })?;
+            .map_err(|_| self.failed(stage))?;
         if let Some(message) = self.take_uncaptured().into_iter().next() {
             return Err(Error::Wgpu { stage, message });
         }
         Ok(())
+    }
+
+    /// Why a wait failed: wgpu's message where a validation error escaped (a command buffer
+    /// it rejected at submission is never run, so waiting for it fails as a lost device
+    /// would), else a lost device.
+    fn failed(&self, stage: &'static str) -> Error {
+        match self.take_uncaptured().into_iter().next() {
+            Some(message) => Error::Wgpu { stage, message },
+            None => Error::DeviceLost { stage },
+        }
     }
 
     /// Block until `readback` is done, turning a device loss or an uncaptured error into a
@@ -236,7 +246,7 @@ impl Context {
             }
             self.device
                 .poll(wgpu::PollType::wait_indefinitely())
-                .map_err(|_| Error::DeviceLost { stage: "block_on" })?;
+                .map_err(|_| self.failed("block_on"))?;
         }
     }
 
@@ -257,7 +267,7 @@ impl<T: 'static> Readback<T> {
                     submission_index: Some(index),
                     timeout: None,
                 })
-                .map_err(|_| Error::DeviceLost { stage: "readback" })?;
+                .map_err(|_| ctx.failed("readback"))?;
         }
         if let Some(message) = ctx.take_uncaptured().into_iter().next() {
             return Err(Error::Wgpu {
