@@ -15,7 +15,8 @@
 //! the chart from a saved table without measuring. Surface and solid rows also print each
 //! pass's time (`Profiler::record` around `encode_surface_with`). With `FIELDKIT_BENCH_SHUFFLED` set, the split bunny
 //! is also timed with its triangles in a
-//! scattered order (neighbours in the list no longer neighbours on the surface).
+//! scattered order (neighbours in the list no longer neighbours on the surface). `--modes
+//! empty,zeroed,cleared` adds the floor rows of `floor.rs`: an empty pass timed the same way.
 
 use std::process::ExitCode;
 
@@ -23,6 +24,7 @@ use fieldkit::gpu::Context;
 use fieldkit::voxelize::{Mesh, Surface, Voxelizer};
 use glam::DVec3;
 
+use crate::floor::EmptyPass;
 use crate::measure::{Stamps, median};
 
 pub fn run(args: &crate::measure::Args) -> ExitCode {
@@ -84,6 +86,7 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
         Some(crate::heater::Heater::new(&ctx, 20.0)?)
     };
     let mut v = Voxelizer::new(&ctx.device).map_err(|e| e.to_string())?;
+    let empty = EmptyPass::new(&ctx);
     // `FIELDKIT_BENCH_LISTINGS=auto,16:4:0:64,4:4:1:32`: time the surface rows with each way
     // of cutting triangles into threads (light columns : chunk columns : sorted : workgroup;
     // `auto`, the default, picks per mesh).
@@ -159,8 +162,54 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
                 // Uploaded once: the `resident` rows time the passes alone.
                 let resident = fieldkit::voxelize::GpuMesh::upload(&ctx.device, mesh)
                     .map_err(|e| e.to_string())?;
-                for mode in ["surface", "resident", "raster", "solid", "attributes"] {
-                    if !args.modes.is_empty() && !args.modes.iter().any(|m| m == mode) {
+                for mode in [
+                    "surface",
+                    "resident",
+                    "raster",
+                    "solid",
+                    "attributes",
+                    "empty",
+                    "zeroed",
+                    "cleared",
+                ] {
+                    // The floor rows (`floor.rs`) only where named.
+                    let floor = matches!(mode, "empty" | "zeroed" | "cleared");
+                    if (args.modes.is_empty() && floor)
+                        || (!args.modes.is_empty() && !args.modes.iter().any(|m| m == mode))
+                    {
+                        continue;
+                    }
+                    if floor {
+                        let threads = mesh.triangles.len() as u64;
+                        let bytes = grid.voxels().div_ceil(32) * 4;
+                        let kept = EmptyPass::buffer(&ctx, bytes);
+                        let (ms, lo, hi, ms_batched) =
+                            time_rows(&ctx, &stamps, heater.as_ref(), args, |enc| {
+                                let fresh;
+                                let words = if mode == "zeroed" {
+                                    fresh = EmptyPass::buffer(&ctx, bytes);
+                                    &fresh
+                                } else {
+                                    &kept
+                                };
+                                if mode == "cleared" {
+                                    enc.clear_buffer(words, 0, None);
+                                }
+                                empty.record(&ctx, enc, words, threads)
+                            })?;
+                        println!(
+                            "| {name} | {threads} threads | {:?} | {mode} | {ms:.4} ({lo:.4}–{hi:.4}) | {ms_batched:.4} | {bytes} bytes |",
+                            grid.size
+                        );
+                        rows.push(Row {
+                            mesh: name.clone(),
+                            triangles: mesh.triangles.len(),
+                            n,
+                            mode,
+                            ms,
+                            ms_batched,
+                            voxels: 0,
+                        });
                         continue;
                     }
                     // The attribute list is sized from the occupied count, read once here.
@@ -196,36 +245,10 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
                         }
                         .map_err(|e| e.to_string())
                     };
-                    // Warm up for at least WARMUP_TIME: sub-millisecond rows read up to 3× slow
-                    // after a few runs while the clocks are still low.
-                    let start = std::time::Instant::now();
-                    let mut warm = 0;
-                    while warm < args.warmup.max(3) || start.elapsed() < crate::measure::WARMUP_TIME
-                    {
-                        stamps.time_after(&ctx, heater.as_ref(), |enc| encode(enc).map(|_| ()))?;
-                        warm += 1;
-                    }
-                    let mut times = Vec::new();
-                    for _ in 0..args.reps {
-                        times
-                            .push(stamps.time_after(&ctx, heater.as_ref(), |enc| {
-                                encode(enc).map(|_| ())
-                            })?);
-                    }
-                    let (lo, hi) = times
-                        .iter()
-                        .fold((f64::MAX, 0.0f64), |(l, h), &t| (l.min(t), h.max(t)));
-                    let ms = median(times);
-                    // The same encode BATCH times in one submission: the GPU never idles between
-                    // runs, so this is the steady rate, free of clock ramps and submit gaps.
-                    let mut batched = Vec::new();
-                    for _ in 0..args.reps.div_ceil(BATCH).max(3) {
-                        let total = stamps.time_after(&ctx, heater.as_ref(), |enc| {
-                            (0..BATCH).try_for_each(|_| encode(enc).map(|_| ()))
+                    let (ms, lo, hi, ms_batched) =
+                        time_rows(&ctx, &stamps, heater.as_ref(), args, |enc| {
+                            encode(enc).map(|_| ())
                         })?;
-                        batched.push(total / BATCH as f64);
-                    }
-                    let ms_batched = median(batched);
                     if mode == "surface" || mode == "resident" || mode == "solid" {
                         // Each pass on its own (the clears between them are not passes).
                         let (total, _, _, passes) = crate::measure::time_runs(
@@ -314,6 +337,42 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
     chart(&args.out, &adapter, &rows)?;
     println!("wrote {} and voxelize.png", csv.display());
     Ok(())
+}
+
+/// Median, min and max of `args.reps` timed runs of `record` (each its own submission after
+/// the heater), after a warm-up of at least WARMUP_TIME, and the median time per run of BATCH
+/// runs recorded into one submission.
+fn time_rows(
+    ctx: &Context,
+    stamps: &Stamps,
+    heater: Option<&crate::heater::Heater>,
+    args: &crate::measure::Args,
+    record: impl Fn(&mut wgpu::CommandEncoder) -> Result<(), String>,
+) -> Result<(f64, f64, f64, f64), String> {
+    // Sub-millisecond rows read up to 3× slow after a few runs while the clocks are still low.
+    let start = std::time::Instant::now();
+    let mut warm = 0;
+    while warm < args.warmup.max(3) || start.elapsed() < crate::measure::WARMUP_TIME {
+        stamps.time_after(ctx, heater, &record)?;
+        warm += 1;
+    }
+    let mut times = Vec::new();
+    for _ in 0..args.reps {
+        times.push(stamps.time_after(ctx, heater, &record)?);
+    }
+    let (lo, hi) = times
+        .iter()
+        .fold((f64::MAX, 0.0f64), |(l, h), &t| (l.min(t), h.max(t)));
+    let ms = median(times);
+    // The same runs BATCH times in one submission: the GPU never idles between runs, so this
+    // is the steady rate, free of clock ramps and submit gaps.
+    let mut batched = Vec::new();
+    for _ in 0..args.reps.div_ceil(BATCH).max(3) {
+        let total =
+            stamps.time_after(ctx, heater, |enc| (0..BATCH).try_for_each(|_| record(enc)))?;
+        batched.push(total / BATCH as f64);
+    }
+    Ok((ms, lo, hi, median(batched)))
 }
 
 /// `FIELDKIT_BENCH_LISTINGS`, or the default listing alone (no suffix on the mesh names).

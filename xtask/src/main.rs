@@ -11,6 +11,7 @@ mod bench_octree;
 mod bench_volume;
 mod bench_voxelize;
 mod chart;
+mod floor;
 mod gpu_tests;
 mod heater;
 mod lint;
@@ -144,7 +145,8 @@ enum Command {
         /// `voxelize`: the Stanford bunny's `index.js` from `scripts/fetch-bunny.sh`.
         #[arg(long)]
         mesh: Option<PathBuf>,
-        /// `voxelize`: only these modes (surface, raster, solid, attributes; comma-separated).
+        /// `voxelize`: only these modes (surface, resident, raster, solid, attributes; comma-separated;
+        /// `empty`, `zeroed` and `cleared`, an empty pass's floor, only where named).
         #[arg(long, value_delimiter = ',')]
         modes: Vec<String>,
         /// `voxelize`: draw `voxelize.png` into `--out` from this saved `voxelize.csv` instead
