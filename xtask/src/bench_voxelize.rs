@@ -197,19 +197,9 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
                                 }
                                 empty.record(&ctx, enc, words, threads)
                             })?;
-                        println!(
-                            "| {name} | {threads} threads | {:?} | {mode} | {ms:.4} ({lo:.4}–{hi:.4}) | {ms_batched:.4} | {bytes} bytes |",
-                            grid.size
-                        );
-                        rows.push(Row {
-                            mesh: name.clone(),
-                            triangles: mesh.triangles.len(),
-                            n,
-                            mode,
-                            ms,
-                            ms_batched,
-                            voxels: 0,
-                        });
+                        let what = (name.as_str(), mesh.triangles.len(), n, mode);
+                        let t = (ms, lo, hi, ms_batched);
+                        report(&mut rows, what, grid.size, t, 0, &format!("{bytes} bytes"));
                         continue;
                     }
                     // The attribute list is sized from the occupied count, read once here.
@@ -305,20 +295,9 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
                         .iter()
                         .filter(|&&o| o)
                         .count();
-                    println!(
-                        "| {name} | {} | {:?} | {mode} | {ms:.3} ({lo:.3}–{hi:.3}) | {ms_batched:.3} | {voxels} |",
-                        mesh.triangles.len(),
-                        grid.size
-                    );
-                    rows.push(Row {
-                        mesh: name.clone(),
-                        triangles: mesh.triangles.len(),
-                        n,
-                        mode,
-                        ms,
-                        ms_batched,
-                        voxels,
-                    });
+                    let what = (name.as_str(), mesh.triangles.len(), n, mode);
+                    let t = (ms, lo, hi, ms_batched);
+                    report(&mut rows, what, grid.size, t, voxels, &voxels.to_string());
                 }
             }
         }
@@ -337,6 +316,32 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
     chart(&args.out, &adapter, &rows)?;
     println!("wrote {} and voxelize.png", csv.display());
     Ok(())
+}
+
+/// Print a row of the table, (mesh, triangles, grid edge, mode) `what` with timing `t` (median,
+/// min, max, back to back) and `last` in the last column, and keep it.
+fn report(
+    rows: &mut Vec<Row>,
+    what: (&str, usize, u32, &'static str),
+    size: [u32; 3],
+    t: (f64, f64, f64, f64),
+    voxels: usize,
+    last: &str,
+) {
+    let (mesh, triangles, n, mode) = what;
+    let (ms, lo, hi, ms_batched) = t;
+    println!(
+        "| {mesh} | {triangles} | {size:?} | {mode} | {ms:.4} ({lo:.4}–{hi:.4}) | {ms_batched:.4} | {last} |"
+    );
+    rows.push(Row {
+        mesh: mesh.to_string(),
+        triangles,
+        n,
+        mode,
+        ms,
+        ms_batched,
+        voxels,
+    });
 }
 
 /// Median, min and max of `args.reps` timed runs of `record` (each its own submission after
