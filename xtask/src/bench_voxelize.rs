@@ -183,22 +183,20 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
                         let threads = mesh.triangles.len() as u64;
                         let bytes = grid.voxels().div_ceil(32) * 4;
                         let kept = EmptyPass::buffer(&ctx, bytes);
-                        let (ms, lo, hi, ms_batched) =
-                            time_rows(&ctx, &stamps, heater.as_ref(), args, |enc| {
-                                let fresh;
-                                let words = if mode == "zeroed" {
-                                    fresh = EmptyPass::buffer(&ctx, bytes);
-                                    &fresh
-                                } else {
-                                    &kept
-                                };
-                                if mode == "cleared" {
-                                    enc.clear_buffer(words, 0, None);
-                                }
-                                empty.record(&ctx, enc, words, threads)
-                            })?;
+                        let t = time_rows(&ctx, &stamps, heater.as_ref(), args, |enc| {
+                            let fresh;
+                            let words = if mode == "zeroed" {
+                                fresh = EmptyPass::buffer(&ctx, bytes);
+                                &fresh
+                            } else {
+                                &kept
+                            };
+                            if mode == "cleared" {
+                                enc.clear_buffer(words, 0, None);
+                            }
+                            empty.record(&ctx, enc, words, threads)
+                        })?;
                         let what = (name.as_str(), mesh.triangles.len(), n, mode);
-                        let t = (ms, lo, hi, ms_batched);
                         report(&mut rows, what, grid.size, t, 0, &format!("{bytes} bytes"));
                         continue;
                     }
@@ -235,10 +233,9 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
                         }
                         .map_err(|e| e.to_string())
                     };
-                    let (ms, lo, hi, ms_batched) =
-                        time_rows(&ctx, &stamps, heater.as_ref(), args, |enc| {
-                            encode(enc).map(|_| ())
-                        })?;
+                    let t = time_rows(&ctx, &stamps, heater.as_ref(), args, |enc| {
+                        encode(enc).map(|_| ())
+                    })?;
                     if mode == "surface" || mode == "resident" || mode == "solid" {
                         // Each pass on its own (the clears between them are not passes).
                         let (total, _, _, passes) = crate::measure::time_runs(
@@ -296,7 +293,6 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
                         .filter(|&&o| o)
                         .count();
                     let what = (name.as_str(), mesh.triangles.len(), n, mode);
-                    let t = (ms, lo, hi, ms_batched);
                     report(&mut rows, what, grid.size, t, voxels, &voxels.to_string());
                 }
             }
