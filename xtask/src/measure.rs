@@ -61,8 +61,11 @@ pub(crate) fn write_table(
 
 /// Least wall time of warm-up before the timed runs. GPU clocks fall while the CPU checks the
 /// previous point: on the H100, 2048² exact measured 1.19 ms after three warm-up runs that
-/// followed the 512³ sweep, and 0.26 ms once warmed up for longer.
-pub(crate) const WARMUP_TIME: std::time::Duration = std::time::Duration::from_millis(500);
+/// followed the 512³ sweep, and 0.26 ms once warmed up for longer. And a variant timed after
+/// another at the same size (whose large buffers were just dropped) ran its first few timed
+/// runs up to 2× slow after half a second of warm-up (one of three `bench distance --sizes 512`
+/// runs on the H100, 2026-11-26), never after 2 s (five runs).
+pub(crate) const WARMUP_TIME: std::time::Duration = std::time::Duration::from_millis(2000);
 
 /// A timed run this many times the median is reported as slow.
 const SLOW: f64 = 1.25;
@@ -124,7 +127,7 @@ pub(crate) fn time_runs(
     // ran. On the H100 (2026-11-26, four runs of `bench distance --sizes 512`) every such
     // run was one of the first three timed runs of a variant that followed another at the same
     // size, never in the first (the default path); warming up for half a second after the first
-    // run instead of from the start moved nothing.
+    // run instead of from the start moved nothing; warming up for 2 s (WARMUP_TIME) did.
     for (i, (&t, at)) in totals.iter().zip(&times).enumerate() {
         if t > SLOW * med {
             eprintln!(
