@@ -105,7 +105,7 @@ enum Command {
         /// Timed runs per point; the median is reported.
         #[arg(long, default_value_t = 20)]
         reps: usize,
-        /// Untimed runs first: at least this many, and at least 0.5 s of them.
+        /// Untimed runs first: at least this many, and at least 2 s of them (`measure::WARMUP_TIME`).
         #[arg(long, default_value_t = 3)]
         warmup: usize,
         /// Fraction of cells that are seeds.
