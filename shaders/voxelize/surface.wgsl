@@ -48,8 +48,9 @@ override LISTED_WORKGROUP: u32 = 64u;
 // past `capacity` only if the host's bound were wrong; entries past it are dropped).
 @group(0) @binding(3) var<storage, read_write> work: array<vec2<u32>>;
 @group(0) @binding(4) var<storage, read_write> work_count: atomic<u32>;
-// Indirect dispatch arguments for `surface_heavy`.
-@group(0) @binding(5) var<storage, read_write> heavy_dispatch: array<u32, 3>;
+// Indirect dispatch arguments for `surface_heavy`: the host creates them as (0, 1, 1) and
+// `surface` raises the workgroup count as it lists chunks, so no pass of its own writes them.
+@group(0) @binding(5) var<storage, read_write> heavy_dispatch: array<atomic<u32>, 3>;
 // `surface_listed`: the heavy triangles' chunks, listed by the host.
 @group(0) @binding(6) var<storage, read> listed: array<vec2<u32>>;
 
@@ -99,6 +100,9 @@ fn surface(@builtin(global_invocation_id) id: vec3<u32>) {
     if s.columns > LIGHT {
         let chunks = (s.columns + CHUNK - 1u) / CHUNK;
         let at = atomicAdd(&work_count, chunks);
+        // The workgroups `surface_heavy` needs for the chunks listed so far; the largest any
+        // thread sees is the count for them all.
+        atomicMax(&heavy_dispatch[0], (min(at + chunks, params.capacity) + 63u) / 64u);
         for (var c = 0u; c < chunks; c++) {
             if at + c < params.capacity {
                 work[at + c] = vec2<u32>(t, c * CHUNK);
@@ -107,14 +111,6 @@ fn surface(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     voxelize_columns(s, 0u, s.columns);
-}
-
-@compute @workgroup_size(1)
-fn heavy_args() {
-    let items = min(atomicLoad(&work_count), params.capacity);
-    heavy_dispatch[0] = (items + 63u) / 64u;
-    heavy_dispatch[1] = 1u;
-    heavy_dispatch[2] = 1u;
 }
 
 @compute @workgroup_size(64)

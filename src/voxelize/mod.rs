@@ -674,12 +674,12 @@ pub enum Separation {
     Six,
 }
 
-/// The three entries of one surface variant: triangles, heavy triangles' chunks, and the
-/// indirect arguments between them.
+/// The entries of one surface variant: triangles (listing the heavy ones' chunks and sizing
+/// their indirect dispatch), the heavy triangles' chunks, and both in one pass where the host
+/// listed the chunks.
 struct SurfacePipelines {
     light: ComputePipeline<stage::surface::Entry>,
     heavy: ComputePipeline<stage::surface_heavy::Entry>,
-    args: ComputePipeline<stage::heavy_args::Entry>,
     listed: ComputePipeline<stage::surface_listed::Entry>,
 }
 
@@ -689,7 +689,6 @@ impl SurfacePipelines {
         Ok(Self {
             light: ComputePipeline::with_overrides(device, &o)?,
             heavy: ComputePipeline::with_overrides(device, &o)?,
-            args: ComputePipeline::new(device)?,
             listed: ComputePipeline::with_overrides(device, &o)?,
         })
     }
@@ -1164,6 +1163,15 @@ impl Voxelizer {
                 mapped_at_creation: false,
             })
         };
+        // (0, 1, 1) workgroups: `surface` raises the count as it lists chunks.
+        let dispatch = wgpu::util::DeviceExt::create_buffer_init(
+            device,
+            &wgpu::util::BufferInitDescriptor {
+                label: Some("voxelize heavy dispatch"),
+                contents: bytemuck::cast_slice(&[0u32, 1, 1]),
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
+            },
+        );
         let heavy_work = HeavyWork {
             work: buffer(
                 "voxelize work list",
@@ -1171,11 +1179,7 @@ impl Voxelizer {
                 wgpu::BufferUsages::empty(),
             ),
             work_count: buffer("voxelize work count", 4, wgpu::BufferUsages::COPY_DST),
-            dispatch: buffer(
-                "voxelize heavy dispatch",
-                12,
-                wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
-            ),
+            dispatch,
             capacity,
         };
         let HeavyWork {
@@ -1215,6 +1219,7 @@ impl Voxelizer {
                     occupancy: occupancy.into(),
                     work: work.into(),
                     work_count: work_count.into(),
+                    heavy_dispatch: dispatch.into(),
                 },
                 [n.div_ceil(64), 1, 1],
                 STAGE,
@@ -1224,14 +1229,6 @@ impl Voxelizer {
             return Ok(heavy_work);
         }
         let params = params_for(0, count);
-        let args = pipelines.args.bind(
-            device,
-            &stage::heavy_args::Resources {
-                params: (&params).into(),
-                work_count: work_count.into(),
-                heavy_dispatch: dispatch.into(),
-            },
-        )?;
         let heavy = pipelines.heavy.bind(
             device,
             &stage::surface_heavy::Resources {
@@ -1242,11 +1239,6 @@ impl Voxelizer {
                 work_count: work_count.into(),
             },
         )?;
-        {
-            let mut r = rec.recorder();
-            let mut pass = r.compute_pass("voxelize heavy arguments", "voxelize heavy arguments");
-            pipelines.args.dispatch(&mut pass, &args, [1, 1, 1]);
-        }
         run_indirect(
             rec,
             "voxelize heavy triangles",
