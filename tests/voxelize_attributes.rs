@@ -148,6 +148,71 @@ fn heavy_triangles_count_once() {
     assert!(got.iter().any(|v| v.triangles >= 3));
 }
 
+/// More chunks than one dispatch row holds (65 535 workgroups of 64): 68 copies of a triangle
+/// whose box face holds 501² columns list 68 × 62 751 = 4.27 M chunks, so the work list's
+/// passes (surface and attributes) run in two rows of workgroups. Its edges run through no
+/// voxel corner (legs at half a voxel, the hypotenuse on x + y = 500.5), so no voxel is a
+/// matter of rounding. Every voxel against the
+/// reference for one copy: the same voxels in the same order, 68 times its triangle count, its
+/// colour and normal. (Copies, not one larger triangle: lavapipe ends a thread's loops after
+/// 65535 iterations, and one thread lists a triangle's chunks.)
+#[test]
+fn more_chunks_than_one_dispatch_row_holds() {
+    let ctx = Context::shared();
+    let copies = 68u32;
+    let one = Mesh {
+        positions: vec![
+            DVec3::new(0.5, 0.5, 1.5),
+            DVec3::new(500.0, 0.5, 1.5),
+            DVec3::new(0.5, 500.0, 1.5),
+        ],
+        triangles: vec![[0, 1, 2]],
+        colors: vec![[200, 10, 30, 255], [0, 90, 250, 255], [40, 40, 40, 128]],
+        ..Mesh::default()
+    };
+    let mut mesh = one.clone();
+    for k in 1..copies {
+        mesh.positions.extend(one.positions.iter().copied());
+        mesh.colors.extend(one.colors.iter().copied());
+        mesh.triangles.push([3 * k, 3 * k + 1, 3 * k + 2]);
+    }
+    let grid = Grid {
+        origin: DVec3::ZERO,
+        voxel: 1.0,
+        size: [512, 512, 2],
+    };
+    let local = mesh.to_grid(&grid).unwrap();
+    let chunks = fieldkit::voxelize::heavy_chunk_bound(&local, grid.size) as u64;
+    assert!(chunks > 65_535 * 64, "{chunks} chunks fit one row");
+    let (_, got) = run(&ctx, &mesh, &grid);
+    let want = cpu::attribute_sums(&one, &one.to_grid(&grid).unwrap(), grid.size);
+    let got_index: Vec<u64> = got
+        .iter()
+        .map(|v| (v.voxel[2] as u64 * 512 + v.voxel[1] as u64) * 512 + v.voxel[0] as u64)
+        .collect();
+    assert!(got.len() > 100_000, "{} voxels", got.len());
+    let want_index: Vec<u64> = want.keys().copied().collect();
+    let first = got_index.iter().zip(&want_index).position(|(g, w)| g != w);
+    assert!(
+        got_index == want_index,
+        "voxels or their order differ from the reference: {} against {}, first at {first:?}: {:?}",
+        got_index.len(),
+        want_index.len(),
+        first.map(|i| (got_index[i], want_index[i]))
+    );
+    for (g, w) in got.iter().zip(want.values()) {
+        assert_eq!(g.triangles, copies * w.triangles, "at voxel {:?}", g.voxel);
+        for ch in 0..4 {
+            let mean = w.color[ch] / w.triangles as f64;
+            assert!(
+                (g.color[ch] as f64 - mean).abs() <= 0.55,
+                "colour at voxel {:?}",
+                g.voxel
+            );
+        }
+    }
+}
+
 /// A sheet drawn twice with opposite windings: its normals cancel, and the voxels say so.
 #[test]
 fn cancelling_normals_are_reported() {

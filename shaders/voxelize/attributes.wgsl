@@ -119,12 +119,15 @@ fn accumulate(@builtin(global_invocation_id) id: vec3<u32>) {
     }
 }
 
+// The surface pass's work list, in the rows of workgroups its dispatch arguments give.
 @compute @workgroup_size(64)
-fn accumulate_heavy(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= min(work_count, params.capacity) {
+fn accumulate_heavy(@builtin(global_invocation_id) id: vec3<u32>,
+                    @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = id.x + id.y * groups.x * 64u;
+    if i >= min(work_count, params.capacity) {
         return;
     }
-    let item = work[id.x];
+    let item = work[i];
     accumulate_columns(load(item.x), item.x, item.y, CHUNK);
 }
 

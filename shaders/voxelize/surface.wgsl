@@ -48,8 +48,9 @@ override LISTED_WORKGROUP: u32 = 64u;
 // past `capacity` only if the host's bound were wrong; entries past it are dropped).
 @group(0) @binding(3) var<storage, read_write> work: array<vec2<u32>>;
 @group(0) @binding(4) var<storage, read_write> work_count: atomic<u32>;
-// Indirect dispatch arguments for `surface_heavy`: the host creates them as (0, 1, 1) and
-// `surface` raises the workgroup count as it lists chunks, so no pass of its own writes them.
+// Indirect dispatch arguments for `surface_heavy` (and the attribute pass's walk of the same
+// list): the host creates them as (0, 1, 1) and `surface` raises them as it lists chunks, so
+// no pass of its own writes them. Past 65535 workgroups they run in rows of 65535.
 @group(0) @binding(5) var<storage, read_write> heavy_dispatch: array<atomic<u32>, 3>;
 // `surface_listed`: the heavy triangles' chunks, listed by the host.
 @group(0) @binding(6) var<storage, read> listed: array<vec2<u32>>;
@@ -100,9 +101,15 @@ fn surface(@builtin(global_invocation_id) id: vec3<u32>) {
     if s.columns > LIGHT {
         let chunks = (s.columns + CHUNK - 1u) / CHUNK;
         let at = atomicAdd(&work_count, chunks);
-        // The workgroups `surface_heavy` needs for the chunks listed so far; the largest any
-        // thread sees is the count for them all.
-        atomicMax(&heavy_dispatch[0], (min(at + chunks, params.capacity) + 63u) / 64u);
+        // The workgroups `surface_heavy` needs for the chunks listed so far, in rows of 65535;
+        // the largest any thread sees is the count for them all.
+        let groups = (min(at + chunks, params.capacity) + 63u) / 64u;
+        atomicMax(&heavy_dispatch[0], min(groups, 65535u));
+        atomicMax(&heavy_dispatch[1], (groups + 65534u) / 65535u);
+        // One thread lists all of its triangle's chunks. (llvmpipe, lavapipe's compiler, ends
+        // any invocation's loops after 65535 iterations in all, so there a triangle whose box
+        // face holds more than 65535 chunks, over 262 140 columns, keeps only its first
+        // 65535; GPUs run them all.)
         for (var c = 0u; c < chunks; c++) {
             if at + c < params.capacity {
                 work[at + c] = vec2<u32>(t, c * CHUNK);
@@ -114,11 +121,13 @@ fn surface(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 
 @compute @workgroup_size(64)
-fn surface_heavy(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= min(atomicLoad(&work_count), params.capacity) {
+fn surface_heavy(@builtin(global_invocation_id) id: vec3<u32>,
+                 @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = id.x + id.y * groups.x * 64u;
+    if i >= min(atomicLoad(&work_count), params.capacity) {
         return;
     }
-    let item = work[id.x];
+    let item = work[i];
     voxelize_columns(load(item.x), item.y, CHUNK);
 }
 
