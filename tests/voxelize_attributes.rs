@@ -165,22 +165,15 @@ fn heavy_triangles_count_once() {
     assert!(got.iter().any(|v| v.triangles >= 3));
 }
 
-/// More chunks than one dispatch row holds (65 535 workgroups of 64): 68 copies of a triangle
-/// whose box face holds 501² columns list 68 × 62 751 = 4.27 M chunks, so the work list's
-/// passes (surface and attributes) run in two rows of workgroups. Its edges run through no
-/// voxel corner (legs at half a voxel, the hypotenuse on x + y = 500.5), so no voxel is a
-/// matter of rounding. Every voxel against the reference for one copy: the same voxels in the
-/// same order, 68 times its triangle count, its colour and normal. (Copies, not one larger triangle: lavapipe ends a thread's loops after
-/// 65535 iterations, and one thread lists a triangle's chunks.)
-#[test]
-fn more_chunks_than_one_dispatch_row_holds() {
-    let ctx = Context::shared();
-    let copies = 68u32;
+/// Copies of a right triangle in the plane z = 1.5 with its right angle at (0.5, 0.5) and legs
+/// of `leg` voxels: its edges run through no voxel corner (legs at half a voxel, the hypotenuse
+/// on x + y = leg + 0.5), so no voxel is a matter of rounding.
+fn right_triangles(leg: f64, copies: u32) -> (Mesh, Mesh) {
     let one = Mesh {
         positions: vec![
             DVec3::new(0.5, 0.5, 1.5),
-            DVec3::new(500.0, 0.5, 1.5),
-            DVec3::new(0.5, 500.0, 1.5),
+            DVec3::new(leg, 0.5, 1.5),
+            DVec3::new(0.5, leg, 1.5),
         ],
         triangles: vec![[0, 1, 2]],
         colors: vec![[200, 10, 30, 255], [0, 90, 250, 255], [40, 40, 40, 128]],
@@ -192,18 +185,53 @@ fn more_chunks_than_one_dispatch_row_holds() {
         mesh.colors.extend(one.colors.iter().copied());
         mesh.triangles.push([3 * k, 3 * k + 1, 3 * k + 2]);
     }
+    (one, mesh)
+}
+
+/// More chunks than one dispatch row holds (65 535 workgroups of 64): 257 copies of a triangle
+/// whose box face holds 256² columns list 257 × 16 384 = 4.21 M chunks of 4 columns (a box face
+/// of at most 65 536 columns keeps chunks of 4), so the work list's passes (surface and
+/// attributes) run in two rows of workgroups. Every voxel against the reference for one copy:
+/// the same voxels in the same order, 257 times its triangle count, its colour and normal.
+#[test]
+fn more_chunks_than_one_dispatch_row_holds() {
+    let ctx = Context::shared();
+    let copies = 257u32;
+    let (one, mesh) = right_triangles(255.0, copies);
     let grid = Grid {
         origin: DVec3::ZERO,
         voxel: 1.0,
-        size: [512, 512, 2],
+        size: [256, 256, 2],
     };
     let local = mesh.to_grid(&grid).unwrap();
+    // The bound is exact here: each triangle has 256² columns, in chunks of 4.
     let chunks = fieldkit::voxelize::heavy_chunk_bound(&local, grid.size) as u64;
+    assert_eq!(chunks, copies as u64 * 256 * 256 / 4);
     assert!(chunks > 65_535 * 64, "{chunks} chunks fit one row");
     let (_, got) = run(&ctx, &mesh, &grid);
-    assert!(got.len() > 100_000, "{} voxels", got.len());
+    assert!(got.len() > 30_000, "{} voxels", got.len());
     let want = cpu::attribute_sums(&one, &one.to_grid(&grid).unwrap(), grid.size);
     check_sums(&grid, &got, &want, copies, 1e-3);
+}
+
+/// One triangle whose box face holds 901² columns (202 951 chunks of 4): its thread lists it in
+/// at most 16 384 longer chunks. Before, it listed every chunk of 4, and on lavapipe, whose
+/// compiler ends an invocation's loops after 65 535 iterations, the voxels of the chunks past
+/// the 65 535th were lost (this test failed there); every voxel against the reference.
+#[test]
+fn one_giant_triangle_lists_every_chunk() {
+    let ctx = Context::shared();
+    let (one, _) = right_triangles(900.0, 1);
+    let grid = Grid {
+        origin: DVec3::ZERO,
+        voxel: 1.0,
+        size: [904, 904, 2],
+    };
+    let local = one.to_grid(&grid).unwrap();
+    assert!(fieldkit::voxelize::heavy_chunk_bound(&local, grid.size) > 65_535);
+    let (_, got) = run(&ctx, &one, &grid);
+    assert!(got.len() > 400_000, "{} voxels", got.len());
+    check_against_reference(&one, &grid, &got, 1e-3);
 }
 
 /// A sheet drawn twice with opposite windings: its normals cancel, and the voxels say so.

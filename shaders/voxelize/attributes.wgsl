@@ -10,7 +10,7 @@
 // closest point on the triangle's plane (barycentrics clamped to the triangle),
 // written as a0 + b1·(a1 − a0) + b2·(a2 − a0) so a constant attribute stays exact.
 
-import fieldkit::triangle_box::{CHUNK, LIGHT, Setup, column, overlaps, setup};
+import fieldkit::triangle_box::{LIGHT, Setup, chunk_columns, column, overlaps, setup};
 import package::shared::voxel_attribute::{SUMS, average, closest_weights, contribution, corner_colour, corner_normal, corner_uv};
 
 struct AttributeParams {
@@ -128,7 +128,8 @@ fn accumulate_heavy(@builtin(global_invocation_id) id: vec3<u32>,
         return;
     }
     let item = work[i];
-    accumulate_columns(load(item.x), item.x, item.y, CHUNK);
+    let s = load(item.x);
+    accumulate_columns(s, item.x, item.y, chunk_columns(s.columns));
 }
 
 // One bitset word per thread (a 2D dispatch: rows of 65535 workgroups).

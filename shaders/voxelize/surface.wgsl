@@ -9,13 +9,13 @@
 //
 // One thread per triangle (`first` and `count` select a run of the triangle list). A triangle
 // with more than LIGHT columns does not stall its thread: `surface` appends it to a work list
-// in chunks of CHUNK columns, `heavy_args` sizes an indirect dispatch from the list's length,
-// and `surface_heavy` takes one chunk per thread.
+// in chunks of `chunk_columns` columns (CHUNK but for giant triangles) and raises the indirect
+// dispatch arguments to the list's length, and `surface_heavy` takes one chunk per thread.
 //
 // SIX_SEPARATING gives the thinner voxelization of the same paper, through which no
 // 6-connected path gets; 26-connected paths can.
 
-import fieldkit::triangle_box::{CHUNK, LIGHT, Setup, column, overlaps, setup};
+import fieldkit::triangle_box::{LIGHT, Setup, chunk_columns, column, overlaps, setup};
 
 struct SurfaceParams {
     // Mesh coordinates to grid-local ones (affine; composed in f64 on the host).
@@ -30,7 +30,7 @@ struct SurfaceParams {
     moved: f32,
     // Entries the work list holds (the host sizes it for every chunk there can be).
     capacity: u32,
-    // Columns per listed chunk (`surface_listed`; the others walk CHUNK).
+    // Columns per listed chunk (`surface_listed`; the GPU's work list uses `chunk_columns`).
     chunk: u32,
 }
 
@@ -99,20 +99,18 @@ fn surface(@builtin(global_invocation_id) id: vec3<u32>) {
     let t = params.first + id.x;
     let s = load(t);
     if s.columns > LIGHT {
-        let chunks = (s.columns + CHUNK - 1u) / CHUNK;
+        let size = chunk_columns(s.columns);
+        let chunks = (s.columns + size - 1u) / size;
         let at = atomicAdd(&work_count, chunks);
         // The workgroups `surface_heavy` needs for the chunks listed so far, in rows of 65535;
         // the largest any thread sees is the count for them all.
         let groups = (min(at + chunks, params.capacity) + 63u) / 64u;
         atomicMax(&heavy_dispatch[0], min(groups, 65535u));
         atomicMax(&heavy_dispatch[1], (groups + 65534u) / 65535u);
-        // One thread lists all of its triangle's chunks. (llvmpipe, lavapipe's compiler, ends
-        // any invocation's loops after 65535 iterations in all, so there a triangle whose box
-        // face holds more than 65535 chunks, over 262 140 columns, keeps only its first
-        // 65535; GPUs run them all.)
+        // One thread lists all of its triangle's chunks: at most MAX_CHUNKS of them.
         for (var c = 0u; c < chunks; c++) {
             if at + c < params.capacity {
-                work[at + c] = vec2<u32>(t, c * CHUNK);
+                work[at + c] = vec2<u32>(t, c * size);
             }
         }
         return;
@@ -128,7 +126,8 @@ fn surface_heavy(@builtin(global_invocation_id) id: vec3<u32>,
         return;
     }
     let item = work[i];
-    voxelize_columns(load(item.x), item.y, CHUNK);
+    let s = load(item.x);
+    voxelize_columns(s, item.y, chunk_columns(s.columns));
 }
 
 // One pass when the host has sorted the triangles (`encode_surface`, `encode_solid`): the

@@ -558,7 +558,8 @@ fn box_columns(t: &[Vec4], size: [u32; 3]) -> u64 {
 }
 
 /// Chunks of [`CHUNK`] columns the heavy triangles of `local` can need at most (see
-/// [`box_columns`]).
+/// [`box_columns`]). The GPU's lister gives a giant triangle longer chunks (at most 16 384 per
+/// triangle), so it lists no more than this.
 pub fn heavy_chunk_bound(local: &GridMesh, size: [u32; 3]) -> u32 {
     let total: u64 = local
         .vertices
@@ -1163,7 +1164,8 @@ impl Voxelizer {
                 mapped_at_creation: false,
             })
         };
-        // (0, 1, 1) workgroups: `surface` raises the count as it lists chunks.
+        // (0, 1, 1) workgroups: `surface` raises the count (and the rows of 65535) as it lists
+        // chunks.
         let dispatch = wgpu::util::DeviceExt::create_buffer_init(
             device,
             &wgpu::util::BufferInitDescriptor {
