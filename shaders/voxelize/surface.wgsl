@@ -9,13 +9,15 @@
 //
 // One thread per triangle (`first` and `count` select a run of the triangle list). A triangle
 // with more than LIGHT columns does not stall its thread: `surface` appends it to a work list
-// in chunks of `chunk_columns` columns (CHUNK but for giant triangles) and raises the indirect
-// dispatch arguments to the list's length, and `surface_heavy` takes one chunk per thread.
+// in chunks of `chunk_columns` columns (CHUNK but for giant triangles; a workgroup's threads
+// list their heavy triangles' chunks together) and raises the indirect dispatch arguments to
+// the list's length, and `surface_heavy` takes one chunk per thread.
 //
 // SIX_SEPARATING gives the thinner voxelization of the same paper, through which no
 // 6-connected path gets; 26-connected paths can.
 
 import fieldkit::triangle_box::{LIGHT, Setup, chunk_columns, column, overlaps, setup};
+import package::shared::scan::{scan_first, scan_partial};
 
 struct SurfaceParams {
     // Mesh coordinates to grid-local ones (affine; composed in f64 on the host).
@@ -91,31 +93,77 @@ fn voxelize_columns(s: Setup, first: u32, count: u32) {
     }
 }
 
-@compute @workgroup_size(64)
-fn surface(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= params.count {
-        return;
-    }
-    let t = params.first + id.x;
-    let s = load(t);
-    if s.columns > LIGHT {
-        let size = chunk_columns(s.columns);
-        let chunks = (s.columns + size - 1u) / size;
-        let at = atomicAdd(&work_count, chunks);
+// Invocations per workgroup of `surface`.
+const GROUP: u32 = 64u;
+// Per thread of a `surface` workgroup: columns per chunk of its triangle, if heavy.
+var<workgroup> chunk_sizes: array<u32, GROUP>;
+// Whether any of the workgroup's triangles is heavy (`heavy_seen`, then read uniformly).
+var<workgroup> heavy_seen: atomic<u32>;
+var<workgroup> heavy_flag: u32;
+// Where the workgroup's chunks start in the work list.
+var<workgroup> group_base: u32;
+
+// The workgroup's heavy triangles list their chunks together: a prefix sum of the threads'
+// `chunks`, one atomic on the work list's count for the workgroup, and every thread writing
+// entries whichever triangle they belong to, so a triangle of many chunks does not hold up its
+// warp's lanes while one of them writes. Every thread of the workgroup calls it.
+fn list_chunks(local: u32, chunks: u32, first_thread: u32) {
+    scan_first(local, chunks, GROUP);
+    let total = scan_partial(GROUP - 1u);
+    if local == 0u {
+        let at = atomicAdd(&work_count, total);
         // The workgroups `surface_heavy` needs for the chunks listed so far, in rows of 65535;
-        // the largest any thread sees is the count for them all.
-        let groups = (min(at + chunks, params.capacity) + 63u) / 64u;
+        // the largest any workgroup sees is the count for them all.
+        let groups = (min(at + total, params.capacity) + 63u) / 64u;
         atomicMax(&heavy_dispatch[0], min(groups, 65535u));
         atomicMax(&heavy_dispatch[1], (groups + 65534u) / 65535u);
-        // One thread lists all of its triangle's chunks: at most MAX_CHUNKS of them.
-        for (var c = 0u; c < chunks; c++) {
-            if at + c < params.capacity {
-                work[at + c] = vec2<u32>(t, c * size);
-            }
-        }
-        return;
+        group_base = at;
     }
-    voxelize_columns(s, 0u, s.columns);
+    let base = workgroupUniformLoad(&group_base);
+    // Entry e of the workgroup's belongs to the first thread j whose running sum passes e;
+    // each thread's entries rise, so j only moves forward.
+    var j = 0u;
+    var begin = 0u;
+    var end = scan_partial(0u);
+    for (var e = local; e < total; e += GROUP) {
+        while end <= e {
+            j++;
+            begin = end;
+            end = scan_partial(j);
+        }
+        if base + e < params.capacity {
+            work[base + e] = vec2<u32>(first_thread + j, (e - begin) * chunk_sizes[j]);
+        }
+    }
+}
+
+@compute @workgroup_size(GROUP)
+fn surface(@builtin(global_invocation_id) id: vec3<u32>,
+           @builtin(local_invocation_index) local: u32,
+           @builtin(workgroup_id) group: vec3<u32>) {
+    let mine = id.x < params.count;
+    var s: Setup;
+    var chunks = 0u;
+    if mine {
+        s = load(params.first + id.x);
+        if s.columns > LIGHT {
+            let size = chunk_columns(s.columns);
+            chunks = (s.columns + size - 1u) / size;
+            chunk_sizes[local] = size;
+            atomicOr(&heavy_seen, 1u);
+        }
+    }
+    // Workgroups without a heavy triangle (most, at small grids) skip the prefix sum.
+    workgroupBarrier();
+    if local == 0u {
+        heavy_flag = atomicLoad(&heavy_seen);
+    }
+    if workgroupUniformLoad(&heavy_flag) != 0u {
+        list_chunks(local, chunks, params.first + group.x * GROUP);
+    }
+    if mine && chunks == 0u {
+        voxelize_columns(s, 0u, s.columns);
+    }
 }
 
 @compute @workgroup_size(64)
