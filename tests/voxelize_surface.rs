@@ -618,35 +618,84 @@ fn resident_meshes_move_by_matrices_on_the_gpu() {
     assert!(GpuMesh::upload(&ctx.device, &flat).is_err());
 }
 
+/// Two triangles covering the square [0, 4096]² at z = 1.5, inside voxel layer 1.
+fn square_on_layer_one() -> (Vec<DVec3>, Vec<[u32; 3]>) {
+    let n = 4096.0;
+    let positions = vec![
+        DVec3::new(0.0, 0.0, 1.5),
+        DVec3::new(n, 0.0, 1.5),
+        DVec3::new(n, n, 1.5),
+        DVec3::new(0.0, n, 1.5),
+    ];
+    (positions, vec![[0, 1, 2], [0, 2, 3]])
+}
+
+/// Every voxel of layer 1 of a 4096 × 4096 × 2 grid set, none of layer 0.
+fn check_layer_one(ctx: &Context, s: &fieldkit::voxelize::Surface) {
+    let gpu = s.read(&ctx.device, &ctx.queue).wait(ctx).unwrap();
+    let layer = 4096 * 4096;
+    let missing = gpu[layer..].iter().filter(|&&o| !o).count();
+    let stray = gpu[..layer].iter().filter(|&&o| o).count();
+    assert_eq!((missing, stray), (0, 0), "layer 1 missing, layer 0 set");
+}
+
 /// More threads than one dispatch row holds (65 535 workgroups of 64): two triangles covering a
 /// 4096² square at z = 1.5 list 2 × 4096² / 4 chunks, so `surface_listed` runs in two rows of
 /// workgroups. The plane lies inside voxel layer 1, so exactly that layer is set.
 #[test]
 fn more_chunks_than_one_dispatch_row_holds() {
     let ctx = Context::shared();
-    let n = 4096.0;
-    let m = mesh(
-        vec![
-            DVec3::new(0.0, 0.0, 1.5),
-            DVec3::new(n, 0.0, 1.5),
-            DVec3::new(n, n, 1.5),
-            DVec3::new(0.0, n, 1.5),
-        ],
-        vec![[0, 1, 2], [0, 2, 3]],
-    );
+    let (positions, triangles) = square_on_layer_one();
+    let m = mesh(positions, triangles);
+    // The host lists every chunk of 4 (`MAX_CHUNKS` bounds only the GPU's work list).
     let grid = unit_grid([4096, 4096, 2]);
-    let local = m.to_grid(&grid).unwrap();
-    let chunks = fieldkit::voxelize::heavy_chunk_bound(&local, grid.size) as u64;
-    assert!(chunks > 65_535 * 64, "{chunks} chunks fit one row");
     let v = Voxelizer::new(&ctx.device).unwrap();
     let mut enc = ctx.encoder("voxelize");
     let s = v.encode_surface(&ctx.device, &mut enc, &m, &grid).unwrap();
     ctx.submit_and_wait("voxelize", enc).unwrap();
-    let gpu = s.read(&ctx.device, &ctx.queue).wait(&ctx).unwrap();
-    let layer = 4096 * 4096;
-    let missing = gpu[layer..].iter().filter(|&&o| !o).count();
-    let stray = gpu[..layer].iter().filter(|&&o| o).count();
-    assert_eq!((missing, stray), (0, 0), "layer 1 missing, layer 0 set");
+    check_layer_one(&ctx, &s);
+}
+
+/// A resident mesh of giant triangles: no triangle lists more than `MAX_CHUNKS` chunks (longer
+/// ones past that), so the work list's bound for 500 triangles each spanning a 4096² grid is
+/// 500 × 16 384 entries (66 MB), which a storage binding of WebGPU's default 128 MiB holds.
+/// Before, each counted 4.2 M chunks of 4 (16.8 GB in all) and the mesh was refused. The 500
+/// lie past the grid's last layer (the bound cannot know that; the GPU walks nothing for them);
+/// a square of two more, on layer 1, is walked in chunks of 512 columns, and every voxel of
+/// that layer is set and none of layer 0.
+#[test]
+fn resident_giant_triangles_get_a_short_work_list() {
+    use fieldkit::voxelize::GpuMesh;
+    use glam::DMat4;
+    let ctx = Context::shared();
+    let n = 4096.0;
+    let (mut positions, mut triangles) = square_on_layer_one();
+    for k in 0..500u32 {
+        let z = 2.5 + k as f64 * 0.001;
+        let at = positions.len() as u32;
+        positions.extend([
+            DVec3::new(0.0, 0.0, z),
+            DVec3::new(n, 0.0, z),
+            DVec3::new(0.0, n, z),
+        ]);
+        triangles.push([at, at + 1, at + 2]);
+    }
+    let m = mesh(positions, triangles);
+    let grid = unit_grid([4096, 4096, 2]);
+    let v = Voxelizer::new(&ctx.device).unwrap();
+    let resident = GpuMesh::upload(&ctx.device, &m).unwrap();
+    let mut enc = ctx.encoder("giant triangles");
+    let s = v
+        .encode_surface_placed(
+            &ctx.device,
+            &mut enc,
+            &[(&resident, DMat4::IDENTITY)],
+            &grid,
+            Separation::Conservative,
+        )
+        .unwrap();
+    ctx.submit_and_wait("giant triangles", enc).unwrap();
+    check_layer_one(&ctx, &s);
 }
 
 /// Many triangles each as large as the grid: their chunk list would need gigabytes. The host

@@ -557,16 +557,15 @@ fn box_columns(t: &[Vec4], size: [u32; 3]) -> u64 {
     (x * y).max(y * z).max(z * x)
 }
 
-/// Chunks of [`CHUNK`] columns the heavy triangles of `local` can need at most (see
-/// [`box_columns`]). The GPU's lister gives a giant triangle longer chunks (at most 16 384 per
-/// triangle), so it lists no more than this.
+/// Chunks the heavy triangles of `local` can need at most in the GPU's work list (see
+/// [`box_columns`]): [`CHUNK`] columns each, but no more than [`MAX_CHUNKS`] for a triangle.
 pub fn heavy_chunk_bound(local: &GridMesh, size: [u32; 3]) -> u32 {
     let total: u64 = local
         .vertices
         .chunks(3)
         .map(|t| box_columns(t, size))
         .filter(|&most| most > LIGHT as u64)
-        .map(|most| most.div_ceil(CHUNK as u64))
+        .map(most_chunks)
         .sum();
     total.min(u32::MAX as u64) as u32
 }
@@ -697,6 +696,18 @@ impl SurfacePipelines {
 
 /// Columns per chunk of a heavy triangle (the shader's `CHUNK`).
 pub const CHUNK: u32 = 4;
+
+/// Most chunks the GPU lists for one triangle (`fieldkit::triangle_box`'s `MAX_CHUNKS`): a
+/// triangle of more than `MAX_CHUNKS` × [`CHUNK`] columns gets longer chunks, so a mesh of a
+/// few giant triangles (a ground plane, walls) needs a short work list at any grid.
+pub const MAX_CHUNKS: u32 = 16384;
+
+/// Chunks the GPU's work list can need for a triangle of at most `columns` columns: chunks of
+/// [`CHUNK`], and at most [`MAX_CHUNKS`] (the shader's `chunk_columns` keeps a larger triangle
+/// to that many, and never lists more for fewer columns).
+fn most_chunks(columns: u64) -> u64 {
+    columns.div_ceil(CHUNK as u64).min(MAX_CHUNKS as u64)
+}
 
 /// How `encode_surface`/`encode_solid` cut the triangles into threads: a triangle whose box
 /// has at most `light` columns is one thread, a heavier one is cut into chunks of `chunk`
@@ -1390,5 +1401,22 @@ impl Voxelizer {
             occupancy,
             degenerate: local.degenerate,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    /// The host's copies of the shader's constants agree with `fieldkit::triangle_box`.
+    #[test]
+    fn constants_match_the_shader() {
+        let src = include_str!("../../fieldkit-wesl/shaders/triangle_box.wesl");
+        for (name, value) in [
+            ("LIGHT", super::LIGHT),
+            ("CHUNK", super::CHUNK),
+            ("MAX_CHUNKS", super::MAX_CHUNKS),
+        ] {
+            let line = format!("const {name}: u32 = {value}u;");
+            assert!(src.contains(&line), "triangle_box.wesl lacks `{line}`");
+        }
     }
 }

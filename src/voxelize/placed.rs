@@ -5,8 +5,8 @@
 use glam::{DMat4, DVec3, Vec4};
 
 use super::{
-    CHUNK, Error, Grid, LIGHT, Mesh, Separation, Surface, SurfaceRun, Voxelizer, check_grid,
-    check_model, invalid, zeroed_bitset,
+    CHUNK, Error, Grid, LIGHT, MAX_CHUNKS, Mesh, Separation, Surface, SurfaceRun, Voxelizer,
+    check_grid, check_model, invalid, most_chunks, zeroed_bitset,
 };
 use crate::gpu::Record;
 
@@ -151,16 +151,23 @@ impl GpuMesh {
     /// diagonal d spans at most stretch · d voxels along each axis, so at most
     /// (stretch · d + 3)² columns (one more each way for closed boxes and one for rounding),
     /// and it is heavy only when that exceeds `LIGHT`.
+    ///
+    /// No triangle lists more than [`MAX_CHUNKS`]: those whose bound is larger (the first
+    /// `giant`, where (stretch · d + 3)² / CHUNK passes it) count that many.
     fn chunk_bound(&self, stretch: f64, size: [u32; 3]) -> u64 {
         // (stretch · d + 3)² > LIGHT = 16 only when stretch · d > 1.
         let heavy = self.diameters.partition_point(|&d| stretch * d > 1.0);
-        let k = heavy as f64;
-        let columns =
-            stretch * stretch * self.squares[heavy] + 6.0 * stretch * self.sums[heavy] + 9.0 * k;
-        let by_size = (columns / CHUNK as f64 + k).ceil();
+        let cap = MAX_CHUNKS as f64;
+        let giant = self.diameters[..heavy]
+            .partition_point(|&d| (stretch * d + 3.0).powi(2) / CHUNK as f64 > cap);
+        let k = (heavy - giant) as f64;
+        let columns = stretch * stretch * (self.squares[heavy] - self.squares[giant])
+            + 6.0 * stretch * (self.sums[heavy] - self.sums[giant])
+            + 9.0 * k;
+        let by_size = (columns / CHUNK as f64 + k + giant as f64 * cap).ceil();
         let [x, y, z] = size.map(|n| n as u64);
         let most = (x * y).max(y * z).max(z * x);
-        let by_grid = heavy as u64 * most.div_ceil(CHUNK as u64);
+        let by_grid = heavy as u64 * most_chunks(most);
         if by_size.is_finite() {
             (by_size as u64).min(by_grid)
         } else {
