@@ -10,7 +10,7 @@ use super::{
 };
 use crate::gpu::Record;
 
-// `GpuMesh::chunk_bound`'s threshold assumes LIGHT = 16.
+// `ChunkBound::chunks`'s threshold assumes LIGHT = 16.
 const _: () = assert!(LIGHT == 16);
 
 /// A mesh's triangles in a GPU buffer, ready for [`Voxelizer::encode_surface_placed`].
@@ -48,12 +48,80 @@ pub struct GpuMesh {
     anchor: DVec3,
     /// Largest distance of a vertex from `anchor`.
     radius: f64,
-    /// Each kept triangle's box diagonal, largest first, and their running sums and sums of
-    /// squares: enough to bound the heavy triangles' work under any matrix without a pass over
-    /// the triangles.
+    bound: ChunkBound,
+}
+
+/// Each kept triangle's box diagonal, largest first, and their running sums and sums of
+/// squares: enough to bound the heavy triangles' work under any matrix without a pass over the
+/// triangles.
+struct ChunkBound {
     diameters: Vec<f64>,
     sums: Vec<f64>,
     squares: Vec<f64>,
+}
+
+/// The diagonal of the box of a triangle as the GPU stores it (f32, relative to the anchor).
+fn box_diagonal(v: &[glam::Vec3; 3]) -> f64 {
+    let lo = v[0].min(v[1]).min(v[2]).as_dvec3();
+    let hi = v[0].max(v[1]).max(v[2]).as_dvec3();
+    (hi - lo).length()
+}
+
+/// The largest and second-largest stretch of `linear` along the grid's axes (the lengths of
+/// its rows): a segment of length d spans at most row_i · d voxels along axis i.
+fn axis_stretches(linear: glam::DMat3) -> (f64, f64) {
+    let mut rows = [0, 1, 2].map(|i| linear.row(i).length());
+    rows.sort_by(|a, b| b.total_cmp(a));
+    (rows[0], rows[1])
+}
+
+impl ChunkBound {
+    fn new(mut diameters: Vec<f64>) -> Self {
+        diameters.sort_by(|a, b| b.total_cmp(a));
+        let running = |f: fn(f64) -> f64| -> Vec<f64> {
+            std::iter::once(0.0)
+                .chain(diameters.iter().scan(0.0, |acc, &d| {
+                    *acc += f(d);
+                    Some(*acc)
+                }))
+                .collect()
+        };
+        let (sums, squares) = (running(|d| d), running(|d| d * d));
+        Self {
+            diameters,
+            sums,
+            squares,
+        }
+    }
+
+    /// Work-list entries the heavy triangles can need when moved into a grid of `size` by a
+    /// matrix whose rows' largest lengths are `a` ≥ `b` (`axis_stretches`): a triangle of box
+    /// diagonal d spans at most a · d and b · d voxels along two axes, so its box's largest face
+    /// has at most (a · d + 3)(b · d + 3) columns (one more each way for closed boxes and one
+    /// for rounding), and it is heavy only when that exceeds `LIGHT`.
+    ///
+    /// No triangle lists more than [`MAX_CHUNKS`]: those whose bound is larger (the first
+    /// `giant`) count that many.
+    fn chunks(&self, a: f64, b: f64, size: [u32; 3]) -> u64 {
+        // (a · d + 3)(b · d + 3) ≤ (a · d + 3)² ≤ LIGHT = 16 when a · d ≤ 1.
+        let heavy = self.diameters.partition_point(|&d| a * d > 1.0);
+        let cap = MAX_CHUNKS as f64;
+        let giant = self.diameters[..heavy]
+            .partition_point(|&d| (a * d + 3.0) * (b * d + 3.0) / CHUNK as f64 > cap);
+        let k = (heavy - giant) as f64;
+        let columns = a * b * (self.squares[heavy] - self.squares[giant])
+            + 3.0 * (a + b) * (self.sums[heavy] - self.sums[giant])
+            + 9.0 * k;
+        let by_size = (columns / CHUNK as f64 + k + giant as f64 * cap).ceil();
+        let [x, y, z] = size.map(|n| n as u64);
+        let most = (x * y).max(y * z).max(z * x);
+        let by_grid = heavy as u64 * most_chunks(most);
+        if by_size.is_finite() {
+            (by_size as u64).min(by_grid)
+        } else {
+            by_grid
+        }
+    }
 }
 
 impl GpuMesh {
@@ -84,9 +152,7 @@ impl GpuMesh {
             }
             let v = p.map(|q| q.as_vec3());
             // The f32 vertices are the triangle the GPU sees: measure those.
-            let box_lo = v[0].min(v[1]).min(v[2]).as_dvec3();
-            let box_hi = v[0].max(v[1]).max(v[2]).as_dvec3();
-            diameters.push((box_hi - box_lo).length());
+            diameters.push(box_diagonal(&v));
             radius = v.iter().fold(radius, |r, q| r.max(q.as_dvec3().length()));
             vertices.extend(v.iter().map(|q| q.extend(0.0)));
         }
@@ -97,16 +163,6 @@ impl GpuMesh {
             )));
         }
         let count = (vertices.len() / 3) as u32;
-        diameters.sort_by(|a, b| b.total_cmp(a));
-        let running = |f: fn(f64) -> f64| -> Vec<f64> {
-            std::iter::once(0.0)
-                .chain(diameters.iter().scan(0.0, |acc, &d| {
-                    *acc += f(d);
-                    Some(*acc)
-                }))
-                .collect()
-        };
-        let (sums, squares) = (running(|d| d), running(|d| d * d));
         // One padding vertex keeps the buffer non-empty when every triangle was degenerate.
         if vertices.is_empty() {
             vertices.push(Vec4::ZERO);
@@ -123,9 +179,7 @@ impl GpuMesh {
             degenerate,
             anchor,
             radius,
-            diameters,
-            sums,
-            squares,
+            bound: ChunkBound::new(diameters),
         })
     }
 
@@ -144,35 +198,6 @@ impl GpuMesh {
     /// to moving instances, say).
     pub fn bounding_sphere(&self) -> (DVec3, f64) {
         (self.anchor, self.radius)
-    }
-
-    /// Work-list entries the heavy triangles can need when the triangles are stretched by at
-    /// most `stretch` (grid voxels per stored unit) into a grid of `size`: a triangle of box
-    /// diagonal d spans at most stretch · d voxels along each axis, so at most
-    /// (stretch · d + 3)² columns (one more each way for closed boxes and one for rounding),
-    /// and it is heavy only when that exceeds `LIGHT`.
-    ///
-    /// No triangle lists more than [`MAX_CHUNKS`]: those whose bound is larger (the first
-    /// `giant`, where (stretch · d + 3)² / CHUNK passes it) count that many.
-    fn chunk_bound(&self, stretch: f64, size: [u32; 3]) -> u64 {
-        // (stretch · d + 3)² > LIGHT = 16 only when stretch · d > 1.
-        let heavy = self.diameters.partition_point(|&d| stretch * d > 1.0);
-        let cap = MAX_CHUNKS as f64;
-        let giant = self.diameters[..heavy]
-            .partition_point(|&d| (stretch * d + 3.0).powi(2) / CHUNK as f64 > cap);
-        let k = (heavy - giant) as f64;
-        let columns = stretch * stretch * (self.squares[heavy] - self.squares[giant])
-            + 6.0 * stretch * (self.sums[heavy] - self.sums[giant])
-            + 9.0 * k;
-        let by_size = (columns / CHUNK as f64 + k + giant as f64 * cap).ceil();
-        let [x, y, z] = size.map(|n| n as u64);
-        let most = (x * y).max(y * z).max(z * x);
-        let by_grid = heavy as u64 * most_chunks(most);
-        if by_size.is_finite() {
-            (by_size as u64).min(by_grid)
-        } else {
-            by_grid
-        }
     }
 }
 
@@ -206,11 +231,7 @@ impl Voxelizer {
             })?;
             let to_grid = grid_from_world * model * DMat4::from_translation(mesh.anchor);
             let linear = glam::DMat3::from_mat4(to_grid);
-            // Frobenius norm: at least the largest stretch of any direction.
-            let stretch = (linear.x_axis.length_squared()
-                + linear.y_axis.length_squared()
-                + linear.z_axis.length_squared())
-            .sqrt();
+            let (a, b) = axis_stretches(linear);
             let shift = to_grid.w_axis.truncate();
             // How far f32 rounding can move a vertex, in voxels: the stored position (half an
             // ulp), the matrix's entries (half an ulp each) and the product's three multiplies
@@ -229,13 +250,13 @@ impl Voxelizer {
                      more than f32 can hold"
                 )));
             }
-            let capacity =
-                u32::try_from(mesh.chunk_bound(stretch, grid.size)).map_err(|_| Error::Size {
-                    stage: super::STAGE,
-                    what: "heavy-triangle work list entries of one placed mesh",
-                    got: mesh.chunk_bound(stretch, grid.size),
-                    max: u32::MAX as u64,
-                })?;
+            let entries = mesh.bound.chunks(a, b, grid.size);
+            let capacity = u32::try_from(entries).map_err(|_| Error::Size {
+                stage: super::STAGE,
+                what: "heavy-triangle work list entries of one placed mesh",
+                got: entries,
+                max: u32::MAX as u64,
+            })?;
             runs.push((mesh, placed, capacity, moved as f32));
         }
         let occupancy = zeroed_bitset(device, grid)?;
@@ -264,5 +285,96 @@ impl Voxelizer {
             occupancy,
             degenerate: parts.iter().map(|(m, _)| m.degenerate).sum(),
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{ChunkBound, axis_stretches, box_diagonal};
+    use crate::voxelize::{GridMesh, heavy_chunk_bound};
+    use glam::{DMat3, DMat4, DVec3, EulerRot, Vec3};
+    use proptest::prelude::*;
+
+    /// `ChunkBound::chunks` for `stored` (f32 triangles, as `GpuMesh` keeps them) moved by
+    /// `to_grid`, and the host's count for the same triangles moved in f64
+    /// (`heavy_chunk_bound`: each moved triangle's box, itself at least what the GPU lists).
+    fn bound_and_count(stored: &[[Vec3; 3]], to_grid: DMat4, size: [u32; 3]) -> (u64, u64) {
+        let bound = ChunkBound::new(stored.iter().map(box_diagonal).collect());
+        let (a, b) = axis_stretches(DMat3::from_mat4(to_grid));
+        let vertices = stored
+            .iter()
+            .flatten()
+            .map(|v| to_grid.transform_point3(v.as_dvec3()).as_vec3().extend(0.0))
+            .collect();
+        let local = GridMesh {
+            vertices,
+            degenerate: 0,
+            source: (0..stored.len() as u32).collect(),
+        };
+        (
+            bound.chunks(a, b, size),
+            heavy_chunk_bound(&local, size) as u64,
+        )
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 2000, ..ProptestConfig::default() })]
+
+        /// The bound holds whatever the matrix: rotations, shears, scales from 1/20 to 40
+        /// voxels per unit along each axis, mirrors, shifts in and out of grids of any size, triangles
+        /// from specks to larger than the grid.
+        #[test]
+        fn the_bound_holds_under_any_matrix(
+            triangles in prop::collection::vec(prop::array::uniform9(-20.0f32..20.0), 1..30),
+            scale in prop::array::uniform3(0.05f64..40.0),
+            mirror in prop::array::uniform3(any::<bool>()),
+            angles in prop::array::uniform3(-3.2f64..3.2),
+            shear in prop::array::uniform3(-4.0f64..4.0),
+            shift in prop::array::uniform3(-100.0f64..400.0),
+            size in prop::array::uniform3(1u32..400),
+        ) {
+            let stored: Vec<[Vec3; 3]> = triangles
+                .iter()
+                .map(|t| [0, 1, 2].map(|i| Vec3::new(t[3 * i], t[3 * i + 1], t[3 * i + 2])))
+                .collect();
+            let signs = DVec3::from_array(mirror.map(|m| if m { -1.0 } else { 1.0 }));
+            // A shear as well, so rows can be far from orthogonal.
+            let shear = DMat3::from_cols(
+                DVec3::X,
+                DVec3::new(shear[0], 1.0, 0.0),
+                DVec3::new(shear[1], shear[2], 1.0),
+            );
+            let linear = DMat3::from_euler(EulerRot::XYZ, angles[0], angles[1], angles[2])
+                * shear
+                * DMat3::from_diagonal(DVec3::from_array(scale) * signs);
+            let to_grid = DMat4::from_mat3_translation(linear, DVec3::from_array(shift));
+            let (bound, count) = bound_and_count(&stored, to_grid, size);
+            prop_assert!(bound >= count, "bound {bound} < {count} chunks");
+        }
+    }
+
+    /// Not loose where it need not be: a flat square in 64 × 64 tiles, unmoved. A tile's
+    /// triangles have boxes of up to 66² columns (closed boxes reach a voxel past each integer
+    /// edge), 138 368 chunks for the 128; the bound counts (64√2 + 3)² / 4 + 1 = 2 187 each,
+    /// 279 938 (2.02 times). The Frobenius norm of the matrix as the stretch of both sides, as
+    /// before 2026-11-26 (seventh session), counted about 6 times.
+    #[test]
+    fn the_bound_is_within_about_twice_the_count_unmoved() {
+        let mut stored = Vec::new();
+        for i in 0..8 {
+            for j in 0..8 {
+                let (x, y) = (64.0 * i as f32, 64.0 * j as f32);
+                let c = [(0.0, 0.0), (64.0, 0.0), (64.0, 64.0), (0.0, 64.0)]
+                    .map(|(u, v)| Vec3::new(x + u, y + v, 1.5));
+                stored.push([c[0], c[1], c[2]]);
+                stored.push([c[0], c[2], c[3]]);
+            }
+        }
+        let (bound, count) = bound_and_count(&stored, DMat4::IDENTITY, [512, 512, 4]);
+        assert!(count > 0 && bound >= count, "{bound} against {count}");
+        assert!(
+            (bound as f64) < 2.05 * count as f64,
+            "{bound} against {count} chunks"
+        );
     }
 }
