@@ -318,6 +318,58 @@ fn single_triangle_far_mesh_and_node_boundaries() {
     assert!(!tree.occupied([14, 30, 30]) && !tree.occupied([17, 30, 30]));
 }
 
+/// A triangle whose box face holds 2101² columns (1.1 M chunks of 4, past the host's budget of
+/// 2^20): the host lists it in chunks of 5 columns, and the fragment pass walks each chunk's 5
+/// (the length the triangle carries; it failed when it walked 4): the fragments are the voxels
+/// whose box meets the triangle, each once.
+#[test]
+fn a_giant_triangle_gives_every_fragment() {
+    let ctx = Context::shared();
+    // Legs at half a voxel, the hypotenuse on x + y = 2100.5: no edge through a voxel corner.
+    let giant = Mesh {
+        positions: vec![
+            DVec3::new(0.5, 0.5, 1.5),
+            DVec3::new(2100.0, 0.5, 1.5),
+            DVec3::new(0.5, 2100.0, 1.5),
+        ],
+        triangles: vec![[0, 1, 2]],
+        ..Mesh::default()
+    };
+    let grid = unit_grid([2104, 2104, 2]);
+    // Layer 1's voxels (x, y) with x + y ≤ 2100: those whose closed box meets the triangle.
+    let want: Vec<bool> = (0..2 * 2104 * 2104usize)
+        .map(|i| {
+            let (x, y, z) = (i % 2104, i / 2104 % 2104, i / (2104 * 2104));
+            z == 1 && x + y <= 2100
+        })
+        .collect();
+    let voxelizer = Voxelizer::new(&ctx.device).unwrap();
+    let mut enc = ctx.encoder("giant fragments");
+    let fragments = voxelizer
+        .encode_fragments(
+            &ctx.device,
+            &mut enc,
+            &giant,
+            &grid,
+            Separation::Conservative,
+            None,
+        )
+        .unwrap();
+    ctx.submit_and_wait("giant fragments", enc).unwrap();
+    let list = fragments.read(&ctx.device, &ctx.queue).wait(&ctx).unwrap();
+    let mut got = vec![false; want.len()];
+    for [x, y, z] in &list {
+        got[((z * 2104 + y) * 2104 + x) as usize] = true;
+    }
+    let occupied = want.iter().filter(|&&o| o).count();
+    let wrong = got.iter().zip(&want).filter(|(a, b)| a != b).count();
+    assert_eq!(
+        wrong, 0,
+        "{wrong} of {occupied} voxels differ from the triangle's"
+    );
+    assert_eq!(list.len(), occupied, "a voxel listed twice");
+}
+
 /// A pool too small is a typed error naming how many entries the levels built need; a
 /// fragment list too short, one naming the part's exact count. With those sizes, the tree
 /// builds, and a tree of many fragment lists (the split a device's bindings force) is the tree

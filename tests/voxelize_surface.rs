@@ -639,32 +639,49 @@ fn check_layer_one(ctx: &Context, s: &fieldkit::voxelize::Surface) {
     assert_eq!((missing, stray), (0, 0), "layer 1 missing, layer 0 set");
 }
 
-/// More threads than one dispatch row holds (65 535 workgroups of 64): two triangles covering a
-/// 4096² square at z = 1.5 list 2 × 4096² / 4 chunks, so `surface_listed` runs in two rows of
-/// workgroups. The plane lies inside voxel layer 1, so exactly that layer is set.
+/// More threads than one dispatch row holds (65 535 workgroups of 64): 257 copies of a right
+/// triangle whose box face holds 256² columns list 257 × 16 384 = 4.21 M chunks of 4 columns
+/// (a box face of at most 65 536 columns keeps chunks of 4), so `surface_listed` runs in two
+/// rows of workgroups. The copies set the voxels of one: every one against the SAT.
 #[test]
 fn more_chunks_than_one_dispatch_row_holds() {
     let ctx = Context::shared();
-    let (positions, triangles) = square_on_layer_one();
-    let m = mesh(positions, triangles);
-    // The host lists every chunk of 4 (`MAX_CHUNKS` bounds only the GPU's work list).
-    let grid = unit_grid([4096, 4096, 2]);
+    // Legs at half a voxel and the hypotenuse on x + y = 255.5: no edge through a voxel corner.
+    let one = [
+        DVec3::new(0.5, 0.5, 1.5),
+        DVec3::new(255.0, 0.5, 1.5),
+        DVec3::new(0.5, 255.0, 1.5),
+    ];
+    let copies = 257u32;
+    let m = mesh(
+        (0..copies).flat_map(|_| one).collect(),
+        (0..copies).map(|k| [3 * k, 3 * k + 1, 3 * k + 2]).collect(),
+    );
+    let grid = unit_grid([256, 256, 2]);
+    let chunks = fieldkit::voxelize::heavy_chunk_bound(&m.to_grid(&grid).unwrap(), grid.size);
+    assert_eq!(chunks as u64, copies as u64 * 256 * 256 / 4);
+    assert!(chunks > 65_535 * 64, "{chunks} chunks fit one row");
     let v = Voxelizer::new(&ctx.device).unwrap();
     let mut enc = ctx.encoder("voxelize");
     let s = v.encode_surface(&ctx.device, &mut enc, &m, &grid).unwrap();
     ctx.submit_and_wait("voxelize", enc).unwrap();
-    check_layer_one(&ctx, &s);
+    let gpu = s.read(&ctx.device, &ctx.queue).wait(&ctx).unwrap();
+    let (misses, extras, _) = check_against_sat(&gpu, &mesh(one.to_vec(), vec![[0, 1, 2]]), &grid);
+    println!("{misses} missed, {extras} extra (each within 1e-3 voxels of the triangle)");
+    assert_eq!(misses, 0, "missed voxels");
+    assert!(gpu.iter().filter(|&&o| o).count() > 30_000);
 }
 
-/// A resident mesh of giant triangles: no triangle lists more than `MAX_CHUNKS` chunks (longer
-/// ones past that), so the work list's bound for 500 triangles each spanning a 4096² grid is
-/// 500 × 16 384 entries (66 MB), which a storage binding of WebGPU's default 128 MiB holds.
-/// Before, each counted 4.2 M chunks of 4 (16.8 GB in all) and the mesh was refused. The 500
-/// lie past the grid's last layer (the bound cannot know that; the GPU walks nothing for them);
-/// a square of two more, on layer 1, is walked in chunks of 512 columns, and every voxel of
-/// that layer is set and none of layer 0.
+/// Giant triangles are listed in at most `MAX_CHUNKS` chunks each (longer ones past that), on
+/// the host (`encode_surface`) as on the GPU (`encode_surface_placed` with a resident mesh), so
+/// the list for 500 triangles each spanning a 4096² grid holds 500 × 16 384 entries (66 MB),
+/// which a storage binding of WebGPU's default 128 MiB holds. Before, each counted 4.2 M chunks
+/// of 4 (16.8 GB in all) and the mesh was refused by both. The 500 lie past the grid's last
+/// layer (the bounds do not look at that; the GPU walks nothing for them); a square of two
+/// more, on layer 1, is walked in chunks of 1024 (host) or 512 (GPU) columns, and every voxel
+/// of that layer is set and none of layer 0.
 #[test]
-fn resident_giant_triangles_get_a_short_work_list() {
+fn giant_triangles_get_a_short_work_list() {
     use fieldkit::voxelize::GpuMesh;
     use glam::DMat4;
     let ctx = Context::shared();
@@ -683,8 +700,13 @@ fn resident_giant_triangles_get_a_short_work_list() {
     let m = mesh(positions, triangles);
     let grid = unit_grid([4096, 4096, 2]);
     let v = Voxelizer::new(&ctx.device).unwrap();
+    let mut enc = ctx.encoder("giant triangles, host-listed");
+    let s = v.encode_surface(&ctx.device, &mut enc, &m, &grid).unwrap();
+    ctx.submit_and_wait("giant triangles, host-listed", enc)
+        .unwrap();
+    check_layer_one(&ctx, &s);
     let resident = GpuMesh::upload(&ctx.device, &m).unwrap();
-    let mut enc = ctx.encoder("giant triangles");
+    let mut enc = ctx.encoder("giant triangles, resident");
     let s = v
         .encode_surface_placed(
             &ctx.device,
@@ -694,20 +716,58 @@ fn resident_giant_triangles_get_a_short_work_list() {
             Separation::Conservative,
         )
         .unwrap();
-    ctx.submit_and_wait("giant triangles", enc).unwrap();
+    ctx.submit_and_wait("giant triangles, resident", enc)
+        .unwrap();
     check_layer_one(&ctx, &s);
 }
 
-/// Many triangles each as large as the grid: their chunk list would need gigabytes. The host
-/// sums the chunks before it allocates them and gives a typed error instead.
+/// A triangle whose box face holds 2101² columns (1.1 M chunks of 4, past the host's list
+/// budget of 2^20 entries) is listed in chunks of 5 columns, which `surface_listed` walks in
+/// full: exactly the voxels whose box meets it.
+#[test]
+fn a_triangle_past_the_list_budget_is_walked_in_longer_chunks() {
+    let ctx = Context::shared();
+    // Legs at half a voxel, the hypotenuse on x + y = 2100.5: no edge through a voxel corner.
+    let m = mesh(
+        vec![
+            DVec3::new(0.5, 0.5, 1.5),
+            DVec3::new(2100.0, 0.5, 1.5),
+            DVec3::new(0.5, 2100.0, 1.5),
+        ],
+        vec![[0, 1, 2]],
+    );
+    let grid = unit_grid([2104, 2104, 2]);
+    let v = Voxelizer::new(&ctx.device).unwrap();
+    let mut enc = ctx.encoder("voxelize");
+    let s = v.encode_surface(&ctx.device, &mut enc, &m, &grid).unwrap();
+    ctx.submit_and_wait("voxelize", enc).unwrap();
+    let gpu = s.read(&ctx.device, &ctx.queue).wait(&ctx).unwrap();
+    // Layer 1's voxels (x, y) with x + y ≤ 2100.
+    let wrong = gpu
+        .iter()
+        .enumerate()
+        .filter(|&(i, &g)| {
+            let (x, y, z) = (i % 2104, i / 2104 % 2104, i / (2104 * 2104));
+            g != (z == 1 && x + y <= 2100)
+        })
+        .count();
+    assert_eq!(wrong, 0, "{wrong} voxels wrong");
+}
+
+/// More giant triangles than the device's storage binding holds chunks for (each lists
+/// `MAX_CHUNKS` of 8 bytes): the host sums the chunks before it allocates them and gives a
+/// typed error instead.
 #[test]
 fn a_chunk_list_too_large_is_refused_before_it_is_made() {
+    use fieldkit::voxelize::MAX_CHUNKS;
     let ctx = Context::shared();
+    let limit = ctx.device.limits().max_storage_buffer_binding_size;
+    let count = (limit / (8 * MAX_CHUNKS as u64) + 1) as u32;
     let n = 4096.0;
     let mut positions = Vec::new();
     let mut triangles = Vec::new();
-    for k in 0..100u32 {
-        let z = 0.25 + k as f64 * 0.01;
+    for k in 0..count {
+        let z = 0.25 + k as f64 * (1.0 / count as f64);
         positions.extend([
             DVec3::new(0.0, 0.0, z),
             DVec3::new(n, 0.0, z),
@@ -721,10 +781,10 @@ fn a_chunk_list_too_large_is_refused_before_it_is_made() {
     match v.encode_surface(&ctx.device, &mut enc, &m, &unit_grid([4096, 4096, 2])) {
         Err(Error::Size { what, got, max, .. }) => {
             assert_eq!(what, "heavy-triangle chunk list bytes");
-            assert!(got > max, "{got} ≤ {max}");
+            assert_eq!((got, max), (count as u64 * 8 * MAX_CHUNKS as u64, limit));
         }
         Err(e) => panic!("another error: {e}"),
-        Ok(_) => panic!("a chunk list of gigabytes was accepted"),
+        Ok(_) => panic!("a chunk list past the binding's {limit} bytes was accepted"),
     }
 }
 

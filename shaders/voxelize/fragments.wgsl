@@ -10,7 +10,7 @@
 // thread walks again to write its voxels there. `total` counts every fragment, also those past
 // `capacity` (which are dropped), so a list too short is sized exactly on the next try.
 
-import fieldkit::triangle_box::{CHUNK, Setup, column, overlaps, setup};
+import fieldkit::triangle_box::{Setup, column, listed_columns, overlaps, setup};
 
 struct FragmentParams {
     grid: vec3<u32>,
@@ -34,7 +34,8 @@ override SIX_SEPARATING: bool = false;
 override TRIANGLE_IDS: bool = false;
 
 @group(0) @binding(0) var<uniform> params: FragmentParams;
-// Three grid-local vertices per triangle (w unused), light triangles first.
+// Three grid-local vertices per triangle, light triangles first (a heavy one's first vertex
+// carries its chunks' columns in w: `listed_columns`).
 @group(0) @binding(1) var<storage, read> triangles: array<vec4<f32>>;
 // The heavy triangles' chunks: (triangle, first column).
 @group(0) @binding(2) var<storage, read> listed: array<vec2<u32>>;
@@ -94,7 +95,7 @@ fn fragments_listed(@builtin(global_invocation_id) id: vec3<u32>,
         t = item.x;
         s = load(item.x);
         first = item.y;
-        columns = CHUNK;
+        columns = listed_columns(triangles[3u * item.x]);
     }
     var n = 0u;
     if columns > 0u {

@@ -16,7 +16,9 @@
 // SIX_SEPARATING gives the thinner voxelization of the same paper, through which no
 // 6-connected path gets; 26-connected paths can.
 
-import fieldkit::triangle_box::{LIGHT, Setup, chunk_columns, column, overlaps, setup};
+import fieldkit::triangle_box::{
+    LIGHT, Setup, chunk_columns, column, listed_columns, overlaps, setup,
+};
 import package::shared::scan::{scan_first, scan_partial};
 
 struct SurfaceParams {
@@ -32,8 +34,6 @@ struct SurfaceParams {
     moved: f32,
     // Entries the work list holds (the host sizes it for every chunk there can be).
     capacity: u32,
-    // Columns per listed chunk (`surface_listed`; the GPU's work list uses `chunk_columns`).
-    chunk: u32,
 }
 
 override SIX_SEPARATING: bool = false;
@@ -41,7 +41,8 @@ override SIX_SEPARATING: bool = false;
 override LISTED_WORKGROUP: u32 = 64u;
 
 @group(0) @binding(0) var<uniform> params: SurfaceParams;
-// Three vertices per triangle, in the coordinates `to_grid` moves (w unused).
+// Three vertices per triangle, in the coordinates `to_grid` moves (w: see `listed`; `vertex`
+// ignores it).
 @group(0) @binding(1) var<storage, read> triangles: array<vec4<f32>>;
 // Occupancy, one bit per voxel, x fastest: voxel (x, y, z) is bit i % 32 of word i / 32 with
 // i = (z · ny + y) · nx + x.
@@ -54,7 +55,8 @@ override LISTED_WORKGROUP: u32 = 64u;
 // list): the host creates them as (0, 1, 1) and `surface` raises them as it lists chunks, so
 // no pass of its own writes them. Past 65535 workgroups they run in rows of 65535.
 @group(0) @binding(5) var<storage, read_write> heavy_dispatch: array<atomic<u32>, 3>;
-// `surface_listed`: the heavy triangles' chunks, listed by the host.
+// `surface_listed`: the heavy triangles' chunks, listed by the host. A listed triangle's first
+// vertex carries its chunks' columns in w (`listed_columns`).
 @group(0) @binding(6) var<storage, read> listed: array<vec2<u32>>;
 
 fn set_voxel(p: vec3<i32>) {
@@ -191,6 +193,6 @@ fn surface_listed(@builtin(global_invocation_id) id: vec3<u32>,
         voxelize_columns(s, 0u, s.columns);
     } else if i - params.count < params.capacity {
         let item = listed[i - params.count];
-        voxelize_columns(load(item.x), item.y, params.chunk);
+        voxelize_columns(load(item.x), item.y, listed_columns(triangles[3u * item.x]));
     }
 }

@@ -4,7 +4,7 @@
 
 use std::sync::OnceLock;
 
-use super::{CHUNK, Grid, GridMesh, Listed, Mesh, SLACK, Separation, Voxelizer, box_columns};
+use super::{Grid, GridMesh, Listed, Mesh, SLACK, Separation, Voxelizer, box_columns};
 use crate::bind::ComputePipeline;
 use crate::error::Error;
 use crate::gpu::{Readback, Record, uniform_buffer as uniform};
@@ -230,13 +230,14 @@ impl Voxelizer {
         let budget = capacity.map_or(most, |c| c as u64);
         let mut parts: Vec<(u32, u32, u64)> = Vec::new();
         let (mut first, mut sum) = (0u32, 0u64);
-        for i in 0..threads as u32 {
-            let estimate = if i < listed.light {
-                let t = listed.order[i as usize] as usize;
-                4 * box_columns(&local.vertices[3 * t..3 * t + 3], grid.size)
-            } else {
-                4 * CHUNK as u64
-            };
+        let light = listed.order[..listed.light as usize].iter().map(|&t| {
+            let t = t as usize;
+            4 * box_columns(&local.vertices[3 * t..3 * t + 3], grid.size)
+        });
+        let heavy = listed.runs.iter().flat_map(|&(chunks, columns)| {
+            std::iter::repeat_n(4 * columns as u64, chunks as usize)
+        });
+        for (i, estimate) in (0u32..).zip(light.chain(heavy)) {
             if i > first && sum + estimate > budget {
                 parts.push((first, i - first, sum));
                 (first, sum) = (i, 0);

@@ -570,10 +570,52 @@ pub fn heavy_chunk_bound(local: &GridMesh, size: [u32; 3]) -> u32 {
     total.min(u32::MAX as u64) as u32
 }
 
+/// Chunks the host lists for `encode_surface`/`encode_solid` (8 MiB of entries) before the
+/// heaviest triangles get chunks longer than the listing's: enough threads to fill a large GPU
+/// many times, and a short upload. Measured on the H100 (docs/voxelize.md): a square of two
+/// triangles at 4096² took 0.52 ms in chunks of 4 columns (8.4 M entries, 67 MB), 0.31 in
+/// chunks of 32 (1 M entries); a thread walks about 0.65 µs per column, so chunks far longer
+/// (1024 columns: 0.76 ms) leave the GPU waiting on a few threads.
+pub const LIST_BUDGET: u64 = 1 << 20;
+
+/// The most chunks a heavy triangle may list, given each heavy triangle's count in chunks of
+/// the listing's length: no cap while they all fit [`LIST_BUDGET`], else the largest cap under
+/// which they do (the heaviest triangles shortened first), but never below [`MAX_CHUNKS`], so
+/// no chunk is longer than `MAX_SIDE² / MAX_CHUNKS` = 1024 columns.
+fn chunk_cap(chunks: &[u64]) -> u64 {
+    let fits = |cap: u64| chunks.iter().map(|&n| n.min(cap)).sum::<u64>() <= LIST_BUDGET;
+    let Some(&most) = chunks.iter().max() else {
+        return u64::MAX;
+    };
+    if fits(most) {
+        return u64::MAX;
+    }
+    // Binary search for the largest cap that fits (1 may not, with more heavy triangles than
+    // the budget: then the floor decides).
+    let (mut lo, mut hi) = (1, most);
+    while lo < hi {
+        let mid = lo + (hi - lo).div_ceil(2);
+        if fits(mid) {
+            lo = mid;
+        } else {
+            hi = mid - 1;
+        }
+    }
+    lo.max(MAX_CHUNKS as u64)
+}
+
+/// Columns per listed chunk of a heavy triangle of at most `most` columns: `chunk`, or longer
+/// where that would take more than `cap` chunks ([`chunk_cap`]).
+fn listed_chunk(most: u64, chunk: u64, cap: u64) -> u64 {
+    chunk.max(most.div_ceil(cap))
+}
+
 /// `local`'s triangles sorted for `surface_listed`: the light ones (at most [`LIGHT`] columns
-/// by [`box_columns`]) first, then the heavy ones, and each heavy triangle's chunks of
-/// [`CHUNK`] columns as (triangle, first column); a list larger than `limit` bytes is refused
-/// before it is made.
+/// by [`box_columns`]) first, then the heavy ones, and each heavy triangle's chunks as
+/// (triangle, first column), of `listing.chunk` columns, or longer for the heaviest ones where
+/// the list would pass [`LIST_BUDGET`] entries ([`chunk_cap`]); a heavy triangle's first
+/// vertex carries its chunks' columns in w (which the shaders read for nothing else). A list
+/// larger than `limit` bytes is refused before it is made.
 fn listed(local: &GridMesh, size: [u32; 3], limit: u64, listing: Listing) -> Result<Sorted, Error> {
     let chunk = listing.chunk.max(1) as u64;
     let light_most = listing.light as u64;
@@ -582,12 +624,18 @@ fn listed(local: &GridMesh, size: [u32; 3], limit: u64, listing: Listing) -> Res
         .chunks(3)
         .map(|t| box_columns(t, size))
         .collect();
-    // Sized before anything is allocated: a few huge triangles can need more entries than a
+    let heavy_chunks: Vec<u64> = most
+        .iter()
+        .filter(|&&m| m > light_most)
+        .map(|&m| m.div_ceil(chunk))
+        .collect();
+    let cap = chunk_cap(&heavy_chunks);
+    // Sized before anything is allocated: many huge triangles can need more entries than a
     // buffer may hold (or the host has memory for).
     let total: u64 = most
         .iter()
         .filter(|&&m| m > light_most)
-        .map(|m| m.div_ceil(chunk))
+        .map(|&m| m.div_ceil(listed_chunk(m, chunk, cap)))
         .sum();
     if total.saturating_mul(8) > limit {
         return Err(Error::Size {
@@ -616,27 +664,36 @@ fn listed(local: &GridMesh, size: [u32; 3], limit: u64, listing: Listing) -> Res
     }
     let light = (vertices.len() / 3) as u32;
     let mut chunks = Vec::with_capacity(total as usize);
+    let mut runs = Vec::with_capacity(heavy.len());
     for (k, (i, t, most)) in heavy.into_iter().enumerate() {
+        let columns = listed_chunk(most, chunk, cap);
+        // Exact in f32: at most MAX_SIDE² / MAX_CHUNKS (or the listing's chunk) columns.
         vertices.extend_from_slice(t);
+        let first = vertices.len() - 3;
+        vertices[first].w = columns as f32;
         order.push(i as u32);
         let at = light + k as u32;
-        chunks.extend((0..most.div_ceil(chunk)).map(|c| [at, (c * chunk) as u32]));
+        let n = most.div_ceil(columns);
+        chunks.extend((0..n).map(|c| [at, (c * columns) as u32]));
+        runs.push((n as u32, columns as u32));
     }
     Ok(Sorted {
         vertices,
         light,
         chunks,
+        runs,
         order,
     })
 }
 
 /// [`listed`]'s result: vertices with the light triangles first, how many are light, the
-/// heavy ones' chunks as (triangle, first column), and for each sorted triangle its index in
-/// the [`GridMesh`].
+/// heavy ones' chunks as (triangle, first column) and for each heavy triangle its chunks and
+/// their columns, and for each sorted triangle its index in the [`GridMesh`].
 struct Sorted {
     vertices: Vec<Vec4>,
     light: u32,
     chunks: Vec<[u32; 2]>,
+    runs: Vec<(u32, u32)>,
     order: Vec<u32>,
 }
 
@@ -699,7 +756,8 @@ pub const CHUNK: u32 = 4;
 
 /// Most chunks the GPU lists for one triangle (`fieldkit::triangle_box`'s `MAX_CHUNKS`): a
 /// triangle of more than `MAX_CHUNKS` × [`CHUNK`] columns gets longer chunks, so a mesh of a
-/// few giant triangles (a ground plane, walls) needs a short work list at any grid.
+/// few giant triangles (a ground plane, walls) needs a short work list at any grid. The host's
+/// listing for `encode_surface` shortens triangles to fit [`LIST_BUDGET`], but never below this.
 pub const MAX_CHUNKS: u32 = 16384;
 
 /// Chunks the GPU's work list can need for a triangle of at most `columns` columns: chunks of
@@ -836,8 +894,8 @@ struct Listed {
     chunks: wgpu::Buffer,
     light: u32,
     chunk_count: u32,
-    /// Columns per chunk.
-    chunk: u32,
+    /// Per heavy triangle (in the sorted order): its chunks and their columns.
+    runs: Vec<(u32, u32)>,
     /// Per sorted triangle, its index in the [`GridMesh`].
     order: Vec<u32>,
 }
@@ -855,6 +913,7 @@ impl Listed {
             mut vertices,
             light,
             mut chunks,
+            runs,
             order,
         } = listed(local, grid.size, limit, listing)?;
         let chunk_count = chunks.len() as u32;
@@ -877,7 +936,7 @@ impl Listed {
             chunks: buffer("voxelize heavy chunks", bytemuck::cast_slice(&chunks)),
             light,
             chunk_count,
-            chunk: listing.chunk,
+            runs,
             order,
         })
     }
@@ -1111,7 +1170,6 @@ impl Voxelizer {
                 slack: SLACK,
                 moved: 0.0,
                 capacity: listed.chunk_count,
-                chunk: listed.chunk,
             },
         );
         // More than 65535 workgroups: rows of 65535 (the shader reads `num_workgroups`).
@@ -1217,7 +1275,6 @@ impl Voxelizer {
                     slack: SLACK,
                     moved,
                     capacity,
-                    chunk: CHUNK,
                 },
             )
         };
@@ -1406,6 +1463,95 @@ impl Voxelizer {
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+
+    /// Three vertices of a right triangle at height `z` with legs `leg` from (x0, y0).
+    fn right(x0: f32, y0: f32, leg: f32, z: f32) -> [Vec4; 3] {
+        [
+            Vec4::new(x0, y0, z, 0.0),
+            Vec4::new(x0 + leg, y0, z, 0.0),
+            Vec4::new(x0, y0 + leg, z, 0.0),
+        ]
+    }
+
+    fn grid_mesh(triangles: &[[Vec4; 3]]) -> GridMesh {
+        GridMesh {
+            vertices: triangles.concat(),
+            degenerate: 0,
+            source: (0..triangles.len() as u32).collect(),
+        }
+    }
+
+    /// While the list fits `LIST_BUDGET`, every heavy triangle keeps chunks of `CHUNK`; past it
+    /// the heaviest get longer chunks, just enough to fit, and their chunks start at every
+    /// multiple of their length up to their columns; the chunks' columns ride in each heavy
+    /// triangle's first vertex's w.
+    #[test]
+    fn the_heaviest_triangles_get_longer_chunks_past_the_budget() {
+        let size = [4096, 4096, 2];
+        let light = right(0.2, 0.2, 0.5, 0.5); // 1 column
+        let heavy = right(0.5, 0.5, 5.0, 0.5); // its box: 6 × 6 = 36 columns
+        let giant = right(0.0, 0.0, 4096.0, 1.5); // its box: the whole 4096² layer
+        // Fits: 9 + 512² / 4 chunks of 4.
+        let fits = right(0.0, 0.0, 511.5, 1.5);
+        let sorted = listed(
+            &grid_mesh(&[light, heavy, fits]),
+            size,
+            u64::MAX,
+            Listing::default(),
+        );
+        let sorted = sorted.unwrap();
+        assert_eq!(sorted.runs, [(9, CHUNK), (512 * 512 / 4, CHUNK)]);
+
+        let sorted = listed(
+            &grid_mesh(&[light, heavy, giant]),
+            size,
+            u64::MAX,
+            Listing::default(),
+        );
+        let sorted = sorted.unwrap();
+        assert_eq!((sorted.light, &sorted.order[..]), (1, &[0, 1, 2][..]));
+        // The largest cap c with 9 + c ≤ 2^20 is 1 048 567 chunks: 2^24 columns in chunks of
+        // ⌈2^24 / c⌉ = 17, 986 896 of them.
+        assert_eq!(sorted.runs, [(9, CHUNK), (986_896, 17)]);
+        assert_eq!(sorted.chunks.len(), 9 + 986_896);
+        assert!(sorted.chunks.len() as u64 <= LIST_BUDGET);
+        let ws: Vec<f32> = sorted.vertices.iter().map(|p| p.w).collect();
+        assert_eq!(ws, [0.0, 0.0, 0.0, 4.0, 0.0, 0.0, 17.0, 0.0, 0.0]);
+        for (c, &[t, first]) in sorted.chunks.iter().enumerate() {
+            let want = if c < 9 {
+                (1, 4 * c as u32)
+            } else {
+                (2, 17 * (c - 9) as u32)
+            };
+            assert_eq!((t, first), want, "chunk {c}");
+        }
+        // The last chunk starts within the triangle's columns and reaches its last one.
+        let [_, last] = sorted.chunks[sorted.chunks.len() - 1];
+        assert!(last < 1 << 24 && last + 17 >= 1 << 24, "{last}");
+    }
+
+    /// More giant triangles than the budget holds at `MAX_CHUNKS` each: each lists exactly
+    /// that many (chunks of 1024 columns, no longer), and the list's bytes, counted before
+    /// anything is made, are refused past the limit.
+    #[test]
+    fn giant_triangles_list_at_least_max_chunks_each() {
+        let size = [4096, 4096, 2];
+        let giants: Vec<[Vec4; 3]> = (0..100)
+            .map(|k| right(0.0, 0.0, 4096.0, 0.25 + k as f32 * 0.01))
+            .collect();
+        let mesh = grid_mesh(&giants);
+        let sorted = listed(&mesh, size, u64::MAX, Listing::default()).unwrap();
+        assert!(sorted.runs.iter().all(|&run| run == (MAX_CHUNKS, 1024)));
+        assert_eq!(sorted.chunks.len(), 100 * MAX_CHUNKS as usize);
+        let bytes = 100 * MAX_CHUNKS as u64 * 8;
+        assert!(listed(&mesh, size, bytes, Listing::default()).is_ok());
+        assert!(matches!(
+            listed(&mesh, size, bytes - 1, Listing::default()),
+            Err(Error::Size { got, .. }) if got == bytes
+        ));
+    }
+
     /// The host's copies of the shader's constants agree with `fieldkit::triangle_box`.
     #[test]
     fn constants_match_the_shader() {
