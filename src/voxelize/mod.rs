@@ -570,29 +570,36 @@ pub fn heavy_chunk_bound(local: &GridMesh, size: [u32; 3]) -> u32 {
     total.min(u32::MAX as u64) as u32
 }
 
-/// Chunks the host lists for `encode_surface`/`encode_solid` (8 MiB of entries) before the
-/// heaviest triangles get chunks longer than the listing's: enough threads to fill a large GPU
-/// many times, and a short upload. Measured on the H100 (docs/voxelize.md): a square of two
-/// triangles at 4096² took 0.52 ms in chunks of 4 columns (8.4 M entries, 67 MB), 0.31 in
-/// chunks of 32 (1 M entries); a thread walks about 0.65 µs per column, so chunks far longer
-/// (1024 columns: 0.76 ms) leave the GPU waiting on a few threads.
+/// Chunks the host lists in all for the giant triangles of a mesh (those of more than
+/// [`MAX_CHUNKS`] chunks, a ground plane or walls; 8 MiB of entries) in `encode_surface` and
+/// `encode_solid` before they get chunks longer than the listing's: enough threads to fill a
+/// large GPU many times, and a short upload. Smaller triangles keep their chunks. Measured on
+/// the H100 (docs/voxelize.md): a square of two triangles at 4096² took 0.52 ms in chunks of 4
+/// columns (8.4 M entries, 67 MB), 0.31 in chunks of 32 (1 M entries); a thread walks about
+/// 0.65 µs per column, so chunks far longer (1024 columns: 0.76 ms) leave the GPU waiting on a
+/// few threads.
 pub const LIST_BUDGET: u64 = 1 << 20;
 
 /// The most chunks a heavy triangle may list, given each heavy triangle's count in chunks of
-/// the listing's length: no cap while they all fit [`LIST_BUDGET`], else the largest cap under
-/// which they do (the heaviest triangles shortened first), but never below [`MAX_CHUNKS`], so
-/// no chunk is longer than `MAX_SIDE² / MAX_CHUNKS` = 1024 columns.
+/// the listing's length. Triangles of at most [`MAX_CHUNKS`] are never cut short; the larger
+/// ones share [`LIST_BUDGET`]: no cap while they fit it, else the largest cap under which they
+/// do (the heaviest shortened first), but never below `MAX_CHUNKS`, so no chunk is longer than
+/// `MAX_SIDE² / MAX_CHUNKS` = 1024 columns (past 64 such triangles each lists `MAX_CHUNKS`).
 fn chunk_cap(chunks: &[u64]) -> u64 {
-    let fits = |cap: u64| chunks.iter().map(|&n| n.min(cap)).sum::<u64>() <= LIST_BUDGET;
-    let Some(&most) = chunks.iter().max() else {
+    let floor = MAX_CHUNKS as u64;
+    let giant: Vec<u64> = chunks.iter().copied().filter(|&n| n > floor).collect();
+    let fits = |cap: u64| giant.iter().map(|&n| n.min(cap)).sum::<u64>() <= LIST_BUDGET;
+    let Some(&most) = giant.iter().max() else {
         return u64::MAX;
     };
     if fits(most) {
         return u64::MAX;
     }
-    // Binary search for the largest cap that fits (1 may not, with more heavy triangles than
-    // the budget: then the floor decides).
-    let (mut lo, mut hi) = (1, most);
+    if !fits(floor) {
+        return floor;
+    }
+    // The largest cap that fits, between the floor (fits) and `most` (does not).
+    let (mut lo, mut hi) = (floor, most - 1);
     while lo < hi {
         let mid = lo + (hi - lo).div_ceil(2);
         if fits(mid) {
@@ -601,7 +608,7 @@ fn chunk_cap(chunks: &[u64]) -> u64 {
             hi = mid - 1;
         }
     }
-    lo.max(MAX_CHUNKS as u64)
+    lo
 }
 
 /// Columns per listed chunk of a heavy triangle of at most `most` columns: `chunk`, or longer
@@ -613,7 +620,7 @@ fn listed_chunk(most: u64, chunk: u64, cap: u64) -> u64 {
 /// `local`'s triangles sorted for `surface_listed`: the light ones (at most [`LIGHT`] columns
 /// by [`box_columns`]) first, then the heavy ones, and each heavy triangle's chunks as
 /// (triangle, first column), of `listing.chunk` columns, or longer for the heaviest ones where
-/// the list would pass [`LIST_BUDGET`] entries ([`chunk_cap`]); a heavy triangle's first
+/// the giant triangles' chunks would pass [`LIST_BUDGET`] ([`chunk_cap`]); a heavy triangle's first
 /// vertex carries its chunks' columns in w (which the shaders read for nothing else). A list
 /// larger than `limit` bytes is refused before it is made.
 fn listed(local: &GridMesh, size: [u32; 3], limit: u64, listing: Listing) -> Result<Sorted, Error> {
@@ -1482,53 +1489,51 @@ mod tests {
         }
     }
 
-    /// While the list fits `LIST_BUDGET`, every heavy triangle keeps chunks of `CHUNK`; past it
-    /// the heaviest get longer chunks, just enough to fit, and their chunks start at every
-    /// multiple of their length up to their columns; the chunks' columns ride in each heavy
-    /// triangle's first vertex's w.
+    /// Triangles of more than `MAX_CHUNKS` chunks share `LIST_BUDGET`: while they fit it
+    /// every heavy triangle keeps chunks of `CHUNK`; past it the heaviest get longer chunks,
+    /// just enough to fit, that start at every multiple of their length up to their columns;
+    /// the chunks' columns ride in each heavy triangle's first vertex's w. Smaller triangles
+    /// neither get longer chunks nor count against the budget.
     #[test]
     fn the_heaviest_triangles_get_longer_chunks_past_the_budget() {
         let size = [4096, 4096, 2];
         let light = right(0.2, 0.2, 0.5, 0.5); // 1 column
         let heavy = right(0.5, 0.5, 5.0, 0.5); // its box: 6 × 6 = 36 columns
-        let giant = right(0.0, 0.0, 4096.0, 1.5); // its box: the whole 4096² layer
-        // Fits: 9 + 512² / 4 chunks of 4.
-        let fits = right(0.0, 0.0, 511.5, 1.5);
-        let sorted = listed(
-            &grid_mesh(&[light, heavy, fits]),
-            size,
-            u64::MAX,
-            Listing::default(),
-        );
-        let sorted = sorted.unwrap();
+        let list = |triangles: &[[Vec4; 3]]| {
+            listed(&grid_mesh(triangles), size, u64::MAX, Listing::default()).unwrap()
+        };
+        // 512² columns, 65 536 chunks: within the budget.
+        let sorted = list(&[light, heavy, right(0.0, 0.0, 511.5, 1.5)]);
         assert_eq!(sorted.runs, [(9, CHUNK), (512 * 512 / 4, CHUNK)]);
 
-        let sorted = listed(
-            &grid_mesh(&[light, heavy, giant]),
-            size,
-            u64::MAX,
-            Listing::default(),
-        );
-        let sorted = sorted.unwrap();
-        assert_eq!((sorted.light, &sorted.order[..]), (1, &[0, 1, 2][..]));
-        // The largest cap c with 9 + c ≤ 2^20 is 1 048 567 chunks: 2^24 columns in chunks of
-        // ⌈2^24 / c⌉ = 17, 986 896 of them.
-        assert_eq!(sorted.runs, [(9, CHUNK), (986_896, 17)]);
-        assert_eq!(sorted.chunks.len(), 9 + 986_896);
-        assert!(sorted.chunks.len() as u64 <= LIST_BUDGET);
+        // 4096² and 2048² columns, 2^22 + 2^20 chunks of 4: the largest cap c with
+        // min(2^22, c) + min(2^20, c) ≤ 2^20 is 2^19, so chunks of 32 and 8 columns.
+        let giant = right(0.0, 0.0, 4096.0, 1.5);
+        let sorted = list(&[light, heavy, giant, right(0.0, 0.0, 2047.5, 1.5)]);
+        assert_eq!((sorted.light, &sorted.order[..]), (1, &[0, 1, 2, 3][..]));
+        assert_eq!(sorted.runs, [(9, CHUNK), (1 << 19, 32), (1 << 19, 8)]);
+        assert_eq!(sorted.chunks.len() as u64, 9 + LIST_BUDGET);
         let ws: Vec<f32> = sorted.vertices.iter().map(|p| p.w).collect();
-        assert_eq!(ws, [0.0, 0.0, 0.0, 4.0, 0.0, 0.0, 17.0, 0.0, 0.0]);
+        let mut want_ws = [0.0; 12];
+        (want_ws[3], want_ws[6], want_ws[9]) = (4.0, 32.0, 8.0);
+        assert_eq!(ws, want_ws);
         for (c, &[t, first]) in sorted.chunks.iter().enumerate() {
-            let want = if c < 9 {
-                (1, 4 * c as u32)
-            } else {
-                (2, 17 * (c - 9) as u32)
+            let want = match c {
+                0..9 => (1, 4 * c as u32),
+                _ if c < 9 + (1 << 19) => (2, 32 * (c - 9) as u32),
+                _ => (3, 8 * (c - 9 - (1 << 19)) as u32),
             };
             assert_eq!((t, first), want, "chunk {c}");
         }
-        // The last chunk starts within the triangle's columns and reaches its last one.
-        let [_, last] = sorted.chunks[sorted.chunks.len() - 1];
-        assert!(last < 1 << 24 && last + 17 >= 1 << 24, "{last}");
+
+        // 70 triangles of 256² columns (16 384 chunks each, 1.15 M in all) and one of 1024²
+        // (262 144 chunks, within the budget on its own): every chunk keeps 4 columns.
+        let mut many = vec![right(0.0, 0.0, 255.5, 0.5); 70];
+        many.push(right(0.0, 0.0, 1023.5, 1.5));
+        let sorted = list(&many);
+        assert_eq!(sorted.runs.len(), 71);
+        assert!(sorted.runs.iter().all(|&(_, columns)| columns == CHUNK));
+        assert_eq!(sorted.chunks.len(), 70 * 16_384 + 262_144);
     }
 
     /// More giant triangles than the budget holds at `MAX_CHUNKS` each: each lists exactly
