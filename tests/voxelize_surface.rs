@@ -672,14 +672,16 @@ fn more_chunks_than_one_dispatch_row_holds() {
     assert!(gpu.iter().filter(|&&o| o).count() > 30_000);
 }
 
-/// Giant triangles are listed in at most `MAX_CHUNKS` chunks each (longer ones past that), on
-/// the host (`encode_surface`) as on the GPU (`encode_surface_placed` with a resident mesh), so
-/// the list for 500 triangles each spanning a 4096² grid holds 500 × 16 384 entries (66 MB),
+/// Giant triangles are listed in at most `MAX_CHUNKS` chunks each (longer ones past that) on
+/// the GPU (`encode_surface_placed` with a resident mesh), and the host's list
+/// (`encode_surface`) is shorter still, so the list for 500 triangles each spanning a 4096²
+/// grid holds at most 500 × 16 384 entries (66 MB),
 /// which a storage binding of WebGPU's default 128 MiB holds. Before, each counted 4.2 M chunks
 /// of 4 (16.8 GB in all) and the mesh was refused by both. The 500 lie past the grid's last
-/// layer (the bounds do not look at that; the GPU walks nothing for them); a square of two
-/// more, on layer 1, is walked in chunks of 1024 (host) or 512 (GPU) columns, and every voxel
-/// of that layer is set and none of layer 0.
+/// layer: the host lists them as light triangles (their box misses the grid), the resident
+/// mesh's bound cannot know that (the GPU lists nothing for them); a square of two more, on
+/// layer 1, is walked in chunks of 32 (host, 2^20 chunks between the two) or 512 (GPU) columns,
+/// and every voxel of that layer is set and none of layer 0.
 #[test]
 fn giant_triangles_get_a_short_work_list() {
     use fieldkit::voxelize::GpuMesh;

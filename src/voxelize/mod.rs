@@ -543,7 +543,9 @@ fn zeroed_bitset(device: &wgpu::Device, grid: &Grid) -> Result<wgpu::Buffer, Err
 }
 
 /// Columns triangle `t` (three grid-local vertices) can have at most: whichever axis is
-/// dominant, the largest product of two of its box's sides (clamped to a grid of `size`).
+/// dominant, the largest product of two of its box's sides (clamped to a grid of `size`), and
+/// none when the box misses the grid along any axis (as the shaders' `setup` finds from the
+/// same box of the same f32 vertices).
 fn box_columns(t: &[Vec4], size: [u32; 3]) -> u64 {
     let lo = t[0].min(t[1]).min(t[2]).truncate();
     let hi = t[0].max(t[1]).max(t[2]).truncate();
@@ -554,6 +556,9 @@ fn box_columns(t: &[Vec4], size: [u32; 3]) -> u64 {
         h.saturating_sub(l).saturating_add(1).max(0) as u64
     };
     let (x, y, z) = (side(0), side(1), side(2));
+    if x == 0 || y == 0 || z == 0 {
+        return 0;
+    }
     (x * y).max(y * z).max(z * x)
 }
 
@@ -1534,6 +1539,30 @@ mod tests {
         assert_eq!(sorted.runs.len(), 71);
         assert!(sorted.runs.iter().all(|&(_, columns)| columns == CHUNK));
         assert_eq!(sorted.chunks.len(), 70 * 16_384 + 262_144);
+    }
+
+    /// A triangle whose box misses the grid along one axis has no columns, however large its
+    /// box is along the other two (a roof above the grid's top layer), so it is listed as light
+    /// (one thread, which finds nothing) instead of in chunks; one that touches the grid's
+    /// last layer keeps them.
+    #[test]
+    fn triangles_outside_the_grid_list_no_chunks() {
+        let size = [4096, 4096, 2];
+        let above = right(0.0, 0.0, 4096.0, 2.5);
+        let touching = right(0.0, 0.0, 4096.0, 2.0);
+        let below = right(0.0, 0.0, 4096.0, -0.001);
+        assert_eq!(box_columns(&above, size), 0);
+        assert_eq!(box_columns(&below, size), 0);
+        assert_eq!(box_columns(&touching, size), 4096 * 4096);
+        let sorted = listed(
+            &grid_mesh(&[above, touching, below]),
+            size,
+            u64::MAX,
+            Listing::default(),
+        )
+        .unwrap();
+        assert_eq!((sorted.light, &sorted.order[..]), (2, &[0, 2, 1][..]));
+        assert_eq!(sorted.runs, [(1 << 20, 16)]);
     }
 
     /// More giant triangles than the budget holds at `MAX_CHUNKS` each: each lists exactly
