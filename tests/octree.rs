@@ -4,6 +4,8 @@
 //! exactly the children that hold voxels, identical bytes on every build; and the issue's
 //! failure modes, each a test.
 
+mod common;
+
 use fieldkit::Error;
 use fieldkit::gpu::Context;
 use fieldkit::octree::{Octree, OctreeBuilder, OctreeData};
@@ -325,24 +327,9 @@ fn single_triangle_far_mesh_and_node_boundaries() {
 #[test]
 fn a_giant_triangle_gives_every_fragment() {
     let ctx = Context::shared();
-    // Legs at half a voxel, the hypotenuse on x + y = 2100.5: no edge through a voxel corner.
-    let giant = Mesh {
-        positions: vec![
-            DVec3::new(0.5, 0.5, 1.5),
-            DVec3::new(2100.0, 0.5, 1.5),
-            DVec3::new(0.5, 2100.0, 1.5),
-        ],
-        triangles: vec![[0, 1, 2]],
-        ..Mesh::default()
-    };
+    let giant = common::right_triangle(2100.0);
     let grid = unit_grid([2104, 2104, 2]);
-    // Layer 1's voxels (x, y) with x + y ≤ 2100: those whose closed box meets the triangle.
-    let want: Vec<bool> = (0..2 * 2104 * 2104usize)
-        .map(|i| {
-            let (x, y, z) = (i % 2104, i / 2104 % 2104, i / (2104 * 2104));
-            z == 1 && x + y <= 2100
-        })
-        .collect();
+    let want = common::right_triangle_voxels(2100, [2104, 2104, 2]);
     let voxelizer = Voxelizer::new(&ctx.device).unwrap();
     let mut enc = ctx.encoder("giant fragments");
     let fragments = voxelizer

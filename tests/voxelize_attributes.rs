@@ -3,6 +3,8 @@
 //! (`voxelize::cpu::attribute_sums`), heavy triangles count once, cancelling normals are
 //! reported, two runs give identical bytes, and bad attribute arrays get typed errors.
 
+mod common;
+
 use fieldkit::Error;
 use fieldkit::gpu::{Context, read_buffer};
 use fieldkit::voxelize::{Attributes, Grid, Mesh, VoxelAttributes, Voxelizer, cpu};
@@ -165,26 +167,13 @@ fn heavy_triangles_count_once() {
     assert!(got.iter().any(|v| v.triangles >= 3));
 }
 
-/// Copies of a right triangle in the plane z = 1.5 with its right angle at (0.5, 0.5) and legs
-/// of `leg` voxels: its edges run through no voxel corner (legs at half a voxel, the hypotenuse
-/// on x + y = leg + 0.5), so no voxel is a matter of rounding.
+/// [`common::right_triangle`] with a colour per corner, and `copies` copies of it in one mesh.
 fn right_triangles(leg: f64, copies: u32) -> (Mesh, Mesh) {
     let one = Mesh {
-        positions: vec![
-            DVec3::new(0.5, 0.5, 1.5),
-            DVec3::new(leg, 0.5, 1.5),
-            DVec3::new(0.5, leg, 1.5),
-        ],
-        triangles: vec![[0, 1, 2]],
         colors: vec![[200, 10, 30, 255], [0, 90, 250, 255], [40, 40, 40, 128]],
-        ..Mesh::default()
+        ..common::right_triangle(leg)
     };
-    let mut mesh = one.clone();
-    for k in 1..copies {
-        mesh.positions.extend(one.positions.iter().copied());
-        mesh.colors.extend(one.colors.iter().copied());
-        mesh.triangles.push([3 * k, 3 * k + 1, 3 * k + 2]);
-    }
+    let mesh = common::repeated(&one, copies);
     (one, mesh)
 }
 

@@ -1,6 +1,8 @@
 //! Conservative surface voxelization (`voxelize/surface`) against the 13-axis SAT in f64
 //! (`fieldkit::voxelize::cpu`), and the failure modes of the issue, each a test.
 
+mod common;
+
 use fieldkit::Error;
 use fieldkit::gpu::Context;
 use fieldkit::voxelize::{Grid, GridMesh, Mesh, Separation, Voxelizer, cpu};
@@ -646,17 +648,9 @@ fn check_layer_one(ctx: &Context, s: &fieldkit::voxelize::Surface) {
 #[test]
 fn more_chunks_than_one_dispatch_row_holds() {
     let ctx = Context::shared();
-    // Legs at half a voxel and the hypotenuse on x + y = 255.5: no edge through a voxel corner.
-    let one = [
-        DVec3::new(0.5, 0.5, 1.5),
-        DVec3::new(255.0, 0.5, 1.5),
-        DVec3::new(0.5, 255.0, 1.5),
-    ];
+    let one = common::right_triangle(255.0);
     let copies = 257u32;
-    let m = mesh(
-        (0..copies).flat_map(|_| one).collect(),
-        (0..copies).map(|k| [3 * k, 3 * k + 1, 3 * k + 2]).collect(),
-    );
+    let m = common::repeated(&one, copies);
     let grid = unit_grid([256, 256, 2]);
     let chunks = fieldkit::voxelize::heavy_chunk_bound(&m.to_grid(&grid).unwrap(), grid.size);
     assert_eq!(chunks as u64, copies as u64 * 256 * 256 / 4);
@@ -666,7 +660,7 @@ fn more_chunks_than_one_dispatch_row_holds() {
     let s = v.encode_surface(&ctx.device, &mut enc, &m, &grid).unwrap();
     ctx.submit_and_wait("voxelize", enc).unwrap();
     let gpu = s.read(&ctx.device, &ctx.queue).wait(&ctx).unwrap();
-    let (misses, extras, _) = check_against_sat(&gpu, &mesh(one.to_vec(), vec![[0, 1, 2]]), &grid);
+    let (misses, extras, _) = check_against_sat(&gpu, &one, &grid);
     println!("{misses} missed, {extras} extra (each within 1e-3 voxels of the triangle)");
     assert_eq!(misses, 0, "missed voxels");
     assert!(gpu.iter().filter(|&&o| o).count() > 30_000);
@@ -729,30 +723,15 @@ fn giant_triangles_get_a_short_work_list() {
 #[test]
 fn a_triangle_past_the_list_budget_is_walked_in_longer_chunks() {
     let ctx = Context::shared();
-    // Legs at half a voxel, the hypotenuse on x + y = 2100.5: no edge through a voxel corner.
-    let m = mesh(
-        vec![
-            DVec3::new(0.5, 0.5, 1.5),
-            DVec3::new(2100.0, 0.5, 1.5),
-            DVec3::new(0.5, 2100.0, 1.5),
-        ],
-        vec![[0, 1, 2]],
-    );
+    let m = common::right_triangle(2100.0);
     let grid = unit_grid([2104, 2104, 2]);
     let v = Voxelizer::new(&ctx.device).unwrap();
     let mut enc = ctx.encoder("voxelize");
     let s = v.encode_surface(&ctx.device, &mut enc, &m, &grid).unwrap();
     ctx.submit_and_wait("voxelize", enc).unwrap();
     let gpu = s.read(&ctx.device, &ctx.queue).wait(&ctx).unwrap();
-    // Layer 1's voxels (x, y) with x + y ≤ 2100.
-    let wrong = gpu
-        .iter()
-        .enumerate()
-        .filter(|&(i, &g)| {
-            let (x, y, z) = (i % 2104, i / 2104 % 2104, i / (2104 * 2104));
-            g != (z == 1 && x + y <= 2100)
-        })
-        .count();
+    let want = common::right_triangle_voxels(2100, [2104, 2104, 2]);
+    let wrong = gpu.iter().zip(&want).filter(|(g, w)| g != w).count();
     assert_eq!(wrong, 0, "{wrong} voxels wrong");
 }
 

@@ -136,3 +136,45 @@ pub fn example_binary(name: &str) -> std::path::PathBuf {
     );
     bin
 }
+
+/// A right triangle in the plane z = 1.5 with its right angle at (0.5, 0.5) and legs to
+/// x = `leg` and y = `leg` (in voxels of a unit grid): its legs lie at half a voxel and its
+/// hypotenuse on x + y = leg + 0.5, so no edge runs through a voxel corner and no voxel is a
+/// matter of rounding.
+pub fn right_triangle(leg: f64) -> fieldkit::voxelize::Mesh {
+    use glam::DVec3;
+    fieldkit::voxelize::Mesh {
+        positions: vec![
+            DVec3::new(0.5, 0.5, 1.5),
+            DVec3::new(leg, 0.5, 1.5),
+            DVec3::new(0.5, leg, 1.5),
+        ],
+        triangles: vec![[0, 1, 2]],
+        ..Default::default()
+    }
+}
+
+/// The voxels whose closed box meets [`right_triangle`]`(leg)` (an integer `leg`) in a unit
+/// grid of `size` (x fastest; at least 2 layers): those of layer 1 with x + y ≤ leg.
+pub fn right_triangle_voxels(leg: usize, size: [usize; 3]) -> Vec<bool> {
+    let [nx, ny, nz] = size;
+    (0..nx * ny * nz)
+        .map(|i| {
+            let (x, y, z) = (i % nx, i / nx % ny, i / (nx * ny));
+            z == 1 && x + y <= leg
+        })
+        .collect()
+}
+
+/// `copies` copies of `one` in one mesh (positions and any per-vertex colours repeated).
+pub fn repeated(one: &fieldkit::voxelize::Mesh, copies: u32) -> fieldkit::voxelize::Mesh {
+    let mut mesh = one.clone();
+    let n = one.positions.len() as u32;
+    for k in 1..copies {
+        mesh.positions.extend(one.positions.iter().copied());
+        mesh.colors.extend(one.colors.iter().copied());
+        mesh.triangles
+            .extend(one.triangles.iter().map(|t| t.map(|v| v + k * n)));
+    }
+    mesh
+}
