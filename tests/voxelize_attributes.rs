@@ -203,11 +203,13 @@ fn more_chunks_than_one_dispatch_row_holds() {
     check_sums(&grid, &got, &want, copies, 1e-3);
 }
 
-/// One triangle whose box face holds 901² columns (202 951 chunks of 4): it is listed in
-/// 16 237 chunks of 50 columns (at most 16 384). Before, one thread listed every chunk of 4,
-/// and on lavapipe, whose compiler ends an invocation's loops after 65 535 iterations, the
-/// voxels of the chunks past the 65 535th were lost (this test failed there); every voxel
-/// against the reference.
+/// One triangle whose box face holds 901² columns (202 951 chunks of 4): a giant on the GPU's
+/// list (past `GIANT_MIN_COLUMNS`), so the surface pass records it and the attribute pass walks
+/// its 3 172 blocks of 64 chunks a workgroup each. Before giants, it was listed in 16 237
+/// chunks of 50 columns; before that one thread listed every chunk of 4, and on lavapipe, whose
+/// compiler ends an invocation's loops after 65 535 iterations, the voxels of the chunks past
+/// the 65 535th were lost (this test failed there). Every voxel against the reference; fails
+/// when the giant pass walks 3 columns per chunk instead of 4.
 #[test]
 fn one_giant_triangle_lists_every_chunk() {
     let ctx = Context::shared();
@@ -218,10 +220,16 @@ fn one_giant_triangle_lists_every_chunk() {
         size: [904, 904, 2],
     };
     let local = one.to_grid(&grid).unwrap();
-    // The host's bound: the most chunks a triangle of at most 901² columns lists.
+    // One giant, no entries but those the list keeps in case the GPU finds it under the
+    // threshold (at most that many columns).
+    use fieldkit::voxelize::{GIANT_MIN_COLUMNS, GpuListing};
     assert_eq!(
-        fieldkit::voxelize::heavy_chunk_bound(&local, grid.size),
-        16_384
+        GpuListing::exact(&local, grid.size),
+        GpuListing {
+            capacity: GIANT_MIN_COLUMNS as u64 / 4,
+            giant_columns: GIANT_MIN_COLUMNS,
+            giants: 1,
+        }
     );
     let (_, got) = run(&ctx, &one, &grid);
     assert!(got.len() > 400_000, "{} voxels", got.len());

@@ -735,6 +735,82 @@ fn a_triangle_past_the_list_budget_is_walked_in_longer_chunks() {
     assert_eq!(wrong, 0, "{wrong} voxels wrong");
 }
 
+/// `mesh` resident and placed by the identity: its surface voxels.
+fn resident_voxels(ctx: &Context, mesh: &Mesh, grid: &Grid) -> Vec<bool> {
+    use fieldkit::voxelize::GpuMesh;
+    let v = Voxelizer::new(&ctx.device).unwrap();
+    let resident = GpuMesh::upload(&ctx.device, mesh).unwrap();
+    let mut enc = ctx.encoder("resident");
+    let s = v
+        .encode_surface_placed(
+            &ctx.device,
+            &mut enc,
+            &[(&resident, glam::DMat4::IDENTITY)],
+            grid,
+            Separation::Conservative,
+        )
+        .unwrap();
+    ctx.submit_and_wait("resident", enc).unwrap();
+    s.read(&ctx.device, &ctx.queue).wait(ctx).unwrap()
+}
+
+/// Right triangles with legs `legs[k]` on layer `k`, as `common::right_triangle` puts one on
+/// layer 1: voxel (x, y, k) is set exactly when x + y ≤ legs[k].
+fn right_triangles_on_layers(legs: &[u32], side: u32) -> (Mesh, Vec<bool>) {
+    let mut positions = Vec::new();
+    for (k, &leg) in legs.iter().enumerate() {
+        let (z, leg) = (k as f64 + 0.5, leg as f64);
+        positions.extend([
+            DVec3::new(0.5, 0.5, z),
+            DVec3::new(leg, 0.5, z),
+            DVec3::new(0.5, leg, z),
+        ]);
+    }
+    let triangles = (0..legs.len() as u32)
+        .map(|k| [3 * k, 3 * k + 1, 3 * k + 2])
+        .collect();
+    let n = side as usize;
+    let want = (0..n * n * legs.len())
+        .map(|i| (i % n) + (i / n % n) <= legs[i / (n * n)] as usize)
+        .collect();
+    (mesh(positions, triangles), want)
+}
+
+/// A resident giant triangle (2101² columns, past `GIANT_MIN_COLUMNS`) gets a record instead
+/// of work-list entries, and `surface_giant` walks it a workgroup per block of 64 chunks of 5
+/// columns (its 4.4 M columns over the 2^20 chunks a giant may have): exactly the voxels whose
+/// box meets it. Fails when the giant pass walks 4 columns per chunk, or is not recorded.
+#[test]
+fn a_resident_giant_triangle_is_walked_in_blocks() {
+    let ctx = Context::shared();
+    let m = common::right_triangle(2100.0);
+    let grid = unit_grid([2104, 2104, 2]);
+    let gpu = resident_voxels(&ctx, &m, &grid);
+    let want = common::right_triangle_voxels(2100, [2104, 2104, 2]);
+    let wrong = gpu.iter().zip(&want).filter(|(g, w)| g != w).count();
+    assert_eq!(wrong, 0, "{wrong} voxels wrong");
+}
+
+/// More giant blocks than one dispatch row holds: five giant triangles of 2048² columns, 2^20
+/// chunks of 4 each, are 81 920 blocks of 64 chunks, walked in two rows of workgroups; and
+/// 64 giants (201² columns) beside 10 smaller triangles (101²) that the resident mesh's bound
+/// cannot tell from them, so those are listed in chunks: both exactly the triangles' voxels.
+#[test]
+fn giant_triangles_fill_two_dispatch_rows_and_share_a_pass_with_listed_ones() {
+    let ctx = Context::shared();
+    let (m, want) = right_triangles_on_layers(&[2047; 5], 2048);
+    let gpu = resident_voxels(&ctx, &m, &unit_grid([2048, 2048, 5]));
+    let wrong = gpu.iter().zip(&want).filter(|(g, w)| g != w).count();
+    assert_eq!(wrong, 0, "five giants: {wrong} voxels wrong");
+
+    let mut legs = vec![200; 64];
+    legs.extend([100; 10]);
+    let (m, want) = right_triangles_on_layers(&legs, 208);
+    let gpu = resident_voxels(&ctx, &m, &unit_grid([208, 208, legs.len() as u32]));
+    let wrong = gpu.iter().zip(&want).filter(|(g, w)| g != w).count();
+    assert_eq!(wrong, 0, "64 giants and 10 listed: {wrong} voxels wrong");
+}
+
 /// More giant triangles than the device's storage binding holds chunks for (each lists
 /// `MAX_CHUNKS` of 8 bytes): the host sums the chunks before it allocates them and gives a
 /// typed error instead.

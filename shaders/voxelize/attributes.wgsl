@@ -10,7 +10,10 @@
 // closest point on the triangle's plane (barycentrics clamped to the triangle),
 // written as a0 + b1·(a1 − a0) + b2·(a2 − a0) so a constant attribute stays exact.
 
-import fieldkit::triangle_box::{LIGHT, Setup, chunk_columns, column, overlaps, setup};
+import fieldkit::triangle_box::{
+    GIANT_BLOCK, GIANT_HEADER, GIANT_RECORDS, LIGHT, MAX_GIANTS, Setup, chunk_columns, column,
+    overlaps, setup,
+};
 import package::shared::voxel_attribute::{SUMS, average, closest_weights, contribution, corner_colour, corner_normal, corner_uv};
 
 struct AttributeParams {
@@ -50,6 +53,8 @@ struct AttributeParams {
 // (u, 1 − v): OBJ's v runs up, an image's rows down.
 @group(0) @binding(10) var albedo: texture_2d<f32>;
 @group(0) @binding(11) var albedo_sampler: sampler;
+// The surface pass's giant triangles: its records and their dispatch arguments.
+@group(0) @binding(12) var<storage, read> giants: array<u32>;
 
 const BLOCK_WORDS: u32 = 1024u;
 
@@ -130,6 +135,32 @@ fn accumulate_heavy(@builtin(global_invocation_id) id: vec3<u32>,
     let item = work[i];
     let s = load(item.x);
     accumulate_columns(s, item.x, item.y, chunk_columns(s.columns));
+}
+
+// The record whose blocks hold the workgroup's block (as `surface_giant` finds it).
+var<workgroup> owner: u32;
+
+// The surface pass's giant triangles, a workgroup per block of their chunks.
+@compute @workgroup_size(GIANT_BLOCK)
+fn accumulate_giant(@builtin(workgroup_id) group: vec3<u32>,
+                    @builtin(local_invocation_index) local: u32,
+                    @builtin(num_workgroups) groups: vec3<u32>) {
+    let b = group.x + group.y * groups.x;
+    if local < min(giants[GIANT_RECORDS], MAX_GIANTS) {
+        let at = GIANT_HEADER + 4u * local;
+        if b >= giants[at + 2u] && b - giants[at + 2u] < giants[at + 3u] {
+            owner = at + 1u;
+        }
+    }
+    let found = workgroupUniformLoad(&owner);
+    if found == 0u {
+        return;
+    }
+    let at = found - 1u;
+    let t = giants[at];
+    let size = giants[at + 1u];
+    let chunk = (b - giants[at + 2u]) * GIANT_BLOCK + local;
+    accumulate_columns(load(t), t, chunk * size, size);
 }
 
 // One bitset word per thread (a 2D dispatch: rows of 65535 workgroups).

@@ -11,13 +11,16 @@
 // with more than LIGHT columns does not stall its thread: `surface` appends it to a work list
 // in chunks of `chunk_columns` columns (CHUNK but for giant triangles; a workgroup's threads
 // list their heavy triangles' chunks together) and raises the indirect dispatch arguments to
-// the list's length, and `surface_heavy` takes one chunk per thread.
+// the list's length, and `surface_heavy` takes one chunk per thread. A giant triangle (more
+// than `giant_columns`) gets a record instead of entries, and `surface_giant` walks its chunks
+// a workgroup per block (`fieldkit::triangle_box`'s MAX_GIANTS).
 //
 // SIX_SEPARATING gives the thinner voxelization of the same paper, through which no
 // 6-connected path gets; 26-connected paths can.
 
 import fieldkit::triangle_box::{
-    LIGHT, Setup, chunk_columns, column, listed_columns, overlaps, setup,
+    GIANT_BLOCK, GIANT_BLOCKS, GIANT_HEADER, GIANT_RECORDS, LIGHT, MAX_GIANTS, Setup,
+    chunk_columns, column, giant_blocks, giant_chunk_columns, listed_columns, overlaps, setup,
 };
 import package::shared::scan::{scan_first, scan_partial};
 
@@ -34,6 +37,9 @@ struct SurfaceParams {
     moved: f32,
     // Entries the work list holds (the host sizes it for every chunk there can be).
     capacity: u32,
+    // Triangles of more columns than this are giant (the host picks it so that at most
+    // MAX_GIANTS are; u32 max when none can be).
+    giant_columns: u32,
 }
 
 override SIX_SEPARATING: bool = false;
@@ -58,6 +64,12 @@ override LISTED_WORKGROUP: u32 = 64u;
 // `surface_listed`: the heavy triangles' chunks, listed by the host. A listed triangle's first
 // vertex carries its chunks' columns in w (`listed_columns`).
 @group(0) @binding(6) var<storage, read> listed: array<vec2<u32>>;
+// Giant triangles' records and the dispatch arguments of `surface_giant` (the layout is
+// `fieldkit::triangle_box`'s GIANT_HEADER; the host creates it as (0, 1, 1) and zeros).
+@group(0) @binding(7) var<storage, read_write> giants: array<atomic<u32>>;
+// The same buffer, read by `surface_giant` (a dispatch may not write the buffer it takes its
+// arguments from).
+@group(0) @binding(8) var<storage, read> giant_list: array<u32>;
 
 fn set_voxel(p: vec3<i32>) {
     let g = vec3<i32>(params.grid);
@@ -146,9 +158,13 @@ fn surface(@builtin(global_invocation_id) id: vec3<u32>,
     let mine = id.x < params.count;
     var s: Setup;
     var chunks = 0u;
+    var giant = false;
     if mine {
         s = load(params.first + id.x);
-        if s.columns > LIGHT {
+        if s.columns > params.giant_columns {
+            giant = add_giant(params.first + id.x, s.columns);
+        }
+        if s.columns > LIGHT && !giant {
             let size = chunk_columns(s.columns);
             chunks = (s.columns + size - 1u) / size;
             chunk_sizes[local] = size;
@@ -163,9 +179,58 @@ fn surface(@builtin(global_invocation_id) id: vec3<u32>,
     if workgroupUniformLoad(&heavy_flag) != 0u {
         list_chunks(local, chunks, params.first + group.x * GROUP);
     }
-    if mine && chunks == 0u {
+    if mine && chunks == 0u && !giant {
         voxelize_columns(s, 0u, s.columns);
     }
+}
+
+// Record giant triangle `t` for `surface_giant`, if a record is left (the host's threshold
+// leaves one for every triangle that can pass it; a triangle past them is listed in chunks).
+fn add_giant(t: u32, columns: u32) -> bool {
+    let slot = atomicAdd(&giants[GIANT_RECORDS], 1u);
+    if slot >= MAX_GIANTS {
+        return false;
+    }
+    let size = giant_chunk_columns(columns);
+    let blocks = giant_blocks(columns, size);
+    let first = atomicAdd(&giants[GIANT_BLOCKS], blocks);
+    // The workgroups for the blocks recorded so far, in rows of 65535.
+    let total = first + blocks;
+    atomicMax(&giants[0], min(total, 65535u));
+    atomicMax(&giants[1], (total + 65534u) / 65535u);
+    let at = GIANT_HEADER + 4u * slot;
+    atomicStore(&giants[at], t);
+    atomicStore(&giants[at + 1u], size);
+    atomicStore(&giants[at + 2u], first);
+    atomicStore(&giants[at + 3u], blocks);
+    return true;
+}
+
+// The record whose blocks hold block `b` (GIANT_HEADER + 4 · record + 1: 0 when none), found
+// by the workgroup's threads, one record each.
+var<workgroup> owner: u32;
+
+// Giant triangles, a workgroup per block of GIANT_BLOCK chunks, in the rows of workgroups
+// their dispatch arguments give.
+@compute @workgroup_size(GIANT_BLOCK)
+fn surface_giant(@builtin(workgroup_id) group: vec3<u32>,
+                 @builtin(local_invocation_index) local: u32,
+                 @builtin(num_workgroups) groups: vec3<u32>) {
+    let b = group.x + group.y * groups.x;
+    if local < min(giant_list[GIANT_RECORDS], MAX_GIANTS) {
+        let at = GIANT_HEADER + 4u * local;
+        if b >= giant_list[at + 2u] && b - giant_list[at + 2u] < giant_list[at + 3u] {
+            owner = at + 1u;
+        }
+    }
+    let found = workgroupUniformLoad(&owner);
+    if found == 0u {
+        return;
+    }
+    let at = found - 1u;
+    let size = giant_list[at + 1u];
+    let chunk = (b - giant_list[at + 2u]) * GIANT_BLOCK + local;
+    voxelize_columns(load(giant_list[at]), chunk * size, size);
 }
 
 @compute @workgroup_size(64)

@@ -40,6 +40,7 @@ pub(super) struct AttributePipelines {
     scan_blocks: OnceLock<ComputePipeline<compact::scan_blocks::Entry>>,
     accumulate: OnceLock<ComputePipeline<stage::accumulate::Entry>>,
     accumulate_heavy: OnceLock<ComputePipeline<stage::accumulate_heavy::Entry>>,
+    accumulate_giant: OnceLock<ComputePipeline<stage::accumulate_giant::Entry>>,
     resolve: OnceLock<ComputePipeline<stage::resolve::Entry>>,
     to_volumes: OnceLock<ComputePipeline<volume_stage::to_volumes::Entry>>,
     albedo: AlbedoBinding,
@@ -684,6 +685,31 @@ impl Voxelizer {
             )?;
         }
         let params = params_for(0, count);
+        if heavy.giants > 0 {
+            let pipeline = ComputePipeline::cached(&p.accumulate_giant, device, &[])?;
+            let bound = pipeline.bind(
+                device,
+                &stage::accumulate_giant::Resources {
+                    params: (&params).into(),
+                    triangles: (&triangles).into(),
+                    corners: (&corners).into(),
+                    occupancy: (&surface.occupancy).into(),
+                    word_offsets: (&word_offsets).into(),
+                    block_offsets: (&block_offsets).into(),
+                    giants: (&heavy.giant_records).into(),
+                    sums: (&sums).into(),
+                    albedo: albedo_view.into(),
+                    albedo_sampler: sampler.into(),
+                },
+            )?;
+            run_indirect(
+                rec,
+                "voxel attributes of giant triangles",
+                pipeline,
+                &bound,
+                &heavy.giant_records,
+            );
+        }
         if heavy.capacity > 0 {
             let pipeline = ComputePipeline::cached(&p.accumulate_heavy, device, &[])?;
             let bound = pipeline.bind(

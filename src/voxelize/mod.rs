@@ -749,6 +749,7 @@ pub enum Separation {
 struct SurfacePipelines {
     light: ComputePipeline<stage::surface::Entry>,
     heavy: ComputePipeline<stage::surface_heavy::Entry>,
+    giant: ComputePipeline<stage::surface_giant::Entry>,
     listed: ComputePipeline<stage::surface_listed::Entry>,
 }
 
@@ -758,6 +759,7 @@ impl SurfacePipelines {
         Ok(Self {
             light: ComputePipeline::with_overrides(device, &o)?,
             heavy: ComputePipeline::with_overrides(device, &o)?,
+            giant: ComputePipeline::with_overrides(device, &o)?,
             listed: ComputePipeline::with_overrides(device, &o)?,
         })
     }
@@ -777,6 +779,71 @@ pub const MAX_CHUNKS: u32 = 16384;
 /// to that many, and never lists more for fewer columns).
 fn most_chunks(columns: u64) -> u64 {
     columns.div_ceil(CHUNK as u64).min(MAX_CHUNKS as u64)
+}
+
+/// Most giant triangles in one surface pass on the GPU (`fieldkit::triangle_box`'s
+/// `MAX_GIANTS`): the host picks the pass's threshold so that no more can pass it.
+pub const MAX_GIANTS: u32 = 64;
+
+/// The GPU's list makes no triangle of at most this many columns giant: below it, writing a
+/// triangle's entries (at most 1 024) costs its workgroup about a microsecond, less than the
+/// giants' pass of its own.
+pub const GIANT_MIN_COLUMNS: u32 = 4096;
+
+/// Bytes of the giants' buffer: the dispatch arguments, two counts, padding, then four words
+/// per record (`fieldkit::triangle_box`'s `GIANT_HEADER`).
+const GIANT_BYTES: u64 = 4 * (8 + 4 * MAX_GIANTS as u64);
+
+/// How a surface pass on the GPU takes a mesh's heavy triangles: the entries its work list
+/// can need, and the threshold past which a triangle is giant (a record and a pass of its own
+/// instead of entries; `u32::MAX` when no triangle can pass it) with how many can.
+#[doc(hidden)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GpuListing {
+    pub capacity: u64,
+    pub giant_columns: u32,
+    pub giants: u32,
+}
+
+impl GpuListing {
+    /// From heavy triangles' column counts (or bounds on them) sorted most first: the
+    /// threshold is the [`MAX_GIANTS`]-plus-first's count (at least [`GIANT_MIN_COLUMNS`]), so
+    /// at most `MAX_GIANTS` pass it; a triangle at or under it lists at most as many chunks as
+    /// one of the threshold's columns, and one over it none (`entries` counts a triangle's
+    /// chunks under a cap).
+    fn new(sorted: &[u64], entries: impl FnOnce(u64) -> u64) -> GpuListing {
+        let threshold = sorted
+            .get(MAX_GIANTS as usize)
+            .map_or(0, |&c| c)
+            .max(GIANT_MIN_COLUMNS as u64);
+        let giants = sorted.partition_point(|&c| c > threshold) as u32;
+        // A triangle the host counts as giant may still be listed (the GPU may find it fewer
+        // columns), in at most the threshold's chunks: the list holds those too.
+        let capacity = entries(most_chunks(threshold));
+        GpuListing {
+            capacity,
+            giant_columns: if giants == 0 {
+                u32::MAX
+            } else {
+                threshold.min(u32::MAX as u64 - 1) as u32
+            },
+            giants,
+        }
+    }
+
+    /// The listing for `local` moved by the identity: each heavy triangle's box columns.
+    pub fn exact(local: &GridMesh, size: [u32; 3]) -> GpuListing {
+        let mut columns: Vec<u64> = local
+            .vertices
+            .chunks(3)
+            .map(|t| box_columns(t, size))
+            .filter(|&c| c > LIGHT as u64)
+            .collect();
+        columns.sort_unstable_by(|a, b| b.cmp(a));
+        GpuListing::new(&columns, |cap| {
+            columns.iter().map(|&c| most_chunks(c).min(cap)).sum()
+        })
+    }
 }
 
 /// How `encode_surface`/`encode_solid` cut the triangles into threads: a triangle whose box
@@ -894,7 +961,7 @@ fn batches(count: u32) -> impl Iterator<Item = (u32, u32)> {
 struct SurfaceRun<'a> {
     triangles: &'a wgpu::Buffer,
     count: u32,
-    capacity: u32,
+    listing: GpuListing,
     to_grid: glam::Mat4,
     moved: f32,
 }
@@ -954,13 +1021,15 @@ impl Listed {
     }
 }
 
-/// The heavy triangles' chunks a surface pass listed, and the indirect dispatch that walks
-/// them.
+/// The heavy triangles' chunks a surface pass listed and the indirect dispatch that walks
+/// them, and its giant triangles' records with theirs (`giants`: how many there can be).
 struct HeavyWork {
     work: wgpu::Buffer,
     work_count: wgpu::Buffer,
     dispatch: wgpu::Buffer,
     capacity: u32,
+    giant_records: wgpu::Buffer,
+    giants: u32,
 }
 
 impl Voxelizer {
@@ -1139,7 +1208,7 @@ impl Voxelizer {
         grid: &Grid,
     ) -> Result<HeavyWork, Error> {
         let count = (local.vertices.len() / 3) as u32;
-        let capacity = heavy_chunk_bound(local, grid.size);
+        let listing = GpuListing::exact(local, grid.size);
         self.surface_pass(
             device,
             rec,
@@ -1148,7 +1217,7 @@ impl Voxelizer {
             &SurfaceRun {
                 triangles,
                 count,
-                capacity,
+                listing,
                 to_grid: glam::Mat4::IDENTITY,
                 moved: 0.0,
             },
@@ -1182,6 +1251,7 @@ impl Voxelizer {
                 slack: SLACK,
                 moved: 0.0,
                 capacity: listed.chunk_count,
+                giant_columns: u32::MAX,
             },
         );
         // More than 65535 workgroups: rows of 65535 (the shader reads `num_workgroups`).
@@ -1224,19 +1294,21 @@ impl Voxelizer {
         let &SurfaceRun {
             triangles,
             count,
-            capacity,
+            listing,
             to_grid,
             moved,
         } = run;
         let limit = device.limits().max_storage_buffer_binding_size;
-        if capacity as u64 * 8 > limit {
+        if listing.capacity.saturating_mul(8) > limit {
             return Err(Error::Size {
                 stage: STAGE,
                 what: "heavy-triangle work list bytes",
-                got: capacity as u64 * 8,
+                got: listing.capacity.saturating_mul(8),
                 max: limit,
             });
         }
+        // Within a binding: a u32 count.
+        let capacity = listing.capacity as u32;
         let buffer = |label, size: u64, usage| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -1247,14 +1319,19 @@ impl Voxelizer {
         };
         // (0, 1, 1) workgroups: `surface` raises the count (and the rows of 65535) as it lists
         // chunks.
-        let dispatch = wgpu::util::DeviceExt::create_buffer_init(
-            device,
-            &wgpu::util::BufferInitDescriptor {
-                label: Some("voxelize heavy dispatch"),
-                contents: bytemuck::cast_slice(&[0u32, 1, 1]),
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
-            },
-        );
+        let arguments = |label, bytes: u64| {
+            let mut words = vec![0u32; bytes as usize / 4];
+            words[1..3].copy_from_slice(&[1, 1]);
+            wgpu::util::DeviceExt::create_buffer_init(
+                device,
+                &wgpu::util::BufferInitDescriptor {
+                    label: Some(label),
+                    contents: bytemuck::cast_slice(&words),
+                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
+                },
+            )
+        };
+        let dispatch = arguments("voxelize heavy dispatch", 12);
         let heavy_work = HeavyWork {
             work: buffer(
                 "voxelize work list",
@@ -1264,11 +1341,15 @@ impl Voxelizer {
             work_count: buffer("voxelize work count", 4, wgpu::BufferUsages::COPY_DST),
             dispatch,
             capacity,
+            // The giant pass's arguments (0, 1, 1), then zeros.
+            giant_records: arguments("voxelize giant triangles", GIANT_BYTES),
+            giants: listing.giants,
         };
         let HeavyWork {
             work,
             work_count,
             dispatch,
+            giant_records,
             ..
         } = &heavy_work;
         // New buffers: zeroed by wgpu (the count starts at 0).
@@ -1287,6 +1368,7 @@ impl Voxelizer {
                     slack: SLACK,
                     moved,
                     capacity,
+                    giant_columns: listing.giant_columns,
                 },
             )
         };
@@ -1302,15 +1384,34 @@ impl Voxelizer {
                     work: work.into(),
                     work_count: work_count.into(),
                     heavy_dispatch: dispatch.into(),
+                    giants: giant_records.into(),
                 },
                 [n.div_ceil(64), 1, 1],
                 STAGE,
             )?;
         }
+        let params = params_for(0, count);
+        if listing.giants > 0 {
+            let giant = pipelines.giant.bind(
+                device,
+                &stage::surface_giant::Resources {
+                    params: (&params).into(),
+                    triangles: triangles.into(),
+                    occupancy: occupancy.into(),
+                    giant_list: giant_records.into(),
+                },
+            )?;
+            run_indirect(
+                rec,
+                "voxelize giant triangles",
+                &pipelines.giant,
+                &giant,
+                giant_records,
+            );
+        }
         if capacity == 0 {
             return Ok(heavy_work);
         }
-        let params = params_for(0, count);
         let heavy = pipelines.heavy.bind(
             device,
             &stage::surface_heavy::Resources {
@@ -1594,6 +1695,9 @@ mod tests {
             ("LIGHT", super::LIGHT),
             ("CHUNK", super::CHUNK),
             ("MAX_CHUNKS", super::MAX_CHUNKS),
+            ("MAX_GIANTS", super::MAX_GIANTS),
+            // `GIANT_BYTES`' header.
+            ("GIANT_HEADER", 8),
         ] {
             let line = format!("const {name}: u32 = {value}u;");
             assert!(src.contains(&line), "triangle_box.wesl lacks `{line}`");

@@ -5,8 +5,8 @@
 use glam::{DMat4, DVec3, Vec4};
 
 use super::{
-    CHUNK, Error, Grid, LIGHT, MAX_CHUNKS, Mesh, Separation, Surface, SurfaceRun, Voxelizer,
-    check_grid, check_model, invalid, most_chunks, zeroed_bitset,
+    CHUNK, Error, GpuListing, Grid, LIGHT, MAX_GIANTS, Mesh, Separation, Surface, SurfaceRun,
+    Voxelizer, check_grid, check_model, invalid, most_chunks, zeroed_bitset,
 };
 use crate::gpu::Record;
 
@@ -100,12 +100,12 @@ impl ChunkBound {
     /// has at most (a · d + 3)(b · d + 3) columns (one more each way for closed boxes and one
     /// for rounding), and it is heavy only when that exceeds `LIGHT`.
     ///
-    /// No triangle lists more than [`MAX_CHUNKS`]: those whose bound is larger (the first
+    /// No triangle lists more than `cap` chunks: those whose bound is larger (the first
     /// `giant`) count that many.
-    fn chunks(&self, a: f64, b: f64, size: [u32; 3]) -> u64 {
+    fn chunks(&self, a: f64, b: f64, size: [u32; 3], cap: u64) -> u64 {
         // (a · d + 3)(b · d + 3) ≤ (a · d + 3)² ≤ LIGHT = 16 when a · d ≤ 1.
         let heavy = self.diameters.partition_point(|&d| a * d > 1.0);
-        let cap = MAX_CHUNKS as f64;
+        let cap = cap as f64;
         let giant = self.diameters[..heavy]
             .partition_point(|&d| (a * d + 3.0) * (b * d + 3.0) / CHUNK as f64 > cap);
         let k = (heavy - giant) as f64;
@@ -115,12 +115,26 @@ impl ChunkBound {
         let by_size = (columns / CHUNK as f64 + k + giant as f64 * cap).ceil();
         let [x, y, z] = size.map(|n| n as u64);
         let most = (x * y).max(y * z).max(z * x);
-        let by_grid = heavy as u64 * most_chunks(most);
+        let by_grid = heavy as u64 * most_chunks(most).min(cap as u64);
         if by_size.is_finite() {
             (by_size as u64).min(by_grid)
         } else {
             by_grid
         }
+    }
+
+    /// The pass's listing under the same matrix: the giants' threshold from the bounds of the
+    /// [`MAX_GIANTS`] + 1 largest triangles (each clamped to the grid's largest face), so no
+    /// triangle under them can pass it, and the entries under it ([`ChunkBound::chunks`]).
+    fn listing(&self, a: f64, b: f64, size: [u32; 3]) -> GpuListing {
+        let [x, y, z] = size.map(|n| n as u64);
+        let most = (x * y).max(y * z).max(z * x);
+        let heavy = self.diameters.partition_point(|&d| a * d > 1.0);
+        let largest: Vec<u64> = self.diameters[..heavy.min(MAX_GIANTS as usize + 1)]
+            .iter()
+            .map(|&d| ((a * d + 3.0) * (b * d + 3.0)).min(most as f64).ceil() as u64)
+            .collect();
+        GpuListing::new(&largest, |cap| self.chunks(a, b, size, cap))
     }
 }
 
@@ -250,21 +264,19 @@ impl Voxelizer {
                      more than f32 can hold"
                 )));
             }
-            let entries = mesh.bound.chunks(a, b, grid.size);
-            let capacity = u32::try_from(entries).map_err(|_| Error::Size {
-                stage: super::STAGE,
-                what: "heavy-triangle work list entries of one placed mesh",
-                got: entries,
-                max: u32::MAX as u64,
-            })?;
-            runs.push((mesh, placed, capacity, moved as f32));
+            runs.push((
+                mesh,
+                placed,
+                mesh.bound.listing(a, b, grid.size),
+                moved as f32,
+            ));
         }
         let occupancy = zeroed_bitset(device, grid)?;
         let pipelines = match separation {
             Separation::Conservative => &self.surface,
             Separation::Six => &self.surface_six,
         };
-        for &(mesh, to_grid, capacity, moved) in &runs {
+        for &(mesh, to_grid, listing, moved) in &runs {
             let _ = self.surface_pass(
                 device,
                 rec,
@@ -273,7 +285,7 @@ impl Voxelizer {
                 &SurfaceRun {
                     triangles: &mesh.triangles,
                     count: mesh.count,
-                    capacity,
+                    listing,
                     to_grid,
                     moved,
                 },
@@ -291,30 +303,67 @@ impl Voxelizer {
 #[cfg(test)]
 mod tests {
     use super::{ChunkBound, axis_stretches, box_diagonal};
-    use crate::voxelize::{GridMesh, heavy_chunk_bound};
+    use crate::voxelize::{GpuListing, LIGHT, MAX_GIANTS, box_columns, most_chunks};
     use glam::{DMat3, DMat4, DVec3, EulerRot, Vec3};
     use proptest::prelude::*;
 
-    /// `ChunkBound::chunks` for `stored` (f32 triangles, as `GpuMesh` keeps them) moved by
-    /// `to_grid`, and the host's count for the same triangles moved in f64
-    /// (`heavy_chunk_bound`: each moved triangle's box, itself at least what the GPU lists).
-    fn bound_and_count(stored: &[[Vec3; 3]], to_grid: DMat4, size: [u32; 3]) -> (u64, u64) {
+    /// `ChunkBound::listing` for `stored` (f32 triangles, as `GpuMesh` keeps them) moved by
+    /// `to_grid`, and what the GPU's list needs for the same triangles moved in f64 (each moved
+    /// triangle's box columns, themselves at least what the GPU finds): the entries of those
+    /// the listing does not make giant, and how many it does.
+    fn listing_and_needs(
+        stored: &[[Vec3; 3]],
+        to_grid: DMat4,
+        size: [u32; 3],
+    ) -> (GpuListing, u64, u32) {
         let bound = ChunkBound::new(stored.iter().map(box_diagonal).collect());
         let (a, b) = axis_stretches(DMat3::from_mat4(to_grid));
-        let vertices = stored
+        let listing = bound.listing(a, b, size);
+        let moved: Vec<_> = stored
             .iter()
             .flatten()
             .map(|v| to_grid.transform_point3(v.as_dvec3()).as_vec3().extend(0.0))
             .collect();
-        let local = GridMesh {
-            vertices,
-            degenerate: 0,
-            source: (0..stored.len() as u32).collect(),
-        };
-        (
-            bound.chunks(a, b, size),
-            heavy_chunk_bound(&local, size) as u64,
-        )
+        let heavy = moved
+            .chunks(3)
+            .map(|t| box_columns(t, size))
+            .filter(|&c| c > LIGHT as u64);
+        let (mut entries, mut giants) = (0, 0);
+        for c in heavy {
+            if c > listing.giant_columns as u64 {
+                giants += 1;
+            } else {
+                entries += most_chunks(c);
+            }
+        }
+        (listing, entries, giants)
+    }
+
+    /// [`listing_and_needs`]: the listing holds every entry, and a record for every giant.
+    fn check(stored: &[[Vec3; 3]], to_grid: DMat4, size: [u32; 3]) -> (GpuListing, u64) {
+        let (listing, entries, giants) = listing_and_needs(stored, to_grid, size);
+        assert!(
+            listing.capacity >= entries,
+            "{listing:?} < {entries} entries"
+        );
+        assert!(
+            giants <= listing.giants && listing.giants <= MAX_GIANTS,
+            "{listing:?}: {giants} giants"
+        );
+        (listing, entries)
+    }
+
+    /// One flat right triangle per (leg, height) at the origin.
+    fn flat(legs: &[(f32, f32)]) -> Vec<[Vec3; 3]> {
+        legs.iter()
+            .map(|&(l, z)| {
+                [
+                    Vec3::new(0.0, 0.0, z),
+                    Vec3::new(l, 0.0, z),
+                    Vec3::new(0.0, l, z),
+                ]
+            })
+            .collect()
     }
 
     proptest! {
@@ -348,8 +397,7 @@ mod tests {
                 * shear
                 * DMat3::from_diagonal(DVec3::from_array(scale) * signs);
             let to_grid = DMat4::from_mat3_translation(linear, DVec3::from_array(shift));
-            let (bound, count) = bound_and_count(&stored, to_grid, size);
-            prop_assert!(bound >= count, "bound {bound} < {count} chunks");
+            check(&stored, to_grid, size);
         }
     }
 
@@ -370,11 +418,48 @@ mod tests {
                 stored.push([c[0], c[2], c[3]]);
             }
         }
-        let (bound, count) = bound_and_count(&stored, DMat4::IDENTITY, [512, 512, 4]);
-        assert!(count > 0 && bound >= count, "{bound} against {count}");
+        let (listing, count) = check(&stored, DMat4::IDENTITY, [512, 512, 4]);
+        // 128 triangles of the same bound: none can be giant.
+        assert_eq!((listing.giants, listing.giant_columns), (0, u32::MAX));
+        let bound = listing.capacity;
+        assert!(count > 0, "{bound} against {count}");
         assert!(
             (bound as f64) < 2.05 * count as f64,
             "{bound} against {count} chunks"
         );
+    }
+
+    /// Giant triangles: the largest (at most `MAX_GIANTS`) may pass the threshold and list no
+    /// entries; the rest keep theirs. Two halves of a square over a 4096² grid and a small
+    /// triangle: all three may pass `GIANT_MIN_COLUMNS` by their bounds, the small one does
+    /// not (51² columns), and the list holds each one's entries under the threshold in case the
+    /// GPU finds it there. 64 + 10 large ones: the 64 largest. 70 equal ones: none, each listed
+    /// (in `MAX_CHUNKS`).
+    #[test]
+    fn the_largest_triangles_are_giant() {
+        use crate::voxelize::{GIANT_MIN_COLUMNS, MAX_CHUNKS};
+        let size = [4096, 4096, 2];
+        let (listing, entries) = check(
+            &flat(&[(4096.0, 0.5), (4096.0, 1.5), (50.0, 0.5)]),
+            DMat4::IDENTITY,
+            size,
+        );
+        assert_eq!(
+            (listing.giants, listing.giant_columns),
+            (3, GIANT_MIN_COLUMNS)
+        );
+        // The small one: 51² columns, 651 chunks of 4; each of the three at most 1 024.
+        assert_eq!((entries, listing.capacity), (651, 3 * 1024));
+
+        let mut legs = vec![(1000.0, 0.5); 64];
+        legs.extend([(200.0, 1.5); 10]);
+        let (listing, entries) = check(&flat(&legs), DMat4::IDENTITY, size);
+        assert_eq!(listing.giants, 64);
+        assert!(listing.giant_columns > 201 * 201, "{listing:?}");
+        assert_eq!(entries, 10 * (201 * 201u64).div_ceil(4));
+
+        let (listing, entries) = check(&flat(&[(4096.0, 0.5); 70]), DMat4::IDENTITY, size);
+        assert_eq!((listing.giants, listing.giant_columns), (0, u32::MAX));
+        assert_eq!(entries, 70 * MAX_CHUNKS as u64);
     }
 }
