@@ -796,7 +796,7 @@ fn a_resident_giant_triangle_is_walked_in_blocks() {
 /// 64 giants (201² columns) beside 10 smaller triangles (101²) that the resident mesh's bound
 /// cannot tell from them, so those are listed in chunks: both exactly the triangles' voxels.
 #[test]
-fn giant_triangles_fill_two_dispatch_rows_and_share_a_pass_with_listed_ones() {
+fn giant_triangles_fill_two_dispatch_rows_beside_listed_ones() {
     let ctx = Context::shared();
     let (m, want) = right_triangles_on_layers(&[2047; 5], 2048);
     let gpu = resident_voxels(&ctx, &m, &unit_grid([2048, 2048, 5]));

@@ -769,9 +769,10 @@ impl SurfacePipelines {
 pub const CHUNK: u32 = 4;
 
 /// Most chunks the GPU lists for one triangle (`fieldkit::triangle_box`'s `MAX_CHUNKS`): a
-/// triangle of more than `MAX_CHUNKS` × [`CHUNK`] columns gets longer chunks, so a mesh of a
-/// few giant triangles (a ground plane, walls) needs a short work list at any grid. The host's
-/// listing for `encode_surface` shortens triangles to fit [`LIST_BUDGET`], but never below this.
+/// triangle of more than `MAX_CHUNKS` × [`CHUNK`] columns gets longer chunks, so a mesh of
+/// many large triangles needs a bounded work list at any grid (the largest [`MAX_GIANTS`] get
+/// records instead, [`GpuListing`]). The host's listing for `encode_surface` shortens
+/// triangles to fit [`LIST_BUDGET`], but never below this.
 pub const MAX_CHUNKS: u32 = 16384;
 
 /// Chunks the GPU's work list can need for a triangle of at most `columns` columns: chunks of
