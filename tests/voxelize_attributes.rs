@@ -220,16 +220,17 @@ fn one_giant_triangle_lists_every_chunk() {
         size: [904, 904, 2],
     };
     let local = one.to_grid(&grid).unwrap();
-    // One giant, no entries but those the list keeps in case the GPU finds it under the
-    // threshold (at most that many columns).
-    use fieldkit::voxelize::{GIANT_MIN_COLUMNS, GpuListing};
+    // One giant, triangle 0, and no entries.
+    use fieldkit::voxelize::GpuListing;
     assert_eq!(
         GpuListing::exact(&local, grid.size),
-        GpuListing {
-            capacity: GIANT_MIN_COLUMNS as u64 / 4,
-            giant_columns: GIANT_MIN_COLUMNS,
-            giants: 1,
-        }
+        (
+            GpuListing {
+                capacity: 0,
+                giants: 1
+            },
+            vec![0]
+        )
     );
     let (_, got) = run(&ctx, &one, &grid);
     assert!(got.len() > 400_000, "{} voxels", got.len());

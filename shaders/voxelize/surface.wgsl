@@ -11,9 +11,9 @@
 // with more than LIGHT columns does not stall its thread: `surface` appends it to a work list
 // in chunks of `chunk_columns` columns (CHUNK but for giant triangles; a workgroup's threads
 // list their heavy triangles' chunks together) and raises the indirect dispatch arguments to
-// the list's length, and `surface_heavy` takes one chunk per thread. A giant triangle (more
-// than `giant_columns`) gets a record instead of entries, and `surface_giant` walks its chunks
-// a workgroup per block (`fieldkit::triangle_box`'s MAX_GIANTS).
+// the list's length, and `surface_heavy` takes one chunk per thread. A giant triangle (one of
+// the largest, which the host marks, at most `fieldkit::triangle_box`'s MAX_GIANTS) gets a
+// record instead of entries, and `surface_giant` walks its chunks a workgroup per block.
 //
 // SIX_SEPARATING gives the thinner voxelization of the same paper, through which no
 // 6-connected path gets; 26-connected paths can.
@@ -37,9 +37,10 @@ struct SurfaceParams {
     moved: f32,
     // Entries the work list holds (the host sizes it for every chunk there can be).
     capacity: u32,
-    // Triangles of more columns than this are giant (the host picks it so that at most
-    // MAX_GIANTS are; u32 max when none can be).
-    giant_columns: u32,
+    // Heavy triangles whose first vertex's w is 1 ..= giants are giant (the host ranks the
+    // largest MAX_GIANTS by their columns or a bound on them, and counts those past its
+    // threshold).
+    giants: u32,
 }
 
 override SIX_SEPARATING: bool = false;
@@ -47,8 +48,8 @@ override SIX_SEPARATING: bool = false;
 override LISTED_WORKGROUP: u32 = 64u;
 
 @group(0) @binding(0) var<uniform> params: SurfaceParams;
-// Three vertices per triangle, in the coordinates `to_grid` moves (w: see `listed`; `vertex`
-// ignores it).
+// Three vertices per triangle, in the coordinates `to_grid` moves (a first vertex's w: the
+// triangle's rank among the giants, or see `listed`; `vertex` ignores it).
 @group(0) @binding(1) var<storage, read> triangles: array<vec4<f32>>;
 // Occupancy, one bit per voxel, x fastest: voxel (x, y, z) is bit i % 32 of word i / 32 with
 // i = (z · ny + y) · nx + x.
@@ -161,7 +162,8 @@ fn surface(@builtin(global_invocation_id) id: vec3<u32>,
     var giant = false;
     if mine {
         s = load(params.first + id.x);
-        if s.columns > params.giant_columns {
+        let rank = u32(triangles[3u * (params.first + id.x)].w);
+        if s.columns > LIGHT && rank >= 1u && rank <= params.giants {
             giant = add_giant(params.first + id.x, s.columns);
         }
         if s.columns > LIGHT && !giant {
@@ -184,8 +186,8 @@ fn surface(@builtin(global_invocation_id) id: vec3<u32>,
     }
 }
 
-// Record giant triangle `t` for `surface_giant`, if a record is left (the host's threshold
-// leaves one for every triangle that can pass it; a triangle past them is listed in chunks).
+// Record giant triangle `t` for `surface_giant` (the host marks no more than there are
+// records; were a record not left, the triangle would be listed in chunks).
 fn add_giant(t: u32, columns: u32) -> bool {
     let slot = atomicAdd(&giants[GIANT_RECORDS], 1u);
     if slot >= MAX_GIANTS {

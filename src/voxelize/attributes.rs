@@ -492,14 +492,16 @@ impl Voxelizer {
         let local = mesh.to_grid(grid)?;
         let bound = occupied_bound(&local, grid.size);
         let corner_data = corners(mesh, &local)?;
-        let (occupancy, triangles) = self.bitset(device, &local, grid)?;
+        let (listing, giants) = super::GpuListing::exact(&local, grid.size);
+        let (occupancy, triangles) = self.bitset(device, &local, grid, &giants)?;
         let heavy = self.surface_into(
             device,
             rec,
             &self.surface,
             &occupancy,
             &triangles,
-            &local,
+            (local.vertices.len() / 3) as u32,
+            listing,
             grid,
         )?;
         let voxels = grid.voxels();

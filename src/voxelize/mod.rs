@@ -796,54 +796,56 @@ pub const GIANT_MIN_COLUMNS: u32 = 4096;
 const GIANT_BYTES: u64 = 4 * (8 + 4 * MAX_GIANTS as u64);
 
 /// How a surface pass on the GPU takes a mesh's heavy triangles: the entries its work list
-/// can need, and the threshold past which a triangle is giant (a record and a pass of its own
-/// instead of entries; `u32::MAX` when no triangle can pass it) with how many can.
+/// can need, and how many of the largest are giant (a record and a pass of their own instead
+/// of entries): those whose first vertex's w the host set to 1 ..= `giants` ([`mark_giants`]).
 #[doc(hidden)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct GpuListing {
     pub capacity: u64,
-    pub giant_columns: u32,
     pub giants: u32,
 }
 
-impl GpuListing {
-    /// From heavy triangles' column counts (or bounds on them) sorted most first: the
-    /// threshold is the [`MAX_GIANTS`]-plus-first's count (at least [`GIANT_MIN_COLUMNS`]), so
-    /// at most `MAX_GIANTS` pass it; a triangle at or under it lists at most as many chunks as
-    /// one of the threshold's columns, and one over it none (`entries` counts a triangle's
-    /// chunks under a cap).
-    fn new(sorted: &[u64], entries: impl FnOnce(u64) -> u64) -> GpuListing {
-        let threshold = sorted
-            .get(MAX_GIANTS as usize)
-            .map_or(0, |&c| c)
-            .max(GIANT_MIN_COLUMNS as u64);
-        let giants = sorted.partition_point(|&c| c > threshold) as u32;
-        // A triangle the host counts as giant may still be listed (the GPU may find it fewer
-        // columns), in at most the threshold's chunks: the list holds those too.
-        let capacity = entries(most_chunks(threshold));
-        GpuListing {
-            capacity,
-            giant_columns: if giants == 0 {
-                u32::MAX
-            } else {
-                threshold.min(u32::MAX as u64 - 1) as u32
-            },
-            giants,
-        }
-    }
+/// How many of the triangles whose columns (or bounds on them) are `sorted`, most first, are
+/// giant: those past the [`MAX_GIANTS`]-plus-first's count and past [`GIANT_MIN_COLUMNS`], so
+/// at most `MAX_GIANTS`, the largest first.
+fn giant_count(sorted: &[u64]) -> usize {
+    let threshold = sorted
+        .get(MAX_GIANTS as usize)
+        .map_or(0, |&c| c)
+        .max(GIANT_MIN_COLUMNS as u64);
+    sorted.partition_point(|&c| c > threshold)
+}
 
-    /// The listing for `local` moved by the identity: each heavy triangle's box columns.
-    pub fn exact(local: &GridMesh, size: [u32; 3]) -> GpuListing {
-        let mut columns: Vec<u64> = local
+/// Mark the giant triangles `giants` (triangle indices, largest first) for the surface pass:
+/// the w of a giant's first vertex is its rank + 1, every other first vertex's 0.
+fn mark_giants(vertices: &mut [Vec4], giants: &[u32]) {
+    for first in vertices.iter_mut().step_by(3) {
+        first.w = 0.0;
+    }
+    for (rank, &t) in giants.iter().enumerate() {
+        vertices[3 * t as usize].w = rank as f32 + 1.0;
+    }
+}
+
+impl GpuListing {
+    /// The listing for `local` moved by the identity, from each heavy triangle's box columns,
+    /// and its giant triangles, largest first (to [`mark_giants`]).
+    pub fn exact(local: &GridMesh, size: [u32; 3]) -> (GpuListing, Vec<u32>) {
+        let mut heavy: Vec<(u64, u32)> = local
             .vertices
             .chunks(3)
-            .map(|t| box_columns(t, size))
-            .filter(|&c| c > LIGHT as u64)
+            .zip(0..)
+            .map(|(t, i)| (box_columns(t, size), i))
+            .filter(|&(c, _)| c > LIGHT as u64)
             .collect();
-        columns.sort_unstable_by(|a, b| b.cmp(a));
-        GpuListing::new(&columns, |cap| {
-            columns.iter().map(|&c| most_chunks(c).min(cap)).sum()
-        })
+        heavy.sort_unstable_by(|a, b| b.cmp(a));
+        let columns: Vec<u64> = heavy.iter().map(|&(c, _)| c).collect();
+        let giants = giant_count(&columns);
+        let listing = GpuListing {
+            capacity: columns[giants..].iter().map(|&c| most_chunks(c)).sum(),
+            giants: giants as u32,
+        };
+        (listing, heavy[..giants].iter().map(|&(_, t)| t).collect())
     }
 }
 
@@ -1171,17 +1173,20 @@ impl Voxelizer {
         Ok(volume)
     }
 
-    /// A cleared bitset for `grid` and the triangle buffer of `local`.
+    /// A cleared bitset for `grid` and the triangle buffer of `local`, its `giants` marked
+    /// ([`mark_giants`]).
     fn bitset(
         &self,
         device: &wgpu::Device,
         local: &GridMesh,
         grid: &Grid,
+        giants: &[u32],
     ) -> Result<(wgpu::Buffer, wgpu::Buffer), Error> {
         let occupancy = zeroed_bitset(device, grid)?;
         use wgpu::util::DeviceExt;
-        // One padding vertex keeps the buffer non-empty when every triangle was degenerate.
         let mut vertices = local.vertices.clone();
+        mark_giants(&mut vertices, giants);
+        // One padding vertex keeps the buffer non-empty when every triangle was degenerate.
         if vertices.is_empty() {
             vertices.push(Vec4::ZERO);
         }
@@ -1193,10 +1198,11 @@ impl Voxelizer {
         Ok((occupancy, triangles))
     }
 
-    /// A surface pass (`pipelines`: conservative or six-separating) over the triangles of
-    /// `local`, ORed into `occupancy`: light triangles one per thread, heavy ones (more than
-    /// [`LIGHT`] columns) in chunks of [`CHUNK`] through a work list and an indirect dispatch. Returns the
-    /// work list, which the attribute pass walks again.
+    /// A surface pass (`pipelines`: conservative or six-separating) over the `count` triangles
+    /// of `triangles` (marked for `listing`), ORed into `occupancy`: light triangles one per
+    /// thread, heavy ones (more than [`LIGHT`] columns) in chunks of [`CHUNK`] through a work
+    /// list and an indirect dispatch, giant ones by blocks. Returns the work list, which the
+    /// attribute pass walks again.
     #[allow(clippy::too_many_arguments)]
     fn surface_into(
         &self,
@@ -1205,11 +1211,10 @@ impl Voxelizer {
         pipelines: &SurfacePipelines,
         occupancy: &wgpu::Buffer,
         triangles: &wgpu::Buffer,
-        local: &GridMesh,
+        count: u32,
+        listing: GpuListing,
         grid: &Grid,
     ) -> Result<HeavyWork, Error> {
-        let count = (local.vertices.len() / 3) as u32;
-        let listing = GpuListing::exact(local, grid.size);
         self.surface_pass(
             device,
             rec,
@@ -1252,7 +1257,7 @@ impl Voxelizer {
                 slack: SLACK,
                 moved: 0.0,
                 capacity: listed.chunk_count,
-                giant_columns: u32::MAX,
+                giants: 0,
             },
         );
         // More than 65535 workgroups: rows of 65535 (the shader reads `num_workgroups`).
@@ -1369,7 +1374,7 @@ impl Voxelizer {
                     slack: SLACK,
                     moved,
                     capacity,
-                    giant_columns: listing.giant_columns,
+                    giants: listing.giants,
                 },
             )
         };
@@ -1456,7 +1461,7 @@ impl Voxelizer {
             });
         }
         let local = mesh.to_grid(grid)?;
-        let (occupancy, triangles) = self.bitset(device, &local, grid)?;
+        let (occupancy, triangles) = self.bitset(device, &local, grid, &[])?;
         let format = wgpu::TextureFormat::R8Unorm;
         let pipeline = if let Some(p) = self.raster.get() {
             p

@@ -5,8 +5,9 @@
 use glam::{DMat4, DVec3, Vec4};
 
 use super::{
-    CHUNK, Error, GpuListing, Grid, LIGHT, MAX_GIANTS, Mesh, Separation, Surface, SurfaceRun,
-    Voxelizer, check_grid, check_model, invalid, most_chunks, zeroed_bitset,
+    CHUNK, Error, GpuListing, Grid, LIGHT, MAX_CHUNKS, MAX_GIANTS, Mesh, Separation, Surface,
+    SurfaceRun, Voxelizer, check_grid, check_model, giant_count, invalid, mark_giants, most_chunks,
+    zeroed_bitset,
 };
 use crate::gpu::Record;
 
@@ -56,6 +57,9 @@ pub struct GpuMesh {
 /// triangles.
 struct ChunkBound {
     diameters: Vec<f64>,
+    /// The triangles of the [`MAX_GIANTS`] largest diameters, largest first (ties by index):
+    /// those a pass may make giant ([`mark_giants`]).
+    largest: Vec<u32>,
     sums: Vec<f64>,
     squares: Vec<f64>,
 }
@@ -77,6 +81,9 @@ fn axis_stretches(linear: glam::DMat3) -> (f64, f64) {
 
 impl ChunkBound {
     fn new(mut diameters: Vec<f64>) -> Self {
+        let mut order: Vec<u32> = (0..diameters.len() as u32).collect();
+        order.sort_by(|&i, &j| diameters[j as usize].total_cmp(&diameters[i as usize]));
+        order.truncate(MAX_GIANTS as usize);
         diameters.sort_by(|a, b| b.total_cmp(a));
         let running = |f: fn(f64) -> f64| -> Vec<f64> {
             std::iter::once(0.0)
@@ -89,6 +96,7 @@ impl ChunkBound {
         let (sums, squares) = (running(|d| d), running(|d| d * d));
         Self {
             diameters,
+            largest: order,
             sums,
             squares,
         }
@@ -100,22 +108,23 @@ impl ChunkBound {
     /// has at most (a · d + 3)(b · d + 3) columns (one more each way for closed boxes and one
     /// for rounding), and it is heavy only when that exceeds `LIGHT`.
     ///
-    /// No triangle lists more than `cap` chunks: those whose bound is larger (the first
-    /// `giant`) count that many.
-    fn chunks(&self, a: f64, b: f64, size: [u32; 3], cap: u64) -> u64 {
+    /// The first `skip` (the pass's giants) list nothing. No triangle lists more than
+    /// [`MAX_CHUNKS`]: those whose bound is larger (up to `capped`) count that many.
+    fn chunks(&self, a: f64, b: f64, size: [u32; 3], skip: usize) -> u64 {
         // (a · d + 3)(b · d + 3) ≤ (a · d + 3)² ≤ LIGHT = 16 when a · d ≤ 1.
-        let heavy = self.diameters.partition_point(|&d| a * d > 1.0);
-        let cap = cap as f64;
-        let giant = self.diameters[..heavy]
-            .partition_point(|&d| (a * d + 3.0) * (b * d + 3.0) / CHUNK as f64 > cap);
-        let k = (heavy - giant) as f64;
-        let columns = a * b * (self.squares[heavy] - self.squares[giant])
-            + 3.0 * (a + b) * (self.sums[heavy] - self.sums[giant])
+        let heavy = self.diameters.partition_point(|&d| a * d > 1.0).max(skip);
+        let cap = MAX_CHUNKS as f64;
+        let capped = self.diameters[..heavy]
+            .partition_point(|&d| (a * d + 3.0) * (b * d + 3.0) / CHUNK as f64 > cap)
+            .max(skip);
+        let k = (heavy - capped) as f64;
+        let columns = a * b * (self.squares[heavy] - self.squares[capped])
+            + 3.0 * (a + b) * (self.sums[heavy] - self.sums[capped])
             + 9.0 * k;
-        let by_size = (columns / CHUNK as f64 + k + giant as f64 * cap).ceil();
+        let by_size = (columns / CHUNK as f64 + k + (capped - skip) as f64 * cap).ceil();
         let [x, y, z] = size.map(|n| n as u64);
         let most = (x * y).max(y * z).max(z * x);
-        let by_grid = heavy as u64 * most_chunks(most).min(cap as u64);
+        let by_grid = (heavy - skip) as u64 * most_chunks(most);
         if by_size.is_finite() {
             (by_size as u64).min(by_grid)
         } else {
@@ -123,18 +132,22 @@ impl ChunkBound {
         }
     }
 
-    /// The pass's listing under the same matrix: the giants' threshold from the bounds of the
-    /// [`MAX_GIANTS`] + 1 largest triangles (each clamped to the grid's largest face), so no
-    /// triangle under them can pass it, and the entries under it ([`ChunkBound::chunks`]).
+    /// The pass's listing under the same matrix: its giants from the bounds of the
+    /// [`MAX_GIANTS`] + 1 largest triangles (each clamped to the grid's largest face;
+    /// [`giant_count`]), and the others' entries ([`ChunkBound::chunks`]).
     fn listing(&self, a: f64, b: f64, size: [u32; 3]) -> GpuListing {
         let [x, y, z] = size.map(|n| n as u64);
         let most = (x * y).max(y * z).max(z * x);
         let heavy = self.diameters.partition_point(|&d| a * d > 1.0);
-        let largest: Vec<u64> = self.diameters[..heavy.min(MAX_GIANTS as usize + 1)]
+        let bounds: Vec<u64> = self.diameters[..heavy.min(MAX_GIANTS as usize + 1)]
             .iter()
             .map(|&d| ((a * d + 3.0) * (b * d + 3.0)).min(most as f64).ceil() as u64)
             .collect();
-        GpuListing::new(&largest, |cap| self.chunks(a, b, size, cap))
+        let giants = giant_count(&bounds);
+        GpuListing {
+            capacity: self.chunks(a, b, size, giants),
+            giants: giants as u32,
+        }
     }
 }
 
@@ -177,6 +190,8 @@ impl GpuMesh {
             )));
         }
         let count = (vertices.len() / 3) as u32;
+        let bound = ChunkBound::new(diameters);
+        mark_giants(&mut vertices, &bound.largest);
         // One padding vertex keeps the buffer non-empty when every triangle was degenerate.
         if vertices.is_empty() {
             vertices.push(Vec4::ZERO);
@@ -193,7 +208,7 @@ impl GpuMesh {
             degenerate,
             anchor,
             radius,
-            bound: ChunkBound::new(diameters),
+            bound,
         })
     }
 
@@ -308,48 +323,43 @@ mod tests {
     use proptest::prelude::*;
 
     /// `ChunkBound::listing` for `stored` (f32 triangles, as `GpuMesh` keeps them) moved by
-    /// `to_grid`, and what the GPU's list needs for the same triangles moved in f64 (each moved
-    /// triangle's box columns, themselves at least what the GPU finds): the entries of those
-    /// the listing does not make giant, and how many it does.
-    fn listing_and_needs(
+    /// `to_grid`, and the entries the GPU's list needs for the same triangles moved in f64
+    /// (each moved triangle's box columns, themselves at least what the GPU finds) but for the
+    /// giants the listing marks (the first `giants` of `ChunkBound::largest`).
+    fn listing_and_entries(
         stored: &[[Vec3; 3]],
         to_grid: DMat4,
         size: [u32; 3],
-    ) -> (GpuListing, u64, u32) {
+    ) -> (GpuListing, u64) {
         let bound = ChunkBound::new(stored.iter().map(box_diagonal).collect());
         let (a, b) = axis_stretches(DMat3::from_mat4(to_grid));
         let listing = bound.listing(a, b, size);
+        let giants = &bound.largest[..listing.giants as usize];
         let moved: Vec<_> = stored
             .iter()
             .flatten()
             .map(|v| to_grid.transform_point3(v.as_dvec3()).as_vec3().extend(0.0))
             .collect();
-        let heavy = moved
+        let entries = moved
             .chunks(3)
-            .map(|t| box_columns(t, size))
-            .filter(|&c| c > LIGHT as u64);
-        let (mut entries, mut giants) = (0, 0);
-        for c in heavy {
-            if c > listing.giant_columns as u64 {
-                giants += 1;
-            } else {
-                entries += most_chunks(c);
-            }
-        }
-        (listing, entries, giants)
+            .zip(0..)
+            .filter(|(_, i)| !giants.contains(i))
+            .map(|(t, _)| box_columns(t, size))
+            .filter(|&c| c > LIGHT as u64)
+            .map(most_chunks)
+            .sum();
+        (listing, entries)
     }
 
-    /// [`listing_and_needs`]: the listing holds every entry, and a record for every giant.
+    /// [`listing_and_entries`]: the listing holds every entry, and marks no more giants than
+    /// there are records.
     fn check(stored: &[[Vec3; 3]], to_grid: DMat4, size: [u32; 3]) -> (GpuListing, u64) {
-        let (listing, entries, giants) = listing_and_needs(stored, to_grid, size);
+        let (listing, entries) = listing_and_entries(stored, to_grid, size);
         assert!(
             listing.capacity >= entries,
             "{listing:?} < {entries} entries"
         );
-        assert!(
-            giants <= listing.giants && listing.giants <= MAX_GIANTS,
-            "{listing:?}: {giants} giants"
-        );
+        assert!(listing.giants <= MAX_GIANTS, "{listing:?}");
         (listing, entries)
     }
 
@@ -419,8 +429,8 @@ mod tests {
             }
         }
         let (listing, count) = check(&stored, DMat4::IDENTITY, [512, 512, 4]);
-        // 128 triangles of the same bound: none can be giant.
-        assert_eq!((listing.giants, listing.giant_columns), (0, u32::MAX));
+        // 128 triangles of the same bound: none is giant.
+        assert_eq!(listing.giants, 0);
         let bound = listing.capacity;
         assert!(count > 0, "{bound} against {count}");
         assert!(
@@ -429,37 +439,32 @@ mod tests {
         );
     }
 
-    /// Giant triangles: the largest (at most `MAX_GIANTS`) may pass the threshold and list no
-    /// entries; the rest keep theirs. Two halves of a square over a 4096² grid and a small
-    /// triangle: all three may pass `GIANT_MIN_COLUMNS` by their bounds, the small one does
-    /// not (51² columns), and the list holds each one's entries under the threshold in case the
-    /// GPU finds it there. 64 + 10 large ones: the 64 largest. 70 equal ones: none, each listed
-    /// (in `MAX_CHUNKS`).
+    /// Giant triangles: the largest (at most `MAX_GIANTS`) whose bounds pass the threshold are
+    /// marked and list no entries; the rest keep theirs. Two halves of a square over a 4096²
+    /// grid and a small triangle: the two pass `GIANT_MIN_COLUMNS`, the small one (31²
+    /// columns, bound 2 064) does not. 64 + 10 large ones: the 64 largest. 70 equal ones: none,
+    /// each listed (in `MAX_CHUNKS`).
     #[test]
     fn the_largest_triangles_are_giant() {
-        use crate::voxelize::{GIANT_MIN_COLUMNS, MAX_CHUNKS};
+        use crate::voxelize::MAX_CHUNKS;
         let size = [4096, 4096, 2];
         let (listing, entries) = check(
-            &flat(&[(4096.0, 0.5), (4096.0, 1.5), (50.0, 0.5)]),
+            &flat(&[(30.0, 0.5), (4096.0, 0.5), (4096.0, 1.5)]),
             DMat4::IDENTITY,
             size,
         );
-        assert_eq!(
-            (listing.giants, listing.giant_columns),
-            (3, GIANT_MIN_COLUMNS)
-        );
-        // The small one: 51² columns, 651 chunks of 4; each of the three at most 1 024.
-        assert_eq!((entries, listing.capacity), (651, 3 * 1024));
+        assert_eq!(listing.giants, 2);
+        // The small one: 31² columns, 241 chunks of 4; its bound, 2 064 columns, 517.
+        assert_eq!((entries, listing.capacity), (241, 517));
 
         let mut legs = vec![(1000.0, 0.5); 64];
         legs.extend([(200.0, 1.5); 10]);
         let (listing, entries) = check(&flat(&legs), DMat4::IDENTITY, size);
         assert_eq!(listing.giants, 64);
-        assert!(listing.giant_columns > 201 * 201, "{listing:?}");
         assert_eq!(entries, 10 * (201 * 201u64).div_ceil(4));
 
         let (listing, entries) = check(&flat(&[(4096.0, 0.5); 70]), DMat4::IDENTITY, size);
-        assert_eq!((listing.giants, listing.giant_columns), (0, u32::MAX));
+        assert_eq!(listing.giants, 0);
         assert_eq!(entries, 70 * MAX_CHUNKS as u64);
     }
 }
