@@ -813,7 +813,8 @@ fn giant_triangles_fill_two_dispatch_rows_beside_listed_ones() {
 
 /// More giant triangles than the device's storage binding holds chunks for (each lists
 /// `MAX_CHUNKS` of 8 bytes): the host sums the chunks before it allocates them and gives a
-/// typed error instead.
+/// typed error instead, for its own list and for the GPU's list of a resident mesh (the same
+/// size: triangles of equal size, none of which the GPU's list makes giant).
 #[test]
 fn a_chunk_list_too_large_is_refused_before_it_is_made() {
     use fieldkit::voxelize::MAX_CHUNKS;
@@ -842,6 +843,21 @@ fn a_chunk_list_too_large_is_refused_before_it_is_made() {
         }
         Err(e) => panic!("another error: {e}"),
         Ok(_) => panic!("a chunk list past the binding's {limit} bytes was accepted"),
+    }
+    let resident = fieldkit::voxelize::GpuMesh::upload(&ctx.device, &m).unwrap();
+    match v.encode_surface_placed(
+        &ctx.device,
+        &mut enc,
+        &[(&resident, glam::DMat4::IDENTITY)],
+        &unit_grid([4096, 4096, 2]),
+        Separation::Conservative,
+    ) {
+        Err(Error::Size { what, got, max, .. }) => {
+            assert_eq!(what, "heavy-triangle work list bytes");
+            assert_eq!((got, max), (count as u64 * 8 * MAX_CHUNKS as u64, limit));
+        }
+        Err(e) => panic!("another error: {e}"),
+        Ok(_) => panic!("a resident list past the binding's {limit} bytes was accepted"),
     }
 }
 

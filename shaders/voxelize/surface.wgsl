@@ -9,7 +9,7 @@
 //
 // One thread per triangle (`first` and `count` select a run of the triangle list). A triangle
 // with more than LIGHT columns does not stall its thread: `surface` appends it to a work list
-// in chunks of `chunk_columns` columns (CHUNK but for giant triangles; a workgroup's threads
+// in chunks of `chunk_columns` columns (CHUNK but past MAX_CHUNKS chunks; a workgroup's threads
 // list their heavy triangles' chunks together) and raises the indirect dispatch arguments to
 // the list's length, and `surface_heavy` takes one chunk per thread. A giant triangle (one of
 // the largest, which the host marks, at most `fieldkit::triangle_box`'s MAX_GIANTS) gets a
@@ -186,8 +186,8 @@ fn surface(@builtin(global_invocation_id) id: vec3<u32>,
     }
 }
 
-// Record giant triangle `t` for `surface_giant` (the host marks no more than there are
-// records; were a record not left, the triangle would be listed in chunks).
+// Record giant triangle `t` for `surface_giant`. The host marks no more giants than there are
+// records; the check keeps the writes in the buffer whatever the marks say.
 fn add_giant(t: u32, columns: u32) -> bool {
     let slot = atomicAdd(&giants[GIANT_RECORDS], 1u);
     if slot >= MAX_GIANTS {

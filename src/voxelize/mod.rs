@@ -783,7 +783,7 @@ fn most_chunks(columns: u64) -> u64 {
 }
 
 /// Most giant triangles in one surface pass on the GPU (`fieldkit::triangle_box`'s
-/// `MAX_GIANTS`): the host picks the pass's threshold so that no more can pass it.
+/// `MAX_GIANTS`): the host marks at most this many, the largest ([`mark_giants`]).
 pub const MAX_GIANTS: u32 = 64;
 
 /// The GPU's list makes no triangle of at most this many columns giant: below it, writing a
@@ -1025,7 +1025,7 @@ impl Listed {
 }
 
 /// The heavy triangles' chunks a surface pass listed and the indirect dispatch that walks
-/// them, and its giant triangles' records with theirs (`giants`: how many there can be).
+/// them, and its giant triangles' records with theirs (`giants`: how many the host marked).
 struct HeavyWork {
     work: wgpu::Buffer,
     work_count: wgpu::Buffer,
