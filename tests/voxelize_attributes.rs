@@ -227,7 +227,9 @@ fn one_giant_triangle_lists_every_chunk() {
         (
             GpuListing {
                 capacity: 0,
-                giants: 1
+                giants: 1,
+                // 901² columns in chunks of 4, 64 to a block.
+                blocks: (901 * 901u64).div_ceil(4).div_ceil(64),
             },
             vec![0]
         )

@@ -16,7 +16,7 @@ use std::sync::OnceLock;
 use glam::{DVec3, Vec3};
 
 use super::{
-    Grid, GridMesh, HeavyWork, Mesh, SLACK, Surface, Voxelizer, batches, invalid, run_indirect,
+    Grid, GridMesh, HeavyWork, Mesh, SLACK, Surface, Voxelizer, batches, invalid, run_walk,
     volume_texture,
 };
 use crate::bind::ComputePipeline;
@@ -704,12 +704,13 @@ impl Voxelizer {
                     albedo_sampler: sampler.into(),
                 },
             )?;
-            run_indirect(
+            run_walk(
                 rec,
                 "voxel attributes of giant triangles",
                 pipeline,
                 &bound,
                 &heavy.giant_records,
+                heavy.giant_blocks,
             );
         }
         if heavy.capacity > 0 {
@@ -730,12 +731,13 @@ impl Voxelizer {
                     albedo_sampler: sampler.into(),
                 },
             )?;
-            run_indirect(
+            run_walk(
                 rec,
                 "voxel attributes of heavy triangles",
                 pipeline,
                 &bound,
                 &heavy.dispatch,
+                (heavy.capacity as u64).div_ceil(64),
             );
         }
         let resolve = ComputePipeline::cached(&p.resolve, device, &[])?;

@@ -6,8 +6,8 @@ use glam::{DMat4, DVec3, Vec4};
 
 use super::{
     CHUNK, Error, GpuListing, Grid, LIGHT, MAX_CHUNKS, MAX_GIANTS, Mesh, Separation, Surface,
-    SurfaceRun, Voxelizer, check_grid, check_model, giant_count, invalid, mark_giants, most_chunks,
-    zeroed_bitset,
+    SurfaceRun, Voxelizer, check_grid, check_model, giant_blocks_bound, giant_count, invalid,
+    mark_giants, most_chunks, zeroed_bitset,
 };
 use crate::gpu::Record;
 
@@ -147,6 +147,10 @@ impl ChunkBound {
         GpuListing {
             capacity: self.chunks(a, b, size, giants),
             giants: giants as u32,
+            blocks: bounds[..giants]
+                .iter()
+                .map(|&c| giant_blocks_bound(c))
+                .sum(),
         }
     }
 }
