@@ -926,9 +926,9 @@ pub struct Voxelizer {
 
 /// Most workgroups a walk of the GPU's list is dispatched with directly, the host's bound on
 /// them, instead of through the arguments the surface pass counted: an indirect dispatch
-/// costs the H100 several microseconds more (wgpu validates its arguments in a pass of its
-/// own by default), and a bound dispatched directly may launch many workgroups that find
-/// nothing. Measured on the H100 (docs/voxelize.md, "Giant triangles on the GPU's list"): the
+/// costs the H100 several microseconds more (wgpu validates indirect arguments by default,
+/// `InstanceFlags::VALIDATION_INDIRECT_CALL`), and a bound dispatched directly may launch
+/// many workgroups that find nothing. Measured on the H100 (docs/voxelize.md, "Giant triangles on the GPU's list"): the
 /// resident bunny's heavy pass, bounded by 0.43 M / 0.73 M / 1.6 M / 4.4 M entries at 128³ /
 /// 256³ / 512³ / 1024³, took 0.0091 / 0.0121 / 0.0466 / 0.1965 ms direct against 0.0120 /
 /// 0.0204 / 0.0491 / 0.1468 indirect; so bounds up to 2^21 invocations go direct.
