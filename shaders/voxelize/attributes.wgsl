@@ -12,7 +12,7 @@
 
 import fieldkit::triangle_box::{
     GIANT_BLOCK, GIANT_HEADER, GIANT_RECORDS, LIGHT, MAX_GIANTS, Setup, chunk_columns, column,
-    overlaps, setup,
+    giant_record_of, overlaps, setup,
 };
 import package::shared::voxel_attribute::{SUMS, average, closest_weights, contribution, corner_colour, corner_normal, corner_uv};
 
@@ -137,26 +137,19 @@ fn accumulate_heavy(@builtin(global_invocation_id) id: vec3<u32>,
     accumulate_columns(s, item.x, item.y, chunk_columns(s.columns));
 }
 
-// The record whose blocks hold the workgroup's block (as `surface_giant` finds it).
-var<workgroup> owner: u32;
-
 // The surface pass's giant triangles, a workgroup per block of their chunks.
 @compute @workgroup_size(GIANT_BLOCK)
 fn accumulate_giant(@builtin(workgroup_id) group: vec3<u32>,
                     @builtin(local_invocation_index) local: u32,
                     @builtin(num_workgroups) groups: vec3<u32>) {
     let b = group.x + group.y * groups.x;
-    if local < min(giants[GIANT_RECORDS], MAX_GIANTS) {
-        let at = GIANT_HEADER + 4u * local;
-        if b >= giants[at + 2u] && b - giants[at + 2u] < giants[at + 3u] {
-            owner = at + 1u;
-        }
-    }
-    let found = workgroupUniformLoad(&owner);
-    if found == 0u {
+    let mine = GIANT_HEADER + 4u * local;
+    let held = local < min(giants[GIANT_RECORDS], MAX_GIANTS);
+    let r = giant_record_of(b, local, giants[mine + 2u], giants[mine + 3u], held);
+    if r == 0u {
         return;
     }
-    let at = found - 1u;
+    let at = GIANT_HEADER + 4u * (r - 1u);
     let t = giants[at];
     let size = giants[at + 1u];
     let chunk = (b - giants[at + 2u]) * GIANT_BLOCK + local;

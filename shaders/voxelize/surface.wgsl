@@ -20,7 +20,8 @@
 
 import fieldkit::triangle_box::{
     GIANT_BLOCK, GIANT_BLOCKS, GIANT_HEADER, GIANT_RECORDS, LIGHT, MAX_GIANTS, Setup,
-    chunk_columns, column, giant_blocks, giant_chunk_columns, listed_columns, overlaps, setup,
+    chunk_columns, column, giant_blocks, giant_chunk_columns, giant_record_of, listed_columns,
+    overlaps, setup,
 };
 import package::shared::scan::{scan_first, scan_partial};
 
@@ -208,28 +209,20 @@ fn add_giant(t: u32, columns: u32) -> bool {
     return true;
 }
 
-// The record whose blocks hold block `b` (GIANT_HEADER + 4 · record + 1: 0 when none), found
-// by the workgroup's threads, one record each.
-var<workgroup> owner: u32;
-
 // Giant triangles, a workgroup per block of GIANT_BLOCK chunks, in the rows of workgroups
-// their dispatch arguments give.
+// their dispatch gives.
 @compute @workgroup_size(GIANT_BLOCK)
 fn surface_giant(@builtin(workgroup_id) group: vec3<u32>,
                  @builtin(local_invocation_index) local: u32,
                  @builtin(num_workgroups) groups: vec3<u32>) {
     let b = group.x + group.y * groups.x;
-    if local < min(giant_list[GIANT_RECORDS], MAX_GIANTS) {
-        let at = GIANT_HEADER + 4u * local;
-        if b >= giant_list[at + 2u] && b - giant_list[at + 2u] < giant_list[at + 3u] {
-            owner = at + 1u;
-        }
-    }
-    let found = workgroupUniformLoad(&owner);
-    if found == 0u {
+    let mine = GIANT_HEADER + 4u * local;
+    let held = local < min(giant_list[GIANT_RECORDS], MAX_GIANTS);
+    let r = giant_record_of(b, local, giant_list[mine + 2u], giant_list[mine + 3u], held);
+    if r == 0u {
         return;
     }
-    let at = found - 1u;
+    let at = GIANT_HEADER + 4u * (r - 1u);
     let size = giant_list[at + 1u];
     let chunk = (b - giant_list[at + 2u]) * GIANT_BLOCK + local;
     voxelize_columns(load(giant_list[at]), chunk * size, size);

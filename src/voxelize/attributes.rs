@@ -687,7 +687,7 @@ impl Voxelizer {
             )?;
         }
         let params = params_for(0, count);
-        if heavy.giants > 0 {
+        if heavy.giant_blocks > 0 {
             let pipeline = ComputePipeline::cached(&p.accumulate_giant, device, &[])?;
             let bound = pipeline.bind(
                 device,

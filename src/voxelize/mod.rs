@@ -1059,14 +1059,13 @@ impl Listed {
 }
 
 /// The heavy triangles' chunks a surface pass listed and the indirect dispatch that walks
-/// them, and its giant triangles' records with theirs (`giants`: how many the host marked).
+/// them, and its giant triangles' records with a bound on their blocks (0: no giants).
 struct HeavyWork {
     work: wgpu::Buffer,
     work_count: wgpu::Buffer,
     dispatch: wgpu::Buffer,
     capacity: u32,
     giant_records: wgpu::Buffer,
-    giants: u32,
     giant_blocks: u64,
 }
 
@@ -1384,7 +1383,6 @@ impl Voxelizer {
             capacity,
             // The giant pass's arguments (0, 1, 1), then zeros.
             giant_records: arguments("voxelize giant triangles", GIANT_BYTES),
-            giants: listing.giants,
             giant_blocks: listing.blocks,
         };
         let HeavyWork {
