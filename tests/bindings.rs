@@ -189,7 +189,7 @@ fn unknown_override_is_an_error() {
 }
 
 /// A stage's `Overrides` hold the shader's defaults (`override ROWS: u32 = 1u;` in
-/// `edt_rows.wgsl`; `PACK_2D`, `AXIS`, `Y_AFTER_Z`, `SOURCE_APART` and `CELLS = 3840u` in
+/// `edt_rows.wgsl`; `PACK_2D`, `AXIS`, `Y_AFTER_Z`, `SOURCE_APART` and `CELLS = 3839u` in
 /// `edt_tile.wgsl`; `SEED_X_BITS = SEED_Y_BITS = 11u` in both), and their `constants()` make
 /// pipelines.
 #[test]
@@ -254,12 +254,19 @@ fn pipelines_state_the_limits_they_need() {
     assert_eq!(rows.max_sampled_textures_per_shader_stage, 1);
     assert_eq!(rows.max_storage_buffers_per_shader_stage, 1);
     assert_eq!(rows.max_bind_groups, 1);
-    // The tile at CELLS' default (3840) and the envelope sizes: WebGPU's 16 KiB exactly.
+    // The tile at CELLS' default (3839), the envelope sizes and the resolving entries'
+    // `far_sites` flag: WebGPU's 16 KiB exactly; the entries without the flag 4 bytes less.
+    assert_eq!(
+        edt_tile::tile_columns_resolve::INFO
+            .needs
+            .max_compute_workgroup_storage_size,
+        16384
+    );
     assert_eq!(
         edt_tile::tile_columns::INFO
             .needs
             .max_compute_workgroup_storage_size,
-        16384
+        16380
     );
     // Nothing fieldkit ships needs more than WebGPU's defaults.
     for info in fieldkit::shaders::ALL {

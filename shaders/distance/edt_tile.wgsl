@@ -79,8 +79,8 @@ override Y_AFTER_Z: bool = false;
 override SOURCE_APART: bool = false;
 // Tile cells: (column_cells << lg_columns), set by the host per column length.
 // The default is the most WebGPU's default 16 KiB of workgroup memory holds beside
-// `envelope_size`.
-override CELLS: u32 = 3840u;
+// `envelope_size` and `far_sites`.
+override CELLS: u32 = 3839u;
 // 3D seeds' widths (`SeedPacking`): x in the low SEED_X_BITS bits, y in the next SEED_Y_BITS,
 // z above; 11 and 11 for every grid up to 2048 × 2048 × 1024.
 override SEED_X_BITS: u32 = 11u;
@@ -95,6 +95,9 @@ var<workgroup> tile: array<u32, CELLS>;
 // keeps bands to 128 positions) and the least own cost of its sites (high 24 bits, saturated
 // there: still a lower bound), which lets a far band be passed over skipped.
 var<workgroup> envelope_size: array<u32, THREADS>;
+// The resolving 3D entries: set where some position of the tile holds no site within
+// SCAN_REACH of its column (`near_tile`), so the tile takes the envelopes; else the scan.
+var<workgroup> far_sites: atomic<u32>;
 
 // One thread's view: column c of the tile, band b of it.
 struct Lane {
@@ -563,6 +566,71 @@ fn query(l: Lane, w: ptr<function, Walk>, i: u32) -> vec2<u32> {
     return vec2<u32>(best, u32(best_d));
 }
 
+// The last pass with dense seeds: after the passes before it, every position's own site lies
+// near its column (at 1% random seeds no voxel's own cost passed 24² at 128³ to 512³), and the
+// nearest site to a position is found by looking outward from it, one step at a time, until
+// the step's square alone is no less than the best found: a site farther along the column
+// costs at least that. A position's own site bounds the best, so where every own cost in the
+// tile is at most SCAN_REACH², no scan takes more than SCAN_REACH + 1 steps, and the loads of a
+// step do not wait on each other as the envelope's do. Other tiles (sparse seeds, planes with no
+// seed) build the envelopes.
+const SCAN_REACH: i32 = 24;
+
+// Whether every position of this thread's band holds a site within SCAN_REACH of its column.
+fn near_band(l: Lane) -> bool {
+    for (var i = l.lo; i < l.hi; i++) {
+        let s = tile[cell(l.col, i)];
+        if s == NO_SEED || own_cost(s, l) > SCAN_REACH * SCAN_REACH {
+            return false;
+        }
+    }
+    return true;
+}
+
+// Load the tile and say whether every position of it holds a site within SCAN_REACH of its
+// column (the same answer in every thread). Called by every thread: it holds the barriers.
+fn load_near(li: u32, wg: vec3<u32>) -> bool {
+    if li == 0u {
+        atomicStore(&far_sites, 0u);
+    }
+    load(li, wg);
+    workgroupBarrier();
+    let l = lane_of(li, wg);
+    if l.valid && !near_band(l) {
+        atomicStore(&far_sites, 1u);
+    }
+    return workgroupUniformLoad(&far_sites) == 0u;
+}
+
+// The nearest site to position i, looking outward from it (a tile that `load_near` passed):
+// the nearer step first, and at equal cost the site below, so the answer is deterministic.
+fn scan(l: Lane, i: u32) -> vec2<u32> {
+    let pi = i32(i);
+    var best = tile[cell(l.col, i)];
+    var best_d = own_cost(best, l);
+    for (var r = 1; r * r < best_d; r++) {
+        let below = pi - r;
+        if below >= 0 {
+            let s = tile[cell(l.col, u32(below))];
+            let d = own_cost(s, l) + r * r;
+            if d < best_d {
+                best = s;
+                best_d = d;
+            }
+        }
+        let above = pi + r;
+        if above < i32(l.n) {
+            let s = tile[cell(l.col, u32(above))];
+            let d = own_cost(s, l) + r * r;
+            if d < best_d {
+                best = s;
+                best_d = d;
+            }
+        }
+    }
+    return vec2<u32>(best, u32(best_d));
+}
+
 fn voxel(l: Lane, i: u32) -> vec3<u32> {
     return select(vec3<u32>(l.x, l.other, i), vec3<u32>(l.x, i, l.other), AXIS == 1u);
 }
@@ -621,36 +689,58 @@ fn tile_columns_words(@builtin(local_invocation_index) li: u32, @builtin(workgro
 // `tile_columns`, and the unsigned distance of every voxel it answers (3D).
 @compute @workgroup_size(256)
 fn tile_columns_resolve(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
-    var walk = start(li, wg);
     let l = lane_of(li, wg);
+    if load_near(li, wg) {
+        if l.valid {
+            for (var i = l.lo; i < l.hi; i++) {
+                resolve_at(l, i, scan(l, i));
+            }
+        }
+        return;
+    }
+    var walk = envelopes(li, wg);
     if !l.valid {
         return;
     }
     for (var i = l.lo; i < l.hi; i++) {
-        let found = query(l, &walk, i);
-        nearest[l.at + i * l.stride] = found.x;
-        textureStore(distance, voxel(l, i), vec4<f32>(banded(answer_distance(found, params.voxel_size)), 0.0, 0.0, 0.0));
+        resolve_at(l, i, query(l, &walk, i));
     }
+}
+
+fn resolve_at(l: Lane, i: u32, found: vec2<u32>) {
+    nearest[l.at + i * l.stride] = found.x;
+    textureStore(distance, voxel(l, i), vec4<f32>(banded(answer_distance(found, params.voxel_size)), 0.0, 0.0, 0.0));
 }
 
 // `tile_columns` in the outside seeds' field, and the signed distance of every voxel it answers,
 // as `field_resolve.wgsl`'s `resolve_signed` gives it from both fields (3D).
 @compute @workgroup_size(256)
 fn tile_columns_resolve_signed(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
-    var walk = start(li, wg);
     let l = lane_of(li, wg);
+    if load_near(li, wg) {
+        if l.valid {
+            for (var i = l.lo; i < l.hi; i++) {
+                resolve_signed_at(l, i, scan(l, i));
+            }
+        }
+        return;
+    }
+    var walk = envelopes(li, wg);
     if !l.valid {
         return;
     }
     for (var i = l.lo; i < l.hi; i++) {
-        let found = query(l, &walk, i);
-        let at = l.at + i * l.stride;
-        nearest[at] = found.x;
-        let p = voxel(l, i);
-        let d = signed_at3_bits(nearest_inside[at], p, answer_distance(found, params.voxel_size), found.x,
-                                params.voxel_size, SEED_X_BITS, SEED_Y_BITS);
-        textureStore(distance, p, vec4<f32>(banded(d), 0.0, 0.0, 0.0));
+        resolve_signed_at(l, i, query(l, &walk, i));
     }
+}
+
+fn resolve_signed_at(l: Lane, i: u32, found: vec2<u32>) {
+    let at = l.at + i * l.stride;
+    nearest[at] = found.x;
+    let p = voxel(l, i);
+    let d = signed_at3_bits(nearest_inside[at], p, answer_distance(found, params.voxel_size), found.x,
+                            params.voxel_size, SEED_X_BITS, SEED_Y_BITS);
+    textureStore(distance, p, vec4<f32>(banded(d), 0.0, 0.0, 0.0));
 }
 
 // `tile_columns` in a 2D field, and the unsigned distance of every pixel it answers.

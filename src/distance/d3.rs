@@ -156,7 +156,8 @@ impl TileGeometry {
             } else {
                 need + (32 / columns + 32 - need % 32) % 32
             };
-            let bytes = (column_cells as u64 * columns as u64 + 256) * 4;
+            // The tile, the 256 envelope sizes and the resolving entries' `far_sites` flag.
+            let bytes = (column_cells as u64 * columns as u64 + 257) * 4;
             // A band's envelope size is 8 bits in the shader's `envelope_size`.
             if bytes <= storage as u64 && band_len <= 128 {
                 return Some(Self {
