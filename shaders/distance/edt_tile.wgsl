@@ -96,7 +96,7 @@ var<workgroup> tile: array<u32, CELLS>;
 // there: still a lower bound), which lets a far band be passed over skipped.
 var<workgroup> envelope_size: array<u32, THREADS>;
 // The resolving 3D entries: set where some position of the tile holds no site within
-// SCAN_REACH of its column (`near_tile`), so the tile takes the envelopes; else the scan.
+// SCAN_REACH of its column (`load_near`), so the tile takes the envelopes; else the scan.
 var<workgroup> far_sites: atomic<u32>;
 
 // One thread's view: column c of the tile, band b of it.
@@ -710,6 +710,7 @@ fn tile_columns_resolve(@builtin(local_invocation_index) li: u32, @builtin(workg
     }
 }
 
+// Write position i's answer and its unsigned distance.
 fn resolve_at(l: Lane, i: u32, found: vec2<u32>) {
     nearest[l.at + i * l.stride] = found.x;
     textureStore(distance, voxel(l, i), vec4<f32>(banded(answer_distance(found, params.voxel_size)), 0.0, 0.0, 0.0));
@@ -737,6 +738,7 @@ fn tile_columns_resolve_signed(@builtin(local_invocation_index) li: u32, @builti
     }
 }
 
+// Write position i's answer and its signed distance (the inside seeds' field beside it).
 fn resolve_signed_at(l: Lane, i: u32, found: vec2<u32>) {
     let at = l.at + i * l.stride;
     nearest[at] = found.x;
