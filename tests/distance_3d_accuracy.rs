@@ -308,6 +308,7 @@ fn every_column_band_count_is_exact() {
     let mut d3 = Distance3d::new(&ctx.device).unwrap();
     // The bands are the global-memory passes' (the workgroup-memory passes pick their own).
     d3.set_column_passes(ColumnPasses::Global);
+    d3.set_sweep(true);
     for bands in [1, 2, 4, 8, 16, 32] {
         d3.set_column_bands(Some(bands)).unwrap();
         for case in cases() {
@@ -320,8 +321,42 @@ fn every_column_band_count_is_exact() {
                 "{} with {bands} bands: {} wrong voxels",
                 case.name, e.wrong
             );
+            // At 8 bands the resolving z pass sweeps the workgroups the y pass found near
+            // (`edt_columns.wgsl`'s `near_columns`), in the signed entry too.
+            if bands == 8 {
+                let options = Options3d {
+                    signed: true,
+                    ..Options3d::default()
+                };
+                let (_, _, dist) = run_3d(&ctx, &d3, &case.mask, case.size, &options);
+                let signed = cpu::signed_3d(&case.mask, case.size);
+                check_signed(&format!("{} signed, 8 bands", case.name), &dist, &signed);
+            }
         }
     }
+    // The sweep's ring and the band sizes (9 KiB) fit WebGPU's default 16 KiB.
+    let defaults = default_limits(&ctx);
+    let mut d3_defaults = Distance3d::new(&defaults.device).unwrap();
+    d3_defaults.set_column_passes(ColumnPasses::Global);
+    d3_defaults.set_sweep(true);
+    d3_defaults.set_column_bands(Some(8)).unwrap();
+    for case in cases() {
+        let exact = cpu::edt_3d_squared(&case.mask, case.size);
+        let (nearest, _, dist) = run_3d(
+            &defaults,
+            &d3_defaults,
+            &case.mask,
+            case.size,
+            &Options3d::default(),
+        );
+        let e = score(&case, &nearest, &dist, &exact);
+        assert_eq!(
+            e.wrong, 0,
+            "{} (default limits): {} wrong",
+            case.name, e.wrong
+        );
+    }
+    assert!(defaults.take_uncaptured().is_empty());
     for bad in [0, 3, 64] {
         let err = d3.set_column_bands(Some(bad)).unwrap_err().to_string();
         assert!(err.contains("column bands"), "{err}");

@@ -57,6 +57,8 @@ struct ColumnParams {
     // columns end (size.x, or the end of its part of a field split across bindings).
     first: vec2<u32>,
     x_end: u32,
+    // This run's stamp in `far_groups` (the sweep's marks; never 0, which a new buffer holds).
+    generation: u32,
     // Where the pass reads its sites (`source`, `nearest` or, from the row words, nowhere) and
     // keeps its envelopes (`stack`), and where it writes its answers (`nearest`,
     // `nearest_inside`).
@@ -79,6 +81,11 @@ struct ColumnParams {
 // (the y pass where it is not the last, the z pass of a field split across bindings); a
 // placeholder elsewhere.
 @group(0) @binding(7) var<storage, read> words: array<vec2<u32>>;
+// The y pass's far sites (MARK_FAR writes them, the z pass's sweep reads them): per group g of
+// 32 columns and plane z, entry z · groups + g holds `params.generation` where the y pass found
+// a voxel of them with no site within SCAN_REACH in this run (so nothing clears it between
+// runs). A placeholder elsewhere.
+@group(0) @binding(8) var<storage, read_write> far_groups: array<atomic<u32>>;
 
 // 2D fields pack 16/16 bits (sides to 16384 keep every separator numerator in i32).
 override PACK_2D: bool = false;
@@ -99,6 +106,17 @@ const FAR_D2: i32 = 0x7fffffff;
 
 // Envelope size per (band, column) of this workgroup.
 var<workgroup> band_size: array<u32, 256>;
+
+// The resolving 3D entries' sweep (`near_columns`, `sweep_step`), where the host turns it on: a
+// ring of RING rows of the workgroup's columns (RING_CELLS = columns · RING), and the y pass
+// before it marking its far sites (`columns` with MARK_FAR).
+override SCAN: bool = false;
+override RING: u32 = 64u;
+override RING_CELLS: u32 = 1u;
+override MARK_FAR: bool = false;
+var<workgroup> ring: array<u32, RING_CELLS>;
+// Set where some position of the workgroup's columns holds no site within SCAN_REACH.
+var<workgroup> far_sites: atomic<u32>;
 
 fn voxel(x: u32, other: u32, i: u32) -> vec3<i32> {
     if params.axis == 1u {
@@ -467,6 +485,124 @@ fn query(c: Column, walk: ptr<function, Walk>, i: u32, carry: bool) -> vec2<u32>
     return vec2<u32>(best, u32(best_d));
 }
 
+// The last pass with dense seeds, as `edt_tile.wgsl`'s `scan` does it but with the columns
+// streamed through a ring of rows: where every position of the workgroup's columns holds a site
+// within SCAN_REACH of its column (at 1% random seeds no voxel's own cost passed 24² at 128³
+// to 512³), each voxel is answered by looking outward along its column until the step's square
+// alone is no less than the best found (a site farther along costs at least that; the voxel's
+// own site bounds the best, so no scan passes SCAN_REACH + 1 steps). Whether they all do comes
+// from the y pass before it, which marks each group of 32 columns and plane where some answer
+// was farther (`far_groups`): the z pass's workgroup reads one mark per plane
+// (`near_columns`), not its columns. Then the columns go once through the ring, BANDS rows a
+// step, the ring holding SCAN_REACH rows either side of the rows answered; a warp answers 32
+// neighbouring columns at one position. Answers go in place: a row is read into the ring
+// SCAN_REACH rows before it is answered. Where a mark is found the workgroup builds the
+// envelopes as before.
+const SCAN_REACH: u32 = 24u;
+
+// The site at position i of the column at x (NO_SEED past the grid).
+fn site_at(x: u32, other: u32, n: u32, i: u32) -> u32 {
+    if x >= params.x_end || i >= n {
+        return NO_SEED;
+    }
+    let at = place(params.src, vec3<u32>(voxel(x, other, i)));
+    if SOURCE_APART {
+        return source[at];
+    }
+    return nearest[at];
+}
+
+// The entry of `far_groups` for x group g and plane z.
+fn far_entry(g: u32, z: u32) -> u32 {
+    return z * ((params.size.x + 256u / BANDS - 1u) / (256u / BANDS)) + g;
+}
+
+// Whether the y pass found every voxel of the workgroup's columns with a site within SCAN_REACH
+// (the same answer in every thread): it marked none of their group's planes in this run. Called
+// by every thread: it holds the barriers.
+fn near_columns(li: u32, wg: vec3<u32>) -> bool {
+    if li == 0u {
+        atomicStore(&far_sites, 0u);
+    }
+    workgroupBarrier();
+    var far = false;
+    for (var z = li; z < params.size.z; z += 256u) {
+        far = far | (atomicLoad(&far_groups[far_entry(wg.x, z)]) == params.generation);
+    }
+    if far {
+        atomicStore(&far_sites, 1u);
+    }
+    return workgroupUniformLoad(&far_sites) == 0u;
+}
+
+// One thread's place in the sweep: its column (lane, x) and row of each step, and the site it
+// loaded for the next step.
+struct Sweep {
+    lane: u32,
+    x: u32,
+    other: u32,
+    n: u32,
+    row: u32,
+    next: u32,
+}
+
+fn ring_cell(sw: Sweep, i: u32) -> u32 {
+    return (i & (RING - 1u)) * (256u / BANDS) + sw.lane;
+}
+
+// Start the sweep: the first SCAN_REACH rows into the ring, and the first step's row loaded.
+fn sweep_of(li: u32, wg: vec3<u32>) -> Sweep {
+    var sw: Sweep;
+    let columns = 256u / BANDS;
+    sw.lane = li % columns;
+    sw.row = li / columns;
+    sw.x = params.first.x + wg.x * columns + sw.lane;
+    sw.other = params.first.y + wg.y;
+    sw.n = select(params.size.z, params.size.y, params.axis == 1u);
+    sw.next = site_at(sw.x, sw.other, sw.n, SCAN_REACH + sw.row);
+    for (var i = sw.row; i < SCAN_REACH; i += BANDS) {
+        ring[ring_cell(sw, i)] = site_at(sw.x, sw.other, sw.n, i);
+    }
+    return sw;
+}
+
+// Step t: the rows SCAN_REACH ahead go into the ring (once every thread is done with the slots
+// they take), the next step's are loaded, and this thread's position t · BANDS + row is answered
+// from the ring. Returns the nearest site and its squared distance. Called by every thread: it
+// holds the barriers.
+fn sweep_step(sw: ptr<function, Sweep>, t: u32) -> vec2<u32> {
+    workgroupBarrier();
+    ring[ring_cell(*sw, t * BANDS + SCAN_REACH + (*sw).row)] = (*sw).next;
+    workgroupBarrier();
+    (*sw).next = site_at((*sw).x, (*sw).other, (*sw).n, (t + 1u) * BANDS + SCAN_REACH + (*sw).row);
+    let i = t * BANDS + (*sw).row;
+    if (*sw).x >= params.x_end || i >= (*sw).n {
+        return vec2<u32>(NO_SEED, 0u);
+    }
+    let p = voxel((*sw).x, (*sw).other, i);
+    var best = ring[ring_cell(*sw, i)];
+    var best_d = cost(best, p);
+    for (var r = 1u; i32(r * r) < best_d; r++) {
+        if r <= i {
+            let s = ring[ring_cell(*sw, i - r)];
+            let d = cost(s, p);
+            if d < best_d {
+                best = s;
+                best_d = d;
+            }
+        }
+        if i + r < (*sw).n {
+            let s = ring[ring_cell(*sw, i + r)];
+            let d = cost(s, p);
+            if d < best_d {
+                best = s;
+                best_d = d;
+            }
+        }
+    }
+    return vec2<u32>(best, u32(best_d));
+}
+
 // A distance clamped to the band.
 fn banded(d: f32) -> f32 {
     return clamp(d, -params.band, params.band);
@@ -498,8 +634,17 @@ fn columns(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: 
     }
     // In place, the answer overwrites `nearest`; all of it was read before the barrier.
     var walk = s.walk;
+    var far = false;
     for (var i = c.lo; i < c.hi; i++) {
-        nearest[c.out + i * c.out_stride] = query(c, &walk, i, true).x;
+        let found = query(c, &walk, i, true);
+        nearest[c.out + i * c.out_stride] = found.x;
+        if MARK_FAR {
+            far = far | (found.y > SCAN_REACH * SCAN_REACH);
+        }
+    }
+    // MARK_FAR: the group's plane marked for the z pass's sweep (NO_SEED's distance is FAR_D2).
+    if MARK_FAR && far {
+        atomicStore(&far_groups[far_entry(wg.x, c.other)], params.generation);
     }
 }
 
@@ -521,6 +666,20 @@ fn columns_copy(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id)
 // `columns`, and the unsigned distance of every voxel it answers (3D).
 @compute @workgroup_size(32, 8)
 fn columns_resolve(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
+    if SCAN && near_columns(li, wg) {
+        var sw = sweep_of(li, wg);
+        let n = select(params.size.z, params.size.y, params.axis == 1u);
+        for (var t = 0u; t * BANDS < n; t++) {
+            let found = sweep_step(&sw, t);
+            let i = t * BANDS + sw.row;
+            if sw.x < params.x_end && i < n {
+                let p = vec3<u32>(voxel(sw.x, sw.other, i));
+                nearest[place(params.dst, p)] = found.x;
+                textureStore(distance, p, vec4<f32>(banded(answer_distance(found, params.voxel_size)), 0.0, 0.0, 0.0));
+            }
+        }
+        return;
+    }
     let s = start(li, wg);
     let c = s.c;
     if !c.valid {
@@ -539,6 +698,23 @@ fn columns_resolve(@builtin(local_invocation_index) li: u32, @builtin(workgroup_
 // as `field_resolve.wgsl`'s `resolve_signed` gives it from both fields (3D).
 @compute @workgroup_size(32, 8)
 fn columns_resolve_signed(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
+    if SCAN && near_columns(li, wg) {
+        var sw = sweep_of(li, wg);
+        let n = select(params.size.z, params.size.y, params.axis == 1u);
+        for (var t = 0u; t * BANDS < n; t++) {
+            let found = sweep_step(&sw, t);
+            let i = t * BANDS + sw.row;
+            if sw.x < params.x_end && i < n {
+                let p = vec3<u32>(voxel(sw.x, sw.other, i));
+                let at = place(params.dst, p);
+                nearest[at] = found.x;
+                let d = signed_at3_bits(nearest_inside[at], p, answer_distance(found, params.voxel_size), found.x,
+                                        params.voxel_size, SEED_X_BITS, SEED_Y_BITS);
+                textureStore(distance, p, vec4<f32>(banded(d), 0.0, 0.0, 0.0));
+            }
+        }
+        return;
+    }
     let s = start(li, wg);
     let c = s.c;
     if !c.valid {

@@ -56,6 +56,11 @@ const TARGET_THREADS_3D: u32 = 1 << 19;
 const MIN_BANDS_3D: u32 = 8;
 const TARGET_THREADS_2D: u32 = 1 << 17;
 const BAND_CHOICES: [u32; 6] = [1, 2, 4, 8, 16, 32];
+/// The sweep (`edt_columns.wgsl`'s `near_columns`) runs where both global passes take this many
+/// bands (32 columns per workgroup, the groups the y pass marks), in a ring of SWEEP_RING rows
+/// (24 either side of a step's 8, rounded up to a power of two: 8 KiB).
+const SWEEP_BANDS: u32 = 8;
+const SWEEP_RING: u32 = 64;
 
 fn bands_for(columns: u32, flat: bool) -> usize {
     let want = if flat {
@@ -335,6 +340,10 @@ struct ColumnsIo<'a> {
     stack: &'a wgpu::Buffer,
     slab: usize,
     span: Span,
+    /// The y pass's marks of its far sites (`edt_columns.wgsl`'s `far_groups`) and this run's
+    /// stamp in them: the y pass writes them and the resolving z pass after it reads them to
+    /// choose its sweep.
+    far: Option<(&'a wgpu::Buffer, u32)>,
 }
 
 /// The same placement as `edt_columns.wgsl` declares it.
@@ -1025,9 +1034,18 @@ pub struct Distance3d {
     /// The global-memory column passes' envelope stack, kept from call to call (the largest
     /// made so far): a new one each call would be allocated, and zeroed by wgpu, every frame.
     stack: std::sync::Mutex<Option<wgpu::Buffer>>,
+    /// The y pass's far-site marks for the z pass's sweep, kept the same way.
+    far: std::sync::Mutex<Option<wgpu::Buffer>>,
+    /// The resolving global z pass sweeps the workgroups the y pass marked near.
+    sweep: bool,
+    /// The last stamp given to the far-site marks.
+    generation: std::sync::atomic::AtomicU32,
     /// Bound as `edt_tile.wgsl`'s `source` where a pass reads the buffer it writes (a binding
     /// must be there; the shader does not read it then).
     no_source: wgpu::Buffer,
+    /// Bound as `edt_columns.wgsl`'s `far_groups` where the passes keep no marks (not
+    /// `no_source`: a dispatch may not bind one buffer both read-only and read-write).
+    no_far: wgpu::Buffer,
     resolve_unsigned: ComputePipeline<field_resolve::resolve_unsigned::Entry>,
     resolve_signed: ComputePipeline<field_resolve::resolve_signed::Entry>,
     resolve_points: ComputePipeline<field_resolve::resolve_points::Entry>,
@@ -1513,6 +1531,15 @@ impl Distance3d {
         self.fold_rows = fold;
     }
 
+    /// For benchmarks and tests: `true` lets the resolving global z pass sweep the workgroups
+    /// whose columns the y pass found near (`edt_columns.wgsl`'s `near_columns`), where both
+    /// passes run in global memory at 8 bands; `false` (the default until it is measured to
+    /// pay) has every workgroup build the envelopes.
+    #[doc(hidden)]
+    pub fn set_sweep(&mut self, sweep: bool) {
+        self.sweep = sweep;
+    }
+
     /// For tests: split the exact transform's field across bindings past `bytes` (or, `None`,
     /// past the device's `max_storage_buffer_binding_size` only, the default), so that the
     /// split runs at sizes a software adapter handles.
@@ -1575,8 +1602,17 @@ impl Distance3d {
             split_bytes: None,
             split_columns: MIN_TILE_COLUMNS,
             stack: Default::default(),
+            far: Default::default(),
+            sweep: false,
+            generation: Default::default(),
             no_source: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("edt: no source, no words"),
+                size: 16,
+                usage: wgpu::BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            }),
+            no_far: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("edt: no far marks"),
                 size: 16,
                 usage: wgpu::BufferUsages::STORAGE,
                 mapped_at_creation: false,
@@ -2110,12 +2146,34 @@ impl Distance3d {
         // Along y, and not the last pass: the row pass folds into the y pass, which makes its
         // sites from the row words (`row_words`, then `tile_columns_words` in workgroup memory
         // or `edt_columns.wgsl` with FROM_WORDS in global memory); else rows, then columns.
-        let (nearest, first_axis) = if self.fold_rows && size[1] > 1 && size[2] > 1 {
+        // Both column passes in global memory, the last resolving a volume: the y pass marks
+        // its far sites so the z pass's workgroups whose columns have none sweep
+        // (`edt_columns.wgsl`'s `near_columns`).
+        let folds = self.fold_rows && size[1] > 1 && size[2] > 1;
+        let far = (folds
+            && self.sweep
+            && fuse.as_ref().is_some_and(|f| !f.flat)
+            && self.tile_for(device, size[1], 1, false)?.is_none()
+            && self.tile_for(device, size[2], 2, false)?.is_none()
+            && self.global_bands(size[0] * size[2], false) == SWEEP_BANDS
+            && self.global_bands(size[0] * size[1], false) == SWEEP_BANDS)
+            .then(|| (self.far_for(device, size), self.next_generation()));
+        let (nearest, first_axis) = if folds {
             let words = self.encode_row_words(device, rec, volume, inside, invert)?;
             let nearest = field_buffer(device, "nearest seed", size);
             let tile = self.tile_for(device, size[1], 1, false)?;
             let io = TileIo::in_place(&nearest, size);
-            self.encode_from_words(device, rec, &words, io, size, 1, tile, size)?;
+            self.encode_from_words(
+                device,
+                rec,
+                &words,
+                io,
+                size,
+                1,
+                tile,
+                size,
+                far.as_ref().map(|(b, g)| (b, *g)),
+            )?;
             (nearest, 2)
         } else {
             (self.encode_rows(device, rec, volume, inside, invert)?, 1)
@@ -2145,6 +2203,7 @@ impl Distance3d {
                 axis,
                 size[3 - axis as usize],
                 f,
+                far.as_ref().filter(|_| last).map(|(b, g)| (b, *g)),
             )?;
         }
         if let Some(f) = fuse {
@@ -2304,7 +2363,7 @@ impl Distance3d {
         }
         let tile = self.tile_for(device, size[1], 1, false)?;
         let io = TileIo::in_place(nearest, size);
-        self.encode_from_words(device, rec, words, io, size, 1, tile, size)
+        self.encode_from_words(device, rec, words, io, size, 1, tile, size, None)
     }
 
     /// The column pass along `axis` (1: y, 2: z) that makes its sites from the row words, into
@@ -2321,6 +2380,7 @@ impl Distance3d {
         axis: u32,
         tile: Option<TileGeometry>,
         stack_size: [u32; 3],
+        far: Option<(&wgpu::Buffer, u32)>,
     ) -> Result<(), Error> {
         match tile {
             Some(tile) => self.encode_tile_columns_words(device, rec, words, io, size, axis, tile),
@@ -2335,6 +2395,7 @@ impl Distance3d {
                     stack: &self.stack_for(device, stack_size),
                     slab: 0,
                     span: io.span,
+                    far,
                 },
                 size,
                 axis,
@@ -2475,7 +2536,7 @@ impl Distance3d {
                 slab: 0,
                 span,
             };
-            self.encode_from_words(device, rec, &words, io, size, 2, split.z, part_size)?;
+            self.encode_from_words(device, rec, &words, io, size, 2, split.z, part_size, None)?;
             for (k, &(z0, z_end)) in slabs.iter().enumerate() {
                 let span = Span {
                     first: [x0, z0],
@@ -2513,6 +2574,7 @@ impl Distance3d {
                             stack: &self.stack_for(device, part_size),
                             slab: k,
                             span,
+                            far: None,
                         },
                         size,
                         1,
@@ -2556,6 +2618,7 @@ impl Distance3d {
             axis,
             others,
             None,
+            None,
         )
     }
 
@@ -2571,6 +2634,7 @@ impl Distance3d {
         axis: u32,
         others: u32,
         fuse: Option<Fuse>,
+        far: Option<(&wgpu::Buffer, u32)>,
     ) -> Result<(), Error> {
         let tile = self.tile_for(device, size[axis as usize], axis, pack_2d)?;
         if let Some(tile) = tile {
@@ -2601,6 +2665,7 @@ impl Distance3d {
             stack,
             slab: 0,
             span: Span::whole(size),
+            far,
         };
         self.encode_global_columns(device, rec, pack_2d, io, size, axis, others, fuse)
     }
@@ -2652,14 +2717,40 @@ impl Distance3d {
                 )?
             };
         }
-        record_resolved! {
-            record,
-            Fuse::resolve(fuse.as_ref(), slab),
-            self.columns => columns,
-            self.columns_resolve_2d => columns_resolve_2d,
-            self.columns_resolve_signed_2d => columns_resolve_signed_2d,
-            self.columns_resolve => columns_resolve,
-            self.columns_resolve_signed => columns_resolve_signed,
+        // The 3D entries read or write the y pass's marks (a placeholder where there are none).
+        let far = io.far.map_or(&self.no_far, |(b, _)| b);
+        match Fuse::resolve(fuse.as_ref(), slab) {
+            Resolve::No => record!(self.columns, columns { far_groups: far }),
+            Resolve::Flat(d) => record!(
+                self.columns_resolve_2d,
+                columns_resolve_2d { distance_2d: d }
+            ),
+            Resolve::SignedFlat(i, d) => {
+                record!(
+                    self.columns_resolve_signed_2d,
+                    columns_resolve_signed_2d {
+                        nearest_inside: i,
+                        distance_2d: d
+                    }
+                )
+            }
+            Resolve::Volume(d) => record!(
+                self.columns_resolve,
+                columns_resolve {
+                    distance: d,
+                    far_groups: far
+                }
+            ),
+            Resolve::SignedVolume(i, d) => {
+                record!(
+                    self.columns_resolve_signed,
+                    columns_resolve_signed {
+                        nearest_inside: i,
+                        distance: d,
+                        far_groups: far
+                    }
+                )
+            }
         }
         Ok(())
     }
@@ -2677,18 +2768,14 @@ impl Distance3d {
         others: u32,
         pack_2d: bool,
         fuse: Option<&Fuse>,
-    ) -> (wgpu::Buffer, [(&'static str, f64); 6], [u32; 3]) {
+    ) -> (wgpu::Buffer, [(&'static str, f64); 10], [u32; 3]) {
         let span = &io.span;
         let width = span.x_end - span.first[0];
-        let choice = match self.column_bands {
-            Some(b) => BAND_CHOICES
-                .iter()
-                .position(|&c| c == b)
-                .expect("checked when set"),
-            None => bands_for(width * others, pack_2d),
-        };
-        let bands = BAND_CHOICES[choice];
+        let bands = self.global_bands(width * others, pack_2d);
         let [x_bits, y_bits] = packing_of(size).overrides();
+        // With the marks: the y pass writes them, the resolving z pass reads them.
+        let mark_far = io.far.is_some() && fuse.is_none();
+        let scan = io.far.is_some() && fuse.is_some();
         let overrides = [
             ("PACK_2D", pack_2d as u32 as f64),
             ("BANDS", bands as f64),
@@ -2696,6 +2783,13 @@ impl Distance3d {
             ("FROM_WORDS", io.words.is_some() as u32 as f64),
             x_bits,
             y_bits,
+            ("SCAN", scan as u32 as f64),
+            ("MARK_FAR", mark_far as u32 as f64),
+            ("RING", SWEEP_RING as f64),
+            (
+                "RING_CELLS",
+                if scan { SWEEP_RING * 256 / bands } else { 1 } as f64,
+            ),
         ];
         let params = uniform(
             device,
@@ -2707,6 +2801,7 @@ impl Distance3d {
                 band: fuse.map_or(f32::MAX, |f| f.band),
                 first: span.first.into(),
                 x_end: span.x_end,
+                generation: io.far.map_or(0, |(_, g)| g),
                 src: columns_placement(&span.src),
                 dst: columns_placement(&span.dst),
             },
@@ -2743,6 +2838,7 @@ impl Distance3d {
             stack: &self.no_source,
             slab: 0,
             span: Span::whole(size),
+            far: None,
         };
         let others = size[3 - axis as usize];
         let (params, overrides, groups) =
@@ -2760,6 +2856,48 @@ impl Distance3d {
             if axis == 1 { "copy (y)" } else { "copy (z)" },
         )?;
         Ok(Some(()))
+    }
+
+    /// A stamp for this run's far-site marks: never 0 (what a new buffer holds), and not the
+    /// last run's.
+    fn next_generation(&self) -> u32 {
+        loop {
+            let g = self
+                .generation
+                .fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+                .wrapping_add(1);
+            if g != 0 {
+                return g;
+            }
+        }
+    }
+
+    /// Bands per column of a global-memory column pass over `columns` columns.
+    fn global_bands(&self, columns: u32, pack_2d: bool) -> u32 {
+        self.column_bands
+            .unwrap_or(BAND_CHOICES[bands_for(columns, pack_2d)])
+    }
+
+    /// The y pass's far-site marks for a field of `size` (`edt_columns.wgsl`'s `far_groups`:
+    /// one entry per group of 32 columns and plane), kept from call to call as the stack is.
+    /// Nothing clears it: an entry counts only where it holds the run's stamp.
+    fn far_for(&self, device: &wgpu::Device, size: [u32; 3]) -> wgpu::Buffer {
+        let groups = size[0].div_ceil(256 / SWEEP_BANDS) as u64;
+        let bytes = groups * size[2] as u64 * 4;
+        let mut kept = self.far.lock().unwrap_or_else(|e| e.into_inner());
+        match kept.as_ref() {
+            Some(b) if b.size() >= bytes => b.clone(),
+            _ => {
+                let b = device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("edt far marks"),
+                    size: bytes,
+                    usage: wgpu::BufferUsages::STORAGE,
+                    mapped_at_creation: false,
+                });
+                *kept = Some(b.clone());
+                b
+            }
+        }
     }
 
     /// The envelope stack of the global-memory column passes for a field of `size`: the one
@@ -2983,6 +3121,7 @@ impl Distance3d {
                     1,
                     1,
                     fuse,
+                    None,
                 )?;
             }
             Ok(nearest)

@@ -33,6 +33,10 @@ const WORKGROUP: &str = "exact (workgroup columns)";
 /// by the y pass) where the default folds it into the y pass.
 const ROWS_PASS: &str = "exact (rows pass)";
 
+/// The exact transform with the resolving global z pass's sweep (`Distance3d::set_sweep`),
+/// off by default until it is measured to pay.
+const SWEPT: &str = "exact (z sweep)";
+
 /// One method at one size.
 struct Row {
     dims: u32,
@@ -287,6 +291,11 @@ fn distance(args: &Args) -> Result<(), String> {
     d3_workgroup.set_column_passes(ColumnPasses::Workgroup);
     let mut d3_rows = Distance3d::new(&ctx.device).map_err(|e| e.to_string())?;
     d3_rows.set_fold_rows(false);
+    let mut d3_swept = Distance3d::new(&ctx.device).map_err(|e| e.to_string())?;
+    d3_swept.set_sweep(true);
+    d3_swept
+        .set_column_bands(args.column_bands)
+        .map_err(|e| e.to_string())?;
     let storage = ctx.device.limits().max_compute_workgroup_storage_size;
     // What Auto takes per pass: 3D y up to AUTO_TILE_MAX_LENGTH_Y, 3D z and 2D by `tile_columns`.
     let path = |c: Option<u32>| c.map_or("global".to_string(), |c| format!("{c} columns"));
@@ -328,6 +337,7 @@ fn distance(args: &Args) -> Result<(), String> {
                 ROWS_PASS.to_string(),
                 Options3d::default(),
             )))
+            .chain(std::iter::once((SWEPT.to_string(), Options3d::default())))
             .chain(Variant::ALL.into_iter().map(|v| {
                 (
                     v.name().to_string(),
@@ -345,7 +355,7 @@ fn distance(args: &Args) -> Result<(), String> {
                     ..Options3d::default()
                 },
             )))
-            .take(if args.exact_only { 4 } else { usize::MAX })
+            .take(if args.exact_only { 5 } else { usize::MAX })
             .collect();
     let variants2: &[Variant] = if args.exact_only { &[] } else { &Variant::ALL };
     let total = (sizes3.len() * methods3.len() + sizes2.len() * (1 + variants2.len())) as u64;
@@ -382,10 +392,11 @@ fn distance(args: &Args) -> Result<(), String> {
                 GLOBAL => &d3_global,
                 WORKGROUP => &d3_workgroup,
                 ROWS_PASS => &d3_rows,
+                SWEPT => &d3_swept,
                 _ => &d3,
             };
             // JFA takes fields of one binding only; a split field has no row pass of its own.
-            if split && (name == ROWS_PASS || opts.method != Method::Exact) {
+            if split && (name == ROWS_PASS || name == SWEPT || opts.method != Method::Exact) {
                 bar.inc(1);
                 continue;
             }
