@@ -603,6 +603,12 @@ fn sweep_step(sw: ptr<function, Sweep>, t: u32) -> vec2<u32> {
     return vec2<u32>(best, u32(best_d));
 }
 
+// The voxel the thread answers at step t (xyz) and its position along the column (w).
+fn sweep_voxel(sw: Sweep, t: u32) -> vec4<u32> {
+    let i = t * BANDS + sw.row;
+    return vec4<u32>(vec3<u32>(voxel(sw.x, sw.other, i)), i);
+}
+
 // A distance clamped to the band.
 fn banded(d: f32) -> f32 {
     return clamp(d, -params.band, params.band);
@@ -663,19 +669,31 @@ fn columns_copy(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id)
     }
 }
 
-// `columns`, and the unsigned distance of every voxel it answers (3D).
+// Voxel p's answer at `at`: its site, and its distance clamped to the band.
+fn resolve_at(p: vec3<u32>, at: u32, found: vec2<u32>) {
+    nearest[at] = found.x;
+    textureStore(distance, p, vec4<f32>(banded(answer_distance(found, params.voxel_size)), 0.0, 0.0, 0.0));
+}
+
+// The same, signed as `field_resolve.wgsl`'s `resolve_signed` gives it from both fields.
+fn resolve_signed_at(p: vec3<u32>, at: u32, found: vec2<u32>) {
+    nearest[at] = found.x;
+    let d = signed_at3_bits(nearest_inside[at], p, answer_distance(found, params.voxel_size), found.x,
+                            params.voxel_size, SEED_X_BITS, SEED_Y_BITS);
+    textureStore(distance, p, vec4<f32>(banded(d), 0.0, 0.0, 0.0));
+}
+
+// `columns`, and the unsigned distance of every voxel it answers (3D). Each resolving entry
+// keeps its own loops: one loop shared by both would bind `nearest_inside` to this one too.
 @compute @workgroup_size(32, 8)
 fn columns_resolve(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
     if SCAN && near_columns(li, wg) {
         var sw = sweep_of(li, wg);
-        let n = select(params.size.z, params.size.y, params.axis == 1u);
-        for (var t = 0u; t * BANDS < n; t++) {
+        for (var t = 0u; t * BANDS < sw.n; t++) {
             let found = sweep_step(&sw, t);
-            let i = t * BANDS + sw.row;
-            if sw.x < params.x_end && i < n {
-                let p = vec3<u32>(voxel(sw.x, sw.other, i));
-                nearest[place(params.dst, p)] = found.x;
-                textureStore(distance, p, vec4<f32>(banded(answer_distance(found, params.voxel_size)), 0.0, 0.0, 0.0));
+            let p = sweep_voxel(sw, t);
+            if p.x < params.x_end && p.w < sw.n {
+                resolve_at(p.xyz, place(params.dst, p.xyz), found);
             }
         }
         return;
@@ -687,30 +705,20 @@ fn columns_resolve(@builtin(local_invocation_index) li: u32, @builtin(workgroup_
     }
     var walk = s.walk;
     for (var i = c.lo; i < c.hi; i++) {
-        let found = query(c, &walk, i, false);
-        nearest[c.out + i * c.out_stride] = found.x;
-        let p = vec3<u32>(voxel(c.x, c.other, i));
-        textureStore(distance, p, vec4<f32>(banded(answer_distance(found, params.voxel_size)), 0.0, 0.0, 0.0));
+        resolve_at(vec3<u32>(voxel(c.x, c.other, i)), c.out + i * c.out_stride, query(c, &walk, i, false));
     }
 }
 
-// `columns` in the outside seeds' field, and the signed distance of every voxel it answers,
-// as `field_resolve.wgsl`'s `resolve_signed` gives it from both fields (3D).
+// `columns` in the outside seeds' field, and the signed distance of every voxel it answers (3D).
 @compute @workgroup_size(32, 8)
 fn columns_resolve_signed(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
     if SCAN && near_columns(li, wg) {
         var sw = sweep_of(li, wg);
-        let n = select(params.size.z, params.size.y, params.axis == 1u);
-        for (var t = 0u; t * BANDS < n; t++) {
+        for (var t = 0u; t * BANDS < sw.n; t++) {
             let found = sweep_step(&sw, t);
-            let i = t * BANDS + sw.row;
-            if sw.x < params.x_end && i < n {
-                let p = vec3<u32>(voxel(sw.x, sw.other, i));
-                let at = place(params.dst, p);
-                nearest[at] = found.x;
-                let d = signed_at3_bits(nearest_inside[at], p, answer_distance(found, params.voxel_size), found.x,
-                                        params.voxel_size, SEED_X_BITS, SEED_Y_BITS);
-                textureStore(distance, p, vec4<f32>(banded(d), 0.0, 0.0, 0.0));
+            let p = sweep_voxel(sw, t);
+            if p.x < params.x_end && p.w < sw.n {
+                resolve_signed_at(p.xyz, place(params.dst, p.xyz), found);
             }
         }
         return;
@@ -722,13 +730,7 @@ fn columns_resolve_signed(@builtin(local_invocation_index) li: u32, @builtin(wor
     }
     var walk = s.walk;
     for (var i = c.lo; i < c.hi; i++) {
-        let found = query(c, &walk, i, false);
-        let at = c.out + i * c.out_stride;
-        nearest[at] = found.x;
-        let p = vec3<u32>(voxel(c.x, c.other, i));
-        let d = signed_at3_bits(nearest_inside[at], p, answer_distance(found, params.voxel_size), found.x,
-                                params.voxel_size, SEED_X_BITS, SEED_Y_BITS);
-        textureStore(distance, p, vec4<f32>(banded(d), 0.0, 0.0, 0.0));
+        resolve_signed_at(vec3<u32>(voxel(c.x, c.other, i)), c.out + i * c.out_stride, query(c, &walk, i, false));
     }
 }
 
