@@ -57,8 +57,6 @@ struct ColumnParams {
     // columns end (size.x, or the end of its part of a field split across bindings).
     first: vec2<u32>,
     x_end: u32,
-    // This run's stamp in `far_groups` (the sweep's marks; never 0, which a new buffer holds).
-    generation: u32,
     // Where the pass reads its sites (`source`, `nearest` or, from the row words, nowhere) and
     // keeps its envelopes (`stack`), and where it writes its answers (`nearest`,
     // `nearest_inside`).
@@ -81,11 +79,10 @@ struct ColumnParams {
 // (the y pass where it is not the last, the z pass of a field split across bindings); a
 // placeholder elsewhere.
 @group(0) @binding(7) var<storage, read> words: array<vec2<u32>>;
-// The y pass's far sites (MARK_FAR writes them, the z pass's sweep reads them): per group g of
-// 32 columns and plane z, entry z · groups + g holds `params.generation` where the y pass found
-// a voxel of them with no site within SCAN_REACH in this run (so nothing clears it between
-// runs). A placeholder elsewhere.
-@group(0) @binding(8) var<storage, read_write> far_groups: array<atomic<u32>>;
+// The resolving 3D pass's sweep (SCAN) writes, per workgroup, 1 where it answered the
+// workgroup's columns and 0 where it left them to the pass after it (AFTER_SCAN); every entry
+// is written each run. A placeholder elsewhere.
+@group(0) @binding(8) var<storage, read_write> swept: array<u32>;
 
 // 2D fields pack 16/16 bits (sides to 16384 keep every separator numerator in i32).
 override PACK_2D: bool = false;
@@ -107,15 +104,17 @@ const FAR_D2: i32 = 0x7fffffff;
 // Envelope size per (band, column) of this workgroup.
 var<workgroup> band_size: array<u32, 256>;
 
-// The resolving 3D entries' sweep (`near_columns`, `sweep_step`), where the host turns it on: a
-// ring of RING rows of the workgroup's columns (RING_CELLS = columns · RING), and the y pass
-// before it marking its far sites (`columns` with MARK_FAR).
+// The resolving 3D entries' sweep: SCAN answers the workgroups whose columns hold a site within
+// SCAN_REACH of every voxel in a ring of RING rows of the workgroup's columns (RING_CELLS =
+// columns · RING), and the others as `sweep_verdict` says; AFTER_SCAN, the pass after it,
+// builds the envelopes of those SCAN left to it, marked in `swept`.
 override SCAN: bool = false;
+override AFTER_SCAN: bool = false;
 override RING: u32 = 64u;
 override RING_CELLS: u32 = 1u;
-override MARK_FAR: bool = false;
 var<workgroup> ring: array<u32, RING_CELLS>;
-// Set where some position of the workgroup's columns holds no site within SCAN_REACH.
+// The voxels of the workgroup's columns found with no site within SCAN_REACH (SCAN), or the
+// workgroup's `swept` entry (AFTER_SCAN).
 var<workgroup> far_sites: atomic<u32>;
 
 fn voxel(x: u32, other: u32, i: u32) -> vec3<i32> {
@@ -486,18 +485,20 @@ fn query(c: Column, walk: ptr<function, Walk>, i: u32, carry: bool) -> vec2<u32>
 }
 
 // The last pass with dense seeds, as `edt_tile.wgsl`'s `scan` does it but with the columns
-// streamed through a ring of rows: where every position of the workgroup's columns holds a site
-// within SCAN_REACH of its column (at 1% random seeds no voxel's own cost passed 24² at 128³
-// to 512³), each voxel is answered by looking outward along its column until the step's square
-// alone is no less than the best found (a site farther along costs at least that; the voxel's
-// own site bounds the best, so no scan passes SCAN_REACH + 1 steps). Whether they all do comes
-// from the y pass before it, which marks each group of 32 columns and plane where some answer
-// was farther (`far_groups`): the z pass's workgroup reads one mark per plane
-// (`near_columns`), not its columns. Then the columns go once through the ring, BANDS rows a
-// step, the ring holding SCAN_REACH rows either side of the rows answered; a warp answers 32
-// neighbouring columns at one position. Answers go in place: a row is read into the ring
-// SCAN_REACH rows before it is answered. Where a mark is found the workgroup builds the
-// envelopes as before.
+// streamed through a ring of rows (SCAN): where every voxel of the workgroup's columns has its
+// own row's site within SCAN_REACH (at 1% random seeds all but a few near the grid's edges,
+// where part of the disc lies outside), each voxel is answered by looking outward along its
+// column until the step's square alone is no less than the best found (a site farther along
+// costs at least that; the voxel's own site bounds the best, so no scan passes SCAN_REACH + 1
+// steps). The workgroup first reads its columns to find whether they all do (`sweep_verdict`,
+// a chunk at a time, so that sparse seeds stop at the first); the answers go in place, so
+// nothing may be written before. Then the columns go once through the ring, BANDS rows a step,
+// the ring holding SCAN_REACH rows either side of the rows answered; a warp answers 32
+// neighbouring columns at one position, a row read into the ring SCAN_REACH rows before it is
+// answered. The workgroups that do not sweep build the envelopes: in the same dispatch where
+// few voxels are far (a pass of their own would wait for its slowest workgroup, ~0.13 ms on the
+// H100 at 512³), else in the pass after (AFTER_SCAN), whose entry point holds no sweep and so
+// takes fewer registers (38 against 44 on the H100: 6 workgroups per SM, not 5).
 const SCAN_REACH: u32 = 24u;
 
 // The site at position i of the column at x (NO_SEED past the grid).
@@ -512,27 +513,63 @@ fn site_at(x: u32, other: u32, n: u32, i: u32) -> u32 {
     return nearest[at];
 }
 
-// The entry of `far_groups` for x group g and plane z.
-fn far_entry(g: u32, z: u32) -> u32 {
-    return z * ((params.size.x + 256u / BANDS - 1u) / (256u / BANDS)) + g;
+// The workgroup's entry in `swept`.
+fn swept_entry(wg: vec3<u32>) -> u32 {
+    let columns = 256u / BANDS;
+    return wg.y * ((params.x_end - params.first.x + columns - 1u) / columns) + wg.x;
 }
 
-// Whether the y pass found every voxel of the workgroup's columns with a site within SCAN_REACH
-// (the same answer in every thread): it marked none of their group's planes in this run. Called
-// by every thread: it holds the barriers.
-fn near_columns(li: u32, wg: vec3<u32>) -> bool {
+// AFTER_SCAN: whether the sweep answered the workgroup's columns (the same answer in every
+// thread). Called by every thread: it holds the barrier.
+fn swept_before(li: u32, wg: vec3<u32>) -> bool {
+    if li == 0u {
+        atomicStore(&far_sites, swept[swept_entry(wg)]);
+    }
+    return workgroupUniformLoad(&far_sites) != 0u;
+}
+
+// What SCAN does with the workgroup's columns (the same answer in every thread): SWEEP them
+// where every voxel has its own row's site within SCAN_REACH; else build their envelopes HERE
+// where few voxels have not (at dense seeds, those near the grid's edges, where part of the disc
+// lies outside), or LATER, in the pass after (AFTER_SCAN), where many have (sparse seeds: that
+// pass's entry point holds no sweep, so takes fewer registers). The columns are read a chunk
+// of rows at a time (BANDS rows first, one a thread, so that sparse seeds stop early; then
+// CHECK_ROWS), stopping at the first chunk with a voxel past SCAN_REACH; LATER where at least a
+// sixteenth of that chunk's voxels are. Called by every thread: it holds the barriers.
+const SWEEP: u32 = 0u;
+const HERE: u32 = 1u;
+const LATER: u32 = 2u;
+const CHECK_ROWS: u32 = 64u;
+
+fn sweep_verdict(li: u32, wg: vec3<u32>) -> u32 {
+    let columns = 256u / BANDS;
+    let x = params.first.x + wg.x * columns + li % columns;
+    let other = params.first.y + wg.y;
+    let n = select(params.size.z, params.size.y, params.axis == 1u);
     if li == 0u {
         atomicStore(&far_sites, 0u);
     }
     workgroupBarrier();
-    var far = false;
-    for (var z = li; z < params.size.z; z += 256u) {
-        far = far | (atomicLoad(&far_groups[far_entry(wg.x, z)]) == params.generation);
+    var rows = BANDS;
+    for (var first = 0u; first < n; first += rows) {
+        if first > 0u {
+            rows = CHECK_ROWS;
+        }
+        var far = 0u;
+        if x < params.x_end {
+            for (var i = first + li / columns; i < min(first + rows, n); i += BANDS) {
+                far += u32(cost(site_at(x, other, n, i), voxel(x, other, i)) > i32(SCAN_REACH * SCAN_REACH));
+            }
+        }
+        if far > 0u {
+            atomicAdd(&far_sites, far);
+        }
+        let found = workgroupUniformLoad(&far_sites);
+        if found != 0u {
+            return select(HERE, LATER, found * 16u >= rows * columns);
+        }
     }
-    if far {
-        atomicStore(&far_sites, 1u);
-    }
-    return workgroupUniformLoad(&far_sites) == 0u;
+    return SWEEP;
 }
 
 // One thread's place in the sweep: its column (lane, x) and row of each step, and the site it
@@ -640,17 +677,8 @@ fn columns(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: 
     }
     // In place, the answer overwrites `nearest`; all of it was read before the barrier.
     var walk = s.walk;
-    var far = false;
     for (var i = c.lo; i < c.hi; i++) {
-        let found = query(c, &walk, i, true);
-        nearest[c.out + i * c.out_stride] = found.x;
-        if MARK_FAR {
-            far = far | (found.y > SCAN_REACH * SCAN_REACH);
-        }
-    }
-    // MARK_FAR: the group's plane marked for the z pass's sweep (NO_SEED's distance is FAR_D2).
-    if MARK_FAR && far {
-        atomicStore(&far_groups[far_entry(wg.x, c.other)], params.generation);
+        nearest[c.out + i * c.out_stride] = query(c, &walk, i, true).x;
     }
 }
 
@@ -687,15 +715,26 @@ fn resolve_signed_at(p: vec3<u32>, at: u32, found: vec2<u32>) {
 // keeps its own loops: one loop shared by both would bind `nearest_inside` to this one too.
 @compute @workgroup_size(32, 8)
 fn columns_resolve(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
-    if SCAN && near_columns(li, wg) {
-        var sw = sweep_of(li, wg);
-        for (var t = 0u; t * BANDS < sw.n; t++) {
-            let found = sweep_step(&sw, t);
-            let p = sweep_voxel(sw, t);
-            if p.x < params.x_end && p.w < sw.n {
-                resolve_at(p.xyz, place(params.dst, p.xyz), found);
+    if SCAN {
+        let verdict = sweep_verdict(li, wg);
+        if li == 0u {
+            swept[swept_entry(wg)] = u32(verdict != LATER);
+        }
+        if verdict == SWEEP {
+            var sw = sweep_of(li, wg);
+            for (var t = 0u; t * BANDS < sw.n; t++) {
+                let found = sweep_step(&sw, t);
+                let p = sweep_voxel(sw, t);
+                if p.x < params.x_end && p.w < sw.n {
+                    resolve_at(p.xyz, place(params.dst, p.xyz), found);
+                }
             }
         }
+        if verdict != HERE {
+            return;
+        }
+    }
+    if AFTER_SCAN && swept_before(li, wg) {
         return;
     }
     let s = start(li, wg);
@@ -712,15 +751,26 @@ fn columns_resolve(@builtin(local_invocation_index) li: u32, @builtin(workgroup_
 // `columns` in the outside seeds' field, and the signed distance of every voxel it answers (3D).
 @compute @workgroup_size(32, 8)
 fn columns_resolve_signed(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
-    if SCAN && near_columns(li, wg) {
-        var sw = sweep_of(li, wg);
-        for (var t = 0u; t * BANDS < sw.n; t++) {
-            let found = sweep_step(&sw, t);
-            let p = sweep_voxel(sw, t);
-            if p.x < params.x_end && p.w < sw.n {
-                resolve_signed_at(p.xyz, place(params.dst, p.xyz), found);
+    if SCAN {
+        let verdict = sweep_verdict(li, wg);
+        if li == 0u {
+            swept[swept_entry(wg)] = u32(verdict != LATER);
+        }
+        if verdict == SWEEP {
+            var sw = sweep_of(li, wg);
+            for (var t = 0u; t * BANDS < sw.n; t++) {
+                let found = sweep_step(&sw, t);
+                let p = sweep_voxel(sw, t);
+                if p.x < params.x_end && p.w < sw.n {
+                    resolve_signed_at(p.xyz, place(params.dst, p.xyz), found);
+                }
             }
         }
+        if verdict != HERE {
+            return;
+        }
+    }
+    if AFTER_SCAN && swept_before(li, wg) {
         return;
     }
     let s = start(li, wg);

@@ -56,11 +56,20 @@ const TARGET_THREADS_3D: u32 = 1 << 19;
 const MIN_BANDS_3D: u32 = 8;
 const TARGET_THREADS_2D: u32 = 1 << 17;
 const BAND_CHOICES: [u32; 6] = [1, 2, 4, 8, 16, 32];
-/// The sweep (`edt_columns.wgsl`'s `near_columns`) runs where both global passes take this many
-/// bands (32 columns per workgroup, the groups the y pass marks), in a ring of SWEEP_RING rows
-/// (24 either side of a step's 8, rounded up to a power of two: 8 KiB).
+/// The sweep (`edt_columns.wgsl`'s SCAN) runs where the resolving global z pass takes this many
+/// bands (32 columns per workgroup), in a ring of SWEEP_RING rows (24 either side of a step's 8,
+/// rounded up to a power of two: 8 KiB).
 const SWEEP_BANDS: u32 = 8;
 const SWEEP_RING: u32 = 64;
+
+/// Which dispatch of a resolving pass that sweeps (`edt_columns.wgsl`'s SCAN, AFTER_SCAN) a
+/// dispatch is: the sweep, the rest (the workgroups it left to the envelopes), or neither.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum SweepPart {
+    No,
+    Sweep,
+    Rest,
+}
 
 fn bands_for(columns: u32, flat: bool) -> usize {
     let want = if flat {
@@ -340,10 +349,10 @@ struct ColumnsIo<'a> {
     stack: &'a wgpu::Buffer,
     slab: usize,
     span: Span,
-    /// The y pass's marks of its far sites (`edt_columns.wgsl`'s `far_groups`) and this run's
-    /// stamp in them: the y pass writes them and the resolving z pass after it reads them to
-    /// choose its sweep.
-    far: Option<(&'a wgpu::Buffer, u32)>,
+    /// The resolving pass sweeps the workgroups whose columns hold a site near every voxel and
+    /// leaves the others to a pass of their own (`edt_columns.wgsl`'s SCAN, AFTER_SCAN), with
+    /// its record of which it swept.
+    sweep: Option<&'a wgpu::Buffer>,
 }
 
 /// The same placement as `edt_columns.wgsl` declares it.
@@ -1034,18 +1043,17 @@ pub struct Distance3d {
     /// The global-memory column passes' envelope stack, kept from call to call (the largest
     /// made so far): a new one each call would be allocated, and zeroed by wgpu, every frame.
     stack: std::sync::Mutex<Option<wgpu::Buffer>>,
-    /// The y pass's far-site marks for the z pass's sweep, kept the same way.
-    far: std::sync::Mutex<Option<wgpu::Buffer>>,
-    /// The resolving global z pass sweeps the workgroups the y pass marked near.
+    /// The sweep's record of the workgroups it answered, kept the same way.
+    swept: std::sync::Mutex<Option<wgpu::Buffer>>,
+    /// The resolving global z pass sweeps the workgroups whose columns hold a site near every
+    /// voxel.
     sweep: bool,
-    /// The last stamp given to the far-site marks.
-    generation: std::sync::atomic::AtomicU32,
     /// Bound as `edt_tile.wgsl`'s `source` where a pass reads the buffer it writes (a binding
     /// must be there; the shader does not read it then).
     no_source: wgpu::Buffer,
-    /// Bound as `edt_columns.wgsl`'s `far_groups` where the passes keep no marks (not
-    /// `no_source`: a dispatch may not bind one buffer both read-only and read-write).
-    no_far: wgpu::Buffer,
+    /// Bound as `edt_columns.wgsl`'s `swept` where there is no sweep (not `no_source`: a
+    /// dispatch may not bind one buffer both read-only and read-write).
+    no_swept: wgpu::Buffer,
     resolve_unsigned: ComputePipeline<field_resolve::resolve_unsigned::Entry>,
     resolve_signed: ComputePipeline<field_resolve::resolve_signed::Entry>,
     resolve_points: ComputePipeline<field_resolve::resolve_points::Entry>,
@@ -1531,10 +1539,10 @@ impl Distance3d {
         self.fold_rows = fold;
     }
 
-    /// For benchmarks and tests: `true` lets the resolving global z pass sweep the workgroups
-    /// whose columns the y pass found near (`edt_columns.wgsl`'s `near_columns`), where both
-    /// passes run in global memory at 8 bands; `false` (the default until it is measured to
-    /// pay) has every workgroup build the envelopes.
+    /// For benchmarks and tests: `true` (the default) lets the resolving global z pass at 8
+    /// bands sweep the workgroups whose columns hold a site near every voxel
+    /// (`edt_columns.wgsl`'s SCAN); `false` has every workgroup build the envelopes, as the z
+    /// pass does at other band counts and in workgroup memory.
     #[doc(hidden)]
     pub fn set_sweep(&mut self, sweep: bool) {
         self.sweep = sweep;
@@ -1602,17 +1610,16 @@ impl Distance3d {
             split_bytes: None,
             split_columns: MIN_TILE_COLUMNS,
             stack: Default::default(),
-            far: Default::default(),
-            sweep: false,
-            generation: Default::default(),
+            swept: Default::default(),
+            sweep: true,
             no_source: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("edt: no source, no words"),
                 size: 16,
                 usage: wgpu::BufferUsages::STORAGE,
                 mapped_at_creation: false,
             }),
-            no_far: device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("edt: no far marks"),
+            no_swept: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("edt: no sweep"),
                 size: 16,
                 usage: wgpu::BufferUsages::STORAGE,
                 mapped_at_creation: false,
@@ -2146,34 +2153,20 @@ impl Distance3d {
         // Along y, and not the last pass: the row pass folds into the y pass, which makes its
         // sites from the row words (`row_words`, then `tile_columns_words` in workgroup memory
         // or `edt_columns.wgsl` with FROM_WORDS in global memory); else rows, then columns.
-        // Both column passes in global memory, the last resolving a volume: the y pass marks
-        // its far sites so the z pass's workgroups whose columns have none sweep
-        // (`edt_columns.wgsl`'s `near_columns`).
-        let folds = self.fold_rows && size[1] > 1 && size[2] > 1;
-        let far = (folds
-            && self.sweep
+        // The z pass resolving a volume in global memory at SWEEP_BANDS: it sweeps where it can
+        // (`edt_columns.wgsl`'s SCAN).
+        let sweep = (self.sweep
+            && size[2] > 1
             && fuse.as_ref().is_some_and(|f| !f.flat)
-            && self.tile_for(device, size[1], 1, false)?.is_none()
             && self.tile_for(device, size[2], 2, false)?.is_none()
-            && self.global_bands(size[0] * size[2], false) == SWEEP_BANDS
             && self.global_bands(size[0] * size[1], false) == SWEEP_BANDS)
-            .then(|| (self.far_for(device, size), self.next_generation()));
-        let (nearest, first_axis) = if folds {
+            .then(|| self.swept_for(device, size[0].div_ceil(256 / SWEEP_BANDS) * size[1]));
+        let (nearest, first_axis) = if self.fold_rows && size[1] > 1 && size[2] > 1 {
             let words = self.encode_row_words(device, rec, volume, inside, invert)?;
             let nearest = field_buffer(device, "nearest seed", size);
             let tile = self.tile_for(device, size[1], 1, false)?;
             let io = TileIo::in_place(&nearest, size);
-            self.encode_from_words(
-                device,
-                rec,
-                &words,
-                io,
-                size,
-                1,
-                tile,
-                size,
-                far.as_ref().map(|(b, g)| (b, *g)),
-            )?;
+            self.encode_from_words(device, rec, &words, io, size, 1, tile, size)?;
             (nearest, 2)
         } else {
             (self.encode_rows(device, rec, volume, inside, invert)?, 1)
@@ -2203,7 +2196,7 @@ impl Distance3d {
                 axis,
                 size[3 - axis as usize],
                 f,
-                far.as_ref().filter(|_| last).map(|(b, g)| (b, *g)),
+                sweep.as_ref().filter(|_| last),
             )?;
         }
         if let Some(f) = fuse {
@@ -2363,7 +2356,7 @@ impl Distance3d {
         }
         let tile = self.tile_for(device, size[1], 1, false)?;
         let io = TileIo::in_place(nearest, size);
-        self.encode_from_words(device, rec, words, io, size, 1, tile, size, None)
+        self.encode_from_words(device, rec, words, io, size, 1, tile, size)
     }
 
     /// The column pass along `axis` (1: y, 2: z) that makes its sites from the row words, into
@@ -2380,7 +2373,6 @@ impl Distance3d {
         axis: u32,
         tile: Option<TileGeometry>,
         stack_size: [u32; 3],
-        far: Option<(&wgpu::Buffer, u32)>,
     ) -> Result<(), Error> {
         match tile {
             Some(tile) => self.encode_tile_columns_words(device, rec, words, io, size, axis, tile),
@@ -2395,7 +2387,7 @@ impl Distance3d {
                     stack: &self.stack_for(device, stack_size),
                     slab: 0,
                     span: io.span,
-                    far,
+                    sweep: None,
                 },
                 size,
                 axis,
@@ -2536,7 +2528,7 @@ impl Distance3d {
                 slab: 0,
                 span,
             };
-            self.encode_from_words(device, rec, &words, io, size, 2, split.z, part_size, None)?;
+            self.encode_from_words(device, rec, &words, io, size, 2, split.z, part_size)?;
             for (k, &(z0, z_end)) in slabs.iter().enumerate() {
                 let span = Span {
                     first: [x0, z0],
@@ -2574,7 +2566,7 @@ impl Distance3d {
                             stack: &self.stack_for(device, part_size),
                             slab: k,
                             span,
-                            far: None,
+                            sweep: None,
                         },
                         size,
                         1,
@@ -2634,7 +2626,7 @@ impl Distance3d {
         axis: u32,
         others: u32,
         fuse: Option<Fuse>,
-        far: Option<(&wgpu::Buffer, u32)>,
+        sweep: Option<&wgpu::Buffer>,
     ) -> Result<(), Error> {
         let tile = self.tile_for(device, size[axis as usize], axis, pack_2d)?;
         if let Some(tile) = tile {
@@ -2665,7 +2657,7 @@ impl Distance3d {
             stack,
             slab: 0,
             span: Span::whole(size),
-            far,
+            sweep,
         };
         self.encode_global_columns(device, rec, pack_2d, io, size, axis, others, fuse)
     }
@@ -2684,72 +2676,90 @@ impl Distance3d {
         others: u32,
         fuse: Option<Fuse>,
     ) -> Result<(), Error> {
-        let (params, overrides, groups) =
-            self.global_columns_setup(device, &io, size, axis, others, pack_2d, fuse.as_ref());
-        let name = match (axis, &fuse, io.words.is_some()) {
-            (1, _, true) => "columns (y) from row words",
-            (_, _, true) => "columns (z) from row words",
-            (1, None, _) => "columns (y)",
-            (1, Some(_), _) => "columns (y) + resolve",
-            (_, None, _) => "columns (z)",
-            (_, Some(_), _) => "columns (z) + resolve",
-        };
         let (nearest, stack, slab) = (io.nearest, io.stack, io.slab);
         let source = io.source.unwrap_or(&self.no_source);
         let words = io.words.unwrap_or(&self.no_source);
-
-        // One arm per entry point: the same resources, plus what its resolve writes.
-        macro_rules! record {
-            ($cache:expr, $entry:ident { $($field:ident: $value:expr),* }) => {
-                $cache.get(device, &overrides, true)?.record(
-                    device,
-                    rec,
-                    &edt_columns::$entry::Resources {
-                        params: (&params).into(),
-                        nearest: nearest.into(),
-                        stack: stack.into(),
-                        source: source.into(),
-                        words: words.into(),
-                        $($field: $value.into()),*
-                    },
-                    groups,
-                    name,
-                )?
+        // A resolving 3D pass that sweeps is two dispatches: the sweep, then the envelopes of
+        // the workgroups it left (the same entry point, other override constants).
+        let resolve = Fuse::resolve(fuse.as_ref(), slab);
+        let volume = matches!(resolve, Resolve::Volume(_) | Resolve::SignedVolume(..));
+        let (parts, swept): (&[SweepPart], _) = match io.sweep {
+            Some(swept) if volume => (&[SweepPart::Sweep, SweepPart::Rest], swept),
+            _ => (&[SweepPart::No], &self.no_swept),
+        };
+        for &part in parts {
+            let (params, overrides, groups) = self.global_columns_setup(
+                device,
+                &io,
+                size,
+                axis,
+                others,
+                pack_2d,
+                fuse.as_ref(),
+                part,
+            );
+            let name = match (axis, &fuse, io.words.is_some(), part) {
+                (_, _, _, SweepPart::Sweep) => "columns (z) sweep + resolve",
+                (_, _, _, SweepPart::Rest) => "columns (z) + resolve (rest)",
+                (1, _, true, _) => "columns (y) from row words",
+                (_, _, true, _) => "columns (z) from row words",
+                (1, None, _, _) => "columns (y)",
+                (1, Some(_), _, _) => "columns (y) + resolve",
+                (_, None, _, _) => "columns (z)",
+                (_, Some(_), _, _) => "columns (z) + resolve",
             };
-        }
-        // The 3D entries read or write the y pass's marks (a placeholder where there are none).
-        let far = io.far.map_or(&self.no_far, |(b, _)| b);
-        match Fuse::resolve(fuse.as_ref(), slab) {
-            Resolve::No => record!(self.columns, columns { far_groups: far }),
-            Resolve::Flat(d) => record!(
-                self.columns_resolve_2d,
-                columns_resolve_2d { distance_2d: d }
-            ),
-            Resolve::SignedFlat(i, d) => {
-                record!(
-                    self.columns_resolve_signed_2d,
-                    columns_resolve_signed_2d {
-                        nearest_inside: i,
-                        distance_2d: d
-                    }
-                )
+
+            // One arm per entry point: the same resources, plus what its resolve writes.
+            macro_rules! record {
+                ($cache:expr, $entry:ident { $($field:ident: $value:expr),* }) => {
+                    $cache.get(device, &overrides, true)?.record(
+                        device,
+                        rec,
+                        &edt_columns::$entry::Resources {
+                            params: (&params).into(),
+                            nearest: nearest.into(),
+                            stack: stack.into(),
+                            source: source.into(),
+                            words: words.into(),
+                            $($field: $value.into()),*
+                        },
+                        groups,
+                        name,
+                    )?
+                };
             }
-            Resolve::Volume(d) => record!(
-                self.columns_resolve,
-                columns_resolve {
-                    distance: d,
-                    far_groups: far
+            match &resolve {
+                Resolve::No => record!(self.columns, columns {}),
+                Resolve::Flat(d) => record!(
+                    self.columns_resolve_2d,
+                    columns_resolve_2d { distance_2d: *d }
+                ),
+                Resolve::SignedFlat(i, d) => {
+                    record!(
+                        self.columns_resolve_signed_2d,
+                        columns_resolve_signed_2d {
+                            nearest_inside: *i,
+                            distance_2d: *d
+                        }
+                    )
                 }
-            ),
-            Resolve::SignedVolume(i, d) => {
-                record!(
-                    self.columns_resolve_signed,
-                    columns_resolve_signed {
-                        nearest_inside: i,
-                        distance: d,
-                        far_groups: far
+                Resolve::Volume(d) => record!(
+                    self.columns_resolve,
+                    columns_resolve {
+                        distance: *d,
+                        swept: swept
                     }
-                )
+                ),
+                Resolve::SignedVolume(i, d) => {
+                    record!(
+                        self.columns_resolve_signed,
+                        columns_resolve_signed {
+                            nearest_inside: *i,
+                            distance: *d,
+                            swept: swept
+                        }
+                    )
+                }
             }
         }
         Ok(())
@@ -2768,14 +2778,13 @@ impl Distance3d {
         others: u32,
         pack_2d: bool,
         fuse: Option<&Fuse>,
+        part: SweepPart,
     ) -> (wgpu::Buffer, [(&'static str, f64); 10], [u32; 3]) {
         let span = &io.span;
         let width = span.x_end - span.first[0];
         let bands = self.global_bands(width * others, pack_2d);
         let [x_bits, y_bits] = packing_of(size).overrides();
-        // With the marks: the y pass writes them, the resolving z pass reads them.
-        let mark_far = io.far.is_some() && fuse.is_none();
-        let scan = io.far.is_some() && fuse.is_some();
+        let scan = part == SweepPart::Sweep;
         let overrides = [
             ("PACK_2D", pack_2d as u32 as f64),
             ("BANDS", bands as f64),
@@ -2784,7 +2793,7 @@ impl Distance3d {
             x_bits,
             y_bits,
             ("SCAN", scan as u32 as f64),
-            ("MARK_FAR", mark_far as u32 as f64),
+            ("AFTER_SCAN", (part == SweepPart::Rest) as u32 as f64),
             ("RING", SWEEP_RING as f64),
             (
                 "RING_CELLS",
@@ -2801,7 +2810,6 @@ impl Distance3d {
                 band: fuse.map_or(f32::MAX, |f| f.band),
                 first: span.first.into(),
                 x_end: span.x_end,
-                generation: io.far.map_or(0, |(_, g)| g),
                 src: columns_placement(&span.src),
                 dst: columns_placement(&span.dst),
             },
@@ -2838,11 +2846,11 @@ impl Distance3d {
             stack: &self.no_source,
             slab: 0,
             span: Span::whole(size),
-            far: None,
+            sweep: None,
         };
         let others = size[3 - axis as usize];
         let (params, overrides, groups) =
-            self.global_columns_setup(device, &io, size, axis, others, false, None);
+            self.global_columns_setup(device, &io, size, axis, others, false, None, SweepPart::No);
         self.columns_copy.get(device, &overrides, true)?.record(
             device,
             rec,
@@ -2858,38 +2866,23 @@ impl Distance3d {
         Ok(Some(()))
     }
 
-    /// A stamp for this run's far-site marks: never 0 (what a new buffer holds), and not the
-    /// last run's.
-    fn next_generation(&self) -> u32 {
-        loop {
-            let g = self
-                .generation
-                .fetch_add(1, std::sync::atomic::Ordering::Relaxed)
-                .wrapping_add(1);
-            if g != 0 {
-                return g;
-            }
-        }
-    }
-
     /// Bands per column of a global-memory column pass over `columns` columns.
     fn global_bands(&self, columns: u32, pack_2d: bool) -> u32 {
         self.column_bands
             .unwrap_or(BAND_CHOICES[bands_for(columns, pack_2d)])
     }
 
-    /// The y pass's far-site marks for a field of `size` (`edt_columns.wgsl`'s `far_groups`:
-    /// one entry per group of 32 columns and plane), kept from call to call as the stack is.
-    /// Nothing clears it: an entry counts only where it holds the run's stamp.
-    fn far_for(&self, device: &wgpu::Device, size: [u32; 3]) -> wgpu::Buffer {
-        let groups = size[0].div_ceil(256 / SWEEP_BANDS) as u64;
-        let bytes = groups * size[2] as u64 * 4;
-        let mut kept = self.far.lock().unwrap_or_else(|e| e.into_inner());
+    /// The sweep's record of the workgroups it answered (`edt_columns.wgsl`'s `swept`), one
+    /// entry for each of `groups` workgroups, kept from call to call as the stack is. The sweep
+    /// writes every entry before the pass after it reads them.
+    fn swept_for(&self, device: &wgpu::Device, groups: u32) -> wgpu::Buffer {
+        let bytes = groups as u64 * 4;
+        let mut kept = self.swept.lock().unwrap_or_else(|e| e.into_inner());
         match kept.as_ref() {
             Some(b) if b.size() >= bytes => b.clone(),
             _ => {
                 let b = device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("edt far marks"),
+                    label: Some("edt swept workgroups"),
                     size: bytes,
                     usage: wgpu::BufferUsages::STORAGE,
                     mapped_at_creation: false,
