@@ -519,13 +519,27 @@ fn swept_entry(wg: vec3<u32>) -> u32 {
     return wg.y * ((params.x_end - params.first.x + columns - 1u) / columns) + wg.x;
 }
 
-// AFTER_SCAN: whether the sweep answered the workgroup's columns (the same answer in every
-// thread). Called by every thread: it holds the barrier.
-fn swept_before(li: u32, wg: vec3<u32>) -> bool {
-    if li == 0u {
-        atomicStore(&far_sites, swept[swept_entry(wg)]);
+// What a resolving 3D dispatch does with the workgroup's columns (the same answer in every
+// thread): SCAN's `sweep_verdict`, marked in `swept`; AFTER_SCAN's: the envelopes (HERE) of
+// those SCAN left to it, nothing (DONE) for the others; elsewhere HERE. Called by every
+// thread: it holds the barriers.
+fn verdict_of(li: u32, wg: vec3<u32>) -> u32 {
+    if SCAN {
+        let verdict = sweep_verdict(li, wg);
+        if li == 0u {
+            swept[swept_entry(wg)] = u32(verdict != LATER);
+        }
+        return verdict;
     }
-    return workgroupUniformLoad(&far_sites) != 0u;
+    if AFTER_SCAN {
+        if li == 0u {
+            atomicStore(&far_sites, swept[swept_entry(wg)]);
+        }
+        if workgroupUniformLoad(&far_sites) != 0u {
+            return DONE;
+        }
+    }
+    return HERE;
 }
 
 // What SCAN does with the workgroup's columns (the same answer in every thread): SWEEP them
@@ -541,6 +555,7 @@ fn swept_before(li: u32, wg: vec3<u32>) -> bool {
 const SWEEP: u32 = 0u;
 const HERE: u32 = 1u;
 const LATER: u32 = 2u;
+const DONE: u32 = 3u;
 
 fn sweep_verdict(li: u32, wg: vec3<u32>) -> u32 {
     let columns = 256u / BANDS;
@@ -716,26 +731,18 @@ fn resolve_signed_at(p: vec3<u32>, at: u32, found: vec2<u32>) {
 // keeps its own loops: one loop shared by both would bind `nearest_inside` to this one too.
 @compute @workgroup_size(32, 8)
 fn columns_resolve(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
-    if SCAN {
-        let verdict = sweep_verdict(li, wg);
-        if li == 0u {
-            swept[swept_entry(wg)] = u32(verdict != LATER);
-        }
-        if verdict == SWEEP {
-            var sw = sweep_of(li, wg);
-            for (var t = 0u; t * BANDS < sw.n; t++) {
-                let found = sweep_step(&sw, t);
-                let p = sweep_voxel(sw, t);
-                if p.x < params.x_end && p.w < sw.n {
-                    resolve_at(p.xyz, place(params.dst, p.xyz), found);
-                }
+    let verdict = verdict_of(li, wg);
+    if verdict == SWEEP {
+        var sw = sweep_of(li, wg);
+        for (var t = 0u; t * BANDS < sw.n; t++) {
+            let found = sweep_step(&sw, t);
+            let p = sweep_voxel(sw, t);
+            if p.x < params.x_end && p.w < sw.n {
+                resolve_at(p.xyz, place(params.dst, p.xyz), found);
             }
         }
-        if verdict != HERE {
-            return;
-        }
     }
-    if AFTER_SCAN && swept_before(li, wg) {
+    if verdict != HERE {
         return;
     }
     let s = start(li, wg);
@@ -752,26 +759,18 @@ fn columns_resolve(@builtin(local_invocation_index) li: u32, @builtin(workgroup_
 // `columns` in the outside seeds' field, and the signed distance of every voxel it answers (3D).
 @compute @workgroup_size(32, 8)
 fn columns_resolve_signed(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
-    if SCAN {
-        let verdict = sweep_verdict(li, wg);
-        if li == 0u {
-            swept[swept_entry(wg)] = u32(verdict != LATER);
-        }
-        if verdict == SWEEP {
-            var sw = sweep_of(li, wg);
-            for (var t = 0u; t * BANDS < sw.n; t++) {
-                let found = sweep_step(&sw, t);
-                let p = sweep_voxel(sw, t);
-                if p.x < params.x_end && p.w < sw.n {
-                    resolve_signed_at(p.xyz, place(params.dst, p.xyz), found);
-                }
+    let verdict = verdict_of(li, wg);
+    if verdict == SWEEP {
+        var sw = sweep_of(li, wg);
+        for (var t = 0u; t * BANDS < sw.n; t++) {
+            let found = sweep_step(&sw, t);
+            let p = sweep_voxel(sw, t);
+            if p.x < params.x_end && p.w < sw.n {
+                resolve_signed_at(p.xyz, place(params.dst, p.xyz), found);
             }
         }
-        if verdict != HERE {
-            return;
-        }
     }
-    if AFTER_SCAN && swept_before(li, wg) {
+    if verdict != HERE {
         return;
     }
     let s = start(li, wg);
