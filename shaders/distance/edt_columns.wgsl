@@ -559,9 +559,8 @@ const DONE: u32 = 3u;
 
 fn sweep_verdict(li: u32, wg: vec3<u32>) -> u32 {
     let columns = 256u / BANDS;
-    let x = params.first.x + wg.x * columns + li % columns;
-    let other = params.first.y + wg.y;
-    let n = select(params.size.z, params.size.y, params.axis == 1u);
+    let sw = sweep_place(li, wg);
+    let n = sw.n;
     if li == 0u {
         atomicStore(&far_sites, 0u);
     }
@@ -572,9 +571,9 @@ fn sweep_verdict(li: u32, wg: vec3<u32>) -> u32 {
             rows = n - first;
         }
         var far = 0u;
-        if x < params.x_end {
-            for (var i = first + li / columns; i < min(first + rows, n); i += BANDS) {
-                far += u32(cost(site_at(x, other, n, i), voxel(x, other, i)) > i32(SCAN_REACH * SCAN_REACH));
+        if sw.x < params.x_end {
+            for (var i = first + sw.row; i < min(first + rows, n); i += BANDS) {
+                far += u32(cost(site_at(sw.x, sw.other, n, i), voxel(sw.x, sw.other, i)) > i32(SCAN_REACH * SCAN_REACH));
             }
         }
         if far > 0u {
@@ -603,8 +602,8 @@ fn ring_cell(sw: Sweep, i: u32) -> u32 {
     return (i & (RING - 1u)) * (256u / BANDS) + sw.lane;
 }
 
-// Start the sweep: the first SCAN_REACH rows into the ring, and the first step's row loaded.
-fn sweep_of(li: u32, wg: vec3<u32>) -> Sweep {
+// The thread's column and first row in the sweep (nothing loaded yet).
+fn sweep_place(li: u32, wg: vec3<u32>) -> Sweep {
     var sw: Sweep;
     let columns = 256u / BANDS;
     sw.lane = li % columns;
@@ -612,6 +611,12 @@ fn sweep_of(li: u32, wg: vec3<u32>) -> Sweep {
     sw.x = params.first.x + wg.x * columns + sw.lane;
     sw.other = params.first.y + wg.y;
     sw.n = select(params.size.z, params.size.y, params.axis == 1u);
+    return sw;
+}
+
+// Start the sweep: the first SCAN_REACH rows into the ring, and the first step's row loaded.
+fn sweep_of(li: u32, wg: vec3<u32>) -> Sweep {
+    var sw = sweep_place(li, wg);
     sw.next = site_at(sw.x, sw.other, sw.n, SCAN_REACH + sw.row);
     for (var i = sw.row; i < SCAN_REACH; i += BANDS) {
         ring[ring_cell(sw, i)] = site_at(sw.x, sw.other, sw.n, i);

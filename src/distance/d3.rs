@@ -457,19 +457,44 @@ impl<'a> Fuse<'a> {
 /// order No, Flat, SignedFlat, Volume, SignedVolume, each `cache => entry`.
 macro_rules! record_resolved {
     ($record:ident, $resolve:expr, $($cache:expr => $entry:ident),* $(,)?) => {
-        record_resolved!(@arms $record, $resolve, $($cache => $entry),*)
+        record_resolved!(@arms $record, $resolve, {}, $($cache => $entry),*)
     };
-    (@arms $record:ident, $resolve:expr,
+    // The volume entries bind more (`edt_columns.wgsl`'s `swept`).
+    ($record:ident, $resolve:expr, volume { $($field:ident: $value:expr),* },
+        $($cache:expr => $entry:ident),* $(,)?) => {
+        record_resolved!(@arms $record, $resolve, { $($field: $value),* }, $($cache => $entry),*)
+    };
+    (@arms $record:ident, $resolve:expr, { $($field:ident: $value:expr),* },
         $c0:expr => $e0:ident, $c1:expr => $e1:ident, $c2:expr => $e2:ident,
         $c3:expr => $e3:ident, $c4:expr => $e4:ident) => {
         match $resolve {
             Resolve::No => $record!($c0, $e0 {}),
             Resolve::Flat(d) => $record!($c1, $e1 { distance_2d: d }),
             Resolve::SignedFlat(i, d) => $record!($c2, $e2 { nearest_inside: i, distance_2d: d }),
-            Resolve::Volume(d) => $record!($c3, $e3 { distance: d }),
-            Resolve::SignedVolume(i, d) => $record!($c4, $e4 { nearest_inside: i, distance: d }),
+            Resolve::Volume(d) => $record!($c3, $e3 { distance: d $(, $field: $value)* }),
+            Resolve::SignedVolume(i, d) => {
+                $record!($c4, $e4 { nearest_inside: i, distance: d $(, $field: $value)* })
+            }
         }
     };
+}
+
+/// The buffer kept in `slot` where it holds at least `bytes`, else a new one from `make`, kept
+/// in its place for the next call.
+fn kept_buffer(
+    slot: &std::sync::Mutex<Option<wgpu::Buffer>>,
+    bytes: u64,
+    make: impl FnOnce() -> wgpu::Buffer,
+) -> wgpu::Buffer {
+    let mut kept = slot.lock().unwrap_or_else(|e| e.into_inner());
+    match kept.as_ref() {
+        Some(b) if b.size() >= bytes => b.clone(),
+        _ => {
+            let b = make();
+            *kept = Some(b.clone());
+            b
+        }
+    }
 }
 
 /// Parts (columns along x) and slabs (planes along z) of a field of `size` that the exact
@@ -2728,38 +2753,15 @@ impl Distance3d {
                     )?
                 };
             }
-            match &resolve {
-                Resolve::No => record!(self.columns, columns {}),
-                Resolve::Flat(d) => record!(
-                    self.columns_resolve_2d,
-                    columns_resolve_2d { distance_2d: *d }
-                ),
-                Resolve::SignedFlat(i, d) => {
-                    record!(
-                        self.columns_resolve_signed_2d,
-                        columns_resolve_signed_2d {
-                            nearest_inside: *i,
-                            distance_2d: *d
-                        }
-                    )
-                }
-                Resolve::Volume(d) => record!(
-                    self.columns_resolve,
-                    columns_resolve {
-                        distance: *d,
-                        swept: swept
-                    }
-                ),
-                Resolve::SignedVolume(i, d) => {
-                    record!(
-                        self.columns_resolve_signed,
-                        columns_resolve_signed {
-                            nearest_inside: *i,
-                            distance: *d,
-                            swept: swept
-                        }
-                    )
-                }
+            record_resolved! {
+                record,
+                resolve,
+                volume { swept: swept },
+                self.columns => columns,
+                self.columns_resolve_2d => columns_resolve_2d,
+                self.columns_resolve_signed_2d => columns_resolve_signed_2d,
+                self.columns_resolve => columns_resolve,
+                self.columns_resolve_signed => columns_resolve_signed,
             }
         }
         Ok(())
@@ -2877,20 +2879,14 @@ impl Distance3d {
     /// writes every entry before the pass after it reads them.
     fn swept_for(&self, device: &wgpu::Device, groups: u32) -> wgpu::Buffer {
         let bytes = groups as u64 * 4;
-        let mut kept = self.swept.lock().unwrap_or_else(|e| e.into_inner());
-        match kept.as_ref() {
-            Some(b) if b.size() >= bytes => b.clone(),
-            _ => {
-                let b = device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("edt swept workgroups"),
-                    size: bytes,
-                    usage: wgpu::BufferUsages::STORAGE,
-                    mapped_at_creation: false,
-                });
-                *kept = Some(b.clone());
-                b
-            }
-        }
+        kept_buffer(&self.swept, bytes, || {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("edt swept workgroups"),
+                size: bytes,
+                usage: wgpu::BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            })
+        })
     }
 
     /// The envelope stack of the global-memory column passes for a field of `size`: the one
@@ -2898,15 +2894,9 @@ impl Distance3d {
     /// Every pass writes the stack's entries before it reads them, so passes recorded one after
     /// another may share it (wgpu orders their use of it).
     fn stack_for(&self, device: &wgpu::Device, size: [u32; 3]) -> wgpu::Buffer {
-        let mut kept = self.stack.lock().unwrap_or_else(|e| e.into_inner());
-        match kept.as_ref() {
-            Some(b) if b.size() >= voxels(size) * 4 => b.clone(),
-            _ => {
-                let b = field_buffer(device, "edt envelope stack", size);
-                *kept = Some(b.clone());
-                b
-            }
-        }
+        kept_buffer(&self.stack, voxels(size) * 4, || {
+            field_buffer(device, "edt envelope stack", size)
+        })
     }
 
     /// The workgroup-memory tile the column passes take for columns of length `n` along `axis`
