@@ -46,8 +46,6 @@ struct Placement {
 
 struct ColumnParams {
     size: vec3<u32>,
-    // 1: columns run along y; 2: along z.
-    axis: u32,
     // The resolving entries: world units per voxel, and the band (world units) distances are
     // clamped to (FAR when none).
     voxel_size: f32,
@@ -84,6 +82,15 @@ struct ColumnParams {
 // is written each run. A placeholder elsewhere.
 @group(0) @binding(8) var<storage, read_write> swept: array<u32>;
 
+// The axis the columns run along (1: y, 2: z): an override, so that every choice between them
+// is made when the pipeline is (read from the uniform, it cost 512³ 0.6% at 1% seeds and 2.5% at
+// 1e-5 on the H100).
+override AXIS: u32 = 1u;
+// Every site lies in its column's plane across the other axis (z for a y column, y for a z
+// column): the y pass before the z pass, and any pass from the row words. Its costs leave that
+// coordinate out: the y pass at 512³ went from 1.439 to 1.346 ms on the H100, so these passes
+// are bound by the instructions of their walks as much as by their loads.
+override PLANAR: bool = false;
 // 2D fields pack 16/16 bits (sides to 16384 keep every separator numerator in i32).
 override PACK_2D: bool = false;
 // Bands per column; 256 / BANDS columns per workgroup. At most MAX_BANDS, a power of two.
@@ -118,7 +125,7 @@ var<workgroup> ring: array<u32, RING_CELLS>;
 var<workgroup> far_sites: atomic<u32>;
 
 fn voxel(x: u32, other: u32, i: u32) -> vec3<i32> {
-    if params.axis == 1u {
+    if AXIS == 1u {
         return vec3<i32>(i32(x), i32(i), i32(other));
     }
     return vec3<i32>(i32(x), i32(other), i32(i));
@@ -127,6 +134,14 @@ fn voxel(x: u32, other: u32, i: u32) -> vec3<i32> {
 fn cost(s: u32, p: vec3<i32>) -> i32 {
     if PACK_2D {
         return i32(dist2(unpack_seed2(s), p.xy));
+    }
+    if PLANAR {
+        // The third coordinate of every site is the column's own.
+        let d = unpack_seed3_bits(s, SEED_X_BITS, SEED_Y_BITS) - p;
+        if AXIS == 1u {
+            return d.x * d.x + d.y * d.y;
+        }
+        return d.x * d.x + d.z * d.z;
     }
     return dist2_3(unpack_seed3_bits(s, SEED_X_BITS, SEED_Y_BITS), p);
 }
@@ -138,7 +153,7 @@ fn position(s: u32) -> i32 {
     }
     // No vector indexed at run time: that can be lowered to a private array in memory.
     let p = unpack_seed3_bits(s, SEED_X_BITS, SEED_Y_BITS);
-    return select(p.z, p.y, params.axis == 1u);
+    return select(p.z, p.y, AXIS == 1u);
 }
 
 // A site's cost within the plane through its own position (the squared distance from the
@@ -232,13 +247,13 @@ fn column_of(li: u32, wg: vec3<u32>) -> Column {
     c.band = li / c.columns_per_group;
     c.x = params.first.x + wg.x * c.columns_per_group + c.lane;
     c.other = params.first.y + wg.y;
-    c.n = select(params.size.z, params.size.y, params.axis == 1u);
+    c.n = select(params.size.z, params.size.y, AXIS == 1u);
     c.valid = c.x < params.x_end;
     let start = vec3<u32>(voxel(min(c.x, params.x_end - 1u), c.other, 0u));
     c.base = place(params.src, start);
-    c.stride = select(params.src.plane, params.src.row, params.axis == 1u);
+    c.stride = select(params.src.plane, params.src.row, AXIS == 1u);
     c.out = place(params.dst, start);
-    c.out_stride = select(params.dst.plane, params.dst.row, params.axis == 1u);
+    c.out_stride = select(params.dst.plane, params.dst.row, AXIS == 1u);
     c.band_len = (c.n + BANDS - 1u) / BANDS;
     c.lo = min(c.n, c.band * c.band_len);
     c.hi = min(c.n, c.lo + c.band_len);
@@ -610,8 +625,33 @@ fn sweep_place(li: u32, wg: vec3<u32>) -> Sweep {
     sw.row = li / columns;
     sw.x = params.first.x + wg.x * columns + sw.lane;
     sw.other = params.first.y + wg.y;
-    sw.n = select(params.size.z, params.size.y, params.axis == 1u);
+    sw.n = select(params.size.z, params.size.y, AXIS == 1u);
     return sw;
+}
+
+// A site as the sweep's ring holds it: its squared distance from the column within its own
+// plane (the low 10 bits) and its offsets from the column along that plane's two axes, + 32 (6
+// bits each, above), so that a step's cost is one add. Where the sweep runs every site it
+// consults is within SCAN_REACH of the column in its plane (576 < 2^10, |offset| ≤ 24 < 32), and
+// lies in the plane of its own row (the pass before it answered within planes); NO_SEED, never
+// consulted there, is held as the largest cost.
+const RING_COST: u32 = 0x3ffu;
+
+fn ring_entry(sw: Sweep, s: u32) -> u32 {
+    let d = unpack_seed3_bits(s, SEED_X_BITS, SEED_Y_BITS) - voxel(sw.x, sw.other, 0u);
+    let v = select(d.y, d.z, AXIS == 1u);
+    let g = d.x * d.x + v * v;
+    if s == NO_SEED || g > i32(SCAN_REACH * SCAN_REACH) {
+        return RING_COST;
+    }
+    return u32(g) | (u32(d.x + 32) << 10u) | (u32(v + 32) << 16u);
+}
+
+// The site a ring entry at position i of the column holds.
+fn ring_site(sw: Sweep, e: u32, i: u32) -> u32 {
+    let x = sw.x + ((e >> 10u) & 63u) - 32u;
+    let other = sw.other + ((e >> 16u) & 63u) - 32u;
+    return pack_seed3_bits(vec3<u32>(voxel(x, other, i)), SEED_X_BITS, SEED_Y_BITS);
 }
 
 // Start the sweep: the first SCAN_REACH rows into the ring, and the first step's row loaded.
@@ -619,7 +659,7 @@ fn sweep_of(li: u32, wg: vec3<u32>) -> Sweep {
     var sw = sweep_place(li, wg);
     sw.next = site_at(sw.x, sw.other, sw.n, SCAN_REACH + sw.row);
     for (var i = sw.row; i < SCAN_REACH; i += BANDS) {
-        ring[ring_cell(sw, i)] = site_at(sw.x, sw.other, sw.n, i);
+        ring[ring_cell(sw, i)] = ring_entry(sw, site_at(sw.x, sw.other, sw.n, i));
     }
     return sw;
 }
@@ -630,35 +670,37 @@ fn sweep_of(li: u32, wg: vec3<u32>) -> Sweep {
 // holds the barriers.
 fn sweep_step(sw: ptr<function, Sweep>, t: u32) -> vec2<u32> {
     workgroupBarrier();
-    ring[ring_cell(*sw, t * BANDS + SCAN_REACH + (*sw).row)] = (*sw).next;
+    ring[ring_cell(*sw, t * BANDS + SCAN_REACH + (*sw).row)] = ring_entry(*sw, (*sw).next);
     workgroupBarrier();
     (*sw).next = site_at((*sw).x, (*sw).other, (*sw).n, (t + 1u) * BANDS + SCAN_REACH + (*sw).row);
     let i = t * BANDS + (*sw).row;
     if (*sw).x >= params.x_end || i >= (*sw).n {
         return vec2<u32>(NO_SEED, 0u);
     }
-    let p = voxel((*sw).x, (*sw).other, i);
     var best = ring[ring_cell(*sw, i)];
-    var best_d = cost(best, p);
+    var best_d = i32(best & RING_COST);
+    var best_at = i;
     for (var r = 1u; i32(r * r) < best_d; r++) {
         if r <= i {
-            let s = ring[ring_cell(*sw, i - r)];
-            let d = cost(s, p);
+            let e = ring[ring_cell(*sw, i - r)];
+            let d = i32((e & RING_COST) + r * r);
             if d < best_d {
-                best = s;
+                best = e;
                 best_d = d;
+                best_at = i - r;
             }
         }
         if i + r < (*sw).n {
-            let s = ring[ring_cell(*sw, i + r)];
-            let d = cost(s, p);
+            let e = ring[ring_cell(*sw, i + r)];
+            let d = i32((e & RING_COST) + r * r);
             if d < best_d {
-                best = s;
+                best = e;
                 best_d = d;
+                best_at = i + r;
             }
         }
     }
-    return vec2<u32>(best, u32(best_d));
+    return vec2<u32>(ring_site(*sw, best, best_at), u32(best_d));
 }
 
 // The voxel the thread answers at step t (xyz) and its position along the column (w).

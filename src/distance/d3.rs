@@ -2781,7 +2781,7 @@ impl Distance3d {
         pack_2d: bool,
         fuse: Option<&Fuse>,
         part: SweepPart,
-    ) -> (wgpu::Buffer, [(&'static str, f64); 10], [u32; 3]) {
+    ) -> (wgpu::Buffer, [(&'static str, f64); 12], [u32; 3]) {
         let span = &io.span;
         let width = span.x_end - span.first[0];
         let bands = self.global_bands(width * others, pack_2d);
@@ -2790,6 +2790,14 @@ impl Distance3d {
         let overrides = [
             ("PACK_2D", pack_2d as u32 as f64),
             ("BANDS", bands as f64),
+            ("AXIS", axis as f64),
+            // Sites within the column's plane: made from the row words, or the y pass of a
+            // field not split (it runs before z; a split field's y pass reads the z pass's part).
+            (
+                "PLANAR",
+                (!pack_2d && (io.words.is_some() || (axis == 1 && io.source.is_none()))) as u32
+                    as f64,
+            ),
             ("SOURCE_APART", io.source.is_some() as u32 as f64),
             ("FROM_WORDS", io.words.is_some() as u32 as f64),
             x_bits,
@@ -2807,7 +2815,6 @@ impl Distance3d {
             "edt columns params",
             &edt_columns::ColumnParams {
                 size: size.into(),
-                axis,
                 voxel_size: fuse.map_or(1.0, |f| f.voxel_size),
                 band: fuse.map_or(f32::MAX, |f| f.band),
                 first: span.first.into(),
