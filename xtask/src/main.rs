@@ -70,6 +70,11 @@ enum Command {
         /// writes them: clamped indices, bounded loops), `no-loop-bounding`, or `none`.
         #[arg(long, default_value = "wgpu")]
         checks: String,
+        /// The shader files of the checkout it runs in (or the one it was built from) instead
+        /// of the linked WGSL built into this binary, which its benches run: so two builds sent
+        /// to the GPU machine each report their own shaders.
+        #[arg(long)]
+        checkout: bool,
     },
     /// Render every technique to PNG on the default adapter (FIELDKIT_ADAPTER picks another).
     Gallery {
@@ -198,6 +203,7 @@ fn main() -> ExitCode {
             stage,
             overrides,
             checks,
+            checkout,
         } => {
             // The checkout it runs in (a release binary sent to another machine), else the one
             // it was built from.
@@ -205,7 +211,12 @@ fn main() -> ExitCode {
                 .ok()
                 .filter(|d| d.join("shaders").is_dir() && d.join("build.rs").is_file());
             let root = here.unwrap_or_else(crate_root);
-            shader_stats::run(&root, stage.as_deref(), &overrides, &checks)
+            let source = if checkout {
+                shader_stats::Source::Checkout(&root)
+            } else {
+                shader_stats::Source::Built
+            };
+            shader_stats::run(source, stage.as_deref(), &overrides, &checks)
         }
         Command::Gallery { out } => gallery(&out),
         Command::GpuTests => gpu_tests::run(&crate_root()),

@@ -3,6 +3,9 @@
 //! `VK_KHR_pipeline_executable_properties`. wgpu does not expose that extension, so this opens
 //! its own Vulkan device with `ash` (the crate wgpu's Vulkan backend is built on) and builds
 //! each entry point from naga's SPIR-V with a pipeline layout read off the module's bindings.
+//! The stages are the linked WGSL built into this binary, what its benches run (`--checkout`:
+//! the shader files of the checkout instead), so two builds sent to a GPU machine each report
+//! their own.
 //!
 //! For performance work: a kernel that is slow for its arithmetic is often short of registers
 //! (few warps in flight) or spilling to local memory, which only the driver can say.
@@ -13,8 +16,15 @@ use std::process::ExitCode;
 
 use ash::vk;
 
-pub fn run(root: &Path, filter: Option<&str>, overrides: &[String], checks: &str) -> ExitCode {
-    match stats(root, filter, overrides, checks) {
+/// Where the stages come from: the linked WGSL built into this binary (`fieldkit::shaders::ALL`,
+/// what its benches ran), or the shader files of a checkout (validated afresh).
+pub enum Source<'a> {
+    Built,
+    Checkout(&'a Path),
+}
+
+pub fn run(source: Source, filter: Option<&str>, overrides: &[String], checks: &str) -> ExitCode {
+    match stats(source, filter, overrides, checks) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("shader-stats: {e}");
@@ -307,19 +317,66 @@ fn spirv_options(checks: &str) -> Result<naga::back::spv::Options<'static>, Stri
     })
 }
 
+/// One stage's module: its `room::stage` name, the module and its validation.
+struct Stage {
+    id: String,
+    module: naga::Module,
+    info: naga::valid::ModuleInfo,
+}
+
+/// The stages as `source` has them.
+fn stages_of(source: Source) -> Result<Vec<Stage>, String> {
+    match source {
+        Source::Checkout(root) => Ok(crate::stages(root)
+            .ok_or("the shaders do not build")?
+            .into_iter()
+            .map(|s| Stage {
+                id: s.file.id(),
+                module: s.module,
+                info: s.info,
+            })
+            .collect()),
+        Source::Built => {
+            // One linked source per stage (every entry point of a stage shares it).
+            let sources: std::collections::BTreeMap<&str, &str> = fieldkit::shaders::ALL
+                .iter()
+                .map(|e| (e.stage, e.source))
+                .collect();
+            sources
+                .into_iter()
+                .map(|(id, text)| {
+                    let module = naga::front::wgsl::parse_str(text)
+                        .map_err(|e| format!("{id}: {}", e.emit_to_string(text)))?;
+                    let info = naga::valid::Validator::new(
+                        naga::valid::ValidationFlags::all(),
+                        naga::valid::Capabilities::all(),
+                    )
+                    .validate(&module)
+                    .map_err(|e| format!("{id}: {e}"))?;
+                    Ok(Stage {
+                        id: id.to_string(),
+                        module,
+                        info,
+                    })
+                })
+                .collect()
+        }
+    }
+}
+
 fn stats(
-    root: &Path,
+    source: Source,
     filter: Option<&str>,
     overrides: &[String],
     checks: &str,
 ) -> Result<(), String> {
     let overrides = parse_overrides(overrides)?;
     let options = spirv_options(checks)?;
-    let stages = crate::stages(root).ok_or("the shaders do not build")?;
+    let stages = stages_of(source)?;
     let vulkan = Vulkan::open()?;
     println!("device: {}", vulkan.name);
     for stage in &stages {
-        let id = stage.file.id();
+        let id = &stage.id;
         if filter.is_some_and(|f| !id.contains(f)) {
             continue;
         }
@@ -388,6 +445,44 @@ mod tests {
         assert!(e.contains("\"MODE\""), "{e}");
         let e = parse_overrides(&["MODE=two".into()]).unwrap_err();
         assert!(e.contains("\"two\""), "{e}");
+    }
+
+    /// The stages built into the binary are the checkout's (this test's binary is built from
+    /// it): each file's stage is there with the same entry points, and every linked source
+    /// parses and validates on its own. The binary has more: stages the build makes from
+    /// templates (the cloud's density march), which no file holds.
+    #[test]
+    fn built_stages_are_the_checkouts() {
+        let entries = |stages: Vec<Stage>| {
+            let mut v: Vec<(String, Vec<String>)> = stages
+                .into_iter()
+                .map(|s| {
+                    let mut e: Vec<String> = s
+                        .module
+                        .entry_points
+                        .iter()
+                        .map(|e| e.name.clone())
+                        .collect();
+                    e.sort();
+                    (s.id, e)
+                })
+                .collect();
+            v.sort();
+            v
+        };
+        let built = entries(stages_of(Source::Built).expect("built stages validate"));
+        let root = crate::crate_root();
+        let checkout = entries(stages_of(Source::Checkout(&root)).expect("checkout validates"));
+        for stage in &checkout {
+            assert!(
+                built.contains(stage),
+                "{stage:?} is not built in as the checkout has it"
+            );
+        }
+        assert!(
+            built.iter().any(|(id, _)| id == "volume::cloud_march"),
+            "the templated stage is missing"
+        );
     }
 
     /// The layout built for the driver has every binding the shader declares, with the
