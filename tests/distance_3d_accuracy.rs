@@ -69,22 +69,37 @@ fn cases() -> Vec<Case> {
         ),
         jfa: true,
     });
-    // Dense seeds but for one plane with none near its x = 0 edge: the global z pass's sweep
-    // (`edt_columns.wgsl`'s `sweep_verdict`) answers the workgroup of columns x ≥ 32, and builds
-    // the envelopes of the other in the same dispatch (a few voxels far, past its first chunk).
-    let s = [64, 3, 80];
-    let mut mask = random_mask_3d(s, 0.2, 11);
-    for y in 0..s[1] {
-        for x in 0..30 {
-            mask[(60 * s[1] + y) * s[0] + x] = false;
+    // Dense seeds but for a hollow at the x = 0 edge: the global z pass's sweep
+    // (`edt_columns.wgsl`'s SCAN) answers the workgroup of columns x ≥ 32 and, in the other,
+    // finds voxels whose nearest seed is past its reach part-way along the columns (at z = 64,
+    // the sweep's ninth step, having written the steps before). With the hollow x < 26,
+    // 40 ≤ z < 90 about 4 voxels of that step are far (x < 2, z = 64 and 65), and the same
+    // dispatch builds the workgroup's envelopes (`sweep_end`'s HERE); with x < 30, 40 ≤ z < 100
+    // about 48 are (x < 6), and the pass after it does (LATER).
+    for (name, x_end, z_end) in [
+        ("dense, a hollow at an edge (a few voxels far)", 26, 90),
+        (
+            "dense, a larger hollow at an edge (many voxels far)",
+            30,
+            100,
+        ),
+    ] {
+        let s = [64, 3, 110];
+        let mut mask = random_mask_3d(s, 0.2, 11);
+        for z in 40..z_end {
+            for y in 0..s[1] {
+                for x in 0..x_end {
+                    mask[(z * s[1] + y) * s[0] + x] = false;
+                }
+            }
         }
+        v.push(Case {
+            name,
+            size: s,
+            mask,
+            jfa: false,
+        });
     }
-    v.push(Case {
-        name: "dense, one plane bare near an edge",
-        size: s,
-        mask,
-        jfa: false,
-    });
     v.push(Case {
         name: "no seeds",
         size: [9, 7, 5],
@@ -337,7 +352,7 @@ fn every_column_band_count_is_exact() {
                 case.name, e.wrong
             );
             // At 8 bands the resolving z pass sweeps where every voxel is near a site
-            // (`edt_columns.wgsl`'s `sweep_verdict`), in the signed entry too.
+            // (`edt_columns.wgsl`'s SCAN), in the signed entry too.
             if bands == 8 {
                 let options = Options3d {
                     signed: true,

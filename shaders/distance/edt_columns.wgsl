@@ -100,6 +100,11 @@ override SOURCE_APART: bool = false;
 // The pass makes each site from the row words as it reads it (3D only): the row pass's answers
 // never go through memory.
 override FROM_WORDS: bool = false;
+// The pass reads its sites from `stack`, where the pass before it wrote them, and builds its
+// envelopes over them in place (a band's envelope never holds more sites than it has read), so
+// that its answers can go to `nearest` from the first: the resolving 3D pass that sweeps
+// (SCAN, AFTER_SCAN), which then needs no look at its columns before it writes.
+override IN_STACK: bool = false;
 // 3D seeds' widths (`SeedPacking`): x in the low SEED_X_BITS bits, y in the next SEED_Y_BITS,
 // z above; 11 and 11 for every grid up to 2048 × 2048 × 1024.
 override SEED_X_BITS: u32 = 11u;
@@ -111,10 +116,10 @@ const FAR_D2: i32 = 0x7fffffff;
 // Envelope size per (band, column) of this workgroup.
 var<workgroup> band_size: array<u32, 256>;
 
-// The resolving 3D entries' sweep: SCAN answers the workgroups whose columns hold a site within
-// SCAN_REACH of every voxel in a ring of RING rows of the workgroup's columns (RING_CELLS =
-// columns · RING), and the others as `sweep_verdict` says; AFTER_SCAN, the pass after it,
-// builds the envelopes of those SCAN left to it, marked in `swept`.
+// The resolving 3D entries' sweep: SCAN answers the workgroups whose every voxel has its nearest
+// site within SCAN_REACH, through a ring of RING rows of the workgroup's columns (RING_CELLS =
+// columns · RING), and the others as `sweep_end` says; AFTER_SCAN, the pass after it, builds
+// the envelopes of those SCAN left to it, marked in `swept`.
 override SCAN: bool = false;
 override AFTER_SCAN: bool = false;
 override RING: u32 = 64u;
@@ -123,6 +128,9 @@ var<workgroup> ring: array<u32, RING_CELLS>;
 // The voxels of the workgroup's columns found with no site within SCAN_REACH (SCAN), or the
 // workgroup's `swept` entry (AFTER_SCAN).
 var<workgroup> far_sites: atomic<u32>;
+// The voxels of the first SCAN_REACH rows whose own site is past SCAN_REACH in their plane
+// (SCAN).
+var<workgroup> thin_sites: atomic<u32>;
 
 fn voxel(x: u32, other: u32, i: u32) -> vec3<i32> {
     if AXIS == 1u {
@@ -271,6 +279,9 @@ fn fetch(c: Column, i: u32) -> vec2<u32> {
     }
     if SOURCE_APART {
         return vec2<u32>(source[c.base + i * c.stride], 0u);
+    }
+    if IN_STACK {
+        return vec2<u32>(stack[c.base + i * c.stride], 0u);
     }
     return vec2<u32>(nearest[c.base + i * c.stride], 0u);
 }
@@ -500,20 +511,24 @@ fn query(c: Column, walk: ptr<function, Walk>, i: u32, carry: bool) -> vec2<u32>
 }
 
 // The last pass with dense seeds, as `edt_tile.wgsl`'s `scan` does it but with the columns
-// streamed through a ring of rows (SCAN): where every voxel of the workgroup's columns has its
-// own row's site within SCAN_REACH (at 1% random seeds all but a few near the grid's edges,
-// where part of the disc lies outside), each voxel is answered by looking outward along its
-// column until the step's square alone is no less than the best found (a site farther along
-// costs at least that; the voxel's own site bounds the best, so no scan passes SCAN_REACH + 1
-// steps). The workgroup first reads its columns to find whether they all do (`sweep_verdict`,
-// a chunk at a time, so that sparse seeds stop at the first); the answers go in place, so
-// nothing may be written before. Then the columns go once through the ring, BANDS rows a step,
-// the ring holding SCAN_REACH rows either side of the rows answered; a warp answers 32
-// neighbouring columns at one position, a row read into the ring SCAN_REACH rows before it is
-// answered. The workgroups that do not sweep build the envelopes: in the same dispatch where
-// few voxels are far (a pass of their own would wait for its slowest workgroup, ~0.13 ms on the
-// H100 at 512³), else in the pass after (AFTER_SCAN), whose entry point holds no sweep and so
-// takes fewer registers (38 against 44 on the H100: 6 workgroups per SM, not 5).
+// streamed through a ring of rows (SCAN): each voxel looks outward along its column, at most
+// SCAN_REACH rows either side, until the step's square alone is no less than the best found (a
+// site farther along costs at least that). Where the best found is within SCAN_REACH the answer
+// is exact: a site past SCAN_REACH rows, or one whose cost within its own plane is past
+// SCAN_REACH², costs more, so the ring need not hold those. At 1% random seeds every voxel's
+// nearest seed is that near, at the grid's corners too (an eighth of a ball of 24 voxels holds
+// about 72 seeds). The columns go once through the ring, BANDS rows a step, the ring holding
+// SCAN_REACH rows either side of the rows answered; a warp answers 32 neighbouring columns at
+// one position, a row read into the ring SCAN_REACH rows before it is answered. The sites come
+// from `stack` (IN_STACK) and the answers go to `nearest` as they are found, so nothing is read
+// twice. A workgroup that finds a voxel whose best is farther stops at the step after and
+// builds the envelopes over its columns, whose sites it has not touched (what it wrote, they
+// overwrite): in the same dispatch where few voxels of the step were far (a pass of their own
+// would wait for its slowest workgroup, ~0.13 ms on the H100 at 512³), else in the pass after
+// (AFTER_SCAN), whose entry point holds no sweep and so takes fewer registers. (Until
+// 2026-11-27 the workgroup first read its columns to find whether every voxel's own site was
+// within SCAN_REACH, the answers going in place: a quarter of a millisecond at 512³ on the
+// H100, and two in five workgroups at the grid's edges left to the envelopes.)
 const SCAN_REACH: u32 = 24u;
 
 // The site at position i of the column at x (NO_SEED past the grid).
@@ -525,6 +540,9 @@ fn site_at(x: u32, other: u32, n: u32, i: u32) -> u32 {
     if SOURCE_APART {
         return source[at];
     }
+    if IN_STACK {
+        return stack[at];
+    }
     return nearest[at];
 }
 
@@ -534,72 +552,51 @@ fn swept_entry(wg: vec3<u32>) -> u32 {
     return wg.y * ((params.x_end - params.first.x + columns - 1u) / columns) + wg.x;
 }
 
-// What a resolving 3D dispatch does with the workgroup's columns (the same answer in every
-// thread): SCAN's `sweep_verdict`, marked in `swept`; AFTER_SCAN's: the envelopes (HERE) of
-// those SCAN left to it, nothing (DONE) for the others; elsewhere HERE. Called by every
-// thread: it holds the barriers.
-fn verdict_of(li: u32, wg: vec3<u32>) -> u32 {
-    if SCAN {
-        let verdict = sweep_verdict(li, wg);
-        if li == 0u {
-            swept[swept_entry(wg)] = u32(verdict != LATER);
-        }
-        return verdict;
-    }
-    if AFTER_SCAN {
-        if li == 0u {
-            atomicStore(&far_sites, swept[swept_entry(wg)]);
-        }
-        if workgroupUniformLoad(&far_sites) != 0u {
-            return DONE;
-        }
-    }
-    return HERE;
-}
-
-// What SCAN does with the workgroup's columns (the same answer in every thread): SWEEP them
-// where every voxel has its own row's site within SCAN_REACH; else build their envelopes HERE
-// where few voxels have not (at dense seeds, those near the grid's edges, where part of the disc
-// lies outside), or LATER, in the pass after (AFTER_SCAN), where many have (sparse seeds: that
-// pass's entry point holds no sweep, so takes fewer registers). The columns are read in two
-// chunks: BANDS rows first, one a thread, so that sparse seeds stop there, then the rest at
-// once (no barrier between its loads: 1% faster at 512³ than chunks of 64 rows); LATER where at
-// least a sixteenth of the chunk's voxels are past SCAN_REACH (a 64th left workgroups at the
-// grid's edges to the pass after at 1% seeds, which then waits for them). Called by every
-// thread: it holds the barriers.
-const SWEEP: u32 = 0u;
+// What a resolving 3D dispatch does with the workgroup's columns after its sweep, if any (the
+// same answer in every thread): nothing more (DONE) where every voxel was answered; else their
+// envelopes, HERE or LATER (AFTER_SCAN), as `sweep_end` says.
 const HERE: u32 = 1u;
 const LATER: u32 = 2u;
 const DONE: u32 = 3u;
 
-fn sweep_verdict(li: u32, wg: vec3<u32>) -> u32 {
-    let columns = 256u / BANDS;
-    let sw = sweep_place(li, wg);
-    let n = sw.n;
+// AFTER_SCAN's verdict: the envelopes of the workgroups SCAN left to it (marked in `swept`),
+// nothing for the others. Called by every thread: it holds the barrier.
+fn rest_verdict(li: u32, wg: vec3<u32>) -> u32 {
     if li == 0u {
-        atomicStore(&far_sites, 0u);
+        atomicStore(&far_sites, swept[swept_entry(wg)]);
     }
-    workgroupBarrier();
-    var rows = BANDS;
-    for (var first = 0u; first < n; first += rows) {
-        if first > 0u {
-            rows = n - first;
-        }
-        var far = 0u;
-        if sw.x < params.x_end {
-            for (var i = first + sw.row; i < min(first + rows, n); i += BANDS) {
-                far += u32(cost(site_at(sw.x, sw.other, n, i), voxel(sw.x, sw.other, i)) > i32(SCAN_REACH * SCAN_REACH));
-            }
-        }
-        if far > 0u {
-            atomicAdd(&far_sites, far);
-        }
-        let found = workgroupUniformLoad(&far_sites);
-        if found != 0u {
-            return select(HERE, LATER, found * 16u >= rows * columns);
+    return select(HERE, DONE, workgroupUniformLoad(&far_sites) != 0u);
+}
+
+// SCAN's verdict once its sweep ends, from the far voxels of the step that stopped it: DONE
+// where none stopped it; LATER where at least a sixteenth of that step's voxels were far, else
+// HERE (a few near the grid's edges or a seed-free region); LATER where it did not start
+// (`sweep_starts`). Marked in `swept` for AFTER_SCAN. Called by every thread: it holds the
+// barrier.
+fn sweep_end(li: u32, wg: vec3<u32>, started: bool) -> u32 {
+    var verdict = LATER;
+    if started {
+        let far = workgroupUniformLoad(&far_sites);
+        verdict = DONE;
+        if far != 0u {
+            verdict = select(HERE, LATER, far * 16u >= 256u);
         }
     }
-    return SWEEP;
+    if li == 0u {
+        swept[swept_entry(wg)] = u32(verdict != LATER);
+    }
+    return verdict;
+}
+
+// Whether the sweep goes on past its first rows (the same answer in every thread): not where at
+// least a sixteenth of their voxels have their own site past SCAN_REACH in their plane. Those
+// are sparse seeds, where the sweep's looks would go far (or stop it) and the envelopes are
+// faster: on the H100 at 512³ with 0.1% seeds, sweeping every workgroup took the z pass from
+// 1.81 to 1.99 ms, and at 1e-5 trying the first step 0.02 to 0.28. Called by every thread: it
+// holds the barrier.
+fn sweep_starts(sw: Sweep) -> bool {
+    let counted = min(sw.n, SCAN_REACH) * (256u / BANDS);
+    return workgroupUniformLoad(&thin_sites) * 16u < counted;
 }
 
 // One thread's place in the sweep: its column (lane, x) and row of each step, and the site it
@@ -654,35 +651,52 @@ fn ring_site(sw: Sweep, e: u32, i: u32) -> u32 {
     return pack_seed3_bits(vec3<u32>(voxel(x, other, i)), SEED_X_BITS, SEED_Y_BITS);
 }
 
-// Start the sweep: the first SCAN_REACH rows into the ring, and the first step's row loaded.
+// Start the sweep: the first SCAN_REACH rows into the ring (counted in `thin_sites`), and the
+// first step's row loaded. Called by every thread: it holds the barrier.
 fn sweep_of(li: u32, wg: vec3<u32>) -> Sweep {
     var sw = sweep_place(li, wg);
+    if li == 0u {
+        atomicStore(&far_sites, 0u);
+        atomicStore(&thin_sites, 0u);
+    }
+    workgroupBarrier();
     sw.next = site_at(sw.x, sw.other, sw.n, SCAN_REACH + sw.row);
+    var thin = 0u;
     for (var i = sw.row; i < SCAN_REACH; i += BANDS) {
-        ring[ring_cell(sw, i)] = ring_entry(sw, site_at(sw.x, sw.other, sw.n, i));
+        let e = ring_entry(sw, site_at(sw.x, sw.other, sw.n, i));
+        ring[ring_cell(sw, i)] = e;
+        thin += u32(e == RING_COST && i < sw.n && sw.x < params.x_end);
+    }
+    if thin != 0u {
+        atomicAdd(&thin_sites, thin);
     }
     return sw;
 }
 
-// Step t: the rows SCAN_REACH ahead go into the ring (once every thread is done with the slots
-// they take), the next step's are loaded, and this thread's position t · BANDS + row is answered
-// from the ring. Returns the nearest site and its squared distance. Called by every thread: it
-// holds the barriers.
-fn sweep_step(sw: ptr<function, Sweep>, t: u32) -> vec2<u32> {
-    workgroupBarrier();
+// Step t: the rows SCAN_REACH ahead go into the ring and the next step's are loaded. Returns
+// the far voxels found so far (the same in every thread: the sweep stops at the first step that
+// sees any). The slots a step writes are those of rows no thread reads in the step before (RING
+// ≥ 2 · (SCAN_REACH + BANDS)), so one barrier a step does. Called by every thread.
+fn sweep_advance(sw: ptr<function, Sweep>, t: u32) -> u32 {
     ring[ring_cell(*sw, t * BANDS + SCAN_REACH + (*sw).row)] = ring_entry(*sw, (*sw).next);
-    workgroupBarrier();
+    let far = workgroupUniformLoad(&far_sites);
     (*sw).next = site_at((*sw).x, (*sw).other, (*sw).n, (t + 1u) * BANDS + SCAN_REACH + (*sw).row);
-    let i = t * BANDS + (*sw).row;
-    if (*sw).x >= params.x_end || i >= (*sw).n {
-        return vec2<u32>(NO_SEED, 0u);
-    }
-    var best = ring[ring_cell(*sw, i)];
+    return far;
+}
+
+// The answer at step t for this thread's position t · BANDS + row (within the column): the
+// nearest site the ring holds and its squared distance, which is exact where it is at most
+// SCAN_REACH² (and the voxel far where it is not). No look goes past SCAN_REACH rows, where the
+// ring holds other rows (a site there could not make a far voxel near: the step's square alone
+// is more than SCAN_REACH²).
+fn sweep_answer(sw: Sweep, t: u32) -> vec2<u32> {
+    let i = t * BANDS + sw.row;
+    var best = ring[ring_cell(sw, i)];
     var best_d = i32(best & RING_COST);
     var best_at = i;
-    for (var r = 1u; i32(r * r) < best_d; r++) {
+    for (var r = 1u; r <= SCAN_REACH && i32(r * r) < best_d; r++) {
         if r <= i {
-            let e = ring[ring_cell(*sw, i - r)];
+            let e = ring[ring_cell(sw, i - r)];
             let d = i32((e & RING_COST) + r * r);
             if d < best_d {
                 best = e;
@@ -690,8 +704,8 @@ fn sweep_step(sw: ptr<function, Sweep>, t: u32) -> vec2<u32> {
                 best_at = i - r;
             }
         }
-        if i + r < (*sw).n {
-            let e = ring[ring_cell(*sw, i + r)];
+        if i + r < sw.n {
+            let e = ring[ring_cell(sw, i + r)];
             let d = i32((e & RING_COST) + r * r);
             if d < best_d {
                 best = e;
@@ -700,7 +714,7 @@ fn sweep_step(sw: ptr<function, Sweep>, t: u32) -> vec2<u32> {
             }
         }
     }
-    return vec2<u32>(ring_site(*sw, best, best_at), u32(best_d));
+    return vec2<u32>(ring_site(sw, best, best_at), u32(best_d));
 }
 
 // The voxel the thread answers at step t (xyz) and its position along the column (w).
@@ -778,16 +792,29 @@ fn resolve_signed_at(p: vec3<u32>, at: u32, found: vec2<u32>) {
 // keeps its own loops: one loop shared by both would bind `nearest_inside` to this one too.
 @compute @workgroup_size(32, 8)
 fn columns_resolve(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
-    let verdict = verdict_of(li, wg);
-    if verdict == SWEEP {
+    var verdict = HERE;
+    if SCAN {
         var sw = sweep_of(li, wg);
-        for (var t = 0u; t * BANDS < sw.n; t++) {
-            let found = sweep_step(&sw, t);
-            let p = sweep_voxel(sw, t);
-            if p.x < params.x_end && p.w < sw.n {
-                resolve_at(p.xyz, place(params.dst, p.xyz), found);
+        let started = sweep_starts(sw);
+        if started {
+            for (var t = 0u; t * BANDS < sw.n; t++) {
+                if sweep_advance(&sw, t) != 0u {
+                    break;
+                }
+                let p = sweep_voxel(sw, t);
+                if p.x < params.x_end && p.w < sw.n {
+                    let found = sweep_answer(sw, t);
+                    if found.y > SCAN_REACH * SCAN_REACH {
+                        atomicAdd(&far_sites, 1u);
+                    } else {
+                        resolve_at(p.xyz, place(params.dst, p.xyz), found);
+                    }
+                }
             }
         }
+        verdict = sweep_end(li, wg, started);
+    } else if AFTER_SCAN {
+        verdict = rest_verdict(li, wg);
     }
     if verdict != HERE {
         return;
@@ -806,16 +833,29 @@ fn columns_resolve(@builtin(local_invocation_index) li: u32, @builtin(workgroup_
 // `columns` in the outside seeds' field, and the signed distance of every voxel it answers (3D).
 @compute @workgroup_size(32, 8)
 fn columns_resolve_signed(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
-    let verdict = verdict_of(li, wg);
-    if verdict == SWEEP {
+    var verdict = HERE;
+    if SCAN {
         var sw = sweep_of(li, wg);
-        for (var t = 0u; t * BANDS < sw.n; t++) {
-            let found = sweep_step(&sw, t);
-            let p = sweep_voxel(sw, t);
-            if p.x < params.x_end && p.w < sw.n {
-                resolve_signed_at(p.xyz, place(params.dst, p.xyz), found);
+        let started = sweep_starts(sw);
+        if started {
+            for (var t = 0u; t * BANDS < sw.n; t++) {
+                if sweep_advance(&sw, t) != 0u {
+                    break;
+                }
+                let p = sweep_voxel(sw, t);
+                if p.x < params.x_end && p.w < sw.n {
+                    let found = sweep_answer(sw, t);
+                    if found.y > SCAN_REACH * SCAN_REACH {
+                        atomicAdd(&far_sites, 1u);
+                    } else {
+                        resolve_signed_at(p.xyz, place(params.dst, p.xyz), found);
+                    }
+                }
             }
         }
+        verdict = sweep_end(li, wg, started);
+    } else if AFTER_SCAN {
+        verdict = rest_verdict(li, wg);
     }
     if verdict != HERE {
         return;

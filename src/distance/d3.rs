@@ -349,9 +349,9 @@ struct ColumnsIo<'a> {
     stack: &'a wgpu::Buffer,
     slab: usize,
     span: Span,
-    /// The resolving pass sweeps the workgroups whose columns hold a site near every voxel and
+    /// The resolving pass sweeps the workgroups whose every voxel has a site near it and
     /// leaves the others to a pass of their own (`edt_columns.wgsl`'s SCAN, AFTER_SCAN), with
-    /// its record of which it swept.
+    /// its record of which it swept. It reads its sites from `stack` then (IN_STACK).
     sweep: Option<&'a wgpu::Buffer>,
 }
 
@@ -1070,8 +1070,7 @@ pub struct Distance3d {
     stack: std::sync::Mutex<Option<wgpu::Buffer>>,
     /// The sweep's record of the workgroups it answered, kept the same way.
     swept: std::sync::Mutex<Option<wgpu::Buffer>>,
-    /// The resolving global z pass sweeps the workgroups whose columns hold a site near every
-    /// voxel.
+    /// The resolving global z pass sweeps the workgroups whose every voxel has a site near it.
     sweep: bool,
     /// Bound as `edt_tile.wgsl`'s `source` where a pass reads the buffer it writes (a binding
     /// must be there; the shader does not read it then).
@@ -1565,9 +1564,10 @@ impl Distance3d {
     }
 
     /// For benchmarks and tests: `true` (the default) lets the resolving global z pass at 8
-    /// bands sweep the workgroups whose columns hold a site near every voxel
-    /// (`edt_columns.wgsl`'s SCAN); `false` has every workgroup build the envelopes, as the z
-    /// pass does at other band counts and in workgroup memory.
+    /// bands sweep the workgroups whose every voxel has a site near it (`edt_columns.wgsl`'s
+    /// SCAN; it runs after the y pass from the row words, which then writes into the kept
+    /// stack for it); `false` has every workgroup build the envelopes, as the z pass does at
+    /// other band counts and in workgroup memory.
     #[doc(hidden)]
     pub fn set_sweep(&mut self, sweep: bool) {
         self.sweep = sweep;
@@ -2180,18 +2180,38 @@ impl Distance3d {
         // or `edt_columns.wgsl` with FROM_WORDS in global memory); else rows, then columns.
         // The z pass resolving a volume in global memory at SWEEP_BANDS: it sweeps where it can
         // (`edt_columns.wgsl`'s SCAN).
+        // Its sites come from the y pass (from the row words) through the kept stack, so that
+        // it writes into `nearest` from the first (`edt_columns.wgsl`'s IN_STACK).
+        let folds = self.fold_rows && size[1] > 1 && size[2] > 1;
         let sweep = (self.sweep
-            && size[2] > 1
+            && folds
             && fuse.as_ref().is_some_and(|f| !f.flat)
             && self.tile_for(device, size[2], 2, false)?.is_none()
             && self.global_bands(size[0] * size[1], false) == SWEEP_BANDS)
             .then(|| self.swept_for(device, size[0].div_ceil(256 / SWEEP_BANDS) * size[1]));
-        let (nearest, first_axis) = if self.fold_rows && size[1] > 1 && size[2] > 1 {
+        let (nearest, first_axis) = if folds {
             let words = self.encode_row_words(device, rec, volume, inside, invert)?;
             let nearest = field_buffer(device, "nearest seed", size);
             let tile = self.tile_for(device, size[1], 1, false)?;
-            let io = TileIo::in_place(&nearest, size);
-            self.encode_from_words(device, rec, &words, io, size, 1, tile, size)?;
+            if sweep.is_some() {
+                // Into the stack, `nearest` its scratch.
+                let stack = self.stack_for(device, size);
+                let io = TileIo::in_place(&stack, size);
+                self.encode_from_words(
+                    device,
+                    rec,
+                    &words,
+                    io,
+                    size,
+                    1,
+                    tile,
+                    size,
+                    Some(&nearest),
+                )?;
+            } else {
+                let io = TileIo::in_place(&nearest, size);
+                self.encode_from_words(device, rec, &words, io, size, 1, tile, size, None)?;
+            }
             (nearest, 2)
         } else {
             (self.encode_rows(device, rec, volume, inside, invert)?, 1)
@@ -2381,12 +2401,13 @@ impl Distance3d {
         }
         let tile = self.tile_for(device, size[1], 1, false)?;
         let io = TileIo::in_place(nearest, size);
-        self.encode_from_words(device, rec, words, io, size, 1, tile, size)
+        self.encode_from_words(device, rec, words, io, size, 1, tile, size, None)
     }
 
     /// The column pass along `axis` (1: y, 2: z) that makes its sites from the row words, into
     /// `io.nearest` where `io.span` places it: in workgroup memory where `tile` is given, else
-    /// in global memory with the envelope stack kept for a field of `stack_size`.
+    /// in global memory with the envelope stack kept for a field of `stack_size` (or `scratch`
+    /// where given: the stack itself is where `io` writes).
     #[allow(clippy::too_many_arguments)]
     fn encode_from_words(
         &self,
@@ -2398,6 +2419,7 @@ impl Distance3d {
         axis: u32,
         tile: Option<TileGeometry>,
         stack_size: [u32; 3],
+        scratch: Option<&wgpu::Buffer>,
     ) -> Result<(), Error> {
         match tile {
             Some(tile) => self.encode_tile_columns_words(device, rec, words, io, size, axis, tile),
@@ -2409,7 +2431,10 @@ impl Distance3d {
                     source: None,
                     words: Some(words),
                     nearest: io.nearest,
-                    stack: &self.stack_for(device, stack_size),
+                    stack: &match scratch {
+                        Some(s) => s.clone(),
+                        None => self.stack_for(device, stack_size),
+                    },
                     slab: 0,
                     span: io.span,
                     sweep: None,
@@ -2553,7 +2578,7 @@ impl Distance3d {
                 slab: 0,
                 span,
             };
-            self.encode_from_words(device, rec, &words, io, size, 2, split.z, part_size)?;
+            self.encode_from_words(device, rec, &words, io, size, 2, split.z, part_size, None)?;
             for (k, &(z0, z_end)) in slabs.iter().enumerate() {
                 let span = Span {
                     first: [x0, z0],
@@ -2781,7 +2806,7 @@ impl Distance3d {
         pack_2d: bool,
         fuse: Option<&Fuse>,
         part: SweepPart,
-    ) -> (wgpu::Buffer, [(&'static str, f64); 12], [u32; 3]) {
+    ) -> (wgpu::Buffer, [(&'static str, f64); 13], [u32; 3]) {
         let span = &io.span;
         let width = span.x_end - span.first[0];
         let bands = self.global_bands(width * others, pack_2d);
@@ -2804,6 +2829,8 @@ impl Distance3d {
             y_bits,
             ("SCAN", scan as u32 as f64),
             ("AFTER_SCAN", (part == SweepPart::Rest) as u32 as f64),
+            // A pass that sweeps reads its sites from the stack (see `encode_exact_fused`).
+            ("IN_STACK", (part != SweepPart::No) as u32 as f64),
             ("RING", SWEEP_RING as f64),
             (
                 "RING_CELLS",
@@ -2866,6 +2893,8 @@ impl Distance3d {
             &edt_columns::columns_copy::Resources {
                 params: (&params).into(),
                 nearest: nearest.into(),
+                // Unread (IN_STACK is off): a placeholder.
+                stack: (&self.no_source).into(),
                 source: (&self.no_source).into(),
                 words: words.unwrap_or(&self.no_source).into(),
             },
