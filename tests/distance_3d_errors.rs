@@ -2,7 +2,7 @@
 //! a wgpu validation error or a lost device.
 
 use fieldkit::Error;
-use fieldkit::distance::Variant;
+use fieldkit::distance::{ColumnPasses, Variant};
 use fieldkit::distance::{
     Distance3d, Grid3, Inside, MAX_SIDE_3D, Method, Options3d, check_size_2d_exact, check_size_3d,
     upload_points, upload_points_with_homes, upload_volume,
@@ -311,6 +311,28 @@ fn bad_options_and_textures() {
         d3.encode_global_copy(&ctx.device, &mut enc, &buf(256), None, [4, 4, 4], 3),
         Err(Error::Invalid { .. })
     ));
+    // With good buffers the global copies record (a placeholder bound both read-only and
+    // read-write in one dispatch would fail wgpu's validation below).
+    let mut global = Distance3d::new(&ctx.device).unwrap();
+    global.set_column_passes(ColumnPasses::Global);
+    for axis in [1, 2] {
+        for words in [None, Some(buf(128))] {
+            let recorded = global
+                .encode_global_copy(
+                    &ctx.device,
+                    &mut enc,
+                    &buf(256),
+                    words.as_ref(),
+                    [4, 4, 4],
+                    axis,
+                )
+                .unwrap();
+            assert!(
+                recorded.is_some(),
+                "axis {axis}: the copy did not run in global memory"
+            );
+        }
+    }
     // Nothing bad reached wgpu: the encoder still submits cleanly.
     ctx.submit_and_wait("bad", enc).unwrap();
     assert!(ctx.take_uncaptured().is_empty());

@@ -2893,8 +2893,9 @@ impl Distance3d {
             &edt_columns::columns_copy::Resources {
                 params: (&params).into(),
                 nearest: nearest.into(),
-                // Unread (IN_STACK is off): a placeholder.
-                stack: (&self.no_source).into(),
+                // Unread (IN_STACK is off): a placeholder, not `no_source` (bound read-only
+                // beside it: the layout binds the stack read-write).
+                stack: (&self.no_swept).into(),
                 source: (&self.no_source).into(),
                 words: words.unwrap_or(&self.no_source).into(),
             },
