@@ -513,22 +513,23 @@ fn query(c: Column, walk: ptr<function, Walk>, i: u32, carry: bool) -> vec2<u32>
 // The last pass with dense seeds, as `edt_tile.wgsl`'s `scan` does it but with the columns
 // streamed through a ring of rows (SCAN): each voxel looks outward along its column, at most
 // SCAN_REACH rows either side, until the step's square alone is no less than the best found (a
-// site farther along costs at least that). Where the best found is within SCAN_REACH the answer
-// is exact: a site past SCAN_REACH rows, or one whose cost within its own plane is past
-// SCAN_REACH², costs more, so the ring need not hold those. At 1% random seeds every voxel's
-// nearest seed is that near, at the grid's corners too (an eighth of a ball of 24 voxels holds
-// about 72 seeds). The columns go once through the ring, BANDS rows a step, the ring holding
-// SCAN_REACH rows either side of the rows answered; a warp answers 32 neighbouring columns at
-// one position, a row read into the ring SCAN_REACH rows before it is answered. The sites come
-// from `stack` (IN_STACK) and the answers go to `nearest` as they are found, so nothing is read
-// twice. A workgroup that finds a voxel whose best is farther stops at the step after and
-// builds the envelopes over its columns, whose sites it has not touched (what it wrote, they
-// overwrite): in the same dispatch where few voxels of the step were far (a pass of their own
-// would wait for its slowest workgroup, ~0.13 ms on the H100 at 512³), else in the pass after
-// (AFTER_SCAN), whose entry point holds no sweep and so takes fewer registers. (Until
-// 2026-11-27 the workgroup first read its columns to find whether every voxel's own site was
-// within SCAN_REACH, the answers going in place: a quarter of a millisecond at 512³ on the
-// H100, and two in five workgroups at the grid's edges left to the envelopes.)
+// site farther along costs at least that). Where the best found is within SCAN_REACH (its squared
+// distance at most SCAN_REACH²) the answer is exact: a site past SCAN_REACH rows, or one whose
+// cost within its own plane is past SCAN_REACH², costs more, so the ring need not hold those. At
+// 1% random seeds every voxel's nearest seed is that near, at the grid's corners too (an eighth of
+// a ball of 24 voxels holds about 72 seeds). The columns go once through the ring, BANDS rows a
+// step, the ring holding SCAN_REACH rows either side of the rows answered; a warp answers 32
+// neighbouring columns at one position, a row read into the ring SCAN_REACH rows before it is
+// answered. The sites come from `stack` (IN_STACK) and the answers go to `nearest` as they are
+// found, so nothing is read twice. A workgroup that finds a voxel whose best is farther stops at
+// the next step and builds the envelopes over its columns, whose sites it has not touched (what it
+// wrote, they overwrite): in the same dispatch where few voxels of the step were far (a pass of
+// their own would wait for its slowest workgroup, ~0.13 ms on the H100 at 512³), else in the pass
+// after (AFTER_SCAN), whose entry point holds no sweep and so takes fewer registers. Sparse seeds
+// go to the pass after from the first rows (`sweep_starts`). (Until 2026-11-27 the workgroup first
+// read its columns to find whether every voxel's own site was within SCAN_REACH, the answers going
+// in place: a quarter of a millisecond at 512³ on the H100, and two in five workgroups at the
+// grid's edges left to the envelopes.)
 const SCAN_REACH: u32 = 24u;
 
 // The site at position i of the column at x (NO_SEED past the grid).
