@@ -392,6 +392,50 @@ fn every_column_band_count_is_exact() {
     }
 }
 
+/// The z pass's sweep after a y pass in workgroup memory (Auto at 8 bands: y of 3 in a tile,
+/// which then writes the kept stack the sweep reads its sites from; z of 300 in global memory),
+/// unsigned and signed, with a hollow at the x = 0 edge that stops the sweep part-way (a few far
+/// voxels: the envelopes in the same dispatch; many: in the pass after).
+#[test]
+fn the_sweep_after_a_workgroup_y_pass_is_exact() {
+    let ctx = Context::shared();
+    let mut d3 = Distance3d::new(&ctx.device).unwrap();
+    d3.set_column_bands(Some(8)).unwrap();
+    assert_eq!(tile_columns(16384, 3, 3), Some(16));
+    assert_eq!(tile_columns(16384, 300, 3), None);
+    let s = [64, 3, 300];
+    for (x_end, z_end) in [(26, 190), (30, 200)] {
+        let mut mask = random_mask_3d(s, 0.2, 17);
+        for z in 140..z_end {
+            for y in 0..s[1] {
+                for x in 0..x_end {
+                    mask[(z * s[1] + y) * s[0] + x] = false;
+                }
+            }
+        }
+        let case = Case {
+            name: "dense, a hollow at an edge",
+            size: s,
+            mask,
+            jfa: false,
+        };
+        let exact = cpu::edt_3d_squared(&case.mask, s);
+        let (nearest, _, dist) = run_3d(&ctx, &d3, &case.mask, s, &Options3d::default());
+        let e = score(&case, &nearest, &dist, &exact);
+        assert_eq!(e.wrong, 0, "hollow x < {x_end}: {} wrong voxels", e.wrong);
+        let options = Options3d {
+            signed: true,
+            ..Options3d::default()
+        };
+        let (_, _, dist) = run_3d(&ctx, &d3, &case.mask, s, &options);
+        check_signed(
+            &format!("hollow x < {x_end}, signed"),
+            &dist,
+            &cpu::signed_3d(&case.mask, s),
+        );
+    }
+}
+
 /// A device on the same adapter with WebGPU's default limits: 16 KiB of workgroup memory, so the
 /// workgroup-memory column passes take 8 or 4 columns per tile, or the global path, by length.
 fn default_limits(ctx: &Context) -> Context {
