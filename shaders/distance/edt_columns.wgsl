@@ -528,8 +528,8 @@ fn query(c: Column, walk: ptr<function, Walk>, i: u32, carry: bool) -> vec2<u32>
 // after (AFTER_SCAN), whose entry point holds no sweep and so takes fewer registers. Sparse seeds
 // go to the pass after from the first rows (`sweep_starts`). (Until 2026-11-27 the workgroup first
 // read its columns to find whether every voxel's own site was within SCAN_REACH, the answers going
-// in place: a quarter of a millisecond at 512³ on the H100, and two in five workgroups at the
-// grid's edges left to the envelopes.)
+// in place: a quarter of a millisecond at 512³ on the H100, and workgroups at the grid's edges,
+// where part of the disc lies outside, left to the envelopes.)
 const SCAN_REACH: u32 = 24u;
 
 // The site at position i of the column at x (NO_SEED past the grid).
