@@ -590,14 +590,18 @@ fn sweep_end(li: u32, wg: vec3<u32>, started: bool) -> u32 {
 }
 
 // Whether the sweep goes on past its first rows (the same answer in every thread): not where at
-// least a sixteenth of their voxels have their own site past SCAN_REACH in their plane. Those
-// are sparse seeds, where the sweep's looks would go far (or stop it) and the envelopes are
-// faster: on the H100 at 512³ with 0.1% seeds, sweeping every workgroup took the z pass from
-// 1.81 to 1.99 ms, and at 1e-5 trying the first step 0.02 to 0.28. Called by every thread: it
-// holds the barrier.
+// least a 64th of their voxels have their own site past SCAN_REACH in their plane. Those are
+// sparse seeds, where the sweep's looks would go far (or stop it) and the envelopes are faster:
+// on the H100 at 512³ with 0.1% seeds, sweeping every workgroup took the z pass from 1.81 to
+// 1.99 ms, and at 1e-5 trying the first step 0.02 to 0.28; a sixteenth, not a 64th, left the
+// few 0.1% workgroups whose first rows had seeds near to sweep whole columns looking far (the
+// sweep's dispatch 0.175 ms against 0.039, the transform 3.109 against 2.987). At 1% seeds a
+// workgroup at a corner of the grid expects fewer than one of the 12 (its corner column's voxels
+// each about 1%, with a quarter of the disc inside; its edge columns' about 0.01%). Called by
+// every thread: it holds the barrier.
 fn sweep_starts(sw: Sweep) -> bool {
     let counted = min(sw.n, SCAN_REACH) * (256u / BANDS);
-    return workgroupUniformLoad(&thin_sites) * 16u < counted;
+    return workgroupUniformLoad(&thin_sites) * 64u < counted;
 }
 
 // One thread's place in the sweep: its column (lane, x) and row of each step, and the site it
