@@ -85,18 +85,10 @@ fn cases() -> Vec<Case> {
         ),
     ] {
         let s = [64, 3, 110];
-        let mut mask = random_mask_3d(s, 0.2, 11);
-        for z in 40..z_end {
-            for y in 0..s[1] {
-                for x in 0..x_end {
-                    mask[(z * s[1] + y) * s[0] + x] = false;
-                }
-            }
-        }
         v.push(Case {
             name,
             size: s,
-            mask,
+            mask: hollow_at_edge(s, 11, x_end, 40..z_end),
             jfa: false,
         });
     }
@@ -392,6 +384,25 @@ fn every_column_band_count_is_exact() {
     }
 }
 
+/// 20% random seeds (`seed`) in a field of `size` but for a hollow at its x = 0 edge: x <
+/// `x_end` and z in `z`, every y.
+fn hollow_at_edge(
+    size: [usize; 3],
+    seed: u64,
+    x_end: usize,
+    z: std::ops::Range<usize>,
+) -> Vec<bool> {
+    let mut mask = random_mask_3d(size, 0.2, seed);
+    for z in z {
+        for y in 0..size[1] {
+            for x in 0..x_end {
+                mask[(z * size[1] + y) * size[0] + x] = false;
+            }
+        }
+    }
+    mask
+}
+
 /// The z pass's sweep after a y pass in workgroup memory (Auto at 8 bands: y of 3 in a tile,
 /// which then writes the kept stack the sweep reads its sites from; z of 300 in global memory),
 /// unsigned and signed, with a hollow at the x = 0 edge that stops the sweep part-way (a few far
@@ -401,22 +412,15 @@ fn the_sweep_after_a_workgroup_y_pass_is_exact() {
     let ctx = Context::shared();
     let mut d3 = Distance3d::new(&ctx.device).unwrap();
     d3.set_column_bands(Some(8)).unwrap();
-    assert_eq!(tile_columns(16384, 3, 3), Some(16));
-    assert_eq!(tile_columns(16384, 300, 3), None);
+    let storage = ctx.device.limits().max_compute_workgroup_storage_size;
+    assert!(tile_columns(storage, 3, 3).is_some());
+    assert_eq!(tile_columns(storage, 300, 3), None);
     let s = [64, 3, 300];
     for (x_end, z_end) in [(26, 190), (30, 200)] {
-        let mut mask = random_mask_3d(s, 0.2, 17);
-        for z in 140..z_end {
-            for y in 0..s[1] {
-                for x in 0..x_end {
-                    mask[(z * s[1] + y) * s[0] + x] = false;
-                }
-            }
-        }
         let case = Case {
             name: "dense, a hollow at an edge",
             size: s,
-            mask,
+            mask: hollow_at_edge(s, 17, x_end, 140..z_end),
             jfa: false,
         };
         let exact = cpu::edt_3d_squared(&case.mask, s);

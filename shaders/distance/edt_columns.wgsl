@@ -633,10 +633,11 @@ fn sweep_place(li: u32, wg: vec3<u32>) -> Sweep {
 
 // A site as the sweep's ring holds it: its squared distance from the column within its own
 // plane (the low 10 bits) and its offsets from the column along that plane's two axes, + 32 (6
-// bits each, above), so that a step's cost is one add. Where the sweep runs every site it
-// consults is within SCAN_REACH of the column in its plane (576 < 2^10, |offset| ≤ 24 < 32), and
-// lies in the plane of its own row (the pass before it answered within planes); NO_SEED, never
-// consulted there, is held as the largest cost.
+// bits each, above), so that a step's cost is one add. Every site the ring holds lies in the
+// plane of its own row (the pass before it answered within planes); one past SCAN_REACH of the
+// column in that plane, and NO_SEED, are held as the largest cost (RING_COST, above SCAN_REACH²:
+// never the answer of a voxel the sweep keeps), so the rest fit (576 < 2^10, |offset| ≤ 24 <
+// 32).
 const RING_COST: u32 = 0x3ffu;
 
 fn ring_entry(sw: Sweep, s: u32) -> u32 {

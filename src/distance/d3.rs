@@ -2193,25 +2193,14 @@ impl Distance3d {
             let words = self.encode_row_words(device, rec, volume, inside, invert)?;
             let nearest = field_buffer(device, "nearest seed", size);
             let tile = self.tile_for(device, size[1], 1, false)?;
-            if sweep.is_some() {
-                // Into the stack, `nearest` its scratch.
-                let stack = self.stack_for(device, size);
-                let io = TileIo::in_place(&stack, size);
-                self.encode_from_words(
-                    device,
-                    rec,
-                    &words,
-                    io,
-                    size,
-                    1,
-                    tile,
-                    size,
-                    Some(&nearest),
-                )?;
-            } else {
-                let io = TileIo::in_place(&nearest, size);
-                self.encode_from_words(device, rec, &words, io, size, 1, tile, size, None)?;
-            }
+            // Where the z pass sweeps, into the stack, with `nearest` the y pass's own stack.
+            let stack = sweep.is_some().then(|| self.stack_for(device, size));
+            let (out, scratch) = match &stack {
+                Some(stack) => (stack, Some(&nearest)),
+                None => (&nearest, None),
+            };
+            let io = TileIo::in_place(out, size);
+            self.encode_from_words(device, rec, &words, io, size, 1, tile, size, scratch)?;
             (nearest, 2)
         } else {
             (self.encode_rows(device, rec, volume, inside, invert)?, 1)
