@@ -392,11 +392,24 @@ fn hollow_at_edge(
     x_end: usize,
     z: std::ops::Range<usize>,
 ) -> Vec<bool> {
+    hollow_along(size, seed, x_end, 2, z)
+}
+
+/// As `hollow_at_edge`, with the range along `axis` (1: y, every z; 2: z, every y).
+fn hollow_along(
+    size: [usize; 3],
+    seed: u64,
+    x_end: usize,
+    axis: usize,
+    range: std::ops::Range<usize>,
+) -> Vec<bool> {
     let mut mask = random_mask_3d(size, 0.2, seed);
-    for z in z {
+    for z in 0..size[2] {
         for y in 0..size[1] {
-            for x in 0..x_end {
-                mask[(z * size[1] + y) * size[0] + x] = false;
+            if range.contains(&[y, z][axis - 1]) {
+                for x in 0..x_end {
+                    mask[(z * size[1] + y) * size[0] + x] = false;
+                }
             }
         }
     }
@@ -436,6 +449,61 @@ fn the_sweep_after_a_workgroup_y_pass_is_exact() {
             &format!("hollow x < {x_end}, signed"),
             &dist,
             &cpu::signed_3d(&case.mask, s),
+        );
+    }
+}
+
+/// A field split across bindings runs the y pass last, from its parts into its slabs; in
+/// global memory at 8 bands that pass sweeps as the z pass of a whole field does, reading its
+/// sites from the part. Dense seeds (the sweep answers every voxel, some from far along y),
+/// and a hollow at the x = 0 edge part-way along y that stops it (a few far voxels: the envelopes in the same dispatch;
+/// many: in the pass after), unsigned and signed, against the CPU transform.
+#[test]
+fn the_y_pass_of_a_split_field_sweeps_exactly() {
+    let ctx = Context::shared();
+    let mut d3 = Distance3d::new(&ctx.device).unwrap();
+    d3.set_column_passes(ColumnPasses::Global);
+    d3.set_column_bands(Some(8)).unwrap();
+    let s = [70, 300, 3];
+    // Three parts (32, 32 and 6 columns) and three slabs of one plane.
+    d3.set_split_bytes(Some((32 * 300 * 3 * 4) as u64));
+    let masks = [
+        ("dense", random_mask_3d(s, 0.2, 31)),
+        // No voxel far (every row's own site within 22), but those at x = 0 take their
+        // answer from 20 rows away or more: a sweep that looked less far would be wrong.
+        (
+            "a hollow narrower than the reach",
+            hollow_along(s, 34, 22, 1, 100..160),
+        ),
+        (
+            "a hollow (a few voxels far)",
+            hollow_along(s, 32, 26, 1, 140..190),
+        ),
+        (
+            "a larger hollow (many far)",
+            hollow_along(s, 33, 30, 1, 140..200),
+        ),
+    ];
+    for (name, mask) in &masks {
+        let case = Case {
+            name,
+            size: s,
+            mask: mask.clone(),
+            jfa: false,
+        };
+        let exact = cpu::edt_3d_squared(mask, s);
+        let (nearest, _, dist) = run_3d(&ctx, &d3, mask, s, &Options3d::default());
+        let e = score(&case, &nearest, &dist, &exact);
+        assert_eq!(e.wrong, 0, "{name}, split: {} wrong voxels", e.wrong);
+        let options = Options3d {
+            signed: true,
+            ..Options3d::default()
+        };
+        let (_, _, dist) = run_3d(&ctx, &d3, mask, s, &options);
+        check_signed(
+            &format!("{name}, split, signed"),
+            &dist,
+            &cpu::signed_3d(mask, s),
         );
     }
 }

@@ -520,8 +520,9 @@ fn query(c: Column, walk: ptr<function, Walk>, i: u32, carry: bool) -> vec2<u32>
 // a ball of 24 voxels holds about 72 seeds). The columns go once through the ring, BANDS rows a
 // step, the ring holding SCAN_REACH rows either side of the rows answered; a warp answers 32
 // neighbouring columns at one position, a row read into the ring SCAN_REACH rows before it is
-// answered. The sites come from `stack` (IN_STACK) and the answers go to `nearest` as they are
-// found, so nothing is read twice. A workgroup that finds a voxel whose best is farther stops at
+// answered. The sites come from `stack` (IN_STACK), or from `source` (SOURCE_APART: the y pass of
+// a field split across bindings, which reads the part the z pass wrote), and the answers go to
+// `nearest` as they are found, so nothing is read twice. A workgroup that finds a voxel whose best is farther stops at
 // the next step and builds the envelopes over its columns, whose sites it has not touched (what it
 // wrote, they overwrite): in the same dispatch where few voxels of the step were far (a pass of
 // their own would wait for its slowest workgroup, ~0.13 ms on the H100 at 512³), else in the pass

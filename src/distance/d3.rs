@@ -56,9 +56,9 @@ const TARGET_THREADS_3D: u32 = 1 << 19;
 const MIN_BANDS_3D: u32 = 8;
 const TARGET_THREADS_2D: u32 = 1 << 17;
 const BAND_CHOICES: [u32; 6] = [1, 2, 4, 8, 16, 32];
-/// The sweep (`edt_columns.wgsl`'s SCAN) runs where the resolving global z pass takes this many
-/// bands (32 columns per workgroup), in a ring of SWEEP_RING rows (24 either side of a step's 8,
-/// rounded up to a power of two: 8 KiB).
+/// The sweep (`edt_columns.wgsl`'s SCAN) runs where the resolving global pass (z; y of a field
+/// split across bindings) takes this many bands (32 columns per workgroup), in a ring of
+/// SWEEP_RING rows (24 either side of a step's 8, rounded up to a power of two: 8 KiB).
 const SWEEP_BANDS: u32 = 8;
 const SWEEP_RING: u32 = 64;
 
@@ -351,7 +351,8 @@ struct ColumnsIo<'a> {
     span: Span,
     /// The resolving pass sweeps the workgroups whose every voxel has a site near it and
     /// leaves the others to a pass of their own (`edt_columns.wgsl`'s SCAN, AFTER_SCAN), with
-    /// its record of which it swept. It reads its sites from `stack` then (IN_STACK).
+    /// its record of which it swept. It reads its sites from `source` where given (a split
+    /// field's part), else from `stack` (IN_STACK).
     sweep: Option<&'a wgpu::Buffer>,
 }
 
@@ -1070,7 +1071,8 @@ pub struct Distance3d {
     stack: std::sync::Mutex<Option<wgpu::Buffer>>,
     /// The sweep's record of the workgroups it answered, kept the same way.
     swept: std::sync::Mutex<Option<wgpu::Buffer>>,
-    /// The resolving global z pass sweeps the workgroups whose every voxel has a site near it.
+    /// The resolving global pass (z; y of a split field) sweeps the workgroups whose every
+    /// voxel has a site near it.
     sweep: bool,
     /// Bound as `edt_tile.wgsl`'s `source` where a pass reads the buffer it writes (a binding
     /// must be there; the shader does not read it then).
@@ -1566,8 +1568,9 @@ impl Distance3d {
     /// For benchmarks and tests: `true` (the default) lets the resolving global z pass at 8
     /// bands sweep the workgroups whose every voxel has a site near it (`edt_columns.wgsl`'s
     /// SCAN; it runs after the y pass from the row words, which then writes into the kept
-    /// stack for it); `false` has every workgroup build the envelopes, as the z pass does at
-    /// other band counts and in workgroup memory.
+    /// stack for it), and the resolving y pass of a field split across bindings likewise (it
+    /// reads the part the z pass wrote); `false` has every workgroup build the envelopes, as
+    /// those passes do at other band counts and in workgroup memory.
     #[doc(hidden)]
     pub fn set_sweep(&mut self, sweep: bool) {
         self.sweep = sweep;
@@ -2552,6 +2555,28 @@ impl Distance3d {
         let part_at = |x0: u32| placement([x0, 0, 0], split.part_width, split.part_width * h);
         // A pass in global memory keeps its envelopes in the part's layout: a part's worth.
         let part_size = [split.part_width, h, d];
+        // The y pass resolving a volume in global memory at SWEEP_BANDS sweeps as the unsplit
+        // z pass does (`edt_columns.wgsl`'s SCAN): its sites come from the part, its answers go
+        // to the slab, so it writes from the first without reading its sites from the stack.
+        // One record of the workgroups swept serves every dispatch (each sweep writes the
+        // entries of its own before the pass after it reads them).
+        let sweeps = |x0: u32, depth: u32| {
+            let width = (x0 + split.part_width).min(w) - x0;
+            self.sweep
+                && split.y.is_none()
+                && fuse.as_ref().is_some_and(|f| !f.flat)
+                && self.global_bands(width * depth, false) == SWEEP_BANDS
+        };
+        let swept = (0..w)
+            .step_by(split.part_width as usize)
+            .flat_map(|x0| slabs.iter().map(move |&(z0, z_end)| (x0, z_end - z0)))
+            .any(|(x0, depth)| sweeps(x0, depth))
+            .then(|| {
+                self.swept_for(
+                    device,
+                    split.part_width.div_ceil(256 / SWEEP_BANDS) * split.slab_depth,
+                )
+            });
         for x0 in (0..w).step_by(split.part_width as usize) {
             let x_end = (x0 + split.part_width).min(w);
             let span = Span {
@@ -2605,7 +2630,7 @@ impl Distance3d {
                             stack: &self.stack_for(device, part_size),
                             slab: k,
                             span,
-                            sweep: None,
+                            sweep: swept.as_ref().filter(|_| sweeps(x0, z_end - z0)),
                         },
                         size,
                         1,
@@ -2738,6 +2763,8 @@ impl Distance3d {
                 part,
             );
             let name = match (axis, &fuse, io.words.is_some(), part) {
+                (1, _, _, SweepPart::Sweep) => "columns (y) sweep + resolve",
+                (1, _, _, SweepPart::Rest) => "columns (y) + resolve (rest)",
                 (_, _, _, SweepPart::Sweep) => "columns (z) sweep + resolve",
                 (_, _, _, SweepPart::Rest) => "columns (z) + resolve (rest)",
                 (1, _, true, _) => "columns (y) from row words",
@@ -2818,8 +2845,12 @@ impl Distance3d {
             y_bits,
             ("SCAN", scan as u32 as f64),
             ("AFTER_SCAN", (part == SweepPart::Rest) as u32 as f64),
-            // A pass that sweeps reads its sites from the stack (see `encode_exact_fused`).
-            ("IN_STACK", (part != SweepPart::No) as u32 as f64),
+            // A pass that sweeps in place reads its sites from the stack (see
+            // `encode_exact_fused`); a split field's reads them from its part.
+            (
+                "IN_STACK",
+                (part != SweepPart::No && io.source.is_none()) as u32 as f64,
+            ),
             ("RING", SWEEP_RING as f64),
             (
                 "RING_CELLS",
