@@ -454,8 +454,8 @@ fn the_sweep_after_a_workgroup_y_pass_is_exact() {
 }
 
 /// A field split across bindings runs the y pass last, from its parts into its slabs; in
-/// global memory at 8 bands that pass sweeps as the z pass of a whole field does, reading its
-/// sites from the part. Dense seeds (the sweep answers every voxel, some from far along y),
+/// global memory that pass sweeps as the z pass of a whole field does, reading its sites from
+/// the part, at 8 bands whether set so or chosen (the automatic count would be 32 here). Dense seeds (the sweep answers every voxel, some from far along y),
 /// and a hollow at the x = 0 edge part-way along y that stops it (a few far voxels: the envelopes in the same dispatch;
 /// many: in the pass after), unsigned and signed, against the CPU transform.
 #[test]
@@ -463,7 +463,6 @@ fn the_y_pass_of_a_split_field_sweeps_exactly() {
     let ctx = Context::shared();
     let mut d3 = Distance3d::new(&ctx.device).unwrap();
     d3.set_column_passes(ColumnPasses::Global);
-    d3.set_column_bands(Some(8)).unwrap();
     let s = [70, 300, 3];
     // Three parts (32, 32 and 6 columns) and three slabs of one plane.
     d3.set_split_bytes(Some((32 * 300 * 3 * 4) as u64));
@@ -484,27 +483,34 @@ fn the_y_pass_of_a_split_field_sweeps_exactly() {
             hollow_along(s, 33, 30, 1, 140..200),
         ),
     ];
-    for (name, mask) in &masks {
-        let case = Case {
-            name,
-            size: s,
-            mask: mask.clone(),
-            jfa: false,
-        };
-        let exact = cpu::edt_3d_squared(mask, s);
-        let (nearest, _, dist) = run_3d(&ctx, &d3, mask, s, &Options3d::default());
-        let e = score(&case, &nearest, &dist, &exact);
-        assert_eq!(e.wrong, 0, "{name}, split: {} wrong voxels", e.wrong);
-        let options = Options3d {
-            signed: true,
-            ..Options3d::default()
-        };
-        let (_, _, dist) = run_3d(&ctx, &d3, mask, s, &options);
-        check_signed(
-            &format!("{name}, split, signed"),
-            &dist,
-            &cpu::signed_3d(mask, s),
-        );
+    for bands in [None, Some(8)] {
+        d3.set_column_bands(bands).unwrap();
+        for (name, mask) in &masks {
+            let case = Case {
+                name,
+                size: s,
+                mask: mask.clone(),
+                jfa: false,
+            };
+            let exact = cpu::edt_3d_squared(mask, s);
+            let (nearest, _, dist) = run_3d(&ctx, &d3, mask, s, &Options3d::default());
+            let e = score(&case, &nearest, &dist, &exact);
+            assert_eq!(
+                e.wrong, 0,
+                "{name}, split, bands {bands:?}: {} wrong voxels",
+                e.wrong
+            );
+            let options = Options3d {
+                signed: true,
+                ..Options3d::default()
+            };
+            let (_, _, dist) = run_3d(&ctx, &d3, mask, s, &options);
+            check_signed(
+                &format!("{name}, split, bands {bands:?}, signed"),
+                &dist,
+                &cpu::signed_3d(mask, s),
+            );
+        }
     }
 }
 

@@ -1535,7 +1535,8 @@ fn upload_points_inner(
 
 impl Distance3d {
     /// Fix how many bands each column of the exact transform is split into (1, 2, 4, 8, 16 or
-    /// 32), or `None` (the default) to pick by grid size. Every choice gives the exact distance
+    /// 32), or `None` (the default) to pick by grid size (and 8 for the resolving y pass of a
+    /// field split across bindings, which then sweeps). Every choice gives the exact distance
     /// (on a tie between two seeds, which one is named may differ); only speed differs.
     ///
     /// ```no_run
@@ -2555,28 +2556,26 @@ impl Distance3d {
         let part_at = |x0: u32| placement([x0, 0, 0], split.part_width, split.part_width * h);
         // A pass in global memory keeps its envelopes in the part's layout: a part's worth.
         let part_size = [split.part_width, h, d];
-        // The y pass resolving a volume in global memory at SWEEP_BANDS sweeps as the unsplit
-        // z pass does (`edt_columns.wgsl`'s SCAN): its sites come from the part, its answers go
-        // to the slab, so it writes from the first without reading its sites from the stack.
-        // One record of the workgroups swept serves every dispatch (each sweep writes the
-        // entries of its own before the pass after it reads them).
-        let sweeps = |x0: u32, depth: u32| {
-            let width = (x0 + split.part_width).min(w) - x0;
-            self.sweep
-                && split.y.is_none()
-                && fuse.as_ref().is_some_and(|f| !f.flat)
-                && self.global_bands(width * depth, false) == SWEEP_BANDS
-        };
-        let swept = (0..w)
-            .step_by(split.part_width as usize)
-            .flat_map(|x0| slabs.iter().map(move |&(z0, z_end)| (x0, z_end - z0)))
-            .any(|(x0, depth)| sweeps(x0, depth))
-            .then(|| {
-                self.swept_for(
-                    device,
-                    split.part_width.div_ceil(256 / SWEEP_BANDS) * split.slab_depth,
-                )
-            });
+        // The y pass resolving a volume in global memory sweeps as the unsplit z pass does
+        // (`edt_columns.wgsl`'s SCAN): its sites come from the part, its answers go to the
+        // slab, so it writes from the first without reading its sites from the stack. It takes
+        // SWEEP_BANDS then (unless set otherwise), whatever the automatic count: a dispatch is
+        // one part × one slab, whose fewer columns ask for more bands (32 at 512³ split at
+        // 180 MB, 128 columns × 171 planes), and on the H100 there 8 bands and the sweep took
+        // the y pass + resolve from 2.427 to 1.776 ms at 1% seeds and 3.467 to 2.167 at 1e-5
+        // (8 bands without the sweep: 2.471 and 2.150). One record of the workgroups swept
+        // serves every dispatch (each sweep writes the entries of its own before the pass
+        // after it reads them).
+        let swept = (self.sweep
+            && split.y.is_none()
+            && fuse.as_ref().is_some_and(|f| !f.flat)
+            && self.column_bands.is_none_or(|b| b == SWEEP_BANDS))
+        .then(|| {
+            self.swept_for(
+                device,
+                split.part_width.div_ceil(256 / SWEEP_BANDS) * split.slab_depth,
+            )
+        });
         for x0 in (0..w).step_by(split.part_width as usize) {
             let x_end = (x0 + split.part_width).min(w);
             let span = Span {
@@ -2630,7 +2629,7 @@ impl Distance3d {
                             stack: &self.stack_for(device, part_size),
                             slab: k,
                             span,
-                            sweep: swept.as_ref().filter(|_| sweeps(x0, z_end - z0)),
+                            sweep: swept.as_ref(),
                         },
                         size,
                         1,
@@ -2825,7 +2824,13 @@ impl Distance3d {
     ) -> (wgpu::Buffer, [(&'static str, f64); 13], [u32; 3]) {
         let span = &io.span;
         let width = span.x_end - span.first[0];
-        let bands = self.global_bands(width * others, pack_2d);
+        // A pass that sweeps takes the sweep's bands (its ring's layout, and the workgroups
+        // its record names, are those of SWEEP_BANDS).
+        let bands = if part == SweepPart::No {
+            self.global_bands(width * others, pack_2d)
+        } else {
+            SWEEP_BANDS
+        };
         let [x_bits, y_bits] = packing_of(size).overrides();
         let scan = part == SweepPart::Sweep;
         let overrides = [
