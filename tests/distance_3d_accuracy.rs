@@ -455,9 +455,10 @@ fn the_sweep_after_a_workgroup_y_pass_is_exact() {
 
 /// A field split across bindings runs the y pass last, from its parts into its slabs; in
 /// global memory that pass sweeps as the z pass of a whole field does, reading its sites from
-/// the part, at 8 bands whether set so or chosen (the automatic count would be 32 here). Dense seeds (the sweep answers every voxel, some from far along y),
-/// and a hollow at the x = 0 edge part-way along y that stops it (a few far voxels: the envelopes in the same dispatch;
-/// many: in the pass after), unsigned and signed, against the CPU transform.
+/// the part, at 8 bands whether set so or chosen (the automatic count would be 32 here).
+/// Dense seeds (the sweep answers every voxel, some from far along y), and hollows at the
+/// x = 0 edge part-way along y that stop it (a few far voxels: the envelopes in the same
+/// dispatch; many: in the pass after), unsigned and signed, against the CPU transform.
 #[test]
 fn the_y_pass_of_a_split_field_sweeps_exactly() {
     let ctx = Context::shared();
