@@ -57,7 +57,8 @@ const MIN_BANDS_3D: u32 = 8;
 const TARGET_THREADS_2D: u32 = 1 << 17;
 const BAND_CHOICES: [u32; 6] = [1, 2, 4, 8, 16, 32];
 /// The sweep (`edt_columns.wgsl`'s SCAN) runs where the resolving global pass (z; y of a field
-/// split across bindings) takes this many bands (32 columns per workgroup), in a ring of
+/// split across bindings) takes this many bands (32 columns per workgroup; the pass takes it
+/// whatever the automatic count, unless `set_column_bands` says otherwise), in a ring of
 /// SWEEP_RING rows (24 either side of a step's 8, rounded up to a power of two: 8 KiB).
 const SWEEP_BANDS: u32 = 8;
 const SWEEP_RING: u32 = 64;
@@ -131,6 +132,16 @@ pub const AUTO_TILE_MAX_LENGTH: u32 = 256;
 /// words and y pass together: 0.049 ms at 128³ in workgroup memory against 0.069 in global
 /// memory, 0.315 against 0.277 at 256³, 2.53 against 1.92 at 512³.
 pub const AUTO_TILE_MAX_LENGTH_Y: u32 = 128;
+/// Fewest columns of a 3D field's y pass (x · z) that [`ColumnPasses::Auto`] runs in global
+/// memory whatever their length: as many as take [`MIN_BANDS_3D`] bands of the global pass to
+/// fill the GPU (`TARGET_THREADS_3D`). The tile wins at 128³ (16 384 columns; above), the
+/// global pass from there. Measured on the H100 (`cargo xtask bench distance --exact-only
+/// --shapes ...`, clocks held, 2026-11-27, the z pass in global memory sweeping at 8 bands),
+/// the transform with y in workgroup memory against global memory: 128 × 128 × 1024 0.502
+/// against 0.450 ms at 1% seeds, 0.635 against 0.450 at 1e-5 and 0.415 for both at 30%;
+/// 128 × 128 × 512 0.277 / 0.257, 0.344 / 0.260 and 0.238 / 0.241; 256 × 128 × 512 0.515 /
+/// 0.471, 0.626 / 0.447 and 0.438 / 0.442.
+pub const AUTO_TILE_MAX_COLUMNS_Y: u32 = TARGET_THREADS_3D / MIN_BANDS_3D;
 /// Longest column of a 2D field [`ColumnPasses::Auto`] holds in workgroup memory: 2048² took
 /// 0.323 ms with 4 columns per tile against 0.257 in global memory; lengths from 257 to 512
 /// were not measured, so they stay in global memory.
@@ -196,15 +207,15 @@ impl TileGeometry {
             .unwrap_or(0)
     }
 
-    /// What [`ColumnPasses::Auto`] takes for columns of length `n` along `axis` (1: y, 2: z)
-    /// of a 3D field, or along y of a 2D field where `flat`.
-    fn auto(n: u32, storage: u32, axis: u32, flat: bool) -> Option<Self> {
+    /// What [`ColumnPasses::Auto`] takes for `columns` columns of length `n` along `axis` (1:
+    /// y, 2: z) of a 3D field, or along y of a 2D field where `flat`.
+    fn auto(n: u32, columns: u32, storage: u32, axis: u32, flat: bool) -> Option<Self> {
         let longest = match (flat, axis) {
             (true, _) => AUTO_TILE_MAX_LENGTH_2D,
             (false, 1) => AUTO_TILE_MAX_LENGTH_Y,
             (false, _) => AUTO_TILE_MAX_LENGTH,
         };
-        if n > longest {
+        if n > longest || (!flat && axis == 1 && columns >= AUTO_TILE_MAX_COLUMNS_Y) {
             return None;
         }
         Self::fit(n, storage, MIN_TILE_COLUMNS, Self::banded_columns(n))
@@ -398,7 +409,8 @@ impl Span {
 /// 3D columns up to [`AUTO_TILE_MAX_LENGTH`] long, 2D columns up to
 /// [`AUTO_TILE_MAX_LENGTH_2D`], with up to `256 · 8 / n` columns per tile (bands of 8
 /// positions), 16 at most, 4 at least. The 3D y pass takes the same tile up to
-/// [`AUTO_TILE_MAX_LENGTH_Y`]. WebGPU's default 16 KiB holds every tile this takes.
+/// [`AUTO_TILE_MAX_LENGTH_Y`], over fewer than [`AUTO_TILE_MAX_COLUMNS_Y`] columns. WebGPU's
+/// default 16 KiB holds every tile this takes.
 ///
 /// ```
 /// use fieldkit::distance::tile_columns;
@@ -409,7 +421,7 @@ impl Span {
 /// assert_eq!(tile_columns(48 << 10, 512, 2), None);
 /// ```
 pub fn tile_columns(storage: u32, n: u32, dims: u32) -> Option<u32> {
-    TileGeometry::auto(n, storage, 2, dims == 2).map(|g| 1 << g.lg_columns)
+    TileGeometry::auto(n, 0, storage, 2, dims == 2).map(|g| 1 << g.lg_columns)
 }
 
 /// Where the last exact column pass writes distances (`columns_resolve*` in `edt_columns.wgsl`).
@@ -1535,8 +1547,8 @@ fn upload_points_inner(
 
 impl Distance3d {
     /// Fix how many bands each column of the exact transform is split into (1, 2, 4, 8, 16 or
-    /// 32), or `None` (the default) to pick by grid size (and 8 for the resolving y pass of a
-    /// field split across bindings, which then sweeps). Every choice gives the exact distance
+    /// 32), or `None` (the default) to pick by grid size (and 8 for the resolving global pass,
+    /// z or the y pass of a field split across bindings, which then sweeps). Every choice gives the exact distance
     /// (on a tie between two seeds, which one is named may differ); only speed differs.
     ///
     /// ```no_run
@@ -2182,21 +2194,25 @@ impl Distance3d {
         // Along y, and not the last pass: the row pass folds into the y pass, which makes its
         // sites from the row words (`row_words`, then `tile_columns_words` in workgroup memory
         // or `edt_columns.wgsl` with FROM_WORDS in global memory); else rows, then columns.
-        // The z pass resolving a volume in global memory at SWEEP_BANDS: it sweeps where it can
-        // (`edt_columns.wgsl`'s SCAN).
+        // The z pass resolving a volume in global memory sweeps where it can (`edt_columns.wgsl`'s
+        // SCAN), at SWEEP_BANDS (unless set otherwise) whatever the automatic count: a grid of
+        // few columns (x · y under 65 536) asks for 16 or 32 bands, and on the H100
+        // (2026-11-27, `bench distance --shapes`, 1% seeds) 8 bands and the sweep took
+        // 128 × 128 × 1024 from 0.704 to 0.454 ms and 192 × 192 × 512 from 0.662 to 0.502
+        // (1e-5 seeds 0.696 → 0.464 and 0.554 → 0.526; 30% 0.764 → 0.420 and 0.773 → 0.496).
         // Its sites come from the y pass (from the row words) through the kept stack, so that
         // it writes into `nearest` from the first (`edt_columns.wgsl`'s IN_STACK).
         let folds = self.fold_rows && size[1] > 1 && size[2] > 1;
         let sweep = (self.sweep
             && folds
             && fuse.as_ref().is_some_and(|f| !f.flat)
-            && self.tile_for(device, size[2], 2, false)?.is_none()
-            && self.global_bands(size[0] * size[1], false) == SWEEP_BANDS)
-            .then(|| self.swept_for(device, size[0].div_ceil(256 / SWEEP_BANDS) * size[1]));
+            && self.tile_for(device, size, 2, false)?.is_none()
+            && self.column_bands.is_none_or(|b| b == SWEEP_BANDS))
+        .then(|| self.swept_for(device, size[0].div_ceil(256 / SWEEP_BANDS) * size[1]));
         let (nearest, first_axis) = if folds {
             let words = self.encode_row_words(device, rec, volume, inside, invert)?;
             let nearest = field_buffer(device, "nearest seed", size);
-            let tile = self.tile_for(device, size[1], 1, false)?;
+            let tile = self.tile_for(device, size, 1, false)?;
             // Where the z pass sweeps, into the stack, with `nearest` the y pass's own stack.
             let stack = sweep.is_some().then(|| self.stack_for(device, size));
             let (out, scratch) = match &stack {
@@ -2215,9 +2231,7 @@ impl Distance3d {
         // The envelope stack only where a pass runs in global memory.
         let mut global = false;
         for &axis in &axes {
-            global |= self
-                .tile_for(device, size[axis as usize], axis, false)?
-                .is_none();
+            global |= self.tile_for(device, size, axis, false)?.is_none();
         }
         let stack = global.then(|| self.stack_for(device, size));
         let mut fuse = fuse;
@@ -2392,7 +2406,7 @@ impl Distance3d {
         for (what, b, bytes) in need {
             check_len(edt_tile::STAGE, what, b, bytes, size)?;
         }
-        let tile = self.tile_for(device, size[1], 1, false)?;
+        let tile = self.tile_for(device, size, 1, false)?;
         let io = TileIo::in_place(nearest, size);
         self.encode_from_words(device, rec, words, io, size, 1, tile, size, None)
     }
@@ -2493,14 +2507,14 @@ impl Distance3d {
         // 1024³ on the H100 (2026-11-26, one command, 8 bands in global memory) the y pass took
         // 23.4 ms for the nine slabs in global memory against 26.0 in workgroup memory, the z
         // pass from the words 4.27 to 4.33 ms per part against 7.72 to 7.91.
-        let y = match self.tile_for(device, size[1], 1, false)? {
+        let y = match self.tile_for(device, size, 1, false)? {
             Some(_) => Some(TileGeometry::split(size[1], storage, self.split_columns)?),
             None => None,
         };
         // Bands of 8 for the z pass from the words in workgroup memory: at 1024³ on the H100
         // it took 7.95 ms per part with 2 columns per tile against 8.70 with 4 (the y pass took
         // 2.87 ms per slab with 4, 3.15 with 2; the whole transform 54.4 ms with 4 for both).
-        let z = match self.tile_for(device, size[2], 2, false)? {
+        let z = match self.tile_for(device, size, 2, false)? {
             Some(_) => Some(TileGeometry::split(size[2], storage, 1)?),
             None => None,
         };
@@ -2691,7 +2705,7 @@ impl Distance3d {
         fuse: Option<Fuse>,
         sweep: Option<&wgpu::Buffer>,
     ) -> Result<(), Error> {
-        let tile = self.tile_for(device, size[axis as usize], axis, pack_2d)?;
+        let tile = self.tile_for(device, size, axis, pack_2d)?;
         if let Some(tile) = tile {
             return self.encode_tile_columns(
                 device,
@@ -2894,10 +2908,7 @@ impl Distance3d {
         axis: u32,
     ) -> Result<Option<()>, Error> {
         check_copy(device, edt_columns::STAGE, nearest, words, size, axis)?;
-        if self
-            .tile_for(device, size[axis as usize], axis, false)?
-            .is_some()
-        {
+        if self.tile_for(device, size, axis, false)?.is_some() {
             return Ok(None);
         }
         let io = ColumnsIo {
@@ -2961,20 +2972,23 @@ impl Distance3d {
         })
     }
 
-    /// The workgroup-memory tile the column passes take for columns of length `n` along `axis`
-    /// (1: y, 2: z; of a 2D field where `flat`), or `None` for the global-memory passes (as
-    /// [`Self::set_column_passes`] chose).
+    /// The workgroup-memory tile the column passes take along `axis` (1: y, 2: z; of a 2D field
+    /// of `size` = [w, h, 1] where `flat`) of a field of `size`, or `None` for the global-memory
+    /// passes (as [`Self::set_column_passes`] chose).
     fn tile_for(
         &self,
         device: &wgpu::Device,
-        n: u32,
+        size: [u32; 3],
         axis: u32,
         flat: bool,
     ) -> Result<Option<TileGeometry>, Error> {
         let storage = device.limits().max_compute_workgroup_storage_size;
+        let n = size[axis as usize];
+        // The columns of the pass: x times the third axis (1 in 2D).
+        let columns = size[0] * size[3 - axis as usize];
         Ok(match self.column_passes {
             ColumnPasses::Global => None,
-            ColumnPasses::Auto => TileGeometry::auto(n, storage, axis, flat),
+            ColumnPasses::Auto => TileGeometry::auto(n, columns, storage, axis, flat),
             ColumnPasses::Workgroup => Some(TileGeometry::forced(n, storage)?),
         })
     }
@@ -2993,7 +3007,7 @@ impl Distance3d {
         axis: u32,
     ) -> Result<Option<()>, Error> {
         check_copy(device, edt_tile::STAGE, nearest, None, size, axis)?;
-        let Some(tile) = self.tile_for(device, size[axis as usize], axis, false)? else {
+        let Some(tile) = self.tile_for(device, size, axis, false)? else {
             return Ok(None);
         };
         let span = Span::whole(size);
@@ -3112,7 +3126,7 @@ impl Distance3d {
         let size = [w, h, 1];
         let mv = view(mask);
         let stack = self
-            .tile_for(device, h, 1, true)?
+            .tile_for(device, size, 1, true)?
             .is_none()
             .then(|| self.stack_for(device, size));
         let rec = &mut rec.recorder();
@@ -3284,6 +3298,23 @@ mod tests {
     /// wgpu's storage binding (2 GiB − 1) and NVIDIA's largest buffer (4 GiB − 2 MiB).
     const BINDING: u64 = (1 << 31) - 1;
     const BUFFER: u64 = (1 << 32) - (2 << 20);
+
+    /// Auto's y pass: in workgroup memory up to 128 long over fewer than 65 536 columns (x · z),
+    /// where the global pass would need more than 8 bands to fill the GPU; else global. The z
+    /// pass and 2D columns do not depend on the column count.
+    #[test]
+    fn the_y_pass_leaves_workgroup_memory_at_65536_columns() {
+        let storage = 48 << 10;
+        let y = |n: u32, columns: u32| TileGeometry::auto(n, columns, storage, 1, false).is_some();
+        assert!(y(128, 128 * 128));
+        assert!(y(128, 128 * 256 + 127 * 256));
+        assert!(!y(128, 256 * 256));
+        assert!(!y(128, 128 * 1024));
+        assert!(!y(129, 16));
+        let z = |n: u32, columns: u32| TileGeometry::auto(n, columns, storage, 2, false).is_some();
+        assert!(z(256, 1 << 20) && !z(257, 16));
+        assert!(TileGeometry::auto(256, 1 << 20, storage, 1, true).is_some());
+    }
 
     #[test]
     fn split_parts_start_on_row_boundaries_where_they_can() {

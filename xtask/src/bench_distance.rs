@@ -11,8 +11,8 @@ use std::path::Path;
 use std::process::ExitCode;
 
 use fieldkit::distance::{
-    AUTO_TILE_MAX_LENGTH_Y, ColumnPasses, Distance3d, Method, Options3d, tile_columns,
-    upload_volume,
+    AUTO_TILE_MAX_COLUMNS_Y, AUTO_TILE_MAX_LENGTH, AUTO_TILE_MAX_LENGTH_Y, ColumnPasses,
+    Distance3d, Method, Options3d, tile_columns, upload_volume,
 };
 use fieldkit::distance::{Jfa2d, Options, Variant, cpu, upload_mask};
 use fieldkit::gpu::{Context, read_buffer, read_texture};
@@ -211,6 +211,15 @@ fn run_peer(cmd: &str, mask: &[u8], shape: &[usize], tag: &str) -> Result<Peer, 
     Ok(Peer { ms, d2, json })
 }
 
+/// A 3D grid's name in the tables: `512³` for a cube, `128×128×1024` otherwise.
+fn label3([x, y, z]: [usize; 3]) -> String {
+    if x == y && y == z {
+        format!("{x}³")
+    } else {
+        format!("{x}×{y}×{z}")
+    }
+}
+
 fn words(ctx: &Context, b: &wgpu::Buffer) -> Result<Vec<u32>, String> {
     Ok(bytemuck::cast_slice::<u8, u32>(&read_buffer(ctx, b).map_err(|e| e.to_string())?).to_vec())
 }
@@ -232,17 +241,38 @@ fn distance(args: &Args) -> Result<(), String> {
             .filter(|n| args.sizes.is_empty() || args.sizes.contains(n))
             .collect()
     };
-    let sizes3 = pick(if args.quick {
-        &[32, 64]
+    // 3D grids as (x, y, z): the sweep's cubes, or the shapes asked for (and then no 2D).
+    let sizes3: Vec<[usize; 3]> = if args.shapes.is_empty() {
+        pick(if args.quick {
+            &[32, 64]
+        } else {
+            &[128, 256, 512, 1024]
+        })
+        .into_iter()
+        .map(|n| [n; 3])
+        .collect()
     } else {
-        &[128, 256, 512, 1024]
-    });
-    let sizes2 = pick(if args.quick {
-        &[256, 512]
+        args.shapes.clone()
+    };
+    let sizes2 = if args.shapes.is_empty() {
+        pick(if args.quick {
+            &[256, 512]
+        } else {
+            &[2048, 4096, 8192, 16384]
+        })
     } else {
-        &[2048, 4096, 8192, 16384]
-    });
-    let mask3 = |n: usize| random_mask(n * n * n, args.density, n as u64);
+        Vec::new()
+    };
+    // A cube's mask is seeded by its edge, as before shapes were taken, so its figures stay
+    // comparable with earlier commands'.
+    let mask3 = |[x, y, z]: [usize; 3]| {
+        let seed = if x == y && y == z {
+            x as u64
+        } else {
+            ((x as u64) << 40) ^ ((y as u64) << 20) ^ z as u64
+        };
+        random_mask(x * y * z, args.density, seed)
+    };
     let mask2 = |n: usize| random_mask(n * n, args.density, 1000 + n as u64);
     // The peer runs first, every size, before this process opens its device. On the H100 a CUDA
     // process started while our Vulkan device was open left every later run of this process
@@ -251,9 +281,13 @@ fn distance(args: &Args) -> Result<(), String> {
     let mut peers3 = std::collections::HashMap::new();
     let mut peers2 = std::collections::HashMap::new();
     if let Some(cmd) = &args.peer {
-        for &n in &sizes3 {
-            eprintln!("peer {n}³");
-            peers3.insert(n, run_peer(cmd, &mask3(n), &[n, n, n], &format!("{n}c"))?);
+        for &size in &sizes3 {
+            let [x, y, z] = size;
+            eprintln!("peer {}", label3(size));
+            peers3.insert(
+                size,
+                run_peer(cmd, &mask3(size), &[z, y, x], &format!("{x}_{y}_{z}c"))?,
+            );
         }
         for &n in &sizes2 {
             eprintln!("peer {n}²");
@@ -311,10 +345,12 @@ fn distance(args: &Args) -> Result<(), String> {
         "workgroup memory: {storage} bytes; column passes by length: {}",
         sizes3
             .iter()
-            .map(|&n| {
-                let z = tile_columns(storage, n as u32, 3);
-                let y = z.filter(|_| n as u32 <= AUTO_TILE_MAX_LENGTH_Y);
-                format!("{n}³ y {}, z {}", path(y), path(z))
+            .map(|&size| {
+                let [x, y, z] = size.map(|s| s as u32);
+                let z_path = tile_columns(storage, z, 3);
+                let y_path = tile_columns(storage, y, 3)
+                    .filter(|_| y <= AUTO_TILE_MAX_LENGTH_Y && x * z < AUTO_TILE_MAX_COLUMNS_Y);
+                format!("{} y {}, z {}", label3(size), path(y_path), path(z_path))
             })
             .chain(
                 sizes2
@@ -384,18 +420,18 @@ fn distance(args: &Args) -> Result<(), String> {
         .limits()
         .max_storage_buffer_binding_size
         .min(args.split_bytes.unwrap_or(u64::MAX));
-    for &n in &sizes3 {
-        let size = [n, n, n];
-        let cells = (n * n * n) as u64;
+    for &size in &sizes3 {
+        let label = label3(size);
+        let cells = size.iter().product::<usize>() as u64;
         let split = cells * 4 > binding;
-        let mask = mask3(n);
-        let volume = upload_volume(&ctx.device, &ctx.queue, &mask, [n as u32; 3])
+        let mask = mask3(size);
+        let volume = upload_volume(&ctx.device, &ctx.queue, &mask, size.map(|s| s as u32))
             .map_err(|e| e.to_string())?;
-        let peer = peers3.remove(&n);
+        let peer = peers3.remove(&size);
         let mut exact_d2: Vec<u64> = Vec::new();
         let mut reference: Option<Vec<u64>> = None;
         for (name, opts) in &methods3 {
-            bar.set_message(format!("{n}³ {name}"));
+            bar.set_message(format!("{label} {name}"));
             let d3 = match name.as_str() {
                 GLOBAL => &d3_global,
                 WORKGROUP => &d3_workgroup,
@@ -414,7 +450,8 @@ fn distance(args: &Args) -> Result<(), String> {
                 && (d3
                     .encode(&ctx.device, &mut ctx.encoder("probe"), &volume, opts)
                     .is_err()
-                    || n as u32 <= AUTO_TILE_MAX_LENGTH_Y)
+                    || (size[1] as u32 <= AUTO_TILE_MAX_LENGTH_Y
+                        && size[2] as u32 <= AUTO_TILE_MAX_LENGTH))
             {
                 bar.inc(1);
                 continue;
@@ -459,7 +496,7 @@ fn distance(args: &Args) -> Result<(), String> {
             };
             rows.push(Row {
                 dims: 3,
-                size: format!("{n}³"),
+                size: label.clone(),
                 voxels: cells,
                 method: name.clone(),
                 median_ms: med,
@@ -503,7 +540,7 @@ fn distance(args: &Args) -> Result<(), String> {
             ctx.submit_and_wait("bench row words", enc)
                 .map_err(|e| e.to_string())?;
             for axis in [1u32, 2] {
-                let edge = [n as u32; 3];
+                let edge = size.map(|s| s as u32);
                 let mut tile = false;
                 let timing = time_runs(&ctx, args.warmup, args.reps, heater, |enc, prof| {
                     let rec = &mut prof.record(enc);
@@ -523,11 +560,11 @@ fn distance(args: &Args) -> Result<(), String> {
                     (1, false) => "columns (y) from row words",
                     (_, false) => "columns (z)",
                 };
-                floors.push((format!("{n}³"), tag, timing.0));
+                floors.push((label.clone(), tag, timing.0));
             }
         }
         if let Some(p) = &peer {
-            bar.println(format!("peer {n}³: {}", p.json));
+            bar.println(format!("peer {label}: {}", p.json));
         }
     }
 

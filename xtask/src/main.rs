@@ -147,6 +147,10 @@ enum Command {
         /// any sizes, in the order given.
         #[arg(long, value_delimiter = ',')]
         sizes: Vec<usize>,
+        /// `distance`: 3D grids of these shapes (`XxYxZ`, comma-separated, e.g.
+        /// `128x128x1024`) instead of the cubes; no 2D sizes then.
+        #[arg(long, value_delimiter = ',', value_parser = parse_shape)]
+        shapes: Vec<[usize; 3]>,
         /// `voxelize`: the Stanford bunny's `index.js` from `scripts/fetch-bunny.sh`.
         #[arg(long)]
         mesh: Option<PathBuf>,
@@ -174,6 +178,21 @@ enum Technique {
     Voxelize,
     /// The sparse voxel octree against the dense grid: memory, build and render time.
     Octree,
+}
+
+/// `--shapes`: a 3D grid's shape written `XxYxZ`, every side at least 1.
+fn parse_shape(s: &str) -> Result<[usize; 3], String> {
+    let sides: Vec<usize> = s
+        .split('x')
+        .map(|t| t.trim().parse::<usize>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| format!("`{s}`: {e} (write a shape as XxYxZ, e.g. 128x128x1024)"))?;
+    match sides[..] {
+        [x, y, z] if x > 0 && y > 0 && z > 0 => Ok([x, y, z]),
+        _ => Err(format!(
+            "`{s}`: a shape is three sides of at least 1, written XxYxZ (e.g. 128x128x1024)"
+        )),
+    }
 }
 
 fn crate_root() -> PathBuf {
@@ -241,6 +260,7 @@ fn main() -> ExitCode {
             split_bytes,
             workgroup_storage,
             sizes,
+            shapes,
             mesh,
             modes,
             replot,
@@ -268,6 +288,7 @@ fn main() -> ExitCode {
                 split_bytes,
                 workgroup_storage,
                 sizes,
+                shapes,
                 mesh,
                 modes,
                 replot,

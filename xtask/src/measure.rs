@@ -33,6 +33,8 @@ pub struct Args {
     pub workgroup_storage: Option<u32>,
     /// Only these sizes of the sweep (empty: all).
     pub sizes: Vec<usize>,
+    /// `distance`: 3D shapes (x, y, z) instead of the cubes of the sweep (empty: the cubes).
+    pub shapes: Vec<[usize; 3]>,
     /// `voxelize`: the bunny's `index.js` (`scripts/fetch-bunny.sh`).
     pub mesh: Option<PathBuf>,
     /// `voxelize`: only these modes (empty: all).
