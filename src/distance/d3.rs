@@ -46,13 +46,19 @@ pub const MAX_SIDE_3D: [u32; 3] = [2048, 2048, 1024];
 pub const MAX_SIDE_2D_EXACT: u32 = 16384;
 /// Bands per column in the exact column passes in global memory (`edt_columns.wgsl`): enough
 /// that columns × bands reaches about `TARGET_THREADS_3D` threads in 3D, and never fewer than
-/// `MIN_BANDS_3D`; about `TARGET_THREADS_2D` in 2D; 32 at most. Measured on the H100 in one
+/// `MIN_BANDS_3D`; about `TARGET_THREADS_2D` in 2D; 32 at most. In 3D that is 8 bands from
+/// 16 384 columns up (the target was 2^19 until 2026-11-27). On the H100 (`bench distance
+/// --shapes ... --column-bands B`, 1% seeds, command 38 of `docs/bench/distance_scan.csv`) the y
+/// pass over 16 384 to 32 768 columns took, with 8 / 16 / 32 bands: 128 × 512 × 128 0.112 /
+/// 0.117 / 0.130 ms, 64 × 1024 × 256 0.195 / 0.201 / 0.219, 128 × 1024 × 128 0.218 / 0.217 /
+/// 0.233, 256 × 512 × 128 0.200 / 0.213 (16 was its old count). (The resolving z pass takes 8
+/// wherever it sweeps: `encode_exact_fused`.) Measured on the H100 in one
 /// command per setting (`cargo xtask bench distance --exact-only --column-bands B`, 1% seeds,
 /// clocks held, 2026-11-26): 512³ took 4.51, 3.96 and 4.47 ms with 4, 8 and 16 bands; z +
 /// resolve at 256³ 0.327, 0.284 and 0.271 ms, y 0.198, 0.200 and 0.238; 1024³ (split, every
 /// pass in global memory) 41.5, 39.1 and 44.3 ms; 16384² 8.44, 6.82 and 5.67 ms with 32, 16 and
 /// 8 bands, 8192² 1.86, 1.47 and 1.77, 4096² 0.443 and 0.533 with 32 and 16.
-const TARGET_THREADS_3D: u32 = 1 << 19;
+const TARGET_THREADS_3D: u32 = 1 << 17;
 const MIN_BANDS_3D: u32 = 8;
 const TARGET_THREADS_2D: u32 = 1 << 17;
 const BAND_CHOICES: [u32; 6] = [1, 2, 4, 8, 16, 32];
@@ -133,15 +139,15 @@ pub const AUTO_TILE_MAX_LENGTH: u32 = 256;
 /// memory, 0.315 against 0.277 at 256³, 2.53 against 1.92 at 512³.
 pub const AUTO_TILE_MAX_LENGTH_Y: u32 = 128;
 /// Fewest columns of a 3D field's y pass (x · z) that [`ColumnPasses::Auto`] runs in global
-/// memory whatever their length: as many as take [`MIN_BANDS_3D`] bands of the global pass to
-/// fill the GPU (`TARGET_THREADS_3D`). The tile wins at 128³ (16 384 columns; above), the
-/// global pass from there. Measured on the H100 (`cargo xtask bench distance --exact-only
+/// memory whatever their length. The tile wins at 128³ (16 384 columns; above) and at 128 ×
+/// 128 × 256 (32 768: 0.158 ms against 0.169 with the global pass at 16 bands), the global
+/// pass from 65 536 columns. Measured on the H100 (`cargo xtask bench distance --exact-only
 /// --shapes ...`, clocks held, 2026-11-27, the z pass in global memory sweeping at 8 bands),
 /// the transform with y in workgroup memory against global memory: 128 × 128 × 1024 0.502
 /// against 0.450 ms at 1% seeds, 0.635 against 0.450 at 1e-5 and 0.415 for both at 30%;
 /// 128 × 128 × 512 0.277 / 0.257, 0.344 / 0.260 and 0.238 / 0.241; 256 × 128 × 512 0.515 /
 /// 0.471, 0.626 / 0.447 and 0.438 / 0.442.
-pub const AUTO_TILE_MAX_COLUMNS_Y: u32 = TARGET_THREADS_3D / MIN_BANDS_3D;
+pub const AUTO_TILE_MAX_COLUMNS_Y: u32 = 1 << 16;
 /// Longest column of a 2D field [`ColumnPasses::Auto`] holds in workgroup memory: 2048² took
 /// 0.323 ms with 4 columns per tile against 0.257 in global memory; lengths from 257 to 512
 /// were not measured, so they stay in global memory.
@@ -3314,6 +3320,22 @@ mod tests {
         let z = |n: u32, columns: u32| TileGeometry::auto(n, columns, storage, 2, false).is_some();
         assert!(z(256, 1 << 20) && !z(257, 16));
         assert!(TileGeometry::auto(256, 1 << 20, storage, 1, true).is_some());
+    }
+
+    /// Bands of the global passes: 8 in 3D from 16 384 columns up (2^17 threads), more below,
+    /// 32 at most; 2D aims at 2^17 threads with no floor.
+    #[test]
+    fn global_passes_take_8_bands_from_16384_columns_in_3d() {
+        let bands = |columns: u32, flat: bool| BAND_CHOICES[bands_for(columns, flat)];
+        assert_eq!(bands(1 << 20, false), 8);
+        assert_eq!(bands(16384, false), 8);
+        assert_eq!(bands(16383, false), 16);
+        assert_eq!(bands(8192, false), 16);
+        assert_eq!(bands(4096, false), 32);
+        assert_eq!(bands(1, false), 32);
+        assert_eq!(bands(16384, true), 8);
+        assert_eq!(bands(65536, true), 2);
+        assert_eq!(bands(1 << 20, true), 1);
     }
 
     #[test]
