@@ -5,8 +5,9 @@
 // Parallelism and coalescing: a workgroup of 256 threads takes 256 / BANDS neighbouring columns
 // (consecutive x, so a warp's reads and writes are contiguous runs) and splits every column into
 // BANDS bands, one thread each, as the Parallel Banding Algorithm does (Cao et al. 2010). The host
-// picks BANDS so that there are enough threads (about 2^17, and at least 8 bands in 3D). A band builds the envelope of its own sites over the whole column, kept as a stack in
-// `stack` at the band's own positions.
+// picks BANDS so that there are enough threads (about 2^17, and at least 8 bands in 3D). A band
+// builds the envelope of its own sites over the whole column, kept as a stack in `stack` at the
+// band's own positions.
 // After a barrier each thread answers the positions of its band: the nearest site is on some
 // band's envelope, so it evaluates its own band's envelope and those of the other bands that are
 // not already farther away than the best so far. Along one envelope the cost is unimodal and its

@@ -1554,8 +1554,9 @@ fn upload_points_inner(
 impl Distance3d {
     /// Fix how many bands each column of the exact transform is split into (1, 2, 4, 8, 16 or
     /// 32), or `None` (the default) to pick by grid size (and 8 for the resolving global pass,
-    /// z or the y pass of a field split across bindings, which then sweeps). Every choice gives the exact distance
-    /// (on a tie between two seeds, which one is named may differ); only speed differs.
+    /// z or the y pass of a field split across bindings, which then sweeps). Every choice gives
+    /// the exact distance (on a tie between two seeds, which one is named may differ); only
+    /// speed differs.
     ///
     /// ```no_run
     /// # fn f(device: &wgpu::Device) -> Result<(), fieldkit::Error> {
@@ -3305,9 +3306,9 @@ mod tests {
     const BINDING: u64 = (1 << 31) - 1;
     const BUFFER: u64 = (1 << 32) - (2 << 20);
 
-    /// Auto's y pass: in workgroup memory up to 128 long over fewer than 65 536 columns (x · z),
-    /// where the global pass would need more than 8 bands to fill the GPU; else global. The z
-    /// pass and 2D columns do not depend on the column count.
+    /// Auto's y pass: in workgroup memory up to 128 long over fewer than 65 536 columns (x · z;
+    /// the tile won at 16 384 and 32 768 columns, the global pass from 65 536); else global.
+    /// The z pass and 2D columns do not depend on the column count.
     #[test]
     fn the_y_pass_leaves_workgroup_memory_at_65536_columns() {
         let storage = 48 << 10;
