@@ -3,8 +3,13 @@
 //! with xz into `.gpu/tests.tar.xz` with a runner script. There, in the checkout:
 //!
 //! ```sh
-//! . .gpu/env.sh && sh .gpu/run-tests.sh H100 $OUT
+//! . .gpu/env.sh && sh .gpu/run-tests.sh H100 $OUT [SECONDS]
 //! ```
+//!
+//! Each binary may run SECONDS (120 by default): one that runs past it is stopped and the
+//! tests it never finished are named, so one hang does not cost the rest of the suite (on a
+//! freshly started H100 machine the user crate's `stage` binary once ran past a whole 240 s
+//! command). Each binary's log is copied to `$OUT/logs` as it ends.
 //!
 //! The binaries find `tests/` (snapshots, reference images) through `CARGO_MANIFEST_DIR`, the
 //! path they were built in; the runner links that path to the checkout when it differs. Each
@@ -34,7 +39,7 @@ pub fn run(root: &Path) -> ExitCode {
         Ok(n) => {
             println!(
                 "packed {n} test binaries into .gpu/tests.tar.xz; on the GPU machine:\n  \
-                 . .gpu/env.sh && sh .gpu/run-tests.sh H100 $OUT"
+                 . .gpu/env.sh && sh .gpu/run-tests.sh H100 $OUT [SECONDS per binary]"
             );
             ExitCode::SUCCESS
         }
@@ -138,8 +143,10 @@ fn prepare(root: &Path) -> Result<usize, String> {
         .collect();
     let script = format!(
         r#"#!/bin/sh
-# Written by `cargo xtask gpu-tests`. Usage: sh .gpu/run-tests.sh ADAPTER OUT_DIR
-adapter="$1"; out="${{2:-.}}"; logs=/tmp/fieldkit-test-logs; mkdir -p "$logs"
+# Written by `cargo xtask gpu-tests`. Usage: sh .gpu/run-tests.sh ADAPTER OUT_DIR [SECONDS]
+# Each binary may run SECONDS (120 if absent); one that runs past it is stopped, and the tests
+# it listed but never finished are named. Each binary's log goes to OUT_DIR/logs as it ends.
+adapter="$1"; out="${{2:-.}}"; limit="${{3:-120}}"; logs=/tmp/fieldkit-test-logs; mkdir -p "$logs" "$out/logs"
 built="{built}"
 if [ "$(pwd)" != "$built" ] && [ ! -e "$built" ]; then mkdir -p "$(dirname "$built")"; ln -s "$(pwd)" "$built"; fi
 mkdir -p .gpu/bin/tests .gpu/bin/examples && tar -xJf .gpu/tests.tar.xz -C .gpu/bin/tests
@@ -152,8 +159,17 @@ for name in {names}; do
   skip=""
   case "$name" in
 {skip}  esac
-  if (cd "$built" && CI=true INSTA_UPDATE=no INSTA_WORKSPACE_ROOT="$built" FIELDKIT_ADAPTER="$adapter" "$OLDPWD/.gpu/bin/tests/$name" $skip) > "$logs/$name.log" 2>&1; then
+  bin="$(pwd)/.gpu/bin/tests/$name"
+  (cd "$built" && CI=true INSTA_UPDATE=no INSTA_WORKSPACE_ROOT="$built" FIELDKIT_ADAPTER="$adapter" timeout "$limit" "$bin" $skip) > "$logs/$name.log" 2>&1
+  rc=$?
+  cp "$logs/$name.log" "$out/logs/"
+  if [ $rc = 0 ]; then
     pass=$((pass+1)); echo "ok   $name: $(grep -h '^test result' "$logs/$name.log" | tail -1)"
+  elif [ $rc = 124 ]; then
+    fail=$((fail+1)); echo "TIME $name: stopped after ${{limit}} s; unfinished:"
+    "$bin" --list 2>/dev/null | sed -n 's/: test$//p' | while read -r t; do
+      grep -Eq "^test $t \.\.\. (ok|FAILED|ignored)" "$logs/$name.log" || echo "       $t"
+    done
   else
     fail=$((fail+1)); echo "FAIL $name: $(grep -h '^test result' "$logs/$name.log" | tail -1)"
     grep -h -A12 -- '---- .* stdout ----' "$logs/$name.log" | head -60
