@@ -433,6 +433,25 @@ fn gallery(out: &Path) -> ExitCode {
 mod tests {
     use super::*;
 
+    /// `--shapes`: three sides of at least 1 written XxYxZ; anything else is an error that
+    /// shows how to write one.
+    #[test]
+    fn shapes_parse_or_say_how_to_write_one() {
+        assert_eq!(parse_shape("128x128x1024"), Ok([128, 128, 1024]));
+        assert_eq!(parse_shape("1x1x1"), Ok([1, 1, 1]));
+        for bad in [
+            "128x128",
+            "128x128x1024x2",
+            "0x1x1",
+            "ax1x1",
+            "128×128×1024",
+            "",
+        ] {
+            let e = parse_shape(bad).unwrap_err();
+            assert!(e.contains("XxYxZ"), "{bad}: {e}");
+        }
+    }
+
     /// naga 30's HLSL and GLSL writers panic on binding arrays of buffers: `lint` reports
     /// that as a portability finding for the language and goes on.
     #[test]
