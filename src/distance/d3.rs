@@ -227,6 +227,13 @@ impl TileGeometry {
         Self::fit(n, storage, MIN_TILE_COLUMNS, Self::banded_columns(n))
     }
 
+    /// [`Self::auto`] for the pass along `axis` of a field of `size` ([w, h, 1] where `flat`):
+    /// its columns are x times the third axis.
+    fn auto_for(size: [u32; 3], storage: u32, axis: u32, flat: bool) -> Option<Self> {
+        let columns = size[0] * size[3 - axis as usize];
+        Self::auto(size[axis as usize], columns, storage, axis, flat)
+    }
+
     /// The tile [`ColumnPasses::Workgroup`] takes at any length: bands of 8 where they fit (16
     /// columns of 512 took 4.48 ms for y at 512³, 4 columns 2.70), fewer columns where the
     /// storage is short; [`Error::Size`] where not even one column fits.
@@ -428,6 +435,22 @@ impl Span {
 /// ```
 pub fn tile_columns(storage: u32, n: u32, dims: u32) -> Option<u32> {
     TileGeometry::auto(n, 0, storage, 2, dims == 2).map(|g| 1 << g.lg_columns)
+}
+
+/// Columns per workgroup-memory tile that [`ColumnPasses::Auto`] takes for the column pass
+/// along `axis` (1: y, 2: z) of a 3D field of `size`, or `None` where that pass runs in global
+/// memory: [`tile_columns`] for z; for y the same up to [`AUTO_TILE_MAX_LENGTH_Y`] long over
+/// fewer than [`AUTO_TILE_MAX_COLUMNS_Y`] columns (x · z).
+///
+/// ```
+/// use fieldkit::distance::tile_columns_3d;
+/// assert_eq!(tile_columns_3d(48 << 10, [128, 128, 128], 1), Some(16));
+/// assert_eq!(tile_columns_3d(48 << 10, [128, 128, 1024], 1), None);
+/// assert_eq!(tile_columns_3d(48 << 10, [128, 128, 1024], 2), None);
+/// assert_eq!(tile_columns_3d(48 << 10, [512, 128, 256], 2), Some(8));
+/// ```
+pub fn tile_columns_3d(storage: u32, size: [u32; 3], axis: u32) -> Option<u32> {
+    TileGeometry::auto_for(size, storage, axis, false).map(|g| 1 << g.lg_columns)
 }
 
 /// Where the last exact column pass writes distances (`columns_resolve*` in `edt_columns.wgsl`).
@@ -2990,13 +3013,10 @@ impl Distance3d {
         flat: bool,
     ) -> Result<Option<TileGeometry>, Error> {
         let storage = device.limits().max_compute_workgroup_storage_size;
-        let n = size[axis as usize];
-        // The columns of the pass: x times the third axis (1 in 2D).
-        let columns = size[0] * size[3 - axis as usize];
         Ok(match self.column_passes {
             ColumnPasses::Global => None,
-            ColumnPasses::Auto => TileGeometry::auto(n, columns, storage, axis, flat),
-            ColumnPasses::Workgroup => Some(TileGeometry::forced(n, storage)?),
+            ColumnPasses::Auto => TileGeometry::auto_for(size, storage, axis, flat),
+            ColumnPasses::Workgroup => Some(TileGeometry::forced(size[axis as usize], storage)?),
         })
     }
 

@@ -11,8 +11,7 @@ use std::path::Path;
 use std::process::ExitCode;
 
 use fieldkit::distance::{
-    AUTO_TILE_MAX_COLUMNS_Y, AUTO_TILE_MAX_LENGTH, AUTO_TILE_MAX_LENGTH_Y, ColumnPasses,
-    Distance3d, Method, Options3d, tile_columns, upload_volume,
+    ColumnPasses, Distance3d, Method, Options3d, tile_columns, tile_columns_3d, upload_volume,
 };
 use fieldkit::distance::{Jfa2d, Options, Variant, cpu, upload_mask};
 use fieldkit::gpu::{Context, read_buffer, read_texture};
@@ -346,10 +345,9 @@ fn distance(args: &Args) -> Result<(), String> {
         sizes3
             .iter()
             .map(|&size| {
-                let [x, y, z] = size.map(|s| s as u32);
-                let z_path = tile_columns(storage, z, 3);
-                let y_path = tile_columns(storage, y, 3)
-                    .filter(|_| y <= AUTO_TILE_MAX_LENGTH_Y && x * z < AUTO_TILE_MAX_COLUMNS_Y);
+                let edge = size.map(|s| s as u32);
+                let y_path = tile_columns_3d(storage, edge, 1);
+                let z_path = tile_columns_3d(storage, edge, 2);
                 format!("{} y {}, z {}", label3(size), path(y_path), path(z_path))
             })
             .chain(
@@ -450,8 +448,9 @@ fn distance(args: &Args) -> Result<(), String> {
                 && (d3
                     .encode(&ctx.device, &mut ctx.encoder("probe"), &volume, opts)
                     .is_err()
-                    || (size[1] as u32 <= AUTO_TILE_MAX_LENGTH_Y
-                        && size[2] as u32 <= AUTO_TILE_MAX_LENGTH))
+                    || [1, 2].iter().all(|&axis| {
+                        tile_columns_3d(storage, size.map(|s| s as u32), axis).is_some()
+                    }))
             {
                 bar.inc(1);
                 continue;
