@@ -11,8 +11,8 @@
 // written as a0 + b1·(a1 − a0) + b2·(a2 − a0) so a constant attribute stays exact.
 
 import fieldkit::triangle_box::{
-    GIANT_BLOCK, GIANT_HEADER, GIANT_RECORDS, LIGHT, MAX_GIANTS, Setup, chunk_columns, column,
-    giant_record_of, overlaps, setup,
+    GIANT_BLOCK, GIANT_HEADER, GIANT_RECORDS, LIGHT, MAX_GIANTS, Setup, chunk_columns, column_at,
+    column_coords, giant_record_of, next_column, overlaps, setup,
 };
 import package::shared::voxel_attribute::{SUMS, average, closest_weights, contribution, corner_colour, corner_normal, corner_uv};
 
@@ -100,8 +100,10 @@ fn load(t: u32) -> Setup {
 
 fn accumulate_columns(s: Setup, t: u32, first: u32, count: u32) {
     let end = min(first + count, s.columns);
+    var square = column_coords(s, first);
     for (var j = first; j < end; j++) {
-        let c = column(s, j);
+        let c = column_at(s, square.x, square.y);
+        square = next_column(s, square);
         for (var z = c.k0; z < c.k1; z++) {
             let p = c.p + s.ek * z;
             if overlaps(s, p, false) {

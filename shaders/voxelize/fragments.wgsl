@@ -10,7 +10,9 @@
 // thread walks again to write its voxels there. `total` counts every fragment, also those past
 // `capacity` (which are dropped), so a list too short is sized exactly on the next try.
 
-import fieldkit::triangle_box::{Setup, column, listed_columns, overlaps, setup};
+import fieldkit::triangle_box::{
+    Setup, column_at, column_coords, listed_columns, next_column, overlaps, setup,
+};
 
 struct FragmentParams {
     grid: vec3<u32>,
@@ -57,8 +59,10 @@ fn load(t: u32) -> Setup {
 fn walk(s: Setup, t: u32, first: u32, count: u32, emit: bool, at: u32) -> u32 {
     var n = 0u;
     let end = min(first + count, s.columns);
+    var square = column_coords(s, first);
     for (var j = first; j < end; j++) {
-        let c = column(s, j);
+        let c = column_at(s, square.x, square.y);
+        square = next_column(s, square);
         for (var z = c.k0; z < c.k1; z++) {
             let p = c.p + s.ek * z;
             if overlaps(s, p, SIX_SEPARATING) {

@@ -20,8 +20,8 @@
 
 import fieldkit::triangle_box::{
     GIANT_BLOCK, GIANT_BLOCKS, GIANT_HEADER, GIANT_RECORDS, LIGHT, MAX_GIANTS, Setup,
-    chunk_columns, column, giant_blocks, giant_chunk_columns, giant_record_of, listed_columns,
-    overlaps, setup,
+    chunk_columns, column_at, column_coords, giant_blocks, giant_chunk_columns, giant_record_of,
+    listed_columns, next_column, overlaps, setup,
 };
 import package::shared::scan::{scan_first, scan_partial};
 
@@ -98,8 +98,10 @@ fn load(t: u32) -> Setup {
 // Test the voxels of columns [first, first + count) of the triangle.
 fn voxelize_columns(s: Setup, first: u32, count: u32) {
     let end = min(first + count, s.columns);
+    var square = column_coords(s, first);
     for (var j = first; j < end; j++) {
-        let c = column(s, j);
+        let c = column_at(s, square.x, square.y);
+        square = next_column(s, square);
         for (var z = c.k0; z < c.k1; z++) {
             let p = c.p + s.ek * z;
             if overlaps(s, p, SIX_SEPARATING) {
