@@ -7,9 +7,10 @@
 //! ```
 //!
 //! Each binary may run SECONDS (120 by default): one that runs past it is stopped and the
-//! tests it never finished are named, so one hang does not cost the rest of the suite (on a
-//! freshly started H100 machine the user crate's `stage` binary once ran past a whole 240 s
-//! command). Each binary's log is copied to `$OUT/logs` as it ends.
+//! tests it never finished are named, so one hang does not cost the rest of the suite (two
+//! first runs on freshly started H100 machines ran out of whole 240 s commands with no word of
+//! which binary held them; with the limit, the next such run passed every binary in 70 s).
+//! Each binary's log is copied to `$OUT/logs` as it ends.
 //!
 //! The binaries find `tests/` (snapshots, reference images) through `CARGO_MANIFEST_DIR`, the
 //! path they were built in; the runner links that path to the checkout when it differs. Each
