@@ -12,7 +12,7 @@
 
 import fieldkit::triangle_box::{
     GIANT_BLOCK, GIANT_HEADER, GIANT_RECORDS, LIGHT, MAX_GIANTS, Setup, chunk_columns, column_at,
-    column_coords, giant_record_of, next_column, overlaps, setup,
+    column_coords, giant_record_of, next_column, overlaps_in, setup,
 };
 import package::shared::voxel_attribute::{SUMS, average, closest_weights, contribution, corner_colour, corner_normal, corner_uv};
 
@@ -106,7 +106,7 @@ fn accumulate_columns(s: Setup, t: u32, first: u32, count: u32) {
         square = next_column(s, square);
         for (var z = c.k0; z < c.k1; z++) {
             let p = c.p + s.ek * z;
-            if overlaps(s, p, false) {
+            if overlaps_in(s, c, z, false) {
                 add_voxel(s, t, p);
             }
         }

@@ -11,7 +11,7 @@
 // `capacity` (which are dropped), so a list too short is sized exactly on the next try.
 
 import fieldkit::triangle_box::{
-    Setup, column_at, column_coords, listed_columns, next_column, overlaps, setup,
+    Setup, column_at, column_coords, listed_columns, next_column, overlaps_in, setup,
 };
 
 struct FragmentParams {
@@ -65,7 +65,7 @@ fn walk(s: Setup, t: u32, first: u32, count: u32, emit: bool, at: u32) -> u32 {
         square = next_column(s, square);
         for (var z = c.k0; z < c.k1; z++) {
             let p = c.p + s.ek * z;
-            if overlaps(s, p, SIX_SEPARATING) {
+            if overlaps_in(s, c, z, SIX_SEPARATING) {
                 if emit && at + n < params.capacity {
                     fragments[at + n] = vec2<u32>(u32(p.x) | (u32(p.y) << 16u), u32(p.z));
                     if TRIANGLE_IDS {

@@ -21,7 +21,7 @@
 import fieldkit::triangle_box::{
     GIANT_BLOCK, GIANT_BLOCKS, GIANT_HEADER, GIANT_RECORDS, LIGHT, MAX_GIANTS, Setup,
     chunk_columns, column_at, column_coords, giant_blocks, giant_chunk_columns, giant_record_of,
-    listed_columns, next_column, overlaps, setup,
+    listed_columns, next_column, overlaps_in, setup,
 };
 import package::shared::scan::{scan_first, scan_partial};
 
@@ -104,7 +104,7 @@ fn voxelize_columns(s: Setup, first: u32, count: u32) {
         square = next_column(s, square);
         for (var z = c.k0; z < c.k1; z++) {
             let p = c.p + s.ek * z;
-            if overlaps(s, p, SIX_SEPARATING) {
+            if overlaps_in(s, c, z, SIX_SEPARATING) {
                 set_voxel(p);
             }
         }
