@@ -7,7 +7,7 @@
 // fragment then runs the exact tests of `fieldkit::triangle_box` on its column and sets bits with
 // atomicOr, so the voxels are the compute path's, and only the way columns are found differs.
 
-import fieldkit::triangle_box::{Setup, column_at, in_box, overlaps_in, setup};
+import fieldkit::triangle_box::{Setup, column_at, in_box, overlaps, setup};
 
 struct RasterParams {
     grid: vec3<u32>,
@@ -81,8 +81,10 @@ fn fs_raster(in: Raster) -> @location(0) vec4<f32> {
     let g = vec3<i32>(params.grid);
     for (var z = c.k0; z < c.k1; z++) {
         let p = c.p + s.ek * z;
-        // The enlarged triangle reaches columns outside the box; those hold nothing.
-        if in_box(s, p) && overlaps_in(s, c, z, false) {
+        // The enlarged triangle reaches columns outside the box; those hold nothing. The
+        // whole test (`overlaps`, which the package offers for a voxel found any way), though
+        // `column_at` has tested the projection along k: this path's cost is the rasterizer's.
+        if in_box(s, p) && overlaps(s, p, false) {
             let i = u32((p.z * g.y + p.y) * g.x + p.x);
             atomicOr(&occupancy[i / 32u], 1u << (i % 32u));
         }
