@@ -73,9 +73,7 @@ override LISTED_WORKGROUP: u32 = 64u;
 // arguments from).
 @group(0) @binding(8) var<storage, read> giant_list: array<u32>;
 
-fn set_voxel(p: vec3<i32>) {
-    let g = vec3<i32>(params.grid);
-    let i = u32((p.z * g.y + p.y) * g.x + p.x);
+fn set_bit(i: u32) {
     atomicOr(&occupancy[i / 32u], 1u << (i % 32u));
 }
 
@@ -95,17 +93,27 @@ fn load(t: u32) -> Setup {
                  SIX_SEPARATING);
 }
 
+// `load` for triangles already in grid-local coordinates (`surface_listed`'s, which the host
+// moved in f64): no matrix to apply, no widening for it.
+fn load_local(t: u32) -> Setup {
+    return setup(triangles[3u * t].xyz, triangles[3u * t + 1u].xyz, triangles[3u * t + 2u].xyz,
+                 vec3<i32>(params.grid), params.slack, SIX_SEPARATING);
+}
+
 // Test the voxels of columns [first, first + count) of the triangle.
 fn voxelize_columns(s: Setup, first: u32, count: u32) {
     let end = min(first + count, s.columns);
+    // Voxel c.p + ek · z of a column is bit at + z · step of the occupancy.
+    let g = params.grid;
+    let step = dot(vec3<u32>(s.ek), vec3<u32>(1u, g.x, g.x * g.y));
     var square = column_coords(s, first);
     for (var j = first; j < end; j++) {
         let c = column_at(s, square.x, square.y);
         square = next_column(s, square);
+        let at = (u32(c.p.z) * g.y + u32(c.p.y)) * g.x + u32(c.p.x);
         for (var z = c.k0; z < c.k1; z++) {
-            let p = c.p + s.ek * z;
             if overlaps_in(s, c, z, SIX_SEPARATING) {
-                set_voxel(p);
+                set_bit(at + u32(z) * step);
             }
         }
     }
@@ -245,16 +253,17 @@ fn surface_heavy(@builtin(global_invocation_id) id: vec3<u32>,
 // One pass when the host has sorted the triangles (`encode_surface`, `encode_solid`): the
 // first `count` triangles are light (their box's largest face has at most LIGHT columns), one
 // per thread; the next `capacity` threads take one listed chunk of a heavy triangle each. No
-// work-list counter, no second pass, no indirect dispatch.
+// work-list counter, no second pass, no indirect dispatch. The host moved the triangles into
+// grid-local coordinates (`to_grid` and `moved` are not read).
 @compute @workgroup_size(LISTED_WORKGROUP)
 fn surface_listed(@builtin(global_invocation_id) id: vec3<u32>,
                   @builtin(num_workgroups) groups: vec3<u32>) {
     let i = id.x + id.y * groups.x * LISTED_WORKGROUP;
     if i < params.count {
-        let s = load(params.first + i);
+        let s = load_local(params.first + i);
         voxelize_columns(s, 0u, s.columns);
     } else if i - params.count < params.capacity {
         let item = listed[i - params.count];
-        voxelize_columns(load(item.x), item.y, listed_columns(triangles[3u * item.x]));
+        voxelize_columns(load_local(item.x), item.y, listed_columns(triangles[3u * item.x]));
     }
 }

@@ -892,14 +892,14 @@ impl Default for Listing {
 
 impl Listing {
     /// Fewer triangles than one wave of a large GPU's threads: the pass takes as long as its
-    /// slowest warp, so no thread walks more than 8 columns and the light triangles are sorted
+    /// slowest warp, so no thread walks more than 4 columns and the light triangles are sorted
     /// by columns (warps of equal work). More: throughput counts, and cutting more triangles
     /// would repeat their setup; the default. Chosen from the H100 measurements in
     /// docs/voxelize.md.
     pub fn auto(triangles: usize) -> Self {
         if triangles <= 1 << 18 {
             Self {
-                light: 8,
+                light: 4,
                 sort: true,
                 ..Self::default()
             }
