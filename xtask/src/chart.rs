@@ -18,12 +18,23 @@ pub(crate) struct Axes<'a> {
     pub floor: f64,
 }
 
+/// Creates the folder a chart goes into (`--replot --out DIR` may name one that does not exist
+/// yet), naming it if that fails.
+fn make_parent(path: &std::path::Path) -> Result<(), String> {
+    match path.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() => std::fs::create_dir_all(dir)
+            .map_err(|e| format!("cannot create {}: {e}", dir.display())),
+        _ => Ok(()),
+    }
+}
+
 pub(crate) fn time_vs_error(
     path: &std::path::Path,
     axes: &Axes,
     points: &[Point],
 ) -> Result<(), String> {
     use plotters::prelude::*;
+    make_parent(path)?;
     let e = |e: &dyn std::fmt::Display| e.to_string();
     let _ =
         plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular());
@@ -102,6 +113,7 @@ pub(crate) fn log_log(
     series: &[Series],
 ) -> Result<(), String> {
     use plotters::prelude::*;
+    make_parent(path)?;
     let e = |e: &dyn std::fmt::Display| e.to_string();
     let _ =
         plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular());
@@ -165,4 +177,20 @@ pub(crate) fn log_log(
         .map_err(|x| e(&x))?;
     root.present().map_err(|x| e(&x))?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    /// A chart drawn into a folder that does not exist yet (as `--replot --out` may name) is
+    /// written there, not refused.
+    #[test]
+    fn charts_go_into_new_folders() {
+        let dir = std::env::temp_dir().join(format!("fieldkit-chart-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let path = dir.join("a").join("b").join("chart.png");
+        let series = vec![("s".to_string(), vec![(1.0, 1.0), (2.0, 4.0)])];
+        super::log_log(&path, "caption", "x", "y", &series).unwrap();
+        assert!(path.is_file(), "{} not written", path.display());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }
