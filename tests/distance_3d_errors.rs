@@ -278,14 +278,22 @@ fn bad_options_and_textures() {
     // The benchmarks' copies check their buffers as the passes do.
     for axis in [1, 2] {
         let e = d3
-            .encode_tile_copy(&ctx.device, &mut enc, &buf(128), [4, 4, 4], axis)
+            .encode_tile_copy(&ctx.device, &mut enc, &buf(128), [4, 4, 4], axis, None)
             .unwrap_err();
         assert!(
             matches!(&e, Error::Invalid { what, .. } if what.contains("nearest buffer has 128 bytes")),
             "{e}"
         );
         let e = d3
-            .encode_global_copy(&ctx.device, &mut enc, &buf(128), None, [4, 4, 4], axis)
+            .encode_global_copy(
+                &ctx.device,
+                &mut enc,
+                &buf(128),
+                None,
+                [4, 4, 4],
+                axis,
+                None,
+            )
             .unwrap_err();
         assert!(
             matches!(&e, Error::Invalid { what, .. } if what.contains("nearest")),
@@ -300,6 +308,7 @@ fn bad_options_and_textures() {
                 Some(&buf(64)),
                 [4, 4, 4],
                 axis,
+                None,
             )
             .unwrap_err();
         assert!(
@@ -308,7 +317,7 @@ fn bad_options_and_textures() {
         );
     }
     assert!(matches!(
-        d3.encode_global_copy(&ctx.device, &mut enc, &buf(256), None, [4, 4, 4], 3),
+        d3.encode_global_copy(&ctx.device, &mut enc, &buf(256), None, [4, 4, 4], 3, None),
         Err(Error::Invalid { .. })
     ));
     // With good buffers the global copies record (a placeholder bound both read-only and
@@ -325,11 +334,93 @@ fn bad_options_and_textures() {
                     words.as_ref(),
                     [4, 4, 4],
                     axis,
+                    None,
                 )
                 .unwrap();
             assert!(
                 recorded.is_some(),
                 "axis {axis}: the copy did not run in global memory"
+            );
+        }
+    }
+    // The copies along z with the resolving pass's distance store take a 3D R32Float storage
+    // texture of the grid's size, and record with one in either memory; a wrong one, or one
+    // along y, is a typed error naming what was wrong.
+    let texture = |size: [u32; 3], format, dimension| {
+        ctx.device.create_texture(&wgpu::TextureDescriptor {
+            label: None,
+            size: wgpu::Extent3d {
+                width: size[0],
+                height: size[1],
+                depth_or_array_layers: size[2],
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension,
+            format,
+            usage: wgpu::TextureUsages::STORAGE_BINDING,
+            view_formats: &[],
+        })
+    };
+    let d3d = wgpu::TextureDimension::D3;
+    let good = texture([4, 4, 4], wgpu::TextureFormat::R32Float, d3d);
+    for copier in [&d3, &global] {
+        let tile = copier
+            .encode_tile_copy(&ctx.device, &mut enc, &buf(256), [4, 4, 4], 2, Some(&good))
+            .unwrap();
+        let glob = copier
+            .encode_global_copy(
+                &ctx.device,
+                &mut enc,
+                &buf(256),
+                None,
+                [4, 4, 4],
+                2,
+                Some(&good),
+            )
+            .unwrap();
+        // Exactly one of them runs the pass's memory.
+        assert!(tile.is_some() != glob.is_some());
+    }
+    let bad = [
+        (
+            texture([4, 4, 5], wgpu::TextureFormat::R32Float, d3d),
+            2,
+            "the grid [4, 4, 4]",
+        ),
+        (
+            texture([4, 4, 4], wgpu::TextureFormat::R32Uint, d3d),
+            2,
+            "R32Float",
+        ),
+        (
+            texture(
+                [4, 4, 1],
+                wgpu::TextureFormat::R32Float,
+                wgpu::TextureDimension::D2,
+            ),
+            2,
+            "3D",
+        ),
+        (good.clone(), 1, "only by the copy along z"),
+    ];
+    for (t, axis, says) in &bad {
+        for e in [
+            d3.encode_tile_copy(&ctx.device, &mut enc, &buf(256), [4, 4, 4], *axis, Some(t)),
+            global.encode_global_copy(
+                &ctx.device,
+                &mut enc,
+                &buf(256),
+                None,
+                [4, 4, 4],
+                *axis,
+                Some(t),
+            ),
+        ] {
+            let e = e.unwrap_err();
+            assert!(
+                matches!(&e, Error::Invalid { what, .. } if what.contains(says)),
+                "{says}: {e}"
             );
         }
     }

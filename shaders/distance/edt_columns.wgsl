@@ -781,6 +781,22 @@ fn columns_copy(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id)
     }
 }
 
+// `columns_copy` with the distance store of a resolving 3D pass as well (a value converted from
+// the site, no distance made): the floor of `columns_resolve`, whose stores include it.
+@compute @workgroup_size(32, 8)
+fn columns_copy_resolve(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
+    let c = column_of(li, wg);
+    if !c.valid {
+        return;
+    }
+    var ahead = ahead_of(c);
+    for (var i = c.lo; i < c.hi; i++) {
+        let s = next_site(c, &ahead, i);
+        nearest[c.out + i * c.out_stride] = s;
+        textureStore(distance, vec3<u32>(voxel(c.x, c.other, i)), vec4<f32>(f32(s), 0.0, 0.0, 0.0));
+    }
+}
+
 // Voxel p's answer at `at`: its site, and its distance clamped to the band.
 fn resolve_at(p: vec3<u32>, at: u32, found: vec2<u32>) {
     nearest[at] = found.x;

@@ -783,17 +783,37 @@ fn tile_columns_resolve_signed_2d(@builtin(local_invocation_index) li: u32, @bui
     }
 }
 
+// The copies' start: load the tile, wait, and this thread's lane. Called by every thread.
+fn loaded_lane(li: u32, wg: vec3<u32>) -> Lane {
+    load(li, wg);
+    workgroupBarrier();
+    return lane_of(li, wg);
+}
+
 // The floor of a workgroup column pass: the tile's loads and the answers' stores alone (each
 // thread writes back its band's positions as loaded), for `bench distance` to compare with.
 @compute @workgroup_size(256)
 fn tile_copy(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
-    load(li, wg);
-    workgroupBarrier();
-    let l = lane_of(li, wg);
+    let l = loaded_lane(li, wg);
     if !l.valid {
         return;
     }
     for (var i = l.lo; i < l.hi; i++) {
         nearest[l.at + i * l.stride] = tile[cell(l.col, i)];
+    }
+}
+
+// `tile_copy` with the distance store of a resolving 3D pass as well (a value converted from
+// the site, no distance made): the floor of `tile_columns_resolve`, whose stores include it.
+@compute @workgroup_size(256)
+fn tile_copy_resolve(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
+    let l = loaded_lane(li, wg);
+    if !l.valid {
+        return;
+    }
+    for (var i = l.lo; i < l.hi; i++) {
+        let s = tile[cell(l.col, i)];
+        nearest[l.at + i * l.stride] = s;
+        textureStore(distance, voxel(l, i), vec4<f32>(f32(s), 0.0, 0.0, 0.0));
     }
 }

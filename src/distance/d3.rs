@@ -1083,6 +1083,7 @@ pub struct Distance3d {
     /// Column pass per band count, packing and seed widths, made on first use.
     columns: Variants<edt_columns::columns::Entry>,
     columns_copy: Variants<edt_columns::columns_copy::Entry>,
+    columns_copy_resolve: Variants<edt_columns::columns_copy_resolve::Entry>,
     /// The last 3D column pass with the resolve folded in.
     columns_resolve: Variants<edt_columns::columns_resolve::Entry>,
     columns_resolve_signed: Variants<edt_columns::columns_resolve_signed::Entry>,
@@ -1099,6 +1100,7 @@ pub struct Distance3d {
     tile_columns_resolve_2d: Variants<edt_tile::tile_columns_resolve_2d::Entry>,
     tile_columns_resolve_signed_2d: Variants<edt_tile::tile_columns_resolve_signed_2d::Entry>,
     tile_copy: Variants<edt_tile::tile_copy::Entry>,
+    tile_copy_resolve: Variants<edt_tile::tile_copy_resolve::Entry>,
     column_passes: ColumnPasses,
     /// Fold the 3D row pass into the y pass (its sites made from the row words) where y is
     /// not the last pass.
@@ -1263,6 +1265,46 @@ fn check_copy(
         check_len(stage, "words", w, row_words_bytes(size), size)?;
     }
     Ok(())
+}
+
+/// The distance texture a benchmark copy stores into (`encode_tile_copy`, `encode_global_copy`
+/// with `distance`): a 3D `R32Float` storage texture of the grid's size, for a copy along z (the
+/// resolving pass's); its view.
+fn copy_distance_view(
+    stage: &'static str,
+    distance: &wgpu::Texture,
+    size: [u32; 3],
+    axis: u32,
+) -> Result<wgpu::TextureView, Error> {
+    let extent = distance.size();
+    let got = [extent.width, extent.height, extent.depth_or_array_layers];
+    let problem = if axis != 2 {
+        Some(format!(
+            "a distance texture is stored only by the copy along z (2), not {axis}"
+        ))
+    } else if distance.dimension() != wgpu::TextureDimension::D3
+        || distance.format() != wgpu::TextureFormat::R32Float
+        || !distance
+            .usage()
+            .contains(wgpu::TextureUsages::STORAGE_BINDING)
+    {
+        Some(format!(
+            "the distance texture must be a 3D R32Float storage texture, got {:?} {:?} ({:?})",
+            distance.dimension(),
+            distance.format(),
+            distance.usage()
+        ))
+    } else if got != size {
+        Some(format!(
+            "the distance texture is {got:?}, the grid {size:?}"
+        ))
+    } else {
+        None
+    };
+    match problem {
+        Some(what) => Err(Error::Invalid { stage, what }),
+        None => Ok(distance.create_view(&wgpu::TextureViewDescriptor::default())),
+    }
 }
 
 /// A grid the exact transform takes and a column axis: 1 (y) or 2 (z).
@@ -1664,6 +1706,7 @@ impl Distance3d {
             row_words: Default::default(),
             columns: Default::default(),
             columns_copy: Default::default(),
+            columns_copy_resolve: Default::default(),
             columns_resolve: Default::default(),
             columns_resolve_signed: Default::default(),
             columns_resolve_2d: Default::default(),
@@ -1676,6 +1719,7 @@ impl Distance3d {
             tile_columns_resolve_2d: Default::default(),
             tile_columns_resolve_signed_2d: Default::default(),
             tile_copy: Default::default(),
+            tile_copy_resolve: Default::default(),
             column_passes: ColumnPasses::Auto,
             fold_rows: true,
             split_bytes: None,
@@ -2926,8 +2970,10 @@ impl Distance3d {
     /// y, 2: z) of a 3D field of `size` in `nearest` (from the row words `words` where given, as
     /// the y pass reads them), without the envelopes and their stack: the floor that pass is
     /// measured against. `None` where the pass runs in workgroup memory
-    /// ([`Self::encode_tile_copy`]).
+    /// ([`Self::encode_tile_copy`]). With `distance` (along z) it also stores a value per voxel
+    /// there, as the resolving pass stores its distances.
     #[doc(hidden)]
+    #[allow(clippy::too_many_arguments)]
     pub fn encode_global_copy(
         &self,
         device: &wgpu::Device,
@@ -2936,8 +2982,12 @@ impl Distance3d {
         words: Option<&wgpu::Buffer>,
         size: [u32; 3],
         axis: u32,
+        distance: Option<&wgpu::Texture>,
     ) -> Result<Option<()>, Error> {
         check_copy(device, edt_columns::STAGE, nearest, words, size, axis)?;
+        let view = distance
+            .map(|d| copy_distance_view(edt_columns::STAGE, d, size, axis))
+            .transpose()?;
         if self.tile_for(device, size, axis, false)?.is_some() {
             return Ok(None);
         }
@@ -2953,21 +3003,40 @@ impl Distance3d {
         let others = size[3 - axis as usize];
         let (params, overrides, groups) =
             self.global_columns_setup(device, &io, size, axis, others, false, None, SweepPart::No);
-        self.columns_copy.get(device, &overrides, true)?.record(
-            device,
-            rec,
-            &edt_columns::columns_copy::Resources {
-                params: (&params).into(),
-                nearest: nearest.into(),
-                // Unread (IN_STACK is off): a placeholder, not `no_source` (bound read-only
-                // beside it: the layout binds the stack read-write).
-                stack: (&self.no_swept).into(),
-                source: (&self.no_source).into(),
-                words: words.unwrap_or(&self.no_source).into(),
-            },
-            groups,
-            if axis == 1 { "copy (y)" } else { "copy (z)" },
-        )?;
+        // The stack is unread (IN_STACK is off): a placeholder, not `no_source` (bound read-only
+        // beside it: the layout binds the stack read-write).
+        match &view {
+            None => self.columns_copy.get(device, &overrides, true)?.record(
+                device,
+                rec,
+                &edt_columns::columns_copy::Resources {
+                    params: (&params).into(),
+                    nearest: nearest.into(),
+                    stack: (&self.no_swept).into(),
+                    source: (&self.no_source).into(),
+                    words: words.unwrap_or(&self.no_source).into(),
+                },
+                groups,
+                if axis == 1 { "copy (y)" } else { "copy (z)" },
+            )?,
+            Some(view) => self
+                .columns_copy_resolve
+                .get(device, &overrides, true)?
+                .record(
+                    device,
+                    rec,
+                    &edt_columns::columns_copy_resolve::Resources {
+                        params: (&params).into(),
+                        nearest: nearest.into(),
+                        stack: (&self.no_swept).into(),
+                        source: (&self.no_source).into(),
+                        words: words.unwrap_or(&self.no_source).into(),
+                        distance: view.into(),
+                    },
+                    groups,
+                    "copy (z) + distance store",
+                )?,
+        }
         Ok(Some(()))
     }
 
@@ -3023,7 +3092,8 @@ impl Distance3d {
     /// For benchmarks: the loads and stores of one workgroup-memory column pass along `axis` (1:
     /// y, 2: z) of a 3D field of `size` in `nearest`, without the envelopes, with the tile the
     /// pass itself takes: the floor that pass is measured against. `None` where the pass runs
-    /// in global memory.
+    /// in global memory. With `distance` (along z) it also stores a value per voxel there, as
+    /// the resolving pass stores its distances.
     #[doc(hidden)]
     pub fn encode_tile_copy(
         &self,
@@ -3032,28 +3102,50 @@ impl Distance3d {
         nearest: &wgpu::Buffer,
         size: [u32; 3],
         axis: u32,
+        distance: Option<&wgpu::Texture>,
     ) -> Result<Option<()>, Error> {
         check_copy(device, edt_tile::STAGE, nearest, None, size, axis)?;
+        let view = distance
+            .map(|d| copy_distance_view(edt_tile::STAGE, d, size, axis))
+            .transpose()?;
         let Some(tile) = self.tile_for(device, size, axis, false)? else {
             return Ok(None);
         };
         let span = Span::whole(size);
         let (params, overrides) = tile.bind(device, size, axis, false, None, &span, false);
-        self.tile_copy.get(device, &overrides, false)?.record(
-            device,
-            rec,
-            &edt_tile::tile_copy::Resources {
-                params: (&params).into(),
-                nearest: nearest.into(),
-                source: (&self.no_source).into(),
-            },
-            tile.groups(&span, size[3 - axis as usize]),
-            if axis == 1 {
-                "copy (y, workgroup)"
-            } else {
-                "copy (z, workgroup)"
-            },
-        )?;
+        let groups = tile.groups(&span, size[3 - axis as usize]);
+        match &view {
+            None => self.tile_copy.get(device, &overrides, false)?.record(
+                device,
+                rec,
+                &edt_tile::tile_copy::Resources {
+                    params: (&params).into(),
+                    nearest: nearest.into(),
+                    source: (&self.no_source).into(),
+                },
+                groups,
+                if axis == 1 {
+                    "copy (y, workgroup)"
+                } else {
+                    "copy (z, workgroup)"
+                },
+            )?,
+            Some(view) => self
+                .tile_copy_resolve
+                .get(device, &overrides, false)?
+                .record(
+                    device,
+                    rec,
+                    &edt_tile::tile_copy_resolve::Resources {
+                        params: (&params).into(),
+                        nearest: nearest.into(),
+                        source: (&self.no_source).into(),
+                        distance: view.into(),
+                    },
+                    groups,
+                    "copy (z, workgroup) + distance store",
+                )?,
+        }
         Ok(Some(()))
     }
 

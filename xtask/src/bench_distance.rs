@@ -408,7 +408,8 @@ fn distance(args: &Args) -> Result<(), String> {
     let mut rows: Vec<Row> = Vec::new();
     // (size, the pass's name as the per-pass table has it, median ms) of the column passes'
     // load/store floor.
-    let mut floors: Vec<(String, &str, f64)> = Vec::new();
+    // (size, pass, its copy's time, and for a resolving pass its copy's with the distance store).
+    let mut floors: Vec<(String, &str, f64, Option<f64>)> = Vec::new();
 
     // Fields larger than one storage binding (1024³ is 4 GiB) are split across bindings, which
     // only the exact transform's workgroup-memory passes do, always from the row words: the
@@ -538,28 +539,59 @@ fn distance(args: &Args) -> Result<(), String> {
                 .map_err(|e| e.to_string())?;
             ctx.submit_and_wait("bench row words", enc)
                 .map_err(|e| e.to_string())?;
+            // The z pass resolves: its copy is timed again with the distance store as well.
+            let edge = size.map(|s| s as u32);
+            let distance = ctx.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("bench copy distance"),
+                size: wgpu::Extent3d {
+                    width: edge[0],
+                    height: edge[1],
+                    depth_or_array_layers: edge[2],
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D3,
+                format: wgpu::TextureFormat::R32Float,
+                usage: wgpu::TextureUsages::STORAGE_BINDING,
+                view_formats: &[],
+            });
             for axis in [1u32, 2] {
-                let edge = size.map(|s| s as u32);
                 let mut tile = false;
-                let timing = time_runs(&ctx, args.warmup, args.reps, heater, |enc, prof| {
-                    let rec = &mut prof.record(enc);
-                    tile = d3
-                        .encode_tile_copy(&ctx.device, rec, &buffer, edge, axis)
-                        .expect("encode")
-                        .is_some();
-                    if !tile {
-                        let words = (axis == 1).then_some(&words);
-                        d3.encode_global_copy(&ctx.device, rec, &buffer, words, edge, axis)
+                let mut copy = |store: Option<&wgpu::Texture>| {
+                    time_runs(&ctx, args.warmup, args.reps, heater, |enc, prof| {
+                        let rec = &mut prof.record(enc);
+                        tile = d3
+                            .encode_tile_copy(&ctx.device, rec, &buffer, edge, axis, store)
+                            .expect("encode")
+                            .is_some();
+                        if !tile {
+                            let words = (axis == 1).then_some(&words);
+                            d3.encode_global_copy(
+                                &ctx.device,
+                                rec,
+                                &buffer,
+                                words,
+                                edge,
+                                axis,
+                                store,
+                            )
                             .expect("encode");
-                    }
-                })?;
+                        }
+                    })
+                };
+                let timing = copy(None)?;
+                let stored = if axis == 2 {
+                    Some(copy(Some(&distance))?.0)
+                } else {
+                    None
+                };
                 let tag = match (axis, tile) {
                     (1, true) => "columns (y, workgroup)",
                     (_, true) => "columns (z, workgroup)",
                     (1, false) => "columns (y) from row words",
                     (_, false) => "columns (z)",
                 };
-                floors.push((label.clone(), tag, timing.0));
+                floors.push((label.clone(), tag, timing.0, stored));
             }
         }
         if let Some(p) = &peer {
@@ -695,9 +727,13 @@ fn distance(args: &Args) -> Result<(), String> {
     chart(&args.out.join("distance.png"), &adapter, &rows, (1000, 640))?;
     print_table(&rows);
     println!();
-    println!("| size | column pass | ms (median) | load/store only ms | ratio |");
-    println!("|---|---|---|---|---|");
-    for (size, tag, floor) in &floors {
+    // Two floors for the resolving z pass: its copy as the prototype's mode 1 makes it (the
+    // answers' loads and stores), and with the distance store the pass makes too.
+    println!(
+        "| size | column pass | ms (median) | load/store only ms | ratio | with the distance store ms | ratio |"
+    );
+    println!("|---|---|---|---|---|---|---|");
+    for (size, tag, floor, stored) in &floors {
         // "columns (z)" also names "columns (z) + resolve" and a sweep's two dispatches
         // ("columns (z) sweep + resolve", "columns (z) + resolve (rest)"), summed; not
         // "columns (z, workgroup)".
@@ -710,8 +746,11 @@ fn distance(args: &Args) -> Result<(), String> {
             .collect();
         if !times.is_empty() {
             let ms: f64 = times.iter().sum();
+            let with_store = stored.map_or("| — | — |".to_string(), |s| {
+                format!("| {s:.3} | {:.2} |", ms / s)
+            });
             println!(
-                "| {size} | {tag} | {ms:.3} | {floor:.3} | {:.2} |",
+                "| {size} | {tag} | {ms:.3} | {floor:.3} | {:.2} {with_store}",
                 ms / floor
             );
         }
