@@ -406,9 +406,8 @@ fn distance(args: &Args) -> Result<(), String> {
         indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} {elapsed} {msg}").unwrap(),
     );
     let mut rows: Vec<Row> = Vec::new();
-    // (size, the pass's name as the per-pass table has it, median ms) of the column passes'
-    // load/store floor.
-    // (size, pass, its copy's time, and for a resolving pass its copy's with the distance store).
+    // The column passes' load/store floors: (size, the pass's name as the per-pass table has
+    // it, its copy's median ms, and for the resolving z pass its copy's with the distance store).
     let mut floors: Vec<(String, &str, f64, Option<f64>)> = Vec::new();
 
     // Fields larger than one storage binding (1024³ is 4 GiB) are split across bindings, which
