@@ -28,7 +28,8 @@
 // is almost always their last (below) or first (above): the first walk starts from that end,
 // and each later one goes on from where the last stopped. Farther bands are looked up by
 // binary search, keeping no per-band state (private arrays live in local memory, and
-// zero-initialising them cost as much traffic as the field itself).
+// zero-initialising them cost as much traffic as the field itself) but one mask of the
+// column's bands that hold sites, so that empty bands are never visited.
 //
 // The last pass of a 3D transform can resolve distances as `field_resolve.wgsl` would, in the
 // same sweep (`columns_resolve`, `columns_resolve_signed`): that saves reading the field again.
@@ -401,12 +402,19 @@ struct Walk {
     next: u32,
     k_up: u32,
     k_dn: u32,
+    // The column's bands that hold sites, above this one and below it (bit b: band b).
+    up: u32,
+    dn: u32,
 }
 
 const BELOW_UNSET: u32 = 0xffffffffu;
 
 fn walk_of(c: Column, size: u32) -> Walk {
     let at = c.base + c.lo * c.stride;
+    var held = 0u;
+    for (var b = 0u; b < BANDS; b++) {
+        held |= u32(band_size[b * c.columns_per_group + c.lane] > 0u) << b;
+    }
     return Walk(
         0u,
         size,
@@ -415,6 +423,8 @@ fn walk_of(c: Column, size: u32) -> Walk {
         select(NO_SEED, stack[at + c.stride], size > 1u),
         0u,
         BELOW_UNSET,
+        held & ~((2u << c.band) - 1u),
+        held & ((1u << c.band) - 1u),
     );
 }
 
@@ -446,65 +456,63 @@ fn query(c: Column, walk: ptr<function, Walk>, i: u32, carry: bool) -> vec2<u32>
         best = (*walk).s;
         best_d = d;
     }
-    // Other bands outward, both sides at once; a band whose nearest position is already as
-    // far as the best found cannot win, and the ones beyond it are farther still.
-    for (var off = 1u; off < BANDS; off++) {
-        var open = false;
-        if c.band + off < BANDS {
-            let b = c.band + off;
-            let b_lo = b * c.band_len;
-            if b_lo < c.n && i32((b_lo - i) * (b_lo - i)) < best_d {
-                open = true;
-                let size = band_size[b * c.columns_per_group + c.lane];
-                if size > 0u {
-                    let at = c.base + b_lo * c.stride;
-                    var s: u32;
-                    if off == 1u {
-                        let found = nearest_on_from(at, size, c.stride, p, select(0u, (*walk).k_up, carry));
-                        (*walk).k_up = found.x;
-                        s = found.y;
-                    } else {
-                        s = nearest_on(at, size, c.stride, p);
-                    }
-                    let d = cost(s, p);
-                    if d < best_d {
-                        best = s;
-                        best_d = d;
-                    }
-                }
-            }
-        }
-        if off <= c.band {
-            let b = c.band - off;
-            let b_hi = (b + 1u) * c.band_len - 1u;
-            if i32((i - b_hi) * (i - b_hi)) < best_d {
-                open = true;
-                let size = band_size[b * c.columns_per_group + c.lane];
-                if size > 0u {
-                    let at = c.base + b * c.band_len * c.stride;
-                    var s: u32;
-                    if off == 1u {
-                        var found: vec2<u32>;
-                        if (*walk).k_dn == BELOW_UNSET || !carry {
-                            found = nearest_on_from_end(at, size, c.stride, p);
-                        } else {
-                            found = nearest_on_from(at, size, c.stride, p, (*walk).k_dn);
-                        }
-                        (*walk).k_dn = found.x;
-                        s = found.y;
-                    } else {
-                        s = nearest_on(at, size, c.stride, p);
-                    }
-                    let d = cost(s, p);
-                    if d < best_d {
-                        best = s;
-                        best_d = d;
-                    }
-                }
-            }
-        }
-        if !open {
+    // Other bands outward, only those that hold sites (`Walk::up`, `Walk::dn`): above, then
+    // below. A band whose nearest position is already as far as the best found cannot win, and
+    // the ones beyond it are farther still. (Visiting every band outward, both sides at once,
+    // and skipping the empty ones, took the y pass from the words 1.184 ms at 512³ with 1e-5
+    // seeds on the H100, where most bands are empty and each position looked through all of
+    // them, against 0.816 now; 0.192 against 0.188 ms at 256³ with 1% seeds.)
+    var up = (*walk).up;
+    while up != 0u {
+        let b = firstTrailingBit(up);
+        let b_lo = b * c.band_len;
+        if i32((b_lo - i) * (b_lo - i)) >= best_d {
             break;
+        }
+        up &= up - 1u;
+        let size = band_size[b * c.columns_per_group + c.lane];
+        let at = c.base + b_lo * c.stride;
+        var s: u32;
+        if b == c.band + 1u {
+            let found = nearest_on_from(at, size, c.stride, p, select(0u, (*walk).k_up, carry));
+            (*walk).k_up = found.x;
+            s = found.y;
+        } else {
+            s = nearest_on(at, size, c.stride, p);
+        }
+        let d = cost(s, p);
+        if d < best_d {
+            best = s;
+            best_d = d;
+        }
+    }
+    var dn = (*walk).dn;
+    while dn != 0u {
+        let b = firstLeadingBit(dn);
+        let b_hi = (b + 1u) * c.band_len - 1u;
+        if i32((i - b_hi) * (i - b_hi)) >= best_d {
+            break;
+        }
+        dn &= ~(1u << b);
+        let size = band_size[b * c.columns_per_group + c.lane];
+        let at = c.base + b * c.band_len * c.stride;
+        var s: u32;
+        if b + 1u == c.band {
+            var found: vec2<u32>;
+            if (*walk).k_dn == BELOW_UNSET || !carry {
+                found = nearest_on_from_end(at, size, c.stride, p);
+            } else {
+                found = nearest_on_from(at, size, c.stride, p, (*walk).k_dn);
+            }
+            (*walk).k_dn = found.x;
+            s = found.y;
+        } else {
+            s = nearest_on(at, size, c.stride, p);
+        }
+        let d = cost(s, p);
+        if d < best_d {
+            best = s;
+            best_d = d;
         }
     }
     return vec2<u32>(best, u32(best_d));
