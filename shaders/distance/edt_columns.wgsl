@@ -322,17 +322,22 @@ fn ahead_of(c: Column) -> Ahead {
     return a;
 }
 
-// The site at position i; positions come one after another from the band's first.
-fn next_site(c: Column, a: ptr<function, Ahead>, i: u32) -> u32 {
+// What `fetch` loaded for position i; positions come one after another from the band's first.
+fn next_load(c: Column, a: ptr<function, Ahead>, i: u32) -> vec2<u32> {
     var q3 = vec2<u32>(NO_SEED, 0u);
     if i + 3u < c.hi {
         q3 = fetch(c, i + 3u);
     }
-    let s = site_from(c, i, (*a).q0);
+    let q = (*a).q0;
     (*a).q0 = (*a).q1;
     (*a).q1 = (*a).q2;
     (*a).q2 = q3;
-    return s;
+    return q;
+}
+
+// The site at position i; positions come one after another from the band's first.
+fn next_site(c: Column, a: ptr<function, Ahead>, i: u32) -> u32 {
+    return site_from(c, i, next_load(c, a, i));
 }
 
 // Build: Meijster's stack over this band's sites, valid for the whole column [0, n); returns
@@ -352,11 +357,28 @@ fn build(c: Column) -> u32 {
     let at = c.base + c.lo * c.stride;
     var ahead = ahead_of(c);
     for (var i = c.lo; i < c.hi; i++) {
-        let s = next_site(c, &ahead, i);
-        if s == NO_SEED {
-            continue;
+        let loaded = next_load(c, &ahead, i);
+        var s: u32;
+        var gs: i32;
+        if FROM_WORDS {
+            // The site is the row's nearest mark: its own cost is its offset along x squared,
+            // made from the mark, not unpacked from the site made of it (the y pass at 512³
+            // with 1e-5 seeds on the H100: 0.816 → 0.791 ms; with 1% seeds the same).
+            let near = row_word_mark(loaded, c.x);
+            if near == 0u {
+                continue;
+            }
+            let dx = i32(near) - 1 - i32(c.x);
+            gs = dx * dx;
+            let v = vec3<u32>(voxel(c.x, c.other, i));
+            s = pack_seed3_bits(vec3<u32>(near - 1u, v.y, v.z), SEED_X_BITS, SEED_Y_BITS);
+        } else {
+            s = loaded.x;
+            if s == NO_SEED {
+                continue;
+            }
+            gs = own_cost(s, c.x, c.other);
         }
-        let gs = own_cost(s, c.x, c.other);
         let pi = i32(i);
         loop {
             if top < 0 || g_top + (p_top - t_top) * (p_top - t_top) <= gs + (pi - t_top) * (pi - t_top) {
@@ -461,7 +483,8 @@ fn query(c: Column, walk: ptr<function, Walk>, i: u32, carry: bool) -> vec2<u32>
     // the ones beyond it are farther still. (Visiting every band outward, both sides at once,
     // and skipping the empty ones, took the y pass from the words 1.184 ms at 512³ with 1e-5
     // seeds on the H100, where most bands are empty and each position looked through all of
-    // them, against 0.816 now; 0.192 against 0.188 ms at 256³ with 1% seeds.)
+    // them, against 0.816 with the mask; 0.192 against 0.188 ms at 256³ with 1% seeds. The
+    // split field's z pass from the words, n = 1024, lost by it: 3.53 → 3.64 ms a part.)
     var up = (*walk).up;
     while up != 0u {
         let b = firstTrailingBit(up);

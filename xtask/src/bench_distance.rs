@@ -37,6 +37,7 @@ const ROWS_PASS: &str = "exact (rows pass)";
 const UNSWEPT: &str = "exact (no z sweep)";
 
 /// One method at one size.
+#[derive(Debug)]
 struct Row {
     dims: u32,
     size: String,
@@ -234,6 +235,14 @@ pub fn run(args: &Args) -> ExitCode {
 }
 
 fn distance(args: &Args) -> Result<(), String> {
+    if let Some(csv) = &args.replot {
+        let (adapter, rows) = read_table(csv)?;
+        std::fs::create_dir_all(&args.out).map_err(|e| e.to_string())?;
+        let png = args.out.join("distance.png");
+        chart(&png, &adapter, &rows, (1000, 640))?;
+        println!("wrote {}", png.display());
+        return Ok(());
+    }
     let pick = |all: &[usize]| -> Vec<usize> {
         all.iter()
             .copied()
@@ -758,12 +767,12 @@ fn distance(args: &Args) -> Result<(), String> {
     Ok(())
 }
 
+/// The header of `distance.csv`.
+const TABLE_HEADER: &str = "adapter,dims,size,cells,method,median_ms,min_ms,max_ms,wrong,wrong_fraction,max_err_voxels,mean_err_voxels,peer_ms,ratio_to_peer";
+
 fn write_csv(dir: &Path, adapter: &str, rows: &[Row]) -> std::io::Result<()> {
     let mut f = std::fs::File::create(dir.join("distance.csv"))?;
-    writeln!(
-        f,
-        "adapter,dims,size,cells,method,median_ms,min_ms,max_ms,wrong,wrong_fraction,max_err_voxels,mean_err_voxels,peer_ms,ratio_to_peer"
-    )?;
+    writeln!(f, "{TABLE_HEADER}")?;
     for r in rows {
         let peer = r.peer_ms.map_or(String::new(), |p| format!("{p:.4}"));
         let ratio = r
@@ -958,4 +967,115 @@ fn chart(path: &Path, adapter: &str, rows: &[Row], (w, h): (u32, u32)) -> Result
     }
     root.present().map_err(|e| e.to_string())?;
     Ok(())
+}
+
+/// `--replot`: the adapter and rows of a `distance.csv`, or of several joined into one file
+/// (their header lines repeated), all from one adapter. Per-pass times are not in it.
+fn read_table(path: &Path) -> Result<(String, Vec<Row>), String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut adapter: Option<String> = None;
+    let mut rows = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        if line == TABLE_HEADER || line.is_empty() {
+            continue;
+        }
+        let bad = |what: &str| format!("{} line {}: {what}: {line}", path.display(), i + 1);
+        let fields = crate::measure::csv_fields(line);
+        let [
+            a,
+            dims,
+            size,
+            cells,
+            method,
+            median,
+            min,
+            max,
+            wrong,
+            _,
+            max_err,
+            mean_err,
+            peer,
+            _,
+        ] = &fields[..]
+        else {
+            return Err(bad("not the 14 fields of distance.csv"));
+        };
+        match &adapter {
+            Some(first) if first != a => {
+                return Err(bad(&format!("a second adapter ({first} before)")));
+            }
+            _ => adapter = Some(a.clone()),
+        }
+        let num = |v: &str, name: &str| v.parse::<f64>().map_err(|_| bad(name));
+        let int = |v: &str, name: &str| v.parse::<u64>().map_err(|_| bad(name));
+        rows.push(Row {
+            dims: int(dims, "dims")? as u32,
+            size: size.clone(),
+            voxels: int(cells, "cells")?,
+            method: method.clone(),
+            median_ms: num(median, "median_ms")?,
+            min_ms: num(min, "min_ms")?,
+            max_ms: num(max, "max_ms")?,
+            wrong: int(wrong, "wrong")?,
+            max_err: num(max_err, "max_err_voxels")?,
+            mean_err: num(mean_err, "mean_err_voxels")?,
+            peer_ms: if peer.is_empty() {
+                None
+            } else {
+                Some(num(peer, "peer_ms")?)
+            },
+            passes: Vec::new(),
+        });
+    }
+    let adapter = adapter.ok_or_else(|| format!("{}: no rows", path.display()))?;
+    Ok((adapter, rows))
+}
+
+#[cfg(test)]
+mod tests {
+    /// `--replot` reads back two joined tables: the quoted adapter keeps its commas, an empty
+    /// peer is none, and a short line or a second adapter is an error naming its line.
+    #[test]
+    fn replot_reads_joined_tables() {
+        let dir = std::env::temp_dir().join(format!("fieldkit-replot-d-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let csv = dir.join("distance.csv");
+        let table = format!(
+            "{h}\n\"GPU (Vulkan, 1.2)\",3,512³,134217728,\"exact\",2.9350,2.9150,2.9560,0,0.000e0,0.0000,0.000e0,8.5190,0.345\n\
+             {h}\n\"GPU (Vulkan, 1.2)\",2,8192²,67108864,\"JFA+2\",1.2000,1.1000,1.3000,12,1.788e-7,2.2361,2.000e-8,,\n",
+            h = super::TABLE_HEADER
+        );
+        std::fs::write(&csv, &table).unwrap();
+        let (adapter, rows) = super::read_table(&csv).unwrap();
+        assert_eq!(adapter, "GPU (Vulkan, 1.2)");
+        let got: Vec<_> = rows
+            .iter()
+            .map(|r| {
+                (
+                    r.dims,
+                    r.size.as_str(),
+                    r.voxels,
+                    r.method.as_str(),
+                    r.median_ms,
+                    r.wrong,
+                    r.max_err,
+                    r.peer_ms,
+                )
+            })
+            .collect();
+        assert_eq!(
+            got,
+            [
+                (3, "512³", 134217728, "exact", 2.935, 0, 0.0, Some(8.519)),
+                (2, "8192²", 67108864, "JFA+2", 1.2, 12, 2.2361, None),
+            ]
+        );
+        std::fs::write(&csv, format!("{}\n\"GPU\",3,512³\n", super::TABLE_HEADER)).unwrap();
+        let e = super::read_table(&csv).unwrap_err();
+        assert!(e.contains("line 2"), "{e}");
+        std::fs::write(&csv, table.replacen("GPU (Vulkan, 1.2)", "Other GPU", 1)).unwrap();
+        let e = super::read_table(&csv).unwrap_err();
+        assert!(e.contains("line 4") && e.contains("second adapter"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

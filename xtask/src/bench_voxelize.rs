@@ -437,16 +437,7 @@ fn read_table(path: &std::path::Path) -> Result<(String, Vec<Row>), String> {
     let mut adapter = String::new();
     let mut rows = Vec::new();
     for (i, line) in text.lines().enumerate().skip(1) {
-        // Fields split at commas outside quotes (the adapter and mesh names hold commas).
-        let mut fields = vec![String::new()];
-        let mut quoted = false;
-        for c in line.chars() {
-            match c {
-                '"' => quoted = !quoted,
-                ',' if !quoted => fields.push(String::new()),
-                _ => fields.last_mut().expect("one field").push(c),
-            }
-        }
+        let fields = crate::measure::csv_fields(line);
         let bad = || format!("{} line {}: {line}", path.display(), i + 1);
         let [a, mesh, triangles, n, mode, ms, ms_batched, voxels] = &fields[..] else {
             return Err(bad());

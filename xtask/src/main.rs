@@ -158,8 +158,9 @@ enum Command {
         /// `empty`, `zeroed` and `cleared`, an empty pass's floor, only where named).
         #[arg(long, value_delimiter = ',')]
         modes: Vec<String>,
-        /// `voxelize`: draw `voxelize.png` into `--out` from this saved `voxelize.csv` instead
-        /// of measuring (for a run cut short after its table was saved).
+        /// `voxelize`, `distance`: draw `voxelize.png` / `distance.png` into `--out` from this
+        /// saved `voxelize.csv` / `distance.csv` instead of measuring (for a run cut short
+        /// after its table was saved, or the tables of several runs joined into one file).
         #[arg(long)]
         replot: Option<PathBuf>,
     },

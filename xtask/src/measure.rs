@@ -39,7 +39,8 @@ pub struct Args {
     pub mesh: Option<PathBuf>,
     /// `voxelize`: only these modes (empty: all).
     pub modes: Vec<String>,
-    /// `voxelize`: chart this saved `voxelize.csv` instead of measuring.
+    /// `voxelize`, `distance`: chart this saved `voxelize.csv` / `distance.csv` instead of
+    /// measuring.
     pub replot: Option<PathBuf>,
 }
 
@@ -59,6 +60,21 @@ pub(crate) fn write_table(
     }
     std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
     Ok(path)
+}
+
+/// The fields of one line of a table [`write_table`] wrote, split at commas outside double
+/// quotes (adapter and mesh names hold commas); the quotes are dropped. For `--replot`.
+pub(crate) fn csv_fields(line: &str) -> Vec<String> {
+    let mut fields = vec![String::new()];
+    let mut quoted = false;
+    for c in line.chars() {
+        match c {
+            '"' => quoted = !quoted,
+            ',' if !quoted => fields.push(String::new()),
+            _ => fields.last_mut().expect("one field").push(c),
+        }
+    }
+    fields
 }
 
 /// Least wall time of warm-up before the timed runs. GPU clocks fall while the CPU checks the
