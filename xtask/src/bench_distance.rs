@@ -1037,9 +1037,7 @@ mod tests {
     /// peer is none, and a short line or a second adapter is an error naming its line.
     #[test]
     fn replot_reads_joined_tables() {
-        let dir = std::env::temp_dir().join(format!("fieldkit-replot-d-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let csv = dir.join("distance.csv");
+        let (dir, csv) = crate::measure::scratch_file("replot-distance", "distance.csv");
         let table = format!(
             "{h}\n\"GPU (Vulkan, 1.2)\",3,512³,134217728,\"exact\",2.9350,2.9150,2.9560,0,0.000e0,0.0000,0.000e0,8.5190,0.345\n\
              {h}\n\"GPU (Vulkan, 1.2)\",2,8192²,67108864,\"JFA+2\",1.2000,1.1000,1.3000,12,1.788e-7,2.2361,2.000e-8,,\n",

@@ -466,9 +466,7 @@ mod tests {
     /// commas, and a malformed line is an error naming it.
     #[test]
     fn replot_reads_the_written_table() {
-        let dir = std::env::temp_dir().join(format!("fieldkit-replot-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let csv = dir.join("voxelize.csv");
+        let (dir, csv) = crate::measure::scratch_file("replot-voxelize", "voxelize.csv");
         std::fs::write(
             &csv,
             "adapter,mesh,triangles,grid,mode,ms,ms_back_to_back,voxels\n\

@@ -77,6 +77,16 @@ pub(crate) fn csv_fields(line: &str) -> Vec<String> {
     fields
 }
 
+/// A fresh folder under the system's temporary one for a test's files (named after `tag` and
+/// this process), and the path of `file` in it; the test removes the folder.
+#[cfg(test)]
+pub(crate) fn scratch_file(tag: &str, file: &str) -> (PathBuf, PathBuf) {
+    let dir = std::env::temp_dir().join(format!("fieldkit-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("a temporary folder");
+    let path = dir.join(file);
+    (dir, path)
+}
+
 /// Least wall time of warm-up before the timed runs. GPU clocks fall while the CPU checks the
 /// previous point: on the H100, 2048² exact measured 1.19 ms after three warm-up runs that
 /// followed the 512³ sweep, and 0.26 ms once warmed up for longer. And a variant timed after
