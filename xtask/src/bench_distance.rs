@@ -150,10 +150,20 @@ fn errors(got: &[u64], exact: &[u64], band: Option<f64>) -> (u64, f64, f64) {
     };
     let (mut wrong, mut max, mut sum) = (0u64, 0f64, 0f64);
     for (&g, &e) in got.iter().zip(exact) {
+        // Equal values agree, "no seed" on both sides included (∞ − ∞ is NaN, not 0).
+        if g == e {
+            continue;
+        }
         let err = clamp(g) - clamp(e);
         if err != 0.0 {
             wrong += 1;
-            let err = if err.is_finite() { err.abs() } else { f64::MAX };
+            // "No seed" against a seed (or NaN from a bad field) is an infinite error: the CSV
+            // and the table say `inf`, and the chart draws it at its top.
+            let err = if err.is_finite() {
+                err.abs()
+            } else {
+                f64::INFINITY
+            };
             max = max.max(err);
             sum += err;
         }
@@ -879,7 +889,9 @@ fn chart(path: &Path, adapter: &str, rows: &[Row], (w, h): (u32, u32)) -> Result
     }
     let y_of = |r: &Row| {
         if r.max_err > 0.0 {
-            r.max_err.max(5e-3)
+            // An infinite error (a voxel left without its seed) on a log axis has no place:
+            // drawn at a million voxels, past any grid's diagonal (a log range to ∞ never ends).
+            r.max_err.clamp(5e-3, 1e6)
         } else {
             floor * 1.18f64.powi(methods.iter().position(|m| *m == r.method).unwrap_or(0) as i32)
         }
@@ -1033,6 +1045,46 @@ fn read_table(path: &Path) -> Result<(String, Vec<Row>), String> {
 
 #[cfg(test)]
 mod tests {
+    /// "No seed" on both sides (a mask with none) agrees; "no seed" against a distance, or two
+    /// distances apart, is wrong; a band clamps both sides first.
+    #[test]
+    fn errors_count_only_disagreements() {
+        let none = u64::MAX;
+        assert_eq!(super::errors(&[none, 4], &[none, 4], None), (0, 0.0, 0.0));
+        let (wrong, max, mean) = super::errors(&[none, 9, 1], &[4, 4, 1], None);
+        assert_eq!((wrong, max, mean), (2, f64::INFINITY, f64::INFINITY));
+        assert_eq!(super::errors(&[9], &[4], None).0, 1);
+        assert_eq!(
+            super::errors(&[none, 25], &[16, 9], Some(2.0)),
+            (0, 0.0, 0.0)
+        );
+    }
+
+    /// A row whose error is infinite (a voxel left without its seed) still charts: drawn at
+    /// the axis's top, where a log range up to it would never end.
+    #[test]
+    fn an_infinite_error_charts() {
+        let (dir, png) = crate::measure::scratch_file("chart-distance", "distance.png");
+        let row = |method: &str, max_err: f64| super::Row {
+            dims: 3,
+            size: "1×300×2".into(),
+            voxels: 600,
+            method: method.into(),
+            median_ms: 5.6,
+            min_ms: 5.5,
+            max_ms: 5.7,
+            wrong: u64::from(max_err > 0.0) * 600,
+            max_err,
+            mean_err: max_err,
+            peer_ms: None,
+            passes: Vec::new(),
+        };
+        let rows = [row("exact", f64::INFINITY), row("JFA", 0.5)];
+        super::chart(&png, "GPU", &rows, (400, 300)).unwrap();
+        assert!(std::fs::metadata(&png).unwrap().len() > 0);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
     /// `--replot` reads back two joined tables: the quoted adapter keeps its commas, an empty
     /// peer is none, and a short line or a second adapter is an error naming its line.
     #[test]
