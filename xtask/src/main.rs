@@ -151,7 +151,9 @@ enum Command {
         /// `128x128x1024`) instead of the cubes; no 2D sizes then.
         #[arg(long, value_delimiter = ',', value_parser = parse_shape)]
         shapes: Vec<[usize; 3]>,
-        /// `voxelize`: the Stanford bunny's `index.js` from `scripts/fetch-bunny.sh`.
+        /// `voxelize`, `octree`: a mesh to time beside the torus: an OBJ file (the peers'
+        /// Stanford bunny, `stanford-bunny.obj`); for `voxelize` also the npm bunny's `index.js`
+        /// from `scripts/fetch-bunny.sh` (timed as it is and split twice).
         #[arg(long)]
         mesh: Option<PathBuf>,
         /// `voxelize`: only these modes (surface, resident, raster, solid, attributes; comma-separated;
