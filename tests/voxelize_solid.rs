@@ -135,7 +135,7 @@ fn open_meshes_are_refused() {
         .err()
         .expect("accepted an open mesh");
     assert!(
-        matches!(&err, Error::Invalid { what, .. } if what.contains("closed")),
+        matches!(&err, Error::Invalid { stage: "voxelize::solid", what } if what.contains("closed")),
         "{err}"
     );
     // Flipping one triangle breaks the orientation.

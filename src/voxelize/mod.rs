@@ -1128,10 +1128,14 @@ impl Voxelizer {
         with_surface: bool,
     ) -> Result<Surface, Error> {
         if let Some([a, b]) = mesh.open_edge() {
-            return Err(invalid(format!(
-                "solid voxelization needs a closed, consistently oriented mesh: the edge between \
-                 vertices {a} and {b} is not shared by exactly two triangles running opposite ways"
-            )));
+            return Err(Error::Invalid {
+                stage: solid_stage::STAGE,
+                what: format!(
+                    "solid voxelization needs a closed, consistently oriented mesh: the edge \
+                     between vertices {a} and {b} is not shared by exactly two triangles running \
+                     opposite ways"
+                ),
+            });
         }
         let local = mesh.to_grid(grid)?;
         let occupancy = zeroed_bitset(device, grid)?;

@@ -233,6 +233,12 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
                         }
                         .map_err(|e| e.to_string())
                     };
+                    // A mesh the mode refuses (solid fill of an open mesh) skips the mode, as
+                    // `attributes` does above, so the other rows are still timed and written.
+                    if let Err(e) = encode(&mut ctx.encoder("probe")) {
+                        println!("| {name} | {:?} | {mode} | skipped: {e} |", grid.size);
+                        continue;
+                    }
                     let t = time_rows(&ctx, &stamps, heater.as_ref(), args, |enc| {
                         encode(enc).map(|_| ())
                     })?;
