@@ -24,10 +24,13 @@ fn grid_fit_refuses_meshes_it_cannot_fit() {
         .iter_mut()
         .for_each(|p| *p = DVec3::splat(2.0));
     invalid(Grid::fit(&flat, 32), "no extent");
-    assert!(matches!(
-        Grid::fit(&Mesh::cuboid(DVec3::ZERO, DVec3::ONE), 2),
-        Err(Error::Size { got: 2, .. })
-    ));
+    for n in [0, 1, 2] {
+        invalid(
+            Grid::fit(&Mesh::cuboid(DVec3::ZERO, DVec3::ONE), n),
+            &format!("{n} voxels along the longest side: a fitted grid needs at least 3"),
+        );
+    }
+    assert!(Grid::fit(&Mesh::cuboid(DVec3::ZERO, DVec3::ONE), 3).is_ok());
     // A fitted grid holds the mesh with a voxel of margin and at most n voxels a side.
     let mesh = Mesh::cuboid(DVec3::new(-1.0, 0.0, 2.0), DVec3::new(3.0, 1.0, 2.5));
     let g = Grid::fit(&mesh, 20).unwrap();

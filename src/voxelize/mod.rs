@@ -99,8 +99,8 @@ impl Grid {
     }
 
     /// A cube-voxel grid of about `n` voxels along the mesh's longest side, fitted to its
-    /// bounds with one voxel of margin on each side (so `n ≥ 3`). An empty mesh, a non-finite
-    /// position or a mesh with no extent is refused.
+    /// bounds with one voxel of margin on each side. An empty mesh, a non-finite position, a
+    /// mesh with no extent or `n` below 3 is refused ([`Error::Invalid`]).
     pub fn fit(mesh: &Mesh, n: u32) -> Result<Grid, Error> {
         if mesh.positions.is_empty() {
             return Err(invalid("cannot fit a grid to an empty mesh".into()));
@@ -109,12 +109,11 @@ impl Grid {
             return Err(invalid(format!("vertex {i} is {}", mesh.positions[i])));
         }
         if n < 3 {
-            return Err(Error::Size {
-                stage: STAGE,
-                what: "voxels along the longest side (at least 3: one of margin each side)",
-                got: n as u64,
-                max: u32::MAX as u64,
-            });
+            // Not `Error::Size`, whose message says "between 1 and …": 1 and 2 are refused too.
+            return Err(invalid(format!(
+                "{n} voxels along the longest side: a fitted grid needs at least 3 (the mesh \
+                 and one voxel of margin each side)"
+            )));
         }
         let lo = mesh
             .positions
@@ -563,7 +562,7 @@ fn box_columns(t: &[Vec4], size: [u32; 3]) -> u64 {
 }
 
 /// Chunks the heavy triangles of `local` can need at most in the GPU's work list (see
-/// [`box_columns`]): [`CHUNK`] columns each, but no more than [`MAX_CHUNKS`] for a triangle.
+/// `box_columns`): [`CHUNK`] columns each, but no more than [`MAX_CHUNKS`] for a triangle.
 pub fn heavy_chunk_bound(local: &GridMesh, size: [u32; 3]) -> u32 {
     let total: u64 = local
         .vertices
@@ -783,7 +782,7 @@ fn most_chunks(columns: u64) -> u64 {
 }
 
 /// Most giant triangles in one surface pass on the GPU (`fieldkit::triangle_box`'s
-/// `MAX_GIANTS`): the host marks at most this many, the largest ([`mark_giants`]).
+/// `MAX_GIANTS`): the host marks at most this many, the largest (`mark_giants`).
 pub const MAX_GIANTS: u32 = 64;
 
 /// The GPU's list makes no triangle of at most this many columns giant: below it, writing a
