@@ -211,8 +211,8 @@ fn a_point_light_shades_by_distance() {
             range: 1.0,
         },
     ] {
-        assert!(
-            view.encode_lit(
+        let err = view
+            .encode_lit(
                 device,
                 &mut enc,
                 &targets.colour_view,
@@ -223,7 +223,12 @@ fn a_point_light_shades_by_distance() {
                 bad,
                 ColourBy::Colour,
             )
-            .is_err()
+            .err()
+            .expect("a bad light was accepted");
+        // The view's own stage refuses it, not the voxelizer's.
+        assert!(
+            matches!(&err, fieldkit::Error::Invalid { stage: "voxelize::voxel_view", what } if what.contains("light")),
+            "{err}"
         );
     }
 }

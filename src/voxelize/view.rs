@@ -3,12 +3,20 @@
 
 use glam::{Mat4, Vec3};
 
-use super::{Attributes, Grid, invalid};
+use super::{Attributes, Grid};
 use crate::bind::{RenderPipeline, RenderTargets};
 use crate::error::Error;
 use crate::gpu::uniform_buffer as uniform;
 use crate::shaders::voxelize::voxel_view::{self as stage, ViewParams};
 use crate::view::{depth_state, load_pass};
+
+/// Bad input to the voxel view: an error of its own stage.
+fn refused(what: String) -> Error {
+    Error::Invalid {
+        stage: stage::STAGE,
+        what,
+    }
+}
 
 /// What the cubes are coloured by.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -63,7 +71,7 @@ impl Light {
         if ok {
             Ok(())
         } else {
-            Err(invalid(format!(
+            Err(refused(format!(
                 "light {self:?}: a direction finite and non-zero, or a point with a finite \
                  position and a range > 0"
             )))
@@ -147,13 +155,13 @@ impl VoxelView {
     ) -> Result<(), Error> {
         light.check()?;
         if voxels.surface.size != grid.size {
-            return Err(invalid(format!(
+            return Err(refused(format!(
                 "the voxels were made in a {:?} grid, not {:?}",
                 voxels.surface.size, grid.size
             )));
         }
         if !view_proj.is_finite() {
-            return Err(invalid("view_proj must be finite".into()));
+            return Err(refused("view_proj must be finite".into()));
         }
         if voxels.count == 0 {
             return Ok(());
