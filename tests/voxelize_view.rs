@@ -223,8 +223,7 @@ fn a_point_light_shades_by_distance() {
                 bad,
                 ColourBy::Colour,
             )
-            .err()
-            .expect("a bad light was accepted");
+            .expect_err("a bad light was accepted");
         // The view's own stage refuses it, not the voxelizer's.
         assert!(
             matches!(&err, fieldkit::Error::Invalid { stage: "voxelize::voxel_view", what } if what.contains("light")),
