@@ -27,7 +27,9 @@ fn grid_fit_refuses_meshes_it_cannot_fit() {
     for n in [0, 1, 2] {
         invalid(
             Grid::fit(&Mesh::cuboid(DVec3::ZERO, DVec3::ONE), n),
-            &format!("{n} voxels along the longest side: a fitted grid needs at least 3"),
+            &format!(
+                "needs at least 3 voxels along the longest side (the mesh and one voxel of margin each side), not {n}"
+            ),
         );
     }
     assert!(Grid::fit(&Mesh::cuboid(DVec3::ZERO, DVec3::ONE), 3).is_ok());

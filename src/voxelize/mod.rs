@@ -111,8 +111,8 @@ impl Grid {
         if n < 3 {
             // Not `Error::Size`, whose message says "between 1 and …": 1 and 2 are refused too.
             return Err(invalid(format!(
-                "{n} voxels along the longest side: a fitted grid needs at least 3 (the mesh \
-                 and one voxel of margin each side)"
+                "a fitted grid needs at least 3 voxels along the longest side (the mesh and one \
+                 voxel of margin each side), not {n}"
             )));
         }
         let lo = mesh
