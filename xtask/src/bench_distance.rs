@@ -157,8 +157,8 @@ fn errors(got: &[u64], exact: &[u64], band: Option<f64>) -> (u64, f64, f64) {
         let err = clamp(g) - clamp(e);
         if err != 0.0 {
             wrong += 1;
-            // "No seed" against a seed (or NaN from a bad field) is an infinite error: the CSV
-            // and the table say `inf`, and the chart draws it at its top.
+            // "No seed" against a seed is an infinite error: the CSV and the table say `inf`,
+            // and the chart draws it at its top.
             let err = if err.is_finite() {
                 err.abs()
             } else {

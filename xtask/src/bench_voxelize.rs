@@ -200,12 +200,17 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
                         report(&mut rows, what, grid.size, t, 0, &format!("{bytes} bytes"));
                         continue;
                     }
+                    // A mode the mesh is refused for (attributes or a solid fill of an open
+                    // mesh) is skipped with the reason, and the other rows still timed and written.
+                    let skipped = |e: &dyn std::fmt::Display| {
+                        println!("| {name} | {:?} | {mode} | skipped: {e} |", grid.size);
+                    };
                     // The attribute list is sized from the occupied count, read once here.
                     let occupied = if mode == "attributes" {
                         match ctx.block_on(v.attributes(&ctx.device, &ctx.queue, mesh, &grid)) {
                             Ok(a) => a.count,
                             Err(e) => {
-                                println!("| {name} | {:?} | {mode} | skipped: {e} |", grid.size);
+                                skipped(&e);
                                 continue;
                             }
                         }
@@ -233,10 +238,8 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
                         }
                         .map_err(|e| e.to_string())
                     };
-                    // A mesh the mode refuses (solid fill of an open mesh) skips the mode, as
-                    // `attributes` does above, so the other rows are still timed and written.
                     if let Err(e) = encode(&mut ctx.encoder("probe")) {
-                        println!("| {name} | {:?} | {mode} | skipped: {e} |", grid.size);
+                        skipped(&e);
                         continue;
                     }
                     let t = time_rows(&ctx, &stamps, heater.as_ref(), args, |enc| {
