@@ -16,7 +16,8 @@
 //! pass's time (`Profiler::record` around `encode_surface_with`). With `FIELDKIT_BENCH_SHUFFLED` set, the split bunny
 //! is also timed with its triangles in a
 //! scattered order (neighbours in the list no longer neighbours on the surface). `--modes
-//! empty,zeroed,cleared` adds the floor rows of `floor.rs`: an empty pass timed the same way.
+//! empty,zeroed,cleared,loaded` adds the floor rows of `floor.rs`: an empty pass timed the same
+//! way (`FIELDKIT_BENCH_FLOOR_THREADS` sets its threads).
 
 use std::process::ExitCode;
 
@@ -87,6 +88,14 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
     };
     let mut v = Voxelizer::new(&ctx.device).map_err(|e| e.to_string())?;
     let empty = EmptyPass::new(&ctx);
+    // `FIELDKIT_BENCH_FLOOR_THREADS=174000`: the floor rows' threads (default: one a triangle).
+    let floor_threads = match std::env::var("FIELDKIT_BENCH_FLOOR_THREADS") {
+        Ok(t) => Some(
+            t.parse::<u64>()
+                .map_err(|e| format!("FIELDKIT_BENCH_FLOOR_THREADS {t:?}: {e}"))?,
+        ),
+        Err(_) => None,
+    };
     // `FIELDKIT_BENCH_LISTINGS=auto,16:4:0:64,4:4:1:32`: time the surface rows with each way
     // of cutting triangles into threads (light columns : chunk columns : sorted : workgroup;
     // `auto`, the default, picks per mesh).
@@ -171,16 +180,17 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
                     "empty",
                     "zeroed",
                     "cleared",
+                    "loaded",
                 ] {
                     // The floor rows (`floor.rs`) only where named.
-                    let floor = matches!(mode, "empty" | "zeroed" | "cleared");
+                    let floor = matches!(mode, "empty" | "zeroed" | "cleared" | "loaded");
                     if (args.modes.is_empty() && floor)
                         || (!args.modes.is_empty() && !args.modes.iter().any(|m| m == mode))
                     {
                         continue;
                     }
                     if floor {
-                        let threads = mesh.triangles.len() as u64;
+                        let threads = floor_threads.unwrap_or(mesh.triangles.len() as u64);
                         let bytes = grid.voxels().div_ceil(32) * 4;
                         let kept = EmptyPass::buffer(&ctx, bytes);
                         let t = time_rows(&ctx, &stamps, heater.as_ref(), args, |enc| {
@@ -194,10 +204,11 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
                             if mode == "cleared" {
                                 enc.clear_buffer(words, 0, None);
                             }
-                            empty.record(&ctx, enc, words, threads)
+                            empty.record(&ctx, enc, words, threads, mode == "loaded")
                         })?;
                         let what = (name.as_str(), mesh.triangles.len(), n, mode);
-                        report(&mut rows, what, grid.size, t, 0, &format!("{bytes} bytes"));
+                        let last = format!("{bytes} bytes, {threads} threads");
+                        report(&mut rows, what, grid.size, t, 0, &last);
                         continue;
                     }
                     // A mode the mesh is refused for (attributes or a solid fill of an open

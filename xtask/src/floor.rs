@@ -5,9 +5,13 @@
 //! run, as `encode_surface` does: wgpu zero-fills it at submission in a command buffer of its
 //! own ahead of the recorded one, so outside the timestamps (on the H100 `zeroed` reads the
 //! same at 1024³, a 103 MB bitset, as at 128³). `cleared` records the clear
-//! (`clear_buffer`) before the pass, inside them: what that zeroing costs the GPU. A surface
-//! row minus `empty` is the surface pass's own work; `empty` itself is what no single-pass
-//! voxelizer through wgpu gets under on that adapter. `scripts/cuda_launch_floor.py` times the
+//! (`clear_buffer`) before the pass, inside them: what that zeroing costs the GPU. `loaded`
+//! binds the buffer made once, and each thread reads one word of it (as each surface thread
+//! reads its list entry) and writes nothing. A surface row minus `empty` is the surface pass's
+//! own work; `empty` itself is what no single-pass voxelizer through wgpu gets under on that
+//! adapter. `FIELDKIT_BENCH_FLOOR_THREADS=174000` gives the floor rows that many threads
+//! instead of one a triangle (the surface pass at 256³ runs one a light triangle and one a
+//! heavy triangle's chunk: 174 k on the Stanford bunny). `scripts/cuda_launch_floor.py` times the
 //! same empty kernel through CUDA the way the peers' README times cuda_voxelizer (CUDA events,
 //! median of 40 after 20 warm-ups), with and without a memset of the bitset.
 
@@ -24,10 +28,20 @@ fn empty(@builtin(global_invocation_id) id: vec3<u32>) {
         words[0] = 1u;
     }
 }
+
+@compute @workgroup_size(64)
+fn loaded(@builtin(global_invocation_id) id: vec3<u32>) {
+    // One word a thread (the last one past the buffer's end); the buffer is zeroed, so never
+    // true.
+    if words[min(id.x, arrayLength(&words) - 1u)] == 0xffffffffu {
+        words[0] = 1u;
+    }
+}
 "#;
 
 pub(crate) struct EmptyPass {
-    pipeline: wgpu::ComputePipeline,
+    empty: wgpu::ComputePipeline,
+    loaded: wgpu::ComputePipeline,
 }
 
 impl EmptyPass {
@@ -38,17 +52,21 @@ impl EmptyPass {
                 label: Some("bench empty pass"),
                 source: wgpu::ShaderSource::Wgsl(EMPTY.into()),
             });
-        let pipeline = ctx
-            .device
-            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some("bench empty pass"),
-                layout: None,
-                module: &module,
-                entry_point: Some("empty"),
-                compilation_options: Default::default(),
-                cache: None,
-            });
-        Self { pipeline }
+        let pipeline = |entry: &str| {
+            ctx.device
+                .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some("bench empty pass"),
+                    layout: None,
+                    module: &module,
+                    entry_point: Some(entry),
+                    compilation_options: Default::default(),
+                    cache: None,
+                })
+        };
+        Self {
+            empty: pipeline("empty"),
+            loaded: pipeline("loaded"),
+        }
     }
 
     /// A storage buffer of `bytes` (at least 4), new and so zero-filled by wgpu at its first
@@ -64,14 +82,16 @@ impl EmptyPass {
     }
 
     /// One pass of `threads` threads (in workgroups of 64, at most 65535 of them) that binds
-    /// `words` and does nothing.
+    /// `words` and does nothing, or with `load` reads one word of it a thread.
     pub(crate) fn record(
         &self,
         ctx: &Context,
         enc: &mut wgpu::CommandEncoder,
         words: &wgpu::Buffer,
         threads: u64,
+        load: bool,
     ) -> Result<(), String> {
+        let pipeline = if load { &self.loaded } else { &self.empty };
         let groups = threads.div_ceil(64).max(1);
         if groups > 65535 {
             return Err(format!(
@@ -80,7 +100,7 @@ impl EmptyPass {
         }
         let bind = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("bench empty pass"),
-            layout: &self.pipeline.get_bind_group_layout(0),
+            layout: &pipeline.get_bind_group_layout(0),
             entries: &[wgpu::BindGroupEntry {
                 binding: 0,
                 resource: words.as_entire_binding(),
@@ -90,7 +110,7 @@ impl EmptyPass {
             label: Some("bench empty pass"),
             timestamp_writes: None,
         });
-        pass.set_pipeline(&self.pipeline);
+        pass.set_pipeline(pipeline);
         pass.set_bind_group(0, &bind, &[]);
         pass.dispatch_workgroups(groups as u32, 1, 1);
         Ok(())

@@ -157,7 +157,7 @@ enum Command {
         #[arg(long)]
         mesh: Option<PathBuf>,
         /// `voxelize`: only these modes (surface, resident, raster, solid, attributes; comma-separated;
-        /// `empty`, `zeroed` and `cleared`, an empty pass's floor, only where named).
+        /// `empty`, `zeroed`, `cleared` and `loaded`, an empty pass's floor, only where named).
         #[arg(long, value_delimiter = ',')]
         modes: Vec<String>,
         /// `voxelize`, `distance`: draw `voxelize.png` / `distance.png` into `--out` from this
