@@ -18,15 +18,15 @@
 //! differs fails instead of being rewritten, and with `INSTA_WORKSPACE_ROOT` set to the
 //! checkout (there is no cargo there to find it, and the user crate's snapshots are named
 //! from the workspace root). Tests that need what that machine lacks are left
-//! out by name: cargo (the consumer and binding-drift tests build crates) and Xvfb (the window
-//! tests). The user crate's tests (`tests/user-crate`) run too.
+//! out by name: cargo (the consumer test and the user crate's drift test build crates) and Xvfb
+//! (the window tests). The user crate's tests (`tests/user-crate`) run too.
 
 use std::path::Path;
 use std::process::{Command, ExitCode};
 
 /// Test binaries (by target name) that cannot run without a toolchain, and tests (by name)
 /// that need a display.
-const NEEDS_CARGO: [&str; 3] = ["consumer", "bindings", "drift"];
+const NEEDS_CARGO: [&str; 2] = ["consumer", "drift"];
 const NEEDS_DISPLAY: [(&str, &str); 2] = [
     ("window", "window_screenshot_matches_the_offscreen_frame"),
     (
