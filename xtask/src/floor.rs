@@ -31,8 +31,8 @@ fn empty(@builtin(global_invocation_id) id: vec3<u32>) {
 
 @compute @workgroup_size(64)
 fn loaded(@builtin(global_invocation_id) id: vec3<u32>) {
-    // One word a thread (the last one past the buffer's end); the buffer is zeroed, so never
-    // true.
+    // One word a thread (threads past the buffer's end read its last word); the buffer is
+    // zeroed, so never true.
     if words[min(id.x, arrayLength(&words) - 1u)] == 0xffffffffu {
         words[0] = 1u;
     }
