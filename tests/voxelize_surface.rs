@@ -515,6 +515,162 @@ fn placed_meshes_voxelize_into_one_grid() {
     );
 }
 
+/// A surface refilled in place (`encode_surface_placed_into`, for loops that voxelize every
+/// frame): each frame's bits equal a new surface's for the same placement exactly, with none
+/// of the frame before left over (the meshes move apart between frames, so a missing clear
+/// leaves stale voxels), and `degenerate` follows the parts. A surface of another size, a
+/// buffer too small or without `COPY_DST` are refused with a typed error before anything is
+/// recorded, and the surface keeps its bits.
+#[test]
+fn a_surface_refilled_in_place_equals_a_new_one() {
+    use fieldkit::voxelize::{GpuMesh, Surface};
+    use glam::DMat4;
+    let ctx = Context::shared();
+    let v = Voxelizer::new(&ctx.device).unwrap();
+    let mut flat = Mesh::uv_sphere(DVec3::ZERO, 0.6, 16, 8);
+    flat.triangles.push([0, 0, 1]);
+    let ball = GpuMesh::upload(&ctx.device, &flat).unwrap();
+    // Long thin boxes cross the grid, so their triangles go through the heavy work list.
+    let bar = GpuMesh::upload(
+        &ctx.device,
+        &Mesh::cuboid(DVec3::new(-2.0, -0.1, -0.1), DVec3::new(2.0, 0.1, 0.1)),
+    )
+    .unwrap();
+    let grid = Grid {
+        origin: DVec3::splat(-2.4),
+        voxel: 0.1,
+        size: [48, 40, 36],
+    };
+    let read = |s: &Surface| s.read(&ctx.device, &ctx.queue).wait(&ctx).unwrap();
+    let frames: [Vec<(&GpuMesh, DMat4)>; 4] = [
+        vec![
+            (&ball, DMat4::from_translation(DVec3::new(-1.2, 0.0, 0.0))),
+            (&bar, DMat4::from_translation(DVec3::new(0.0, 1.0, 0.5))),
+        ],
+        vec![
+            (&ball, DMat4::from_translation(DVec3::new(1.2, 0.5, -0.3))),
+            (&bar, DMat4::from_rotation_z(1.2)),
+        ],
+        vec![],
+        vec![(&bar, DMat4::from_translation(DVec3::new(0.0, -1.5, -1.0)))],
+    ];
+    let mut enc = ctx.encoder("refill");
+    let mut kept = v
+        .encode_surface_placed(
+            &ctx.device,
+            &mut enc,
+            &frames[0],
+            &grid,
+            Separation::Conservative,
+        )
+        .unwrap();
+    ctx.submit_and_wait("refill", enc).unwrap();
+    let mut before = read(&kept);
+    assert_eq!(kept.degenerate, 1);
+    for (f, parts) in frames.iter().enumerate().skip(1) {
+        let mut enc = ctx.encoder("refill");
+        v.encode_surface_placed_into(
+            &ctx.device,
+            &mut enc,
+            parts,
+            &grid,
+            Separation::Conservative,
+            &mut kept,
+        )
+        .unwrap();
+        let new = v
+            .encode_surface_placed(
+                &ctx.device,
+                &mut enc,
+                parts,
+                &grid,
+                Separation::Conservative,
+            )
+            .unwrap();
+        ctx.submit_and_wait("refill", enc).unwrap();
+        let (refilled, want) = (read(&kept), read(&new));
+        let stale = before.iter().zip(&want).filter(|&(&b, &w)| b && !w).count();
+        println!(
+            "frame {f}: {} voxels, {stale} of the frame before not in it",
+            want.iter().filter(|&&b| b).count()
+        );
+        assert!(
+            f == 2 || want.iter().filter(|&&b| b).count() > 500,
+            "frame {f}"
+        );
+        // After the empty frame there is nothing to leave over.
+        assert!(
+            f == 3 || stale > 100,
+            "frame {f}: the frames must differ for the test to hold"
+        );
+        assert!(
+            refilled == want,
+            "frame {f}: the refilled surface differs from a new one"
+        );
+        assert_eq!(kept.degenerate, new.degenerate, "frame {f}");
+        assert_eq!(
+            kept.degenerate,
+            usize::from(parts.iter().any(|p| std::ptr::eq(p.0, &ball)))
+        );
+        before = refilled;
+    }
+    // Refusals leave the surface as it was (the last frame's bar).
+    let bad = |s: &mut Surface, g: &Grid, want: &str| {
+        let mut enc = ctx.encoder("refill errors");
+        let e = v
+            .encode_surface_placed_into(
+                &ctx.device,
+                &mut enc,
+                &frames[0],
+                g,
+                Separation::Conservative,
+                s,
+            )
+            .expect_err("refused");
+        assert!(
+            matches!(&e, Error::Invalid { what, .. } if what.contains(want)),
+            "{e}"
+        );
+        ctx.submit_and_wait("refill errors", enc).unwrap();
+    };
+    let other = Grid {
+        size: [48, 40, 35],
+        ..grid
+    };
+    bad(
+        &mut kept,
+        &other,
+        "the surface to refill is [48, 40, 36] voxels, the grid [48, 40, 35]",
+    );
+    assert!(read(&kept) == before, "a refusal changed the surface");
+    let buffer = |size, usage| {
+        ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: None,
+            size,
+            usage: wgpu::BufferUsages::STORAGE | usage,
+            mapped_at_creation: false,
+        })
+    };
+    let words = (48 * 40 * 36u64).div_ceil(32);
+    let mut small = Surface {
+        size: grid.size,
+        occupancy: buffer(4 * words - 4, wgpu::BufferUsages::COPY_DST),
+        degenerate: 0,
+    };
+    bad(
+        &mut small,
+        &grid,
+        &format!("buffer is {} bytes", 4 * words - 4),
+    );
+    let mut no_copy = Surface {
+        size: grid.size,
+        occupancy: buffer(4 * words, wgpu::BufferUsages::COPY_SRC),
+        degenerate: 7,
+    };
+    bad(&mut no_copy, &grid, "refilling it needs");
+    assert_eq!(no_copy.degenerate, 7);
+}
+
 /// Resident meshes moved by matrices on the GPU (issue 24, seed 004: "a per-mesh model matrix
 /// so several meshes voxelize into one grid without re-uploading each"). Each mesh is uploaded
 /// once; three frames move them (rotation, non-uniform scale, a mirror, and a cube stretched

@@ -476,6 +476,20 @@ fn check_model(model: glam::DMat4) -> Result<f64, Error> {
     Ok(det)
 }
 
+/// Refuses a GPU work list for `listing` larger than one binding of `device`.
+fn check_work_list(device: &wgpu::Device, listing: &GpuListing) -> Result<(), Error> {
+    let limit = device.limits().max_storage_buffer_binding_size;
+    if listing.capacity.saturating_mul(8) > limit {
+        return Err(Error::Size {
+            stage: STAGE,
+            what: "heavy-triangle work list bytes",
+            got: listing.capacity.saturating_mul(8),
+            max: limit,
+        });
+    }
+    Ok(())
+}
+
 fn check_grid(grid: &Grid) -> Result<(), Error> {
     check_sides(grid, MAX_SIDE)?;
     // Voxel indices are u32 in the shaders.
@@ -1341,15 +1355,7 @@ impl Voxelizer {
             to_grid,
             moved,
         } = run;
-        let limit = device.limits().max_storage_buffer_binding_size;
-        if listing.capacity.saturating_mul(8) > limit {
-            return Err(Error::Size {
-                stage: STAGE,
-                what: "heavy-triangle work list bytes",
-                got: listing.capacity.saturating_mul(8),
-                max: limit,
-            });
-        }
+        check_work_list(device, &listing)?;
         // Within a binding: a u32 count.
         let capacity = listing.capacity as u32;
         let buffer = |label, size: u64, usage| {

@@ -6,8 +6,8 @@ use glam::{DMat4, DVec3, Vec4};
 
 use super::{
     CHUNK, Error, GpuListing, Grid, LIGHT, MAX_CHUNKS, MAX_GIANTS, Mesh, Separation, Surface,
-    SurfaceRun, Voxelizer, check_grid, check_model, giant_blocks_bound, giant_count, invalid,
-    mark_giants, most_chunks, zeroed_bitset,
+    SurfaceRun, Voxelizer, check_grid, check_model, check_work_list, giant_blocks_bound,
+    giant_count, invalid, mark_giants, most_chunks, zeroed_bitset,
 };
 use crate::gpu::Record;
 
@@ -250,57 +250,88 @@ impl Voxelizer {
         grid: &Grid,
         separation: Separation,
     ) -> Result<Surface, Error> {
-        check_grid(grid)?;
-        let grid_from_world = DMat4::from_scale(DVec3::splat(1.0 / grid.voxel))
-            * DMat4::from_translation(-grid.origin);
-        let mut runs = Vec::with_capacity(parts.len());
-        for (i, &(mesh, model)) in parts.iter().enumerate() {
-            check_model(model).map_err(|e| match e {
-                Error::Invalid { stage, what } => Error::Invalid {
-                    stage,
-                    what: format!("part {i}: {what}"),
-                },
-                e => e,
-            })?;
-            let to_grid = grid_from_world * model * DMat4::from_translation(mesh.anchor);
-            let linear = glam::DMat3::from_mat4(to_grid);
-            let (a, b) = axis_stretches(linear);
-            let shift = to_grid.w_axis.truncate();
-            // How far f32 rounding can move a vertex, in voxels: the stored position (half an
-            // ulp), the matrix's entries (half an ulp each) and the product's three multiplies
-            // and adds, each a few ulp of |A|·|p| + |b| — 8 ulp of it bounds them all.
-            let rows = linear.transpose();
-            let row_sum = [rows.x_axis, rows.y_axis, rows.z_axis]
-                .map(|r| r.abs().element_sum())
-                .into_iter()
-                .fold(0.0, f64::max);
-            let size = row_sum * mesh.radius + shift.abs().max_element();
-            let moved = 8.0 * f32::EPSILON as f64 * size;
-            let placed = to_grid.as_mat4();
-            if !placed.is_finite() || !size.is_finite() || size > 1e30 {
-                return Err(invalid(format!(
-                    "part {i}: the model matrix moves the mesh {size} voxels from the grid, \
-                     more than f32 can hold"
-                )));
-            }
-            runs.push((
-                mesh,
-                placed,
-                mesh.bound.listing(a, b, grid.size),
-                moved as f32,
-            ));
-        }
+        let runs = placed_runs(device, parts, grid)?;
         let occupancy = zeroed_bitset(device, grid)?;
+        self.record_placed(device, rec, &runs, &occupancy, grid, separation)?;
+        Ok(Surface {
+            size: grid.size,
+            occupancy,
+            degenerate: parts.iter().map(|(m, _)| m.degenerate).sum(),
+        })
+    }
+
+    /// [`Voxelizer::encode_surface_placed`] into `surface`, a surface made before for a grid
+    /// of the same size: its bitset is cleared in `rec` and filled again, so a loop that
+    /// voxelizes every frame keeps one bitset instead of allocating a new one a frame (16 MiB at
+    /// 512³, 128 MiB at 1024³). The voxels are the same as a new surface's. The clear is
+    /// recorded into `rec` (a new buffer is zeroed by wgpu instead, in a command buffer of its
+    /// own at submission), so the GPU clears the bitset either way: what this saves is the
+    /// allocation.
+    ///
+    /// Refused with [`Error::Invalid`], before anything is recorded: a surface of another size
+    /// than `grid`, or whose buffer is too small for it or lacks `STORAGE` or `COPY_DST`; and
+    /// whatever `encode_surface_placed` refuses. On an error `surface` is left as it was.
+    ///
+    /// ```
+    /// # fn f(ctx: &fieldkit::gpu::Context) -> Result<(), fieldkit::Error> {
+    /// use fieldkit::voxelize::{GpuMesh, Grid, Mesh, Separation, Voxelizer};
+    /// use glam::{DMat4, DVec3};
+    /// let v = Voxelizer::new(&ctx.device)?;
+    /// let ball = GpuMesh::upload(&ctx.device, &Mesh::uv_sphere(DVec3::ZERO, 0.5, 16, 8))?;
+    /// let grid = Grid { origin: DVec3::splat(-2.0), voxel: 0.125, size: [32, 32, 32] };
+    /// let mut surface = None;
+    /// for frame in 0..3 {
+    ///     let place = [(&ball, DMat4::from_translation(DVec3::new(frame as f64 * 0.1, 0.0, 0.0)))];
+    ///     let mut encoder = ctx.encoder("voxelize");
+    ///     match surface.as_mut() {
+    ///         None => surface = Some(v.encode_surface_placed(
+    ///             &ctx.device, &mut encoder, &place, &grid, Separation::Conservative)?),
+    ///         Some(s) => v.encode_surface_placed_into(
+    ///             &ctx.device, &mut encoder, &place, &grid, Separation::Conservative, s)?,
+    ///     }
+    ///     ctx.submit_and_wait("voxelize", encoder)?;
+    /// }
+    /// # Ok(()) }
+    /// ```
+    pub fn encode_surface_placed_into(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        parts: &[(&GpuMesh, DMat4)],
+        grid: &Grid,
+        separation: Separation,
+        surface: &mut Surface,
+    ) -> Result<(), Error> {
+        let runs = placed_runs(device, parts, grid)?;
+        check_reused(device, surface, grid)?;
+        rec.recorder()
+            .encoder
+            .clear_buffer(&surface.occupancy, 0, None);
+        self.record_placed(device, rec, &runs, &surface.occupancy, grid, separation)?;
+        surface.degenerate = parts.iter().map(|(m, _)| m.degenerate).sum();
+        Ok(())
+    }
+
+    /// The surface passes of `runs` into `occupancy`.
+    fn record_placed(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        runs: &[PlacedRun],
+        occupancy: &wgpu::Buffer,
+        grid: &Grid,
+        separation: Separation,
+    ) -> Result<(), Error> {
         let pipelines = match separation {
             Separation::Conservative => &self.surface,
             Separation::Six => &self.surface_six,
         };
-        for &(mesh, to_grid, listing, moved) in &runs {
+        for &(mesh, to_grid, listing, moved) in runs {
             let _ = self.surface_pass(
                 device,
                 rec,
                 pipelines,
-                &occupancy,
+                occupancy,
                 &SurfaceRun {
                     triangles: &mesh.triangles,
                     count: mesh.count,
@@ -311,12 +342,90 @@ impl Voxelizer {
                 grid,
             )?;
         }
-        Ok(Surface {
-            size: grid.size,
-            occupancy,
-            degenerate: parts.iter().map(|(m, _)| m.degenerate).sum(),
-        })
+        Ok(())
     }
+}
+
+/// One placed mesh as its surface pass takes it: the mesh, its move into the grid in f32, how
+/// its heavy triangles are listed, and how far f32 rounding of the move can carry a vertex.
+type PlacedRun<'a> = (&'a GpuMesh, glam::Mat4, GpuListing, f32);
+
+/// Check `grid` and every part's matrix, and make each part's [`PlacedRun`], refusing a work
+/// list larger than one binding (as `surface_pass` would, but before anything is recorded).
+fn placed_runs<'a>(
+    device: &wgpu::Device,
+    parts: &[(&'a GpuMesh, DMat4)],
+    grid: &Grid,
+) -> Result<Vec<PlacedRun<'a>>, Error> {
+    check_grid(grid)?;
+    let grid_from_world =
+        DMat4::from_scale(DVec3::splat(1.0 / grid.voxel)) * DMat4::from_translation(-grid.origin);
+    let mut runs = Vec::with_capacity(parts.len());
+    for (i, &(mesh, model)) in parts.iter().enumerate() {
+        check_model(model).map_err(|e| match e {
+            Error::Invalid { stage, what } => Error::Invalid {
+                stage,
+                what: format!("part {i}: {what}"),
+            },
+            e => e,
+        })?;
+        let to_grid = grid_from_world * model * DMat4::from_translation(mesh.anchor);
+        let linear = glam::DMat3::from_mat4(to_grid);
+        let (a, b) = axis_stretches(linear);
+        let shift = to_grid.w_axis.truncate();
+        // How far f32 rounding can move a vertex, in voxels: the stored position (half an
+        // ulp), the matrix's entries (half an ulp each) and the product's three multiplies
+        // and adds, each a few ulp of |A|·|p| + |b| — 8 ulp of it bounds them all.
+        let rows = linear.transpose();
+        let row_sum = [rows.x_axis, rows.y_axis, rows.z_axis]
+            .map(|r| r.abs().element_sum())
+            .into_iter()
+            .fold(0.0, f64::max);
+        let size = row_sum * mesh.radius + shift.abs().max_element();
+        let moved = 8.0 * f32::EPSILON as f64 * size;
+        let placed = to_grid.as_mat4();
+        if !placed.is_finite() || !size.is_finite() || size > 1e30 {
+            return Err(invalid(format!(
+                "part {i}: the model matrix moves the mesh {size} voxels from the grid, \
+                 more than f32 can hold"
+            )));
+        }
+        let listing = mesh.bound.listing(a, b, grid.size);
+        check_work_list(device, &listing)?;
+        runs.push((mesh, placed, listing, moved as f32));
+    }
+    Ok(runs)
+}
+
+/// Whether `surface` can take a surface of `grid` again: the same size, a buffer that holds
+/// its bits within one binding, and the usages the clear and the passes need.
+fn check_reused(device: &wgpu::Device, surface: &Surface, grid: &Grid) -> Result<(), Error> {
+    if surface.size != grid.size {
+        return Err(invalid(format!(
+            "the surface to refill is {:?} voxels, the grid {:?}; make a new surface for \
+             another size",
+            surface.size, grid.size
+        )));
+    }
+    let bytes = grid.voxels().div_ceil(32).max(1) * 4;
+    let buffer = &surface.occupancy;
+    let limit = device.limits().max_storage_buffer_binding_size;
+    if buffer.size() < bytes || buffer.size() > limit {
+        return Err(invalid(format!(
+            "the surface's occupancy buffer is {} bytes; {} voxels need {bytes}, within the \
+             device's binding limit of {limit}",
+            buffer.size(),
+            grid.voxels()
+        )));
+    }
+    let needs = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
+    if !buffer.usage().contains(needs) {
+        return Err(invalid(format!(
+            "the surface's occupancy buffer has usages {:?}; refilling it needs {needs:?}",
+            buffer.usage()
+        )));
+    }
+    Ok(())
 }
 
 #[cfg(test)]

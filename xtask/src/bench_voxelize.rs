@@ -1,6 +1,7 @@
 //! `cargo xtask bench voxelize`: GPU time of conservative surface voxelization (compute and
 //! the write-up's raster path; `resident`: a `GpuMesh` uploaded once, the passes alone, as
-//! cuda_voxelizer's kernel is timed), solid fill and averaged attributes, for the mesh given
+//! cuda_voxelizer's kernel is timed; `refill`: the same into one surface kept across runs,
+//! `encode_surface_placed_into`, its recorded clear included), solid fill and averaged attributes, for the mesh given
 //! with `--mesh` (an OBJ file, read by tobj: the 69 451-triangle Stanford bunny the peers were
 //! measured on; or the npm `bunny`'s `index.js` from `scripts/fetch-bunny.sh`, also split twice,
 //! 59 k triangles) and a procedural torus of about a million triangles, in grids of 128³ to
@@ -13,7 +14,8 @@
 //!
 //! `--sizes 512,256,512` times those grid sizes in that order. `--replot voxelize.csv` draws
 //! the chart from a saved table without measuring. Surface and solid rows also print each
-//! pass's time (`Profiler::record` around `encode_surface_with`). With `FIELDKIT_BENCH_SHUFFLED` set, the split bunny
+//! pass's time (`Profiler::record` around `encode_surface_with`); `resident` and `refill`
+//! rows the CPU's time to record and submit a run. With `FIELDKIT_BENCH_SHUFFLED` set, the split bunny
 //! is also timed with its triangles in a
 //! scattered order (neighbours in the list no longer neighbours on the surface). `--modes
 //! empty,zeroed,cleared,loaded` adds the floor rows of `floor.rs`: an empty pass timed the same
@@ -174,6 +176,7 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
                 for mode in [
                     "surface",
                     "resident",
+                    "refill",
                     "raster",
                     "solid",
                     "attributes",
@@ -228,15 +231,53 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
                     } else {
                         0
                     };
+                    // `refill`: the resident mesh into one surface kept across runs.
+                    let kept = std::cell::RefCell::new(None::<Surface>);
                     let encode = |enc: &mut wgpu::CommandEncoder| -> Result<Surface, String> {
+                        let placed = [(&resident, glam::DMat4::IDENTITY)];
+                        let conservative = fieldkit::voxelize::Separation::Conservative;
                         match mode {
+                            "refill" => {
+                                let mut kept = kept.borrow_mut();
+                                if let Some(s) = kept.as_mut() {
+                                    v.encode_surface_placed_into(
+                                        &ctx.device,
+                                        enc,
+                                        &placed,
+                                        &grid,
+                                        conservative,
+                                        s,
+                                    )
+                                    .map(|()| Surface {
+                                        size: s.size,
+                                        occupancy: s.occupancy.clone(),
+                                        degenerate: s.degenerate,
+                                    })
+                                } else {
+                                    let s = v.encode_surface_placed(
+                                        &ctx.device,
+                                        enc,
+                                        &placed,
+                                        &grid,
+                                        conservative,
+                                    );
+                                    if let Ok(s) = &s {
+                                        *kept = Some(Surface {
+                                            size: s.size,
+                                            occupancy: s.occupancy.clone(),
+                                            degenerate: s.degenerate,
+                                        });
+                                    }
+                                    s
+                                }
+                            }
                             "surface" => v.encode_surface(&ctx.device, enc, mesh, &grid),
                             "resident" => v.encode_surface_placed(
                                 &ctx.device,
                                 enc,
-                                &[(&resident, glam::DMat4::IDENTITY)],
+                                &placed,
                                 &grid,
-                                fieldkit::voxelize::Separation::Conservative,
+                                conservative,
                             ),
                             "raster" => v.encode_surface_raster(&ctx.device, enc, mesh, &grid),
                             "solid" => v.encode_solid(&ctx.device, enc, mesh, &grid, true),
@@ -256,6 +297,33 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
                     let t = time_rows(&ctx, &stamps, heater.as_ref(), args, |enc| {
                         encode(enc).map(|_| ())
                     })?;
+                    if mode == "resident" || mode == "refill" {
+                        // What the CPU spends a frame: recording (buffers made here) and the
+                        // submission (where wgpu records the zeroing of new buffers), the GPU's
+                        // work waited for outside the time, the surface dropped after it.
+                        let mut host = Vec::new();
+                        for _ in 0..args.reps.max(20) {
+                            let mut enc = ctx.encoder("host");
+                            let start = std::time::Instant::now();
+                            let s = encode(&mut enc)?;
+                            let index = ctx.queue.submit([enc.finish()]);
+                            host.push(start.elapsed().as_secs_f64() * 1e3);
+                            ctx.device
+                                .poll(wgpu::PollType::Wait {
+                                    submission_index: Some(index),
+                                    timeout: None,
+                                })
+                                .map_err(|e| e.to_string())?;
+                            drop(s);
+                        }
+                        let (lo, hi) = host
+                            .iter()
+                            .fold((f64::MAX, 0.0f64), |(l, h), &t| (l.min(t), h.max(t)));
+                        println!(
+                            "  host (record + submit): {:.4} ms ({lo:.4}–{hi:.4})",
+                            median(host)
+                        );
+                    }
                     if mode == "surface" || mode == "resident" || mode == "solid" {
                         // Each pass on its own (the clears between them are not passes).
                         let (total, _, _, passes) = crate::measure::time_runs(
