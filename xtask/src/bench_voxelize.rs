@@ -233,6 +233,11 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
                     };
                     // `refill`: the resident mesh into one surface kept across runs.
                     let kept = std::cell::RefCell::new(None::<Surface>);
+                    let share = |s: &Surface| Surface {
+                        size: s.size,
+                        occupancy: s.occupancy.clone(),
+                        degenerate: s.degenerate,
+                    };
                     let encode = |enc: &mut wgpu::CommandEncoder| -> Result<Surface, String> {
                         let placed = [(&resident, glam::DMat4::IDENTITY)];
                         let conservative = fieldkit::voxelize::Separation::Conservative;
@@ -248,11 +253,7 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
                                         conservative,
                                         s,
                                     )
-                                    .map(|()| Surface {
-                                        size: s.size,
-                                        occupancy: s.occupancy.clone(),
-                                        degenerate: s.degenerate,
-                                    })
+                                    .map(|()| share(s))
                                 } else {
                                     let s = v.encode_surface_placed(
                                         &ctx.device,
@@ -262,11 +263,7 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
                                         conservative,
                                     );
                                     if let Ok(s) = &s {
-                                        *kept = Some(Surface {
-                                            size: s.size,
-                                            occupancy: s.occupancy.clone(),
-                                            degenerate: s.degenerate,
-                                        });
+                                        *kept = Some(share(s));
                                     }
                                     s
                                 }
