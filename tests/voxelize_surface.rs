@@ -516,11 +516,15 @@ fn placed_meshes_voxelize_into_one_grid() {
 }
 
 /// A surface refilled in place (`encode_surface_placed_into`, for loops that voxelize every
-/// frame): each frame's bits equal a new surface's for the same placement exactly, with none
-/// of the frame before left over (the meshes move apart between frames, so a missing clear
-/// leaves stale voxels), and `degenerate` follows the parts. A surface of another size, a
-/// buffer too small or without `COPY_DST` are refused with a typed error before anything is
-/// recorded, and the surface keeps its bits.
+/// frame): each frame's bits equal a new surface's for the same placement exactly. The frames
+/// are chosen so that each thing the refill must do fails the test when left out: the meshes
+/// move apart (a missing clear leaves stale voxels), a bar grows past the kept list (a list
+/// not made again for it drops chunks), and a ball of heavy triangles follows the large bar (a
+/// work list whose count is not reset puts the ball's chunks past the ball's own capacity,
+/// where they are dropped: 1 657 voxels missing on llvmpipe); `degenerate` follows the parts.
+/// A surface
+/// of another size, a buffer too small or without `COPY_DST` are refused with a typed error
+/// before anything is recorded, and the surface keeps its bits.
 #[test]
 fn a_surface_refilled_in_place_equals_a_new_one() {
     use fieldkit::voxelize::{GpuMesh, Surface};
@@ -542,7 +546,10 @@ fn a_surface_refilled_in_place_equals_a_new_one() {
         size: [48, 40, 36],
     };
     let read = |s: &Surface| s.read(&ctx.device, &ctx.queue).wait(&ctx).unwrap();
-    let frames: [Vec<(&GpuMesh, DMat4)>; 4] = [
+    let low = DMat4::from_translation(DVec3::new(0.0, -1.5, -1.0));
+    // Stretched across the grid: a list more than four times the thin bar's.
+    let thick = DMat4::from_scale(DVec3::new(1.0, 15.0, 15.0));
+    let frames: [Vec<(&GpuMesh, DMat4)>; 9] = [
         vec![
             (&ball, DMat4::from_translation(DVec3::new(-1.2, 0.0, 0.0))),
             (&bar, DMat4::from_translation(DVec3::new(0.0, 1.0, 0.5))),
@@ -552,7 +559,12 @@ fn a_surface_refilled_in_place_equals_a_new_one() {
             (&bar, DMat4::from_rotation_z(1.2)),
         ],
         vec![],
-        vec![(&bar, DMat4::from_translation(DVec3::new(0.0, -1.5, -1.0)))],
+        vec![(&bar, low)],
+        vec![(&bar, low)],
+        vec![(&bar, low)],
+        vec![(&bar, thick)],
+        vec![(&bar, thick)],
+        vec![(&ball, DMat4::from_scale(DVec3::splat(2.5)))],
     ];
     let mut enc = ctx.encoder("refill");
     let mut kept = v
@@ -589,29 +601,26 @@ fn a_surface_refilled_in_place_equals_a_new_one() {
             .unwrap();
         ctx.submit_and_wait("refill", enc).unwrap();
         let (refilled, want) = (read(&kept), read(&new));
+        let voxels = want.iter().filter(|&&b| b).count();
         let stale = before.iter().zip(&want).filter(|&(&b, &w)| b && !w).count();
+        let missing = want
+            .iter()
+            .zip(&refilled)
+            .filter(|&(&w, &r)| w && !r)
+            .count();
         println!(
-            "frame {f}: {} voxels, {stale} of the frame before not in it",
-            want.iter().filter(|&&b| b).count()
+            "frame {f}: {voxels} voxels, {stale} of the frame before not in it, {missing} missing"
         );
-        assert!(
-            f == 2 || want.iter().filter(|&&b| b).count() > 500,
-            "frame {f}"
-        );
-        // After the empty frame there is nothing to leave over.
-        assert!(
-            f == 3 || stale > 100,
-            "frame {f}: the frames must differ for the test to hold"
-        );
+        // The frames the clear is tested on must differ from the one before.
+        assert!(!matches!(f, 1 | 2 | 6) || stale > 100, "frame {f}: {stale}");
+        assert!(f == 2 || voxels > 500, "frame {f}: {voxels}");
         assert!(
             refilled == want,
             "frame {f}: the refilled surface differs from a new one"
         );
         assert_eq!(kept.degenerate, new.degenerate, "frame {f}");
-        assert_eq!(
-            kept.degenerate,
-            usize::from(parts.iter().any(|p| std::ptr::eq(p.0, &ball)))
-        );
+        let has_ball = parts.iter().any(|p| std::ptr::eq(p.0, &ball));
+        assert_eq!(kept.degenerate, usize::from(has_ball), "frame {f}");
         before = refilled;
     }
     // Refusals leave the surface as it was (the last frame's bar).
@@ -652,23 +661,16 @@ fn a_surface_refilled_in_place_equals_a_new_one() {
         })
     };
     let words = (48 * 40 * 36u64).div_ceil(32);
-    let mut small = Surface {
-        size: grid.size,
-        occupancy: buffer(4 * words - 4, wgpu::BufferUsages::COPY_DST),
-        degenerate: 0,
-    };
+    kept.occupancy = buffer(4 * words - 4, wgpu::BufferUsages::COPY_DST);
     bad(
-        &mut small,
+        &mut kept,
         &grid,
         &format!("buffer is {} bytes", 4 * words - 4),
     );
-    let mut no_copy = Surface {
-        size: grid.size,
-        occupancy: buffer(4 * words, wgpu::BufferUsages::COPY_SRC),
-        degenerate: 7,
-    };
-    bad(&mut no_copy, &grid, "refilling it needs");
-    assert_eq!(no_copy.degenerate, 7);
+    kept.occupancy = buffer(4 * words, wgpu::BufferUsages::COPY_SRC);
+    kept.degenerate = 7;
+    bad(&mut kept, &grid, "refilling it needs");
+    assert_eq!(kept.degenerate, 7);
 }
 
 /// Resident meshes moved by matrices on the GPU (issue 24, seed 004: "a per-mesh model matrix

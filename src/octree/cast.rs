@@ -453,11 +453,7 @@ impl OctreeCaster {
             [groups.min(row) as u32, groups.div_ceil(row) as u32, 1],
             stage::STAGE,
         )?;
-        Ok(crate::voxelize::Surface {
-            size,
-            occupancy,
-            degenerate: 0,
-        })
+        Ok(crate::voxelize::Surface::new(size, occupancy, 0))
     }
 
     fn run(

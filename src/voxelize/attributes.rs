@@ -578,11 +578,7 @@ impl Voxelizer {
         Ok(PendingAttributes {
             bound,
             albedo: albedo_view,
-            surface: Surface {
-                size: grid.size,
-                occupancy,
-                degenerate: local.degenerate,
-            },
+            surface: Surface::new(grid.size, occupancy, local.degenerate),
             grid: *grid,
             triangles,
             corners,

@@ -730,9 +730,21 @@ pub struct Surface {
     pub occupancy: wgpu::Buffer,
     /// Zero-area triangles left out.
     pub degenerate: usize,
+    /// The work list kept for refills (`encode_surface_placed_into`), made by the first.
+    kept: Option<Box<KeptWork>>,
 }
 
 impl Surface {
+    /// A surface of `size` voxels whose bits are in `occupancy`, with no work list kept.
+    pub(crate) fn new(size: [u32; 3], occupancy: wgpu::Buffer, degenerate: usize) -> Self {
+        Surface {
+            size,
+            occupancy,
+            degenerate,
+            kept: None,
+        }
+    }
+
     /// One bool per voxel, x fastest, once the encoder that recorded this surface has been
     /// submitted (see [`Readback`] for how to wait or poll).
     pub fn read(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Readback<Vec<bool>> {
@@ -1082,6 +1094,94 @@ struct HeavyWork {
     giant_blocks: u64,
 }
 
+impl HeavyWork {
+    /// New buffers for a list of `capacity` entries (at least one): the count zero, both
+    /// dispatches' arguments (0, 1, 1) (`surface` raises the count, and the rows of 65535, as
+    /// it lists chunks), the giants' counts zero.
+    fn new(device: &wgpu::Device, capacity: u32, giant_blocks: u64) -> Self {
+        let buffer = |label, size: u64, usage| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage: wgpu::BufferUsages::STORAGE | usage,
+                mapped_at_creation: false,
+            })
+        };
+        let arguments = |label, bytes: u64| {
+            wgpu::util::DeviceExt::create_buffer_init(
+                device,
+                &wgpu::util::BufferInitDescriptor {
+                    label: Some(label),
+                    contents: bytemuck::cast_slice(&initial_arguments(bytes)),
+                    usage: wgpu::BufferUsages::STORAGE
+                        | wgpu::BufferUsages::INDIRECT
+                        | wgpu::BufferUsages::COPY_DST,
+                },
+            )
+        };
+        HeavyWork {
+            work: buffer(
+                "voxelize work list",
+                capacity.max(1) as u64 * 8,
+                wgpu::BufferUsages::empty(),
+            ),
+            work_count: buffer("voxelize work count", 4, wgpu::BufferUsages::COPY_DST),
+            dispatch: arguments("voxelize heavy dispatch", 12),
+            capacity,
+            // The giant pass's arguments (0, 1, 1), then zeros.
+            giant_records: arguments("voxelize giant triangles", GIANT_BYTES),
+            giant_blocks,
+        }
+    }
+}
+
+/// Words of `bytes` of indirect dispatch arguments before any work is listed: (0, 1, 1), then
+/// zeros.
+fn initial_arguments(bytes: u64) -> Vec<u32> {
+    let mut words = vec![0u32; bytes as usize / 4];
+    words[1..3].copy_from_slice(&[1, 1]);
+    words
+}
+
+/// A [`HeavyWork`] kept with a refilled [`Surface`] (`encode_surface_placed_into`), and the
+/// arguments it starts from, copied over it before each pass that uses it.
+struct KeptWork {
+    heavy: HeavyWork,
+    initial: wgpu::Buffer,
+}
+
+impl KeptWork {
+    /// Kept buffers for a list of at least `capacity` entries (a quarter more, so that a
+    /// listing that grows a little from frame to frame does not make new ones each time).
+    fn new(device: &wgpu::Device, capacity: u32) -> Self {
+        let initial = wgpu::util::DeviceExt::create_buffer_init(
+            device,
+            &wgpu::util::BufferInitDescriptor {
+                label: Some("voxelize initial arguments"),
+                contents: bytemuck::cast_slice(&initial_arguments(GIANT_BYTES)),
+                usage: wgpu::BufferUsages::COPY_SRC,
+            },
+        );
+        let most = device.limits().max_storage_buffer_binding_size / 8;
+        let room = (capacity as u64 + capacity as u64 / 4).min(most) as u32;
+        KeptWork {
+            heavy: HeavyWork::new(device, room, 0),
+            initial,
+        }
+    }
+
+    /// Record the count's and the arguments' reset, so the next pass lists from nothing.
+    fn reset(&self, rec: &mut impl Record) {
+        let rec = rec.recorder();
+        let h = &self.heavy;
+        rec.encoder.clear_buffer(&h.work_count, 0, None);
+        rec.encoder
+            .copy_buffer_to_buffer(&self.initial, 0, &h.dispatch, 0, 12);
+        rec.encoder
+            .copy_buffer_to_buffer(&self.initial, 0, &h.giant_records, 0, GIANT_BYTES);
+    }
+}
+
 impl Voxelizer {
     /// Create the surface, solid and volume pipelines (the rest on first use).
     pub fn new(device: &wgpu::Device) -> Result<Self, Error> {
@@ -1181,11 +1281,7 @@ impl Voxelizer {
         if with_surface {
             self.listed_pass(device, rec, &self.surface, &occupancy, &listed, grid)?;
         }
-        Ok(Surface {
-            size: grid.size,
-            occupancy,
-            degenerate: local.degenerate,
-        })
+        Ok(Surface::new(grid.size, occupancy, local.degenerate))
     }
 
     /// `voxels` as an `R32Float` 3D texture (1 occupied, 0 empty) that the distance stages
@@ -1338,7 +1434,16 @@ impl Voxelizer {
         )
     }
 
-    /// One surface pass of `run`'s triangles into `occupancy` (see [`Self::surface_into`]).
+    /// The surface pipelines for `separation`.
+    fn pipelines(&self, separation: Separation) -> &SurfacePipelines {
+        match separation {
+            Separation::Conservative => &self.surface,
+            Separation::Six => &self.surface_six,
+        }
+    }
+
+    /// One surface pass of `run`'s triangles into `occupancy` (see [`Self::surface_into`]),
+    /// with a work list of its own.
     fn surface_pass(
         &self,
         device: &wgpu::Device,
@@ -1348,6 +1453,27 @@ impl Voxelizer {
         run: &SurfaceRun,
         grid: &Grid,
     ) -> Result<HeavyWork, Error> {
+        check_work_list(device, &run.listing)?;
+        // Within a binding: a u32 count. New buffers: zeroed by wgpu (the count starts at 0).
+        let heavy = HeavyWork::new(device, run.listing.capacity as u32, run.listing.blocks);
+        self.surface_pass_with(device, rec, pipelines, occupancy, run, grid, &heavy)?;
+        Ok(heavy)
+    }
+
+    /// [`Self::surface_pass`] with the work list `heavy`, whose count must be zero and whose
+    /// arguments (0, 1, 1) when the pass is recorded, and which holds at least the run's
+    /// listing's entries (the pass uses as many as the listing asks for).
+    #[allow(clippy::too_many_arguments)]
+    fn surface_pass_with(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        pipelines: &SurfacePipelines,
+        occupancy: &wgpu::Buffer,
+        run: &SurfaceRun,
+        grid: &Grid,
+        heavy_work: &HeavyWork,
+    ) -> Result<(), Error> {
         let &SurfaceRun {
             triangles,
             count,
@@ -1355,55 +1481,17 @@ impl Voxelizer {
             to_grid,
             moved,
         } = run;
-        check_work_list(device, &listing)?;
-        // Within a binding: a u32 count.
+        debug_assert!(heavy_work.capacity as u64 >= listing.capacity);
         let capacity = listing.capacity as u32;
-        let buffer = |label, size: u64, usage| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size,
-                usage: wgpu::BufferUsages::STORAGE | usage,
-                mapped_at_creation: false,
-            })
-        };
-        // (0, 1, 1) workgroups: `surface` raises the count (and the rows of 65535) as it lists
-        // chunks.
-        let arguments = |label, bytes: u64| {
-            let mut words = vec![0u32; bytes as usize / 4];
-            words[1..3].copy_from_slice(&[1, 1]);
-            wgpu::util::DeviceExt::create_buffer_init(
-                device,
-                &wgpu::util::BufferInitDescriptor {
-                    label: Some(label),
-                    contents: bytemuck::cast_slice(&words),
-                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
-                },
-            )
-        };
-        let dispatch = arguments("voxelize heavy dispatch", 12);
-        let heavy_work = HeavyWork {
-            work: buffer(
-                "voxelize work list",
-                capacity.max(1) as u64 * 8,
-                wgpu::BufferUsages::empty(),
-            ),
-            work_count: buffer("voxelize work count", 4, wgpu::BufferUsages::COPY_DST),
-            dispatch,
-            capacity,
-            // The giant pass's arguments (0, 1, 1), then zeros.
-            giant_records: arguments("voxelize giant triangles", GIANT_BYTES),
-            giant_blocks: listing.blocks,
-        };
         let HeavyWork {
             work,
             work_count,
             dispatch,
             giant_records,
             ..
-        } = &heavy_work;
-        // New buffers: zeroed by wgpu (the count starts at 0).
+        } = heavy_work;
         if count == 0 {
-            return Ok(heavy_work);
+            return Ok(());
         }
         let params_for = |first, n| {
             uniform(
@@ -1460,7 +1548,7 @@ impl Voxelizer {
             );
         }
         if capacity == 0 {
-            return Ok(heavy_work);
+            return Ok(());
         }
         let heavy = pipelines.heavy.bind(
             device,
@@ -1480,7 +1568,7 @@ impl Voxelizer {
             dispatch,
             (capacity as u64).div_ceil(64),
         );
-        Ok(heavy_work)
+        Ok(())
     }
 
     /// The conservative surface voxels of [`Voxelizer::encode_surface`], found through the
@@ -1580,11 +1668,7 @@ impl Voxelizer {
         bound.set_render(&mut pass);
         pass.draw(0..count * 3, 0..1);
         drop(pass);
-        Ok(Surface {
-            size: grid.size,
-            occupancy,
-            degenerate: local.degenerate,
-        })
+        Ok(Surface::new(grid.size, occupancy, local.degenerate))
     }
 
     /// Conservative surface voxels of `mesh` in `grid`: every voxel (a closed box) a triangle
@@ -1611,17 +1695,10 @@ impl Voxelizer {
     ) -> Result<Surface, Error> {
         let local = mesh.to_grid(grid)?;
         let occupancy = zeroed_bitset(device, grid)?;
-        let pipelines = match separation {
-            Separation::Conservative => &self.surface,
-            Separation::Six => &self.surface_six,
-        };
+        let pipelines = self.pipelines(separation);
         let listed = Listed::new(device, &local, grid, self.listing_for(&local))?;
         self.listed_pass(device, rec, pipelines, &occupancy, &listed, grid)?;
-        Ok(Surface {
-            size: grid.size,
-            occupancy,
-            degenerate: local.degenerate,
-        })
+        Ok(Surface::new(grid.size, occupancy, local.degenerate))
     }
 }
 

@@ -233,60 +233,56 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
                     };
                     // `refill`: the resident mesh into one surface kept across runs.
                     let kept = std::cell::RefCell::new(None::<Surface>);
-                    let share = |s: &Surface| Surface {
-                        size: s.size,
-                        occupancy: s.occupancy.clone(),
-                        degenerate: s.degenerate,
-                    };
-                    let encode = |enc: &mut wgpu::CommandEncoder| -> Result<Surface, String> {
-                        let placed = [(&resident, glam::DMat4::IDENTITY)];
-                        let conservative = fieldkit::voxelize::Separation::Conservative;
-                        match mode {
-                            "refill" => {
-                                let mut kept = kept.borrow_mut();
-                                if let Some(s) = kept.as_mut() {
-                                    v.encode_surface_placed_into(
-                                        &ctx.device,
-                                        enc,
-                                        &placed,
-                                        &grid,
-                                        conservative,
-                                        s,
-                                    )
-                                    .map(|()| share(s))
-                                } else {
-                                    let s = v.encode_surface_placed(
-                                        &ctx.device,
-                                        enc,
-                                        &placed,
-                                        &grid,
-                                        conservative,
-                                    );
-                                    if let Ok(s) = &s {
-                                        *kept = Some(share(s));
+                    // `Ok(None)`: the run refilled `kept`.
+                    let encode =
+                        |enc: &mut wgpu::CommandEncoder| -> Result<Option<Surface>, String> {
+                            let placed = [(&resident, glam::DMat4::IDENTITY)];
+                            let conservative = fieldkit::voxelize::Separation::Conservative;
+                            match mode {
+                                "refill" => {
+                                    let mut kept = kept.borrow_mut();
+                                    return match kept.as_mut() {
+                                        Some(s) => v.encode_surface_placed_into(
+                                            &ctx.device,
+                                            enc,
+                                            &placed,
+                                            &grid,
+                                            conservative,
+                                            s,
+                                        ),
+                                        None => v
+                                            .encode_surface_placed(
+                                                &ctx.device,
+                                                enc,
+                                                &placed,
+                                                &grid,
+                                                conservative,
+                                            )
+                                            .map(|s| *kept = Some(s)),
                                     }
-                                    s
+                                    .map(|()| None)
+                                    .map_err(|e| e.to_string());
                                 }
+                                "surface" => v.encode_surface(&ctx.device, enc, mesh, &grid),
+                                "resident" => v.encode_surface_placed(
+                                    &ctx.device,
+                                    enc,
+                                    &placed,
+                                    &grid,
+                                    conservative,
+                                ),
+                                "raster" => v.encode_surface_raster(&ctx.device, enc, mesh, &grid),
+                                "solid" => v.encode_solid(&ctx.device, enc, mesh, &grid, true),
+                                _ => v.encode_attributes(&ctx.device, enc, mesh, &grid).and_then(
+                                    |p| {
+                                        v.encode_resolve_attributes(&ctx.device, enc, p, occupied)
+                                            .map(|a| a.surface)
+                                    },
+                                ),
                             }
-                            "surface" => v.encode_surface(&ctx.device, enc, mesh, &grid),
-                            "resident" => v.encode_surface_placed(
-                                &ctx.device,
-                                enc,
-                                &placed,
-                                &grid,
-                                conservative,
-                            ),
-                            "raster" => v.encode_surface_raster(&ctx.device, enc, mesh, &grid),
-                            "solid" => v.encode_solid(&ctx.device, enc, mesh, &grid, true),
-                            _ => v
-                                .encode_attributes(&ctx.device, enc, mesh, &grid)
-                                .and_then(|p| {
-                                    v.encode_resolve_attributes(&ctx.device, enc, p, occupied)
-                                        .map(|a| a.surface)
-                                }),
-                        }
-                        .map_err(|e| e.to_string())
-                    };
+                            .map(Some)
+                            .map_err(|e| e.to_string())
+                        };
                     if let Err(e) = encode(&mut ctx.encoder("probe")) {
                         skipped(&e);
                         continue;
@@ -370,7 +366,11 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
                     let s = encode(&mut enc)?;
                     ctx.submit_and_wait("count", enc)
                         .map_err(|e| e.to_string())?;
+                    let kept = kept.borrow();
                     let voxels = s
+                        .as_ref()
+                        .or(kept.as_ref())
+                        .ok_or("no surface to count")?
                         .read(&ctx.device, &ctx.queue)
                         .wait(&ctx)
                         .map_err(|e| e.to_string())?
