@@ -479,6 +479,14 @@ fn distance(args: &Args) -> Result<(), String> {
                     d3.encode(&ctx.device, &mut prof.record(enc), &volume, opts)
                         .expect("encode");
                 })?;
+            if name == "exact" {
+                // What a loop that runs the transform every frame spends on the CPU.
+                let (host, lo, hi) = crate::measure::host_times(&ctx, args.reps, |enc| {
+                    d3.encode(&ctx.device, enc, &volume, opts)
+                        .map_err(|e| e.to_string())
+                })?;
+                println!("  host (record + submit) {name} {label}: {host:.3} ms ({lo:.3}–{hi:.3})");
+            }
             let mut enc = ctx.encoder("bench readback");
             let field = d3
                 .encode(&ctx.device, &mut enc, &volume, opts)

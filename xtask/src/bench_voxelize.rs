@@ -294,28 +294,8 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
                         // What the CPU spends a frame: recording (buffers made here) and the
                         // submission (where wgpu records the zeroing of new buffers), the GPU's
                         // work waited for outside the time, the surface dropped after it.
-                        let mut host = Vec::new();
-                        for _ in 0..args.reps.max(20) {
-                            let mut enc = ctx.encoder("host");
-                            let start = std::time::Instant::now();
-                            let s = encode(&mut enc)?;
-                            let index = ctx.queue.submit([enc.finish()]);
-                            host.push(start.elapsed().as_secs_f64() * 1e3);
-                            ctx.device
-                                .poll(wgpu::PollType::Wait {
-                                    submission_index: Some(index),
-                                    timeout: None,
-                                })
-                                .map_err(|e| e.to_string())?;
-                            drop(s);
-                        }
-                        let (lo, hi) = host
-                            .iter()
-                            .fold((f64::MAX, 0.0f64), |(l, h), &t| (l.min(t), h.max(t)));
-                        println!(
-                            "  host (record + submit): {:.4} ms ({lo:.4}–{hi:.4})",
-                            median(host)
-                        );
+                        let (host, lo, hi) = crate::measure::host_times(&ctx, args.reps, encode)?;
+                        println!("  host (record + submit): {host:.4} ms ({lo:.4}–{hi:.4})");
                     }
                     if mode == "surface" || mode == "resident" || mode == "solid" {
                         // Each pass on its own (the clears between them are not passes).

@@ -98,6 +98,36 @@ pub(crate) const WARMUP_TIME: std::time::Duration = std::time::Duration::from_mi
 /// A timed run this many times the median is reported as slow.
 const SLOW: f64 = 1.25;
 
+/// The CPU's time to record `record` into a fresh encoder and submit it, `reps` times (at
+/// least 20): median, fastest and slowest ms. Each submission's GPU work is waited for outside
+/// the time, and what `record` returns is dropped after the wait, as a loop that runs the
+/// stage every frame would.
+pub(crate) fn host_times<T>(
+    ctx: &Context,
+    reps: usize,
+    record: impl Fn(&mut wgpu::CommandEncoder) -> Result<T, String>,
+) -> Result<(f64, f64, f64), String> {
+    let mut host = Vec::new();
+    for _ in 0..reps.max(20) {
+        let mut enc = ctx.encoder("host");
+        let start = std::time::Instant::now();
+        let made = record(&mut enc)?;
+        let index = ctx.queue.submit([enc.finish()]);
+        host.push(start.elapsed().as_secs_f64() * 1e3);
+        ctx.device
+            .poll(wgpu::PollType::Wait {
+                submission_index: Some(index),
+                timeout: None,
+            })
+            .map_err(|e| e.to_string())?;
+        drop(made);
+    }
+    let (lo, hi) = host
+        .iter()
+        .fold((f64::MAX, 0.0f64), |(l, h), &t| (l.min(t), h.max(t)));
+    Ok((median(host), lo, hi))
+}
+
 /// Median, fastest and slowest total ms, and each pass's median ms.
 pub(crate) type Timing = (f64, f64, f64, Vec<(String, f64)>);
 
