@@ -392,3 +392,196 @@ fn exact_2d_matches_cpu() {
         }
     }
 }
+
+/// Fields handed back with `Distance3d::recycle` are taken by the next calls and written whole:
+/// after a field of one seed set is recycled, the next field (another seed set, dense where
+/// the first was sparse, so a value left over would show) is made on the recycled buffers and
+/// texture and equals, bit for bit, the field a `Distance3d` with nothing recycled makes of the
+/// same volume: the exact transform unsigned, signed and split across bindings, JFA, and the
+/// exact 2D transform (`recycle_2d`). Recycling the field of another size takes nothing.
+#[test]
+fn recycled_fields_are_taken_again_and_written_whole() {
+    let ctx = Context::shared();
+    let size = [40, 33, 21];
+    let sparse = random_mask_3d(size, 2e-3, 31);
+    let dense = random_mask_3d(size, 0.08, 32);
+    let upload = |m: &[bool], s: [usize; 3]| {
+        upload_volume(&ctx.device, &ctx.queue, &to_bytes(m), size_u32(s)).unwrap()
+    };
+    let (first, second) = (upload(&sparse, size), upload(&dense, size));
+    let jfa = Method::Jfa(fieldkit::distance::Variant::JfaPlus2);
+    // (case, bytes per binding, options)
+    let cases = [
+        ("exact", None, Options3d::default()),
+        (
+            "exact signed",
+            None,
+            Options3d {
+                signed: true,
+                ..Options3d::default()
+            },
+        ),
+        (
+            "exact split",
+            Some(40 * 33 * 21 * 4 / 2),
+            Options3d::default(),
+        ),
+        (
+            "jfa signed",
+            None,
+            Options3d {
+                method: jfa,
+                signed: true,
+                ..Options3d::default()
+            },
+        ),
+    ];
+    let bits = |f: &fieldkit::distance::Field3d| {
+        let mut words = f.nearest.read(&ctx.device, &ctx.queue).wait(&ctx).unwrap();
+        if let Some(o) = &f.nearest_outside {
+            words.extend(o.read(&ctx.device, &ctx.queue).wait(&ctx).unwrap());
+        }
+        let d: Vec<f32> = read_texture(&ctx, &f.distance).unwrap();
+        (words, d.iter().map(|v| v.to_bits()).collect::<Vec<u32>>())
+    };
+    for (case, split, options) in &cases {
+        let mut pooled = Distance3d::new(&ctx.device).unwrap();
+        let mut fresh = Distance3d::new(&ctx.device).unwrap();
+        pooled.set_split_bytes(*split);
+        fresh.set_split_bytes(*split);
+        let mut enc = ctx.encoder("recycle");
+        let old = pooled
+            .encode(&ctx.device, &mut enc, &first, options)
+            .unwrap();
+        ctx.submit_and_wait("recycle", enc).unwrap();
+        let old_bits = bits(&old);
+        let mut given: Vec<wgpu::Buffer> = old.nearest.buffers.clone();
+        given.extend(old.nearest_outside.iter().flat_map(|s| s.buffers.clone()));
+        let old_texture = old.distance.clone();
+        if split.is_some() {
+            assert!(given.len() > 1, "{case}: not split");
+        }
+        pooled.recycle(old);
+        let mut enc = ctx.encoder("recycle");
+        let got = pooled
+            .encode(&ctx.device, &mut enc, &second, options)
+            .unwrap();
+        let want = fresh
+            .encode(&ctx.device, &mut enc, &second, options)
+            .unwrap();
+        ctx.submit_and_wait("recycle", enc).unwrap();
+        let mut taken: Vec<wgpu::Buffer> = got.nearest.buffers.clone();
+        taken.extend(got.nearest_outside.iter().flat_map(|s| s.buffers.clone()));
+        // JFA also takes them for its seeds and ping-pong buffers, so its field holds some.
+        let all = taken.iter().all(|b| given.contains(b)) && taken.len() == given.len();
+        let some = taken.iter().any(|b| given.contains(b));
+        assert!(
+            if options.method == jfa { some } else { all },
+            "{case}: the recycled buffers were not taken"
+        );
+        assert!(
+            got.distance == old_texture,
+            "{case}: the texture was not taken"
+        );
+        let (got_bits, want_bits) = (bits(&got), bits(&want));
+        assert!(
+            got_bits != old_bits,
+            "{case}: the two seed sets give the same field"
+        );
+        assert!(got_bits.0 == want_bits.0, "{case}: nearest seeds differ");
+        assert!(got_bits.1 == want_bits.1, "{case}: distances differ");
+        // A field of another size takes nothing: new buffers, the same answers.
+        let other = [size[0] - 1, size[1], size[2]];
+        let third = upload(&random_mask_3d(other, 0.08, 33), other);
+        pooled.recycle(got);
+        let mut enc = ctx.encoder("recycle");
+        let a = pooled
+            .encode(&ctx.device, &mut enc, &third, options)
+            .unwrap();
+        let b = fresh
+            .encode(&ctx.device, &mut enc, &third, options)
+            .unwrap();
+        ctx.submit_and_wait("recycle", enc).unwrap();
+        assert!(
+            !taken.iter().any(|t| a.nearest.buffers.contains(t)),
+            "{case}"
+        );
+        assert!(bits(&a) == bits(&b), "{case}: another size");
+    }
+    // Sub-voxel seeds: the seed buffer taken from a field of many points must be cleared, or
+    // those points would seed the next field of few.
+    let grid = Grid3::new(size_u32(size));
+    let points = |n: usize, salt: u64| {
+        let mut x = salt;
+        let mut next = move || {
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (x >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let world: Vec<Vec3> = (0..n)
+            .map(|_| Vec3::new(next() * 40.0, next() * 33.0, next() * 21.0))
+            .collect();
+        upload_points(&ctx.device, &ctx.queue, &grid, &world).unwrap()
+    };
+    let (many, few) = (points(300, 1), points(4, 2));
+    let options = Options3d {
+        method: jfa,
+        ..Options3d::default()
+    };
+    let pooled = Distance3d::new(&ctx.device).unwrap();
+    let fresh = Distance3d::new(&ctx.device).unwrap();
+    let mut enc = ctx.encoder("recycle points");
+    let old = pooled
+        .encode_points(&ctx.device, &mut enc, &many, grid.size, None, &options)
+        .unwrap();
+    ctx.submit_and_wait("recycle points", enc).unwrap();
+    pooled.recycle(old);
+    let mut enc = ctx.encoder("recycle points");
+    let got = pooled
+        .encode_points(&ctx.device, &mut enc, &few, grid.size, None, &options)
+        .unwrap();
+    let want = fresh
+        .encode_points(&ctx.device, &mut enc, &few, grid.size, None, &options)
+        .unwrap();
+    ctx.submit_and_wait("recycle points", enc).unwrap();
+    assert!(bits(&got) == bits(&want), "points: the fields differ");
+
+    // 2D: the exact transform's field, recycled with `recycle_2d`.
+    let (w, h) = (97usize, 61usize);
+    let textures = [(0.002, 41), (0.05, 42)].map(|(density, seed)| {
+        let m = random_mask(w, h, density, seed);
+        upload_mask(&ctx.device, &ctx.queue, &to_bytes(&m), w as u32, h as u32).unwrap()
+    });
+    let pooled = Distance3d::new(&ctx.device).unwrap();
+    let fresh = Distance3d::new(&ctx.device).unwrap();
+    let signed = Options3d {
+        signed: true,
+        ..Options3d::default()
+    };
+    let bits_2d = |f: &fieldkit::distance::FieldBuf2d| {
+        let mut words = read_buffer(&ctx, &f.nearest).unwrap();
+        words.extend(read_buffer(&ctx, f.nearest_outside.as_ref().unwrap()).unwrap());
+        (words, read_texture::<u32>(&ctx, &f.distance).unwrap())
+    };
+    let mut enc = ctx.encoder("recycle 2d");
+    let old = pooled
+        .encode_exact_2d(&ctx.device, &mut enc, &textures[0], &signed)
+        .unwrap();
+    ctx.submit_and_wait("recycle 2d", enc).unwrap();
+    let given = old.nearest.clone();
+    pooled.recycle_2d(old);
+    let mut enc = ctx.encoder("recycle 2d");
+    let got = pooled
+        .encode_exact_2d(&ctx.device, &mut enc, &textures[1], &signed)
+        .unwrap();
+    let want = fresh
+        .encode_exact_2d(&ctx.device, &mut enc, &textures[1], &signed)
+        .unwrap();
+    ctx.submit_and_wait("recycle 2d", enc).unwrap();
+    assert!(
+        got.nearest == given || got.nearest_outside.as_ref() == Some(&given),
+        "2D: the recycled buffer was not taken"
+    );
+    assert!(bits_2d(&got) == bits_2d(&want), "2D: the fields differ");
+}

@@ -539,6 +539,24 @@ fn kept_buffer(
     }
 }
 
+/// The buffer kept in `slot` where it has exactly `bytes`, else a new one from `make`, kept
+/// for the next call (for buffers that passes check to be of their field's size).
+fn kept_exact(
+    slot: &std::sync::Mutex<Option<wgpu::Buffer>>,
+    bytes: u64,
+    make: impl FnOnce() -> wgpu::Buffer,
+) -> wgpu::Buffer {
+    let mut kept = slot.lock().unwrap_or_else(|e| e.into_inner());
+    match kept.as_ref() {
+        Some(b) if b.size() == bytes => b.clone(),
+        _ => {
+            let b = make();
+            *kept = Some(b.clone());
+            b
+        }
+    }
+}
+
 /// Parts (columns along x) and slabs (planes along z) of a field of `size` that the exact
 /// transform splits across bindings of `binding` bytes, buffers of `max_buffer_size` (each slab
 /// is one), with parts whole tiles of `columns` wide: `(part_width, slab_depth)`, as few and as
@@ -1114,6 +1132,14 @@ pub struct Distance3d {
     stack: std::sync::Mutex<Option<wgpu::Buffer>>,
     /// The sweep's record of the workgroups it answered, kept the same way.
     swept: std::sync::Mutex<Option<wgpu::Buffer>>,
+    /// The row words of the exact transform's own calls, kept the same way (every word is
+    /// written before it is read).
+    words: std::sync::Mutex<Option<wgpu::Buffer>>,
+    /// A split field's part (the z pass's output, the y pass's input), kept the same way.
+    part: std::sync::Mutex<Option<wgpu::Buffer>>,
+    /// The buffers and textures of fields handed back with [`Self::recycle`], for the next
+    /// calls to take instead of allocating.
+    recycled: std::sync::Mutex<Recycled>,
     /// The resolving global pass (z; y of a split field) sweeps the workgroups whose every
     /// voxel has a site near it.
     sweep: bool,
@@ -1133,6 +1159,14 @@ pub struct Distance3d {
 
 fn voxels(size: [u32; 3]) -> u64 {
     size.iter().map(|&s| s as u64).product()
+}
+
+/// What [`Distance3d::recycle`] was handed: nearest-seed buffers (all made by `field_buffer`,
+/// so of one usage) and distance textures (all made by `distance_texture`).
+#[derive(Default)]
+struct Recycled {
+    buffers: Vec<wgpu::Buffer>,
+    textures: Vec<wgpu::Texture>,
 }
 
 fn field_buffer(device: &wgpu::Device, label: &str, size: [u32; 3]) -> wgpu::Buffer {
@@ -1326,6 +1360,16 @@ fn check_column_axis(
 
 /// Bytes of the row words (`edt_rows.wgsl`'s `row_words`) of a field of `size`: 8 per 32 voxels
 /// of a row, rows rounded up.
+/// A new buffer for the row words of a field of `size`.
+fn row_words_buffer(device: &wgpu::Device, size: [u32; 3]) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("edt row words"),
+        size: row_words_bytes(size),
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    })
+}
+
 fn row_words_bytes(size: [u32; 3]) -> u64 {
     size[0].div_ceil(32) as u64 * size[1] as u64 * size[2] as u64 * 8
 }
@@ -1726,6 +1770,9 @@ impl Distance3d {
             split_columns: MIN_TILE_COLUMNS,
             stack: Default::default(),
             swept: Default::default(),
+            words: Default::default(),
+            part: Default::default(),
+            recycled: Default::default(),
             sweep: true,
             no_source: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("edt: no source, no words"),
@@ -1787,7 +1834,7 @@ impl Distance3d {
         if matches!(options.method, Method::Exact) {
             // The last column pass resolves as it answers (`columns_resolve*`): the field is not
             // read a second time.
-            let distance = distance_texture(device, size, wgpu::TextureDimension::D3);
+            let distance = self.distance_texture(device, size, wgpu::TextureDimension::D3);
             let dv = view(&distance);
             let resolve = |inside_field| Fuse {
                 distance: &dv,
@@ -1874,7 +1921,7 @@ impl Distance3d {
             });
         }
         check_inside(device, inside, size)?;
-        let seeds = field_buffer(device, "nearest seed", size);
+        let seeds = self.field_buffer(device, "nearest seed", size);
         rec.recorder().encoder.clear_buffer(&seeds, 0, None);
         if let Some(h) = &points.homes
             && h.size() < points.count as u64 * 4
@@ -1972,7 +2019,7 @@ impl Distance3d {
             count: 0,
         };
         let params = self.resolve_params(device, size, options);
-        let distance = distance_texture(device, size, wgpu::TextureDimension::D3);
+        let distance = self.distance_texture(device, size, wgpu::TextureDimension::D3);
         let dv = view(&distance);
         let groups = ComputePipeline::<field_resolve::resolve_points::Entry>::groups_for(size);
         match inside {
@@ -2027,7 +2074,7 @@ impl Distance3d {
         invert: bool,
     ) -> Result<wgpu::Buffer, Error> {
         let size = check_volume(device, volume)?;
-        let out = field_buffer(device, "nearest seed", size);
+        let out = self.field_buffer(device, "nearest seed", size);
         let params = uniform(
             device,
             "seed params",
@@ -2130,8 +2177,8 @@ impl Distance3d {
             ComputePipeline::<point_lines::lines_y::Entry>::groups_for(size),
             "lines y",
         )?;
-        let nearest = field_buffer(device, "nearest seed", size);
-        let distance = distance_texture(device, size, wgpu::TextureDimension::D3);
+        let nearest = self.field_buffer(device, "nearest seed", size);
+        let distance = self.distance_texture(device, size, wgpu::TextureDimension::D3);
         let dv = view(&distance);
         let groups = ComputePipeline::<point_lines::lines_z::Entry>::groups_for(size);
         match inside {
@@ -2191,7 +2238,7 @@ impl Distance3d {
                 what: "step 0".into(),
             });
         }
-        let other = field_buffer(device, "jfa ping-pong", size);
+        let other = self.field_buffer(device, "jfa ping-pong", size);
         let (mut a, mut b) = (nearest, other);
         let groups = ComputePipeline::<jfa3_step::jump::Entry>::groups_for(size);
         for &step in steps {
@@ -2284,8 +2331,8 @@ impl Distance3d {
             && self.column_bands.is_none_or(|b| b == SWEEP_BANDS))
         .then(|| self.swept_for(device, size[0].div_ceil(256 / SWEEP_BANDS) * size[1]));
         let (nearest, first_axis) = if folds {
-            let words = self.encode_row_words(device, rec, volume, inside, invert)?;
-            let nearest = field_buffer(device, "nearest seed", size);
+            let words = self.kept_row_words(device, rec, volume, inside, invert)?;
+            let nearest = self.field_buffer(device, "nearest seed", size);
             let tile = self.tile_for(device, size, 1, false)?;
             // Where the z pass sweeps, into the stack, with `nearest` the y pass's own stack.
             let stack = sweep.is_some().then(|| self.stack_for(device, size));
@@ -2397,7 +2444,7 @@ impl Distance3d {
     ) -> Result<wgpu::Buffer, Error> {
         let size = exact_volume_size(device, volume)?;
         check_bytes(&device.limits(), voxels(size) * 4)?;
-        let nearest = field_buffer(device, "nearest seed", size);
+        let nearest = self.field_buffer(device, "nearest seed", size);
         let params = row_params(device, size, inside, invert);
         let vv = view(volume);
         let per_group = rows_per_group(size[0], size[1]);
@@ -2431,13 +2478,41 @@ impl Distance3d {
         invert: bool,
     ) -> Result<wgpu::Buffer, Error> {
         let size = exact_volume_size(device, volume)?;
-        let count = size[0].div_ceil(32);
-        let words = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("edt row words"),
-            size: row_words_bytes(size),
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
+        let words = row_words_buffer(device, size);
+        self.row_words_into(device, rec, volume, inside, invert, &words)?;
+        Ok(words)
+    }
+
+    /// [`Self::encode_row_words`] into the words kept from call to call (the exact
+    /// transform's own row words, which no caller sees).
+    fn kept_row_words(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        volume: &wgpu::Texture,
+        inside: Inside,
+        invert: bool,
+    ) -> Result<wgpu::Buffer, Error> {
+        let size = exact_volume_size(device, volume)?;
+        let words = kept_exact(&self.words, row_words_bytes(size), || {
+            row_words_buffer(device, size)
         });
+        self.row_words_into(device, rec, volume, inside, invert, &words)?;
+        Ok(words)
+    }
+
+    /// The row words pass into `words` (of `row_words_bytes`).
+    fn row_words_into(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        volume: &wgpu::Texture,
+        inside: Inside,
+        invert: bool,
+        words: &wgpu::Buffer,
+    ) -> Result<(), Error> {
+        let size = exact_volume_size(device, volume)?;
+        let count = size[0].div_ceil(32);
         let params = row_params(device, size, inside, invert);
         let vv = view(volume);
         // 2048 cells of workgroup memory per workgroup: rows of up to 2048 voxels (64 words),
@@ -2451,12 +2526,12 @@ impl Distance3d {
                 &edt_rows::row_words::Resources {
                     params: (&params).into(),
                     volume: (&vv).into(),
-                    words: (&words).into(),
+                    words: words.into(),
                 },
                 [size[1].div_ceil(per_group), size[2], 1],
                 "row words (x)",
             )?;
-        Ok(words)
+        Ok(())
     }
 
     /// The y column pass of a 3D field of `size` from the row words of
@@ -2627,20 +2702,25 @@ impl Distance3d {
     ) -> Result<Slabs, Error> {
         let size = exact_volume_size(device, volume)?;
         let [w, h, d] = size;
-        let words = self.encode_row_words(device, rec, volume, inside, invert)?;
+        let words = self.kept_row_words(device, rec, volume, inside, invert)?;
         let slabs: Vec<(u32, u32)> = (0..d)
             .step_by(split.slab_depth as usize)
             .map(|z0| (z0, (z0 + split.slab_depth).min(d)))
             .collect();
         let nearest: Vec<wgpu::Buffer> = slabs
             .iter()
-            .map(|&(z0, z_end)| field_buffer(device, "nearest seed (a slab)", [w, h, z_end - z0]))
+            .map(|&(z0, z_end)| {
+                self.field_buffer(device, "nearest seed (a slab)", [w, h, z_end - z0])
+            })
             .collect();
-        let part = field_buffer(
-            device,
-            "nearest seed (a part of the field)",
-            [split.part_width, h, d],
-        );
+        let part_bytes = voxels([split.part_width, h, d]) * 4;
+        let part = kept_exact(&self.part, part_bytes, || {
+            field_buffer(
+                device,
+                "nearest seed (a part of the field)",
+                [split.part_width, h, d],
+            )
+        });
         let part_at = |x0: u32| placement([x0, 0, 0], split.part_width, split.part_width * h);
         // A pass in global memory keeps its envelopes in the part's layout: a part's worth.
         let part_size = [split.part_width, h, d];
@@ -3046,6 +3126,86 @@ impl Distance3d {
             .unwrap_or(BAND_CHOICES[bands_for(columns, pack_2d)])
     }
 
+    /// Hand back a field no longer needed, so that the next calls take its buffers and
+    /// texture instead of allocating new ones: a loop that runs the transform every frame
+    /// allocates nothing a frame once it recycles the field before the next (on the H200 the
+    /// new buffers of a 512³ field cost the CPU about 26 ms a call, 190 ms at 1024³).
+    ///
+    /// Kept until a call takes them or the next `recycle` replaces them (this keeps one field's
+    /// worth, the last handed back). A call takes a buffer of exactly the size it needs and a
+    /// texture of the same size and dimension; what it takes it writes whole before reading,
+    /// so the field's old contents never show. Commands are ordered as recorded, so a field may
+    /// be recycled as soon as the passes that read it are recorded, even into the same encoder.
+    /// A clone of one of its buffers or its texture kept elsewhere would see the next field's
+    /// values.
+    ///
+    /// ```
+    /// # fn f(ctx: &fieldkit::gpu::Context, volume: &wgpu::Texture) -> Result<(), fieldkit::Error> {
+    /// use fieldkit::distance::{Distance3d, Options3d};
+    /// let d3 = Distance3d::new(&ctx.device)?;
+    /// let mut last = None;
+    /// for _frame in 0..3 {
+    ///     if let Some(field) = last.take() {
+    ///         d3.recycle(field);
+    ///     }
+    ///     let mut encoder = ctx.encoder("distance");
+    ///     last = Some(d3.encode(&ctx.device, &mut encoder, volume, &Options3d::default())?);
+    ///     ctx.submit_and_wait("distance", encoder)?;
+    /// }
+    /// # Ok(()) }
+    /// ```
+    pub fn recycle(&self, field: Field3d) {
+        let mut r = self.recycled.lock().unwrap_or_else(|e| e.into_inner());
+        r.buffers = field.nearest.buffers;
+        r.buffers
+            .extend(field.nearest_outside.into_iter().flat_map(|s| s.buffers));
+        r.textures = vec![field.distance];
+    }
+
+    /// [`Self::recycle`] for a 2D field of the exact transform.
+    pub fn recycle_2d(&self, field: FieldBuf2d) {
+        let mut r = self.recycled.lock().unwrap_or_else(|e| e.into_inner());
+        r.buffers = std::iter::once(field.nearest)
+            .chain(field.nearest_outside)
+            .collect();
+        r.textures = vec![field.distance];
+    }
+
+    /// A buffer for a field of `size`: one handed back to [`Self::recycle`] of exactly its
+    /// bytes where there is one, else a new one.
+    fn field_buffer(&self, device: &wgpu::Device, label: &str, size: [u32; 3]) -> wgpu::Buffer {
+        let bytes = voxels(size) * 4;
+        let mut r = self.recycled.lock().unwrap_or_else(|e| e.into_inner());
+        match r.buffers.iter().position(|b| b.size() == bytes) {
+            Some(i) => r.buffers.swap_remove(i),
+            None => field_buffer(device, label, size),
+        }
+    }
+
+    /// A distance texture of `size`: one handed back to [`Self::recycle`] of that size and
+    /// dimension where there is one, else a new one.
+    fn distance_texture(
+        &self,
+        device: &wgpu::Device,
+        size: [u32; 3],
+        dimension: wgpu::TextureDimension,
+    ) -> wgpu::Texture {
+        let extent = wgpu::Extent3d {
+            width: size[0],
+            height: size[1],
+            depth_or_array_layers: size[2],
+        };
+        let mut r = self.recycled.lock().unwrap_or_else(|e| e.into_inner());
+        match r
+            .textures
+            .iter()
+            .position(|t| t.size() == extent && t.dimension() == dimension)
+        {
+            Some(i) => r.textures.swap_remove(i),
+            None => distance_texture(device, size, dimension),
+        }
+    }
+
     /// The sweep's record of the workgroups it answered (`edt_columns.wgsl`'s `swept`), one
     /// entry for each of `groups` workgroups, kept from call to call as the stack is. The sweep
     /// writes every entry before the pass after it reads them.
@@ -3249,7 +3409,7 @@ impl Distance3d {
             .is_none()
             .then(|| self.stack_for(device, size));
         let rec = &mut rec.recorder();
-        let distance = distance_texture(device, size, wgpu::TextureDimension::D2);
+        let distance = self.distance_texture(device, size, wgpu::TextureDimension::D2);
         let dv = view(&distance);
         // The column pass resolves as it answers (`*_resolve*_2d`), as in 3D; a single row has
         // no column pass and is resolved on its own.
@@ -3266,7 +3426,7 @@ impl Distance3d {
                      invert: bool,
                      fuse: Option<Fuse>|
          -> Result<wgpu::Buffer, Error> {
-            let nearest = field_buffer(device, "nearest seed", size);
+            let nearest = self.field_buffer(device, "nearest seed", size);
             let params = uniform(
                 device,
                 "edt rows params",
@@ -3395,7 +3555,7 @@ impl Distance3d {
     ) -> Result<wgpu::Texture, Error> {
         options.check()?;
         check_size_3d(device, size)?;
-        let distance = distance_texture(device, size, wgpu::TextureDimension::D3);
+        let distance = self.distance_texture(device, size, wgpu::TextureDimension::D3);
         let dv = view(&distance);
         let fuse = Fuse {
             distance: &dv,

@@ -486,6 +486,21 @@ fn distance(args: &Args) -> Result<(), String> {
                         .map_err(|e| e.to_string())
                 })?;
                 println!("  host (record + submit) {name} {label}: {host:.3} ms ({lo:.3}–{hi:.3})");
+                // The same with each run's field recycled for the next (`Distance3d::recycle`).
+                let last = std::cell::RefCell::new(None);
+                let (host, lo, hi) = crate::measure::host_times(&ctx, args.reps, |enc| {
+                    if let Some(field) = last.borrow_mut().take() {
+                        d3.recycle(field);
+                    }
+                    let field = d3
+                        .encode(&ctx.device, enc, &volume, opts)
+                        .map_err(|e| e.to_string())?;
+                    *last.borrow_mut() = Some(field);
+                    Ok(())
+                })?;
+                println!(
+                    "  host (record + submit) {name} {label}, recycled: {host:.3} ms ({lo:.3}–{hi:.3})"
+                );
             }
             let mut enc = ctx.encoder("bench readback");
             let field = d3
