@@ -521,34 +521,18 @@ macro_rules! record_resolved {
     };
 }
 
-/// The buffer kept in `slot` where it holds at least `bytes`, else a new one from `make`, kept
-/// in its place for the next call.
+/// The buffer kept in `slot` where it holds `bytes` (exactly `bytes` where `exact`, for
+/// buffers that passes check to be their field's size), else a new one from `make`, kept for
+/// the next call.
 fn kept_buffer(
     slot: &std::sync::Mutex<Option<wgpu::Buffer>>,
     bytes: u64,
+    exact: bool,
     make: impl FnOnce() -> wgpu::Buffer,
 ) -> wgpu::Buffer {
     let mut kept = slot.lock().unwrap_or_else(|e| e.into_inner());
     match kept.as_ref() {
-        Some(b) if b.size() >= bytes => b.clone(),
-        _ => {
-            let b = make();
-            *kept = Some(b.clone());
-            b
-        }
-    }
-}
-
-/// The buffer kept in `slot` where it has exactly `bytes`, else a new one from `make`, kept
-/// for the next call (for buffers that passes check to be of their field's size).
-fn kept_exact(
-    slot: &std::sync::Mutex<Option<wgpu::Buffer>>,
-    bytes: u64,
-    make: impl FnOnce() -> wgpu::Buffer,
-) -> wgpu::Buffer {
-    let mut kept = slot.lock().unwrap_or_else(|e| e.into_inner());
-    match kept.as_ref() {
-        Some(b) if b.size() == bytes => b.clone(),
+        Some(b) if b.size() == bytes || (!exact && b.size() > bytes) => b.clone(),
         _ => {
             let b = make();
             *kept = Some(b.clone());
@@ -2331,7 +2315,7 @@ impl Distance3d {
             && self.column_bands.is_none_or(|b| b == SWEEP_BANDS))
         .then(|| self.swept_for(device, size[0].div_ceil(256 / SWEEP_BANDS) * size[1]));
         let (nearest, first_axis) = if folds {
-            let words = self.kept_row_words(device, rec, volume, inside, invert)?;
+            let words = self.row_words(device, rec, volume, inside, invert, true)?;
             let nearest = self.field_buffer(device, "nearest seed", size);
             let tile = self.tile_for(device, size, 1, false)?;
             // Where the z pass sweeps, into the stack, with `nearest` the y pass's own stack.
@@ -2477,41 +2461,27 @@ impl Distance3d {
         inside: Inside,
         invert: bool,
     ) -> Result<wgpu::Buffer, Error> {
-        let size = exact_volume_size(device, volume)?;
-        let words = row_words_buffer(device, size);
-        self.row_words_into(device, rec, volume, inside, invert, &words)?;
-        Ok(words)
+        self.row_words(device, rec, volume, inside, invert, false)
     }
 
-    /// [`Self::encode_row_words`] into the words kept from call to call (the exact
-    /// transform's own row words, which no caller sees).
-    fn kept_row_words(
+    /// [`Self::encode_row_words`], into the words kept from call to call where `kept` (the
+    /// exact transform's own row words, which no caller sees), else into a new buffer.
+    fn row_words(
         &self,
         device: &wgpu::Device,
         rec: &mut impl Record,
         volume: &wgpu::Texture,
         inside: Inside,
         invert: bool,
+        kept: bool,
     ) -> Result<wgpu::Buffer, Error> {
         let size = exact_volume_size(device, volume)?;
-        let words = kept_exact(&self.words, row_words_bytes(size), || {
-            row_words_buffer(device, size)
-        });
-        self.row_words_into(device, rec, volume, inside, invert, &words)?;
-        Ok(words)
-    }
-
-    /// The row words pass into `words` (of `row_words_bytes`).
-    fn row_words_into(
-        &self,
-        device: &wgpu::Device,
-        rec: &mut impl Record,
-        volume: &wgpu::Texture,
-        inside: Inside,
-        invert: bool,
-        words: &wgpu::Buffer,
-    ) -> Result<(), Error> {
-        let size = exact_volume_size(device, volume)?;
+        let new = || row_words_buffer(device, size);
+        let words = if kept {
+            kept_buffer(&self.words, row_words_bytes(size), true, new)
+        } else {
+            new()
+        };
         let count = size[0].div_ceil(32);
         let params = row_params(device, size, inside, invert);
         let vv = view(volume);
@@ -2526,12 +2496,12 @@ impl Distance3d {
                 &edt_rows::row_words::Resources {
                     params: (&params).into(),
                     volume: (&vv).into(),
-                    words: words.into(),
+                    words: (&words).into(),
                 },
                 [size[1].div_ceil(per_group), size[2], 1],
                 "row words (x)",
             )?;
-        Ok(())
+        Ok(words)
     }
 
     /// The y column pass of a 3D field of `size` from the row words of
@@ -2702,7 +2672,7 @@ impl Distance3d {
     ) -> Result<Slabs, Error> {
         let size = exact_volume_size(device, volume)?;
         let [w, h, d] = size;
-        let words = self.kept_row_words(device, rec, volume, inside, invert)?;
+        let words = self.row_words(device, rec, volume, inside, invert, true)?;
         let slabs: Vec<(u32, u32)> = (0..d)
             .step_by(split.slab_depth as usize)
             .map(|z0| (z0, (z0 + split.slab_depth).min(d)))
@@ -2714,7 +2684,7 @@ impl Distance3d {
             })
             .collect();
         let part_bytes = voxels([split.part_width, h, d]) * 4;
-        let part = kept_exact(&self.part, part_bytes, || {
+        let part = kept_buffer(&self.part, part_bytes, true, || {
             field_buffer(
                 device,
                 "nearest seed (a part of the field)",
@@ -3211,7 +3181,7 @@ impl Distance3d {
     /// writes every entry before the pass after it reads them.
     fn swept_for(&self, device: &wgpu::Device, groups: u32) -> wgpu::Buffer {
         let bytes = groups as u64 * 4;
-        kept_buffer(&self.swept, bytes, || {
+        kept_buffer(&self.swept, bytes, false, || {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("edt swept workgroups"),
                 size: bytes,
@@ -3226,7 +3196,7 @@ impl Distance3d {
     /// Every pass writes the stack's entries before it reads them, so passes recorded one after
     /// another may share it (wgpu orders their use of it).
     fn stack_for(&self, device: &wgpu::Device, size: [u32; 3]) -> wgpu::Buffer {
-        kept_buffer(&self.stack, voxels(size) * 4, || {
+        kept_buffer(&self.stack, voxels(size) * 4, false, || {
             field_buffer(device, "edt envelope stack", size)
         })
     }
