@@ -194,9 +194,9 @@ pub enum MetaballView {
     /// The debug cubes, one per voxel.
     Cubes,
     /// The raymarched surface, in one of the raymarcher's outputs.
-    Surface(fieldkit::metaball::render::Output),
+    Surface(fieldkit::metaball::Output),
     /// The field traced directly from blob bins (no SDF texture).
-    Direct(fieldkit::metaball::render::Direct),
+    Direct(fieldkit::metaball::Direct),
 }
 
 /// Whose settings a scene uses: fieldkit's defaults, or the source's (`seed()` presets).
@@ -232,8 +232,8 @@ pub fn metaball_scene_with(
     what: MetaballView,
     preset: Preset,
 ) -> Result<Vec<u8>, Error> {
-    use fieldkit::metaball::render::{CubeStyle, Cubes, RaymarchSettings, Raymarcher};
     use fieldkit::metaball::{Animation, Metaballs, Settings, animate, extent_grid, packed_grid};
+    use fieldkit::metaball::{CubeStyle, Cubes, RaymarchSettings, Raymarcher};
     use fieldkit::view::{Targets, View};
     use glam::{Mat4, Vec3};
     let device = &ctx.device;
@@ -416,7 +416,7 @@ fn run(
     let mask_rgba: Vec<u8> = mask.iter().flat_map(|&m| [m, m, m, 255]).collect();
     save("distance_2d_mask.png", &mask_rgba, w, h, &mut written)?;
 
-    use fieldkit::metaball::render::Output;
+    use fieldkit::metaball::Output;
     let (w, h) = (640, 400);
     for (name, what, label) in [
         (
@@ -441,7 +441,7 @@ fn run(
         ),
         (
             "metaball_segment.png",
-            MetaballView::Direct(fieldkit::metaball::render::Direct::Segment),
+            MetaballView::Direct(fieldkit::metaball::Direct::Segment),
             "metaball: segment tracing of the field itself",
         ),
     ] {
@@ -576,7 +576,7 @@ fn run(
         "| ![voxelize_cubes.png](voxelize_cubes.png) | \
          ![voxelize_seed_point_lit.png](voxelize_seed_point_lit.png) | The source's demo \
          scene lights the voxels with a point light, (1 − (d/range)²)² per cube corner \
-         (`voxelize::view::Light::Point`); fieldkit's default is a directional light. |\n",
+         (`voxelize::Light::Point`); fieldkit's default is a directional light. |\n",
     );
     let path = out_dir.join("presets.md");
     std::fs::write(&path, presets).map_err(|e| Error::Invalid {
@@ -879,10 +879,10 @@ pub fn ocean_scene_with(
     gbuffer: bool,
     preset: Preset,
 ) -> Result<Vec<u8>, Error> {
-    use fieldkit::metaball::render::{RaymarchSettings, Raymarcher};
     use fieldkit::metaball::{Metaballs, Settings, packed_grid};
-    use fieldkit::ocean::render::DepthMode;
-    use fieldkit::ocean::render::{Look, OceanCamera, OceanRenderer, Output, Patch};
+    use fieldkit::metaball::{RaymarchSettings, Raymarcher};
+    use fieldkit::ocean::DepthMode;
+    use fieldkit::ocean::{Look, OceanCamera, OceanRenderer, Output, Patch};
     use fieldkit::ocean::{Wave, Waves};
     use fieldkit::view::{Targets, View};
     use glam::{DVec2, DVec3, Mat4, Vec2, Vec3};
@@ -1094,7 +1094,7 @@ pub fn voxelize_scene_with(
 ) -> Result<Vec<u8>, Error> {
     use fieldkit::view::Targets;
     use fieldkit::voxelize::Voxelizer;
-    use fieldkit::voxelize::view::{ColourBy, Light, VoxelView};
+    use fieldkit::voxelize::{ColourBy, Light, VoxelView};
     use glam::Vec3;
     let device = &ctx.device;
     let grid = fieldkit::voxelize::Grid::fit(mesh, n)?;

@@ -17,9 +17,9 @@
 use fieldkit::Error;
 use fieldkit::distance::{Distance2d, Distance3d, Options2d, Options3d, upload_mask};
 use fieldkit::gpu::{Readback, readback_texture};
-use fieldkit::metaball::render::{RaymarchSettings, Raymarcher};
 use fieldkit::metaball::{Metaballs, Settings, packed_grid};
-use fieldkit::ocean::render::{Look, OceanCamera, OceanRenderer, Output, Patch};
+use fieldkit::metaball::{RaymarchSettings, Raymarcher};
+use fieldkit::ocean::{Look, OceanCamera, OceanRenderer, Output, Patch};
 use fieldkit::ocean::{Wave, Waves};
 use fieldkit::view::{Targets, View};
 use fieldkit::volume::{MarchSettings, TransferFunction, Volume, VolumeRenderer, fbm_cloud};

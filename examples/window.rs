@@ -14,8 +14,8 @@
 use std::sync::Arc;
 
 use fieldkit::Error;
-use fieldkit::metaball::render::{RaymarchSettings, Raymarcher};
 use fieldkit::metaball::{Metaballs, Settings, animate, packed_grid};
+use fieldkit::metaball::{RaymarchSettings, Raymarcher};
 use fieldkit::view::View;
 use glam::{Mat4, Vec3};
 use winit::application::ApplicationHandler;

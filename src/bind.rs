@@ -1015,20 +1015,28 @@ fn module(device: &wgpu::Device, info: &EntryInfo, relinked: Option<&str>) -> wg
     unsafe { device.create_shader_module_trusted(desc, stage_checks()) }
 }
 
-/// Compute pipelines of one entry point `E` specialised by override values, each made on first
-/// use and kept (for overrides that take many values, such as a workgroup array's length).
-// Used by the techniques' stages.
-#[cfg_attr(not(feature = "techniques"), allow(dead_code))]
-pub(crate) struct Variants<E> {
-    made: std::sync::Mutex<Vec<(VariantKey, std::sync::Arc<ComputePipeline<E>>)>>,
+/// A stage's `override` constants as one typed value: the generated `Overrides` struct of
+/// every stage that declares overrides implements it, so pipelines are specialised through
+/// typed fields and a renamed override is a compile error, never a string that no longer
+/// matches.
+pub trait Constants: Copy + PartialEq + Send + Sync + 'static {
+    /// `(name, value)` for each override to set, as pipelines take them.
+    fn constants(&self) -> Vec<(&'static str, f64)>;
 }
 
-/// Override names and values (as bits), and the zero-fill choice.
+/// Compute pipelines of one entry point `E` specialised by override values `O` (its stage's
+/// generated `Overrides`), each made on first use and kept, keyed on the typed value (for
+/// overrides that take many values, such as a workgroup array's length).
 // Used by the techniques' stages.
 #[cfg_attr(not(feature = "techniques"), allow(dead_code))]
-type VariantKey = Vec<(String, u64)>;
+pub(crate) struct Variants<E, O> {
+    made: std::sync::Mutex<Vec<(VariantKey<O>, std::sync::Arc<ComputePipeline<E>>)>>,
+}
 
-impl<E> Default for Variants<E> {
+/// The typed overrides and the zero-fill choice.
+type VariantKey<O> = (O, bool);
+
+impl<E, O> Default for Variants<E, O> {
     fn default() -> Self {
         Self {
             made: Default::default(),
@@ -1038,26 +1046,22 @@ impl<E> Default for Variants<E> {
 
 // Used by the techniques' stages.
 #[cfg_attr(not(feature = "techniques"), allow(dead_code))]
-impl<E: Entry> Variants<E> {
+impl<E: Entry, O: Constants> Variants<E, O> {
     /// The pipeline for `overrides`, made now if it is the first use.
     pub(crate) fn get(
         &self,
         device: &wgpu::Device,
-        overrides: &[(&str, f64)],
+        overrides: &O,
         zero_initialize_workgroup_memory: bool,
     ) -> Result<std::sync::Arc<ComputePipeline<E>>, Error> {
-        let key: VariantKey = overrides
-            .iter()
-            .map(|(k, v)| (k.to_string(), v.to_bits()))
-            .chain([(String::new(), zero_initialize_workgroup_memory as u64)])
-            .collect();
+        let key = (*overrides, zero_initialize_workgroup_memory);
         let mut made = self.made.lock().unwrap_or_else(|e| e.into_inner());
         if let Some((_, p)) = made.iter().find(|(k, _)| *k == key) {
             return Ok(p.clone());
         }
         let p = std::sync::Arc::new(ComputePipeline::with_options(
             device,
-            overrides,
+            &overrides.constants(),
             zero_initialize_workgroup_memory,
         )?);
         made.push((key, p.clone()));
@@ -1093,7 +1097,17 @@ impl<E: Entry> ComputePipeline<E> {
         Ok(slot.get().expect("set above"))
     }
 
-    /// Create the pipeline with values for the shader's `override` constants.
+    /// Create the pipeline with the stage's typed `override` values (its generated
+    /// `Overrides`).
+    pub fn with_constants(
+        device: &wgpu::Device,
+        overrides: &impl Constants,
+    ) -> Result<Self, Error> {
+        Self::with_overrides(device, &overrides.constants())
+    }
+
+    /// Create the pipeline with values for the shader's `override` constants, by name
+    /// ([`Self::with_constants`] takes them typed).
     pub fn with_overrides(device: &wgpu::Device, overrides: &[(&str, f64)]) -> Result<Self, Error> {
         Self::with_options(device, overrides, true)
     }
@@ -1108,7 +1122,7 @@ impl<E: Entry> ComputePipeline<E> {
         Self::make(device, None, overrides, zero_initialize_workgroup_memory)
     }
 
-    fn make(
+    pub(crate) fn make(
         device: &wgpu::Device,
         relinked: Option<&str>,
         overrides: &[(&str, f64)],
@@ -1133,22 +1147,6 @@ impl<E: Entry> ComputePipeline<E> {
                 _e: PhantomData,
             }
         })
-    }
-
-    /// The pipeline made again from the stage's file under `crate_root` (`EntryInfo::path`,
-    /// its imports relinked), for iterating on a shader while the app runs: [`Error::Reload`]
-    /// where the file no longer links or validates (the message has its file:line:col) or
-    /// where its interface no longer matches the compiled-in bindings (a new or retyped
-    /// binding, another workgroup size or set of overrides); the body may change freely.
-    /// Feature `hot-reload`.
-    #[cfg(feature = "hot-reload")]
-    pub fn reload(
-        device: &wgpu::Device,
-        crate_root: &std::path::Path,
-        overrides: &[(&str, f64)],
-    ) -> Result<Self, Error> {
-        let source = crate::hot::relink(E::INFO, crate_root)?;
-        Self::make(device, Some(&source), overrides, true)
     }
 
     /// Check every resource against the shader's slots and make the bind groups.
@@ -1222,19 +1220,7 @@ impl<E: Entry> RenderPipeline<E> {
         Self::make(device, None, targets)
     }
 
-    /// The pipeline made again from the stage's file under `crate_root`, as
-    /// [`ComputePipeline::reload`] makes a compute pipeline. Feature `hot-reload`.
-    #[cfg(feature = "hot-reload")]
-    pub fn reload(
-        device: &wgpu::Device,
-        crate_root: &std::path::Path,
-        targets: &RenderTargets<'_>,
-    ) -> Result<Self, Error> {
-        let source = crate::hot::relink(E::INFO, crate_root)?;
-        Self::make(device, Some(&source), targets)
-    }
-
-    fn make(
+    pub(crate) fn make(
         device: &wgpu::Device,
         relinked: Option<&str>,
         targets: &RenderTargets<'_>,
@@ -1404,4 +1390,54 @@ pub fn create_any(device: &wgpu::Device, info: &'static EntryInfo) -> Result<(),
             }
         }
     })
+}
+
+#[cfg(all(test, feature = "techniques"))]
+mod tests {
+    /// Every `.rs` file under `dir`, recursively.
+    fn rust_files(dir: &std::path::Path, out: &mut Vec<std::path::PathBuf>) {
+        for entry in std::fs::read_dir(dir).unwrap().flatten() {
+            let path = entry.path();
+            if path.is_dir() {
+                rust_files(&path, out);
+            } else if path.extension().is_some_and(|e| e == "rs") {
+                out.push(path);
+            }
+        }
+    }
+
+    /// Pipelines are specialised through the generated `Overrides` structs (and
+    /// [`super::Constants`]), so a renamed override is a compile error. A string literal naming
+    /// an override in the library or in xtask would turn it back into a run-time error: none may.
+    #[test]
+    fn no_override_is_named_by_a_string() {
+        let names: std::collections::BTreeSet<&str> = crate::shaders::ALL
+            .iter()
+            .flat_map(|info| info.overrides.iter().copied())
+            .collect();
+        // fieldkit's stages declare 26 distinct override names.
+        assert!(names.len() >= 20, "{names:?}");
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let mut files = Vec::new();
+        for dir in ["src", "xtask/src"] {
+            rust_files(&root.join(dir), &mut files);
+        }
+        assert!(files.len() > 20, "found only {files:?}");
+        let mut found = Vec::new();
+        for file in &files {
+            let text = std::fs::read_to_string(file).unwrap();
+            for (n, line) in text.lines().enumerate() {
+                for name in &names {
+                    if line.contains(&format!("\"{name}\"")) {
+                        found.push(format!("{}:{}: {}", file.display(), n + 1, line.trim()));
+                    }
+                }
+            }
+        }
+        assert!(
+            found.is_empty(),
+            "override names written as strings (use the stage's generated `Overrides`):\n{}",
+            found.join("\n")
+        );
+    }
 }

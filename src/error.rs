@@ -113,3 +113,13 @@ pub enum Error {
     #[error("readback failed: {0}")]
     Readback(String),
 }
+
+impl Error {
+    /// [`Error::Invalid`]: bad input to `stage`, `what` saying what was wrong.
+    pub fn invalid(stage: &'static str, what: impl Into<String>) -> Self {
+        Error::Invalid {
+            stage,
+            what: what.into(),
+        }
+    }
+}

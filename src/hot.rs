@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use crate::bind::{EntryInfo, EntryKind};
+use crate::bind::{ComputePipeline, Entry, EntryInfo, EntryKind, RenderPipeline, RenderTargets};
 use crate::error::Error;
 
 /// The linked WGSL of `info`'s stage read again from `crate_root.join(info.path)` (imports
@@ -53,4 +53,35 @@ pub(crate) fn relink(info: &EntryInfo, crate_root: &Path) -> Result<String, Erro
         )));
     }
     Ok(new.source)
+}
+
+// Hot reload lives here, beside `relink`, so that `bind` does not reach back into this module.
+impl<E: Entry> ComputePipeline<E> {
+    /// The pipeline made again from the stage's file under `crate_root` (`EntryInfo::path`,
+    /// its imports relinked), for iterating on a shader while the app runs: [`Error::Reload`]
+    /// where the file no longer links or validates (the message has its file:line:col) or
+    /// where its interface no longer matches the compiled-in bindings (a new or retyped
+    /// binding, another workgroup size or set of overrides); the body may change freely.
+    /// Feature `hot-reload`.
+    pub fn reload(
+        device: &wgpu::Device,
+        crate_root: &std::path::Path,
+        overrides: &[(&str, f64)],
+    ) -> Result<Self, Error> {
+        let source = crate::hot::relink(E::INFO, crate_root)?;
+        Self::make(device, Some(&source), overrides, true)
+    }
+}
+
+impl<E: Entry> RenderPipeline<E> {
+    /// The pipeline made again from the stage's file under `crate_root`, as
+    /// [`ComputePipeline::reload`] makes a compute pipeline. Feature `hot-reload`.
+    pub fn reload(
+        device: &wgpu::Device,
+        crate_root: &std::path::Path,
+        targets: &RenderTargets<'_>,
+    ) -> Result<Self, Error> {
+        let source = crate::hot::relink(E::INFO, crate_root)?;
+        Self::make(device, Some(&source), targets)
+    }
 }

@@ -8,8 +8,8 @@ mod common;
 
 use common::*;
 use fieldkit::gpu::{Context, read_texture};
-use fieldkit::metaball::render::{Direct, Material, Output, RaymarchSettings, Raymarcher};
 use fieldkit::metaball::{self, BlobBins, MetaballField, Metaballs, Settings, cpu};
+use fieldkit::metaball::{Direct, Material, Output, RaymarchSettings, Raymarcher};
 use fieldkit::view::{Targets, View, box_visible};
 
 use glam::{DVec3, Mat4, Vec3, Vec4};
@@ -391,7 +391,7 @@ fn seed_march_hits_the_same_surface_with_more_steps() {
     // The ripple is the filter's: the source's steps with trilinear reads hit the default's
     // surface.
     let trilinear = RaymarchSettings {
-        filter: fieldkit::metaball::render::Filter::Trilinear,
+        filter: fieldkit::metaball::Filter::Trilinear,
         ..seed
     };
     let shot = shoot(&ctx, &field, &view, Mat4::IDENTITY, &trilinear, 1.0);

@@ -4,11 +4,11 @@
 
 use fieldkit::distance::{Distance3d, Grid3, Method, Options3d, Unreached, Variant};
 use fieldkit::gpu::{Context, read_buffer, read_texture};
-use fieldkit::metaball::render::{CubeStyle, Cubes, Filter, RaymarchSettings};
 use fieldkit::metaball::{
     Animation, FULL_VOLUME_FAR, Metaballs, Settings, animate, extent_grid, packed_grid,
     region_for_extent,
 };
+use fieldkit::metaball::{CubeStyle, Cubes, Filter, RaymarchSettings};
 use fieldkit::view::Targets;
 use glam::{Mat4, Vec3, Vec4};
 

@@ -15,7 +15,7 @@ use fieldkit::distance::Method;
 use fieldkit::distance::Variant;
 use fieldkit::gpu::{Context, read_buffer, read_texture};
 use fieldkit::harness::Summary;
-use fieldkit::metaball::render::Output;
+use fieldkit::metaball::Output;
 use fieldkit::metaball::{Metaballs, Settings, SurfaceSeeds};
 use glam::Vec4;
 

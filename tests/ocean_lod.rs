@@ -3,8 +3,8 @@
 //! where the vertex spacing changes, and the triangle count against the write-up's patches of
 //! 256 vertices per row at the same largest error.
 
-use fieldkit::ocean::lod::{LodSettings, height_error, patch_triangles, select, writeup_patches};
-use fieldkit::ocean::render::{Look, OceanCamera, Patch};
+use fieldkit::ocean::{LodSettings, height_error, patch_triangles, select, writeup_patches};
+use fieldkit::ocean::{Look, OceanCamera, Patch};
 use fieldkit::ocean::{Wave, Waves};
 use glam::{DVec2, DVec3, DVec4, Vec2};
 
@@ -270,14 +270,12 @@ fn an_unreachable_error_is_refused_not_walked() {
     };
     match select(&w, &look, &cam, 1080, &s) {
         Err(fieldkit::Error::Size { got, max, .. }) => {
-            assert_eq!(max, fieldkit::ocean::lod::MAX_LOD_NODES);
+            assert_eq!(max, fieldkit::ocean::MAX_LOD_NODES);
             assert!(got > max, "{got} ≤ {max}");
         }
         other => panic!("expected Error::Size, got {other:?}"),
     }
     // The default settings stay far below the budget.
     let sel = select(&w, &look, &cam, 1080, &LodSettings::default()).unwrap();
-    assert!(
-        (sel.patches.len() as u64 + sel.culled as u64) < fieldkit::ocean::lod::MAX_LOD_NODES / 16
-    );
+    assert!((sel.patches.len() as u64 + sel.culled as u64) < fieldkit::ocean::MAX_LOD_NODES / 16);
 }

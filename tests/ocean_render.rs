@@ -7,7 +7,7 @@
 use fieldkit::Error;
 use fieldkit::gpu::{Context, read_texture};
 use fieldkit::harness::Summary;
-use fieldkit::ocean::render::{ALL_SKIRTS, Look, OceanCamera, OceanRenderer, Output, Patch};
+use fieldkit::ocean::{ALL_SKIRTS, Look, OceanCamera, OceanRenderer, Output, Patch};
 use fieldkit::ocean::{Wave, Waves};
 use glam::{DVec2, DVec3, DVec4, Vec2, Vec3, Vec4};
 
@@ -813,11 +813,11 @@ fn calm() -> Waves {
 /// `depth_fade_and_depth_write_in_one_pass`.
 #[test]
 fn seed_fade_is_thirty_centimetres_and_leaves_the_depth() {
-    use fieldkit::ocean::render::DepthMode;
+    use fieldkit::ocean::DepthMode;
     let ctx = Context::shared();
     let seed = Look::seed();
     assert_eq!(seed.fade_distance, 0.3);
-    assert_eq!(fieldkit::ocean::lod::LodSettings::default().size, 2560.0);
+    assert_eq!(fieldkit::ocean::LodSettings::default().size, 2560.0);
     assert!(!DepthMode::seed().write);
     let renderer = OceanRenderer::with_depth(
         &ctx.device,
@@ -881,7 +881,7 @@ fn seed_fade_is_thirty_centimetres_and_leaves_the_depth() {
 /// it was.
 #[test]
 fn depth_formats_and_the_stencil() {
-    use fieldkit::ocean::render::DepthMode;
+    use fieldkit::ocean::DepthMode;
     let ctx = Context::shared();
     let cam = camera();
     let scene = 15.0;
@@ -1162,7 +1162,7 @@ fn constant_maps(
 /// its map's (−n.x/n.z, −n.y/n.z) × strength.
 #[test]
 fn user_height_and_normal_maps() {
-    use fieldkit::ocean::render::Layer;
+    use fieldkit::ocean::Layer;
     let ctx = Context::shared();
     let mut renderer =
         OceanRenderer::new(&ctx.device, &ctx.queue, Output::GBuffer([RGBA32; 4]), false).unwrap();

@@ -17,10 +17,10 @@ use fieldkit::distance::{
     upload_mask, upload_volume,
 };
 use fieldkit::gpu::Context;
-use fieldkit::metaball::render::{RaymarchSettings, Raymarcher};
 use fieldkit::metaball::{Metaballs, Settings, packed_grid};
-use fieldkit::ocean::lod::{LodSettings, select};
-use fieldkit::ocean::render::{Look, OceanCamera};
+use fieldkit::metaball::{RaymarchSettings, Raymarcher};
+use fieldkit::ocean::{LodSettings, select};
+use fieldkit::ocean::{Look, OceanCamera};
 use fieldkit::ocean::{Wave, Waves};
 use fieldkit::view::View;
 use fieldkit::volume::{MarchSettings, TransferFunction, Volume, VolumeRenderer};

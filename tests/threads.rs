@@ -8,12 +8,12 @@ use fieldkit::distance::{
     Distance2d, Distance3d, Jfa2d, Options2d, Options3d, upload_mask, upload_volume,
 };
 use fieldkit::gpu::{Context, read_texture};
-use fieldkit::metaball::render::{Cubes, Raymarcher};
+use fieldkit::metaball::{Cubes, Raymarcher};
 use fieldkit::metaball::{Metaballs, Settings, packed_grid};
-use fieldkit::ocean::render::OceanRenderer;
+use fieldkit::ocean::OceanRenderer;
 use fieldkit::ocean::{SharedWaves, WaveGrid};
 use fieldkit::volume::VolumeRenderer;
-use fieldkit::voxelize::view::VoxelView;
+use fieldkit::voxelize::VoxelView;
 use fieldkit::voxelize::{Grid, Mesh, Voxelizer};
 use glam::DVec3;
 

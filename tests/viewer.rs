@@ -318,7 +318,7 @@ fn seed_presets_are_a_choice_and_render() {
     assert_eq!(seed.actor.field, fieldkit::metaball::Settings::seed());
     assert_eq!(
         seed.actor.raymarch,
-        fieldkit::metaball::render::RaymarchSettings::seed()
+        fieldkit::metaball::RaymarchSettings::seed()
     );
     assert_eq!(seed.actor.animation, fieldkit::metaball::Animation::seed());
     assert_eq!(seed.ocean.look.fade_distance, 0.3);

@@ -413,7 +413,7 @@ fn one_encoder_gives_the_same_attributes() {
     }
     // The view draws the same picture from either list (the spare entries are not drawn).
     use fieldkit::view::Targets;
-    use fieldkit::voxelize::view::{ColourBy, VoxelView};
+    use fieldkit::voxelize::{ColourBy, VoxelView};
     let format = wgpu::TextureFormat::Rgba8Unorm;
     let view = VoxelView::new(&ctx.device, format, wgpu::TextureFormat::Depth32Float).unwrap();
     let proj = glam::camera::rh::proj::directx::perspective(0.9, 1.0, 0.1, 20.0);

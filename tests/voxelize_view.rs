@@ -4,7 +4,7 @@
 
 use fieldkit::gpu::Context;
 use fieldkit::view::Targets;
-use fieldkit::voxelize::view::{ColourBy, VoxelView};
+use fieldkit::voxelize::{ColourBy, VoxelView};
 use fieldkit::voxelize::{Grid, Mesh, Voxelizer};
 use glam::{DVec3, Vec3};
 
@@ -121,7 +121,7 @@ fn one_voxel_covers_its_square_in_its_colour() {
 /// the ambient is left.
 #[test]
 fn a_point_light_shades_by_distance() {
-    use fieldkit::voxelize::view::Light;
+    use fieldkit::voxelize::Light;
     let ctx = Context::shared();
     let device = &ctx.device;
     let mesh = Mesh {

@@ -88,9 +88,9 @@ impl Camera {
     }
 
     /// The ocean's camera (f64 world, the same projection).
-    pub fn ocean(&self, size: [u32; 2]) -> fieldkit::ocean::render::OceanCamera {
+    pub fn ocean(&self, size: [u32; 2]) -> fieldkit::ocean::OceanCamera {
         let aspect = size[0] as f32 / size[1].max(1) as f32;
-        fieldkit::ocean::render::OceanCamera::look_at(
+        fieldkit::ocean::OceanCamera::look_at(
             self.eye().as_dvec3(),
             self.target.as_dvec3(),
             self.proj(aspect),

@@ -9,11 +9,11 @@ use eframe::egui;
 use egui::{ComboBox, DragValue, Slider, Ui};
 use fieldkit::distance::Method2d;
 use fieldkit::gpu::{Profiler, Readback};
-use fieldkit::metaball::render::{Direct, Output as MarchOutput};
+use fieldkit::metaball::{Direct, Output as MarchOutput};
 use fieldkit::view::Targets;
 use fieldkit::volume::{Mode, Shadow, TransferFunction};
+use fieldkit::voxelize::ColourBy;
 use fieldkit::voxelize::Separation;
-use fieldkit::voxelize::view::ColourBy;
 use glam::{Vec2, Vec3};
 
 use super::scenes::{

@@ -5,15 +5,15 @@
 use fieldkit::Error;
 use fieldkit::distance::{Distance2d, Method2d, Options2d, Variant, upload_mask};
 use fieldkit::gpu::{Readback, Recorder, readback_texture};
-use fieldkit::metaball::render::{CubeStyle, Cubes, Direct, RaymarchSettings, Raymarcher};
 use fieldkit::metaball::{Animation, Instances, Metaballs, Settings, packed_grid};
-use fieldkit::ocean::lod::{LodSettings, select};
-use fieldkit::ocean::render::{Look, OceanRenderer, Output as OceanOutput};
+use fieldkit::metaball::{CubeStyle, Cubes, Direct, RaymarchSettings, Raymarcher};
+use fieldkit::ocean::{LodSettings, select};
+use fieldkit::ocean::{Look, OceanRenderer, Output as OceanOutput};
 use fieldkit::ocean::{Wave, Waves};
 use fieldkit::view::Targets;
 use fieldkit::volume::{MarchSettings, TransferFunction, Volume, VolumeRenderer, fbm_cloud};
-use fieldkit::voxelize::view::{ColourBy, VoxelView};
 use fieldkit::voxelize::{Attributes, Grid, Mesh, PendingAttributes, Separation, Voxelizer};
+use fieldkit::voxelize::{ColourBy, VoxelView};
 use glam::{DVec3, Mat4, Vec2, Vec3, Vec4};
 use serde::{Deserialize, Serialize};
 
@@ -454,7 +454,7 @@ impl Ocean {
             } else {
                 OceanOutput::Forward(COLOUR)
             };
-            let depth = fieldkit::ocean::render::DepthMode {
+            let depth = fieldkit::ocean::DepthMode {
                 write,
                 ..Default::default()
             };
@@ -1372,12 +1372,12 @@ impl VoxelizerScene {
                         let size = glam::DVec3::from(grid.size.map(f64::from)) * grid.voxel;
                         let centre = (grid.origin + size * 0.5).as_vec3();
                         let radius = size.max_element() as f32 * 0.5;
-                        fieldkit::voxelize::view::Light::Point {
+                        fieldkit::voxelize::Light::Point {
                             position: centre + Vec3::new(0.6, 1.2, 1.0) * radius,
                             range: radius * 3.5,
                         }
                     } else {
-                        fieldkit::voxelize::view::Light::Directional(Vec3::new(0.4, 0.8, 0.5))
+                        fieldkit::voxelize::Light::Directional(Vec3::new(0.4, 0.8, 0.5))
                     };
                     v.encode_lit(
                         device,
@@ -1570,7 +1570,7 @@ impl Scenes {
                 }
                 let island = self.island.as_mut().expect("set above");
                 let mut island_s = island_settings(&s.actor);
-                island_s.raymarch.output = fieldkit::metaball::render::Output::Shaded;
+                island_s.raymarch.output = fieldkit::metaball::Output::Shaded;
                 let mut stats = island.encode_island(device, queue, &island_s, frame)?;
                 let ocean = self.ocean.get_or_insert_with(|| Ocean::new(device));
                 stats.extend(ocean.draw(device, queue, &s.ocean, frame)?);

@@ -864,6 +864,7 @@ fn gen_overrides(r: &Reflection, s: &mut String) {
         })
         .collect();
     writeln!(s, "impl Overrides {{\n    /// `(name, value)` for each override to set, as pipelines take them.\n    pub fn constants(&self) -> Vec<(&'static str, f64)> {{\n        [{}].into_iter().flatten().collect()\n    }}\n}}", pairs.join(", ")).unwrap();
+    writeln!(s, "impl crate::bind::Constants for Overrides {{\n    fn constants(&self) -> Vec<(&'static str, f64)> {{\n        Overrides::constants(self)\n    }}\n}}").unwrap();
 }
 
 pub fn stage_module(stage: &Stage) -> String {

@@ -1,207 +1,48 @@
-//! 2D distance by jump flooding (JFA) from a seed texture, with the variants that trade speed
-//! for accuracy, resolved to unsigned or signed distance. [`super::Distance2d`] is the 2D API
-//! (exact by default); [`Jfa2d`] runs JFA alone and each of its stages on its own.
+//! The 2D front: [`Distance2d`] runs the exact transform by default and JFA on request, from
+//! the same seed textures and options.
 
-use crate::bind::{ComputePipeline, Entry};
+use super::buffers::Pool;
+use super::exact::Exact;
+use super::resolve::Resolver;
+use super::{Inside, Jfa2d, Options, Options3d, SeedRule, Variant};
 use crate::error::Error;
-use crate::gpu::Record;
-use crate::shaders::distance::{jfa_resolve, jfa_seed, jfa_step};
+use crate::gpu::{Readback, readback_buffer, readback_texture};
 
-const STAGE: &str = "distance::jfa";
+use std::sync::Arc;
 
-/// Largest side the 16-bit-per-axis seed packing can name (x + 1 must fit in 16 bits).
-pub const MAX_PACKED_SIDE: u32 = 0xfffe;
-
-/// Packed "no seed" (see `fieldkit-wesl/shaders/seed.wesl`).
-pub const NO_SEED: u32 = 0;
-
-/// Distance written where no seed exists (largest finite f32; `-FAR` inside a full mask).
-pub const FAR: f32 = f32::MAX;
-
-/// Common seed texture formats; any colour format read as float is taken ([`is_seed_format`]).
-pub const SEED_FORMATS: &[wgpu::TextureFormat] = &[
-    wgpu::TextureFormat::R8Unorm,
-    wgpu::TextureFormat::R16Float,
-    wgpu::TextureFormat::R32Float,
-    wgpu::TextureFormat::Rgba8Unorm,
-];
-
-/// Which channels of a seed texture a texel's value is read from ([`SeedRule`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub enum Channels {
-    /// The red channel (default): a mask in any format.
-    #[default]
-    Red,
-    /// The largest of red, green and blue: "any non-black texel", the source's rule, for a
-    /// colour image of any format.
-    AnyColour,
-    /// The alpha channel: a sprite's coverage.
-    Alpha,
-}
-
-/// Which texels of a seed texture are seeds: those whose value in `channels` is above `above`.
-/// The default (red above 0) reads masks; [`SeedRule::seed`] is the source's rule (any channel
-/// of red, green and blue above 0: every non-black texel). Any float-sampled colour format is
-/// read (`R8Unorm`, `Rgba8UnormSrgb`, `Bgra8Unorm`, `Rgba16Float`, `Rgba32Float`, …); sRGB
-/// formats are read as the linear values the hardware decodes.
-#[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct SeedRule {
-    /// Where the value comes from.
-    pub channels: Channels,
-    /// A texel is a seed where its value is greater than this.
-    pub above: f32,
-}
-
-impl Default for SeedRule {
-    fn default() -> Self {
-        Self {
-            channels: Channels::Red,
-            above: 0.0,
-        }
-    }
-}
-
-impl SeedRule {
-    /// The source's rule: any non-black texel (red, green or blue above 0), any format.
-    pub fn seed() -> Self {
-        Self {
-            channels: Channels::AnyColour,
-            above: 0.0,
-        }
-    }
-
-    pub(crate) fn check(&self) -> Result<(), Error> {
-        if !self.above.is_finite() {
-            return Err(Error::Invalid {
-                stage: STAGE,
-                what: format!("seed threshold must be finite, got {}", self.above),
-            });
-        }
-        Ok(())
-    }
-
-    /// The shaders' channel weights (the value is the largest weighted channel).
-    pub(crate) fn weights(&self) -> glam::Vec4 {
-        match self.channels {
-            Channels::Red => glam::Vec4::X,
-            Channels::AnyColour => glam::Vec4::new(1.0, 1.0, 1.0, 0.0),
-            Channels::Alpha => glam::Vec4::W,
-        }
-    }
-
-    /// The shaders' test is value ≥ threshold: the least f32 above `above`, kept a normal
-    /// number so a GPU that flushes subnormals to zero reads the same test.
-    pub(crate) fn threshold(&self) -> f32 {
-        let t = self.above.next_up();
-        if t > 0.0 && t < f32::MIN_POSITIVE {
-            f32::MIN_POSITIVE
-        } else if t < 0.0 && t > -f32::MIN_POSITIVE {
-            -0.0
-        } else {
-            t
-        }
-    }
-}
-
-/// Whether a texture format can hold seeds: any colour format read as float.
-pub fn is_seed_format(format: wgpu::TextureFormat) -> bool {
-    !format.is_depth_stencil_format()
-        && matches!(
-            format.sample_type(None, None),
-            Some(wgpu::TextureSampleType::Float { .. })
-        )
-}
-
-/// Pack a seed position as the shaders do.
-pub fn pack_seed(x: u32, y: u32) -> u32 {
-    (x + 1) | ((y + 1) << 16)
-}
-
-/// Unpack a seed; `None` for [`NO_SEED`].
-pub fn unpack_seed(s: u32) -> Option<(u32, u32)> {
-    (s != NO_SEED).then(|| ((s & 0xffff) - 1, (s >> 16) - 1))
-}
-
-/// Which passes run: plain JFA, or with extra passes of step 1 or 2 that repair its errors.
+/// How [`Distance2d`] computes a field.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub enum Variant {
-    /// Steps N/2, N/4, …, 1 (N the next power of two at or above the largest side).
-    Jfa,
-    /// JFA, then one pass of step 1.
-    JfaPlus1,
-    /// JFA, then passes of step 2 and 1 (Rong & Tan's most accurate cheap variant).
+pub enum Method2d {
+    /// The exact Euclidean transform (rows, then banded lower envelopes along columns): no
+    /// wrong texels, and faster than every JFA variant at every size measured. Sides up to
+    /// [`MAX_SIDE_2D_EXACT`].
     #[default]
-    JfaPlus2,
-    /// One pass of step 1 first, then JFA.
-    OnePlusJfa,
-    /// Step 1, JFA, then steps 2 and 1.
-    OnePlusJfaPlus2,
+    Exact,
+    /// Jump flooding with the given variant.
+    Jfa(Variant),
 }
 
-impl Variant {
-    /// Every variant, fewest passes first.
-    pub const ALL: [Variant; 5] = [
-        Variant::Jfa,
-        Variant::JfaPlus1,
-        Variant::JfaPlus2,
-        Variant::OnePlusJfa,
-        Variant::OnePlusJfaPlus2,
-    ];
-
-    /// The variant's name as the README's table writes it.
-    pub fn name(self) -> &'static str {
-        match self {
-            Variant::Jfa => "JFA",
-            Variant::JfaPlus1 => "JFA+1",
-            Variant::JfaPlus2 => "JFA+2",
-            Variant::OnePlusJfa => "1+JFA",
-            Variant::OnePlusJfaPlus2 => "1+JFA+2",
-        }
-    }
-
-    /// Step lengths of every pass, in order, for a grid whose largest side is `max_side`.
-    pub fn steps(self, max_side: u32) -> Vec<u32> {
-        let mut jfa = Vec::new();
-        // The first step is half the next power of two at or above the largest side: the steps then
-        // sum to at least max_side - 1, so every texel can reach every other.
-        let mut step = max_side.max(1).next_power_of_two() / 2;
-        while step >= 1 {
-            jfa.push(step);
-            step /= 2;
-        }
-        match self {
-            Variant::Jfa => jfa,
-            Variant::JfaPlus1 => [jfa, vec![1]].concat(),
-            Variant::JfaPlus2 => [jfa, vec![2, 1]].concat(),
-            Variant::OnePlusJfa => [vec![1], jfa].concat(),
-            Variant::OnePlusJfaPlus2 => [vec![1], jfa, vec![2, 1]].concat(),
-        }
-    }
-}
-
-/// What [`Jfa2d::encode`] computes.
+/// What [`Distance2d::encode`] computes.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct Options {
-    /// Which passes run.
-    pub variant: Variant,
-    /// Treat the seed texture as a mask (non-zero inside) and produce signed distance,
-    /// negative inside.
+pub struct Options2d {
+    /// Exact (default) or a JFA variant.
+    pub method: Method2d,
+    /// Treat the mask as inside (non-zero) and produce signed distance, negative inside.
     pub signed: bool,
     /// World units per texel; distances are multiplied by it.
     pub texel_size: f32,
-    /// Which texels are seeds (default: red above 0).
+    /// Which texels are seeds: red above 0 by default; [`SeedRule::seed`] takes every
+    /// non-black texel, as the source's tool does.
     #[cfg_attr(feature = "serde", serde(default))]
     pub seeds: SeedRule,
 }
 
-impl Default for Options {
+impl Default for Options2d {
     fn default() -> Self {
         Self {
-            variant: Variant::default(),
+            method: Method2d::Exact,
             signed: false,
             texel_size: 1.0,
             seeds: SeedRule::default(),
@@ -209,390 +50,138 @@ impl Default for Options {
     }
 }
 
-/// The result of a 2D distance computation, on the GPU.
-pub struct Field2d {
+/// Nearest seeds of a 2D field, packed as [`pack_seed`] does (0 = none): an `R32Uint` texture
+/// from JFA, a row-major `u32` buffer from the exact transform.
+#[derive(Debug)]
+pub enum Nearest2d {
+    /// `R32Uint` texture (JFA).
+    Texture(wgpu::Texture),
+    /// `u32` per texel, x fastest (exact transform).
+    Buffer(wgpu::Buffer),
+}
+
+impl Nearest2d {
+    /// The packed seeds, x fastest, once the encoder that made them was submitted.
+    pub fn read(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        len: usize,
+    ) -> Readback<Vec<u32>> {
+        match self {
+            Nearest2d::Texture(t) => readback_texture(device, queue, t),
+            Nearest2d::Buffer(b) => readback_buffer(device, queue, b)
+                .then(move |bytes| Ok(bytemuck::cast_slice::<u8, u32>(&bytes)[..len].to_vec())),
+        }
+    }
+}
+
+/// A 2D distance field from [`Distance2d`], on the GPU.
+#[derive(Debug)]
+pub struct DistanceField2d {
     /// Width in texels.
     pub width: u32,
     /// Height in texels.
     pub height: u32,
-    /// `R32Uint`: nearest seed per texel, packed ([`unpack_seed`]). For a signed field, the
-    /// nearest *inside* texel.
-    pub nearest: wgpu::Texture,
-    /// `R32Uint`: for a signed field, the nearest *outside* texel.
-    pub nearest_outside: Option<wgpu::Texture>,
-    /// `R32Float`: distance to the nearest seed (signed: negative inside), times `texel_size`.
+    /// `R32Float`: distance to the nearest seed (signed: negative inside), times `texel_size`;
+    /// [`FAR`] where there is no seed.
     pub distance: wgpu::Texture,
+    /// Nearest seed per texel (signed: nearest *inside* texel).
+    pub nearest: Nearest2d,
+    /// Signed fields: nearest *outside* texel.
+    pub nearest_outside: Option<Nearest2d>,
 }
 
-/// The 2D JFA pipelines. Create once, encode many times.
-pub struct Jfa2d {
-    seed: ComputePipeline<jfa_seed::seed::Entry>,
-    jump: ComputePipeline<jfa_step::jump::Entry>,
-    resolve_unsigned: ComputePipeline<jfa_resolve::resolve_unsigned::Entry>,
-    resolve_signed: ComputePipeline<jfa_resolve::resolve_signed::Entry>,
-}
-
-fn texture(
-    device: &wgpu::Device,
-    label: &str,
-    w: u32,
-    h: u32,
-    format: wgpu::TextureFormat,
-) -> wgpu::Texture {
-    device.create_texture(&wgpu::TextureDescriptor {
-        label: Some(label),
-        size: wgpu::Extent3d {
-            width: w,
-            height: h,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING
-            | wgpu::TextureUsages::STORAGE_BINDING
-            | wgpu::TextureUsages::COPY_SRC
-            | wgpu::TextureUsages::COPY_DST,
-        view_formats: &[],
-    })
-}
-
-use crate::gpu::uniform_buffer as uniform;
-
-fn view(t: &wgpu::Texture) -> wgpu::TextureView {
-    t.create_view(&Default::default())
-}
-
-fn groups<E: Entry>(w: u32, h: u32) -> [u32; 3] {
-    ComputePipeline::<E>::groups_for([w, h, 1])
-}
-
-/// Check a seed texture: 2D, non-empty, a supported format, within the packing range.
-pub fn check_seed_texture(
-    device: &wgpu::Device,
-    seeds: &wgpu::Texture,
-) -> Result<(u32, u32), Error> {
-    if seeds.dimension() != wgpu::TextureDimension::D2 || seeds.depth_or_array_layers() != 1 {
-        return Err(Error::Invalid {
-            stage: STAGE,
-            what: format!(
-                "the seed texture must be a single 2D texture, got {:?} × {} layers",
-                seeds.dimension(),
-                seeds.depth_or_array_layers()
-            ),
-        });
+impl DistanceField2d {
+    /// Read [`DistanceField2d::nearest`] back (see [`Nearest2d::read`]).
+    pub fn read_nearest(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Readback<Vec<u32>> {
+        self.nearest
+            .read(device, queue, self.width as usize * self.height as usize)
     }
-    if !is_seed_format(seeds.format()) {
-        return Err(Error::Format {
-            stage: STAGE,
-            format: seeds.format(),
-            supported: "a colour format read as float (R8Unorm, R16Float, R32Float, Rgba8Unorm, \
-                        Rgba8UnormSrgb, Bgra8Unorm, Rgba16Float, Rgba32Float, …)",
-        });
-    }
-    check_size(device, seeds.width(), seeds.height())?;
-    Ok((seeds.width(), seeds.height()))
 }
 
-/// Check a grid size against the device and the seed packing.
-pub fn check_size(device: &wgpu::Device, w: u32, h: u32) -> Result<(), Error> {
-    let max = device
-        .limits()
-        .max_texture_dimension_2d
-        .min(MAX_PACKED_SIDE) as u64;
-    for (what, got) in [("width", w), ("height", h)] {
-        if got == 0 || got as u64 > max {
-            return Err(Error::Size {
-                stage: STAGE,
-                what,
-                got: got as u64,
-                max,
-            });
-        }
-    }
-    Ok(())
+/// The 2D distance API: the exact transform by default, JFA on request. Create once, encode
+/// many times.
+pub struct Distance2d {
+    jfa: Jfa2d,
+    exact: Exact,
 }
 
-/// Upload a CPU mask (`width × height` bytes, row-major, non-zero = seed) as an `R8Unorm` texture.
-pub fn upload_mask(
-    device: &wgpu::Device,
-    queue: &wgpu::Queue,
-    mask: &[u8],
-    width: u32,
-    height: u32,
-) -> Result<wgpu::Texture, Error> {
-    check_size(device, width, height)?;
-    if mask.len() as u64 != width as u64 * height as u64 {
-        return Err(Error::Invalid {
-            stage: STAGE,
-            what: format!(
-                "mask has {} bytes, {width}×{height} needs {}",
-                mask.len(),
-                width as u64 * height as u64
-            ),
-        });
-    }
-    let t = crate::gpu::scoped(device, STAGE, || {
-        let t = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("seed mask"),
-            size: wgpu::Extent3d {
-                width,
-                height,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::R8Unorm,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING
-                | wgpu::TextureUsages::COPY_DST
-                | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
-        queue.write_texture(
-            t.as_image_copy(),
-            mask,
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(width),
-                rows_per_image: Some(height),
-            },
-            t.size(),
-        );
-        t
-    })?;
-    Ok(t)
-}
-
-impl Jfa2d {
-    /// Create the JFA pipelines.
+impl Distance2d {
+    /// Create the 2D pipelines (both methods).
     pub fn new(device: &wgpu::Device) -> Result<Self, Error> {
         Ok(Self {
-            seed: ComputePipeline::new(device)?,
-            jump: ComputePipeline::new(device)?,
-            resolve_unsigned: ComputePipeline::new(device)?,
-            resolve_signed: ComputePipeline::new(device)?,
+            jfa: Jfa2d::new(device)?,
+            exact: Exact::new(
+                device,
+                Arc::new(Pool::default()),
+                Arc::new(Resolver::new(device)?),
+            )?,
         })
     }
 
-    /// Seed stage alone: a new `R32Uint` texture of packed seeds (red above 0 marks a seed).
-    pub fn encode_seed(
-        &self,
-        device: &wgpu::Device,
-        rec: &mut impl Record,
-        seeds: &wgpu::Texture,
-        invert: bool,
-    ) -> Result<wgpu::Texture, Error> {
-        self.encode_seed_with(device, rec, seeds, invert, &SeedRule::default())
-    }
-
-    /// [`Jfa2d::encode_seed`] with `rule` choosing the seeds.
-    pub fn encode_seed_with(
-        &self,
-        device: &wgpu::Device,
-        rec: &mut impl Record,
-        seeds: &wgpu::Texture,
-        invert: bool,
-        rule: &SeedRule,
-    ) -> Result<wgpu::Texture, Error> {
-        rule.check()?;
-        let (w, h) = check_seed_texture(device, seeds)?;
-        let out = texture(device, "jfa nearest", w, h, wgpu::TextureFormat::R32Uint);
-        let params = uniform(
-            device,
-            "jfa seed params",
-            &jfa_seed::SeedParams {
-                size: glam::uvec2(w, h),
-                invert: invert as u32,
-                threshold: rule.threshold(),
-                channels: rule.weights(),
-            },
-        );
-        let (sv, ov) = (view(seeds), view(&out));
-        self.seed.record(
-            device,
-            rec,
-            &jfa_seed::seed::Resources {
-                params: (&params).into(),
-                seeds: (&sv).into(),
-                nearest: (&ov).into(),
-            },
-            groups::<jfa_seed::seed::Entry>(w, h),
-            "seed",
-        )?;
-        Ok(out)
-    }
-
-    /// One jump pass alone, from `src` into `dst` (both `R32Uint`, same size).
-    pub fn encode_jump(
-        &self,
-        device: &wgpu::Device,
-        rec: &mut impl Record,
-        src: &wgpu::Texture,
-        dst: &wgpu::Texture,
-        step: u32,
-    ) -> Result<(), Error> {
-        let (w, h) = (src.width(), src.height());
-        check_size(device, w, h)?;
-        if step == 0 {
-            return Err(Error::Invalid {
-                stage: jfa_step::STAGE,
-                what: "step 0".into(),
-            });
-        }
-        if dst.size() != src.size() {
-            return Err(Error::Invalid {
-                stage: jfa_step::STAGE,
-                what: format!("src is {:?}, dst is {:?}", src.size(), dst.size()),
-            });
-        }
-        let params = uniform(
-            device,
-            "jfa jump params",
-            &jfa_step::JumpParams {
-                size: glam::uvec2(w, h),
-                step,
-            },
-        );
-        let (sv, dv) = (view(src), view(dst));
-        self.jump.record(
-            device,
-            rec,
-            &jfa_step::jump::Resources {
-                params: (&params).into(),
-                src: (&sv).into(),
-                dst: (&dv).into(),
-            },
-            groups::<jfa_step::jump::Entry>(w, h),
-            &format!("jump {step}"),
-        )
-    }
-
-    /// Run the passes of `steps` over `nearest`, ping-ponging with a second texture; returns the
-    /// texture holding the result.
-    pub fn encode_flood(
-        &self,
-        device: &wgpu::Device,
-        rec: &mut impl Record,
-        nearest: wgpu::Texture,
-        steps: &[u32],
-    ) -> Result<wgpu::Texture, Error> {
-        let other = texture(
-            device,
-            "jfa ping-pong",
-            nearest.width(),
-            nearest.height(),
-            wgpu::TextureFormat::R32Uint,
-        );
-        let (mut a, mut b) = (nearest, other);
-        for &step in steps {
-            self.encode_jump(device, rec, &a, &b, step)?;
-            std::mem::swap(&mut a, &mut b);
-        }
-        Ok(a)
-    }
-
-    /// Resolve stage alone: distance from nearest-seed texture(s).
-    pub fn encode_resolve(
-        &self,
-        device: &wgpu::Device,
-        rec: &mut impl Record,
-        nearest: &wgpu::Texture,
-        nearest_outside: Option<&wgpu::Texture>,
-        texel_size: f32,
-    ) -> Result<wgpu::Texture, Error> {
-        if !(texel_size.is_finite() && texel_size > 0.0) {
-            return Err(Error::Invalid {
-                stage: jfa_resolve::STAGE,
-                what: format!("texel_size must be finite and positive, got {texel_size}"),
-            });
-        }
-        let (w, h) = (nearest.width(), nearest.height());
-        check_size(device, w, h)?;
-        let out = texture(device, "jfa distance", w, h, wgpu::TextureFormat::R32Float);
-        let params = uniform(
-            device,
-            "jfa resolve params",
-            &jfa_resolve::ResolveParams {
-                size: glam::uvec2(w, h),
-                texel_size,
-            },
-        );
-        let (nv, dv) = (view(nearest), view(&out));
-        let groups = groups::<jfa_resolve::resolve_unsigned::Entry>(w, h);
-        match nearest_outside {
-            None => self.resolve_unsigned.record(
-                device,
-                rec,
-                &jfa_resolve::resolve_unsigned::Resources {
-                    params: (&params).into(),
-                    nearest: (&nv).into(),
-                    distance: (&dv).into(),
-                },
-                groups,
-                "resolve",
-            )?,
-            Some(o) => {
-                let ov = view(o);
-                self.resolve_signed.record(
-                    device,
-                    rec,
-                    &jfa_resolve::resolve_signed::Resources {
-                        params: (&params).into(),
-                        nearest: (&nv).into(),
-                        nearest_outside: (&ov).into(),
-                        distance: (&dv).into(),
-                    },
-                    groups,
-                    "resolve",
-                )?
-            }
-        }
-        Ok(out)
-    }
-
-    /// The whole chain: seed → JFA passes → resolve, recorded into `rec` (a command encoder, or
-    /// [`crate::gpu::Profiler::record`] to time each pass).
+    /// The distance field of `mask` (any colour format read as float; `options.seeds` says
+    /// which texels are seeds, red above 0 by default),
+    /// recorded into `rec` (a command encoder, or [`crate::gpu::Profiler::record`] to time each
+    /// pass).
     pub fn encode(
         &self,
         device: &wgpu::Device,
-        rec: &mut impl Record,
-        seeds: &wgpu::Texture,
-        options: &Options,
-    ) -> Result<Field2d, Error> {
-        let (w, h) = check_seed_texture(device, seeds)?;
+        rec: &mut impl crate::gpu::Record,
+        mask: &wgpu::Texture,
+        options: &Options2d,
+    ) -> Result<DistanceField2d, Error> {
         if !(options.texel_size.is_finite() && options.texel_size > 0.0) {
             return Err(Error::Invalid {
-                stage: STAGE,
+                stage: "distance::d2",
                 what: format!(
-                    "texel_size must be finite and positive, got {}",
+                    "texel_size {} must be finite and positive",
                     options.texel_size
                 ),
             });
         }
-        let steps = options.variant.steps(w.max(h));
-        let inside = self.encode_seed_with(device, rec, seeds, false, &options.seeds)?;
-        let nearest = self.encode_flood(device, rec, inside, &steps)?;
-        let nearest_outside = if options.signed {
-            let outside = self.encode_seed_with(device, rec, seeds, true, &options.seeds)?;
-            Some(self.encode_flood(device, rec, outside, &steps)?)
-        } else {
-            None
-        };
-        let distance = self.encode_resolve(
-            device,
-            rec,
-            &nearest,
-            nearest_outside.as_ref(),
-            options.texel_size,
-        )?;
-        Ok(Field2d {
-            width: w,
-            height: h,
-            nearest,
-            nearest_outside,
-            distance,
-        })
+        match options.method {
+            Method2d::Exact => {
+                let f = self.exact.encode_exact_2d_with(
+                    device,
+                    rec,
+                    mask,
+                    &Options3d {
+                        signed: options.signed,
+                        voxel_size: options.texel_size,
+                        inside: Inside::Mask,
+                        ..Options3d::default()
+                    },
+                    &options.seeds,
+                )?;
+                Ok(DistanceField2d {
+                    width: f.width,
+                    height: f.height,
+                    distance: f.distance,
+                    nearest: Nearest2d::Buffer(f.nearest),
+                    nearest_outside: f.nearest_outside.map(Nearest2d::Buffer),
+                })
+            }
+            Method2d::Jfa(variant) => {
+                let f = self.jfa.encode(
+                    device,
+                    rec,
+                    mask,
+                    &Options {
+                        variant,
+                        signed: options.signed,
+                        texel_size: options.texel_size,
+                        seeds: options.seeds,
+                    },
+                )?;
+                Ok(DistanceField2d {
+                    width: f.width,
+                    height: f.height,
+                    distance: f.distance,
+                    nearest: Nearest2d::Texture(f.nearest),
+                    nearest_outside: f.nearest_outside.map(Nearest2d::Texture),
+                })
+            }
+        }
     }
 }

@@ -26,185 +26,43 @@
 //!
 #![doc = include_str!("../../docs/distance.md")]
 
+mod buffers;
+mod check;
 pub mod cpu;
 mod d2;
 mod d3;
+mod exact;
 pub mod export;
+mod field;
+mod jfa2d;
+mod jfa3d;
+mod options;
+mod packing;
+mod points;
+mod resolve;
+mod seeds;
+mod upload;
 
-pub use d2::*;
-pub use d3::*;
+pub use check::{
+    MAX_SIDE_2D_EXACT, MAX_SIDE_3D, MAX_SIDE_EXACT_3D, VOLUME_FORMATS, check_size_2d_exact,
+    check_size_3d,
+};
+pub use d2::{Distance2d, DistanceField2d, Method2d, Nearest2d, Options2d};
+pub use d3::Distance3d;
+pub use exact::plan::{
+    AUTO_TILE_BAND, AUTO_TILE_MAX_COLUMNS_Y, AUTO_TILE_MAX_LENGTH, AUTO_TILE_MAX_LENGTH_2D,
+    AUTO_TILE_MAX_LENGTH_Y, ColumnPasses, MAX_TILE_COLUMNS, MIN_TILE_COLUMNS, tile_columns,
+    tile_columns_3d,
+};
+pub use field::{Field3d, FieldBuf2d, Slabs};
+pub use jfa2d::{Field2d, Jfa2d, Options, Variant};
+pub use options::{Grid3, Inside, Method, Options3d, Unreached};
+pub use packing::{MAX_POINTS, SeedPacking, key_index, pack_seed3, unpack_seed3};
+pub use seeds::{
+    Channels, FAR, MAX_PACKED_SIDE, NO_SEED, SEED_FORMATS, SeedRule, check_seed_texture,
+    check_size, is_seed_format, pack_seed, unpack_seed, upload_mask,
+};
+pub use upload::{PointSeeds, upload_points, upload_points_with_homes, upload_volume};
 
-use crate::error::Error;
-use crate::gpu::{Readback, readback_buffer, readback_texture};
-
-/// How [`Distance2d`] computes a field.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub enum Method2d {
-    /// The exact Euclidean transform (rows, then banded lower envelopes along columns): no
-    /// wrong texels, and faster than every JFA variant at every size measured. Sides up to
-    /// [`MAX_SIDE_2D_EXACT`].
-    #[default]
-    Exact,
-    /// Jump flooding with the given variant.
-    Jfa(Variant),
-}
-
-/// What [`Distance2d::encode`] computes.
-#[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct Options2d {
-    /// Exact (default) or a JFA variant.
-    pub method: Method2d,
-    /// Treat the mask as inside (non-zero) and produce signed distance, negative inside.
-    pub signed: bool,
-    /// World units per texel; distances are multiplied by it.
-    pub texel_size: f32,
-    /// Which texels are seeds: red above 0 by default; [`SeedRule::seed`] takes every
-    /// non-black texel, as the source's tool does.
-    #[cfg_attr(feature = "serde", serde(default))]
-    pub seeds: SeedRule,
-}
-
-impl Default for Options2d {
-    fn default() -> Self {
-        Self {
-            method: Method2d::Exact,
-            signed: false,
-            texel_size: 1.0,
-            seeds: SeedRule::default(),
-        }
-    }
-}
-
-/// Nearest seeds of a 2D field, packed as [`pack_seed`] does (0 = none): an `R32Uint` texture
-/// from JFA, a row-major `u32` buffer from the exact transform.
-#[derive(Debug)]
-pub enum Nearest2d {
-    /// `R32Uint` texture (JFA).
-    Texture(wgpu::Texture),
-    /// `u32` per texel, x fastest (exact transform).
-    Buffer(wgpu::Buffer),
-}
-
-impl Nearest2d {
-    /// The packed seeds, x fastest, once the encoder that made them was submitted.
-    pub fn read(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        len: usize,
-    ) -> Readback<Vec<u32>> {
-        match self {
-            Nearest2d::Texture(t) => readback_texture(device, queue, t),
-            Nearest2d::Buffer(b) => readback_buffer(device, queue, b)
-                .then(move |bytes| Ok(bytemuck::cast_slice::<u8, u32>(&bytes)[..len].to_vec())),
-        }
-    }
-}
-
-/// A 2D distance field from [`Distance2d`], on the GPU.
-#[derive(Debug)]
-pub struct DistanceField2d {
-    /// Width in texels.
-    pub width: u32,
-    /// Height in texels.
-    pub height: u32,
-    /// `R32Float`: distance to the nearest seed (signed: negative inside), times `texel_size`;
-    /// [`FAR`] where there is no seed.
-    pub distance: wgpu::Texture,
-    /// Nearest seed per texel (signed: nearest *inside* texel).
-    pub nearest: Nearest2d,
-    /// Signed fields: nearest *outside* texel.
-    pub nearest_outside: Option<Nearest2d>,
-}
-
-impl DistanceField2d {
-    /// Read [`DistanceField2d::nearest`] back (see [`Nearest2d::read`]).
-    pub fn read_nearest(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Readback<Vec<u32>> {
-        self.nearest
-            .read(device, queue, self.width as usize * self.height as usize)
-    }
-}
-
-/// The 2D distance API: the exact transform by default, JFA on request. Create once, encode
-/// many times.
-pub struct Distance2d {
-    jfa: Jfa2d,
-    exact: Distance3d,
-}
-
-impl Distance2d {
-    /// Create the 2D pipelines (both methods).
-    pub fn new(device: &wgpu::Device) -> Result<Self, Error> {
-        Ok(Self {
-            jfa: Jfa2d::new(device)?,
-            exact: Distance3d::new(device)?,
-        })
-    }
-
-    /// The distance field of `mask` (any colour format read as float; `options.seeds` says
-    /// which texels are seeds, red above 0 by default),
-    /// recorded into `rec` (a command encoder, or [`crate::gpu::Profiler::record`] to time each
-    /// pass).
-    pub fn encode(
-        &self,
-        device: &wgpu::Device,
-        rec: &mut impl crate::gpu::Record,
-        mask: &wgpu::Texture,
-        options: &Options2d,
-    ) -> Result<DistanceField2d, Error> {
-        if !(options.texel_size.is_finite() && options.texel_size > 0.0) {
-            return Err(Error::Invalid {
-                stage: "distance::d2",
-                what: format!(
-                    "texel_size {} must be finite and positive",
-                    options.texel_size
-                ),
-            });
-        }
-        match options.method {
-            Method2d::Exact => {
-                let f = self.exact.encode_exact_2d_with(
-                    device,
-                    rec,
-                    mask,
-                    &Options3d {
-                        signed: options.signed,
-                        voxel_size: options.texel_size,
-                        inside: Inside::Mask,
-                        ..Options3d::default()
-                    },
-                    &options.seeds,
-                )?;
-                Ok(DistanceField2d {
-                    width: f.width,
-                    height: f.height,
-                    distance: f.distance,
-                    nearest: Nearest2d::Buffer(f.nearest),
-                    nearest_outside: f.nearest_outside.map(Nearest2d::Buffer),
-                })
-            }
-            Method2d::Jfa(variant) => {
-                let f = self.jfa.encode(
-                    device,
-                    rec,
-                    mask,
-                    &Options {
-                        variant,
-                        signed: options.signed,
-                        texel_size: options.texel_size,
-                        seeds: options.seeds,
-                    },
-                )?;
-                Ok(DistanceField2d {
-                    width: f.width,
-                    height: f.height,
-                    distance: f.distance,
-                    nearest: Nearest2d::Texture(f.nearest),
-                    nearest_outside: f.nearest_outside.map(Nearest2d::Texture),
-                })
-            }
-        }
-    }
-}
+/// The 3D methods' stage name in their errors.
+const STAGE_3D: &str = "distance::d3";

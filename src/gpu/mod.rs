@@ -4,11 +4,17 @@
 //! fieldkit's choosing with blocking helpers, for tests, demos and benches; nothing a renderer
 //! calls needs it.
 
+#[cfg(feature = "techniques")]
+mod albedo;
+mod alloc;
 #[cfg(feature = "context")]
 mod context;
 mod readback;
 mod timing;
 
+#[cfg(feature = "techniques")]
+pub(crate) use albedo::AlbedoBinding;
+pub(crate) use alloc::{storage_buffer, texture, volume_texture};
 #[cfg(feature = "context")]
 pub use context::{ADAPTER_ENV, Context, read_buffer, read_texture};
 pub use readback::{Readback, readback_buffer, readback_buffers, readback_texture};

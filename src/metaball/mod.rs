@@ -19,7 +19,11 @@
 #![doc = include_str!("../../docs/metaball.md")]
 
 pub mod cpu;
-pub mod render;
+mod render;
+
+pub use render::{
+    CubeStyle, Cubes, Direct, Filter, Marched, Material, Output, RaymarchSettings, Raymarcher,
+};
 
 use glam::{Vec3, Vec4};
 
@@ -468,29 +472,6 @@ fn storage_buffer(device: &wgpu::Device, label: &str, bytes: u64) -> wgpu::Buffe
 }
 
 /// A volume the stages write (storage) and later stages read (sampled), readable back.
-fn volume_texture(
-    device: &wgpu::Device,
-    label: &str,
-    size: [u32; 3],
-    format: wgpu::TextureFormat,
-) -> wgpu::Texture {
-    device.create_texture(&wgpu::TextureDescriptor {
-        label: Some(label),
-        size: wgpu::Extent3d {
-            width: size[0],
-            height: size[1],
-            depth_or_array_layers: size[2],
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D3,
-        format,
-        usage: wgpu::TextureUsages::STORAGE_BINDING
-            | wgpu::TextureUsages::TEXTURE_BINDING
-            | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    })
-}
 
 fn max_scale(voxels: &[Vec4]) -> f32 {
     voxels.iter().map(|v| v.w).fold(0.0, f32::max)
@@ -892,7 +873,7 @@ impl Metaballs {
         sdf: &wgpu::Texture,
         density: &wgpu::Texture,
     ) -> Result<wgpu::Texture, Error> {
-        let packed = volume_texture(
+        let packed = crate::gpu::volume_texture(
             device,
             "metaball march field",
             grid.size,
@@ -986,7 +967,7 @@ impl Metaballs {
                 "splat",
             )?;
         }
-        let density = volume_texture(
+        let density = crate::gpu::volume_texture(
             device,
             "metaball density",
             grid.size,

@@ -4,7 +4,7 @@
 //! ```no_run
 //! # fn f(ctx: &fieldkit::gpu::Context, field: &fieldkit::metaball::MetaballField,
 //! #      colour: &wgpu::TextureView, depth: &wgpu::TextureView) -> Result<(), fieldkit::Error> {
-//! use fieldkit::metaball::render::{Raymarcher, RaymarchSettings};
+//! use fieldkit::metaball::{Raymarcher, RaymarchSettings};
 //! use fieldkit::view::View;
 //! use glam::{Mat4, Vec3};
 //! let proj = glam::camera::rh::proj::directx::perspective(0.8, 16.0 / 9.0, 0.1, 100.0);

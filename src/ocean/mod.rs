@@ -25,8 +25,17 @@
 //!
 #![doc = include_str!("../../docs/ocean.md")]
 
-pub mod lod;
-pub mod render;
+mod lod;
+mod render;
+
+pub use lod::{
+    LodSettings, MAX_LOD_NODES, Selection, WriteupLayout, height_error, patch_triangles, select,
+    writeup_patches,
+};
+pub use render::{
+    ALL_SKIRTS, DETAIL_OCTAVES, DETAIL_SIZE, DepthMode, Layer, Look, MAX_LAYERS, MAX_PATCH_QUADS,
+    OceanCamera, OceanRenderer, Output, PATCH_QUADS, Patch, detail_texels, patch_indices,
+};
 
 use std::sync::{Arc, RwLock};
 
@@ -113,10 +122,6 @@ pub struct Sample {
     pub undisplaced: DVec2,
 }
 
-fn invalid(what: String) -> Error {
-    Error::Invalid { stage: STAGE, what }
-}
-
 impl Waves {
     /// A wave set with steepness `steepness` in [0, 1]. Errors name the first bad wave or
     /// parameter: no waves, more than [`MAX_WAVES`], NaN or infinite values, a zero direction,
@@ -126,15 +131,19 @@ impl Waves {
     pub fn new(waves: Vec<Wave>, steepness: f32) -> Result<Self, Error> {
         check_waves(&waves)?;
         if !(steepness.is_finite() && steepness >= 0.0) {
-            return Err(invalid(format!(
-                "steepness must be finite and ≥ 0, got {steepness}"
-            )));
+            return Err(Error::invalid(
+                STAGE,
+                format!("steepness must be finite and ≥ 0, got {steepness}"),
+            ));
         }
         if steepness > 1.0 {
-            return Err(invalid(format!(
-                "steepness {steepness} > 1 folds crests into loops (the cusp is at 1); \
+            return Err(Error::invalid(
+                STAGE,
+                format!(
+                    "steepness {steepness} > 1 folds crests into loops (the cusp is at 1); \
                  lower it, or use Waves::new_clamped"
-            )));
+                ),
+            ));
         }
         Ok(Self { waves, steepness })
     }
@@ -289,28 +298,37 @@ fn check_waves(waves: &[Wave]) -> Result<(), Error> {
     }
     for (i, w) in waves.iter().enumerate() {
         if !(w.direction.is_finite() && w.direction.length_squared() > 0.0) {
-            return Err(invalid(format!(
-                "wave {i}: direction must be finite and not zero, got {}",
-                w.direction
-            )));
+            return Err(Error::invalid(
+                STAGE,
+                format!(
+                    "wave {i}: direction must be finite and not zero, got {}",
+                    w.direction
+                ),
+            ));
         }
         if !(w.amplitude.is_finite() && w.amplitude > 0.0) {
-            return Err(invalid(format!(
-                "wave {i}: amplitude must be finite and > 0, got {}",
-                w.amplitude
-            )));
+            return Err(Error::invalid(
+                STAGE,
+                format!(
+                    "wave {i}: amplitude must be finite and > 0, got {}",
+                    w.amplitude
+                ),
+            ));
         }
         if !(w.wavelength.is_finite() && w.wavelength > 0.0) {
-            return Err(invalid(format!(
-                "wave {i}: wavelength must be finite and > 0, got {}",
-                w.wavelength
-            )));
+            return Err(Error::invalid(
+                STAGE,
+                format!(
+                    "wave {i}: wavelength must be finite and > 0, got {}",
+                    w.wavelength
+                ),
+            ));
         }
         if !w.speed.is_finite() {
-            return Err(invalid(format!(
-                "wave {i}: speed must be finite, got {}",
-                w.speed
-            )));
+            return Err(Error::invalid(
+                STAGE,
+                format!("wave {i}: speed must be finite, got {}", w.speed),
+            ));
         }
     }
     Ok(())
@@ -391,9 +409,10 @@ impl WaveGrid {
             }
         }
         if !(start.is_finite() && spacing.is_finite()) {
-            return Err(invalid(format!(
-                "grid start {start} and spacing {spacing} must be finite"
-            )));
+            return Err(Error::invalid(
+                STAGE,
+                format!("grid start {start} and spacing {spacing} must be finite"),
+            ));
         }
         if waves.count as usize > MAX_WAVES {
             return Err(Error::Size {

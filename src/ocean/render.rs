@@ -298,10 +298,6 @@ pub struct OceanRenderer {
     copy_depth: ComputePipeline<depth_copy::copy_depth::Entry>,
 }
 
-fn invalid(what: String) -> Error {
-    Error::Invalid { stage: STAGE, what }
-}
-
 /// Triangle indices of one patch: (n + 1)² grid vertices, x fastest, then the skirt ring under
 /// the edges z = 0, x = n, z = n, x = 0 (as `patch_vertex` numbers them).
 pub fn patch_indices(n: u32) -> Vec<u32> {
@@ -434,15 +430,16 @@ impl Look {
             }
             for (i, l) in layers.iter().enumerate() {
                 if !(l.tile.is_finite() && l.tile > 0.0) {
-                    return Err(invalid(format!(
-                        "{kind} layer {i}: tile must be > 0, got {}",
-                        l.tile
-                    )));
+                    return Err(Error::invalid(
+                        STAGE,
+                        format!("{kind} layer {i}: tile must be > 0, got {}", l.tile),
+                    ));
                 }
                 if !(l.velocity.is_finite() && l.strength.is_finite()) {
-                    return Err(invalid(format!(
-                        "{kind} layer {i}: velocity and strength must be finite"
-                    )));
+                    return Err(Error::invalid(
+                        STAGE,
+                        format!("{kind} layer {i}: velocity and strength must be finite"),
+                    ));
                 }
             }
         }
@@ -455,32 +452,39 @@ impl Look {
         let finite = colours.iter().all(|c| c.is_finite());
         let sun = self.sun_direction.is_finite() && self.sun_direction.length_squared() > 0.0;
         if !(finite && sun) {
-            return Err(invalid(
-                "colours must be finite and the sun direction non-zero".into(),
+            return Err(Error::invalid(
+                STAGE,
+                "colours must be finite and the sun direction non-zero",
             ));
         }
         if !(self.roughness.is_finite() && self.roughness > 0.0) {
-            return Err(invalid(format!(
-                "roughness must be > 0, got {}",
-                self.roughness
-            )));
+            return Err(Error::invalid(
+                STAGE,
+                format!("roughness must be > 0, got {}", self.roughness),
+            ));
         }
         if !(self.fade_distance.is_finite() && self.fade_distance > 0.0) {
-            return Err(invalid(format!(
-                "fade distance must be > 0, got {}",
-                self.fade_distance
-            )));
+            return Err(Error::invalid(
+                STAGE,
+                format!("fade distance must be > 0, got {}", self.fade_distance),
+            ));
         }
         if !(self.skirt.is_finite() && self.skirt >= 0.0) {
-            return Err(invalid(format!("skirt must be ≥ 0, got {}", self.skirt)));
+            return Err(Error::invalid(
+                STAGE,
+                format!("skirt must be ≥ 0, got {}", self.skirt),
+            ));
         }
         for (what, v) in [("metallic", self.metallic), ("specular", self.specular)] {
             if !(0.0..=1.0).contains(&v) {
-                return Err(invalid(format!("{what} must be in [0, 1], got {v}")));
+                return Err(Error::invalid(
+                    STAGE,
+                    format!("{what} must be in [0, 1], got {v}"),
+                ));
             }
         }
         if !self.subsurface_colour.is_finite() {
-            return Err(invalid("subsurface colour must be finite".into()));
+            return Err(Error::invalid(STAGE, "subsurface colour must be finite"));
         }
         Ok(())
     }
@@ -522,10 +526,13 @@ impl Maps {
         supported: &'static str,
     ) -> Result<Self, Error> {
         if t.dimension() != wgpu::TextureDimension::D2 {
-            return Err(invalid(format!(
-                "{kind} maps must be a 2D texture (array), got {:?}",
-                t.dimension()
-            )));
+            return Err(Error::invalid(
+                STAGE,
+                format!(
+                    "{kind} maps must be a 2D texture (array), got {:?}",
+                    t.dimension()
+                ),
+            ));
         }
         if !formats.contains(&t.format()) {
             return Err(Error::Format {
@@ -535,16 +542,22 @@ impl Maps {
             });
         }
         if !t.usage().contains(wgpu::TextureUsages::TEXTURE_BINDING) {
-            return Err(invalid(format!(
-                "{kind} maps need TEXTURE_BINDING, they have {:?}",
-                t.usage()
-            )));
+            return Err(Error::invalid(
+                STAGE,
+                format!(
+                    "{kind} maps need TEXTURE_BINDING, they have {:?}",
+                    t.usage()
+                ),
+            ));
         }
         if t.sample_count() != 1 {
-            return Err(invalid(format!(
-                "{kind} maps must not be multisampled ({} samples)",
-                t.sample_count()
-            )));
+            return Err(Error::invalid(
+                STAGE,
+                format!(
+                    "{kind} maps must not be multisampled ({} samples)",
+                    t.sample_count()
+                ),
+            ));
         }
         Ok(Self {
             view: array_view(t),
@@ -566,11 +579,14 @@ fn map_indices(layers: &[Layer], maps: &Maps, kind: &str) -> Result<glam::IVec4,
     for (i, (slot, l)) in out.iter_mut().zip(layers).enumerate() {
         if let Some(m) = l.map {
             if m >= maps.layers {
-                return Err(invalid(format!(
-                    "{kind} layer {i} samples map {m}, but {} {kind} maps are set \
+                return Err(Error::invalid(
+                    STAGE,
+                    format!(
+                        "{kind} layer {i} samples map {m}, but {} {kind} maps are set \
                      (OceanRenderer::set_maps)",
-                    maps.layers
-                )));
+                        maps.layers
+                    ),
+                ));
             }
             *slot = m as i32;
         }
@@ -783,10 +799,16 @@ impl OceanRenderer {
     ) -> Result<(), Error> {
         look.check()?;
         if !time.is_finite() {
-            return Err(invalid(format!("time must be finite, got {time}")));
+            return Err(Error::invalid(
+                STAGE,
+                format!("time must be finite, got {time}"),
+            ));
         }
         if !(camera.view.is_finite() && camera.proj.is_finite()) {
-            return Err(invalid("the camera's matrices must be finite".into()));
+            return Err(Error::invalid(
+                STAGE,
+                "the camera's matrices must be finite",
+            ));
         }
         for (i, p) in patches.iter().enumerate() {
             if !(p.corner.is_finite()
@@ -794,24 +816,30 @@ impl OceanRenderer {
                 && p.size > 0.0
                 && (1..=MAX_PATCH_QUADS).contains(&p.quads))
             {
-                return Err(invalid(format!(
-                    "patch {i}: corner must be finite, size > 0 and quads 1 to {MAX_PATCH_QUADS}, got {p:?}"
-                )));
+                return Err(Error::invalid(
+                    STAGE,
+                    format!(
+                        "patch {i}: corner must be finite, size > 0 and quads 1 to {MAX_PATCH_QUADS}, got {p:?}"
+                    ),
+                ));
             }
         }
         let want = self.output.targets();
         if targets.len() != want {
-            return Err(invalid(format!(
-                "{} targets given, the output takes {want}",
-                targets.len()
-            )));
+            return Err(Error::invalid(
+                STAGE,
+                format!("{} targets given, the output takes {want}", targets.len()),
+            ));
         }
         if depth.format() != self.depth.format {
-            return Err(invalid(format!(
-                "the depth target is {:?}; this renderer was made for {:?} (OceanRenderer::with_depth)",
-                depth.format(),
-                self.depth.format
-            )));
+            return Err(Error::invalid(
+                STAGE,
+                format!(
+                    "the depth target is {:?}; this renderer was made for {:?} (OceanRenderer::with_depth)",
+                    depth.format(),
+                    self.depth.format
+                ),
+            ));
         }
         let height_maps = map_indices(&look.height_layers, &self.height_maps, "height")?;
         let normal_maps = map_indices(&look.normal_layers, &self.normal_maps, "normal")?;
@@ -822,19 +850,25 @@ impl OceanRenderer {
                 wgpu::TextureUsages::empty()
             };
         if !depth.usage().contains(needs) {
-            return Err(invalid(format!(
-                "the depth target needs {needs:?} (depth fade reads a copy of it), it has {:?}",
-                depth.usage()
-            )));
+            return Err(Error::invalid(
+                STAGE,
+                format!(
+                    "the depth target needs {needs:?} (depth fade reads a copy of it), it has {:?}",
+                    depth.usage()
+                ),
+            ));
         }
         let size = depth.size();
         for (i, t) in targets.iter().enumerate() {
             let e = t.texture().size();
             if (e.width, e.height) != (size.width, size.height) {
-                return Err(invalid(format!(
-                    "target {i} is {}×{}, the depth target {}×{}",
-                    e.width, e.height, size.width, size.height
-                )));
+                return Err(Error::invalid(
+                    STAGE,
+                    format!(
+                        "target {i} is {}×{}, the depth target {}×{}",
+                        e.width, e.height, size.width, size.height
+                    ),
+                ));
             }
         }
         // Everything relative to the eye's (x, z): f32 sees small numbers.

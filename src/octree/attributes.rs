@@ -6,9 +6,9 @@ use std::sync::OnceLock;
 use super::{ENTRY_BYTES, Octree, OctreeAttributes, OctreeBuilder};
 use crate::bind::ComputePipeline;
 use crate::error::Error;
+use crate::gpu::AlbedoBinding;
 use crate::gpu::{Readback, Record, readback_buffer, uniform_buffer as uniform};
 use crate::shaders::octree::attributes::{self as stage, AttributeParams};
-use crate::voxelize::attributes::AlbedoBinding;
 use crate::voxelize::{Fragments, SLACK};
 
 /// `u32` sums per occupied voxel (the shader's `SUMS`).

@@ -134,13 +134,6 @@ pub struct OctreeCaster {
     expand: OnceLock<ComputePipeline<stage::expand::Entry>>,
 }
 
-fn invalid(what: String) -> Error {
-    Error::Invalid {
-        stage: stage::STAGE,
-        what,
-    }
-}
-
 fn storage(
     device: &wgpu::Device,
     label: &str,
@@ -194,21 +187,28 @@ impl OctreeCaster {
     ) -> Result<OctreeImage, Error> {
         view.check(stage::STAGE)?;
         if view.origin != [0, 0] {
-            return Err(invalid(format!(
-                "origin {:?}: the octree render draws whole targets (origin [0, 0])",
-                view.origin
-            )));
+            return Err(Error::invalid(
+                stage::STAGE,
+                format!(
+                    "origin {:?}: the octree render draws whole targets (origin [0, 0])",
+                    view.origin
+                ),
+            ));
         }
         if grid.size != octree.size {
-            return Err(invalid(format!(
-                "the grid is {:?}, the octree was built in one of {:?}",
-                grid.size, octree.size
-            )));
+            return Err(Error::invalid(
+                stage::STAGE,
+                format!(
+                    "the grid is {:?}, the octree was built in one of {:?}",
+                    grid.size, octree.size
+                ),
+            ));
         }
         if !(grid.origin.is_finite() && grid.voxel.is_finite() && grid.voxel > 0.0) {
-            return Err(invalid(format!(
-                "the grid needs a finite origin and voxel > 0, got {grid:?}"
-            )));
+            return Err(Error::invalid(
+                stage::STAGE,
+                format!("the grid needs a finite origin and voxel > 0, got {grid:?}"),
+            ));
         }
         let (level, footprint) = match settings.lod {
             Lod::Level(l) if l <= octree.log_side => (l, 1.0),
@@ -222,18 +222,22 @@ impl OctreeCaster {
             }
             Lod::Footprint(p) if p.is_finite() && p > 0.0 => (LOD_BY_FOOTPRINT, p),
             Lod::Footprint(p) => {
-                return Err(invalid(format!(
-                    "the footprint must be finite and > 0, got {p}"
-                )));
+                return Err(Error::invalid(
+                    stage::STAGE,
+                    format!("the footprint must be finite and > 0, got {p}"),
+                ));
             }
         };
         if !(settings.colour.is_finite() && settings.light.is_finite())
             || settings.light.length_squared() == 0.0
         {
-            return Err(invalid(format!(
-                "colour {} and light {} must be finite, the light not zero",
-                settings.colour, settings.light
-            )));
+            return Err(Error::invalid(
+                stage::STAGE,
+                format!(
+                    "colour {} and light {} must be finite, the light not zero",
+                    settings.colour, settings.light
+                ),
+            ));
         }
         let local_to_world = Mat4::from_translation(grid.origin.as_vec3())
             * Mat4::from_scale(Vec3::splat(grid.voxel as f32));
@@ -290,7 +294,10 @@ impl OctreeCaster {
         let pipeline = ComputePipeline::cached(
             &self.render[attributes.is_some() as usize],
             device,
-            &[("ATTRIBUTES", attributes.is_some() as u32 as f64)],
+            &stage::Overrides {
+                attributes: attributes.is_some(),
+            }
+            .constants(),
         )?;
         let none = storage(
             device,
@@ -332,15 +339,16 @@ impl OctreeCaster {
         let size = glam::UVec3::from(octree.size).as_vec3();
         for (i, r) in rays.iter().enumerate() {
             if !(r.start.is_finite() && r.dir.is_finite()) || r.dir == Vec3::ZERO {
-                return Err(invalid(format!(
-                    "ray {i}: {r:?} is not finite or has no direction"
-                )));
+                return Err(Error::invalid(
+                    stage::STAGE,
+                    format!("ray {i}: {r:?} is not finite or has no direction"),
+                ));
             }
             if r.start.cmplt(Vec3::ZERO).any() || r.start.cmpgt(size).any() {
-                return Err(invalid(format!(
-                    "ray {i} starts outside the grid: {}",
-                    r.start
-                )));
+                return Err(Error::invalid(
+                    stage::STAGE,
+                    format!("ray {i} starts outside the grid: {}", r.start),
+                ));
             }
             if r.level > octree.log_side {
                 return Err(Error::Size {

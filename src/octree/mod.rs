@@ -661,7 +661,7 @@ impl OctreeBuilder {
         albedo: &wgpu::Texture,
     ) -> Result<Octree, Error> {
         // Refused before anything is built.
-        crate::voxelize::attributes::AlbedoBinding::check(
+        crate::gpu::AlbedoBinding::check(
             device,
             crate::shaders::octree::attributes::STAGE,
             Some(albedo),

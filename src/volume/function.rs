@@ -436,12 +436,15 @@ impl<M: Entry, B: Entry, K: Entry> DensityMarch<M, B, K> {
             &self.march[((mode * 2 + shadow) * 2 + settings.skip as usize) * 2
                 + settings.count_samples as usize],
             device,
-            &[
-                ("MODE", mode as f64),
-                ("SHADOW", shadow as f64),
-                ("SKIP", settings.skip as u32 as f64),
-                ("COUNT_SAMPLES", settings.count_samples as u32 as f64),
-            ],
+            // Every density march is made from one template, so the built-in cloud's generated
+            // overrides name the template's (`check_entry` holds each stage to the template).
+            &cloud_march::Overrides {
+                mode: mode as u32,
+                shadow: shadow as u32,
+                skip: settings.skip,
+                count_samples: settings.count_samples,
+            }
+            .constants(),
         )?;
         march.record(
             device,

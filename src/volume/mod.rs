@@ -1003,12 +1003,13 @@ impl VolumeRenderer {
             &self.march[((mode * 4 + shadow) * 2 + settings.skip as usize) * 2
                 + settings.count_samples as usize],
             device,
-            &[
-                ("MODE", mode as f64),
-                ("SHADOW", shadow as f64),
-                ("SKIP", settings.skip as u32 as f64),
-                ("COUNT_SAMPLES", settings.count_samples as u32 as f64),
-            ],
+            &volume_march::Overrides {
+                mode: mode as u32,
+                shadow: shadow as u32,
+                skip: settings.skip,
+                count_samples: settings.count_samples,
+            }
+            .constants(),
         )?;
         let groups = [
             (rect[2] - rect[0]).div_ceil(8),

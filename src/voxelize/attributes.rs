@@ -15,12 +15,10 @@ use std::sync::OnceLock;
 
 use glam::{DVec3, Vec3};
 
-use super::{
-    Grid, GridMesh, HeavyWork, Mesh, SLACK, Surface, Voxelizer, batches, invalid, run_walk,
-    volume_texture,
-};
+use super::{Grid, GridMesh, HeavyWork, Mesh, SLACK, STAGE, Surface, Voxelizer, batches, run_walk};
 use crate::bind::ComputePipeline;
 use crate::error::Error;
+use crate::gpu::{AlbedoBinding, volume_texture};
 use crate::gpu::{Readback, Record, readback_buffer, uniform_buffer as uniform};
 use crate::shaders::voxelize::attribute_volume::{self as volume_stage, AttributeVolumeParams};
 use crate::shaders::voxelize::attributes::{self as stage, AttributeParams};
@@ -44,78 +42,6 @@ pub(super) struct AttributePipelines {
     resolve: OnceLock<ComputePipeline<stage::resolve::Entry>>,
     to_volumes: OnceLock<ComputePipeline<volume_stage::to_volumes::Entry>>,
     albedo: AlbedoBinding,
-}
-
-/// How the attribute passes (`voxelize/attributes`, `octree/attributes`) bind an albedo: a
-/// sampler (repeat, linear) and a 1×1 stand-in where there is none.
-#[derive(Default)]
-pub(crate) struct AlbedoBinding {
-    sampler: OnceLock<wgpu::Sampler>,
-    none: OnceLock<wgpu::TextureView>,
-}
-
-impl AlbedoBinding {
-    /// `albedo` checked for `mesh` (its texture coordinates) and `stage`'s pass: the view to
-    /// bind, or `None`.
-    pub(crate) fn check(
-        device: &wgpu::Device,
-        stage: &'static str,
-        albedo: Option<&wgpu::Texture>,
-        textured: bool,
-    ) -> Result<Option<wgpu::TextureView>, Error> {
-        let Some(t) = albedo else {
-            return Ok(None);
-        };
-        check_albedo(device, stage, t)?;
-        if !textured {
-            return Err(Error::Invalid {
-                stage,
-                what: "an albedo texture needs the mesh's texture coordinates (Mesh::texcoords)"
-                    .into(),
-            });
-        }
-        Ok(Some(t.create_view(&Default::default())))
-    }
-
-    /// The view and sampler to bind for `albedo`.
-    pub(crate) fn bind<'a>(
-        &'a self,
-        device: &wgpu::Device,
-        albedo: Option<&'a wgpu::TextureView>,
-    ) -> (&'a wgpu::TextureView, &'a wgpu::Sampler) {
-        let sampler = self.sampler.get_or_init(|| {
-            device.create_sampler(&wgpu::SamplerDescriptor {
-                label: Some("voxel albedo"),
-                address_mode_u: wgpu::AddressMode::Repeat,
-                address_mode_v: wgpu::AddressMode::Repeat,
-                mag_filter: wgpu::FilterMode::Linear,
-                min_filter: wgpu::FilterMode::Linear,
-                ..Default::default()
-            })
-        });
-        let view = match albedo {
-            Some(v) => v,
-            None => self.none.get_or_init(|| {
-                device
-                    .create_texture(&wgpu::TextureDescriptor {
-                        label: Some("no voxel albedo"),
-                        size: wgpu::Extent3d {
-                            width: 1,
-                            height: 1,
-                            depth_or_array_layers: 1,
-                        },
-                        mip_level_count: 1,
-                        sample_count: 1,
-                        dimension: wgpu::TextureDimension::D2,
-                        format: wgpu::TextureFormat::Rgba8Unorm,
-                        usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                        view_formats: &[],
-                    })
-                    .create_view(&Default::default())
-            }),
-        };
-        (view, sampler)
-    }
 }
 
 /// Voxel attributes as dense 3D textures (`voxelize/attribute_volume`), for stages that sample
@@ -273,33 +199,42 @@ pub(super) fn corners(mesh: &Mesh, local: &GridMesh) -> Result<Vec<[u32; 4]>, Er
         ("normals", mesh.normals.len()),
     ] {
         if len != 0 && len != n {
-            return Err(invalid(format!(
-                "the mesh has {n} positions but {len} {what} (give one per vertex, or none)"
-            )));
+            return Err(Error::invalid(
+                STAGE,
+                format!(
+                    "the mesh has {n} positions but {len} {what} (give one per vertex, or none)"
+                ),
+            ));
         }
     }
     let t = mesh.triangles.len();
     if !mesh.texcoords.is_empty() && mesh.texcoords.len() != t {
-        return Err(invalid(format!(
-            "the mesh has {t} triangles but {} texcoords (give one [uv; 3] per triangle, or none)",
-            mesh.texcoords.len()
-        )));
+        return Err(Error::invalid(
+            STAGE,
+            format!(
+                "the mesh has {t} triangles but {} texcoords (give one [uv; 3] per triangle, or none)",
+                mesh.texcoords.len()
+            ),
+        ));
     }
     if let Some(i) = mesh.normals.iter().position(|v| !v.is_finite()) {
-        return Err(invalid(format!(
-            "normal {i} is not finite: {}",
-            mesh.normals[i]
-        )));
+        return Err(Error::invalid(
+            STAGE,
+            format!("normal {i} is not finite: {}", mesh.normals[i]),
+        ));
     }
     if let Some(i) = mesh
         .texcoords
         .iter()
         .position(|c| c.iter().any(|uv| !uv.is_finite()))
     {
-        return Err(invalid(format!(
-            "texcoords of triangle {i} are not finite: {:?}",
-            mesh.texcoords[i]
-        )));
+        return Err(Error::invalid(
+            STAGE,
+            format!(
+                "texcoords of triangle {i} are not finite: {:?}",
+                mesh.texcoords[i]
+            ),
+        ));
     }
     let mut out = Vec::with_capacity(2 * local.vertices.len());
     for &t in &local.source {
@@ -325,43 +260,6 @@ pub(super) fn corners(mesh: &Mesh, local: &GridMesh) -> Result<Vec<[u32; 4]>, Er
         }
     }
     Ok(out)
-}
-
-/// An albedo texture the attribute pass can sample: 2D, one layer, `TEXTURE_BINDING`, a
-/// filterable float format.
-fn check_albedo(
-    device: &wgpu::Device,
-    stage: &'static str,
-    t: &wgpu::Texture,
-) -> Result<(), Error> {
-    if t.dimension() != wgpu::TextureDimension::D2 || t.depth_or_array_layers() != 1 {
-        return Err(Error::Invalid {
-            stage,
-            what: format!(
-                "the albedo must be one 2D texture, got {:?} × {} layers",
-                t.dimension(),
-                t.depth_or_array_layers()
-            ),
-        });
-    }
-    if !t.usage().contains(wgpu::TextureUsages::TEXTURE_BINDING) {
-        return Err(Error::Invalid {
-            stage,
-            what: format!("the albedo needs TEXTURE_BINDING, it has {:?}", t.usage()),
-        });
-    }
-    let filterable = matches!(
-        t.format().sample_type(None, Some(device.features())),
-        Some(wgpu::TextureSampleType::Float { filterable: true })
-    );
-    if !filterable || t.format().is_depth_stencil_format() || t.sample_count() != 1 {
-        return Err(Error::Format {
-            stage,
-            format: t.format(),
-            supported: "a filterable colour format (Rgba8Unorm, Rgba8UnormSrgb, Rgba16Float, …)",
-        });
-    }
-    Ok(())
 }
 
 impl Voxelizer {

@@ -290,10 +290,11 @@ impl Voxelizer {
         let pipeline = ComputePipeline::cached(
             &self.fragment_pipelines.variants[six as usize * 2 + ids as usize],
             device,
-            &[
-                ("SIX_SEPARATING", six as u32 as f64),
-                ("TRIANGLE_IDS", ids as u32 as f64),
-            ],
+            &stage::Overrides {
+                six_separating: six,
+                triangle_ids: ids,
+            }
+            .constants(),
         )?;
         let no_ids = buffer("no fragment triangles", 4, wgpu::BufferUsages::empty());
         let mut fragments = Fragments {

@@ -21,13 +21,15 @@
 //!
 #![doc = include_str!("../../docs/voxelize.md")]
 
-pub(crate) mod attributes;
+mod attributes;
 pub mod cpu;
 pub mod export;
 mod fragments;
 mod obj;
 mod placed;
-pub mod view;
+mod view;
+
+pub use view::{ColourBy, Light, VoxelView};
 
 pub use attributes::{
     AttributeVolumes, Attributes, PendingAttributes, VoxelAttributes, occupied_bound,
@@ -103,17 +105,23 @@ impl Grid {
     /// mesh with no extent or `n` below 3 is refused ([`Error::Invalid`]).
     pub fn fit(mesh: &Mesh, n: u32) -> Result<Grid, Error> {
         if mesh.positions.is_empty() {
-            return Err(invalid("cannot fit a grid to an empty mesh".into()));
+            return Err(Error::invalid(STAGE, "cannot fit a grid to an empty mesh"));
         }
         if let Some(i) = mesh.positions.iter().position(|p| !p.is_finite()) {
-            return Err(invalid(format!("vertex {i} is {}", mesh.positions[i])));
+            return Err(Error::invalid(
+                STAGE,
+                format!("vertex {i} is {}", mesh.positions[i]),
+            ));
         }
         if n < 3 {
             // Not `Error::Size`, whose message says "between 1 and …": 1 and 2 are refused too.
-            return Err(invalid(format!(
-                "a fitted grid needs at least 3 voxels along the longest side (the mesh and one \
+            return Err(Error::invalid(
+                STAGE,
+                format!(
+                    "a fitted grid needs at least 3 voxels along the longest side (the mesh and one \
                  voxel of margin each side), not {n}"
-            )));
+                ),
+            ));
         }
         let lo = mesh
             .positions
@@ -125,9 +133,10 @@ impl Grid {
             .fold(DVec3::splat(f64::MIN), |a, &p| a.max(p));
         let extent = (hi - lo).max_element();
         if extent <= 0.0 {
-            return Err(invalid(format!(
-                "the mesh has no extent (every vertex at {lo})"
-            )));
+            return Err(Error::invalid(
+                STAGE,
+                format!("the mesh has no extent (every vertex at {lo})"),
+            ));
         }
         let voxel = extent / (n - 2) as f64;
         // Saturating: with n near u32::MAX the side plus margin would overflow.
@@ -155,10 +164,6 @@ pub struct GridMesh {
     pub degenerate: usize,
     /// For each triangle kept, its index in the mesh.
     pub source: Vec<u32>,
-}
-
-fn invalid(what: String) -> Error {
-    Error::Invalid { stage: STAGE, what }
 }
 
 impl Mesh {
@@ -371,7 +376,7 @@ impl Mesh {
         let mut out = Mesh::default();
         for m in &placed {
             let base = u32::try_from(out.positions.len())
-                .map_err(|_| invalid("more than 2³² vertices in all".into()))?;
+                .map_err(|_| Error::invalid(STAGE, "more than 2³² vertices in all"))?;
             out.positions.extend(&m.positions);
             out.triangles
                 .extend(m.triangles.iter().map(|t| t.map(|i| i + base)));
@@ -446,17 +451,18 @@ impl Mesh {
             });
         }
         if let Some(i) = self.positions.iter().position(|p| !p.is_finite()) {
-            return Err(invalid(format!(
-                "vertex {i} is not finite: {}",
-                self.positions[i]
-            )));
+            return Err(Error::invalid(
+                STAGE,
+                format!("vertex {i} is not finite: {}", self.positions[i]),
+            ));
         }
         let n = u32::try_from(self.positions.len()).unwrap_or(u32::MAX);
         for (t, tri) in self.triangles.iter().enumerate() {
             if let Some(&bad) = tri.iter().find(|&&i| i >= n) {
-                return Err(invalid(format!(
-                    "triangle {t} names vertex {bad}, the mesh has {n}"
-                )));
+                return Err(Error::invalid(
+                    STAGE,
+                    format!("triangle {t} names vertex {bad}, the mesh has {n}"),
+                ));
             }
         }
         Ok(())
@@ -468,10 +474,13 @@ fn check_model(model: glam::DMat4) -> Result<f64, Error> {
     let det = glam::DMat3::from_mat4(model).determinant();
     let affine = model.row(3).abs_diff_eq(glam::DVec4::W, 1e-12);
     if !(model.is_finite() && det.is_finite() && det != 0.0 && affine) {
-        return Err(invalid(format!(
-            "model matrix must be affine, finite and invertible, got {model} (determinant \
+        return Err(Error::invalid(
+            STAGE,
+            format!(
+                "model matrix must be affine, finite and invertible, got {model} (determinant \
              {det})"
-        )));
+            ),
+        ));
     }
     Ok(det)
 }
@@ -508,9 +517,10 @@ fn check_grid(grid: &Grid) -> Result<(), Error> {
 /// A finite origin, a voxel edge > 0 and sides from 1 to `max_side`.
 fn check_sides(grid: &Grid, max_side: u32) -> Result<(), Error> {
     if !(grid.origin.is_finite() && grid.voxel.is_finite() && grid.voxel > 0.0) {
-        return Err(invalid(format!(
-            "the grid needs a finite origin and a voxel edge > 0, got {grid:?}"
-        )));
+        return Err(Error::invalid(
+            STAGE,
+            format!("the grid needs a finite origin and a voxel edge > 0, got {grid:?}"),
+        ));
     }
     for (axis, &n) in ["x", "y", "z"].iter().zip(&grid.size) {
         if n == 0 || n > max_side {
@@ -780,12 +790,15 @@ struct SurfacePipelines {
 
 impl SurfacePipelines {
     fn new(device: &wgpu::Device, six: bool) -> Result<Self, Error> {
-        let o = [("SIX_SEPARATING", six as u32 as f64)];
+        let o = stage::Overrides {
+            six_separating: six,
+            ..Default::default()
+        };
         Ok(Self {
-            light: ComputePipeline::with_overrides(device, &o)?,
-            heavy: ComputePipeline::with_overrides(device, &o)?,
-            giant: ComputePipeline::with_overrides(device, &o)?,
-            listed: ComputePipeline::with_overrides(device, &o)?,
+            light: ComputePipeline::with_constants(device, &o)?,
+            heavy: ComputePipeline::with_constants(device, &o)?,
+            giant: ComputePipeline::with_constants(device, &o)?,
+            listed: ComputePipeline::with_constants(device, &o)?,
         })
     }
 }
@@ -983,29 +996,6 @@ fn run_walk<E: crate::bind::Entry>(
 
 /// A 3D texture of `size` that stages sample and write (`TEXTURE_BINDING`, `STORAGE_BINDING`)
 /// and tests read back (`COPY_SRC`).
-fn volume_texture(
-    device: &wgpu::Device,
-    label: &str,
-    [width, height, depth]: [u32; 3],
-    format: wgpu::TextureFormat,
-) -> wgpu::Texture {
-    device.create_texture(&wgpu::TextureDescriptor {
-        label: Some(label),
-        size: wgpu::Extent3d {
-            width,
-            height,
-            depth_or_array_layers: depth,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D3,
-        format,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING
-            | wgpu::TextureUsages::STORAGE_BINDING
-            | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    })
-}
 
 /// Triangles per dispatch: at most 65535 workgroups of 64.
 const PER_DISPATCH: u32 = 65535 * 64;
@@ -1208,15 +1198,15 @@ impl Voxelizer {
         let workgroup = listing.map_or(64, |l| l.workgroup);
         if listing.is_some_and(|l| l.chunk == 0) || !workgroup.is_power_of_two() || workgroup > 256
         {
-            return Err(invalid(format!("listing {listing:?}")));
+            return Err(Error::invalid(STAGE, format!("listing {listing:?}")));
         }
         for (pipelines, six) in [(&mut self.surface, false), (&mut self.surface_six, true)] {
-            pipelines.listed = ComputePipeline::with_overrides(
+            pipelines.listed = ComputePipeline::with_constants(
                 device,
-                &[
-                    ("SIX_SEPARATING", six as u32 as f64),
-                    ("LISTED_WORKGROUP", workgroup as f64),
-                ],
+                &stage::Overrides {
+                    six_separating: six,
+                    listed_workgroup: workgroup,
+                },
             )?;
         }
         self.listing = listing;
@@ -1292,7 +1282,7 @@ impl Voxelizer {
         rec: &mut impl Record,
         voxels: &Surface,
     ) -> Result<wgpu::Texture, Error> {
-        let volume = volume_texture(
+        let volume = crate::gpu::volume_texture(
             device,
             "voxel occupancy volume",
             voxels.size,

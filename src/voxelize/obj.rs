@@ -11,7 +11,7 @@ use std::path::Path;
 
 use glam::DVec3;
 
-use super::{Mesh, invalid};
+use super::{Mesh, STAGE};
 use crate::error::Error;
 
 #[cfg(feature = "obj")]
@@ -28,16 +28,16 @@ impl Mesh {
     /// assert_eq!(mesh.triangles, vec![[0, 1, 2]]);
     /// ```
     pub fn from_obj(reader: &mut impl BufRead) -> Result<Self, Error> {
-        read_obj(reader).map_err(|e| invalid(format!("OBJ: {e}")))
+        read_obj(reader).map_err(|e| Error::invalid(STAGE, format!("OBJ: {e}")))
     }
 
     /// [`Mesh::from_obj`] on a file.
     pub fn load_obj(path: impl AsRef<Path>) -> Result<Self, Error> {
         let path = path.as_ref();
         let file = std::fs::File::open(path)
-            .map_err(|e| invalid(format!("cannot open {}: {e}", path.display())))?;
+            .map_err(|e| Error::invalid(STAGE, format!("cannot open {}: {e}", path.display())))?;
         read_obj(&mut std::io::BufReader::new(file))
-            .map_err(|e| invalid(format!("OBJ {}: {e}", path.display())))
+            .map_err(|e| Error::invalid(STAGE, format!("OBJ {}: {e}", path.display())))
     }
 }
 
@@ -169,7 +169,7 @@ impl Mesh {
     /// assert_eq!((mesh.positions.len(), mesh.triangles.len()), (3, 1));
     /// ```
     pub fn from_positions_cells(text: &str) -> Result<Self, Error> {
-        let bad = |what: String| invalid(format!("positions/cells text: {what}"));
+        let bad = |what: String| Error::invalid(STAGE, format!("positions/cells text: {what}"));
         let p = nested_numbers(text, "positions").map_err(bad)?;
         let c = nested_numbers(text, "cells").map_err(bad)?;
         if p.len() % 3 != 0 || c.len() % 3 != 0 {

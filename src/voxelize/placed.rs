@@ -5,9 +5,9 @@
 use glam::{DMat4, DVec3, Vec4};
 
 use super::{
-    CHUNK, Error, GpuListing, Grid, KeptWork, LIGHT, MAX_CHUNKS, MAX_GIANTS, Mesh, Separation,
-    Surface, SurfaceRun, Voxelizer, check_grid, check_model, check_work_list, giant_blocks_bound,
-    giant_count, invalid, mark_giants, most_chunks, zeroed_bitset,
+    CHUNK, Error, GpuListing, Grid, KeptWork, LIGHT, MAX_CHUNKS, MAX_GIANTS, Mesh, STAGE,
+    Separation, Surface, SurfaceRun, Voxelizer, check_grid, check_model, check_work_list,
+    giant_blocks_bound, giant_count, mark_giants, most_chunks, zeroed_bitset,
 };
 use crate::gpu::Record;
 
@@ -188,10 +188,13 @@ impl GpuMesh {
             vertices.extend(v.iter().map(|q| q.extend(0.0)));
         }
         if !radius.is_finite() || radius > f32::MAX as f64 / 4.0 {
-            return Err(invalid(format!(
-                "the mesh spans {} units around its centre, more than f32 can place",
-                radius
-            )));
+            return Err(Error::invalid(
+                STAGE,
+                format!(
+                    "the mesh spans {} units around its centre, more than f32 can place",
+                    radius
+                ),
+            ));
         }
         let count = (vertices.len() / 3) as u32;
         let bound = ChunkBound::new(diameters);
@@ -404,10 +407,13 @@ fn placed_runs<'a>(
         let moved = 8.0 * f32::EPSILON as f64 * size;
         let placed = to_grid.as_mat4();
         if !placed.is_finite() || !size.is_finite() || size > 1e30 {
-            return Err(invalid(format!(
-                "part {i}: the model matrix moves the mesh {size} voxels from the grid, \
+            return Err(Error::invalid(
+                STAGE,
+                format!(
+                    "part {i}: the model matrix moves the mesh {size} voxels from the grid, \
                  more than f32 can hold"
-            )));
+                ),
+            ));
         }
         let listing = mesh.bound.listing(a, b, grid.size);
         check_work_list(device, &listing)?;
@@ -420,29 +426,38 @@ fn placed_runs<'a>(
 /// its bits within one binding, and the usages the clear and the passes need.
 fn check_reused(device: &wgpu::Device, surface: &Surface, grid: &Grid) -> Result<(), Error> {
     if surface.size != grid.size {
-        return Err(invalid(format!(
-            "the surface to refill is {:?} voxels, the grid {:?}; make a new surface for \
+        return Err(Error::invalid(
+            STAGE,
+            format!(
+                "the surface to refill is {:?} voxels, the grid {:?}; make a new surface for \
              another size",
-            surface.size, grid.size
-        )));
+                surface.size, grid.size
+            ),
+        ));
     }
     let bytes = grid.voxels().div_ceil(32).max(1) * 4;
     let buffer = &surface.occupancy;
     let limit = device.limits().max_storage_buffer_binding_size;
     if buffer.size() < bytes || buffer.size() > limit {
-        return Err(invalid(format!(
-            "the surface's occupancy buffer is {} bytes; {} voxels need {bytes}, within the \
+        return Err(Error::invalid(
+            STAGE,
+            format!(
+                "the surface's occupancy buffer is {} bytes; {} voxels need {bytes}, within the \
              device's binding limit of {limit}",
-            buffer.size(),
-            grid.voxels()
-        )));
+                buffer.size(),
+                grid.voxels()
+            ),
+        ));
     }
     let needs = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
     if !buffer.usage().contains(needs) {
-        return Err(invalid(format!(
-            "the surface's occupancy buffer has usages {:?}; refilling it needs {needs:?}",
-            buffer.usage()
-        )));
+        return Err(Error::invalid(
+            STAGE,
+            format!(
+                "the surface's occupancy buffer has usages {:?}; refilling it needs {needs:?}",
+                buffer.usage()
+            ),
+        ));
     }
     Ok(())
 }

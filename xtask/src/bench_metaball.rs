@@ -16,8 +16,8 @@ use std::process::ExitCode;
 use fieldkit::distance::Variant;
 use fieldkit::distance::{Grid3, Method};
 use fieldkit::gpu::{Context, read_texture};
-use fieldkit::metaball::render::{Direct, Output, RaymarchSettings, Raymarcher};
 use fieldkit::metaball::{BlobBins, MetaballField, Metaballs, Settings, animate, cpu, packed_grid};
+use fieldkit::metaball::{Direct, Output, RaymarchSettings, Raymarcher};
 use fieldkit::view::{Targets, View};
 use glam::{DVec3, Mat4, Vec3, Vec4};
 

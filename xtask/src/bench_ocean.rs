@@ -10,8 +10,8 @@ use std::process::ExitCode;
 
 use fieldkit::gpu::Context;
 use fieldkit::ocean::Waves;
-use fieldkit::ocean::lod::{LodSettings, select, writeup_patches};
-use fieldkit::ocean::render::{Look, OceanCamera, OceanRenderer, Output, PATCH_QUADS, Patch};
+use fieldkit::ocean::{LodSettings, select, writeup_patches};
+use fieldkit::ocean::{Look, OceanCamera, OceanRenderer, Output, PATCH_QUADS, Patch};
 use glam::{DVec2, DVec3};
 
 use crate::measure::{Stamps, median};
@@ -254,7 +254,7 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
             })
         })
         .collect();
-    let per = fieldkit::ocean::lod::patch_triangles(PATCH_QUADS);
+    let per = fieldkit::ocean::patch_triangles(PATCH_QUADS);
     push(
         "write-up: 256 per row, split near the camera".into(),
         &waves,

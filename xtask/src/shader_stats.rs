@@ -432,18 +432,18 @@ mod tests {
 
     #[test]
     fn overrides_parse_and_bad_ones_are_named() {
-        let ok = parse_overrides(&["SKIP=true".into(), "MODE=2".into(), "X=0.5".into()]).unwrap();
+        let ok = parse_overrides(&["GAIN=true".into(), "BIAS=2".into(), "X=0.5".into()]).unwrap();
         assert_eq!(
             ok,
             vec![
-                ("SKIP".to_string(), 1.0),
-                ("MODE".to_string(), 2.0),
+                ("GAIN".to_string(), 1.0),
+                ("BIAS".to_string(), 2.0),
                 ("X".to_string(), 0.5)
             ]
         );
-        let e = parse_overrides(&["MODE".into()]).unwrap_err();
-        assert!(e.contains("\"MODE\""), "{e}");
-        let e = parse_overrides(&["MODE=two".into()]).unwrap_err();
+        let e = parse_overrides(&["BIAS".into()]).unwrap_err();
+        assert!(e.contains("\"BIAS\""), "{e}");
+        let e = parse_overrides(&["BIAS=two".into()]).unwrap_err();
         assert!(e.contains("\"two\""), "{e}");
     }
 

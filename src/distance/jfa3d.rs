@@ -1,0 +1,131 @@
+//! 3D jump flooding (Rong & Tan): seeds from a volume, then passes of halving steps over
+//! packed seeds or point keys.
+
+use std::sync::Arc;
+
+use super::Inside;
+use super::buffers::{Pool, view};
+use super::check::{check_len, check_size_3d, check_volume, voxels};
+use crate::bind::ComputePipeline;
+use crate::error::Error;
+use crate::gpu::{Record, uniform_buffer as uniform};
+use crate::shaders::distance::{jfa3_seed, jfa3_step};
+
+/// The 3D JFA pipelines.
+pub(crate) struct Jfa3d {
+    seed: ComputePipeline<jfa3_seed::seed::Entry>,
+    jump: ComputePipeline<jfa3_step::jump::Entry>,
+    jump_points: ComputePipeline<jfa3_step::jump_points::Entry>,
+    pool: Arc<Pool>,
+}
+
+impl Jfa3d {
+    pub(crate) fn new(device: &wgpu::Device, pool: Arc<Pool>) -> Result<Self, Error> {
+        Ok(Self {
+            seed: ComputePipeline::new(device)?,
+            jump: ComputePipeline::new(device)?,
+            jump_points: ComputePipeline::new(device)?,
+            pool,
+        })
+    }
+
+    /// Seed stage alone: a new buffer of packed seeds from the marked (or, inverted, unmarked)
+    /// voxels.
+    pub(crate) fn encode_seed(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        volume: &wgpu::Texture,
+        inside: Inside,
+        invert: bool,
+    ) -> Result<wgpu::Buffer, Error> {
+        let size = check_volume(device, volume)?;
+        let out = self.pool.field_buffer(device, "nearest seed", size);
+        let params = uniform(
+            device,
+            "seed params",
+            &jfa3_seed::SeedParams {
+                size: size.into(),
+                threshold: inside.threshold(),
+                invert: invert as u32,
+            },
+        );
+        let vv = view(volume);
+        self.seed.record(
+            device,
+            rec,
+            &jfa3_seed::seed::Resources {
+                params: (&params).into(),
+                volume: (&vv).into(),
+                nearest: (&out).into(),
+            },
+            ComputePipeline::<jfa3_seed::seed::Entry>::groups_for(size),
+            "seed",
+        )?;
+        Ok(out)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn flood(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        nearest: wgpu::Buffer,
+        size: [u32; 3],
+        steps: &[u32],
+        points: Option<&wgpu::Buffer>,
+    ) -> Result<wgpu::Buffer, Error> {
+        check_size_3d(device, size)?;
+        check_len(jfa3_step::STAGE, "field", &nearest, voxels(size) * 4, size)?;
+        if steps.contains(&0) {
+            return Err(Error::Invalid {
+                stage: jfa3_step::STAGE,
+                what: "step 0".into(),
+            });
+        }
+        let other = self.pool.field_buffer(device, "jfa ping-pong", size);
+        let (mut a, mut b) = (nearest, other);
+        let groups = ComputePipeline::<jfa3_step::jump::Entry>::groups_for(size);
+        for &step in steps {
+            let params = uniform(
+                device,
+                "jfa jump params",
+                &jfa3_step::JumpParams {
+                    size: size.into(),
+                    step,
+                },
+            );
+            match points {
+                None => {
+                    self.jump.record(
+                        device,
+                        rec,
+                        &jfa3_step::jump::Resources {
+                            params: (&params).into(),
+                            src: (&a).into(),
+                            dst: (&b).into(),
+                        },
+                        groups,
+                        &format!("jump {step}"),
+                    )?;
+                }
+                Some(pts) => {
+                    self.jump_points.record(
+                        device,
+                        rec,
+                        &jfa3_step::jump_points::Resources {
+                            params: (&params).into(),
+                            src: (&a).into(),
+                            dst: (&b).into(),
+                            points: pts.into(),
+                        },
+                        groups,
+                        &format!("jump {step}"),
+                    )?;
+                }
+            }
+            std::mem::swap(&mut a, &mut b);
+        }
+        Ok(a)
+    }
+}

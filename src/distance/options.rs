@@ -1,0 +1,239 @@
+//! What [`super::Distance3d`] computes: the method, sign, marks, band and units, and where a
+//! volume sits in the world ([`Grid3`]).
+
+use glam::Vec3;
+
+use super::STAGE_3D as STAGE;
+use super::Variant;
+use crate::error::Error;
+
+/// Where a volume sits in the world: voxel `(i, j, k)` has its centre at
+/// `origin + (i + ½, j + ½, k + ½) · voxel_size`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Grid3 {
+    /// Voxels per axis.
+    pub size: [u32; 3],
+    /// World units per voxel.
+    pub voxel_size: f32,
+    /// The volume's minimum corner.
+    pub origin: Vec3,
+}
+
+impl Grid3 {
+    /// A grid of `size` unit voxels at the origin.
+    pub fn new(size: [u32; 3]) -> Self {
+        Self {
+            size,
+            voxel_size: 1.0,
+            origin: Vec3::ZERO,
+        }
+    }
+
+    /// World position → voxel coordinates (voxel centres at integers).
+    pub fn to_voxel(&self, p: Vec3) -> Vec3 {
+        (p - self.origin) / self.voxel_size - Vec3::splat(0.5)
+    }
+
+    /// Centre of voxel `v` in the world.
+    pub fn voxel_centre(&self, v: [u32; 3]) -> Vec3 {
+        self.origin + (Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32) + 0.5) * self.voxel_size
+    }
+}
+
+/// Which voxels of the input volume are marked (seeds; for a signed field, inside).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum Inside {
+    /// Any positive value.
+    Mask,
+    /// Value ≥ the threshold (a density's iso-level).
+    Threshold(f32),
+}
+
+impl Inside {
+    pub(crate) fn threshold(self) -> f32 {
+        match self {
+            Inside::Mask => f32::MIN_POSITIVE,
+            Inside::Threshold(t) => t,
+        }
+    }
+}
+
+/// How the field is computed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum Method {
+    /// The exact transform: zero wrong voxels, and the fastest at every size measured (README).
+    #[default]
+    Exact,
+    /// Jump flooding with the given variant.
+    Jfa(Variant),
+    /// Sub-voxel seeds within a band: three line passes (x, y, z), each scanning ±band voxels
+    /// (`point_lines.wgsl`); the cost grows with the band. Needs [`Options3d::band`], and each
+    /// point within one voxel of the voxel its key is held in (as surface seeds and
+    /// [`Distance3d::encode_points`] without homes place them). Integer seeds take
+    /// [`Method::Exact`]. Not exact for sub-voxel seeds: it can keep one up to about half a voxel
+    /// farther than the nearest, where JFA+2 keeps one at most a tenth farther (`tests/distance_3d_points.rs` measures
+    /// it against brute force and JFA+2).
+    Lines,
+}
+
+impl Method {
+    /// The method's name as the benchmark tables write it.
+    pub fn name(self) -> String {
+        match self {
+            Method::Exact => "exact".into(),
+            Method::Jfa(v) => v.name().into(),
+            Method::Lines => "lines".into(),
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+/// What [`Distance3d`] computes.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Options3d {
+    /// Exact (default), JFA or the line passes.
+    pub method: Method,
+    /// Signed distance, negative inside (marked voxels).
+    pub signed: bool,
+    /// Which voxels are marked.
+    pub inside: Inside,
+    /// World units per voxel.
+    pub voxel_size: f32,
+    /// Narrow band, in voxels: distances are only needed up to this far. JFA then starts at the
+    /// power of two at or above it instead of half the grid; every method clamps to it.
+    pub band: Option<f32>,
+    /// What a voxel that no seed reached holds (an empty seed set; or, with a band, a voxel
+    /// farther than it): by default ±band, or `f32::MAX` without one. JFA only (the pass that
+    /// writes these is its resolve); other methods refuse it.
+    pub unreached: Option<Unreached>,
+}
+
+/// Distances for voxels no seed reached, world units: `-inside` inside and `outside` outside
+/// (the metaball source's full-volume field writes −one voxel and 1e6).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Unreached {
+    /// Magnitude given inside (the value written is its negation).
+    pub inside: f32,
+    /// Value given outside.
+    pub outside: f32,
+}
+
+impl Default for Options3d {
+    fn default() -> Self {
+        Self {
+            method: Method::Exact,
+            signed: false,
+            inside: Inside::Mask,
+            voxel_size: 1.0,
+            band: None,
+            unreached: None,
+        }
+    }
+}
+
+impl Options3d {
+    /// The band in world units distances are clamped to; `f32::MAX` for none.
+    pub(crate) fn world_band(&self) -> f32 {
+        self.band.map_or(f32::MAX, |b| b * self.voxel_size)
+    }
+
+    pub(crate) fn check(&self) -> Result<(), Error> {
+        if !(self.voxel_size.is_finite() && self.voxel_size > 0.0) {
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: format!(
+                    "voxel_size must be finite and positive, got {}",
+                    self.voxel_size
+                ),
+            });
+        }
+        if let Some(b) = self.band
+            && !(b.is_finite() && b > 0.0)
+        {
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: format!("band must be finite and positive, got {b}"),
+            });
+        }
+        if let Some(u) = self.unreached {
+            if !(u.inside.is_finite()
+                && u.inside >= 0.0
+                && u.outside.is_finite()
+                && u.outside >= 0.0)
+            {
+                return Err(Error::Invalid {
+                    stage: STAGE,
+                    what: format!(
+                        "unreached inside ({}) and outside ({}) must be finite and ≥ 0",
+                        u.inside, u.outside
+                    ),
+                });
+            }
+            if !matches!(self.method, Method::Jfa(_)) {
+                return Err(Error::Invalid {
+                    stage: STAGE,
+                    what: format!(
+                        "unreached values are written by JFA's resolve; method {} does not take them",
+                        self.method.name()
+                    ),
+                });
+            }
+        }
+        if let Inside::Threshold(t) = self.inside
+            && !t.is_finite()
+        {
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: format!("threshold must be finite, got {t}"),
+            });
+        }
+        Ok(())
+    }
+
+    /// The methods that take sub-voxel seeds: JFA, and the line passes with a band.
+    pub(crate) fn check_points(&self) -> Result<(), Error> {
+        match (self.method, self.band) {
+            (Method::Jfa(_), _) | (Method::Lines, Some(_)) => Ok(()),
+            (Method::Lines, None) => Err(Error::Invalid {
+                stage: STAGE,
+                what: "Method::Lines scans ±band voxels per axis and needs a band".into(),
+            }),
+            (Method::Exact, _) => Err(Error::Invalid {
+                stage: STAGE,
+                what: "sub-voxel seeds need JFA or the line passes; the exact transform takes \
+                       integer seeds"
+                    .into(),
+            }),
+        }
+    }
+
+    /// JFA step lengths for a grid whose largest side is `max_side`.
+    pub fn steps(&self, variant: Variant, max_side: u32) -> Vec<u32> {
+        let steps = variant.steps(max_side);
+        let Some(band) = self.band else { return steps };
+        // Steps p, p/2, …, 1 reach any seed up to 2p − 1 ≥ band voxels away along each axis.
+        let full = max_side.max(1).next_power_of_two() / 2;
+        // A band as wide as the grid (or wider, up to f32::MAX) keeps every step; compare in f32
+        // before converting so a huge band cannot overflow.
+        if band.is_nan() || band.ceil() >= full as f32 {
+            return steps;
+        }
+        let first = (band.ceil() as u32).max(1).next_power_of_two();
+        if first >= full {
+            return steps;
+        }
+        let skip = (full / first).trailing_zeros() as usize;
+        // Drop the long steps at the start of the JFA run (after a leading step-1 pass, if any).
+        let lead = usize::from(matches!(
+            variant,
+            Variant::OnePlusJfa | Variant::OnePlusJfaPlus2
+        ));
+        let mut s = steps;
+        s.drain(lead..lead + skip);
+        s
+    }
+}

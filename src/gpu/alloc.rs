@@ -1,0 +1,65 @@
+//! Allocation helpers every technique shares: textures of one mip and sample, the storage
+//! textures stages write volumes into, and storage buffers.
+
+/// A texture of `size` (`[width, height, depth or layers]`), one mip level and one sample.
+pub(crate) fn texture(
+    device: &wgpu::Device,
+    label: &str,
+    size: [u32; 3],
+    dimension: wgpu::TextureDimension,
+    format: wgpu::TextureFormat,
+    usage: wgpu::TextureUsages,
+) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: size[0],
+            height: size[1],
+            depth_or_array_layers: size[2],
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension,
+        format,
+        usage,
+        view_formats: &[],
+    })
+}
+
+/// A 3D texture a stage writes (storage) and later stages sample or copy out.
+// Used by the techniques.
+#[cfg_attr(not(feature = "techniques"), allow(dead_code))]
+pub(crate) fn volume_texture(
+    device: &wgpu::Device,
+    label: &str,
+    size: [u32; 3],
+    format: wgpu::TextureFormat,
+) -> wgpu::Texture {
+    texture(
+        device,
+        label,
+        size,
+        wgpu::TextureDimension::D3,
+        format,
+        wgpu::TextureUsages::STORAGE_BINDING
+            | wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_SRC,
+    )
+}
+
+/// A storage buffer of `bytes` with `extra` usages beside `STORAGE`.
+// Used by the techniques.
+#[cfg_attr(not(feature = "techniques"), allow(dead_code))]
+pub(crate) fn storage_buffer(
+    device: &wgpu::Device,
+    label: &str,
+    bytes: u64,
+    extra: wgpu::BufferUsages,
+) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: bytes,
+        usage: wgpu::BufferUsages::STORAGE | extra,
+        mapped_at_creation: false,
+    })
+}
