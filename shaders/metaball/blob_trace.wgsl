@@ -1,5 +1,5 @@
 // Traces the metaball field directly, from the blobs in `metaball/bin_blobs`, one thread per
-// pixel of the box's screen rectangle; `raymarch/composite` writes the result into the caller's
+// pixel of the box's screen rectangle; `metaball/composite` writes the result into the caller's
 // targets as it does for the SDF-texture march. Two step rules for the field f = Σ (1 − r²/R²)³:
 //
 // - sphere tracing with a global Lipschitz bound (Hart 1996): (T − f) / L never passes the

@@ -1,4 +1,4 @@
-// Writes a marched image (colour and NDC depth from `raymarch/sdf_raymarch`) into the caller's
+// Writes a marched image (colour and NDC depth from `metaball/sdf_raymarch`) into the caller's
 // colour and depth targets through their depth test, so the surface composites with their scene.
 // A full-screen triangle, scissored by the host to the marched rectangle; pixels the march left
 // as a miss (depth −1) are discarded. Hit depths are clamped to [0, 1] as a rasterised depth would

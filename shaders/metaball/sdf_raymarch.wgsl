@@ -1,7 +1,7 @@
 // SDF raymarch of one volume: sphere tracing on a signed-distance texture, refined by bisection on
 // the density's iso-surface and shaded, both read with one hardware-trilinear fetch from the
 // packed volume of `metaball/march_field` (distance in cells in r, density in g), one thread per pixel of the volume's screen rectangle
-// (after the source's Unreal metaball pass; sphere tracing: Hart 1996). `raymarch/composite` then
+// (after the source's Unreal metaball pass; sphere tracing: Hart 1996). `metaball/composite` then
 // writes the result with depth into the caller's targets, so it composites with their scene.
 //
 // The march is a compute pass, not a full-screen fragment shader: some adapters run fragment

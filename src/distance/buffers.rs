@@ -158,3 +158,39 @@ impl Pool {
         }
     }
 }
+
+/// One byte per texel of `data` (x fastest) uploaded as a new `R8Unorm` texture of `size`
+/// (2D: depth 1), for masks and volumes; a wgpu error names `stage`.
+pub(crate) fn upload_r8(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    stage: &'static str,
+    label: &str,
+    data: &[u8],
+    size: [u32; 3],
+    dimension: wgpu::TextureDimension,
+) -> Result<wgpu::Texture, crate::Error> {
+    crate::gpu::scoped(device, stage, || {
+        let t = texture(
+            device,
+            label,
+            size,
+            dimension,
+            wgpu::TextureFormat::R8Unorm,
+            wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_DST
+                | wgpu::TextureUsages::COPY_SRC,
+        );
+        queue.write_texture(
+            t.as_image_copy(),
+            data,
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(size[0]),
+                rows_per_image: Some(size[1]),
+            },
+            t.size(),
+        );
+        t
+    })
+}

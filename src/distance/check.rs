@@ -62,15 +62,25 @@ pub(crate) fn check_sides(
 ) -> Result<(), Error> {
     let tex = device.limits().max_texture_dimension_3d;
     for (i, what) in ["width", "height", "depth"].into_iter().enumerate() {
-        let max = max[i].min(tex) as u64;
-        if size[i] == 0 || size[i] as u64 > max {
-            return Err(Error::Size {
-                stage: STAGE,
-                what,
-                got: size[i] as u64,
-                max,
-            });
-        }
+        check_side(STAGE, what, size[i], max[i].min(tex))?;
+    }
+    Ok(())
+}
+
+/// [`Error::Size`] from `stage` unless the `what` side `got` is from 1 to `max`.
+pub(crate) fn check_side(
+    stage: &'static str,
+    what: &'static str,
+    got: u32,
+    max: u32,
+) -> Result<(), Error> {
+    if got == 0 || got > max {
+        return Err(Error::Size {
+            stage,
+            what,
+            got: got as u64,
+            max: max as u64,
+        });
     }
     Ok(())
 }
@@ -149,17 +159,9 @@ pub(crate) fn check_bytes(limits: &wgpu::Limits, bytes: u64) -> Result<(), Error
 /// Check a 2D grid for the exact transform.
 pub fn check_size_2d_exact(device: &wgpu::Device, w: u32, h: u32) -> Result<(), Error> {
     let limits = device.limits();
-    let max = MAX_SIDE_2D_EXACT.min(limits.max_texture_dimension_2d) as u64;
-    for (what, got) in [("width", w), ("height", h)] {
-        if got == 0 || got as u64 > max {
-            return Err(Error::Size {
-                stage: STAGE,
-                what,
-                got: got as u64,
-                max,
-            });
-        }
-    }
+    let max = MAX_SIDE_2D_EXACT.min(limits.max_texture_dimension_2d);
+    check_side(STAGE, "width", w, max)?;
+    check_side(STAGE, "height", h, max)?;
     check_bytes(&limits, w as u64 * h as u64 * 4)
 }
 

@@ -30,6 +30,7 @@ use super::buffers::{Pool, view};
 use super::check::{check_inside, check_len, check_size_3d, check_volume, voxels};
 use super::exact::Exact;
 use super::jfa3d::Jfa3d;
+use super::options::Marks;
 use super::points::Points;
 use super::resolve::{Fuse, Resolver};
 use super::{
@@ -151,9 +152,15 @@ impl Distance3d {
         let rec = &mut rec.recorder();
         let steps = options.steps(variant, size.into_iter().max().unwrap());
         let flood = |rec: &mut Recorder<'_>, invert: bool| -> Result<wgpu::Buffer, Error> {
-            let seeds = self
-                .jfa
-                .encode_seed(device, rec, volume, options.inside, invert)?;
+            let seeds = self.jfa.encode_seed(
+                device,
+                rec,
+                Marks {
+                    volume,
+                    inside: options.inside,
+                    invert,
+                },
+            )?;
             self.jfa.flood(device, rec, seeds, size, &steps, None)
         };
         let nearest = flood(rec, false)?;
@@ -202,8 +209,16 @@ impl Distance3d {
         inside: Inside,
         invert: bool,
     ) -> Result<Slabs, Error> {
-        self.exact
-            .encode_exact_fused(device, rec, volume, inside, invert, None)
+        self.exact.encode_exact_fused(
+            device,
+            rec,
+            Marks {
+                volume,
+                inside,
+                invert,
+            },
+            None,
+        )
     }
 
     /// Resolve stage alone: packed nearest seeds (and, for signed, the outside field) to distance.
@@ -310,7 +325,15 @@ impl Distance3d {
         inside: Inside,
         invert: bool,
     ) -> Result<wgpu::Buffer, Error> {
-        self.jfa.encode_seed(device, rec, volume, inside, invert)
+        self.jfa.encode_seed(
+            device,
+            rec,
+            Marks {
+                volume,
+                inside,
+                invert,
+            },
+        )
     }
 
     /// First exact pass alone: per row, the nearest marked voxel along x (a new buffer).
@@ -322,7 +345,15 @@ impl Distance3d {
         inside: Inside,
         invert: bool,
     ) -> Result<wgpu::Buffer, Error> {
-        self.exact.encode_rows(device, rec, volume, inside, invert)
+        self.exact.encode_rows(
+            device,
+            rec,
+            Marks {
+                volume,
+                inside,
+                invert,
+            },
+        )
     }
 
     /// The 3D row pass as words (`row_words`): per 32 voxels of a row, their marks and the
@@ -336,8 +367,16 @@ impl Distance3d {
         inside: Inside,
         invert: bool,
     ) -> Result<wgpu::Buffer, Error> {
-        self.exact
-            .encode_row_words(device, rec, volume, inside, invert)
+        self.exact.row_words(
+            device,
+            rec,
+            Marks {
+                volume,
+                inside,
+                invert,
+            },
+            false,
+        )
     }
 
     /// The y column pass of a 3D field of `size` from the row words of

@@ -3,9 +3,9 @@
 
 use std::sync::Arc;
 
-use super::Inside;
 use super::buffers::{Pool, view};
 use super::check::{check_len, check_size_3d, check_volume, voxels};
+use super::options::Marks;
 use crate::bind::ComputePipeline;
 use crate::error::Error;
 use crate::gpu::{Record, uniform_buffer as uniform};
@@ -35,22 +35,20 @@ impl Jfa3d {
         &self,
         device: &wgpu::Device,
         rec: &mut impl Record,
-        volume: &wgpu::Texture,
-        inside: Inside,
-        invert: bool,
+        marks: Marks,
     ) -> Result<wgpu::Buffer, Error> {
-        let size = check_volume(device, volume)?;
+        let size = check_volume(device, marks.volume)?;
         let out = self.pool.field_buffer(device, "nearest seed", size);
         let params = uniform(
             device,
             "seed params",
             &jfa3_seed::SeedParams {
                 size: size.into(),
-                threshold: inside.threshold(),
-                invert: invert as u32,
+                threshold: marks.inside.threshold(),
+                invert: marks.invert as u32,
             },
         );
-        let vv = view(volume);
+        let vv = view(marks.volume);
         self.seed.record(
             device,
             rec,

@@ -237,3 +237,12 @@ impl Options3d {
         s
     }
 }
+
+/// The voxels a pass marks as seeds: those of `volume` that `inside` marks, or, `invert`, the
+/// others (the outside seeds of a signed field).
+#[derive(Clone, Copy)]
+pub(crate) struct Marks<'a> {
+    pub(crate) volume: &'a wgpu::Texture,
+    pub(crate) inside: Inside,
+    pub(crate) invert: bool,
+}

@@ -1,6 +1,8 @@
 //! Seed textures: which texels of a mask or image are seeds ([`SeedRule`]), the formats read,
 //! the 2D seed packing (16/16 bits, [`pack_seed`]) and a mask uploaded from the CPU.
 
+use super::buffers::upload_r8;
+use super::check::check_side;
 use crate::error::Error;
 
 pub(crate) const STAGE: &str = "distance::jfa";
@@ -152,18 +154,9 @@ pub fn check_size(device: &wgpu::Device, w: u32, h: u32) -> Result<(), Error> {
     let max = device
         .limits()
         .max_texture_dimension_2d
-        .min(MAX_PACKED_SIDE) as u64;
-    for (what, got) in [("width", w), ("height", h)] {
-        if got == 0 || got as u64 > max {
-            return Err(Error::Size {
-                stage: STAGE,
-                what,
-                got: got as u64,
-                max,
-            });
-        }
-    }
-    Ok(())
+        .min(MAX_PACKED_SIDE);
+    check_side(STAGE, "width", w, max)?;
+    check_side(STAGE, "height", h, max)
 }
 
 /// Upload a CPU mask (`width × height` bytes, row-major, non-zero = seed) as an `R8Unorm` texture.
@@ -185,28 +178,13 @@ pub fn upload_mask(
             ),
         });
     }
-    let t = crate::gpu::scoped(device, STAGE, || {
-        let t = crate::gpu::texture(
-            device,
-            "seed mask",
-            [width, height, 1],
-            wgpu::TextureDimension::D2,
-            wgpu::TextureFormat::R8Unorm,
-            wgpu::TextureUsages::TEXTURE_BINDING
-                | wgpu::TextureUsages::COPY_DST
-                | wgpu::TextureUsages::COPY_SRC,
-        );
-        queue.write_texture(
-            t.as_image_copy(),
-            mask,
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(width),
-                rows_per_image: Some(height),
-            },
-            t.size(),
-        );
-        t
-    })?;
-    Ok(t)
+    upload_r8(
+        device,
+        queue,
+        STAGE,
+        "seed mask",
+        mask,
+        [width, height, 1],
+        wgpu::TextureDimension::D2,
+    )
 }

@@ -3,6 +3,7 @@
 use glam::Vec3;
 
 use super::STAGE_3D as STAGE;
+use super::buffers::upload_r8;
 use super::check::{MAX_SIDE_EXACT_3D, check_sides, check_size_3d, voxels};
 use super::{Grid3, MAX_POINTS, pack_seed3};
 use crate::error::Error;
@@ -42,29 +43,15 @@ pub fn upload_volume(
             ),
         });
     }
-    crate::gpu::scoped(device, STAGE, || {
-        let t = crate::gpu::texture(
-            device,
-            "volume",
-            size,
-            wgpu::TextureDimension::D3,
-            wgpu::TextureFormat::R8Unorm,
-            wgpu::TextureUsages::TEXTURE_BINDING
-                | wgpu::TextureUsages::COPY_DST
-                | wgpu::TextureUsages::COPY_SRC,
-        );
-        queue.write_texture(
-            t.as_image_copy(),
-            data,
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(size[0]),
-                rows_per_image: Some(size[1]),
-            },
-            t.size(),
-        );
-        t
-    })
+    upload_r8(
+        device,
+        queue,
+        STAGE,
+        "volume",
+        data,
+        size,
+        wgpu::TextureDimension::D3,
+    )
 }
 
 /// Upload sub-voxel seeds given in world coordinates; each seeds the voxel it lies in. Every

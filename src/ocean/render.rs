@@ -797,217 +797,18 @@ impl OceanRenderer {
         depth: &wgpu::Texture,
         fade: bool,
     ) -> Result<(), Error> {
-        look.check()?;
-        if !time.is_finite() {
-            return Err(Error::invalid(
-                STAGE,
-                format!("time must be finite, got {time}"),
-            ));
-        }
-        if !(camera.view.is_finite() && camera.proj.is_finite()) {
-            return Err(Error::invalid(
-                STAGE,
-                "the camera's matrices must be finite",
-            ));
-        }
-        for (i, p) in patches.iter().enumerate() {
-            if !(p.corner.is_finite()
-                && p.size.is_finite()
-                && p.size > 0.0
-                && (1..=MAX_PATCH_QUADS).contains(&p.quads))
-            {
-                return Err(Error::invalid(
-                    STAGE,
-                    format!(
-                        "patch {i}: corner must be finite, size > 0 and quads 1 to {MAX_PATCH_QUADS}, got {p:?}"
-                    ),
-                ));
-            }
-        }
-        let want = self.output.targets();
-        if targets.len() != want {
-            return Err(Error::invalid(
-                STAGE,
-                format!("{} targets given, the output takes {want}", targets.len()),
-            ));
-        }
-        if depth.format() != self.depth.format {
-            return Err(Error::invalid(
-                STAGE,
-                format!(
-                    "the depth target is {:?}; this renderer was made for {:?} (OceanRenderer::with_depth)",
-                    depth.format(),
-                    self.depth.format
-                ),
-            ));
-        }
-        let height_maps = map_indices(&look.height_layers, &self.height_maps, "height")?;
-        let normal_maps = map_indices(&look.normal_layers, &self.normal_maps, "normal")?;
-        let needs = wgpu::TextureUsages::RENDER_ATTACHMENT
-            | if fade {
-                wgpu::TextureUsages::TEXTURE_BINDING
-            } else {
-                wgpu::TextureUsages::empty()
-            };
-        if !depth.usage().contains(needs) {
-            return Err(Error::invalid(
-                STAGE,
-                format!(
-                    "the depth target needs {needs:?} (depth fade reads a copy of it), it has {:?}",
-                    depth.usage()
-                ),
-            ));
-        }
-        let size = depth.size();
-        for (i, t) in targets.iter().enumerate() {
-            let e = t.texture().size();
-            if (e.width, e.height) != (size.width, size.height) {
-                return Err(Error::invalid(
-                    STAGE,
-                    format!(
-                        "target {i} is {}×{}, the depth target {}×{}",
-                        e.width, e.height, size.width, size.height
-                    ),
-                ));
-            }
-        }
+        self.check_encode(time, camera, look, patches, targets, depth, fade)?;
         // Everything relative to the eye's (x, z): f32 sees small numbers.
         let eye = camera.eye();
         let origin = DVec2::new(eye.x, eye.z);
-        let shift = DMat4::from_translation(DVec3::new(origin.x, 0.0, origin.y));
-        let view = (camera.view * shift).as_mat4();
         let wave_set = waves.gpu(origin, time);
-        let frame = FrameParams {
-            view_proj: camera.proj * view,
-            inv_proj: camera.proj.inverse(),
-            camera: Vec3::new(0.0, eye.y as f32, 0.0),
-            skirt: look.skirt,
-            height_layers: layer_uniforms(&look.height_layers, origin, time),
-            normal_layers: layer_uniforms(&look.normal_layers, origin, time),
-            height_layer_count: look.height_layers.len() as u32,
-            normal_layer_count: look.normal_layers.len() as u32,
-            fade_distance: look.fade_distance,
-            roughness: look.roughness,
-            sun_direction: look.sun_direction.normalize(),
-            shading_model: look.shading_model as u32,
-            sun_colour: look.sun_colour,
-            use_fade: fade as u32,
-            deep_colour: look.deep_colour,
-            metallic: look.metallic,
-            shallow_colour: look.shallow_colour,
-            specular: look.specular,
-            sky_colour: look.sky_colour,
-            subsurface_colour: look.subsurface_colour,
-            height_maps,
-            normal_maps,
-        };
-        // The copy of the scene's depth (a 1×1 stand-in without fade).
-        let mut cache = self.depth_copy.lock().unwrap_or_else(|e| e.into_inner());
-        let copy_size = if fade {
-            size
-        } else {
-            wgpu::Extent3d {
-                width: 1,
-                height: 1,
-                depth_or_array_layers: 1,
-            }
-        };
-        if cache.as_ref().is_none_or(|c| c.size() != copy_size) {
-            *cache = Some(device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("ocean scene depth copy"),
-                size: copy_size,
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: wgpu::TextureFormat::R32Float,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::STORAGE_BINDING,
-                view_formats: &[],
-            }));
-        }
-        let copy = cache.as_ref().expect("made above").clone();
-        drop(cache);
-        let copy_view = copy.create_view(&Default::default());
-        if fade {
-            let depth_in = depth.create_view(&wgpu::TextureViewDescriptor {
-                aspect: wgpu::TextureAspect::DepthOnly,
-                ..Default::default()
-            });
-            self.copy_depth.record(
-                device,
-                encoder,
-                &depth_copy::copy_depth::Resources {
-                    depth_in: (&depth_in).into(),
-                    depth_out: (&copy_view).into(),
-                },
-                ComputePipeline::<depth_copy::copy_depth::Entry>::groups_for([
-                    size.width,
-                    size.height,
-                    1,
-                ]),
-                depth_copy::STAGE,
-            )?;
-        }
+        let frame = self.frame_params(camera, look, origin, time, fade)?;
+        let copy_view = self.scene_depth(device, encoder, depth, fade)?;
         if patches.is_empty() {
             return Ok(());
         }
-        // Grouped by quad count, one draw of the grids per group (within a group nearest first
-        // still), then one draw per group and edge of the skirts that edge needs: the same
-        // patches again, listed after the grids.
-        let mut order: Vec<usize> = (0..patches.len()).collect();
-        order.sort_by_key(|&i| patches[i].quads);
-        let instance = |p: &Patch| {
-            // Both corners from f64, so neighbours share their edge's f32 values exactly.
-            let lo = p.corner - origin;
-            let hi = p.corner + DVec2::splat(p.size) - origin;
-            stage::fs_forward::Instance {
-                instance_patch: [lo.x as f32, lo.y as f32, hi.x as f32, hi.y as f32],
-                instance_quads: [p.quads, 0, 0, 0],
-            }
-        };
-        let mut instances: Vec<stage::fs_forward::Instance> =
-            order.iter().map(|&i| instance(&patches[i])).collect();
-        // (quads, first index, index count, instances)
-        let mut draws: Vec<(u32, u32, u32, std::ops::Range<u32>)> = Vec::new();
-        let mut start = 0;
-        while start < order.len() {
-            let q = patches[order[start]].quads;
-            let end = start
-                + order[start..]
-                    .iter()
-                    .take_while(|&&i| patches[i].quads == q)
-                    .count();
-            draws.push((q, 0, 6 * q * q, start as u32..end as u32));
-            for edge in 0..4u32 {
-                let first = instances.len() as u32;
-                instances.extend(
-                    order[start..end]
-                        .iter()
-                        .filter(|&&i| patches[i].skirts & (1 << edge) != 0)
-                        .map(|&i| instance(&patches[i])),
-                );
-                let last = instances.len() as u32;
-                if last > first {
-                    draws.push((q, 6 * q * q + edge * 6 * q, 6 * q, first..last));
-                }
-            }
-            start = end;
-        }
-        let index_buffers: Vec<(wgpu::Buffer, std::ops::Range<u32>, std::ops::Range<u32>)> = {
-            let mut cache = self.indices.lock().unwrap_or_else(|e| e.into_inner());
-            draws
-                .into_iter()
-                .map(|(q, first, count, range)| {
-                    let buffer = cache.entry(q).or_insert_with(|| {
-                        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                            label: Some("ocean patch indices"),
-                            contents: bytemuck::cast_slice(&patch_indices(q)),
-                            usage: wgpu::BufferUsages::INDEX,
-                        })
-                    });
-                    (buffer.clone(), first..first + count, range)
-                })
-                .collect()
-        };
+        let (instances, draws) = patch_draws(patches, origin);
+        let index_buffers = self.index_buffers(device, draws);
         use wgpu::util::DeviceExt;
         let instance_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("ocean patches"),
@@ -1078,4 +879,266 @@ impl OceanRenderer {
         }
         Ok(())
     }
+
+    /// The checks of [`Self::encode`]'s inputs, each a typed error naming what was wrong.
+    #[allow(clippy::too_many_arguments)]
+    fn check_encode(
+        &self,
+        time: f64,
+        camera: &OceanCamera,
+        look: &Look,
+        patches: &[Patch],
+        targets: &[&wgpu::TextureView],
+        depth: &wgpu::Texture,
+        fade: bool,
+    ) -> Result<(), Error> {
+        look.check()?;
+        if !time.is_finite() {
+            return Err(Error::invalid(
+                STAGE,
+                format!("time must be finite, got {time}"),
+            ));
+        }
+        if !(camera.view.is_finite() && camera.proj.is_finite()) {
+            return Err(Error::invalid(
+                STAGE,
+                "the camera's matrices must be finite",
+            ));
+        }
+        for (i, p) in patches.iter().enumerate() {
+            if !(p.corner.is_finite()
+                && p.size.is_finite()
+                && p.size > 0.0
+                && (1..=MAX_PATCH_QUADS).contains(&p.quads))
+            {
+                return Err(Error::invalid(
+                    STAGE,
+                    format!(
+                        "patch {i}: corner must be finite, size > 0 and quads 1 to {MAX_PATCH_QUADS}, got {p:?}"
+                    ),
+                ));
+            }
+        }
+        let want = self.output.targets();
+        if targets.len() != want {
+            return Err(Error::invalid(
+                STAGE,
+                format!("{} targets given, the output takes {want}", targets.len()),
+            ));
+        }
+        if depth.format() != self.depth.format {
+            return Err(Error::invalid(
+                STAGE,
+                format!(
+                    "the depth target is {:?}; this renderer was made for {:?} (OceanRenderer::with_depth)",
+                    depth.format(),
+                    self.depth.format
+                ),
+            ));
+        }
+        let needs = wgpu::TextureUsages::RENDER_ATTACHMENT
+            | if fade {
+                wgpu::TextureUsages::TEXTURE_BINDING
+            } else {
+                wgpu::TextureUsages::empty()
+            };
+        if !depth.usage().contains(needs) {
+            return Err(Error::invalid(
+                STAGE,
+                format!(
+                    "the depth target needs {needs:?} (depth fade reads a copy of it), it has {:?}",
+                    depth.usage()
+                ),
+            ));
+        }
+        let size = depth.size();
+        for (i, t) in targets.iter().enumerate() {
+            let e = t.texture().size();
+            if (e.width, e.height) != (size.width, size.height) {
+                return Err(Error::invalid(
+                    STAGE,
+                    format!(
+                        "target {i} is {}×{}, the depth target {}×{}",
+                        e.width, e.height, size.width, size.height
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The frame's uniforms: the camera with the eye's (x, z) at `origin` taken off, the look,
+    /// the detail layers at `time`.
+    fn frame_params(
+        &self,
+        camera: &OceanCamera,
+        look: &Look,
+        origin: DVec2,
+        time: f64,
+        fade: bool,
+    ) -> Result<FrameParams, Error> {
+        let height_maps = map_indices(&look.height_layers, &self.height_maps, "height")?;
+        let normal_maps = map_indices(&look.normal_layers, &self.normal_maps, "normal")?;
+        let eye = camera.eye();
+        let shift = DMat4::from_translation(DVec3::new(origin.x, 0.0, origin.y));
+        let view = (camera.view * shift).as_mat4();
+        Ok(FrameParams {
+            view_proj: camera.proj * view,
+            inv_proj: camera.proj.inverse(),
+            camera: Vec3::new(0.0, eye.y as f32, 0.0),
+            skirt: look.skirt,
+            height_layers: layer_uniforms(&look.height_layers, origin, time),
+            normal_layers: layer_uniforms(&look.normal_layers, origin, time),
+            height_layer_count: look.height_layers.len() as u32,
+            normal_layer_count: look.normal_layers.len() as u32,
+            fade_distance: look.fade_distance,
+            roughness: look.roughness,
+            sun_direction: look.sun_direction.normalize(),
+            shading_model: look.shading_model as u32,
+            sun_colour: look.sun_colour,
+            use_fade: fade as u32,
+            deep_colour: look.deep_colour,
+            metallic: look.metallic,
+            shallow_colour: look.shallow_colour,
+            specular: look.specular,
+            sky_colour: look.sky_colour,
+            subsurface_colour: look.subsurface_colour,
+            height_maps,
+            normal_maps,
+        })
+    }
+
+    /// The copy of the scene's depth the fade reads (a 1×1 stand-in without fade), kept from
+    /// frame to frame while its size holds: its view.
+    fn scene_depth(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        depth: &wgpu::Texture,
+        fade: bool,
+    ) -> Result<wgpu::TextureView, Error> {
+        let size = depth.size();
+        let mut cache = self.depth_copy.lock().unwrap_or_else(|e| e.into_inner());
+        let copy_size = if fade {
+            size
+        } else {
+            wgpu::Extent3d {
+                width: 1,
+                height: 1,
+                depth_or_array_layers: 1,
+            }
+        };
+        if cache.as_ref().is_none_or(|c| c.size() != copy_size) {
+            *cache = Some(device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("ocean scene depth copy"),
+                size: copy_size,
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::R32Float,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::STORAGE_BINDING,
+                view_formats: &[],
+            }));
+        }
+        let copy = cache.as_ref().expect("made above").clone();
+        drop(cache);
+        let copy_view = copy.create_view(&Default::default());
+        if fade {
+            let depth_in = depth.create_view(&wgpu::TextureViewDescriptor {
+                aspect: wgpu::TextureAspect::DepthOnly,
+                ..Default::default()
+            });
+            self.copy_depth.record(
+                device,
+                encoder,
+                &depth_copy::copy_depth::Resources {
+                    depth_in: (&depth_in).into(),
+                    depth_out: (&copy_view).into(),
+                },
+                ComputePipeline::<depth_copy::copy_depth::Entry>::groups_for([
+                    size.width,
+                    size.height,
+                    1,
+                ]),
+                depth_copy::STAGE,
+            )?;
+        }
+        Ok(copy_view)
+    }
+
+    /// One index buffer per quad count of `draws` (made once, kept), with each draw's index
+    /// and instance ranges.
+    fn index_buffers(
+        &self,
+        device: &wgpu::Device,
+        draws: Vec<PatchDraw>,
+    ) -> Vec<(wgpu::Buffer, std::ops::Range<u32>, std::ops::Range<u32>)> {
+        use wgpu::util::DeviceExt;
+        let mut cache = self.indices.lock().unwrap_or_else(|e| e.into_inner());
+        draws
+            .into_iter()
+            .map(|(q, first, count, range)| {
+                let buffer = cache.entry(q).or_insert_with(|| {
+                    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                        label: Some("ocean patch indices"),
+                        contents: bytemuck::cast_slice(&patch_indices(q)),
+                        usage: wgpu::BufferUsages::INDEX,
+                    })
+                });
+                (buffer.clone(), first..first + count, range)
+            })
+            .collect()
+    }
+}
+
+/// One draw of patches: (quads, first index, index count, instances).
+type PatchDraw = (u32, u32, u32, std::ops::Range<u32>);
+
+/// The patches' instances and draws: grouped by quad count, one draw of the grids per group
+/// (within a group nearest first still), then one draw per group and edge of the skirts that
+/// edge needs: the same patches again, listed after the grids. Corners relative to `origin`.
+fn patch_draws(
+    patches: &[Patch],
+    origin: DVec2,
+) -> (Vec<stage::fs_forward::Instance>, Vec<PatchDraw>) {
+    let mut order: Vec<usize> = (0..patches.len()).collect();
+    order.sort_by_key(|&i| patches[i].quads);
+    let instance = |p: &Patch| {
+        // Both corners from f64, so neighbours share their edge's f32 values exactly.
+        let lo = p.corner - origin;
+        let hi = p.corner + DVec2::splat(p.size) - origin;
+        stage::fs_forward::Instance {
+            instance_patch: [lo.x as f32, lo.y as f32, hi.x as f32, hi.y as f32],
+            instance_quads: [p.quads, 0, 0, 0],
+        }
+    };
+    let mut instances: Vec<stage::fs_forward::Instance> =
+        order.iter().map(|&i| instance(&patches[i])).collect();
+    // (quads, first index, index count, instances)
+    let mut draws: Vec<PatchDraw> = Vec::new();
+    let mut start = 0;
+    while start < order.len() {
+        let q = patches[order[start]].quads;
+        let end = start
+            + order[start..]
+                .iter()
+                .take_while(|&&i| patches[i].quads == q)
+                .count();
+        draws.push((q, 0, 6 * q * q, start as u32..end as u32));
+        for edge in 0..4u32 {
+            let first = instances.len() as u32;
+            instances.extend(
+                order[start..end]
+                    .iter()
+                    .filter(|&&i| patches[i].skirts & (1 << edge) != 0)
+                    .map(|&i| instance(&patches[i])),
+            );
+            let last = instances.len() as u32;
+            if last > first {
+                draws.push((q, 6 * q * q + edge * 6 * q, 6 * q, first..last));
+            }
+        }
+        start = end;
+    }
+    (instances, draws)
 }

@@ -21,8 +21,9 @@ use crate::distance::STAGE_3D as STAGE;
 use crate::distance::buffers::view;
 use crate::distance::buffers::{Pool, kept_buffer, new_field_buffer};
 use crate::distance::check::{check_column_axis, check_len, exact_volume_size, voxels};
+use crate::distance::options::Marks;
 use crate::distance::resolve::{Fuse, Resolver};
-use crate::distance::{Field3d, Inside, Options3d, SeedPacking, Slabs};
+use crate::distance::{Field3d, Options3d, SeedPacking, Slabs};
 use crate::error::Error;
 use crate::gpu::Record;
 use crate::shaders::distance::{edt_columns, edt_rows, edt_tile};
@@ -247,23 +248,20 @@ impl Exact {
             band: options.world_band(),
             inside_field,
         };
+        let marks = |invert| Marks {
+            volume,
+            inside: options.inside,
+            invert,
+        };
         let nearest = self.encode_exact_fused(
             device,
             rec,
-            volume,
-            options.inside,
-            false,
+            marks(false),
             (!options.signed).then(|| resolve(None)),
         )?;
         let nearest_outside = if options.signed {
-            Some(self.encode_exact_fused(
-                device,
-                rec,
-                volume,
-                options.inside,
-                true,
-                Some(resolve(Some(&nearest.buffers))),
-            )?)
+            let inside_field = Some(&nearest.buffers[..]);
+            Some(self.encode_exact_fused(device, rec, marks(true), Some(resolve(inside_field)))?)
         } else {
             None
         };
@@ -282,14 +280,12 @@ impl Exact {
         &self,
         device: &wgpu::Device,
         rec: &mut impl Record,
-        volume: &wgpu::Texture,
-        inside: Inside,
-        invert: bool,
+        marks: Marks,
         fuse: Option<Fuse>,
     ) -> Result<Slabs, Error> {
-        let size = exact_volume_size(device, volume)?;
+        let size = exact_volume_size(device, marks.volume)?;
         if let Some(split) = self.split_for(device, size)? {
-            return self.encode_exact_split(device, rec, volume, inside, invert, fuse, split);
+            return self.encode_exact_split(device, rec, marks, fuse, split);
         }
         // Along y, and not the last pass: the row pass folds into the y pass, which makes its
         // sites from the row words (`row_words`, then `tile_columns_words` in workgroup memory
@@ -310,7 +306,7 @@ impl Exact {
             && self.column_bands.is_none_or(|b| b == SWEEP_BANDS))
         .then(|| self.swept_for(device, size[0].div_ceil(256 / SWEEP_BANDS) * size[1]));
         let (nearest, first_axis) = if folds {
-            let words = self.row_words(device, rec, volume, inside, invert, true)?;
+            let words = self.row_words(device, rec, marks, true)?;
             let nearest = self.pool.field_buffer(device, "nearest seed", size);
             let tile = self.tile_for(device, size, 1, false)?;
             // Where the z pass sweeps, into the stack, with `nearest` the y pass's own stack.
@@ -323,7 +319,7 @@ impl Exact {
             self.encode_from_words(device, rec, &words, io, size, 1, tile, size, scratch)?;
             (nearest, 2)
         } else {
-            (self.encode_rows(device, rec, volume, inside, invert)?, 1)
+            (self.encode_rows(device, rec, marks)?, 1)
         };
         let axes: Vec<u32> = (first_axis..=2u32)
             .filter(|&a| size[a as usize] > 1)

@@ -3,31 +3,32 @@
 
 use super::Exact;
 use super::plan::{ColumnsIo, TileGeometry, TileIo, rows_per_group};
-use crate::distance::Inside;
 use crate::distance::buffers::{kept_buffer, view};
 use crate::distance::check::{check_bytes, check_len, check_size_3d, exact_volume_size, voxels};
+use crate::distance::options::Marks;
 use crate::distance::packing::packing_of;
 use crate::error::Error;
 use crate::gpu::{Record, uniform_buffer as uniform};
 use crate::shaders::distance::{edt_rows, edt_tile};
 
-/// The parameters of the 3D row passes (`rows`, `row_words`).
-pub(crate) fn row_params(
+/// What both 3D row passes (`rows`, `row_words`) start from: the grid of the marked volume,
+/// the pass's parameters and the volume's view.
+pub(crate) fn row_pass(
     device: &wgpu::Device,
-    size: [u32; 3],
-    inside: Inside,
-    invert: bool,
-) -> wgpu::Buffer {
-    uniform(
+    marks: Marks,
+) -> Result<([u32; 3], wgpu::Buffer, wgpu::TextureView), Error> {
+    let size = exact_volume_size(device, marks.volume)?;
+    let params = uniform(
         device,
         "edt rows params",
         &edt_rows::RowParams {
             size: size.into(),
-            threshold: inside.threshold(),
-            invert: invert as u32,
+            threshold: marks.inside.threshold(),
+            invert: marks.invert as u32,
             channels: glam::Vec4::X,
         },
-    )
+    );
+    Ok((size, params, view(marks.volume)))
 }
 
 /// Bytes of the row words (`edt_rows.wgsl`'s `row_words`) of a field of `size`: 8 per 32 voxels
@@ -52,15 +53,11 @@ impl Exact {
         &self,
         device: &wgpu::Device,
         rec: &mut impl Record,
-        volume: &wgpu::Texture,
-        inside: Inside,
-        invert: bool,
+        marks: Marks,
     ) -> Result<wgpu::Buffer, Error> {
-        let size = exact_volume_size(device, volume)?;
+        let (size, params, vv) = row_pass(device, marks)?;
         check_bytes(&device.limits(), voxels(size) * 4)?;
         let nearest = self.pool.field_buffer(device, "nearest seed", size);
-        let params = row_params(device, size, inside, invert);
-        let vv = view(volume);
         let per_group = rows_per_group(size[0], size[1]);
         let packing = packing_of(size);
         let rows = self.rows.get(
@@ -87,31 +84,18 @@ impl Exact {
     }
 
     /// The 3D row pass as words (`row_words`): per 32 voxels of a row, their marks and the
-    /// nearest marks on either side (a new buffer of `vec2<u32>`, `ceil(width / 32)` per row),
-    /// which [`Self::encode_columns_from_words`] reads in place of the row pass's field.
-    pub(crate) fn encode_row_words(
-        &self,
-        device: &wgpu::Device,
-        rec: &mut impl Record,
-        volume: &wgpu::Texture,
-        inside: Inside,
-        invert: bool,
-    ) -> Result<wgpu::Buffer, Error> {
-        self.row_words(device, rec, volume, inside, invert, false)
-    }
-
-    /// [`Self::encode_row_words`], into the words kept from call to call where `kept` (the
-    /// exact transform's own row words, which no caller sees), else into a new buffer.
+    /// nearest marks on either side (`vec2<u32>`, `ceil(width / 32)` per row), which the y pass
+    /// reads in place of the row pass's field: into the words kept from call to call where
+    /// `kept` (the exact transform's own row words, which no caller sees), else into a new
+    /// buffer.
     pub(crate) fn row_words(
         &self,
         device: &wgpu::Device,
         rec: &mut impl Record,
-        volume: &wgpu::Texture,
-        inside: Inside,
-        invert: bool,
+        marks: Marks,
         kept: bool,
     ) -> Result<wgpu::Buffer, Error> {
-        let size = exact_volume_size(device, volume)?;
+        let (size, params, vv) = row_pass(device, marks)?;
         let new = || row_words_buffer(device, size);
         let words = if kept {
             kept_buffer(&self.kept.words, row_words_bytes(size), true, new)
@@ -119,8 +103,6 @@ impl Exact {
             new()
         };
         let count = size[0].div_ceil(32);
-        let params = row_params(device, size, inside, invert);
-        let vv = view(volume);
         // 2048 cells of workgroup memory per workgroup: rows of up to 2048 voxels (64 words),
         // as many as fit (a power of two).
         let per_group = 64 / count.next_power_of_two();

@@ -4,10 +4,11 @@
 use super::Exact;
 use super::plan::{ColumnsIo, SWEEP_BANDS, Span, TileGeometry, TileIo, placement};
 use crate::distance::STAGE_3D as STAGE;
+use crate::distance::Slabs;
 use crate::distance::buffers::{kept_buffer, new_field_buffer};
 use crate::distance::check::{exact_volume_size, voxels};
+use crate::distance::options::Marks;
 use crate::distance::resolve::Fuse;
-use crate::distance::{Inside, Slabs};
 use crate::error::Error;
 use crate::gpu::Record;
 
@@ -145,15 +146,13 @@ impl Exact {
         &self,
         device: &wgpu::Device,
         rec: &mut impl Record,
-        volume: &wgpu::Texture,
-        inside: Inside,
-        invert: bool,
+        marks: Marks,
         fuse: Option<Fuse>,
         split: Split,
     ) -> Result<Slabs, Error> {
-        let size = exact_volume_size(device, volume)?;
+        let size = exact_volume_size(device, marks.volume)?;
         let [w, h, d] = size;
-        let words = self.row_words(device, rec, volume, inside, invert, true)?;
+        let words = self.row_words(device, rec, marks, true)?;
         let slabs: Vec<(u32, u32)> = (0..d)
             .step_by(split.slab_depth as usize)
             .map(|z0| (z0, (z0 + split.slab_depth).min(d)))
@@ -176,26 +175,7 @@ impl Exact {
         let part_at = |x0: u32| placement([x0, 0, 0], split.part_width, split.part_width * h);
         // A pass in global memory keeps its envelopes in the part's layout: a part's worth.
         let part_size = [split.part_width, h, d];
-        // The y pass resolving a volume in global memory sweeps as the unsplit z pass does
-        // (`edt_columns.wgsl`'s SCAN): its sites come from the part, its answers go to the
-        // slab, so it writes from the first without reading its sites from the stack. It takes
-        // SWEEP_BANDS then (unless set otherwise), whatever the automatic count: a dispatch is
-        // one part × one slab, whose fewer columns ask for more bands (32 at 512³ split at
-        // 180 MB, 128 columns × 171 planes), and on the H100 there 8 bands and the sweep took
-        // the y pass + resolve from 2.427 to 1.776 ms at 1% seeds and 3.467 to 2.167 at 1e-5
-        // (8 bands without the sweep: 2.471 and 2.150). One record of the workgroups swept
-        // serves every dispatch (each sweep writes the entries of its own before the pass
-        // after it reads them).
-        let swept = (self.sweep
-            && split.y.is_none()
-            && fuse.as_ref().is_some_and(|f| !f.flat)
-            && self.column_bands.is_none_or(|b| b == SWEEP_BANDS))
-        .then(|| {
-            self.swept_for(
-                device,
-                split.part_width.div_ceil(256 / SWEEP_BANDS) * split.slab_depth,
-            )
-        });
+        let swept = self.split_sweep(device, &split, fuse.as_ref());
         for x0 in (0..w).step_by(split.part_width as usize) {
             let x_end = (x0 + split.part_width).min(w);
             let span = Span {
@@ -213,50 +193,20 @@ impl Exact {
             };
             self.encode_from_words(device, rec, &words, io, size, 2, split.z, part_size, None)?;
             for (k, &(z0, z_end)) in slabs.iter().enumerate() {
-                let span = Span {
-                    first: [x0, z0],
-                    x_end,
-                    y_after_z: true,
-                    src: part_at(x0),
-                    dst: placement([0, 0, z0], w, w * h),
+                let io = TileIo {
+                    source: Some(&part),
+                    nearest: &nearest[k],
+                    slab: k,
+                    span: Span {
+                        first: [x0, z0],
+                        x_end,
+                        y_after_z: true,
+                        src: part_at(x0),
+                        dst: placement([0, 0, z0], w, w * h),
+                    },
                 };
-                match split.y {
-                    Some(tile) => self.encode_tile_columns(
-                        device,
-                        rec,
-                        false,
-                        TileIo {
-                            source: Some(&part),
-                            nearest: &nearest[k],
-                            slab: k,
-                            span,
-                        },
-                        size,
-                        1,
-                        z_end - z0,
-                        tile,
-                        fuse,
-                    )?,
-                    // The stack in the part's layout, as the z pass used it.
-                    None => self.encode_global_columns(
-                        device,
-                        rec,
-                        false,
-                        ColumnsIo {
-                            source: Some(&part),
-                            words: None,
-                            nearest: &nearest[k],
-                            stack: &self.stack_for(device, part_size),
-                            slab: k,
-                            span,
-                            sweep: swept.as_ref(),
-                        },
-                        size,
-                        1,
-                        z_end - z0,
-                        fuse,
-                    )?,
-                }
+                let planes = z_end - z0;
+                self.encode_slab_y(device, rec, io, size, planes, &split, fuse, swept.as_ref())?;
             }
         }
         Ok(Slabs {
@@ -264,6 +214,69 @@ impl Exact {
             depth: split.slab_depth,
             planes: d,
         })
+    }
+
+    /// The sweep's record for a split field's resolving y pass, where it sweeps. That pass
+    /// sweeps as the unsplit z pass does (`edt_columns.wgsl`'s SCAN): its sites come from the
+    /// part, its answers go to the slab, so it writes from the first without reading its sites
+    /// from the stack. It takes SWEEP_BANDS then (unless set otherwise), whatever the automatic
+    /// count: a dispatch is one part × one slab, whose fewer columns ask for more bands (32 at
+    /// 512³ split at 180 MB, 128 columns × 171 planes), and on the H100 there 8 bands and the
+    /// sweep took the y pass + resolve from 2.427 to 1.776 ms at 1% seeds and 3.467 to 2.167 at
+    /// 1e-5 (8 bands without the sweep: 2.471 and 2.150). One record of the workgroups swept
+    /// serves every dispatch (each sweep writes the entries of its own before the pass after it
+    /// reads them).
+    fn split_sweep(
+        &self,
+        device: &wgpu::Device,
+        split: &Split,
+        fuse: Option<&Fuse>,
+    ) -> Option<wgpu::Buffer> {
+        (self.sweep
+            && split.y.is_none()
+            && fuse.is_some_and(|f| !f.flat)
+            && self.column_bands.is_none_or(|b| b == SWEEP_BANDS))
+        .then(|| {
+            self.swept_for(
+                device,
+                split.part_width.div_ceil(256 / SWEEP_BANDS) * split.slab_depth,
+            )
+        })
+    }
+
+    /// The y pass of one part × one slab of `planes` planes of a split field: from the part
+    /// (`io.source`) into the slab, in workgroup memory where `split.y` says, else in global
+    /// memory with the stack in the part's layout, as the z pass used it.
+    #[allow(clippy::too_many_arguments)]
+    fn encode_slab_y(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        io: TileIo,
+        size: [u32; 3],
+        planes: u32,
+        split: &Split,
+        fuse: Option<Fuse>,
+        swept: Option<&wgpu::Buffer>,
+    ) -> Result<(), Error> {
+        match split.y {
+            Some(tile) => {
+                self.encode_tile_columns(device, rec, false, io, size, 1, planes, tile, fuse)
+            }
+            None => {
+                let part_size = [split.part_width, size[1], size[2]];
+                let io = ColumnsIo {
+                    source: io.source,
+                    words: None,
+                    nearest: io.nearest,
+                    stack: &self.stack_for(device, part_size),
+                    slab: io.slab,
+                    span: io.span,
+                    sweep: swept,
+                };
+                self.encode_global_columns(device, rec, false, io, size, 1, planes, fuse)
+            }
+        }
     }
 }
 
