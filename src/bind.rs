@@ -612,60 +612,7 @@ fn check_one(slot: &Slot, res: &Resource<'_>, device: &wgpu::Device) -> Result<(
                 ..
             },
             Resource::Buffer(b),
-        ) => {
-            let (usage, align, what) = match ty {
-                wgpu::BufferBindingType::Uniform => (
-                    wgpu::BufferUsages::UNIFORM,
-                    device.limits().min_uniform_buffer_offset_alignment,
-                    "UNIFORM",
-                ),
-                _ => (
-                    wgpu::BufferUsages::STORAGE,
-                    device.limits().min_storage_buffer_offset_alignment,
-                    "STORAGE",
-                ),
-            };
-            if !b.buffer.usage().contains(usage) {
-                return Err(format!(
-                    "buffer lacks {what} usage (has {:?})",
-                    b.buffer.usage()
-                ));
-            }
-            if b.offset % align as u64 != 0 {
-                return Err(format!("offset {} is not a multiple of {align}", b.offset));
-            }
-            let size = b
-                .size
-                .map(|s| s.get())
-                .unwrap_or(b.buffer.size().saturating_sub(b.offset));
-            if let Some(min) = min_binding_size
-                && size < min.get()
-            {
-                return Err(format!(
-                    "{size} bytes bound, the shader's `{}` needs at least {}",
-                    slot.wgsl,
-                    min.get()
-                ));
-            }
-            // wgpu would reject the bind group with a validation error (a panic in an app
-            // without an error handler): say which binding and which limit instead.
-            let (max, limit) = match ty {
-                wgpu::BufferBindingType::Uniform => (
-                    device.limits().max_uniform_buffer_binding_size,
-                    "max_uniform_buffer_binding_size",
-                ),
-                _ => (
-                    device.limits().max_storage_buffer_binding_size,
-                    "max_storage_buffer_binding_size",
-                ),
-            };
-            if size > max {
-                return Err(format!(
-                    "{size} bytes bound, more than the device's {limit} ({max})"
-                ));
-            }
-            Ok(())
-        }
+        ) => check_buffer(slot, *ty, *min_binding_size, b, device),
         (
             B::Texture {
                 sample_type,
@@ -673,63 +620,14 @@ fn check_one(slot: &Slot, res: &Resource<'_>, device: &wgpu::Device) -> Result<(
                 multisampled,
             },
             Resource::Texture(v),
-        ) => {
-            let t = v.texture();
-            if !t.usage().contains(wgpu::TextureUsages::TEXTURE_BINDING) {
-                return Err(format!(
-                    "texture lacks TEXTURE_BINDING usage (has {:?})",
-                    t.usage()
-                ));
-            }
-            if !view_fits(t, *view_dimension) {
-                return Err(format!(
-                    "{:?} texture bound, the shader reads `{}`",
-                    view_dimension_of(t),
-                    slot.wgsl
-                ));
-            }
-            if (t.sample_count() > 1) != *multisampled {
-                return Err(format!(
-                    "sample count {} does not suit `{}`",
-                    t.sample_count(),
-                    slot.wgsl
-                ));
-            }
-            let features = device.features();
-            let fits = |have: Option<wgpu::TextureSampleType>| match (sample_type, have) {
-                (
-                    wgpu::TextureSampleType::Float { filterable: true },
-                    Some(wgpu::TextureSampleType::Float { filterable }),
-                ) => filterable,
-                // Depth formats may be read as unfilterable float (textureLoad).
-                (
-                    wgpu::TextureSampleType::Float { filterable: false },
-                    Some(wgpu::TextureSampleType::Float { .. } | wgpu::TextureSampleType::Depth),
-                ) => true,
-                (want, Some(h)) => *want == h,
-                (_, None) => false,
-            };
-            // A combined depth-stencil format is read through a view of one aspect (the view
-            // does not say which): either aspect may fit.
-            let ok = match t.format().sample_type(None, Some(features)) {
-                Some(have) => fits(Some(have)),
-                None => [
-                    wgpu::TextureAspect::DepthOnly,
-                    wgpu::TextureAspect::StencilOnly,
-                ]
-                .into_iter()
-                .any(|a| fits(t.format().sample_type(Some(a), Some(features)))),
-            };
-            if !ok {
-                return Err(format!(
-                    "texture format {:?} cannot be read as `{}` (needs {:?})",
-                    t.format(),
-                    slot.wgsl,
-                    sample_type
-                ));
-            }
-            Ok(())
-        }
+        ) => check_texture(
+            slot,
+            *sample_type,
+            *view_dimension,
+            *multisampled,
+            v,
+            device,
+        ),
         (
             B::StorageTexture {
                 format,
@@ -737,34 +635,171 @@ fn check_one(slot: &Slot, res: &Resource<'_>, device: &wgpu::Device) -> Result<(
                 ..
             },
             Resource::StorageTexture(v),
-        ) => {
-            let t = v.texture();
-            if !t.usage().contains(wgpu::TextureUsages::STORAGE_BINDING) {
-                return Err(format!(
-                    "texture lacks STORAGE_BINDING usage (has {:?})",
-                    t.usage()
-                ));
-            }
-            if t.format() != *format {
-                return Err(format!(
-                    "texture format {:?} bound, the shader's `{}` needs {:?}",
-                    t.format(),
-                    slot.wgsl,
-                    format
-                ));
-            }
-            if !view_fits(t, *view_dimension) {
-                return Err(format!(
-                    "{:?} texture bound, the shader writes `{}`",
-                    view_dimension_of(t),
-                    slot.wgsl
-                ));
-            }
-            Ok(())
-        }
+        ) => check_storage_texture(slot, *format, *view_dimension, v),
         (B::Sampler(_), Resource::Sampler(_)) => Ok(()),
         _ => Err(format!("wrong kind of resource for `{}`", slot.wgsl)),
     }
+}
+
+/// A buffer for a uniform or storage slot: its usage, offset alignment, and size against the
+/// shader's minimum and the device's binding limit.
+fn check_buffer(
+    slot: &Slot,
+    ty: wgpu::BufferBindingType,
+    min_binding_size: Option<wgpu::BufferSize>,
+    b: &wgpu::BufferBinding<'_>,
+    device: &wgpu::Device,
+) -> Result<(), String> {
+    let (usage, align, what) = match ty {
+        wgpu::BufferBindingType::Uniform => (
+            wgpu::BufferUsages::UNIFORM,
+            device.limits().min_uniform_buffer_offset_alignment,
+            "UNIFORM",
+        ),
+        _ => (
+            wgpu::BufferUsages::STORAGE,
+            device.limits().min_storage_buffer_offset_alignment,
+            "STORAGE",
+        ),
+    };
+    if !b.buffer.usage().contains(usage) {
+        return Err(format!(
+            "buffer lacks {what} usage (has {:?})",
+            b.buffer.usage()
+        ));
+    }
+    if b.offset % align as u64 != 0 {
+        return Err(format!("offset {} is not a multiple of {align}", b.offset));
+    }
+    let size = b
+        .size
+        .map(|s| s.get())
+        .unwrap_or(b.buffer.size().saturating_sub(b.offset));
+    if let Some(min) = min_binding_size
+        && size < min.get()
+    {
+        return Err(format!(
+            "{size} bytes bound, the shader's `{}` needs at least {}",
+            slot.wgsl,
+            min.get()
+        ));
+    }
+    // wgpu would reject the bind group with a validation error (a panic in an app
+    // without an error handler): say which binding and which limit instead.
+    let (max, limit) = match ty {
+        wgpu::BufferBindingType::Uniform => (
+            device.limits().max_uniform_buffer_binding_size,
+            "max_uniform_buffer_binding_size",
+        ),
+        _ => (
+            device.limits().max_storage_buffer_binding_size,
+            "max_storage_buffer_binding_size",
+        ),
+    };
+    if size > max {
+        return Err(format!(
+            "{size} bytes bound, more than the device's {limit} ({max})"
+        ));
+    }
+    Ok(())
+}
+
+/// A sampled texture: its usage, view dimension, sample count and sample type.
+fn check_texture(
+    slot: &Slot,
+    sample_type: wgpu::TextureSampleType,
+    view_dimension: wgpu::TextureViewDimension,
+    multisampled: bool,
+    v: &wgpu::TextureView,
+    device: &wgpu::Device,
+) -> Result<(), String> {
+    let t = v.texture();
+    if !t.usage().contains(wgpu::TextureUsages::TEXTURE_BINDING) {
+        return Err(format!(
+            "texture lacks TEXTURE_BINDING usage (has {:?})",
+            t.usage()
+        ));
+    }
+    if !view_fits(t, view_dimension) {
+        return Err(format!(
+            "{:?} texture bound, the shader reads `{}`",
+            view_dimension_of(t),
+            slot.wgsl
+        ));
+    }
+    if (t.sample_count() > 1) != multisampled {
+        return Err(format!(
+            "sample count {} does not suit `{}`",
+            t.sample_count(),
+            slot.wgsl
+        ));
+    }
+    let features = device.features();
+    let fits = |have: Option<wgpu::TextureSampleType>| match (sample_type, have) {
+        (
+            wgpu::TextureSampleType::Float { filterable: true },
+            Some(wgpu::TextureSampleType::Float { filterable }),
+        ) => filterable,
+        // Depth formats may be read as unfilterable float (textureLoad).
+        (
+            wgpu::TextureSampleType::Float { filterable: false },
+            Some(wgpu::TextureSampleType::Float { .. } | wgpu::TextureSampleType::Depth),
+        ) => true,
+        (want, Some(h)) => want == h,
+        (_, None) => false,
+    };
+    // A combined depth-stencil format is read through a view of one aspect (the view
+    // does not say which): either aspect may fit.
+    let ok = match t.format().sample_type(None, Some(features)) {
+        Some(have) => fits(Some(have)),
+        None => [
+            wgpu::TextureAspect::DepthOnly,
+            wgpu::TextureAspect::StencilOnly,
+        ]
+        .into_iter()
+        .any(|a| fits(t.format().sample_type(Some(a), Some(features)))),
+    };
+    if !ok {
+        return Err(format!(
+            "texture format {:?} cannot be read as `{}` (needs {:?})",
+            t.format(),
+            slot.wgsl,
+            sample_type
+        ));
+    }
+    Ok(())
+}
+
+/// A storage texture: its usage, format and view dimension.
+fn check_storage_texture(
+    slot: &Slot,
+    format: wgpu::TextureFormat,
+    view_dimension: wgpu::TextureViewDimension,
+    v: &wgpu::TextureView,
+) -> Result<(), String> {
+    let t = v.texture();
+    if !t.usage().contains(wgpu::TextureUsages::STORAGE_BINDING) {
+        return Err(format!(
+            "texture lacks STORAGE_BINDING usage (has {:?})",
+            t.usage()
+        ));
+    }
+    if t.format() != format {
+        return Err(format!(
+            "texture format {:?} bound, the shader's `{}` needs {:?}",
+            t.format(),
+            slot.wgsl,
+            format
+        ));
+    }
+    if !view_fits(t, view_dimension) {
+        return Err(format!(
+            "{:?} texture bound, the shader writes `{}`",
+            view_dimension_of(t),
+            slot.wgsl
+        ));
+    }
+    Ok(())
 }
 
 /// fieldkit's own checks of every resource (kind, format, size, usage, sample type), then the

@@ -387,96 +387,22 @@ impl OctreeBuilder {
         fragments: &Fragments,
         capacity: u32,
     ) -> Result<Octree, Error> {
-        let limits = device.limits();
-        let log_side = log_side(fragments.size);
-        let leaf_level = log_side - 2;
-        let most = (limits.max_storage_buffer_binding_size / ENTRY_BYTES).min(u32::MAX as u64);
-        if capacity == 0 || capacity as u64 > most {
-            return Err(Error::Size {
-                stage: stage::STAGE,
-                what: "octree pool entries (8 bytes each, the storage binding limit)",
-                got: capacity as u64,
-                max: most,
-            });
-        }
-        let count = fragments.capacity();
-        // The most nodes any level can have, which the scans are sized and dispatched for.
-        // With attributes, the bricks' voxels are counted too: one more level of scans.
-        let with_attributes = fragments.attributes.is_some();
-        let scanned = leaf_level + with_attributes as u32;
-        let widest = (0..scanned)
-            .map(|l| 8u64.saturating_pow(l).min(count).min(capacity as u64))
-            .max()
-            .unwrap_or(1)
-            .max(1);
-        let blocks = widest.div_ceil(BLOCK_NODES);
-        let row = limits.max_compute_workgroups_per_dimension as u64;
-        let threads = count.max(widest);
-        if threads.div_ceil(64) > row * row || blocks > row * row {
-            return Err(Error::Size {
-                stage: stage::STAGE,
-                what: "octree build threads (fragments)",
-                got: threads,
-                max: row * row * 64,
-            });
-        }
-        let buffer = |label, size: u64, usage| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: size.max(4),
-                usage: wgpu::BufferUsages::STORAGE | usage,
-                mapped_at_creation: false,
-            })
-        };
-        let none = wgpu::BufferUsages::empty();
-        let pool = buffer(
-            "octree pool",
-            capacity as u64 * ENTRY_BYTES,
-            wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
-        );
-        let starts = {
-            use wgpu::util::DeviceExt;
-            let mut init = vec![0u32; leaf_level as usize + 3];
-            init[1] = 1;
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("octree level starts"),
-                contents: bytemuck::cast_slice(&init),
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            })
-        };
-        let cursors: Vec<wgpu::Buffer> = fragments
-            .parts
-            .iter()
-            .map(|p| buffer("octree fragment cursors", p.capacity as u64 * 4, none))
-            .collect();
-        let node_offsets = buffer("octree node offsets", widest * 4, none);
-        let block_offsets = buffer("octree block offsets", blocks * 4, none);
-        let brick_voxels = with_attributes.then(|| {
-            buffer(
-                "octree brick voxels",
-                capacity as u64 * 4,
-                wgpu::BufferUsages::COPY_SRC,
-            )
-        });
-        let no_bricks;
-        let brick_slot = match &brick_voxels {
-            Some(b) => b,
-            None => {
-                no_bricks = buffer("no octree brick voxels", 4, none);
-                &no_bricks
-            }
-        };
-        let octree = Octree {
-            size: fragments.size,
+        let plan = BuildPlan::new(&device.limits(), fragments, capacity)?;
+        let BuildPlan {
             log_side,
             leaf_level,
-            capacity,
-            pool,
-            starts,
-            attributes: None,
-            brick_voxels: brick_voxels.clone(),
-            cursor: None,
-        };
+            widest,
+            row,
+            with_attributes,
+            ..
+        } = plan;
+        let (octree, scratch) = plan.buffers(device, fragments);
+        let BuildScratch {
+            cursors,
+            node_offsets,
+            block_offsets,
+            brick_slot,
+        } = &scratch;
         let flag = ComputePipeline::cached(&self.flag, device, &[])?;
         let scan_nodes = ComputePipeline::cached(&self.scan_nodes, device, &[])?;
         let scan_blocks = ComputePipeline::cached(&self.scan_blocks, device, &[])?;
@@ -496,7 +422,7 @@ impl OctreeBuilder {
             )
         };
         for level in 0..=leaf_level {
-            for (part, cursor) in fragments.parts.iter().zip(&cursors) {
+            for (part, cursor) in fragments.parts.iter().zip(cursors) {
                 let params = params_for(level, part.capacity);
                 flag.record(
                     device,
@@ -524,8 +450,8 @@ impl OctreeBuilder {
                     params: (&params).into(),
                     pool: (&octree.pool).into(),
                     starts: (&octree.starts).into(),
-                    node_offsets: (&node_offsets).into(),
-                    block_offsets: (&block_offsets).into(),
+                    node_offsets: node_offsets.into(),
+                    block_offsets: block_offsets.into(),
                 },
                 grid(nodes.div_ceil(BLOCK_NODES)),
                 stage::STAGE,
@@ -536,7 +462,7 @@ impl OctreeBuilder {
                 &stage::scan_blocks::Resources {
                     params: (&params).into(),
                     starts: (&octree.starts).into(),
-                    block_offsets: (&block_offsets).into(),
+                    block_offsets: block_offsets.into(),
                 },
                 [1, 1, 1],
                 stage::STAGE,
@@ -548,8 +474,8 @@ impl OctreeBuilder {
                     params: (&params).into(),
                     pool: (&octree.pool).into(),
                     starts: (&octree.starts).into(),
-                    node_offsets: (&node_offsets).into(),
-                    block_offsets: (&block_offsets).into(),
+                    node_offsets: node_offsets.into(),
+                    block_offsets: block_offsets.into(),
                     brick_voxels: brick_slot.into(),
                 },
                 grid(nodes.div_ceil(64)),
@@ -557,7 +483,7 @@ impl OctreeBuilder {
             )?;
         }
         Ok(Octree {
-            cursor: with_attributes.then_some(cursors),
+            cursor: with_attributes.then_some(scratch.cursors),
             ..octree
         })
     }
@@ -779,5 +705,150 @@ impl OctreeBuilder {
             stage: stage::STAGE,
             what: "the octree's sizes did not settle (a bug: please report it)".into(),
         })
+    }
+}
+
+/// The sizes an octree build over a fragment list is planned for, checked against the device.
+#[derive(Clone, Copy)]
+struct BuildPlan {
+    log_side: u32,
+    leaf_level: u32,
+    capacity: u32,
+    /// The most nodes any level can have, which the scans are sized and dispatched for.
+    widest: u64,
+    blocks: u64,
+    /// Workgroups per row of a dispatch (the device's limit per dimension).
+    row: u64,
+    with_attributes: bool,
+}
+
+/// The build's scratch: a cursor per fragment part, the scans' offsets, and the bricks'
+/// voxel counts (a stand-in without attributes).
+struct BuildScratch {
+    cursors: Vec<wgpu::Buffer>,
+    node_offsets: wgpu::Buffer,
+    block_offsets: wgpu::Buffer,
+    brick_slot: wgpu::Buffer,
+}
+
+impl BuildPlan {
+    /// The plan for `fragments` in a pool of `capacity` entries; [`Error::Size`] where the pool
+    /// or the build's threads pass the device's limits.
+    fn new(limits: &wgpu::Limits, fragments: &Fragments, capacity: u32) -> Result<Self, Error> {
+        let log_side = log_side(fragments.size);
+        let leaf_level = log_side - 2;
+        let most = (limits.max_storage_buffer_binding_size / ENTRY_BYTES).min(u32::MAX as u64);
+        if capacity == 0 || capacity as u64 > most {
+            return Err(Error::Size {
+                stage: stage::STAGE,
+                what: "octree pool entries (8 bytes each, the storage binding limit)",
+                got: capacity as u64,
+                max: most,
+            });
+        }
+        let count = fragments.capacity();
+        // The most nodes any level can have, which the scans are sized and dispatched for.
+        // With attributes, the bricks' voxels are counted too: one more level of scans.
+        let with_attributes = fragments.attributes.is_some();
+        let scanned = leaf_level + with_attributes as u32;
+        let widest = (0..scanned)
+            .map(|l| 8u64.saturating_pow(l).min(count).min(capacity as u64))
+            .max()
+            .unwrap_or(1)
+            .max(1);
+        let blocks = widest.div_ceil(BLOCK_NODES);
+        let row = limits.max_compute_workgroups_per_dimension as u64;
+        let threads = count.max(widest);
+        if threads.div_ceil(64) > row * row || blocks > row * row {
+            return Err(Error::Size {
+                stage: stage::STAGE,
+                what: "octree build threads (fragments)",
+                got: threads,
+                max: row * row * 64,
+            });
+        }
+        Ok(Self {
+            log_side,
+            leaf_level,
+            capacity,
+            widest,
+            blocks,
+            row,
+            with_attributes,
+        })
+    }
+
+    /// The tree's buffers (pool and level starts) and the build's scratch.
+    fn buffers(&self, device: &wgpu::Device, fragments: &Fragments) -> (Octree, BuildScratch) {
+        let Self {
+            log_side,
+            leaf_level,
+            capacity,
+            widest,
+            blocks,
+            with_attributes,
+            ..
+        } = *self;
+        let buffer = |label, size: u64, usage| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: size.max(4),
+                usage: wgpu::BufferUsages::STORAGE | usage,
+                mapped_at_creation: false,
+            })
+        };
+        let none = wgpu::BufferUsages::empty();
+        let pool = buffer(
+            "octree pool",
+            capacity as u64 * ENTRY_BYTES,
+            wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+        );
+        let starts = {
+            use wgpu::util::DeviceExt;
+            let mut init = vec![0u32; leaf_level as usize + 3];
+            init[1] = 1;
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("octree level starts"),
+                contents: bytemuck::cast_slice(&init),
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            })
+        };
+        let cursors: Vec<wgpu::Buffer> = fragments
+            .parts
+            .iter()
+            .map(|p| buffer("octree fragment cursors", p.capacity as u64 * 4, none))
+            .collect();
+        let node_offsets = buffer("octree node offsets", widest * 4, none);
+        let block_offsets = buffer("octree block offsets", blocks * 4, none);
+        let brick_voxels = with_attributes.then(|| {
+            buffer(
+                "octree brick voxels",
+                capacity as u64 * 4,
+                wgpu::BufferUsages::COPY_SRC,
+            )
+        });
+        let brick_slot = brick_voxels
+            .clone()
+            .unwrap_or_else(|| buffer("no octree brick voxels", 4, none));
+        let octree = Octree {
+            size: fragments.size,
+            log_side,
+            leaf_level,
+            capacity,
+            pool,
+            starts,
+            attributes: None,
+            brick_voxels: brick_voxels.clone(),
+            cursor: None,
+        };
+        (
+            octree,
+            BuildScratch {
+                cursors,
+                node_offsets,
+                block_offsets,
+                brick_slot,
+            },
+        )
     }
 }
