@@ -1,0 +1,280 @@
+//! Seed 000: the voxel actor (metaballs).
+
+use super::*;
+
+/// What the actor draws.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum ActorDraw {
+    /// The raymarched SDF surface (or its debug view, `RaymarchSettings::output`).
+    Surface,
+    /// The debug cubes alone.
+    Cubes,
+    /// Surface and cubes.
+    Both,
+    /// The field traced directly, no SDF.
+    Direct(Direct),
+}
+
+/// The voxel actor's settings: the source's grid builder (Extent, BlockSize), the field, the
+/// march, the cubes and the animation.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ActorSettings {
+    /// The region the blocks fill, world units per axis.
+    pub extent: [f32; 3],
+    /// Block size: the voxel edge and the spacing.
+    pub block: f32,
+    /// How the voxels become a field.
+    pub field: Settings,
+    /// How the surface is marched and shaded.
+    pub raymarch: RaymarchSettings,
+    /// Debug cube style.
+    pub cubes: CubeStyle,
+    /// What is drawn.
+    pub draw: ActorDraw,
+    /// Animate (scale pulse and Lissajous offsets).
+    pub animate: bool,
+    /// The animation's frequencies, amplitudes, ratios and phase step.
+    pub animation: Animation,
+}
+
+impl Default for ActorSettings {
+    fn default() -> Self {
+        Self {
+            extent: [5.0, 4.0, 3.0],
+            block: 1.0,
+            field: Settings::default(),
+            raymarch: RaymarchSettings::default(),
+            cubes: CubeStyle::default(),
+            draw: ActorDraw::Surface,
+            animate: true,
+            animation: Animation::default(),
+        }
+    }
+}
+
+impl ActorSettings {
+    /// The source's voxel actor: every `seed()` preset (field, march, cubes, animation), the
+    /// same extent and block.
+    pub fn seed() -> Self {
+        Self {
+            field: Settings::seed(),
+            raymarch: RaymarchSettings::seed(),
+            cubes: CubeStyle::seed(),
+            animation: Animation::seed(),
+            ..Self::default()
+        }
+    }
+
+    /// Blocks per axis as the source's builder counts them: max(1, ⌊Extent / BlockSize⌋).
+    pub fn counts(&self) -> Result<[u32; 3], Error> {
+        if !(self.block.is_finite() && self.block > 0.0) {
+            return Err(invalid(format!(
+                "BlockSize must be finite and > 0, got {}",
+                self.block
+            )));
+        }
+        if !self.extent.iter().all(|e| e.is_finite() && *e >= 0.0) {
+            return Err(invalid(format!(
+                "Extent must be finite and ≥ 0, got {:?}",
+                self.extent
+            )));
+        }
+        let n = self
+            .extent
+            .map(|e| ((e / self.block).floor() as f64).clamp(1.0, u32::MAX as f64));
+        let total = n.iter().product::<f64>();
+        if total > MAX_ACTOR_INSTANCES as f64 {
+            return Err(Error::Size {
+                stage: "viewer: voxel actor",
+                what: "instances (Extent / BlockSize per axis, multiplied)",
+                got: total.min(u64::MAX as f64) as u64,
+                max: MAX_ACTOR_INSTANCES,
+            });
+        }
+        Ok(n.map(|v| v as u32))
+    }
+}
+
+/// The voxel actor's GPU state.
+pub struct Actor {
+    pub(super) balls: Metaballs,
+    pub(super) instances: Option<(Instances, usize)>,
+    pub(super) base: Option<([u32; 3], f32, Vec<glam::Vec4>)>,
+    pub(super) marcher: Option<(bool, Raymarcher)>,
+    pub(super) cubes: Option<(CubeStyle, Cubes)>,
+}
+
+impl Actor {
+    pub(super) fn new(device: &wgpu::Device) -> Result<Self, Error> {
+        Ok(Self {
+            balls: Metaballs::new(device)?,
+            instances: None,
+            base: None,
+            marcher: None,
+            cubes: None,
+        })
+    }
+
+    pub(super) fn encode(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        s: &ActorSettings,
+        frame: &mut Frame,
+    ) -> Result<Vec<String>, Error> {
+        clear(frame, [0.09, 0.1, 0.12]);
+        let counts = s.counts()?;
+        if self.base.as_ref().map(|b| (b.0, b.1)) != Some((counts, s.block)) {
+            self.base = Some((counts, s.block, packed_grid(counts, s.block)?));
+        }
+        let base = &self.base.as_ref().expect("set above").2;
+        let voxels = if s.animate {
+            s.animation.apply(base, s.block, frame.time)?
+        } else {
+            base.clone()
+        };
+        self.prepare(device, queue, &voxels, frame.camera.reversed_z)?;
+        let reversed = frame.camera.reversed_z;
+        let instances = &self.instances.as_ref().expect("prepared").0;
+        let view = frame.camera.view(frame.size);
+        let (cv, dv) = (&frame.targets.colour_view, &frame.targets.depth_view);
+        let mut stats = vec![format!(
+            "instances: {} ({}×{}×{})",
+            voxels.len(),
+            counts[0],
+            counts[1],
+            counts[2]
+        )];
+        if matches!(s.draw, ActorDraw::Cubes | ActorDraw::Both) {
+            let mut style = s.cubes;
+            if reversed {
+                style.depth_compare = flip(style.depth_compare);
+            }
+            if self.cubes.as_ref().map(|c| c.0) != Some(style) {
+                self.cubes = Some((style, Cubes::new(device, COLOUR, DEPTH, style)?));
+            }
+            let cubes = &self.cubes.as_ref().expect("set above").1;
+            cubes.encode(
+                device,
+                frame.rec.encoder,
+                cv,
+                dv,
+                instances,
+                s.block,
+                Mat4::IDENTITY,
+                view.view_proj,
+            )?;
+        }
+        let Some(grid) = s.field.fit_grid(&voxels, s.block)? else {
+            return Ok(stats);
+        };
+        stats.push(format!(
+            "grid: {}×{}×{}",
+            grid.size[0], grid.size[1], grid.size[2]
+        ));
+        match s.draw {
+            ActorDraw::Surface | ActorDraw::Both => self.surface(device, s, &grid, frame)?,
+            ActorDraw::Direct(method) => {
+                let bins = self
+                    .balls
+                    .encode_bins(device, frame.rec, instances, &grid, s.block, &s.field)?;
+                let marcher = &self.marcher.as_ref().expect("prepared").1;
+                if let Some(m) = marcher.encode_direct_march(
+                    device,
+                    frame.rec,
+                    &bins,
+                    method,
+                    Mat4::IDENTITY,
+                    &view,
+                    &s.raymarch,
+                )? {
+                    marcher.encode_composite(device, frame.rec.encoder, cv, dv, &m)?;
+                }
+            }
+            ActorDraw::Cubes => {}
+        }
+        Ok(stats)
+    }
+}
+
+impl Actor {
+    /// Upload (or update in place) the voxels, and make the raymarcher for this depth
+    /// convention if the last one was made for the other.
+    pub(super) fn prepare(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        voxels: &[glam::Vec4],
+        reversed: bool,
+    ) -> Result<(), Error> {
+        match &mut self.instances {
+            Some((inst, n)) if *n == voxels.len() => self.balls.update(queue, inst, voxels)?,
+            _ => self.instances = Some((self.balls.upload(device, queue, voxels)?, voxels.len())),
+        }
+        if self.marcher.as_ref().map(|m| m.0) != Some(reversed) {
+            self.marcher = Some((reversed, Raymarcher::new(device, COLOUR, DEPTH, reversed)?));
+        }
+        Ok(())
+    }
+
+    /// The field of the prepared voxels on `grid`, marched and composited into the frame.
+    pub(super) fn surface(
+        &self,
+        device: &wgpu::Device,
+        s: &ActorSettings,
+        grid: &fieldkit::distance::Grid3,
+        frame: &mut Frame,
+    ) -> Result<(), Error> {
+        let instances = &self.instances.as_ref().expect("prepared").0;
+        let marcher = &self.marcher.as_ref().expect("prepared").1;
+        let view = frame.camera.view(frame.size);
+        let field = self
+            .balls
+            .encode(device, frame.rec, instances, grid, s.block, &s.field)?;
+        if let Some(m) = marcher.encode_march(
+            device,
+            frame.rec,
+            &field,
+            Mat4::IDENTITY,
+            &view,
+            &s.raymarch,
+        )? {
+            marcher.encode_composite(
+                device,
+                frame.rec.encoder,
+                &frame.targets.colour_view,
+                &frame.targets.depth_view,
+                &m,
+            )?;
+        }
+        Ok(())
+    }
+
+    /// The actor drawn as the composite's island: sky cleared, the blocks sunk by half their
+    /// height.
+    pub(super) fn encode_island(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        s: &ActorSettings,
+        frame: &mut Frame,
+    ) -> Result<Vec<String>, Error> {
+        let saved_clear = [0.55, 0.7, 0.85];
+        clear(frame, saved_clear);
+        let counts = s.counts()?;
+        let voxels: Vec<glam::Vec4> = packed_grid(counts, s.block)?
+            .into_iter()
+            .map(|v| v - glam::Vec4::new(0.0, 3.5, 0.0, 0.0))
+            .filter(|v| {
+                let r = (v.x * v.x + 1.6 * v.z * v.z).sqrt();
+                r < 19.0 - 4.0 * (v.y + 3.5)
+            })
+            .collect();
+        self.prepare(device, queue, &voxels, frame.camera.reversed_z)?;
+        if let Some(grid) = s.field.fit_grid(&voxels, s.block)? {
+            self.surface(device, s, &grid, frame)?;
+        }
+        Ok(vec![format!("island instances: {}", voxels.len())])
+    }
+}

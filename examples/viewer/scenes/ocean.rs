@@ -1,0 +1,204 @@
+//! Seed 001: the ocean.
+
+use super::*;
+
+/// The ocean's settings: the waves table, steepness, look (detail layers, depth fade), LOD and
+/// which target is shown.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct OceanSettings {
+    /// The waves table.
+    pub waves: Vec<Wave>,
+    /// Steepness Q, shared as Qᵢ = Q / (wᵢ·Aᵢ·N).
+    pub steepness: f32,
+    /// Colours, light, detail layers, depth fade.
+    pub look: Look,
+    /// The patch quadtree's square and error target.
+    pub lod: LodSettings,
+    /// Fade the water's colour with the depth of the scene under it.
+    pub fade: bool,
+    /// Draw into the four G-buffer targets and show one of them (0–3) instead of forward.
+    pub gbuffer: Option<usize>,
+    /// Draw the patch quadtree over the water.
+    pub overlay: bool,
+    /// Depth target: written (default) or read only (the source's).
+    #[serde(default)]
+    pub depth_write: Option<bool>,
+}
+
+impl Default for OceanSettings {
+    fn default() -> Self {
+        let wave = |d: [f32; 2], a, l, s| Wave {
+            direction: Vec2::from_array(d),
+            amplitude: a,
+            wavelength: l,
+            speed: s,
+        };
+        Self {
+            waves: vec![
+                wave([1.0, 0.3], 0.35, 21.0, 5.7),
+                wave([0.2, 1.0], 0.18, 9.5, 3.8),
+                wave([-0.8, 0.5], 0.06, 4.1, 2.5),
+            ],
+            steepness: 0.7,
+            look: Look {
+                fade_distance: 3.0,
+                sun_direction: Vec3::new(-0.4, 0.5, -0.75),
+                ..Look::default()
+            },
+            lod: LodSettings::default(),
+            fade: true,
+            gbuffer: None,
+            overlay: false,
+            depth_write: None,
+        }
+    }
+}
+
+impl OceanSettings {
+    /// The source's sea: `Look::seed` (30 cm fade, no skirts) and depth read only, the same
+    /// waves and sun.
+    pub fn seed() -> Self {
+        let d = Self::default();
+        Self {
+            look: Look {
+                sun_direction: d.look.sun_direction,
+                ..Look::seed()
+            },
+            depth_write: Some(false),
+            ..d
+        }
+    }
+}
+
+/// The ocean's GPU state.
+pub struct Ocean {
+    pub(super) renderer: Option<((bool, bool, bool), OceanRenderer)>,
+    pub(super) gbuffer: Option<([u32; 2], Vec<Targets>)>,
+    pub(super) lines: Lines,
+}
+
+impl Ocean {
+    pub(super) fn new(device: &wgpu::Device) -> Self {
+        Self {
+            renderer: None,
+            gbuffer: None,
+            lines: Lines::new(device, COLOUR),
+        }
+    }
+
+    /// Draw the sea into the frame (over what it holds).
+    pub(super) fn draw(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        s: &OceanSettings,
+        frame: &mut Frame,
+    ) -> Result<Vec<String>, Error> {
+        let waves = Waves::new(s.waves.clone(), s.steepness)?;
+        let camera = frame.camera.ocean(frame.size);
+        let selection = select(&waves, &s.look, &camera, frame.size[1], &s.lod)?;
+        let write = s.depth_write.unwrap_or(true);
+        let key = (s.gbuffer.is_some(), frame.camera.reversed_z, write);
+        if self.renderer.as_ref().map(|r| r.0) != Some(key) {
+            let output = if key.0 {
+                OceanOutput::GBuffer([COLOUR; 4])
+            } else {
+                OceanOutput::Forward(COLOUR)
+            };
+            let depth = fieldkit::ocean::DepthMode {
+                write,
+                ..Default::default()
+            };
+            self.renderer = Some((
+                key,
+                OceanRenderer::with_depth(device, queue, output, key.1, depth)?,
+            ));
+        }
+        let renderer = &self.renderer.as_ref().expect("set above").1;
+        let time = frame.time as f64;
+        match s.gbuffer {
+            None => renderer.encode(
+                device,
+                frame.rec.encoder,
+                &waves,
+                time,
+                &camera,
+                &s.look,
+                &selection.patches,
+                &[&frame.targets.colour_view],
+                &frame.targets.depth,
+                s.fade,
+            )?,
+            Some(shown) => {
+                if shown > 3 {
+                    return Err(invalid(format!("G-buffer target {shown} (0–3)")));
+                }
+                if self.gbuffer.as_ref().map(|g| g.0) != Some(frame.size) {
+                    let g = (0..4)
+                        .map(|_| Targets::new(device, frame.size, COLOUR, DEPTH))
+                        .collect();
+                    self.gbuffer = Some((frame.size, g));
+                }
+                let g = &self.gbuffer.as_ref().expect("set above").1;
+                for t in g {
+                    t.clear(frame.rec.encoder, wgpu::Color::BLACK, 1.0);
+                }
+                let views: Vec<&wgpu::TextureView> = g.iter().map(|t| &t.colour_view).collect();
+                renderer.encode(
+                    device,
+                    frame.rec.encoder,
+                    &waves,
+                    time,
+                    &camera,
+                    &s.look,
+                    &selection.patches,
+                    &views,
+                    &frame.targets.depth,
+                    s.fade,
+                )?;
+                frame.rec.encoder.copy_texture_to_texture(
+                    g[shown].colour.as_image_copy(),
+                    frame.targets.colour.as_image_copy(),
+                    frame.targets.colour.size(),
+                );
+            }
+        }
+        if s.overlay {
+            let segments: Vec<[Vec3; 2]> = selection
+                .patches
+                .iter()
+                .flat_map(|p| {
+                    let (x0, z0) = (p.corner.x as f32, p.corner.y as f32);
+                    let e = p.size as f32;
+                    let c = [
+                        Vec3::new(x0, 0.0, z0),
+                        Vec3::new(x0 + e, 0.0, z0),
+                        Vec3::new(x0 + e, 0.0, z0 + e),
+                        Vec3::new(x0, 0.0, z0 + e),
+                    ];
+                    [[c[0], c[1]], [c[1], c[2]], [c[2], c[3]], [c[3], c[0]]]
+                })
+                .collect();
+            let view = frame.camera.view(frame.size);
+            self.lines.encode(
+                device,
+                queue,
+                frame.rec.encoder,
+                &frame.targets.colour_view,
+                view.view_proj,
+                &segments,
+                Vec4::new(1.0, 0.85, 0.2, 1.0),
+            );
+        }
+        Ok(vec![
+            format!(
+                "patches: {} ({} culled), triangles: {}",
+                selection.patches.len(),
+                selection.culled,
+                selection.triangles
+            ),
+            format!("largest height error: {:.2} px", selection.max_error_px),
+        ])
+    }
+}

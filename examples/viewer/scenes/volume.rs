@@ -1,0 +1,197 @@
+//! Seed 002: the volume.
+
+use super::*;
+
+/// The volume's settings: the cloud, its transfer function and how it is marched.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct VolumeSettings {
+    /// Voxels per side of the fBm cloud.
+    pub size: u32,
+    /// The cloud's noise seed.
+    pub seed: u32,
+    /// Density → colour and opacity.
+    pub tf: TransferFunction,
+    /// Step, shadows, mode, skipping.
+    pub march: MarchSettings,
+    /// March the cloud as a function evaluated at every sample, as the source does
+    /// (`CloudMarch`: seed 0, `size` cells per side for its bricks; a light volume becomes
+    /// shadow rays), instead of the baked texture.
+    pub function: bool,
+}
+
+impl VolumeSettings {
+    /// The source's cloud: the fBm function evaluated per sample, shadowed by rays through it.
+    pub fn seed() -> Self {
+        let d = Self::default();
+        Self {
+            function: true,
+            march: MarchSettings {
+                shadow: fieldkit::volume::Shadow::Rays { step: 1.0 / 32.0 },
+                ..d.march
+            },
+            ..d
+        }
+    }
+}
+
+impl Default for VolumeSettings {
+    fn default() -> Self {
+        Self {
+            function: false,
+            size: 96,
+            seed: 7,
+            tf: TransferFunction::cloud(),
+            march: MarchSettings {
+                step: 1.0 / 96.0,
+                ..MarchSettings::default()
+            },
+        }
+    }
+}
+
+/// The volume's GPU state.
+pub struct VolumeScene {
+    pub(super) renderer: VolumeRenderer,
+    pub(super) volume: Option<((u32, u32), Volume, fieldkit::volume::Bricks)>,
+    /// The cloud as a function, made on first use, and its bricks for a lattice size.
+    pub(super) cloud: Option<fieldkit::volume::CloudMarch>,
+    pub(super) cloud_bricks: Option<(u32, fieldkit::volume::Bricks)>,
+}
+
+impl VolumeScene {
+    pub(super) fn new(device: &wgpu::Device) -> Result<Self, Error> {
+        Ok(Self {
+            renderer: VolumeRenderer::new(device, COLOUR)?,
+            volume: None,
+            cloud: None,
+            cloud_bricks: None,
+        })
+    }
+
+    /// March the cloud *function* (`VolumeSettings::function`) into the frame.
+    pub(super) fn draw_function(
+        &mut self,
+        device: &wgpu::Device,
+        s: &VolumeSettings,
+        local_to_world: Mat4,
+        frame: &mut Frame,
+    ) -> Result<Vec<String>, Error> {
+        use fieldkit::volume::{CloudMarch, FunctionVolume, Shadow};
+        if self.cloud.is_none() {
+            self.cloud = Some(CloudMarch::cloud(device)?);
+        }
+        let cloud = self.cloud.as_ref().expect("set above");
+        let lattice = FunctionVolume::unit(s.size.clamp(4, 512));
+        if self.cloud_bricks.as_ref().map(|b| b.0) != Some(lattice.dims[0]) {
+            let bricks = cloud.encode_bricks(device, frame.rec, &lattice)?;
+            self.cloud_bricks = Some((lattice.dims[0], bricks));
+        }
+        let (_, bricks) = self.cloud_bricks.as_ref().expect("set above");
+        let mut march = s.march;
+        march.frame = frame.number;
+        if let Shadow::LightVolume { step } = march.shadow {
+            march.shadow = Shadow::Rays { step };
+        }
+        let view = frame.camera.view(frame.size);
+        // The function's box is its unit cube of texture coordinates, centred as the texture.
+        let placed = local_to_world * Mat4::from_translation(Vec3::splat(-0.5));
+        if let Some(m) = cloud.encode_march(
+            device,
+            frame.rec,
+            &lattice,
+            bricks,
+            &s.tf,
+            placed,
+            &view,
+            Some(&frame.targets.depth_view),
+            &march,
+        )? {
+            self.renderer.encode_composite(
+                device,
+                frame.rec.encoder,
+                &frame.targets.colour_view,
+                &m,
+            )?;
+        }
+        Ok(vec![format!(
+            "volume: the fBm function per sample (seed 0), bricks over {0}³ cells, {1:?}",
+            lattice.dims[0], march.shadow
+        )])
+    }
+
+    /// March the cloud under `local_to_world` into the frame, stopping at its depth.
+    pub(super) fn draw(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        s: &VolumeSettings,
+        local_to_world: Mat4,
+        frame: &mut Frame,
+    ) -> Result<Vec<String>, Error> {
+        if s.function {
+            return self.draw_function(device, s, local_to_world, frame);
+        }
+        if self.volume.as_ref().map(|v| v.0) != Some((s.size, s.seed)) {
+            if !(4..=512).contains(&s.size) {
+                return Err(Error::Size {
+                    stage: "viewer: volume",
+                    what: "cloud voxels per side (4 to 512)",
+                    got: s.size as u64,
+                    max: 512,
+                });
+            }
+            let dims = [s.size; 3];
+            let volume = Volume::upload(
+                device,
+                queue,
+                &fbm_cloud(dims, s.seed),
+                dims,
+                wgpu::TextureFormat::R8Unorm,
+                Vec3::splat(1.0 / s.size as f32),
+                Vec3::splat(-0.5),
+            )?;
+            let bricks = self.renderer.encode_bricks(device, frame.rec, &volume)?;
+            self.volume = Some(((s.size, s.seed), volume, bricks));
+        }
+        let (_, volume, bricks) = self.volume.as_ref().expect("set above");
+        let mut march = s.march;
+        march.frame = frame.number;
+        let light = match march.shadow {
+            fieldkit::volume::Shadow::LightVolume { .. } => Some(self.renderer.encode_light(
+                device,
+                frame.rec,
+                volume,
+                bricks,
+                &s.tf,
+                local_to_world,
+                &march,
+            )?),
+            _ => None,
+        };
+        let view = frame.camera.view(frame.size);
+        if let Some(m) = self.renderer.encode_march(
+            device,
+            frame.rec,
+            volume,
+            bricks,
+            light.as_ref(),
+            &s.tf,
+            local_to_world,
+            &view,
+            Some(&frame.targets.depth_view),
+            &march,
+        )? {
+            self.renderer.encode_composite(
+                device,
+                frame.rec.encoder,
+                &frame.targets.colour_view,
+                &m,
+            )?;
+        }
+        Ok(vec![format!(
+            "volume: {0}³, bricks {1}×{1}×{1}",
+            s.size, bricks.count[0]
+        )])
+    }
+}
