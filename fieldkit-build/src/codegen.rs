@@ -466,7 +466,6 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, shared: &[SharedGroupInfo], s:
         .filter(|(g, m)| shared.iter().any(|o| o.group == *g && o.module == *m))
         .map(|(g, m)| (g, group_module(shared, m, g)))
         .collect();
-    let is_whole = |g: u32| whole.iter().any(|(w, _)| *w == g);
     let compute = p.entries[0].stage == "compute";
     writeln!(
         s,
@@ -505,7 +504,103 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, shared: &[SharedGroupInfo], s:
         .unwrap();
     }
 
-    // Vertex inputs: per-vertex inputs in buffer 0; `instance_*` inputs in buffer 1 (per instance).
+    let vb_consts = gen_vertex_buffers(p, s);
+    gen_resources(&used, &whole, s);
+
+    let slots = slot_literals(r, p, shared, &used, &whole);
+    let kind = entry_kind(p, &vb_consts);
+    let overrides: Vec<String> = r
+        .overrides
+        .iter()
+        .map(|o| format!("\"{}\"", o.id.map_or(o.name.clone(), |id| id.to_string())))
+        .collect();
+    let main_entry = p.entries.last().unwrap();
+    let needs = p
+        .entries
+        .iter()
+        .fold(super::reflect::Needs::default(), |n, e| n.max(e.needs));
+    let needs: Vec<String> = needs
+        .fields()
+        .iter()
+        .map(|(name, v)| format!("{name}: {v}"))
+        .collect();
+    let features: Vec<String> = r
+        .features
+        .iter()
+        .map(|f| format!("wgpu::Features::{f}"))
+        .collect();
+    writeln!(
+        s,
+        "/// Device features the pipeline needs (binding arrays, immediates): ask for them in the\n/// `wgpu::DeviceDescriptor` (their union: `INFO.required_features()`).\npub const REQUIRED_FEATURES: &[wgpu::Features] = &[{}];",
+        features.join(", ")
+    )
+    .unwrap();
+    let mut extra_limits = binding_array_limits(&used);
+    let immediate_size = match &r.immediate {
+        Some(im) if p.entries.iter().any(|e| e.uses_immediate) => {
+            writeln!(
+                s,
+                "/// Bytes of the `var<immediate> {}: {}` block the pipeline layout holds (set with\n/// `set_immediates(0, bytes)` on the pass).\npub const IMMEDIATE_SIZE: u32 = {};",
+                im.name, im.ty, im.size
+            )
+            .unwrap();
+            im.size
+        }
+        _ => 0,
+    };
+    if immediate_size > 0 {
+        write!(
+            extra_limits,
+            "\n    limits.max_immediate_size = limits.max_immediate_size.max({immediate_size});"
+        )
+        .unwrap();
+    }
+    writeln!(
+        s,
+        "/// What the shader says about this pipeline's interface, read by fieldkit's `bind`.\npub static INFO: crate::bind::EntryInfo = crate::bind::EntryInfo {{ stage: STAGE, path: PATH, entry_point: \"{}\", source: SOURCE, kind: {kind}, slots: &[{}], overrides: &[{}], loops_end: true, needs: crate::bind::Needs {{ {} }}, features: REQUIRED_FEATURES, immediate_size: {immediate_size}, shared_groups: &[{}] }};",
+        main_entry.name,
+        slots.join(", "),
+        overrides.join(", "),
+        needs.join(", "),
+        whole
+            .iter()
+            .map(|(g, _)| g.to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    )
+    .unwrap();
+    writeln!(
+        s,
+        "/// The device limits the pipeline needs: WebGPU's defaults, raised where the shader needs\n/// more (`INFO.needs`, immediates, binding arrays). Ask for them (and `REQUIRED_FEATURES`) in\n/// the `wgpu::DeviceDescriptor`.\npub fn required_limits() -> wgpu::Limits {{\n    #[allow(unused_mut)]\n    let mut limits = INFO.needs.raise(wgpu::Limits::default());{}\n    limits\n}}",
+        extra_limits
+    )
+    .unwrap();
+    writeln!(
+        s,
+        "/// Marker type for this entry point.\npub struct Entry;"
+    )
+    .unwrap();
+    gen_entry_impl(&used, &whole, s);
+    writeln!(s, "}}").unwrap();
+    let ptype = if compute {
+        "ComputePipeline"
+    } else {
+        "RenderPipeline"
+    };
+    writeln!(
+        s,
+        "/// The pipeline for this entry point.\npub type Pipeline = crate::bind::{ptype}<Entry>;"
+    )
+    .unwrap();
+    writeln!(s, "}}").unwrap();
+}
+
+/// A binding the pipeline's entries use, with the stages that use it.
+type Used<'r> = (&'r super::reflect::Binding, Vec<&'r str>);
+
+/// The vertex stage's inputs as structs (`Vertex` per vertex in buffer 0, `Instance` for the
+/// `instance_*` inputs in buffer 1), with each buffer's layout literal for the pipeline.
+fn gen_vertex_buffers(p: &PipelineDesc, s: &mut String) -> Vec<String> {
     let mut buffers: Vec<(&str, &str, Vec<&super::reflect::VertexInput>)> = Vec::new();
     if let Some(vs) = p.entries.iter().find(|e| e.stage == "vertex") {
         let (inst, vert): (Vec<_>, Vec<_>) = vs
@@ -559,13 +654,20 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, shared: &[SharedGroupInfo], s:
         ));
     }
 
+    vb_consts
+}
+
+/// `Resources`: a typed field per binding the entries use, and one per shared group bound
+/// whole.
+fn gen_resources(used: &[Used], whole: &[(u32, String)], s: &mut String) {
+    let is_whole = |g: u32| whole.iter().any(|(w, _)| *w == g);
     writeln!(
         s,
         "/// Every resource the entry point binds, typed by what may be bound there."
     )
     .unwrap();
     writeln!(s, "pub struct Resources<'a> {{").unwrap();
-    for (g, module) in &whole {
+    for (g, module) in whole {
         writeln!(
             s,
             "/// `@group({g})`, bound once for every pipeline that uses it.\npub {module}: &'a super::super::super::groups::{module}::Group,"
@@ -605,14 +707,24 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, shared: &[SharedGroupInfo], s:
         .unwrap();
     }
     writeln!(s, "}}").unwrap();
+}
 
-    // Slots ascending; a shared group's are the module's, as every user binds them.
+/// The pipeline's slot literals, ascending; a shared group's are the module's, as every user
+/// binds them.
+fn slot_literals(
+    r: &Reflection,
+    p: &PipelineDesc,
+    shared: &[SharedGroupInfo],
+    used: &[Used],
+    whole: &[(u32, String)],
+) -> Vec<String> {
+    let is_whole = |g: u32| whole.iter().any(|(w, _)| *w == g);
     let mut slot_list: Vec<(u32, u32, String)> = used
         .iter()
         .filter(|(b, _)| !is_whole(b.group))
         .map(|(b, stages)| (b.group, b.binding, slot_literal(b, stages)))
         .collect();
-    for (g, _) in &whole {
+    for (g, _) in whole {
         let m = shared_groups_of(r, p)
             .into_iter()
             .find(|(w, _)| w == g)
@@ -629,7 +741,14 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, shared: &[SharedGroupInfo], s:
     }
     slot_list.sort_by_key(|(g, b, _)| (*g, *b));
     let slots: Vec<String> = slot_list.into_iter().map(|(_, _, l)| l).collect();
-    let kind = if compute {
+    slots
+}
+
+/// The entry's kind literal: a compute workgroup size, or a render pipeline's vertex buffers
+/// and fragment targets.
+fn entry_kind(p: &PipelineDesc, vb_consts: &[String]) -> String {
+    let compute = p.entries[0].stage == "compute";
+    if compute {
         "crate::bind::EntryKind::Compute { workgroup_size: WORKGROUP_SIZE }".to_string()
     } else {
         let fs = p.entries.iter().find(|e| e.stage == "fragment").unwrap();
@@ -644,34 +763,12 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, shared: &[SharedGroupInfo], s:
             vb_consts.join(", "),
             targets.join(", ")
         )
-    };
-    let overrides: Vec<String> = r
-        .overrides
-        .iter()
-        .map(|o| format!("\"{}\"", o.id.map_or(o.name.clone(), |id| id.to_string())))
-        .collect();
-    let main_entry = p.entries.last().unwrap();
-    let needs = p
-        .entries
-        .iter()
-        .fold(super::reflect::Needs::default(), |n, e| n.max(e.needs));
-    let needs: Vec<String> = needs
-        .fields()
-        .iter()
-        .map(|(name, v)| format!("{name}: {v}"))
-        .collect();
-    let features: Vec<String> = r
-        .features
-        .iter()
-        .map(|f| format!("wgpu::Features::{f}"))
-        .collect();
-    writeln!(
-        s,
-        "/// Device features the pipeline needs (binding arrays, immediates): ask for them in the\n/// `wgpu::DeviceDescriptor` (their union: `INFO.required_features()`).\npub const REQUIRED_FEATURES: &[wgpu::Features] = &[{}];",
-        features.join(", ")
-    )
-    .unwrap();
-    // Limits `Needs` does not hold: immediates and binding array elements (samplers apart).
+    }
+}
+
+/// The limits `Needs` does not hold for the binding arrays the entries use (samplers apart),
+/// as lines raising them in `required_limits`.
+fn binding_array_limits(used: &[Used]) -> String {
     let array_elements = |samplers: bool| -> u32 {
         used.iter()
             .filter(|(b, _)| matches!(b.kind, BindingKind::Sampler { .. }) == samplers)
@@ -697,50 +794,13 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, shared: &[SharedGroupInfo], s:
             .unwrap();
         }
     }
-    let immediate_size = match &r.immediate {
-        Some(im) if p.entries.iter().any(|e| e.uses_immediate) => {
-            writeln!(
-                s,
-                "/// Bytes of the `var<immediate> {}: {}` block the pipeline layout holds (set with\n/// `set_immediates(0, bytes)` on the pass).\npub const IMMEDIATE_SIZE: u32 = {};",
-                im.name, im.ty, im.size
-            )
-            .unwrap();
-            im.size
-        }
-        _ => 0,
-    };
-    if immediate_size > 0 {
-        write!(
-            extra_limits,
-            "\n    limits.max_immediate_size = limits.max_immediate_size.max({immediate_size});"
-        )
-        .unwrap();
-    }
-    writeln!(
-        s,
-        "/// What the shader says about this pipeline's interface, read by fieldkit's `bind`.\npub static INFO: crate::bind::EntryInfo = crate::bind::EntryInfo {{ stage: STAGE, path: PATH, entry_point: \"{}\", source: SOURCE, kind: {kind}, slots: &[{}], overrides: &[{}], loops_end: true, needs: crate::bind::Needs {{ {} }}, features: REQUIRED_FEATURES, immediate_size: {immediate_size}, shared_groups: &[{}] }};",
-        main_entry.name,
-        slots.join(", "),
-        overrides.join(", "),
-        needs.join(", "),
-        whole
-            .iter()
-            .map(|(g, _)| g.to_string())
-            .collect::<Vec<_>>()
-            .join(", ")
-    )
-    .unwrap();
-    writeln!(
-        s,
-        "/// The device limits the pipeline needs: WebGPU's defaults, raised where the shader needs\n/// more (`INFO.needs`, immediates, binding arrays). Ask for them (and `REQUIRED_FEATURES`) in\n/// the `wgpu::DeviceDescriptor`.\npub fn required_limits() -> wgpu::Limits {{\n    #[allow(unused_mut)]\n    let mut limits = INFO.needs.raise(wgpu::Limits::default());{}\n    limits\n}}",
-        extra_limits
-    )
-    .unwrap();
-    writeln!(
-        s,
-        "/// Marker type for this entry point.\npub struct Entry;"
-    )
-    .unwrap();
+    extra_limits
+}
+
+/// `impl bind::Entry for Entry`: the resources in slot order, and the shared groups' bind
+/// groups.
+fn gen_entry_impl(used: &[Used], whole: &[(u32, String)], s: &mut String) {
+    let is_whole = |g: u32| whole.iter().any(|(w, _)| *w == g);
     writeln!(s, "impl crate::bind::Entry for Entry {{").unwrap();
     writeln!(s, "type Resources<'a> = Resources<'a>;").unwrap();
     writeln!(s, "const INFO: &'static crate::bind::EntryInfo = &INFO;").unwrap();
@@ -758,18 +818,6 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, shared: &[SharedGroupInfo], s:
             .collect();
         writeln!(s, "fn groups<'a>(r: &Self::Resources<'a>) -> Vec<(u32, &'a wgpu::BindGroup)> {{ vec![{}] }}", groups.join(", ")).unwrap();
     }
-    writeln!(s, "}}").unwrap();
-    let ptype = if compute {
-        "ComputePipeline"
-    } else {
-        "RenderPipeline"
-    };
-    writeln!(
-        s,
-        "/// The pipeline for this entry point.\npub type Pipeline = crate::bind::{ptype}<Entry>;"
-    )
-    .unwrap();
-    writeln!(s, "}}").unwrap();
 }
 
 /// Generated Rust for one stage (unformatted).
