@@ -507,8 +507,40 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, shared: &[SharedGroupInfo], s:
     let vb_consts = gen_vertex_buffers(p, s);
     gen_resources(&used, &whole, s);
 
-    let slots = slot_literals(r, p, shared, &used, &whole);
-    let kind = entry_kind(p, &vb_consts);
+    gen_info(r, p, shared, &used, &whole, &vb_consts, s);
+    writeln!(
+        s,
+        "/// Marker type for this entry point.\npub struct Entry;"
+    )
+    .unwrap();
+    gen_entry_impl(&used, &whole, s);
+    writeln!(s, "}}").unwrap();
+    let ptype = if compute {
+        "ComputePipeline"
+    } else {
+        "RenderPipeline"
+    };
+    writeln!(
+        s,
+        "/// The pipeline for this entry point.\npub type Pipeline = crate::bind::{ptype}<Entry>;"
+    )
+    .unwrap();
+    writeln!(s, "}}").unwrap();
+}
+
+/// `REQUIRED_FEATURES`, `IMMEDIATE_SIZE` where the entries use immediates, the interface table
+/// `INFO` and `required_limits()`.
+fn gen_info(
+    r: &Reflection,
+    p: &PipelineDesc,
+    shared: &[SharedGroupInfo],
+    used: &[Used],
+    whole: &[(u32, String)],
+    vb_consts: &[String],
+    s: &mut String,
+) {
+    let slots = slot_literals(r, p, shared, used, whole);
+    let kind = entry_kind(p, vb_consts);
     let overrides: Vec<String> = r
         .overrides
         .iter()
@@ -535,7 +567,7 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, shared: &[SharedGroupInfo], s:
         features.join(", ")
     )
     .unwrap();
-    let mut extra_limits = binding_array_limits(&used);
+    let mut extra_limits = binding_array_limits(used);
     let immediate_size = match &r.immediate {
         Some(im) if p.entries.iter().any(|e| e.uses_immediate) => {
             writeln!(
@@ -575,24 +607,6 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, shared: &[SharedGroupInfo], s:
         extra_limits
     )
     .unwrap();
-    writeln!(
-        s,
-        "/// Marker type for this entry point.\npub struct Entry;"
-    )
-    .unwrap();
-    gen_entry_impl(&used, &whole, s);
-    writeln!(s, "}}").unwrap();
-    let ptype = if compute {
-        "ComputePipeline"
-    } else {
-        "RenderPipeline"
-    };
-    writeln!(
-        s,
-        "/// The pipeline for this entry point.\npub type Pipeline = crate::bind::{ptype}<Entry>;"
-    )
-    .unwrap();
-    writeln!(s, "}}").unwrap();
 }
 
 /// A binding the pipeline's entries use, with the stages that use it.

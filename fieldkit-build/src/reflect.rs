@@ -628,7 +628,63 @@ pub fn reflect(stage: &Stage) -> Reflection {
     layouter
         .update(module.to_ctx())
         .expect("validated module has a layout");
+    let mut shareable = Vec::new();
+    let (mut bindings, handles) = reflect_bindings(stage, &layouter, &mut shareable);
+    let entry_points = module
+        .entry_points
+        .iter()
+        .enumerate()
+        .map(|(i, ep)| reflect_entry(stage, i, ep, &bindings, &handles))
+        .collect();
+    // The immediate block is host data like a uniform: its struct is generated.
+    let immediate = module
+        .global_variables
+        .iter()
+        .find(|(_, v)| v.space == AddressSpace::Immediate)
+        .map(|(_, v)| {
+            mark_shareable(module, v.ty, &mut shareable);
+            Immediate {
+                name: v.name.clone().unwrap_or_default(),
+                ty: wgsl_type(module, v.ty),
+                rust: rust_type(module, v.ty).unwrap_or_default(),
+                size: layouter[v.ty].size,
+            }
+        });
 
+    let structs = reflect_structs(module, &layouter, &shareable);
+    let overrides = module
+        .overrides
+        .iter()
+        .map(|(_, o)| Override {
+            name: o.name.clone().unwrap_or_default(),
+            id: o.id,
+            ty: wgsl_type(module, o.ty),
+            has_default: o.init.is_some(),
+            default: literal_value(module, o.init),
+        })
+        .collect();
+
+    bindings.sort_by_key(|b| (b.group, b.binding));
+    Reflection {
+        stage: stage.file.id(),
+        path: stage.file.rel_path.clone(),
+        entry_points,
+        bindings,
+        structs,
+        overrides,
+        immediate,
+        features: stage.features.clone(),
+    }
+}
+
+/// Every bound global of the stage's module, described for the host (in declaration order),
+/// with its handle; the types bound as uniforms or storage are marked host-shareable.
+fn reflect_bindings(
+    stage: &Stage,
+    layouter: &naga::proc::Layouter,
+    shareable: &mut Vec<naga::Handle<naga::Type>>,
+) -> (Vec<Binding>, Vec<naga::Handle<naga::GlobalVariable>>) {
+    let module = &stage.module;
     // Which sampled textures are ever sampled through a sampler (they must be filterable).
     let mut sampled_images = Vec::new();
     let mut sampled_samplers = Vec::new();
@@ -640,7 +696,6 @@ pub fn reflect(stage: &Stage) -> Reflection {
     }
 
     let mut bindings = Vec::new();
-    let mut shareable = Vec::new();
     let mut handles = Vec::new();
     for (handle, var) in module.global_variables.iter() {
         let Some(rb) = &var.binding else { continue };
@@ -657,14 +712,14 @@ pub fn reflect(stage: &Stage) -> Reflection {
         let ty_inner = &module.types[elem].inner;
         let kind = match (var.space, ty_inner) {
             (AddressSpace::Uniform, _) => {
-                mark_shareable(module, elem, &mut shareable);
+                mark_shareable(module, elem, shareable);
                 BindingKind::Uniform {
                     min_size: layouter[elem].size,
                     rust: rust_type(module, elem).unwrap_or_default(),
                 }
             }
             (AddressSpace::Storage { access }, _) => {
-                mark_shareable(module, elem, &mut shareable);
+                mark_shareable(module, elem, shareable);
                 BindingKind::Storage {
                     read_only: !access.contains(naga::StorageAccess::STORE),
                     min_size: layouter[elem].size,
@@ -738,103 +793,105 @@ pub fn reflect(stage: &Stage) -> Reflection {
         handles.push(handle);
     }
 
-    let mut entry_points = Vec::new();
-    for (i, ep) in module.entry_points.iter().enumerate() {
-        let fi = stage.info.get_entry_point(i);
-        let mut uses = Vec::new();
-        for (b, &h) in bindings.iter().zip(&handles) {
-            let u = fi[h];
-            if u.is_empty() {
-                continue;
-            }
-            let r = u.intersects(GlobalUse::READ | GlobalUse::QUERY);
-            let w = u.contains(GlobalUse::WRITE);
-            let access = match (r, w) {
-                (_, true) if u.contains(GlobalUse::READ) => "read_write",
-                (_, true) => "write",
-                _ => "read",
-            };
-            uses.push(BindingUse {
-                group: b.group,
-                binding: b.binding,
-                name: b.name.clone(),
-                access: access.into(),
-            });
+    (bindings, handles)
+}
+
+/// Entry point `i` of the stage: its stage, workgroup, what it binds and how, its vertex inputs
+/// or fragment outputs, and the limits it needs.
+fn reflect_entry(
+    stage: &Stage,
+    i: usize,
+    ep: &naga::EntryPoint,
+    bindings: &[Binding],
+    handles: &[naga::Handle<naga::GlobalVariable>],
+) -> EntryPoint {
+    let module = &stage.module;
+    let fi = stage.info.get_entry_point(i);
+    let mut uses = Vec::new();
+    for (b, &h) in bindings.iter().zip(handles) {
+        let u = fi[h];
+        if u.is_empty() {
+            continue;
         }
-        let stage_name = match ep.stage {
-            ShaderStage::Compute => "compute",
-            ShaderStage::Vertex => "vertex",
-            ShaderStage::Fragment => "fragment",
-            _ => "other",
+        let r = u.intersects(GlobalUse::READ | GlobalUse::QUERY);
+        let w = u.contains(GlobalUse::WRITE);
+        let access = match (r, w) {
+            (_, true) if u.contains(GlobalUse::READ) => "read_write",
+            (_, true) => "write",
+            _ => "read",
         };
-        let vertex_inputs = if ep.stage == ShaderStage::Vertex {
-            located_args(module, &ep.function)
-                .into_iter()
-                .filter_map(|(location, name, ty)| {
-                    let (format, rust, size) = vertex_format(module, ty)?;
-                    Some(VertexInput {
-                        location,
-                        name,
-                        ty: wgsl_type(module, ty),
-                        format,
-                        rust,
-                        size,
-                    })
-                })
-                .collect()
-        } else {
-            vec![]
-        };
-        let fragment_outputs = if ep.stage == ShaderStage::Fragment {
-            fragment_outputs(module, &ep.function)
-        } else {
-            vec![]
-        };
-        let workgroup_storage = module
-            .global_variables
-            .iter()
-            .filter(|(h, v)| v.space == AddressSpace::WorkGroup && !fi[*h].is_empty())
-            .map(|(_, v)| module.types[v.ty].inner.size(module.to_ctx()))
-            .sum();
-        let uses_immediate = module
-            .global_variables
-            .iter()
-            .any(|(h, v)| v.space == AddressSpace::Immediate && !fi[h].is_empty());
-        let needs = needs_of(
-            &bindings,
-            &uses,
-            workgroup_storage,
-            ep.workgroup_size,
-            ep.stage == ShaderStage::Compute,
-        );
-        entry_points.push(EntryPoint {
-            name: ep.name.clone(),
-            stage: stage_name.into(),
-            workgroup_size: ep.workgroup_size,
-            workgroup_storage,
-            needs,
-            uses,
-            vertex_inputs,
-            fragment_outputs,
-            uses_immediate,
+        uses.push(BindingUse {
+            group: b.group,
+            binding: b.binding,
+            name: b.name.clone(),
+            access: access.into(),
         });
     }
-
-    // The immediate block is host data like a uniform: its struct is generated.
-    let immediate = module
+    let stage_name = match ep.stage {
+        ShaderStage::Compute => "compute",
+        ShaderStage::Vertex => "vertex",
+        ShaderStage::Fragment => "fragment",
+        _ => "other",
+    };
+    let vertex_inputs = if ep.stage == ShaderStage::Vertex {
+        located_args(module, &ep.function)
+            .into_iter()
+            .filter_map(|(location, name, ty)| {
+                let (format, rust, size) = vertex_format(module, ty)?;
+                Some(VertexInput {
+                    location,
+                    name,
+                    ty: wgsl_type(module, ty),
+                    format,
+                    rust,
+                    size,
+                })
+            })
+            .collect()
+    } else {
+        vec![]
+    };
+    let fragment_outputs = if ep.stage == ShaderStage::Fragment {
+        fragment_outputs(module, &ep.function)
+    } else {
+        vec![]
+    };
+    let workgroup_storage = module
         .global_variables
         .iter()
-        .find(|(_, v)| v.space == AddressSpace::Immediate)
-        .map(|(_, v)| {
-            mark_shareable(module, v.ty, &mut shareable);
-            Immediate {
-                name: v.name.clone().unwrap_or_default(),
-                ty: wgsl_type(module, v.ty),
-                rust: rust_type(module, v.ty).unwrap_or_default(),
-                size: layouter[v.ty].size,
-            }
-        });
+        .filter(|(h, v)| v.space == AddressSpace::WorkGroup && !fi[*h].is_empty())
+        .map(|(_, v)| module.types[v.ty].inner.size(module.to_ctx()))
+        .sum();
+    let uses_immediate = module
+        .global_variables
+        .iter()
+        .any(|(h, v)| v.space == AddressSpace::Immediate && !fi[h].is_empty());
+    let needs = needs_of(
+        &bindings,
+        &uses,
+        workgroup_storage,
+        ep.workgroup_size,
+        ep.stage == ShaderStage::Compute,
+    );
+    EntryPoint {
+        name: ep.name.clone(),
+        stage: stage_name.into(),
+        workgroup_size: ep.workgroup_size,
+        workgroup_storage,
+        needs,
+        uses,
+        vertex_inputs,
+        fragment_outputs,
+        uses_immediate,
+    }
+}
 
+/// The module's named memory-layout structs (entry-point interface structs left out).
+fn reflect_structs(
+    module: &naga::Module,
+    layouter: &naga::proc::Layouter,
+    shareable: &[naga::Handle<naga::Type>],
+) -> Vec<StructInfo> {
     let mut structs = Vec::new();
     for (handle, ty) in module.types.iter() {
         let TypeInner::Struct { members, span } = &ty.inner else {
@@ -863,29 +920,7 @@ pub fn reflect(stage: &Stage) -> Reflection {
         });
     }
 
-    let overrides = module
-        .overrides
-        .iter()
-        .map(|(_, o)| Override {
-            name: o.name.clone().unwrap_or_default(),
-            id: o.id,
-            ty: wgsl_type(module, o.ty),
-            has_default: o.init.is_some(),
-            default: literal_value(module, o.init),
-        })
-        .collect();
-
-    bindings.sort_by_key(|b| (b.group, b.binding));
-    Reflection {
-        stage: stage.file.id(),
-        path: stage.file.rel_path.clone(),
-        entry_points,
-        bindings,
-        structs,
-        overrides,
-        immediate,
-        features: stage.features.clone(),
-    }
+    structs
 }
 
 impl Reflection {
