@@ -177,7 +177,29 @@ impl VoxelizerScene {
         frame: &mut Frame,
     ) -> Result<Vec<String>, Error> {
         clear(frame, [0.1, 0.11, 0.13]);
-        // Advance a running job.
+        self.advance_job(device, queue, frame)?;
+        if self.job.is_none() && self.shown.as_ref().map(|x| &x.0) != Some(s) {
+            self.start_job(device, s, frame)?;
+        }
+        self.take_slice(device, queue)?;
+        let mut stats = Vec::new();
+        self.draw_shown(device, s, frame, &mut stats)?;
+        if s.slice {
+            self.draw_slice(device, queue, frame, &mut stats);
+        }
+        if self.job.is_some() {
+            stats.push("voxelizing…".into());
+        }
+        Ok(stats)
+    }
+
+    /// Advance a running job: a result read back is shown.
+    fn advance_job(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        frame: &mut Frame,
+    ) -> Result<(), Error> {
         if let Some((key, grid, job)) = self.job.take() {
             match job {
                 VoxelJob::Attributes(pending, mut count) => match count.try_take() {
@@ -204,49 +226,59 @@ impl VoxelizerScene {
                 recorded => self.job = Some((key, grid, recorded)),
             }
         }
-        // Start one when the settings changed.
-        if self.job.is_none() && self.shown.as_ref().map(|x| &x.0) != Some(s) {
-            let mesh = spun(self.mesh(&s.mesh)?, s.spin)?;
-            let grid = Grid::fit(&mesh, s.grid)?;
-            let job = match s.mode {
-                VoxelMode::Surface(Separation::Conservative) => VoxelJob::RecordedAttributes(
-                    self.voxelizer
-                        .encode_attributes(device, frame.rec, &mesh, &grid)?,
-                ),
-                VoxelMode::Surface(sep) => VoxelJob::RecordedSurface(
-                    self.voxelizer
-                        .encode_surface_with(device, frame.rec, &mesh, &grid, sep)?,
-                ),
-                VoxelMode::Raster => {
-                    VoxelJob::RecordedSurface(self.voxelizer.encode_surface_raster(
-                        device,
-                        frame.rec.encoder,
-                        &mesh,
-                        &grid,
-                    )?)
-                }
-                VoxelMode::Solid => VoxelJob::RecordedSurface(
-                    self.voxelizer
-                        .encode_solid(device, frame.rec, &mesh, &grid, true)?,
-                ),
-            };
-            self.slice = None;
-            if s.slice {
-                // The exact distance to the conservative surface voxels, in voxels.
-                let surface = self
-                    .voxelizer
-                    .encode_surface(device, frame.rec, &mesh, &grid)?;
-                let volume = self.voxelizer.encode_volume(device, frame.rec, &surface)?;
-                let field = self.distance.encode(
-                    device,
-                    frame.rec,
-                    &volume,
-                    &fieldkit::distance::Options3d::default(),
-                )?;
-                self.field = Some(field.distance);
-            }
-            self.job = Some((s.clone(), grid, job));
+        Ok(())
+    }
+
+    /// Start a job for settings `s` (they changed), with the distance slice if asked for.
+    fn start_job(
+        &mut self,
+        device: &wgpu::Device,
+        s: &VoxelizerSettings,
+        frame: &mut Frame,
+    ) -> Result<(), Error> {
+        let mesh = spun(self.mesh(&s.mesh)?, s.spin)?;
+        let grid = Grid::fit(&mesh, s.grid)?;
+        let job = match s.mode {
+            VoxelMode::Surface(Separation::Conservative) => VoxelJob::RecordedAttributes(
+                self.voxelizer
+                    .encode_attributes(device, frame.rec, &mesh, &grid)?,
+            ),
+            VoxelMode::Surface(sep) => VoxelJob::RecordedSurface(
+                self.voxelizer
+                    .encode_surface_with(device, frame.rec, &mesh, &grid, sep)?,
+            ),
+            VoxelMode::Raster => VoxelJob::RecordedSurface(self.voxelizer.encode_surface_raster(
+                device,
+                frame.rec.encoder,
+                &mesh,
+                &grid,
+            )?),
+            VoxelMode::Solid => VoxelJob::RecordedSurface(
+                self.voxelizer
+                    .encode_solid(device, frame.rec, &mesh, &grid, true)?,
+            ),
+        };
+        self.slice = None;
+        if s.slice {
+            // The exact distance to the conservative surface voxels, in voxels.
+            let surface = self
+                .voxelizer
+                .encode_surface(device, frame.rec, &mesh, &grid)?;
+            let volume = self.voxelizer.encode_volume(device, frame.rec, &surface)?;
+            let field = self.distance.encode(
+                device,
+                frame.rec,
+                &volume,
+                &fieldkit::distance::Options3d::default(),
+            )?;
+            self.field = Some(field.distance);
         }
+        self.job = Some((s.clone(), grid, job));
+        Ok(())
+    }
+
+    /// The distance field's middle z slice, once read back, as an image to blit.
+    fn take_slice(&mut self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<(), Error> {
         if let Some(r) = &mut self.field_read
             && let Some(d) = r.try_take()
         {
@@ -278,10 +310,20 @@ impl VoxelizerScene {
                 self.slice = Some((upload_rgba(device, queue, &px, w, h), [w, h], max));
             }
         }
+        Ok(())
+    }
+
+    /// The shown voxels, lit by attributes or drawn as cubes, centred with longest side 2.
+    fn draw_shown(
+        &mut self,
+        device: &wgpu::Device,
+        s: &VoxelizerSettings,
+        frame: &mut Frame,
+        stats: &mut Vec<String>,
+    ) -> Result<(), Error> {
         let reversed = frame.camera.reversed_z;
         let view = frame.camera.view(frame.size);
         let (cv, dv) = (&frame.targets.colour_view, &frame.targets.depth_view);
-        let mut stats = Vec::new();
         if let Some((key, grid, shown)) = &self.shown {
             // Centre the grid on the origin, longest side 2.
             let side = grid.size.into_iter().max().unwrap_or(1) as f32 * grid.voxel as f32;
@@ -355,9 +397,18 @@ impl VoxelizerScene {
                 }
             }
         }
-        if let Some((texture, [w, h], max)) = &self.slice
-            && s.slice
-        {
+        Ok(())
+    }
+
+    /// The distance slice in the lower-right corner, a third of the frame's height.
+    fn draw_slice(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        frame: &mut Frame,
+        stats: &mut Vec<String>,
+    ) {
+        if let Some((texture, [w, h], max)) = &self.slice {
             // Lower-right corner, a third of the frame's height, the slice's aspect.
             let fh = 1.0 / 3.0;
             let fw = fh * (*w as f32 / *h as f32) * frame.size[1] as f32 / frame.size[0] as f32;
@@ -375,10 +426,6 @@ impl VoxelizerScene {
                 "distance, middle z slice ({w}×{h}): 0 (white) to {max:.1} voxels, lines every 2"
             ));
         }
-        if self.job.is_some() {
-            stats.push("voxelizing…".into());
-        }
-        Ok(stats)
     }
 }
 
