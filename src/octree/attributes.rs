@@ -98,49 +98,6 @@ impl OctreeBuilder {
                 ),
             });
         }
-        let limit = device.limits().max_storage_buffer_binding_size;
-        // Voxels whose sums one binding holds: the batches.
-        let batch = (limit / (SUMS * 4)).min(voxels.max(1) as u64) as u32;
-        if voxels as u64 * ENTRY_BYTES > limit {
-            return Err(Error::Size {
-                stage: stage::STAGE,
-                what: "octree voxel attribute bytes (8 per occupied voxel)",
-                got: voxels as u64 * ENTRY_BYTES,
-                max: limit,
-            });
-        }
-        let buffer = |label, size: u64, usage| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: size.max(16),
-                usage: wgpu::BufferUsages::STORAGE | usage,
-                mapped_at_creation: false,
-            })
-        };
-        let sums = buffer(
-            "octree attribute sums",
-            batch as u64 * SUMS * 4,
-            wgpu::BufferUsages::COPY_DST,
-        );
-        let attributes = OctreeAttributes {
-            voxels,
-            voxel_attributes: buffer(
-                "octree voxel attributes",
-                voxels as u64 * ENTRY_BYTES,
-                wgpu::BufferUsages::COPY_SRC,
-            ),
-            node_attributes: buffer(
-                "octree node attributes",
-                octree.capacity as u64 * ENTRY_BYTES,
-                wgpu::BufferUsages::COPY_SRC,
-            ),
-            brick_voxels: brick_voxels.clone(),
-        };
-        let row = device.limits().max_compute_workgroups_per_dimension as u64;
-        let grid = |n: u64| {
-            let groups = n.div_ceil(64).max(1);
-            [groups.min(row) as u32, groups.div_ceil(row) as u32, 1]
-        };
         if cursors.len() != fragments.parts.len()
             || fragments.parts.iter().any(|p| p.triangle_ids.is_none())
         {
@@ -149,6 +106,12 @@ impl OctreeBuilder {
                 what: "the octree was built from other fragments than these".into(),
             });
         }
+        let (batch, sums, attributes) = attribute_buffers(device, octree, voxels, brick_voxels)?;
+        let row = device.limits().max_compute_workgroups_per_dimension as u64;
+        let grid = |n: u64| {
+            let groups = n.div_ceil(64).max(1);
+            [groups.min(row) as u32, groups.div_ceil(row) as u32, 1]
+        };
         let params = |level, first_voxel, fragments| {
             uniform(
                 device,
@@ -249,4 +212,54 @@ impl OctreeBuilder {
         octree.attributes = Some(attributes);
         Ok(())
     }
+}
+
+/// The attribute passes' buffers: the sums of one batch of voxels (as many as one binding
+/// holds), and the voxels' and nodes' attributes; [`Error::Size`] where the voxels' attributes
+/// pass one binding.
+fn attribute_buffers(
+    device: &wgpu::Device,
+    octree: &Octree,
+    voxels: u32,
+    brick_voxels: &wgpu::Buffer,
+) -> Result<(u32, wgpu::Buffer, OctreeAttributes), Error> {
+    let limit = device.limits().max_storage_buffer_binding_size;
+    // Voxels whose sums one binding holds: the batches.
+    let batch = (limit / (SUMS * 4)).min(voxels.max(1) as u64) as u32;
+    if voxels as u64 * ENTRY_BYTES > limit {
+        return Err(Error::Size {
+            stage: stage::STAGE,
+            what: "octree voxel attribute bytes (8 per occupied voxel)",
+            got: voxels as u64 * ENTRY_BYTES,
+            max: limit,
+        });
+    }
+    let buffer = |label, size: u64, usage| {
+        device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: size.max(16),
+            usage: wgpu::BufferUsages::STORAGE | usage,
+            mapped_at_creation: false,
+        })
+    };
+    let sums = buffer(
+        "octree attribute sums",
+        batch as u64 * SUMS * 4,
+        wgpu::BufferUsages::COPY_DST,
+    );
+    let attributes = OctreeAttributes {
+        voxels,
+        voxel_attributes: buffer(
+            "octree voxel attributes",
+            voxels as u64 * ENTRY_BYTES,
+            wgpu::BufferUsages::COPY_SRC,
+        ),
+        node_attributes: buffer(
+            "octree node attributes",
+            octree.capacity as u64 * ENTRY_BYTES,
+            wgpu::BufferUsages::COPY_SRC,
+        ),
+        brick_voxels: brick_voxels.clone(),
+    };
+    Ok((batch, sums, attributes))
 }
