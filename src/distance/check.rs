@@ -7,7 +7,7 @@ use super::packing::SeedPacking;
 use crate::error::Error;
 
 /// Largest sides the standard 3D packing can name: x and y in 11 bits, z in 10
-/// ([`pack_seed3`]); JFA and the point seeds take these. The one grid at all three (2048 × 2048
+/// ([`pack_seed3`](super::pack_seed3)); JFA and the point seeds take these. The one grid at all three (2048 × 2048
 /// × 1024, whose last voxel's code + 1 would wrap to 0) is refused too. The exact transform
 /// takes more ([`SeedPacking::for_size`], [`MAX_SIDE_EXACT_3D`]).
 pub const MAX_SIDE_3D: [u32; 3] = [2048, 2048, 1024];
@@ -31,7 +31,7 @@ pub(crate) fn voxels(size: [u32; 3]) -> u64 {
 }
 
 /// Check a 3D grid size against the packing and the device: its sides, and its field (a `u32`
-/// per voxel) against one storage binding. The exact transform ([`Method::Exact`]) takes larger
+/// per voxel) against one storage binding. The exact transform ([`Method::Exact`](super::Method::Exact)) takes larger
 /// fields too, split across bindings, up to the device's `max_buffer_size`.
 pub fn check_size_3d(device: &wgpu::Device, size: [u32; 3]) -> Result<(), Error> {
     check_sides_3d(device, size)?;

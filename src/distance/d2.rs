@@ -16,7 +16,7 @@ use std::sync::Arc;
 pub enum Method2d {
     /// The exact Euclidean transform (rows, then banded lower envelopes along columns): no
     /// wrong texels, and faster than every JFA variant at every size measured. Sides up to
-    /// [`MAX_SIDE_2D_EXACT`].
+    /// [`MAX_SIDE_2D_EXACT`](super::MAX_SIDE_2D_EXACT).
     #[default]
     Exact,
     /// Jump flooding with the given variant.
@@ -50,7 +50,7 @@ impl Default for Options2d {
     }
 }
 
-/// Nearest seeds of a 2D field, packed as [`pack_seed`] does (0 = none): an `R32Uint` texture
+/// Nearest seeds of a 2D field, packed as [`pack_seed`](super::pack_seed) does (0 = none): an `R32Uint` texture
 /// from JFA, a row-major `u32` buffer from the exact transform.
 #[derive(Debug)]
 pub enum Nearest2d {
@@ -84,7 +84,7 @@ pub struct DistanceField2d {
     /// Height in texels.
     pub height: u32,
     /// `R32Float`: distance to the nearest seed (signed: negative inside), times `texel_size`;
-    /// [`FAR`] where there is no seed.
+    /// [`FAR`](super::FAR) where there is no seed.
     pub distance: wgpu::Texture,
     /// Nearest seed per texel (signed: nearest *inside* texel).
     pub nearest: Nearest2d,

@@ -61,11 +61,11 @@ impl Slabs {
 pub struct Field3d {
     /// Voxels per axis.
     pub size: [u32; 3],
-    /// How `nearest` names integer seeds: [`SeedPacking::STANDARD`] ([`unpack_seed3`]) for
+    /// How `nearest` names integer seeds: [`SeedPacking::STANDARD`] ([`unpack_seed3`](super::unpack_seed3)) for
     /// every grid up to 2048 × 2048 × 1024, wider per axis where the exact transform took a
     /// grid past that (`packing.unpack(s)` decodes either).
     pub packing: SeedPacking,
-    /// Nearest seed per voxel: packed (`packing`), or a key into `points` ([`key_index`]).
+    /// Nearest seed per voxel: packed (`packing`), or a key into `points` ([`key_index`](super::key_index)).
     /// For a signed field of integer seeds, the nearest *inside* voxel. One buffer
     /// ([`Slabs::whole`]) except where the exact transform split a field too large for one.
     pub nearest: Slabs,

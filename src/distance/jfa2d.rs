@@ -100,7 +100,7 @@ pub struct Field2d {
     pub width: u32,
     /// Height in texels.
     pub height: u32,
-    /// `R32Uint`: nearest seed per texel, packed ([`unpack_seed`]). For a signed field, the
+    /// `R32Uint`: nearest seed per texel, packed ([`unpack_seed`](super::unpack_seed)). For a signed field, the
     /// nearest *inside* texel.
     pub nearest: wgpu::Texture,
     /// `R32Uint`: for a signed field, the nearest *outside* texel.

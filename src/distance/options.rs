@@ -72,7 +72,7 @@ pub enum Method {
     /// Sub-voxel seeds within a band: three line passes (x, y, z), each scanning ±band voxels
     /// (`point_lines.wgsl`); the cost grows with the band. Needs [`Options3d::band`], and each
     /// point within one voxel of the voxel its key is held in (as surface seeds and
-    /// [`Distance3d::encode_points`] without homes place them). Integer seeds take
+    /// [`Distance3d::encode_points`](super::Distance3d::encode_points) without homes place them). Integer seeds take
     /// [`Method::Exact`]. Not exact for sub-voxel seeds: it can keep one up to about half a voxel
     /// farther than the nearest, where JFA+2 keeps one at most a tenth farther (`tests/distance_3d_points.rs` measures
     /// it against brute force and JFA+2).
@@ -91,7 +91,7 @@ impl Method {
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
-/// What [`Distance3d`] computes.
+/// What [`Distance3d`](super::Distance3d) computes.
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Options3d {
     /// Exact (default), JFA or the line passes.

@@ -21,7 +21,7 @@ pub struct PointSeeds {
 }
 
 /// Upload a CPU volume (`x` fastest, then `y`, then `z`; one byte per voxel) as an `R8Unorm`
-/// 3D texture. Non-zero bytes are marked under [`Inside::Mask`]. Sides up to
+/// 3D texture. Non-zero bytes are marked under [`Inside::Mask`](super::Inside::Mask). Sides up to
 /// [`MAX_SIDE_EXACT_3D`] (and the device's 3D textures): the method checks its own range when it
 /// runs.
 pub fn upload_volume(

@@ -1,5 +1,5 @@
 //! Metaball voxels: a voxel set (centres and scales) splatted into a density grid, iso-surface
-//! seeds, a signed distance field by JFA, and a raymarched surface (see [`render`]).
+//! seeds, a signed distance field by JFA, and a raymarched surface (see [`Raymarcher`]).
 //!
 //! ```no_run
 //! # fn f(ctx: &fieldkit::gpu::Context) -> Result<(), fieldkit::Error> {

@@ -354,7 +354,7 @@ impl Mesh {
         self.local(grid)
     }
 
-    /// [`Mesh::to_grid`] for a grid that is never held densely ([`Voxelizer::encode_fragments`]
+    /// [`Mesh::to_grid`] for a grid that is never held densely ([`Voxelizer::encode_fragments`](super::Voxelizer::encode_fragments)
     /// and the octree): sides up to [`MAX_SPARSE_SIDE`], any number of voxels.
     pub fn to_sparse_grid(&self, grid: &Grid) -> Result<GridMesh, Error> {
         check_sides(grid, MAX_SPARSE_SIDE)?;

@@ -1,0 +1,420 @@
+//! Pipelines made from a stage's interface table, and the override constants that specialise
+//! them.
+
+use super::*;
+
+use super::groups::bind_groups;
+
+/// The runtime checks fieldkit's own stages are built with: wgpu's defaults (indices clamped to
+/// their arrays; buffers and images left to the driver's robust access) less *loop bounding*,
+/// the 64-bit counter naga adds to every loop so that a loop that never ends cannot be assumed
+/// unreachable by the driver's compiler. Every loop in `shaders/` ends by construction (a
+/// counted `for`, a step count, a stack that only shrinks, a walk along an array's
+/// bounds), and the counter costs a register pair, a compare and a carry per iteration: measured
+/// on the H100 (`cargo xtask bench distance --exact-only`, clocks held, one command running a
+/// build with it and one without), the exact transform took 0.709 ms without it against 0.873
+/// with it at 256³, 6.01 against 6.77 at 512³ and 2.55 against 2.95 at 8192², and the
+/// workgroup column pass went from 47 to 41 registers. Entries whose [`EntryInfo::loops_end`]
+/// is false (a shader no one has checked) keep every check.
+pub const fn stage_checks() -> wgpu::ShaderRuntimeChecks {
+    let mut checks = wgpu::ShaderRuntimeChecks::checked();
+    checks.force_loop_bounding = false;
+    checks
+}
+
+/// The shader module of `info`, from its compiled-in source, or from `relinked` (hot reload:
+/// every runtime check kept, as no one has read its loops).
+pub(crate) fn module(
+    device: &wgpu::Device,
+    info: &EntryInfo,
+    relinked: Option<&str>,
+) -> wgpu::ShaderModule {
+    let desc = wgpu::ShaderModuleDescriptor {
+        label: Some(info.path),
+        source: wgpu::ShaderSource::Wgsl(relinked.unwrap_or(info.source).into()),
+    };
+    if !info.loops_end || relinked.is_some() {
+        return device.create_shader_module(desc);
+    }
+    // SAFETY: `stage_checks` keeps every bounds check and turns off only loop bounding, whose
+    // contract is that the shader has no infinite loop: `loops_end` says each loop of this one
+    // ends (fieldkit's own stages, see `stage_checks`).
+    unsafe { device.create_shader_module_trusted(desc, stage_checks()) }
+}
+
+/// A stage's `override` constants as one typed value: the generated `Overrides` struct of
+/// every stage that declares overrides implements it, so pipelines are specialised through
+/// typed fields and a renamed override is a compile error, never a string that no longer
+/// matches.
+pub trait Constants: Copy + PartialEq + Send + Sync + 'static {
+    /// `(name, value)` for each override to set, as pipelines take them.
+    fn constants(&self) -> Vec<(&'static str, f64)>;
+}
+
+/// Compute pipelines of one entry point `E` specialised by override values `O` (its stage's
+/// generated `Overrides`), each made on first use and kept, keyed on the typed value (for
+/// overrides that take many values, such as a workgroup array's length).
+// Used by the techniques' stages.
+#[cfg_attr(not(feature = "techniques"), allow(dead_code))]
+pub(crate) struct Variants<E, O> {
+    made: std::sync::Mutex<Vec<(VariantKey<O>, std::sync::Arc<ComputePipeline<E>>)>>,
+}
+
+/// The typed overrides and the zero-fill choice.
+pub(crate) type VariantKey<O> = (O, bool);
+
+impl<E, O> Default for Variants<E, O> {
+    fn default() -> Self {
+        Self {
+            made: Default::default(),
+        }
+    }
+}
+
+// Used by the techniques' stages.
+#[cfg_attr(not(feature = "techniques"), allow(dead_code))]
+impl<E: Entry, O: Constants> Variants<E, O> {
+    /// The pipeline for `overrides`, made now if it is the first use.
+    pub(crate) fn get(
+        &self,
+        device: &wgpu::Device,
+        overrides: &O,
+        zero_initialize_workgroup_memory: bool,
+    ) -> Result<std::sync::Arc<ComputePipeline<E>>, Error> {
+        let key = (*overrides, zero_initialize_workgroup_memory);
+        let mut made = self.made.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((_, p)) = made.iter().find(|(k, _)| *k == key) {
+            return Ok(p.clone());
+        }
+        let p = std::sync::Arc::new(ComputePipeline::with_options(
+            device,
+            &overrides.constants(),
+            zero_initialize_workgroup_memory,
+        )?);
+        made.push((key, p.clone()));
+        Ok(p)
+    }
+}
+
+/// A compute pipeline for a generated entry point `E`.
+pub struct ComputePipeline<E> {
+    /// The wgpu pipeline.
+    pub pipeline: wgpu::ComputePipeline,
+    layouts: Vec<(u32, wgpu::BindGroupLayout)>,
+    _e: PhantomData<E>,
+}
+
+impl<E: Entry> ComputePipeline<E> {
+    /// Create the pipeline; wgpu validation errors come back as [`Error::Wgpu`].
+    pub fn new(device: &wgpu::Device) -> Result<Self, Error> {
+        Self::with_overrides(device, &[])
+    }
+
+    /// The pipeline specialised by `overrides` held in `slot`, made there on first use.
+    // Used by the techniques' stages.
+    #[cfg_attr(not(feature = "techniques"), allow(dead_code))]
+    pub(crate) fn cached<'a>(
+        slot: &'a std::sync::OnceLock<Self>,
+        device: &wgpu::Device,
+        overrides: &[(&str, f64)],
+    ) -> Result<&'a Self, Error> {
+        if slot.get().is_none() {
+            let _ = slot.set(Self::with_overrides(device, overrides)?);
+        }
+        Ok(slot.get().expect("set above"))
+    }
+
+    /// Create the pipeline with the stage's typed `override` values (its generated
+    /// `Overrides`).
+    pub fn with_constants(
+        device: &wgpu::Device,
+        overrides: &impl Constants,
+    ) -> Result<Self, Error> {
+        Self::with_overrides(device, &overrides.constants())
+    }
+
+    /// Create the pipeline with values for the shader's `override` constants, by name
+    /// ([`Self::with_constants`] takes them typed).
+    pub fn with_overrides(device: &wgpu::Device, overrides: &[(&str, f64)]) -> Result<Self, Error> {
+        Self::with_options(device, overrides, true)
+    }
+
+    /// [`Self::with_overrides`], choosing whether wgpu zero-fills workgroup memory before the
+    /// shader runs (`false` only for shaders that write every workgroup cell before reading it).
+    pub fn with_options(
+        device: &wgpu::Device,
+        overrides: &[(&str, f64)],
+        zero_initialize_workgroup_memory: bool,
+    ) -> Result<Self, Error> {
+        Self::make(device, None, overrides, zero_initialize_workgroup_memory)
+    }
+
+    pub(crate) fn make(
+        device: &wgpu::Device,
+        relinked: Option<&str>,
+        overrides: &[(&str, f64)],
+        zero_initialize_workgroup_memory: bool,
+    ) -> Result<Self, Error> {
+        let info = E::INFO;
+        info.check_overrides(overrides)?;
+        info.check_features(device)?;
+        crate::gpu::scoped(device, info.stage, || {
+            let layouts = info.layouts(device);
+            let pipeline = build_compute(
+                device,
+                info,
+                relinked,
+                &layouts,
+                overrides,
+                zero_initialize_workgroup_memory,
+            );
+            Self {
+                pipeline,
+                layouts,
+                _e: PhantomData,
+            }
+        })
+    }
+
+    /// Check every resource against the shader's slots and make the bind groups.
+    pub fn bind(
+        &self,
+        device: &wgpu::Device,
+        resources: &E::Resources<'_>,
+    ) -> Result<Bound<E>, Error> {
+        bind_groups(device, &self.layouts, resources)
+    }
+
+    /// Record one dispatch of `groups` workgroups into `pass`.
+    pub fn dispatch(&self, pass: &mut wgpu::ComputePass<'_>, bound: &Bound<E>, groups: [u32; 3]) {
+        pass.set_pipeline(&self.pipeline);
+        bound.set_compute(pass);
+        pass.dispatch_workgroups(groups[0], groups[1], groups[2]);
+    }
+
+    /// Bind `resources` and record one dispatch of `groups` workgroups in a compute pass of its
+    /// own, timed under `name` when `rec` carries a profiler.
+    pub fn record(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl crate::gpu::Record,
+        resources: &E::Resources<'_>,
+        groups: [u32; 3],
+        name: &str,
+    ) -> Result<(), Error> {
+        let bound = self.bind(device, resources)?;
+        let mut rec = rec.recorder();
+        let mut pass = rec.compute_pass(E::INFO.stage, name);
+        self.dispatch(&mut pass, &bound, groups);
+        Ok(())
+    }
+
+    /// Workgroups needed to cover `extent` invocations on each axis.
+    pub fn groups_for(extent: [u32; 3]) -> [u32; 3] {
+        let ws = E::INFO.workgroup_size().unwrap_or([1, 1, 1]);
+        [
+            extent[0].div_ceil(ws[0]),
+            extent[1].div_ceil(ws[1]),
+            extent[2].div_ceil(ws[2]),
+        ]
+    }
+}
+
+/// How a render pipeline draws: the parts the shader cannot say.
+#[derive(Debug, Clone, Default)]
+pub struct RenderTargets<'a> {
+    /// One per fragment output, in location order.
+    pub color: &'a [Option<wgpu::ColorTargetState>],
+    /// Depth (and stencil) test and write, if the pass has a depth target.
+    pub depth_stencil: Option<wgpu::DepthStencilState>,
+    /// Topology, culling and polygon mode.
+    pub primitive: wgpu::PrimitiveState,
+    /// Sample count and mask.
+    pub multisample: wgpu::MultisampleState,
+}
+
+/// A render pipeline for a generated vertex + fragment entry pair `E`.
+pub struct RenderPipeline<E> {
+    /// The wgpu pipeline.
+    pub pipeline: wgpu::RenderPipeline,
+    layouts: Vec<(u32, wgpu::BindGroupLayout)>,
+    _e: PhantomData<E>,
+}
+
+impl<E: Entry> RenderPipeline<E> {
+    /// Create the pipeline; colour targets are checked against the fragment outputs first.
+    pub fn new(device: &wgpu::Device, targets: &RenderTargets<'_>) -> Result<Self, Error> {
+        Self::make(device, None, targets)
+    }
+
+    pub(crate) fn make(
+        device: &wgpu::Device,
+        relinked: Option<&str>,
+        targets: &RenderTargets<'_>,
+    ) -> Result<Self, Error> {
+        let info = E::INFO;
+        info.check_features(device)?;
+        let EntryKind::Render {
+            targets: outputs, ..
+        } = info.kind
+        else {
+            return Err(Error::Invalid {
+                stage: info.stage,
+                what: "not a render entry point".into(),
+            });
+        };
+        if targets.color.len() != outputs.len() {
+            return Err(Error::Invalid {
+                stage: info.stage,
+                what: format!(
+                    "{} colour targets given, the fragment shader writes {}",
+                    targets.color.len(),
+                    outputs.len()
+                ),
+            });
+        }
+        for (t, o) in targets.color.iter().zip(outputs) {
+            let Some(t) = t else { continue };
+            let class = match t.format.sample_type(None, None) {
+                Some(wgpu::TextureSampleType::Uint) => ScalarClass::Uint,
+                Some(wgpu::TextureSampleType::Sint) => ScalarClass::Sint,
+                _ => ScalarClass::Float,
+            };
+            if class != o.scalar {
+                return Err(Error::Invalid {
+                    stage: info.stage,
+                    what: format!(
+                        "target @location({}) has format {:?}, the shader writes {:?} values",
+                        o.location, t.format, o.scalar
+                    ),
+                });
+            }
+        }
+        crate::gpu::scoped(device, info.stage, || {
+            let layouts = info.layouts(device);
+            let pipeline = build_render(device, info, relinked, &layouts, targets);
+            Self {
+                pipeline,
+                layouts,
+                _e: PhantomData,
+            }
+        })
+    }
+
+    /// Check every resource against the shader's slots and make the bind groups.
+    pub fn bind(
+        &self,
+        device: &wgpu::Device,
+        resources: &E::Resources<'_>,
+    ) -> Result<Bound<E>, Error> {
+        bind_groups(device, &self.layouts, resources)
+    }
+}
+
+pub(crate) fn build_compute(
+    device: &wgpu::Device,
+    info: &EntryInfo,
+    relinked: Option<&str>,
+    layouts: &[(u32, wgpu::BindGroupLayout)],
+    overrides: &[(&str, f64)],
+    zero_initialize_workgroup_memory: bool,
+) -> wgpu::ComputePipeline {
+    let layout = info.pipeline_layout(device, layouts);
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(info.stage),
+        layout: Some(&layout),
+        module: &module(device, info, relinked),
+        entry_point: Some(info.entry_point),
+        compilation_options: wgpu::PipelineCompilationOptions {
+            constants: overrides,
+            zero_initialize_workgroup_memory,
+        },
+        cache: None,
+    })
+}
+
+/// Build a render pipeline; `info.kind` must be `Render` (checked by the callers).
+pub(crate) fn build_render(
+    device: &wgpu::Device,
+    info: &EntryInfo,
+    relinked: Option<&str>,
+    layouts: &[(u32, wgpu::BindGroupLayout)],
+    targets: &RenderTargets<'_>,
+) -> wgpu::RenderPipeline {
+    let EntryKind::Render {
+        vertex,
+        vertex_buffers,
+        ..
+    } = info.kind
+    else {
+        unreachable!("callers pass render entries")
+    };
+    let layout = info.pipeline_layout(device, layouts);
+    let module = module(device, info, relinked);
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(info.stage),
+        layout: Some(&layout),
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some(vertex),
+            compilation_options: Default::default(),
+            buffers: vertex_buffers,
+        },
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some(info.entry_point),
+            compilation_options: Default::default(),
+            targets: targets.color,
+        }),
+        primitive: targets.primitive,
+        depth_stencil: targets.depth_stencil.clone(),
+        multisample: targets.multisample,
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
+/// Create the pipeline for any entry point from its table alone (used to prove every generated
+/// pipeline is accepted by wgpu, on the noop backend in tests). Colour targets get a format of
+/// each output's scalar class, and a depth target.
+pub fn create_any(device: &wgpu::Device, info: &'static EntryInfo) -> Result<(), Error> {
+    info.check_features(device)?;
+    crate::gpu::scoped(device, info.stage, || {
+        let layouts = info.layouts(device);
+        match info.kind {
+            EntryKind::Compute { .. } => {
+                let _ = build_compute(device, info, None, &layouts, &[], true);
+            }
+            EntryKind::Render { targets, .. } => {
+                let color: Vec<_> = targets
+                    .iter()
+                    .map(|t| {
+                        Some(wgpu::ColorTargetState::from(match t.scalar {
+                            ScalarClass::Float => wgpu::TextureFormat::Rgba8Unorm,
+                            ScalarClass::Uint => wgpu::TextureFormat::R32Uint,
+                            ScalarClass::Sint => wgpu::TextureFormat::R32Sint,
+                        }))
+                    })
+                    .collect();
+                let _ = build_render(
+                    device,
+                    info,
+                    None,
+                    &layouts,
+                    &RenderTargets {
+                        color: &color,
+                        // A depth target, so stages that write `frag_depth` are accepted too.
+                        depth_stencil: Some(wgpu::DepthStencilState {
+                            format: wgpu::TextureFormat::Depth32Float,
+                            depth_write_enabled: Some(true),
+                            depth_compare: Some(wgpu::CompareFunction::Always),
+                            stencil: Default::default(),
+                            bias: Default::default(),
+                        }),
+                        ..Default::default()
+                    },
+                );
+            }
+        }
+    })
+}
