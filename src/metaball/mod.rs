@@ -19,11 +19,11 @@
 #![doc = include_str!("../../docs/metaball.md")]
 
 pub mod cpu;
+mod cubes;
 mod render;
 
-pub use render::{
-    CubeStyle, Cubes, Direct, Filter, Marched, Material, Output, RaymarchSettings, Raymarcher,
-};
+pub use cubes::{CubeStyle, Cubes};
+pub use render::{Direct, Filter, Marched, Material, Output, RaymarchSettings, Raymarcher};
 
 use glam::{Vec3, Vec4};
 

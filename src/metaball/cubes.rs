@@ -1,0 +1,216 @@
+//! The debug view of a metaball set: one instanced cube per voxel, into the caller's colour and
+//! depth targets.
+
+use glam::{Mat4, Vec4};
+
+use super::Instances;
+use crate::bind::{RenderPipeline, RenderTargets};
+use crate::error::Error;
+use crate::gpu::uniform_buffer as uniform;
+use crate::shaders::metaball::voxel_cubes;
+use crate::view::{box_visible, depth_state, load_pass};
+
+/// How the debug cubes are drawn.
+///
+/// [`CubeStyle::default`] draws solid cubes that hide each other; [`CubeStyle::seed`] is the
+/// source's debug draw (both faces, depth test `Always`, no depth write).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(default))]
+pub struct CubeStyle {
+    /// Faces culled; `None` (the source's choice) draws both sides.
+    pub cull: Option<wgpu::Face>,
+    /// `Always` (the source's choice, to be sure the cubes show) or a normal test (`Less`).
+    pub depth_compare: wgpu::CompareFunction,
+    /// Write depth (default); the source reads depth only, so its cubes never hide the scene
+    /// drawn after them.
+    pub depth_write: bool,
+    /// Skip the draw when the voxel set's box is outside the view's frustum (default on, as the
+    /// source culls each volume).
+    pub frustum_cull: bool,
+    /// Edges only: with the adapter's `POLYGON_MODE_LINE` the cubes' triangles are drawn as
+    /// lines; without it, 12 edges per cube as a line list (no diagonals, same picture).
+    pub wireframe: bool,
+    /// Cube colour (RGBA, linear).
+    pub colour: Vec4,
+    /// Cube edge × the voxel's scale; off draws every cube one edge long.
+    pub scale_size: bool,
+}
+
+impl Default for CubeStyle {
+    fn default() -> Self {
+        Self {
+            cull: Some(wgpu::Face::Back),
+            depth_compare: wgpu::CompareFunction::Less,
+            depth_write: true,
+            frustum_cull: true,
+            wireframe: false,
+            colour: Vec4::new(0.35, 0.7, 0.45, 1.0),
+            scale_size: true,
+        }
+    }
+}
+
+impl CubeStyle {
+    /// The source's debug cubes: both faces, depth compare `Always`, depth read only.
+    pub fn seed() -> Self {
+        Self {
+            cull: None,
+            depth_compare: wgpu::CompareFunction::Always,
+            depth_write: false,
+            ..Self::default()
+        }
+    }
+}
+
+/// Instanced debug cubes: one draw of 36 vertices (24 for line-list edges) × the voxel count.
+pub struct Cubes {
+    pipeline: RenderPipeline<voxel_cubes::fs_main::Entry>,
+    style: CubeStyle,
+    /// Edges drawn as a line list (wireframe without `POLYGON_MODE_LINE`).
+    edges: bool,
+}
+
+impl Cubes {
+    /// The cube pipeline for the given targets; `style` fixes culling, depth and wireframe.
+    pub fn new(
+        device: &wgpu::Device,
+        colour: wgpu::TextureFormat,
+        depth: wgpu::TextureFormat,
+        style: CubeStyle,
+    ) -> Result<Self, Error> {
+        let polygon_lines = device
+            .features()
+            .contains(wgpu::Features::POLYGON_MODE_LINE);
+        Self::with_edges(
+            device,
+            colour,
+            depth,
+            style,
+            style.wireframe && !polygon_lines,
+        )
+    }
+
+    /// [`Cubes::new`], with the wireframe as line-list edges even where the device has
+    /// `POLYGON_MODE_LINE` (`edges`, for tests and to draw the same picture everywhere).
+    pub fn with_edges(
+        device: &wgpu::Device,
+        colour: wgpu::TextureFormat,
+        depth: wgpu::TextureFormat,
+        style: CubeStyle,
+        edges: bool,
+    ) -> Result<Self, Error> {
+        let stage = voxel_cubes::STAGE;
+        if edges && !style.wireframe {
+            return Err(Error::Invalid {
+                stage,
+                what: "line-list edges draw the wireframe; set style.wireframe".into(),
+            });
+        }
+        if !style.colour.is_finite() {
+            return Err(Error::Invalid {
+                stage,
+                what: format!("colour {} must be finite", style.colour),
+            });
+        }
+        let mut depth_stencil = depth_state(stage, depth, style.depth_compare)?;
+        depth_stencil.depth_write_enabled = Some(style.depth_write);
+        let pipeline = RenderPipeline::new(
+            device,
+            &RenderTargets {
+                color: &[Some(colour.into())],
+                depth_stencil: Some(depth_stencil),
+                primitive: wgpu::PrimitiveState {
+                    topology: if edges {
+                        wgpu::PrimitiveTopology::LineList
+                    } else {
+                        wgpu::PrimitiveTopology::TriangleList
+                    },
+                    // Lines have no faces to cull.
+                    cull_mode: if edges { None } else { style.cull },
+                    polygon_mode: if style.wireframe && !edges {
+                        wgpu::PolygonMode::Line
+                    } else {
+                        wgpu::PolygonMode::Fill
+                    },
+                    ..Default::default()
+                },
+                ..Default::default()
+            },
+        )?;
+        Ok(Self {
+            pipeline,
+            style,
+            edges,
+        })
+    }
+
+    /// Whether the wireframe is drawn as line-list edges.
+    pub fn edges(&self) -> bool {
+        self.edges
+    }
+
+    /// Draw every instance as a cube of edge `edge` (× scale) into `colour` and `depth`,
+    /// loading what they hold. Returns false, drawing nothing, for an empty set or, with
+    /// `frustum_cull`, when the set's box is outside the frustum of `view_proj`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        colour: &wgpu::TextureView,
+        depth: &wgpu::TextureView,
+        instances: &Instances,
+        edge: f32,
+        local_to_world: Mat4,
+        view_proj: Mat4,
+    ) -> Result<bool, Error> {
+        let stage = voxel_cubes::STAGE;
+        if !(edge.is_finite() && edge > 0.0 && local_to_world.is_finite() && view_proj.is_finite())
+        {
+            return Err(Error::Invalid {
+                stage,
+                what: format!("edge ({edge}) must be finite and positive, matrices finite"),
+            });
+        }
+        if instances.count == 0 {
+            return Ok(false);
+        }
+        if self.style.frustum_cull {
+            let size = edge
+                * if self.style.scale_size {
+                    instances.max_scale
+                } else {
+                    1.0
+                };
+            let [lo, hi] = instances.centres;
+            if !box_visible(view_proj, local_to_world, lo - 0.5 * size, hi + 0.5 * size) {
+                return Ok(false);
+            }
+        }
+        let params = uniform(
+            device,
+            "cube params",
+            &voxel_cubes::CubeParams {
+                view_proj,
+                local_to_world,
+                colour: self.style.colour,
+                edge,
+                scale_size: self.style.scale_size as u32,
+                edges: self.edges as u32,
+            },
+        );
+        let bound = self.pipeline.bind(
+            device,
+            &voxel_cubes::fs_main::Resources {
+                params: (&params).into(),
+            },
+        )?;
+        let mut pass = load_pass(encoder, stage, colour, depth);
+        pass.set_pipeline(&self.pipeline.pipeline);
+        bound.set_render(&mut pass);
+        pass.set_vertex_buffer(0, instances.buffer.slice(..instances.count as u64 * 16));
+        pass.draw(0..if self.edges { 24 } else { 36 }, 0..instances.count);
+        Ok(true)
+    }
+}
