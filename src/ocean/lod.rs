@@ -16,7 +16,8 @@ use std::collections::HashMap;
 use glam::{DMat4, DVec2, DVec3, DVec4};
 
 use super::Waves;
-use super::render::{DETAIL_OCTAVES, Look, MAX_PATCH_QUADS, OceanCamera, Patch};
+use super::look::{DETAIL_OCTAVES, Look};
+use super::render::{MAX_PATCH_QUADS, OceanCamera, Patch};
 use crate::error::Error;
 
 /// Most quadtree nodes [`select`] visits (split, culled or drawn) before it refuses the settings

@@ -26,15 +26,17 @@
 #![doc = include_str!("../../docs/ocean.md")]
 
 mod lod;
+mod look;
 mod render;
 
 pub use lod::{
     LodSettings, MAX_LOD_NODES, Selection, WriteupLayout, height_error, patch_triangles, select,
     writeup_patches,
 };
+pub use look::{DETAIL_OCTAVES, Layer, Look, detail_texels};
 pub use render::{
-    ALL_SKIRTS, DETAIL_OCTAVES, DETAIL_SIZE, DepthMode, Layer, Look, MAX_LAYERS, MAX_PATCH_QUADS,
-    OceanCamera, OceanRenderer, Output, PATCH_QUADS, Patch, detail_texels, patch_indices,
+    ALL_SKIRTS, DETAIL_SIZE, DepthMode, MAX_LAYERS, MAX_PATCH_QUADS, OceanCamera, OceanRenderer,
+    Output, PATCH_QUADS, Patch, patch_indices,
 };
 
 use std::sync::{Arc, RwLock};
