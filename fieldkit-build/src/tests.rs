@@ -1,0 +1,413 @@
+//! The toolchain's tests: discovery, linking, validation errors at their original spans,
+//! codegen for a user crate, the density march template.
+
+use super::*;
+
+/// A throwaway crate root with a shared helper and the given stage files.
+fn tree(stages: &[(&str, &str)]) -> PathBuf {
+    let n = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .unwrap()
+        .as_nanos();
+    let root = std::env::temp_dir().join(format!("fieldkit-toolchain-{}-{n}", std::process::id()));
+    std::fs::create_dir_all(root.join("shaders/shared")).unwrap();
+    std::fs::create_dir_all(root.join("shaders/room")).unwrap();
+    std::fs::write(root.join("shaders/shared/util.wesl"), "// Helpers.\n\nfn twice(x: u32) -> u32 {\n    return x * 2u;\n}\n\nfn broken_helper() -> f32 {\n    return 1u;\n}\n").unwrap();
+    for (name, src) in stages {
+        std::fs::write(root.join(format!("shaders/room/{name}.wgsl")), src).unwrap();
+    }
+    root
+}
+
+/// A density march links the module's `density` into the template and generates its three
+/// entry points; a bad name, a clash with a stage file and a density of the wrong type are
+/// errors that say which.
+#[test]
+fn density_marches_link_the_users_function() {
+    let root = tree(&[]);
+    std::fs::write(
+        root.join("shaders/shared/fog.wesl"),
+        "// A fog.\nfn density(p: vec3<f32>) -> f32 {\n    return exp(-p.y);\n}\n",
+    )
+    .unwrap();
+    std::fs::write(
+        root.join("shaders/shared/wrong.wesl"),
+        "// Not a density.\nfn density(p: vec3<f32>) -> vec2<f32> {\n    return p.xy;\n}\n",
+    )
+    .unwrap();
+    // The template's own helper module is broken on purpose in `tree`: unused, unlinked.
+    let out = root.join("shaders.rs");
+    Builder::new("shaders")
+        .deny_lints()
+        .density_march("room::fog_march", "shared::fog")
+        .build_to(&root, &out)
+        .expect("builds");
+    let code = std::fs::read_to_string(&out).unwrap();
+    for entry in [
+        "pub mod march",
+        "pub mod bricks",
+        "pub mod bake",
+        "fog_density",
+    ] {
+        assert!(code.contains(entry), "{entry} missing");
+    }
+    let err = |stage: &str, module: &str| {
+        Builder::new("shaders")
+            .density_march(stage, module)
+            .build_to(&root, &out)
+            .unwrap_err()
+            .join("\n")
+    };
+    assert!(err("fog_march", "shared::fog").contains("name the stage room::name"));
+    assert!(err("shared::fog_march", "shared::fog").contains("name the stage room::name"));
+    assert!(err("room::fog_march", "shared/fog").contains("name the density module"));
+    std::fs::write(
+        root.join("shaders/room/taken.wgsl"),
+        "// Taken.\n@compute @workgroup_size(1)\nfn main() {}\n",
+    )
+    .unwrap();
+    assert!(err("room::taken", "shared::fog").contains("already a stage file"));
+    let wrong = err("room::wrong_march", "shared::wrong");
+    assert!(
+        wrong.contains("density march `room::wrong_march` over the module `shared::wrong`"),
+        "{wrong}"
+    );
+    let missing = err("room::none_march", "shared::nothing");
+    assert!(missing.contains("none_march"), "{missing}");
+}
+
+/// One build writes one file: the linked WGSL of a stage importing from two packages (the
+/// crate's own `shared::fog` and `fieldkit::…`, whose modules WESL appends in hash-map
+/// order) is the same on every build — CI once rebuilt a snapshotted file in the other
+/// order. Hash-map seeds change per map, so a dozen builds in one process see both orders.
+#[test]
+fn linking_is_deterministic() {
+    let root = tree(&[]);
+    std::fs::write(
+        root.join("shaders/shared/fog.wesl"),
+        "// A fog.\nfn density(p: vec3<f32>) -> f32 {\n    return exp(-p.y);\n}\n",
+    )
+    .unwrap();
+    let out = root.join("shaders.rs");
+    let build = || {
+        Builder::new("shaders")
+            .density_march("room::fog_march", "shared::fog")
+            .build_to(&root, &out)
+            .expect("builds");
+        std::fs::read_to_string(&out).unwrap()
+    };
+    let first = build();
+    for run in 1..12 {
+        assert!(
+            build() == first,
+            "build {run} wrote another file than build 0"
+        );
+    }
+}
+
+/// `Builder` writes bindings that reach fieldkit's runtime through the path asked for, and
+/// leaves an unchanged file untouched; a broken stage is an error at its file:line:col.
+#[test]
+fn builder_writes_bindings_for_a_user_crate() {
+    let root = tree(&[(
+        "double",
+        "// Doubles each value.\nimport package::shared::util::twice;\n@group(0) @binding(0) var<storage, read_write> v: array<u32>;\n@compute @workgroup_size(64)\nfn main(@builtin(global_invocation_id) id: vec3<u32>) {\n    v[id.x] = twice(v[id.x]);\n}\n",
+    )]);
+    let out = root.join("shaders.rs");
+    Builder::new("shaders")
+        .build_to(&root, &out)
+        .expect("builds");
+    let code = std::fs::read_to_string(&out).unwrap();
+    assert!(
+        code.starts_with("// @generated by fieldkit-build"),
+        "{code}"
+    );
+    assert!(
+        code.contains("::fieldkit::bind::StorageReadWrite"),
+        "{code}"
+    );
+    assert!(!code.contains("crate::bind"), "{code}");
+    let before = std::fs::metadata(&out).unwrap().modified().unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(20));
+    Builder::new("shaders").build_to(&root, &out).unwrap();
+    assert_eq!(std::fs::metadata(&out).unwrap().modified().unwrap(), before);
+    // A stage without its header comment: a lint finding, an error only when denied.
+    std::fs::write(
+        root.join("shaders/room/bare.wgsl"),
+        "@group(0) @binding(0) var<storage, read_write> w: array<u32>;\n@compute @workgroup_size(1)\nfn main() {\n    w[0] = 1u;\n}\n",
+    )
+    .unwrap();
+    Builder::new("shaders")
+        .build_to(&root, &out)
+        .expect("lints warn by default");
+    let errors = Builder::new("shaders")
+        .deny_lints()
+        .build_to(&root, &out)
+        .unwrap_err();
+    assert!(
+        errors.len() == 1 && errors[0].starts_with("shaders/room/bare.wgsl:1:1: [header-comment]"),
+        "{errors:#?}"
+    );
+    std::fs::remove_file(root.join("shaders/room/bare.wgsl")).unwrap();
+    // A dynamic offset on a named buffer binding; names that match none are errors.
+    Builder::new("shaders")
+        .dynamic_offset("room::double::v")
+        .build_to(&root, &out)
+        .expect("builds");
+    assert!(
+        std::fs::read_to_string(&out)
+            .unwrap()
+            .contains("has_dynamic_offset: true")
+    );
+    let errors = Builder::new("shaders")
+        .dynamic_offset("room::nope::v")
+        .dynamic_offset("room::double::missing")
+        .build_to(&root, &out)
+        .unwrap_err();
+    assert!(
+        errors.len() == 2
+            && errors[0].contains("no stage `room::nope`")
+            && errors[1].contains("no uniform or storage buffer binding `missing`"),
+        "{errors:#?}"
+    );
+    let own = Builder::new("shaders").runtime("crate");
+    own.build_to(&root, &out).unwrap();
+    assert!(
+        std::fs::read_to_string(&out)
+            .unwrap()
+            .contains("crate::bind::StorageReadWrite")
+    );
+    std::fs::write(
+        root.join("shaders/room/double.wgsl"),
+        "// Broken.\n@compute @workgroup_size(64)\nfn main() {\n    let x: f32 = 1u;\n}\n",
+    )
+    .unwrap();
+    let errors = Builder::new("shaders").build_to(&root, &out).unwrap_err();
+    assert!(
+        errors[0].contains("shaders/room/double.wgsl:4:"),
+        "{errors:#?}"
+    );
+    std::fs::remove_dir_all(&root).unwrap();
+}
+
+/// Bindings the generated code cannot hold are build errors at their declaration, not
+/// silently left out (an unsized binding array, an external texture); a file that imports
+/// nothing reaches naga even where the pinned WESL parser refuses it (`binding_array`).
+#[test]
+fn unsupported_bindings_are_errors_naming_the_binding() {
+    let root = tree(&[
+        (
+            "a_array",
+            "// Binding array without a length, no imports.\nenable wgpu_binding_array;\n@group(0) @binding(0) var textures: binding_array<texture_2d<f32>>;\n@group(0) @binding(1) var<storage, read_write> out: array<f32>;\n@compute @workgroup_size(1)\nfn main() {\n    out[0] = textureLoad(textures[0], vec2<i32>(0, 0), 0).x;\n}\n",
+        ),
+        (
+            "b_external",
+            "// External texture.\n@group(0) @binding(0) var<storage, read_write> out: array<f32>;\n@group(0) @binding(1) var video: texture_external;\n@compute @workgroup_size(1)\nfn main() {\n    out[0] = textureLoad(video, vec2<u32>(0u, 0u)).x;\n}\n",
+        ),
+        (
+            "c_fine",
+            "// A valid stage.\n@compute @workgroup_size(1)\nfn main() {}\n",
+        ),
+    ]);
+    let errors = build_all(&root).err().expect("unsupported bindings fail");
+    assert_eq!(errors.len(), 2, "{errors:#?}");
+    assert!(
+        errors[0].contains("shaders/room/a_array.wgsl:3:")
+            && errors[0].contains("binding `textures` (@group(0) @binding(0))")
+            && errors[0].contains("needs a length"),
+        "{}",
+        errors[0]
+    );
+    assert!(
+        errors[1].contains("shaders/room/b_external.wgsl:3:")
+            && errors[1].contains("binding `video` (@group(0) @binding(1))")
+            && errors[1].contains("external textures"),
+        "{}",
+        errors[1]
+    );
+    std::fs::remove_dir_all(&root).ok();
+}
+
+/// With `check_portability`, a stage that does not translate to a backend language is a
+/// `[portability]` finding (here naga's HLSL writer panics on a binding array of buffers):
+/// a warning, or an error with `deny_lints`.
+#[cfg(feature = "portability")]
+#[test]
+fn portability_findings_come_from_the_build() {
+    let root = tree(&[(
+        "blocks",
+        "// A binding array of storage buffers.\nenable wgpu_binding_array;\nstruct Block {\n    values: array<u32>,\n}\n@group(0) @binding(0) var<storage, read_write> blocks: binding_array<Block, 2>;\n@compute @workgroup_size(1)\nfn main() {\n    blocks[1].values[0] = blocks[0].values[0];\n}\n",
+    )]);
+    let out = root.join("shaders.rs");
+    Builder::new("shaders")
+        .check_portability()
+        .build_to(&root, &out)
+        .expect("portability findings warn by default");
+    let errors = Builder::new("shaders")
+        .check_portability()
+        .deny_lints()
+        .build_to(&root, &out)
+        .unwrap_err();
+    assert!(
+        errors.iter().any(|e| e
+            .starts_with("shaders/room/blocks.wgsl:1:1: [portability] cannot translate to HLSL")),
+        "{errors:#?}"
+    );
+    std::fs::remove_dir_all(&root).ok();
+}
+
+/// A vertex input the generated vertex struct cannot hold (f16) is a build error naming it,
+/// not an attribute silently left out of the struct and its stride.
+#[test]
+fn unmapped_vertex_inputs_are_errors() {
+    let root = tree(&[(
+        "half",
+        "// Half-float vertex input.\nenable f16;\n@vertex\nfn vs(@location(0) p: vec3<f32>, @location(1) h: vec2<f16>) -> @builtin(position) vec4<f32> {\n    return vec4<f32>(p + vec3<f32>(vec2<f32>(h), 0.0), 1.0);\n}\n",
+    )]);
+    let errors = build_all(&root).err().expect("an f16 vertex input fails");
+    assert!(
+        errors.len() == 1
+            && errors[0].contains("shaders/room/half.wgsl:4:")
+            && errors[0].contains("vertex input `h` (@location(1))")
+            && errors[0].contains("vec2<f16>"),
+        "{errors:#?}"
+    );
+    std::fs::remove_dir_all(&root).ok();
+}
+
+/// Binding arrays (sampled and storage textures, samplers, storage buffers), in a file that
+/// imports (WESL links it though its parser reserves the word), reach the
+/// generated code with their counts and array resource types, and the features they need
+/// are found by validation: non-uniform indexing only where an index is non-uniform; an
+/// immediate block gives its size and `IMMEDIATES`.
+#[test]
+fn binding_arrays_and_immediates_are_bound_with_the_features_they_need() {
+    let root = tree(&[
+        (
+            "a_arrays",
+            "// Binding arrays, indexed by constants and by a non-uniform value, in a file that imports.\nimport package::shared::util::twice;\nenable wgpu_binding_array;\nstruct Block {\n    values: array<u32>,\n}\n@group(0) @binding(0) var textures: binding_array<texture_2d<f32>, 4>;\n@group(0) @binding(1) var samplers: binding_array<sampler, 2>;\n@group(0) @binding(2) var<storage, read_write> blocks: binding_array<Block, 3>;\n@group(0) @binding(3) var<storage, read_write> out: array<f32>;\n@compute @workgroup_size(8)\nfn main(@builtin(local_invocation_index) i: u32) {\n    let t = textureSampleLevel(textures[i % 4u], samplers[1], vec2<f32>(0.5), 0.0).x;\n    out[i] = t + f32(twice(blocks[2].values[i]));\n}\n",
+        ),
+        (
+            "b_immediates",
+            "// Immediates.\nstruct Push {\n    scale: f32,\n    offset: vec2<f32>,\n}\nvar<immediate> push: Push;\n@group(0) @binding(0) var<storage, read_write> out: array<f32>;\n@compute @workgroup_size(8)\nfn main(@builtin(local_invocation_index) i: u32) {\n    out[i] = push.scale * f32(i) + push.offset.x;\n}\n",
+        ),
+    ]);
+    let out = root.join("shaders.rs");
+    let code = Builder::new("shaders")
+        .build_to(&root, &out)
+        .map(|p| std::fs::read_to_string(p).unwrap())
+        .unwrap_or_else(|e| panic!("{e:#?}"));
+    for want in [
+        "pub textures: ::fieldkit::bind::Textures<'a>",
+        "pub samplers: ::fieldkit::bind::Samplers<'a>",
+        "pub blocks: ::fieldkit::bind::Buffers<'a, Block>",
+        "count: core::num::NonZeroU32::new(4)",
+        "count: core::num::NonZeroU32::new(3)",
+        "wgpu::Features::TEXTURE_BINDING_ARRAY",
+        "wgpu::Features::STORAGE_RESOURCE_BINDING_ARRAY",
+        "wgpu::Features::SAMPLED_TEXTURE_AND_STORAGE_BUFFER_ARRAY_NON_UNIFORM_INDEXING",
+        "pub const IMMEDIATE_SIZE: u32 = 16;",
+        "wgpu::Features::IMMEDIATES",
+        "immediate_size: 16",
+        "pub struct Push",
+    ] {
+        assert!(code.contains(want), "missing {want:?} in\n{code}");
+    }
+    // Only the textures are indexed non-uniformly (the samplers and buffers by constants),
+    // and no storage texture is bound.
+    let arrays =
+        &code[code.find("pub mod a_arrays").unwrap()..code.find("pub mod b_immediates").unwrap()];
+    assert!(
+        !arrays.contains("wgpu::Features::STORAGE_TEXTURE_ARRAY_NON_UNIFORM_INDEXING")
+            && !arrays.contains("wgpu::Features::IMMEDIATES"),
+        "{arrays}"
+    );
+    std::fs::remove_dir_all(&root).ok();
+}
+
+/// fieldkit's helpers are a package every link has (`import fieldkit::…`), beside the
+/// folder's own; a module the package lacks is an error naming it, at the stage's file.
+#[test]
+fn stages_import_fieldkits_package() {
+    let root = tree(&[
+        (
+            "a_seeds",
+            "// Packs seeds with fieldkit's helper.\nimport fieldkit::seed::{NO_SEED, pack_seed2};\nimport package::shared::util::twice;\n@group(0) @binding(0) var<storage, read_write> out: array<u32>;\n@compute @workgroup_size(64)\nfn main(@builtin(global_invocation_id) id: vec3<u32>) {\n    out[id.x] = select(NO_SEED, pack_seed2(vec2<u32>(id.x, twice(id.x))), id.x > 0u);\n}\n",
+        ),
+        (
+            "b_missing",
+            "// Imports a module the package does not have.\nimport fieldkit::nowhere::thing;\n@compute @workgroup_size(1)\nfn main() { _ = thing(); }\n",
+        ),
+    ]);
+    let errors = build_all(&root).err().expect("the missing module fails");
+    assert_eq!(errors.len(), 1, "{errors:#?}");
+    assert!(
+        errors[0].contains("shaders/room/b_missing.wgsl") && errors[0].contains("nowhere"),
+        "{}",
+        errors[0]
+    );
+    std::fs::remove_file(root.join("shaders/room/b_missing.wgsl")).unwrap();
+    let stages = build_all(&root).expect("the package import links");
+    let linked = &stages[0].source;
+    // The helper's body came from fieldkit's seed.wesl (the 16/16 packing).
+    assert!(linked.contains("<< 16u"), "{linked}");
+    // A struct imported from the package is named as in the package, as one imported from
+    // the folder's own helpers is.
+    std::fs::write(
+        root.join("shaders/room/c_waves.wgsl"),
+        "// Reads waves in fieldkit's layout.\nimport fieldkit::gerstner::GerstnerWave;\n@group(0) @binding(0) var<uniform> wave: GerstnerWave;\n@group(0) @binding(1) var<storage, read_write> out: array<f32>;\n@compute @workgroup_size(1)\nfn main() {\n    out[0] = wave.amplitude;\n}\n",
+    )
+    .unwrap();
+    let out = root.join("shaders.rs");
+    Builder::new("shaders")
+        .build_to(&root, &out)
+        .expect("builds");
+    let code = std::fs::read_to_string(&out).unwrap();
+    assert!(code.contains("pub struct GerstnerWave"), "{code}");
+    std::fs::remove_dir_all(root).ok();
+}
+
+#[test]
+fn every_broken_stage_is_reported_at_its_original_line_and_column() {
+    let root = tree(&[
+        // Type error in the stage itself, on line 6, after an import that shifts linked text.
+        (
+            "a_type",
+            "// Stage with a type error.\nimport package::shared::util::twice;\n@group(0) @binding(0) var<storage, read_write> out: array<u32>;\n@compute @workgroup_size(1)\nfn main() {\n    out[0] = twice(1.5);\n}\n",
+        ),
+        // Parse error on line 3.
+        (
+            "b_parse",
+            "// Stage with a syntax error.\n@compute @workgroup_size(1)\nfn main() { let x = ; }\n",
+        ),
+        (
+            "c_fine",
+            "// A valid stage.\n@compute @workgroup_size(1)\nfn main() {}\n",
+        ),
+        // Error inside an imported helper: reported in the helper's file.
+        (
+            "d_helper",
+            "// Uses a broken helper.\nimport package::shared::util::broken_helper;\n@compute @workgroup_size(1)\nfn main() { _ = broken_helper(); }\n",
+        ),
+    ]);
+    let errors = build_all(&root).err().expect("broken stages fail");
+    assert_eq!(errors.len(), 3, "{errors:#?}");
+    assert!(
+        errors[0].contains("shaders/room/a_type.wgsl:6:"),
+        "{}",
+        errors[0]
+    );
+    assert!(
+        errors[1].contains("shaders/room/b_parse.wgsl:3:"),
+        "{}",
+        errors[1]
+    );
+    assert!(
+        errors[2].contains("shaders/shared/util.wesl:7:1")
+            && errors[2].contains("8 │     return 1u;"),
+        "{}",
+        errors[2]
+    );
+    eprintln!("{}", errors.join("\n"));
+    std::fs::remove_dir_all(root).ok();
+}
