@@ -867,7 +867,7 @@ fn reflect_entry(
         .iter()
         .any(|(h, v)| v.space == AddressSpace::Immediate && !fi[h].is_empty());
     let needs = needs_of(
-        &bindings,
+        bindings,
         &uses,
         workgroup_storage,
         ep.workgroup_size,

@@ -135,7 +135,7 @@ pub(crate) fn check_buffer(
             b.buffer.usage()
         ));
     }
-    if b.offset % align as u64 != 0 {
+    if !b.offset.is_multiple_of(align as u64) {
         return Err(format!("offset {} is not a multiple of {align}", b.offset));
     }
     let size = b

@@ -57,8 +57,11 @@ pub trait Constants: Copy + PartialEq + Send + Sync + 'static {
 // Used by the techniques' stages.
 #[cfg_attr(not(feature = "techniques"), allow(dead_code))]
 pub(crate) struct Variants<E, O> {
-    made: std::sync::Mutex<Vec<(VariantKey<O>, std::sync::Arc<ComputePipeline<E>>)>>,
+    made: std::sync::Mutex<Vec<Made<E, O>>>,
 }
+
+/// A pipeline made for a key.
+type Made<E, O> = (VariantKey<O>, std::sync::Arc<ComputePipeline<E>>);
 
 /// The typed overrides and the zero-fill choice.
 pub(crate) type VariantKey<O> = (O, bool);

@@ -471,8 +471,6 @@ fn storage_buffer(device: &wgpu::Device, label: &str, bytes: u64) -> wgpu::Buffe
     })
 }
 
-/// A volume the stages write (storage) and later stages read (sampled), readable back.
-
 fn max_scale(voxels: &[Vec4]) -> f32 {
     voxels.iter().map(|v| v.w).fold(0.0, f32::max)
 }

@@ -289,9 +289,6 @@ fn run_walk<E: crate::bind::Entry>(
     }
 }
 
-/// A 3D texture of `size` that stages sample and write (`TEXTURE_BINDING`, `STORAGE_BINDING`)
-/// and tests read back (`COPY_SRC`).
-
 /// Triangles per dispatch: at most 65535 workgroups of 64.
 const PER_DISPATCH: u32 = 65535 * 64;
 

@@ -2,7 +2,7 @@
 //! each pass is measured against (`cargo xtask bench distance`).
 
 use super::Exact;
-use super::plan::{ColumnsIo, Span, SweepPart};
+use super::plan::{ColumnsIo, Pass, Span, SweepPart};
 use super::rows::row_words_bytes;
 use crate::distance::check::{check_column_axis, check_len, voxels};
 use crate::error::Error;
@@ -102,9 +102,9 @@ impl Exact {
             span: Span::whole(size),
             sweep: None,
         };
-        let others = size[3 - axis as usize];
+        let pass = Pass::along(size, axis);
         let (params, overrides, groups) =
-            self.global_columns_setup(device, &io, size, axis, others, false, None, SweepPart::No);
+            self.global_columns_setup(device, &io, pass, None, SweepPart::No);
         // The stack is unread (IN_STACK is off): a placeholder, not `no_source` (bound read-only
         // beside it: the layout binds the stack read-write).
         match &view {
@@ -165,7 +165,7 @@ impl Exact {
             return Ok(None);
         };
         let span = Span::whole(size);
-        let (params, overrides) = tile.bind(device, size, axis, false, None, &span, false);
+        let (params, overrides) = tile.bind(device, Pass::along(size, axis), None, &span, false);
         let groups = tile.groups(&span, size[3 - axis as usize]);
         match &view {
             None => self.tile_copy.get(device, &overrides, false)?.record(

@@ -2,6 +2,7 @@
 //! answers.
 
 use super::Exact;
+use super::plan::Pass;
 use crate::distance::buffers::view;
 use crate::distance::check::check_size_2d_exact;
 use crate::distance::resolve::{Fuse, resolve_params};
@@ -95,18 +96,13 @@ impl Exact {
                 "rows (x)",
             )?;
             if h > 1 {
-                self.encode_columns(
-                    device,
-                    rec,
-                    true,
-                    &nearest,
-                    stack.as_ref(),
+                let pass = Pass {
                     size,
-                    1,
-                    1,
-                    fuse,
-                    None,
-                )?;
+                    axis: 1,
+                    others: 1,
+                    pack_2d: true,
+                };
+                self.encode_columns(device, rec, &nearest, stack.as_ref(), pass, fuse, None)?;
             }
             Ok(nearest)
         };

@@ -4,7 +4,7 @@
 use super::Exact;
 use super::fuse::Resolve;
 use super::plan::{
-    BAND_CHOICES, ColumnsIo, SWEEP_BANDS, SWEEP_RING, SweepPart, bands_for, columns_placement,
+    BAND_CHOICES, ColumnsIo, Pass, SWEEP_BANDS, SWEEP_RING, SweepPart, bands_for, columns_placement,
 };
 use crate::distance::packing::packing_of;
 use crate::distance::resolve::Fuse;
@@ -15,18 +15,15 @@ use crate::shaders::distance::edt_columns;
 impl Exact {
     /// One column pass in global memory (`edt_columns.wgsl`) over the columns `io.span` names ×
     /// `others`, resolving into `fuse` where given.
-    #[allow(clippy::too_many_arguments)]
     pub(crate) fn encode_global_columns(
         &self,
         device: &wgpu::Device,
         rec: &mut impl Record,
-        pack_2d: bool,
         io: ColumnsIo,
-        size: [u32; 3],
-        axis: u32,
-        others: u32,
+        pass: Pass,
         fuse: Option<Fuse>,
     ) -> Result<(), Error> {
+        let axis = pass.axis;
         let (nearest, stack, slab) = (io.nearest, io.stack, io.slab);
         let source = io.source.unwrap_or(&self.no_source);
         let words = io.words.unwrap_or(&self.no_source);
@@ -39,16 +36,8 @@ impl Exact {
             _ => (&[SweepPart::No], &self.no_swept),
         };
         for &part in parts {
-            let (params, overrides, groups) = self.global_columns_setup(
-                device,
-                &io,
-                size,
-                axis,
-                others,
-                pack_2d,
-                fuse.as_ref(),
-                part,
-            );
+            let (params, overrides, groups) =
+                self.global_columns_setup(device, &io, pass, fuse.as_ref(), part);
             let name = match (axis, &fuse, io.words.is_some(), part) {
                 (1, _, _, SweepPart::Sweep) => "columns (y) sweep + resolve",
                 (1, _, _, SweepPart::Rest) => "columns (y) + resolve (rest)",
@@ -98,18 +87,20 @@ impl Exact {
     /// The parameters, override constants and workgroup count of a global-memory column pass
     /// along `axis` over `io.span`'s columns × `others`, reading and writing as `io` says and
     /// resolving as `fuse` says.
-    #[allow(clippy::too_many_arguments)]
     pub(crate) fn global_columns_setup(
         &self,
         device: &wgpu::Device,
         io: &ColumnsIo,
-        size: [u32; 3],
-        axis: u32,
-        others: u32,
-        pack_2d: bool,
+        pass: Pass,
         fuse: Option<&Fuse>,
         part: SweepPart,
     ) -> (wgpu::Buffer, edt_columns::Overrides, [u32; 3]) {
+        let Pass {
+            size,
+            axis,
+            others,
+            pack_2d,
+        } = pass;
         let span = &io.span;
         let width = span.x_end - span.first[0];
         // A pass that sweeps takes the sweep's bands (its ring's layout, and the workgroups

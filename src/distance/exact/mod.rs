@@ -28,8 +28,8 @@ use crate::error::Error;
 use crate::gpu::Record;
 use crate::shaders::distance::{edt_columns, edt_rows, edt_tile};
 use plan::{
-    BAND_CHOICES, ColumnPasses, ColumnsIo, MAX_TILE_COLUMNS, MIN_TILE_COLUMNS, SWEEP_BANDS, Span,
-    TileGeometry, TileIo,
+    BAND_CHOICES, ColumnPasses, ColumnsIo, MAX_TILE_COLUMNS, MIN_TILE_COLUMNS, Pass, SWEEP_BANDS,
+    Span, TileGeometry, TileIo,
 };
 
 /// Scratch the exact transform keeps from call to call, each the largest made so far: a new one
@@ -316,7 +316,8 @@ impl Exact {
                 None => (&nearest, None),
             };
             let io = TileIo::in_place(out, size);
-            self.encode_from_words(device, rec, &words, io, size, 1, tile, size, scratch)?;
+            let pass = Pass::along(size, 1);
+            self.encode_from_words(device, rec, &words, io, pass, tile, size, scratch)?;
             (nearest, 2)
         } else {
             (self.encode_rows(device, rec, marks)?, 1)
@@ -334,18 +335,9 @@ impl Exact {
         for (k, &axis) in axes.iter().enumerate() {
             let last = k + 1 == axes.len();
             let f = if last { fuse.take() } else { None };
-            self.encode_columns(
-                device,
-                rec,
-                false,
-                &nearest,
-                stack.as_ref(),
-                size,
-                axis,
-                size[3 - axis as usize],
-                f,
-                sweep.as_ref().filter(|_| last),
-            )?;
+            let pass = Pass::along(size, axis);
+            let sweep = sweep.as_ref().filter(|_| last);
+            self.encode_columns(device, rec, &nearest, stack.as_ref(), pass, f, sweep)?;
         }
         if let Some(f) = fuse {
             // A single row (no column pass ran): resolve on its own.
@@ -370,48 +362,29 @@ impl Exact {
         for (what, b) in [("nearest", nearest), ("stack", stack)] {
             check_len(edt_columns::STAGE, what, b, voxels(size) * 4, size)?;
         }
-        let others = if axis == 1 { size[2] } else { size[1] };
-        self.encode_columns(
-            device,
-            rec,
-            false,
-            nearest,
-            Some(stack),
-            size,
-            axis,
-            others,
-            None,
-            None,
-        )
+        let pass = Pass::along(size, axis);
+        self.encode_columns(device, rec, nearest, Some(stack), pass, None, None)
     }
 
+    /// The column pass `pass` in place on `nearest`, in workgroup or global memory as
+    /// [`Self::tile_for`] says (with `stack`, or the kept one, for its envelopes there),
+    /// resolving into `fuse` where given, sweeping where `sweep` is given.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn encode_columns(
         &self,
         device: &wgpu::Device,
         rec: &mut impl Record,
-        pack_2d: bool,
         nearest: &wgpu::Buffer,
         stack: Option<&wgpu::Buffer>,
-        size: [u32; 3],
-        axis: u32,
-        others: u32,
+        pass: Pass,
         fuse: Option<Fuse>,
         sweep: Option<&wgpu::Buffer>,
     ) -> Result<(), Error> {
-        let tile = self.tile_for(device, size, axis, pack_2d)?;
+        let size = pass.size;
+        let tile = self.tile_for(device, size, pass.axis, pass.pack_2d)?;
         if let Some(tile) = tile {
-            return self.encode_tile_columns(
-                device,
-                rec,
-                pack_2d,
-                TileIo::in_place(nearest, size),
-                size,
-                axis,
-                others,
-                tile,
-                fuse,
-            );
+            let io = TileIo::in_place(nearest, size);
+            return self.encode_tile_columns(device, rec, io, pass, tile, fuse);
         }
         let owned;
         let stack = match stack {
@@ -430,7 +403,7 @@ impl Exact {
             span: Span::whole(size),
             sweep,
         };
-        self.encode_global_columns(device, rec, pack_2d, io, size, axis, others, fuse)
+        self.encode_global_columns(device, rec, io, pass, fuse)
     }
 
     /// The sweep's record of the workgroups it answered (`edt_columns.wgsl`'s `swept`), one

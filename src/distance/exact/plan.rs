@@ -221,17 +221,20 @@ impl TileGeometry {
 
     /// The pass's parameters and override constants, for the columns `span` names, reading
     /// a buffer apart from the one it writes where `source_apart`.
-    #[allow(clippy::too_many_arguments)]
     pub(crate) fn bind(
         &self,
         device: &wgpu::Device,
-        size: [u32; 3],
-        axis: u32,
-        pack_2d: bool,
+        pass: Pass,
         fuse: Option<&Fuse>,
         span: &Span,
         source_apart: bool,
     ) -> (wgpu::Buffer, edt_tile::Overrides) {
+        let Pass {
+            size,
+            axis,
+            pack_2d,
+            ..
+        } = pass;
         let params = uniform(
             device,
             "edt tile params",
@@ -285,6 +288,29 @@ pub(crate) struct Span {
     pub(crate) y_after_z: bool,
     pub(crate) src: edt_tile::Placement,
     pub(crate) dst: edt_tile::Placement,
+}
+
+/// One column pass: the columns along `axis` (1: y, 2: z; y of a 2D field where `pack_2d`) of a
+/// field of `size`, over `others` rows of workgroups (the field's third axis, or a slab's
+/// planes).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Pass {
+    pub(crate) size: [u32; 3],
+    pub(crate) axis: u32,
+    pub(crate) others: u32,
+    pub(crate) pack_2d: bool,
+}
+
+impl Pass {
+    /// Every column of a 3D field of `size` along `axis`.
+    pub(crate) fn along(size: [u32; 3], axis: u32) -> Self {
+        Self {
+            size,
+            axis,
+            others: size[3 - axis as usize],
+            pack_2d: false,
+        }
+    }
 }
 
 /// A buffer holding the voxels from `origin` on, `row` elements per row, `plane` per plane.

@@ -2,7 +2,7 @@
 //! field, or as words of marks that the y pass reads in its place.
 
 use super::Exact;
-use super::plan::{ColumnsIo, TileGeometry, TileIo, rows_per_group};
+use super::plan::{ColumnsIo, Pass, TileGeometry, TileIo, rows_per_group};
 use crate::distance::buffers::{kept_buffer, view};
 use crate::distance::check::{check_bytes, check_len, check_size_3d, exact_volume_size, voxels};
 use crate::distance::options::Marks;
@@ -152,7 +152,16 @@ impl Exact {
         }
         let tile = self.tile_for(device, size, 1, false)?;
         let io = TileIo::in_place(nearest, size);
-        self.encode_from_words(device, rec, words, io, size, 1, tile, size, None)
+        self.encode_from_words(
+            device,
+            rec,
+            words,
+            io,
+            Pass::along(size, 1),
+            tile,
+            size,
+            None,
+        )
     }
 
     /// The column pass along `axis` (1: y, 2: z) that makes its sites from the row words, into
@@ -166,18 +175,16 @@ impl Exact {
         rec: &mut impl Record,
         words: &wgpu::Buffer,
         io: TileIo,
-        size: [u32; 3],
-        axis: u32,
+        pass: Pass,
         tile: Option<TileGeometry>,
         stack_size: [u32; 3],
         scratch: Option<&wgpu::Buffer>,
     ) -> Result<(), Error> {
         match tile {
-            Some(tile) => self.encode_tile_columns_words(device, rec, words, io, size, axis, tile),
+            Some(tile) => self.encode_tile_columns_words(device, rec, words, io, pass, tile),
             None => self.encode_global_columns(
                 device,
                 rec,
-                false,
                 ColumnsIo {
                     source: None,
                     words: Some(words),
@@ -190,9 +197,7 @@ impl Exact {
                     span: io.span,
                     sweep: None,
                 },
-                size,
-                axis,
-                size[3 - axis as usize],
+                pass,
                 None,
             ),
         }

@@ -2,7 +2,7 @@
 //! apart between the z and the y pass, slabs of planes bound one at a time.
 
 use super::Exact;
-use super::plan::{ColumnsIo, SWEEP_BANDS, Span, TileGeometry, TileIo, placement};
+use super::plan::{ColumnsIo, Pass, SWEEP_BANDS, Span, TileGeometry, TileIo, placement};
 use crate::distance::STAGE_3D as STAGE;
 use crate::distance::Slabs;
 use crate::distance::buffers::{kept_buffer, new_field_buffer};
@@ -191,7 +191,8 @@ impl Exact {
                 slab: 0,
                 span,
             };
-            self.encode_from_words(device, rec, &words, io, size, 2, split.z, part_size, None)?;
+            let pass = Pass::along(size, 2);
+            self.encode_from_words(device, rec, &words, io, pass, split.z, part_size, None)?;
             for (k, &(z0, z_end)) in slabs.iter().enumerate() {
                 let io = TileIo {
                     source: Some(&part),
@@ -205,8 +206,13 @@ impl Exact {
                         dst: placement([0, 0, z0], w, w * h),
                     },
                 };
-                let planes = z_end - z0;
-                self.encode_slab_y(device, rec, io, size, planes, &split, fuse, swept.as_ref())?;
+                let pass = Pass {
+                    size,
+                    axis: 1,
+                    others: z_end - z0,
+                    pack_2d: false,
+                };
+                self.encode_slab_y(device, rec, io, pass, &split, fuse, swept.as_ref())?;
             }
         }
         Ok(Slabs {
@@ -253,18 +259,15 @@ impl Exact {
         device: &wgpu::Device,
         rec: &mut impl Record,
         io: TileIo,
-        size: [u32; 3],
-        planes: u32,
+        pass: Pass,
         split: &Split,
         fuse: Option<Fuse>,
         swept: Option<&wgpu::Buffer>,
     ) -> Result<(), Error> {
         match split.y {
-            Some(tile) => {
-                self.encode_tile_columns(device, rec, false, io, size, 1, planes, tile, fuse)
-            }
+            Some(tile) => self.encode_tile_columns(device, rec, io, pass, tile, fuse),
             None => {
-                let part_size = [split.part_width, size[1], size[2]];
+                let part_size = [split.part_width, pass.size[1], pass.size[2]];
                 let io = ColumnsIo {
                     source: io.source,
                     words: None,
@@ -274,7 +277,7 @@ impl Exact {
                     span: io.span,
                     sweep: swept,
                 };
-                self.encode_global_columns(device, rec, false, io, size, 1, planes, fuse)
+                self.encode_global_columns(device, rec, io, pass, fuse)
             }
         }
     }

@@ -2,7 +2,7 @@
 
 use super::Exact;
 use super::fuse::Resolve;
-use super::plan::{TileGeometry, TileIo};
+use super::plan::{Pass, TileGeometry, TileIo};
 use crate::distance::resolve::Fuse;
 use crate::error::Error;
 use crate::gpu::Record;
@@ -10,27 +10,22 @@ use crate::shaders::distance::edt_tile;
 
 impl Exact {
     /// A column pass in workgroup memory (`edt_tile.wgsl`), tiles laid out as `tile` says.
-    #[allow(clippy::too_many_arguments)]
     pub(crate) fn encode_tile_columns(
         &self,
         device: &wgpu::Device,
         rec: &mut impl Record,
-        pack_2d: bool,
         io: TileIo,
-        size: [u32; 3],
-        axis: u32,
-        others: u32,
+        pass: Pass,
         tile: TileGeometry,
         fuse: Option<Fuse>,
     ) -> Result<(), Error> {
         let apart = io.source.is_some();
-        let (params, overrides) =
-            tile.bind(device, size, axis, pack_2d, fuse.as_ref(), &io.span, apart);
-        let groups = tile.groups(&io.span, others);
+        let (params, overrides) = tile.bind(device, pass, fuse.as_ref(), &io.span, apart);
+        let groups = tile.groups(&io.span, pass.others);
         let nearest = io.nearest.into();
         let source = io.source.unwrap_or(&self.no_source).into();
         let slab = io.slab;
-        let name = match (axis, &fuse) {
+        let name = match (pass.axis, &fuse) {
             (1, None) => "columns (y, workgroup)",
             (1, Some(_)) => "columns (y, workgroup) + resolve",
             (_, None) => "columns (z, workgroup)",
@@ -69,19 +64,17 @@ impl Exact {
 
     /// The column pass along `axis` from the row words, writing where `io` says (its `source`
     /// is not read).
-    #[allow(clippy::too_many_arguments)]
     pub(crate) fn encode_tile_columns_words(
         &self,
         device: &wgpu::Device,
         rec: &mut impl Record,
         words: &wgpu::Buffer,
         io: TileIo,
-        size: [u32; 3],
-        axis: u32,
+        pass: Pass,
         tile: TileGeometry,
     ) -> Result<(), Error> {
-        let (params, overrides) = tile.bind(device, size, axis, false, None, &io.span, false);
-        let others = if axis == 1 { size[2] } else { size[1] };
+        let (params, overrides) = tile.bind(device, pass, None, &io.span, false);
+        let (axis, others) = (pass.axis, pass.others);
         self.tile_columns_words
             .get(device, &overrides, false)?
             .record(
