@@ -4,7 +4,7 @@
 mod common;
 
 // The gallery example's scenes and test pictures (the example is the one place they live).
-#[path = "../examples/gallery.rs"]
+#[path = "../examples/gallery/main.rs"]
 #[allow(dead_code)]
 mod gallery;
 

@@ -414,7 +414,7 @@ fn soak(frames: u32, size: &str, scene: Option<&str>, mesh: Option<&str>) -> Exi
     }
 }
 
-/// The gallery is an example (`examples/gallery.rs`); this runs it in release mode.
+/// The gallery is an example (`examples/gallery/`); this runs it in release mode.
 fn gallery(out: &Path) -> ExitCode {
     let status =
         std::process::Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
