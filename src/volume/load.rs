@@ -433,131 +433,12 @@ fn gunzip(_: &[u8]) -> Result<Vec<u8>, Error> {
 /// positions are typed errors.
 #[cfg(feature = "dicom")]
 pub fn dicom(files: &[&[u8]]) -> Result<VolumeData, Error> {
-    use dicom_dictionary_std::tags;
-    use dicom_object::DefaultDicomObject;
     if files.is_empty() {
         return Err(bad("a DICOM series needs at least one file".into()));
     }
-    struct Slice {
-        position: glam::DVec3,
-        rows: u32,
-        columns: u32,
-        spacing: [f64; 2],
-        normal: glam::DVec3,
-        values: Vec<f32>,
-    }
     let mut slices = Vec::with_capacity(files.len());
     for (i, bytes) in files.iter().enumerate() {
-        let fail = |what: String| bad(format!("DICOM file {i}: {what}"));
-        let obj = DefaultDicomObject::from_reader(*bytes).map_err(|e| fail(e.to_string()))?;
-        let syntax = obj
-            .meta()
-            .transfer_syntax()
-            .trim_end_matches('\0')
-            .to_string();
-        if !matches!(syntax.as_str(), "1.2.840.10008.1.2" | "1.2.840.10008.1.2.1") {
-            return Err(fail(format!(
-                "transfer syntax {syntax} is not read (uncompressed little endian only: convert \
-                 the series with dcmdjpeg or gdcmconv --raw)"
-            )));
-        }
-        let int = |tag, name: &str| -> Result<i64, Error> {
-            obj.element(tag)
-                .map_err(|e| fail(format!("{name}: {e}")))?
-                .to_int::<i64>()
-                .map_err(|e| fail(format!("{name}: {e}")))
-        };
-        let floats = |tag, name: &str| -> Result<Option<Vec<f64>>, Error> {
-            match obj
-                .element_opt(tag)
-                .map_err(|e| fail(format!("{name}: {e}")))?
-            {
-                None => Ok(None),
-                Some(e) => e
-                    .to_multi_float64()
-                    .map(Some)
-                    .map_err(|e| fail(format!("{name}: {e}"))),
-            }
-        };
-        let (rows, columns) = (int(tags::ROWS, "Rows")?, int(tags::COLUMNS, "Columns")?);
-        let bits = int(tags::BITS_ALLOCATED, "BitsAllocated")?;
-        let signed = int(tags::PIXEL_REPRESENTATION, "PixelRepresentation")? == 1;
-        let samples = obj
-            .element_opt(tags::SAMPLES_PER_PIXEL)
-            .ok()
-            .flatten()
-            .and_then(|e| e.to_int::<i64>().ok())
-            .unwrap_or(1);
-        let frames = obj
-            .element_opt(tags::NUMBER_OF_FRAMES)
-            .ok()
-            .flatten()
-            .and_then(|e| e.to_int::<i64>().ok())
-            .unwrap_or(1);
-        if samples != 1 || frames != 1 {
-            return Err(fail(format!(
-                "{samples} samples per pixel and {frames} frames: one greyscale frame per file \
-                 is read"
-            )));
-        }
-        if !(1..=65536).contains(&rows) || !(1..=65536).contains(&columns) {
-            return Err(fail(format!("{columns} × {rows} pixels")));
-        }
-        let scalar = match (bits, signed) {
-            (8, false) => Scalar::U8,
-            (8, true) => Scalar::I8,
-            (16, false) => Scalar::U16,
-            (16, true) => Scalar::I16,
-            _ => return Err(fail(format!("{bits}-bit pixels are not read (8 or 16)"))),
-        };
-        let spacing = floats(tags::PIXEL_SPACING, "PixelSpacing")?.unwrap_or(vec![1.0, 1.0]);
-        let position = floats(tags::IMAGE_POSITION_PATIENT, "ImagePositionPatient")?
-            .ok_or_else(|| fail("no ImagePositionPatient: the slices cannot be stacked".into()))?;
-        let orientation = floats(tags::IMAGE_ORIENTATION_PATIENT, "ImageOrientationPatient")?
-            .unwrap_or(vec![1.0, 0.0, 0.0, 0.0, 1.0, 0.0]);
-        if spacing.len() != 2 || position.len() != 3 || orientation.len() != 6 {
-            return Err(fail(
-                "PixelSpacing needs 2 values, ImagePositionPatient 3, ImageOrientationPatient 6"
-                    .into(),
-            ));
-        }
-        let slope = floats(tags::RESCALE_SLOPE, "RescaleSlope")?
-            .and_then(|v| v.first().copied())
-            .unwrap_or(1.0);
-        let intercept = floats(tags::RESCALE_INTERCEPT, "RescaleIntercept")?
-            .and_then(|v| v.first().copied())
-            .unwrap_or(0.0);
-        let pixels = obj
-            .element(tags::PIXEL_DATA)
-            .map_err(|e| fail(format!("PixelData: {e}")))?
-            .to_bytes()
-            .map_err(|e| fail(format!("PixelData: {e}")))?;
-        let raw = raw_with(
-            &pixels,
-            &RawLayout {
-                dims: [columns as u32, rows as u32, 1],
-                scalar,
-                big_endian: false,
-                spacing: Vec3::ONE,
-                origin: Vec3::ZERO,
-                skip: 0,
-            },
-        )
-        .map_err(|e| fail(e.to_string()))?;
-        let row = glam::DVec3::new(orientation[0], orientation[1], orientation[2]);
-        let column = glam::DVec3::new(orientation[3], orientation[4], orientation[5]);
-        slices.push(Slice {
-            position: glam::DVec3::new(position[0], position[1], position[2]),
-            rows: rows as u32,
-            columns: columns as u32,
-            spacing: [spacing[0], spacing[1]],
-            normal: row.cross(column).normalize_or(glam::DVec3::Z),
-            values: raw
-                .values
-                .iter()
-                .map(|&v| (v as f64 * slope + intercept) as f32)
-                .collect(),
-        });
+        slices.push(dicom_slice(i, bytes)?);
     }
     let first = &slices[0];
     let (rows, columns, spacing, normal) = (first.rows, first.columns, first.spacing, first.normal);
@@ -587,5 +468,133 @@ pub fn dicom(files: &[&[u8]]) -> Result<VolumeData, Error> {
         spacing: Vec3::new(spacing[1] as f32, spacing[0] as f32, dz as f32),
         origin,
         values: slices.into_iter().flat_map(|s| s.values).collect(),
+    })
+}
+
+/// One slice of a DICOM series: where it lies, its pixels' size and spacing, and its values.
+#[cfg(feature = "dicom")]
+struct Slice {
+    position: glam::DVec3,
+    rows: u32,
+    columns: u32,
+    spacing: [f64; 2],
+    normal: glam::DVec3,
+    values: Vec<f32>,
+}
+
+/// DICOM file `i` of a series read as one slice: uncompressed little endian, one greyscale
+/// frame, 8 or 16 bits, rescaled to its values.
+#[cfg(feature = "dicom")]
+fn dicom_slice(i: usize, bytes: &[u8]) -> Result<Slice, Error> {
+    use dicom_dictionary_std::tags;
+    use dicom_object::DefaultDicomObject;
+    let fail = |what: String| bad(format!("DICOM file {i}: {what}"));
+    let obj = DefaultDicomObject::from_reader(bytes).map_err(|e| fail(e.to_string()))?;
+    let syntax = obj
+        .meta()
+        .transfer_syntax()
+        .trim_end_matches('\0')
+        .to_string();
+    if !matches!(syntax.as_str(), "1.2.840.10008.1.2" | "1.2.840.10008.1.2.1") {
+        return Err(fail(format!(
+            "transfer syntax {syntax} is not read (uncompressed little endian only: convert \
+             the series with dcmdjpeg or gdcmconv --raw)"
+        )));
+    }
+    let int = |tag, name: &str| -> Result<i64, Error> {
+        obj.element(tag)
+            .map_err(|e| fail(format!("{name}: {e}")))?
+            .to_int::<i64>()
+            .map_err(|e| fail(format!("{name}: {e}")))
+    };
+    let floats = |tag, name: &str| -> Result<Option<Vec<f64>>, Error> {
+        match obj
+            .element_opt(tag)
+            .map_err(|e| fail(format!("{name}: {e}")))?
+        {
+            None => Ok(None),
+            Some(e) => e
+                .to_multi_float64()
+                .map(Some)
+                .map_err(|e| fail(format!("{name}: {e}"))),
+        }
+    };
+    let (rows, columns) = (int(tags::ROWS, "Rows")?, int(tags::COLUMNS, "Columns")?);
+    let bits = int(tags::BITS_ALLOCATED, "BitsAllocated")?;
+    let signed = int(tags::PIXEL_REPRESENTATION, "PixelRepresentation")? == 1;
+    let samples = obj
+        .element_opt(tags::SAMPLES_PER_PIXEL)
+        .ok()
+        .flatten()
+        .and_then(|e| e.to_int::<i64>().ok())
+        .unwrap_or(1);
+    let frames = obj
+        .element_opt(tags::NUMBER_OF_FRAMES)
+        .ok()
+        .flatten()
+        .and_then(|e| e.to_int::<i64>().ok())
+        .unwrap_or(1);
+    if samples != 1 || frames != 1 {
+        return Err(fail(format!(
+            "{samples} samples per pixel and {frames} frames: one greyscale frame per file \
+             is read"
+        )));
+    }
+    if !(1..=65536).contains(&rows) || !(1..=65536).contains(&columns) {
+        return Err(fail(format!("{columns} × {rows} pixels")));
+    }
+    let scalar = match (bits, signed) {
+        (8, false) => Scalar::U8,
+        (8, true) => Scalar::I8,
+        (16, false) => Scalar::U16,
+        (16, true) => Scalar::I16,
+        _ => return Err(fail(format!("{bits}-bit pixels are not read (8 or 16)"))),
+    };
+    let spacing = floats(tags::PIXEL_SPACING, "PixelSpacing")?.unwrap_or(vec![1.0, 1.0]);
+    let position = floats(tags::IMAGE_POSITION_PATIENT, "ImagePositionPatient")?
+        .ok_or_else(|| fail("no ImagePositionPatient: the slices cannot be stacked".into()))?;
+    let orientation = floats(tags::IMAGE_ORIENTATION_PATIENT, "ImageOrientationPatient")?
+        .unwrap_or(vec![1.0, 0.0, 0.0, 0.0, 1.0, 0.0]);
+    if spacing.len() != 2 || position.len() != 3 || orientation.len() != 6 {
+        return Err(fail(
+            "PixelSpacing needs 2 values, ImagePositionPatient 3, ImageOrientationPatient 6".into(),
+        ));
+    }
+    let slope = floats(tags::RESCALE_SLOPE, "RescaleSlope")?
+        .and_then(|v| v.first().copied())
+        .unwrap_or(1.0);
+    let intercept = floats(tags::RESCALE_INTERCEPT, "RescaleIntercept")?
+        .and_then(|v| v.first().copied())
+        .unwrap_or(0.0);
+    let pixels = obj
+        .element(tags::PIXEL_DATA)
+        .map_err(|e| fail(format!("PixelData: {e}")))?
+        .to_bytes()
+        .map_err(|e| fail(format!("PixelData: {e}")))?;
+    let raw = raw_with(
+        &pixels,
+        &RawLayout {
+            dims: [columns as u32, rows as u32, 1],
+            scalar,
+            big_endian: false,
+            spacing: Vec3::ONE,
+            origin: Vec3::ZERO,
+            skip: 0,
+        },
+    )
+    .map_err(|e| fail(e.to_string()))?;
+    let row = glam::DVec3::new(orientation[0], orientation[1], orientation[2]);
+    let column = glam::DVec3::new(orientation[3], orientation[4], orientation[5]);
+    Ok(Slice {
+        position: glam::DVec3::new(position[0], position[1], position[2]),
+        rows: rows as u32,
+        columns: columns as u32,
+        spacing: [spacing[0], spacing[1]],
+        normal: row.cross(column).normalize_or(glam::DVec3::Z),
+        values: raw
+            .values
+            .iter()
+            .map(|&v| (v as f64 * slope + intercept) as f32)
+            .collect(),
     })
 }
