@@ -229,14 +229,13 @@ fn outside(planes: &[DVec4; 6], lo: DVec3, hi: DVec3) -> bool {
     })
 }
 
-/// Choose patches for `camera` with a viewport `viewport_height` pixels high.
-pub fn select(
-    waves: &Waves,
-    look: &Look,
+/// What [`select`] refuses: a square, error bound, depth or patch size out of range, an
+/// empty viewport or a camera that is not finite.
+fn check_select(
     camera: &OceanCamera,
     viewport_height: u32,
     settings: &LodSettings,
-) -> Result<Selection, Error> {
+) -> Result<(), Error> {
     let s = settings;
     if !(s.centre.is_finite() && s.size.is_finite() && s.size > 0.0) {
         return Err(Error::Invalid {
@@ -262,6 +261,19 @@ pub fn select(
             what: "the viewport must be at least a pixel high and the camera finite".into(),
         });
     }
+    Ok(())
+}
+
+/// Choose patches for `camera` with a viewport `viewport_height` pixels high.
+pub fn select(
+    waves: &Waves,
+    look: &Look,
+    camera: &OceanCamera,
+    viewport_height: u32,
+    settings: &LodSettings,
+) -> Result<Selection, Error> {
+    check_select(camera, viewport_height, settings)?;
+    let s = settings;
     let eye = camera.eye();
     let proj = camera.proj.as_dmat4();
     let frustum = planes(proj * camera.view);

@@ -9,7 +9,7 @@ use crate::error::Error;
 use crate::gpu::AlbedoBinding;
 use crate::gpu::{Readback, Record, readback_buffer, uniform_buffer as uniform};
 use crate::shaders::octree::attributes::{self as stage, AttributeParams};
-use crate::voxelize::{Fragments, SLACK};
+use crate::voxelize::{FragmentAttributes, Fragments, SLACK};
 
 /// `u32` sums per occupied voxel (the shader's `SUMS`).
 const SUMS: u64 = 8;
@@ -78,40 +78,10 @@ impl OctreeBuilder {
         voxels: u32,
         albedo: Option<&wgpu::Texture>,
     ) -> Result<(), Error> {
-        let (Some(inputs), Some(brick_voxels), Some(cursors)) =
-            (&fragments.attributes, &octree.brick_voxels, &octree.cursor)
-        else {
-            return Err(Error::Invalid {
-                stage: stage::STAGE,
-                what: "attributes need fragments with attributes \
-                       (Voxelizer::encode_fragments_with_attributes) and the tree built from them"
-                    .into(),
-            });
-        };
+        let (inputs, brick_voxels, cursors) = attribute_inputs(octree, fragments)?;
         let albedo = AlbedoBinding::check(device, stage::STAGE, albedo, inputs.textured)?;
-        if fragments.size != octree.size {
-            return Err(Error::Invalid {
-                stage: stage::STAGE,
-                what: format!(
-                    "the fragments are of a {:?} grid, the octree of {:?}",
-                    fragments.size, octree.size
-                ),
-            });
-        }
-        if cursors.len() != fragments.parts.len()
-            || fragments.parts.iter().any(|p| p.triangle_ids.is_none())
-        {
-            return Err(Error::Invalid {
-                stage: stage::STAGE,
-                what: "the octree was built from other fragments than these".into(),
-            });
-        }
         let (batch, sums, attributes) = attribute_buffers(device, octree, voxels, brick_voxels)?;
-        let row = device.limits().max_compute_workgroups_per_dimension as u64;
-        let grid = |n: u64| {
-            let groups = n.div_ceil(64).max(1);
-            [groups.min(row) as u32, groups.div_ceil(row) as u32, 1]
-        };
+        let grid = |n: u64| groups(device, n);
         let params = |level, first_voxel, fragments| {
             uniform(
                 device,
@@ -176,6 +146,24 @@ impl OctreeBuilder {
                 stage::STAGE,
             )?;
         }
+        self.record_nodes(device, rec, octree, brick_voxels, &attributes, &params)?;
+        octree.attributes = Some(attributes);
+        Ok(())
+    }
+
+    /// The leaves' attributes gathered from their voxels, then each level above filtered
+    /// from its children, up to the root.
+    fn record_nodes(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        octree: &Octree,
+        brick_voxels: &wgpu::Buffer,
+        attributes: &OctreeAttributes,
+        params: &dyn Fn(u32, u32, u32) -> wgpu::Buffer,
+    ) -> Result<(), Error> {
+        let p = &self.attributes;
+        let grid = |n: u64| groups(device, n);
         let leaf = params(octree.leaf_level, 0, 0);
         // Each level's nodes are at most the pool's entries and the level's cells.
         let nodes = |l: u32| 8u64.saturating_pow(l).min(octree.capacity as u64);
@@ -209,9 +197,50 @@ impl OctreeBuilder {
                 stage::STAGE,
             )?;
         }
-        octree.attributes = Some(attributes);
         Ok(())
     }
+}
+
+/// What the attribute passes read of `octree` and `fragments`, or why they cannot run.
+fn attribute_inputs<'a>(
+    octree: &'a Octree,
+    fragments: &'a Fragments,
+) -> Result<(&'a FragmentAttributes, &'a wgpu::Buffer, &'a [wgpu::Buffer]), Error> {
+    let (Some(inputs), Some(brick_voxels), Some(cursors)) =
+        (&fragments.attributes, &octree.brick_voxels, &octree.cursor)
+    else {
+        return Err(Error::Invalid {
+            stage: stage::STAGE,
+            what: "attributes need fragments with attributes \
+                   (Voxelizer::encode_fragments_with_attributes) and the tree built from them"
+                .into(),
+        });
+    };
+    if fragments.size != octree.size {
+        return Err(Error::Invalid {
+            stage: stage::STAGE,
+            what: format!(
+                "the fragments are of a {:?} grid, the octree of {:?}",
+                fragments.size, octree.size
+            ),
+        });
+    }
+    if cursors.len() != fragments.parts.len()
+        || fragments.parts.iter().any(|p| p.triangle_ids.is_none())
+    {
+        return Err(Error::Invalid {
+            stage: stage::STAGE,
+            what: "the octree was built from other fragments than these".into(),
+        });
+    }
+    Ok((inputs, brick_voxels, cursors))
+}
+
+/// Workgroups of 64 threads for `n` items, rows of the device's most per dimension.
+fn groups(device: &wgpu::Device, n: u64) -> [u32; 3] {
+    let row = device.limits().max_compute_workgroups_per_dimension as u64;
+    let groups = n.div_ceil(64).max(1);
+    [groups.min(row) as u32, groups.div_ceil(row) as u32, 1]
 }
 
 /// The attribute passes' buffers: the sums of one batch of voxels (as many as one binding

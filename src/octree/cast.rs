@@ -185,60 +185,7 @@ impl OctreeCaster {
         view: &View,
         settings: &RenderSettings,
     ) -> Result<OctreeImage, Error> {
-        view.check(stage::STAGE)?;
-        if view.origin != [0, 0] {
-            return Err(Error::invalid(
-                stage::STAGE,
-                format!(
-                    "origin {:?}: the octree render draws whole targets (origin [0, 0])",
-                    view.origin
-                ),
-            ));
-        }
-        if grid.size != octree.size {
-            return Err(Error::invalid(
-                stage::STAGE,
-                format!(
-                    "the grid is {:?}, the octree was built in one of {:?}",
-                    grid.size, octree.size
-                ),
-            ));
-        }
-        if !(grid.origin.is_finite() && grid.voxel.is_finite() && grid.voxel > 0.0) {
-            return Err(Error::invalid(
-                stage::STAGE,
-                format!("the grid needs a finite origin and voxel > 0, got {grid:?}"),
-            ));
-        }
-        let (level, footprint) = match settings.lod {
-            Lod::Level(l) if l <= octree.log_side => (l, 1.0),
-            Lod::Level(l) => {
-                return Err(Error::Size {
-                    stage: stage::STAGE,
-                    what: "octree level (0 the root, log_side the voxels)",
-                    got: l as u64,
-                    max: octree.log_side as u64,
-                });
-            }
-            Lod::Footprint(p) if p.is_finite() && p > 0.0 => (LOD_BY_FOOTPRINT, p),
-            Lod::Footprint(p) => {
-                return Err(Error::invalid(
-                    stage::STAGE,
-                    format!("the footprint must be finite and > 0, got {p}"),
-                ));
-            }
-        };
-        if !(settings.colour.is_finite() && settings.light.is_finite())
-            || settings.light.length_squared() == 0.0
-        {
-            return Err(Error::invalid(
-                stage::STAGE,
-                format!(
-                    "colour {} and light {} must be finite, the light not zero",
-                    settings.colour, settings.light
-                ),
-            ));
-        }
+        let (level, footprint) = check_render(octree, grid, view, settings)?;
         let local_to_world = Mat4::from_translation(grid.origin.as_vec3())
             * Mat4::from_scale(Vec3::splat(grid.voxel as f32));
         let (near_z, far_z) = if view.reversed_z {
@@ -264,23 +211,18 @@ impl OctreeCaster {
                 ..self.params(octree, 0)
             },
         );
+        let size = [view.viewport[0], view.viewport[1], 1];
         let texture = |label, format| {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size: wgpu::Extent3d {
-                    width: view.viewport[0],
-                    height: view.viewport[1],
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
+            crate::gpu::texture(
+                device,
+                label,
+                size,
+                wgpu::TextureDimension::D2,
                 format,
-                usage: wgpu::TextureUsages::STORAGE_BINDING
+                wgpu::TextureUsages::STORAGE_BINDING
                     | wgpu::TextureUsages::TEXTURE_BINDING
                     | wgpu::TextureUsages::COPY_SRC,
-                view_formats: &[],
-            })
+            )
         };
         let image = OctreeImage {
             colour: texture("octree colour", wgpu::TextureFormat::Rgba8Unorm),
@@ -541,4 +483,69 @@ impl OctreeCaster {
         }
         Ok(casts)
     }
+}
+
+/// What [`OctreeCaster::encode_render`] refuses, else the level it renders at and the
+/// footprint (pixels a node may cover) it picks levels by.
+fn check_render(
+    octree: &Octree,
+    grid: &Grid,
+    view: &View,
+    settings: &RenderSettings,
+) -> Result<(u32, f32), Error> {
+    view.check(stage::STAGE)?;
+    if view.origin != [0, 0] {
+        return Err(Error::invalid(
+            stage::STAGE,
+            format!(
+                "origin {:?}: the octree render draws whole targets (origin [0, 0])",
+                view.origin
+            ),
+        ));
+    }
+    if grid.size != octree.size {
+        return Err(Error::invalid(
+            stage::STAGE,
+            format!(
+                "the grid is {:?}, the octree was built in one of {:?}",
+                grid.size, octree.size
+            ),
+        ));
+    }
+    if !(grid.origin.is_finite() && grid.voxel.is_finite() && grid.voxel > 0.0) {
+        return Err(Error::invalid(
+            stage::STAGE,
+            format!("the grid needs a finite origin and voxel > 0, got {grid:?}"),
+        ));
+    }
+    let (level, footprint) = match settings.lod {
+        Lod::Level(l) if l <= octree.log_side => (l, 1.0),
+        Lod::Level(l) => {
+            return Err(Error::Size {
+                stage: stage::STAGE,
+                what: "octree level (0 the root, log_side the voxels)",
+                got: l as u64,
+                max: octree.log_side as u64,
+            });
+        }
+        Lod::Footprint(p) if p.is_finite() && p > 0.0 => (LOD_BY_FOOTPRINT, p),
+        Lod::Footprint(p) => {
+            return Err(Error::invalid(
+                stage::STAGE,
+                format!("the footprint must be finite and > 0, got {p}"),
+            ));
+        }
+    };
+    if !(settings.colour.is_finite() && settings.light.is_finite())
+        || settings.light.length_squared() == 0.0
+    {
+        return Err(Error::invalid(
+            stage::STAGE,
+            format!(
+                "colour {} and light {} must be finite, the light not zero",
+                settings.colour, settings.light
+            ),
+        ));
+    }
+    Ok((level, footprint))
 }

@@ -84,6 +84,23 @@ impl PendingAttributes {
         readback_buffer(device, queue, &self.total)
             .then(|bytes| Ok(bytemuck::pod_read_unaligned(&bytes[..4])))
     }
+
+    /// The parameters of the attribute passes over triangles `first..first + count`.
+    fn params(&self, device: &wgpu::Device, first: u32, count: u32) -> wgpu::Buffer {
+        uniform(
+            device,
+            "voxel attribute params",
+            &AttributeParams {
+                grid: self.grid.size.into(),
+                first,
+                count,
+                slack: SLACK,
+                capacity: self.heavy.capacity,
+                words: self.words,
+                textured: self.albedo.is_some() as u32,
+            },
+        )
+    }
 }
 
 /// Averaged attributes of every occupied voxel.
@@ -508,20 +525,6 @@ impl Voxelizer {
                 max: limit,
             });
         }
-        let PendingAttributes {
-            surface,
-            grid,
-            triangles,
-            corners,
-            heavy,
-            word_offsets,
-            block_offsets,
-            words,
-            count,
-            total,
-            albedo,
-            ..
-        } = pending;
         let buffer = |label, size: u64, usage| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -541,38 +544,54 @@ impl Voxelizer {
             wgpu::BufferUsages::COPY_SRC,
         );
         rec.recorder().encoder.clear_buffer(&sums, 0, None);
-        let params_for = |first, n| {
-            uniform(
-                device,
-                "voxel attribute params",
-                &AttributeParams {
-                    grid: grid.size.into(),
-                    first,
-                    count: n,
-                    slack: SLACK,
-                    capacity: heavy.capacity,
-                    words,
-                    textured: albedo.is_some() as u32,
-                },
-            )
-        };
+        let params = pending.params(device, 0, pending.count);
+        self.record_sums(device, rec, &pending, &params, &sums)?;
+        self.record_averages(device, rec, &pending, &params, &sums, &voxels)?;
+        Ok(Attributes {
+            surface: pending.surface,
+            count: occupied,
+            occupied: pending.total,
+            voxels,
+        })
+    }
+
+    /// Every triangle's attributes added into the `sums` of the voxels it covers: light
+    /// triangles in batches, then the giant and heavy ones walked by blocks.
+    fn record_sums(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        pending: &PendingAttributes,
+        params: &wgpu::Buffer,
+        sums: &wgpu::Buffer,
+    ) -> Result<(), Error> {
+        let PendingAttributes {
+            surface,
+            triangles,
+            corners,
+            heavy,
+            word_offsets,
+            block_offsets,
+            count,
+            albedo,
+            ..
+        } = pending;
         let p = &self.attribute_pipelines;
         let (albedo_view, sampler) = p.albedo.bind(device, albedo.as_ref());
         let accumulate = ComputePipeline::cached(&p.accumulate, device, &[])?;
-        for (first, n) in batches(count) {
-            let params = params_for(first, n);
-
+        for (first, n) in batches(*count) {
+            let params = pending.params(device, first, n);
             accumulate.record(
                 device,
                 rec,
                 &stage::accumulate::Resources {
                     params: (&params).into(),
-                    triangles: (&triangles).into(),
-                    corners: (&corners).into(),
+                    triangles: triangles.into(),
+                    corners: corners.into(),
                     occupancy: (&surface.occupancy).into(),
-                    word_offsets: (&word_offsets).into(),
-                    block_offsets: (&block_offsets).into(),
-                    sums: (&sums).into(),
+                    word_offsets: word_offsets.into(),
+                    block_offsets: block_offsets.into(),
+                    sums: sums.into(),
                     albedo: albedo_view.into(),
                     albedo_sampler: sampler.into(),
                 },
@@ -580,20 +599,19 @@ impl Voxelizer {
                 stage::STAGE,
             )?;
         }
-        let params = params_for(0, count);
         if heavy.giant_blocks > 0 {
             let pipeline = ComputePipeline::cached(&p.accumulate_giant, device, &[])?;
             let bound = pipeline.bind(
                 device,
                 &stage::accumulate_giant::Resources {
-                    params: (&params).into(),
-                    triangles: (&triangles).into(),
-                    corners: (&corners).into(),
+                    params: params.into(),
+                    triangles: triangles.into(),
+                    corners: corners.into(),
                     occupancy: (&surface.occupancy).into(),
-                    word_offsets: (&word_offsets).into(),
-                    block_offsets: (&block_offsets).into(),
+                    word_offsets: word_offsets.into(),
+                    block_offsets: block_offsets.into(),
                     giants: (&heavy.giant_records).into(),
-                    sums: (&sums).into(),
+                    sums: sums.into(),
                     albedo: albedo_view.into(),
                     albedo_sampler: sampler.into(),
                 },
@@ -612,15 +630,15 @@ impl Voxelizer {
             let bound = pipeline.bind(
                 device,
                 &stage::accumulate_heavy::Resources {
-                    params: (&params).into(),
-                    triangles: (&triangles).into(),
-                    corners: (&corners).into(),
+                    params: params.into(),
+                    triangles: triangles.into(),
+                    corners: corners.into(),
                     occupancy: (&surface.occupancy).into(),
-                    word_offsets: (&word_offsets).into(),
-                    block_offsets: (&block_offsets).into(),
+                    word_offsets: word_offsets.into(),
+                    block_offsets: block_offsets.into(),
                     work: (&heavy.work).into(),
                     work_count: (&heavy.work_count).into(),
-                    sums: (&sums).into(),
+                    sums: sums.into(),
                     albedo: albedo_view.into(),
                     albedo_sampler: sampler.into(),
                 },
@@ -634,29 +652,36 @@ impl Voxelizer {
                 (heavy.capacity as u64).div_ceil(64),
             );
         }
-        let resolve = ComputePipeline::cached(&p.resolve, device, &[])?;
-        let groups = words.div_ceil(64);
+        Ok(())
+    }
+
+    /// Each occupied voxel's sums divided into its averaged attributes, written to `voxels`.
+    fn record_averages(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        pending: &PendingAttributes,
+        params: &wgpu::Buffer,
+        sums: &wgpu::Buffer,
+        voxels: &wgpu::Buffer,
+    ) -> Result<(), Error> {
+        let resolve = ComputePipeline::cached(&self.attribute_pipelines.resolve, device, &[])?;
+        let groups = pending.words.div_ceil(64);
         let row = device.limits().max_compute_workgroups_per_dimension;
         resolve.record(
             device,
             rec,
             &stage::resolve::Resources {
-                params: (&params).into(),
-                occupancy: (&surface.occupancy).into(),
-                word_offsets: (&word_offsets).into(),
-                block_offsets: (&block_offsets).into(),
-                sums: (&sums).into(),
-                voxels: (&voxels).into(),
+                params: params.into(),
+                occupancy: (&pending.surface.occupancy).into(),
+                word_offsets: (&pending.word_offsets).into(),
+                block_offsets: (&pending.block_offsets).into(),
+                sums: sums.into(),
+                voxels: voxels.into(),
             },
             [groups.min(row), groups.div_ceil(row), 1],
             stage::STAGE,
-        )?;
-        Ok(Attributes {
-            surface,
-            count: occupied,
-            occupied: total,
-            voxels,
-        })
+        )
     }
 
     /// Every stage of [`Voxelizer::attributes`] recorded into `rec` alone, no read-back in

@@ -7,7 +7,7 @@ use std::sync::OnceLock;
 use super::{Grid, GridMesh, Listed, Mesh, SLACK, Separation, Voxelizer, box_columns};
 use crate::bind::ComputePipeline;
 use crate::error::Error;
-use crate::gpu::{Readback, Record, uniform_buffer as uniform};
+use crate::gpu::{Readback, Record, storage_buffer as storage, uniform_buffer as uniform};
 use crate::shaders::voxelize::fragments::{self as stage, FragmentParams};
 
 /// Bytes per fragment: (x | y << 16, z).
@@ -225,58 +225,9 @@ impl Voxelizer {
         }
         let listed = Listed::new(device, &local, grid, super::Listing::default())?;
         let threads = listed.light as u64 + listed.chunk_count as u64;
-        // Parts of consecutive threads whose estimated fragments fit a list: a light
-        // triangle's estimate is 4 per column of its box, a heavy chunk's 4 per column.
-        let budget = capacity.map_or(most, |c| c as u64);
-        let mut parts: Vec<(u32, u32, u64)> = Vec::new();
-        let (mut first, mut sum) = (0u32, 0u64);
-        let light = listed.order[..listed.light as usize].iter().map(|&t| {
-            let t = t as usize;
-            4 * box_columns(&local.vertices[3 * t..3 * t + 3], grid.size)
-        });
-        let heavy = listed.runs.iter().flat_map(|&(chunks, columns)| {
-            std::iter::repeat_n(4 * columns as u64, chunks as usize)
-        });
-        for (i, estimate) in (0u32..).zip(light.chain(heavy)) {
-            if i > first && sum + estimate > budget {
-                parts.push((first, i - first, sum));
-                (first, sum) = (i, 0);
-            }
-            sum += estimate;
-        }
-        if threads as u32 > first || parts.is_empty() {
-            parts.push((first, threads as u32 - first, sum));
-        }
-        let buffer = |label, size: u64, usage| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: size.max(4),
-                usage: wgpu::BufferUsages::STORAGE | usage,
-                mapped_at_creation: false,
-            })
-        };
-        // New buffers: zeroed by wgpu (each total starts at 0).
-        let attributes = corner_data.map(|corners| {
-            use wgpu::util::DeviceExt;
-            // The corners in the order the triangles were sorted in.
-            let mut sorted: Vec<[u32; 4]> = listed
-                .order
-                .iter()
-                .flat_map(|&t| corners[6 * t as usize..6 * t as usize + 6].iter().copied())
-                .collect();
-            if sorted.is_empty() {
-                sorted.push([0; 4]);
-            }
-            FragmentAttributes {
-                triangles: listed.triangles.clone(),
-                corners: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("voxel fragment corners"),
-                    contents: bytemuck::cast_slice(&sorted),
-                    usage: wgpu::BufferUsages::STORAGE,
-                }),
-                textured: !mesh.texcoords.is_empty(),
-            }
-        });
+        let parts = parts(&listed, &local, grid, capacity.map_or(most, |c| c as u64));
+        let attributes =
+            corner_data.map(|corners| FragmentAttributes::sorted(device, mesh, &listed, &corners));
         let groups = threads.div_ceil(64);
         if groups.div_ceil(65535) > 65535 {
             return Err(Error::Size {
@@ -296,7 +247,7 @@ impl Voxelizer {
             }
             .constants(),
         )?;
-        let no_ids = buffer("no fragment triangles", 4, wgpu::BufferUsages::empty());
+        let no_ids = storage(device, "no fragment triangles", 4, wgpu::BufferUsages::empty());
         let mut fragments = Fragments {
             size: grid.size,
             parts: Vec::with_capacity(parts.len()),
@@ -306,22 +257,7 @@ impl Voxelizer {
         for (first_thread, count, estimate) in parts {
             // Exactly the capacity asked for, else the estimate (within one binding).
             let part_capacity = capacity.unwrap_or(estimate.clamp(1, most) as u32);
-            let part = FragmentPart {
-                capacity: part_capacity,
-                list: buffer(
-                    "voxel fragments",
-                    part_capacity as u64 * FRAGMENT_BYTES,
-                    wgpu::BufferUsages::COPY_SRC,
-                ),
-                total: buffer("voxel fragment count", 4, wgpu::BufferUsages::COPY_SRC),
-                triangle_ids: ids.then(|| {
-                    buffer(
-                        "voxel fragment triangles",
-                        part_capacity as u64 * 4,
-                        wgpu::BufferUsages::empty(),
-                    )
-                }),
-            };
+            let part = FragmentPart::new(device, part_capacity, ids);
             if count > 0 {
                 let params = uniform(
                     device,
@@ -355,5 +291,81 @@ impl Voxelizer {
             fragments.parts.push(part);
         }
         Ok(fragments)
+    }
+}
+
+/// Parts of consecutive threads whose estimated fragments fit a list of `budget`: a light
+/// triangle's estimate is 4 per column of its box, a heavy chunk's 4 per column. Each part
+/// is `(first thread, threads, estimate)`; there is always at least one.
+fn parts(listed: &Listed, local: &GridMesh, grid: &Grid, budget: u64) -> Vec<(u32, u32, u64)> {
+    let threads = listed.light + listed.chunk_count;
+    let mut parts: Vec<(u32, u32, u64)> = Vec::new();
+    let (mut first, mut sum) = (0u32, 0u64);
+    let light = listed.order[..listed.light as usize].iter().map(|&t| {
+        let t = t as usize;
+        4 * box_columns(&local.vertices[3 * t..3 * t + 3], grid.size)
+    });
+    let heavy = listed
+        .runs
+        .iter()
+        .flat_map(|&(chunks, columns)| std::iter::repeat_n(4 * columns as u64, chunks as usize));
+    for (i, estimate) in (0u32..).zip(light.chain(heavy)) {
+        if i > first && sum + estimate > budget {
+            parts.push((first, i - first, sum));
+            (first, sum) = (i, 0);
+        }
+        sum += estimate;
+    }
+    if threads > first || parts.is_empty() {
+        parts.push((first, threads - first, sum));
+    }
+    parts
+}
+
+impl FragmentPart {
+    /// A new, empty part of `capacity` fragments (wgpu zeroes new buffers: the total starts
+    /// at 0), with room for each fragment's triangle where `ids`.
+    fn new(device: &wgpu::Device, capacity: u32, ids: bool) -> Self {
+        let buffer = |label, size: u64, usage| storage(device, label, size.max(4), usage);
+        FragmentPart {
+            capacity,
+            list: buffer(
+                "voxel fragments",
+                capacity as u64 * FRAGMENT_BYTES,
+                wgpu::BufferUsages::COPY_SRC,
+            ),
+            total: buffer("voxel fragment count", 4, wgpu::BufferUsages::COPY_SRC),
+            triangle_ids: ids.then(|| {
+                buffer(
+                    "voxel fragment triangles",
+                    capacity as u64 * 4,
+                    wgpu::BufferUsages::empty(),
+                )
+            }),
+        }
+    }
+}
+
+impl FragmentAttributes {
+    /// The triangles' `corners` in the order `listed` sorted the triangles in.
+    fn sorted(device: &wgpu::Device, mesh: &Mesh, listed: &Listed, corners: &[[u32; 4]]) -> Self {
+        use wgpu::util::DeviceExt;
+        let mut sorted: Vec<[u32; 4]> = listed
+            .order
+            .iter()
+            .flat_map(|&t| corners[6 * t as usize..6 * t as usize + 6].iter().copied())
+            .collect();
+        if sorted.is_empty() {
+            sorted.push([0; 4]);
+        }
+        FragmentAttributes {
+            triangles: listed.triangles.clone(),
+            corners: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("voxel fragment corners"),
+                contents: bytemuck::cast_slice(&sorted),
+                usage: wgpu::BufferUsages::STORAGE,
+            }),
+            textured: !mesh.texcoords.is_empty(),
+        }
     }
 }
