@@ -1,6 +1,8 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
+pub mod octree;
+
 use fieldkit::distance::{Jfa2d, Options, Variant, upload_mask};
 use fieldkit::gpu::{Context, read_texture};
 
