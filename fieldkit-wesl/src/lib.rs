@@ -19,6 +19,7 @@
 //! | `fieldkit::triangle_box` | Schwarz & Seidel's triangle/voxel overlap |
 //! | `fieldkit::field` | trilinear field sampling by `textureLoad` and ray/box helpers |
 //! | `fieldkit::octree` | the sparse voxel octree's layout: octants, children, brick bits (`octree_child`, `brick_has`) |
+//! | `fieldkit::march` | the volume march's view ray and depth stop, jittered segment lattice, segment opacity and transmittance, brick skipping |
 //!
 //! Each module is the file of the same name in this crate's `shaders/`, and fieldkit's own
 //! stages import them from here too (`import fieldkit::seed::…`): one source, so the package
@@ -43,6 +44,7 @@ static OCTAHEDRAL: CodegenModule = module!(octahedral);
 static TRIANGLE_BOX: CodegenModule = module!(triangle_box);
 static FIELD: CodegenModule = module!(field);
 static OCTREE: CodegenModule = module!(octree);
+static MARCH: CodegenModule = module!(march);
 
 static ROOT: CodegenModule = CodegenModule {
     name: "fieldkit",
@@ -54,6 +56,7 @@ static ROOT: CodegenModule = CodegenModule {
         &TRIANGLE_BOX,
         &FIELD,
         &OCTREE,
+        &MARCH,
     ],
 };
 
@@ -76,6 +79,7 @@ pub const MODULES: &[&str] = &[
     "triangle_box",
     "field",
     "octree",
+    "march",
 ];
 
 #[cfg(test)]

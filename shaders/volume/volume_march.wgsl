@@ -31,7 +31,11 @@
 // the lookup costs every lane of the warp a dependent load (looking up every brick entered made
 // skipping slower than no skipping: 0.66 against 0.47 ms outside the 256³ cloud on the H100).
 
-import fieldkit::field::{ray_box, unproject};
+import fieldkit::field::ray_box;
+import fieldkit::march::{
+    box_exit, brick_adds_nothing, corrected_opacity, depth_stop, lattice_jitter, segment_start,
+    segment_transmittance, view_ray,
+};
 
 struct MarchParams {
     inv_view_proj: mat4x4<f32>,
@@ -138,11 +142,6 @@ fn density_at(p: vec3<f32>) -> f32 {
     return textureSampleLevel(density, linear_clamp, uvw_of(p), 0.0).r;
 }
 
-// Opacity of a segment of world length `len` whose transfer-function opacity is `a` (per Δ₀).
-fn corrected(a: f32, len: f32) -> f32 {
-    return 1.0 - pow(max(1.0 - a, 0.0), len * params.inv_reference_step);
-}
-
 // Transmittance from local point `p` to where the ray toward the light leaves the box.
 fn toward_light(p: vec3<f32>) -> f32 {
     let exit = ray_box(p, params.light_local, params.box_min, params.box_max).y;
@@ -155,7 +154,7 @@ fn toward_light(p: vec3<f32>) -> f32 {
         }
         let b = min(a + h, exit);
         let alpha = transfer(density_at(p + 0.5 * (a + b) * params.light_local)).a;
-        t_light *= 1.0 - corrected(alpha, b - a);
+        t_light *= 1.0 - corrected_opacity(alpha, b - a, params.inv_reference_step);
     }
     return t_light;
 }
@@ -189,18 +188,16 @@ fn brick_at(uvw: vec3<f32>, uo: vec3<f32>, inv_ud: vec3<f32>) -> Brick {
     let b = min(vec3<u32>(max(uvw, vec3<f32>(0.0)) * params.brick_scale), params.bricks - 1u);
     let lo = vec3<f32>(b) * params.brick_size;
     let hi = min(lo + params.brick_size, vec3<f32>(1.0));
-    let far = max((lo - uo) * inv_ud, (hi - uo) * inv_ud);
     let i = (b.z * params.bricks.y + b.y) * params.bricks.x + b.x;
-    return Brick(min(min(far.x, far.y), far.z), ranges[i]);
+    return Brick(box_exit(uo, inv_ud, lo, hi), ranges[i]);
 }
 
-// Interleaved gradient noise (Jimenez 2014), shifted per frame.
+// Where the lattice starts at `pixel`: jittered per pixel and frame, or not.
 fn jitter_of(pixel: vec2<f32>) -> f32 {
     if params.jitter == 0u {
         return 0.0;
     }
-    let q = pixel + 5.588238 * f32(params.frame % 64u);
-    return fract(52.9829189 * fract(dot(q, vec2<f32>(0.06711056, 0.00583715))));
+    return lattice_jitter(pixel, params.frame);
 }
 
 // Root of density − iso between ray parameters a (below) and b (at or above): bisection.
@@ -230,23 +227,16 @@ fn iso_normal(p: vec3<f32>) -> vec3<f32> {
 }
 
 fn march_pixel(pixel: vec2<f32>) -> vec4<f32> {
-    let ndc = vec2<f32>(pixel.x / params.viewport.x * 2.0 - 1.0, 1.0 - pixel.y / params.viewport.y * 2.0);
-    let near_w = unproject(params.inv_view_proj, vec3<f32>(ndc, params.near_z));
-    let far_w = unproject(params.inv_view_proj, vec3<f32>(ndc, params.far_z));
-    let dir_w = normalize(far_w - near_w);
-    let o = (params.world_to_local * vec4<f32>(near_w, 1.0)).xyz;
-    let dir = (params.world_to_local * vec4<f32>(dir_w, 0.0)).xyz;
-    // The scene's opaque depth ends the ray; the far plane (cleared depth) does not.
+    let ray = view_ray(pixel, params.viewport, params.inv_view_proj, params.world_to_local, params.near_z, params.far_z);
+    let o = ray.origin;
+    let dir = ray.dir;
     var t_scene = INF;
     if params.use_depth != 0u {
-        let depth = textureLoad(scene_depth, vec2<i32>(pixel), 0).r;
-        if depth != params.far_z {
-            t_scene = dot(unproject(params.inv_view_proj, vec3<f32>(ndc, depth)) - near_w, dir_w);
-        }
+        t_scene = depth_stop(ray, params.inv_view_proj, textureLoad(scene_depth, vec2<i32>(pixel), 0).r, params.far_z);
     }
     let hit = ray_box(o, dir, params.box_min, params.box_max);
     let t0 = max(hit.x, 0.0);
-    let t1 = min(min(hit.y, length(far_w - near_w)), t_scene);
+    let t1 = min(min(hit.y, ray.length), t_scene);
     if !(t0 < t1) {
         return vec4<f32>(0.0);
     }
@@ -256,8 +246,7 @@ fn march_pixel(pixel: vec2<f32>) -> vec4<f32> {
     let h = params.step;
     let j = jitter_of(pixel);
     // Segment k of the lattice runs from x = (k + j)·h to x + h; `x` carries its start.
-    var x = floor(t0 / h - j);
-    x = (x + j) * h;
+    var x = segment_start(t0, h, j);
     var colour = vec3<f32>(0.0);
     var transmittance = 1.0;
     var peak = -INF;
@@ -281,11 +270,9 @@ fn march_pixel(pixel: vec2<f32>) -> vec4<f32> {
         if SKIP && clear && t >= brick_end {
             let brick = brick_at(uvw, uo, 1.0 / ud);
             brick_end = brick.exit;
-            let empty = select(brick.range.y <= params.skip_below, brick.range.y <= peak, MODE == 1u);
-            let iso_empty = MODE == 2u && brick.range.y < params.iso;
-            if (empty && MODE != 2u) || iso_empty {
+            if brick_adds_nothing(brick.range.y, MODE, params.skip_below, peak, params.iso) {
                 // Continue with the segment holding the brick's exit (never go back).
-                x = max(x_next, (floor(brick.exit / h - j) + j) * h);
+                x = max(x_next, segment_start(brick.exit, h, j));
                 below = min(brick.exit, t1);
                 continue;
             }
@@ -311,7 +298,7 @@ fn march_pixel(pixel: vec2<f32>) -> vec4<f32> {
         } else {
             let s = transfer(d);
             // The segment's transmittance (1 − α)^(len / Δ₀): 1 where it adds nothing.
-            let tau = exp2(log2(max(1.0 - s.a, 0.0)) * ((b - a) * params.inv_reference_step));
+            let tau = segment_transmittance(s.a, b - a, params.inv_reference_step);
             clear = tau >= 1.0;
             if !clear {
                 // Folded (`SHADOW` 2), the light came with the density's fetch; otherwise it is
