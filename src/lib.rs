@@ -12,6 +12,7 @@ pub mod bind;
 pub mod distance;
 pub mod error;
 pub mod gpu;
+pub mod grid;
 #[cfg(feature = "harness")]
 pub mod harness;
 #[cfg(feature = "hot-reload")]
@@ -30,6 +31,7 @@ pub mod volume;
 pub mod voxelize;
 
 pub use error::{BindingError, Error};
+pub use grid::Grid;
 pub use wgpu;
 
 /// Generated bindings, one module per stage (`shaders::<room>::<stage>`). See [`bind`].

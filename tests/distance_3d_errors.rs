@@ -4,7 +4,7 @@
 use fieldkit::Error;
 use fieldkit::distance::{ColumnPasses, Variant};
 use fieldkit::distance::{
-    Distance3d, Grid3, Inside, MAX_SIDE_3D, Method, Options3d, check_size_2d_exact, check_size_3d,
+    Distance3d, Grid, Inside, MAX_SIDE_3D, Method, Options3d, check_size_2d_exact, check_size_3d,
     upload_points, upload_points_with_homes, upload_volume,
 };
 use fieldkit::gpu::Context;
@@ -103,12 +103,12 @@ fn past_the_device_buffer_limit() {
 #[test]
 fn bad_seed_points() {
     let ctx = Context::shared();
-    let grid = Grid3 {
+    let grid = Grid {
         size: [8, 8, 8],
-        voxel_size: 0.5,
-        origin: Vec3::new(1.0, 2.0, 3.0),
+        voxel: 0.5,
+        origin: glam::DVec3::new(1.0, 2.0, 3.0),
     };
-    let inside = grid.origin + Vec3::splat(2.0);
+    let inside = grid.origin.as_vec3() + Vec3::splat(2.0);
     let e = upload_points(
         &ctx.device,
         &ctx.queue,
@@ -125,7 +125,7 @@ fn bad_seed_points() {
         &ctx.device,
         &ctx.queue,
         &grid,
-        &[grid.origin + Vec3::new(4.1, 1.0, 1.0)],
+        &[grid.origin.as_vec3() + Vec3::new(4.1, 1.0, 1.0)],
     )
     .unwrap_err();
     assert!(
@@ -151,8 +151,8 @@ fn bad_seed_points() {
         matches!(&e, Error::Invalid { what, .. } if what.contains("0 homes for 1 points")),
         "{e}"
     );
-    let bad_grid = Grid3 {
-        voxel_size: f32::NAN,
+    let bad_grid = Grid {
+        voxel: f64::NAN,
         ..grid
     };
     assert!(matches!(
@@ -233,7 +233,7 @@ fn bad_options_and_textures() {
         Err(Error::Invalid { .. })
     ));
     // Sub-voxel seeds with the exact method, and an inside volume of another size.
-    let grid = Grid3::new([4, 4, 4]);
+    let grid = Grid::new([4, 4, 4]);
     let pts = upload_points(&ctx.device, &ctx.queue, &grid, &[Vec3::splat(1.5)]).unwrap();
     let e = d3
         .encode_points(

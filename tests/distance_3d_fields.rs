@@ -5,7 +5,7 @@ mod common;
 
 use common::*;
 use fieldkit::distance::{
-    ColumnPasses, Distance3d, Grid3, Inside, Method, Options3d, upload_points,
+    ColumnPasses, Distance3d, Grid, Inside, Method, Options3d, upload_points,
     upload_points_with_homes, upload_volume,
 };
 use fieldkit::distance::{Variant, cpu, upload_mask};
@@ -214,15 +214,15 @@ fn analytic_error(
     let ctx = Context::shared();
     let d3 = Distance3d::new(&ctx.device).unwrap();
     // Grid placed in the world away from the origin, to exercise the world → voxel mapping.
-    let grid = Grid3 {
+    let grid = Grid {
         size: size_u32(size),
-        voxel_size,
-        origin: Vec3::new(-3.0, 10.0, 0.5),
+        voxel: voxel_size as f64,
+        origin: glam::DVec3::new(-3.0, 10.0, 0.5),
     };
     let pts = surface_points(size, sdf, closest);
     let world: Vec<Vec3> = pts
         .iter()
-        .map(|&(_, p)| grid.origin + (p + 0.5) * voxel_size)
+        .map(|&(_, p)| grid.origin.as_vec3() + (p + 0.5) * voxel_size)
         .collect();
     let homes: Vec<[u32; 3]> = pts.iter().map(|&(v, _)| v).collect();
     let seeds = if with_homes {
@@ -510,7 +510,7 @@ fn recycled_fields_are_taken_again_and_written_whole() {
     }
     // Sub-voxel seeds: the seed buffer taken from a field of many points must be cleared, or
     // those points would seed the next field of few.
-    let grid = Grid3::new(size_u32(size));
+    let grid = Grid::new(size_u32(size));
     let points = |n: usize, salt: u64| {
         let mut x = salt;
         let mut next = move || {

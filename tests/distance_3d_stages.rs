@@ -6,7 +6,7 @@ mod common;
 use common::*;
 use fieldkit::distance::cpu;
 use fieldkit::distance::{
-    ColumnPasses, Distance3d, Grid3, Inside, Options3d, key_index, upload_points, upload_volume,
+    ColumnPasses, Distance3d, Grid, Inside, Options3d, key_index, upload_points, upload_volume,
 };
 use fieldkit::gpu::{Context, read_buffer, read_texture};
 use fieldkit::harness::Summary;
@@ -284,7 +284,7 @@ fn resolve_stage() {
 fn seed_points_stage() {
     let ctx = Context::shared();
     let d3 = Distance3d::new(&ctx.device).unwrap();
-    let grid = Grid3::new(size_u32(SIZE));
+    let grid = Grid::new(size_u32(SIZE));
     // Two points share voxel (3, 4, 5): the one nearer its centre (index 1) must win.
     let pts = [
         Vec3::new(3.8, 4.9, 5.7),
@@ -319,7 +319,7 @@ fn seed_points_stage() {
         assert_ne!(k, 0);
         let p = Vec3::new((i % w) as f32, ((i / w) % h) as f32, (i / (w * h)) as f32);
         assert!(
-            (dist[i] - grid.to_voxel(pts[k]).distance(p)).abs() < 1e-4,
+            (dist[i] - grid.to_voxel(pts[k].as_dvec3()).as_vec3().distance(p)).abs() < 1e-4,
             "voxel {i}"
         );
     }

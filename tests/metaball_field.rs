@@ -5,7 +5,7 @@ mod common;
 
 use common::*;
 use fieldkit::distance::Variant;
-use fieldkit::distance::{Grid3, Method};
+use fieldkit::distance::{Grid, Method};
 use fieldkit::gpu::Context;
 use fieldkit::gpu::{read_buffer, read_texture};
 use fieldkit::metaball::{Metaballs, Settings, cpu, fixed_scale, packed_grid};
@@ -28,7 +28,7 @@ fn seed_stages(
     ctx: &fieldkit::gpu::Context,
     voxels: &[Vec4],
     settings: &Settings,
-) -> (Grid3, fieldkit::metaball::SurfaceSeeds) {
+) -> (Grid, fieldkit::metaball::SurfaceSeeds) {
     let grid = settings.fit_grid(voxels, 1.0).unwrap().unwrap();
     let balls = Metaballs::new(&ctx.device).unwrap();
     let inst = balls.upload(&ctx.device, &ctx.queue, voxels).unwrap();
@@ -84,10 +84,10 @@ fn fixed_point_scale_keeps_sums_in_u32() {
     let ctx = Context::shared();
     let voxels = vec![Vec4::new(0.0, 0.0, 0.0, 1.0), Vec4::new(0.2, 0.0, 0.0, 1e4)];
     let settings = Settings::default();
-    let grid = Grid3 {
+    let grid = Grid {
         size: [8, 8, 8],
-        voxel_size: 0.25,
-        origin: Vec3::splat(-1.0),
+        voxel: 0.25,
+        origin: glam::DVec3::splat(-1.0),
     };
     let balls = Metaballs::new(&ctx.device).unwrap();
     let inst = balls.upload(&ctx.device, &ctx.queue, &voxels).unwrap();
@@ -159,12 +159,12 @@ fn seeds_are_the_boundary_voxels_moved_onto_the_surface() {
                     let off = Vec3::new(p[0] - x as f32, p[1] - y as f32, p[2] - z as f32);
                     assert!(off.length() <= 0.8661, "offset {off} of voxel {i}");
                     // The point should sit near the analytic iso-surface.
-                    let world = grid.origin.as_dvec3()
+                    let world = grid.origin
                         + (glam::DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64) + 0.5)
-                            * grid.voxel_size as f64;
+                            * grid.voxel;
                     let r = cpu::density_at(&voxels, 1.0, &settings, world) - t;
                     let g = cpu::gradient_at(&voxels, 1.0, &settings, world).length();
-                    max_residual = max_residual.max((r / g).abs() / grid.voxel_size as f64);
+                    max_residual = max_residual.max((r / g).abs() / grid.voxel);
                 }
             }
         }
@@ -217,11 +217,11 @@ fn one_blob_error(settings: &Settings) -> (f64, f64) {
         for y in 0..h {
             for x in 0..w {
                 let i = ((z * h + y) * w + x) as usize;
-                let c = g.voxel_centre([x, y, z]).as_dvec3();
+                let c = g.voxel_centre([x, y, z]);
                 let exact = (c - centre).length() - r_iso;
                 assert_eq!(sdf[i] < 0.0, dens[i] >= 0.5, "sign at {i}");
                 if exact.abs() < 0.75 * field.band as f64 {
-                    let err = (sdf[i] as f64 - exact).abs() / g.voxel_size as f64;
+                    let err = (sdf[i] as f64 - exact).abs() / g.voxel;
                     max_err = max_err.max(err);
                     sum2 += err * err;
                     n += 1;
@@ -272,10 +272,10 @@ fn bad_input_is_a_typed_error() {
     let mut inst = balls
         .upload(&ctx.device, &ctx.queue, &three_blobs())
         .unwrap();
-    let grid = Grid3 {
+    let grid = Grid {
         size: [300, 300, 300],
-        voxel_size: 0.1,
-        origin: Vec3::ZERO,
+        voxel: 0.1,
+        origin: glam::DVec3::ZERO,
     };
     let mut enc = ctx.encoder("bad");
     assert!(err(balls.encode(&ctx.device, &mut enc, &inst, &grid, 1.0, &s)).contains("grid cells"));

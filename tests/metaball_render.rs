@@ -240,7 +240,7 @@ fn one_blob_is_a_sphere() {
     let field = metaball_field(&ctx, &voxels, 1.0, &s);
     let view = camera(Vec3::new(0.3, 0.4, 2.5), Vec3::ZERO, false);
     let shot = shoot(&ctx, &field, &view, Mat4::IDENTITY, &normals(), 1.0);
-    let a = against_analytic(&shot, &view, &voxels, &s, field.grid.voxel_size as f64);
+    let a = against_analytic(&shot, &view, &voxels, &s, field.grid.voxel);
     println!(
         "one blob: {} hits, {} silhouette pixels differ, depth error ≤ {:.3} cells (≤ 60° from \
          the normal), hit point ≤ {:.3} cells off the surface, normal ≤ {:.2}°",
@@ -284,7 +284,7 @@ fn several_blobs_and_a_thin_neck() {
     let field = metaball_field(&ctx, &voxels, 1.0, &s);
     let view = camera(Vec3::new(0.0, 0.2, 2.8), Vec3::ZERO, false);
     let shot = shoot(&ctx, &field, &view, Mat4::IDENTITY, &normals(), 1.0);
-    let a = against_analytic(&shot, &view, &voxels, &s, field.grid.voxel_size as f64);
+    let a = against_analytic(&shot, &view, &voxels, &s, field.grid.voxel);
     println!(
         "three blobs: {} hits, {} silhouette pixels differ, depth ≤ {:.3} cells, hit point ≤ \
          {:.3} cells off, normal ≤ {:.2}°",
@@ -323,14 +323,7 @@ fn scaled_placement_matches_the_analytic_field() {
         * Mat4::from_scale(Vec3::new(1.4, 0.7, 1.0))
         * Mat4::from_translation(Vec3::new(0.1, 0.0, 0.0));
     let shot = shoot(&ctx, &field, &view, place, &normals(), 1.0);
-    let a = against_analytic_placed(
-        &shot,
-        &view,
-        &voxels,
-        &s,
-        field.grid.voxel_size as f64,
-        place,
-    );
+    let a = against_analytic_placed(&shot, &view, &voxels, &s, field.grid.voxel, place);
     println!(
         "scaled placement: {} hits, {} silhouette pixels differ, depth ≤ {:.3} cells, hit point \
          ≤ {:.3} cells off, normal ≤ {:.2}°",
@@ -372,7 +365,7 @@ fn seed_march_hits_the_same_surface_with_more_steps() {
         ..RaymarchSettings::seed()
     };
     let shot = shoot(&ctx, &field, &view, Mat4::IDENTITY, &seed, 1.0);
-    let a = against_analytic(&shot, &view, &voxels, &s, field.grid.voxel_size as f64);
+    let a = against_analytic(&shot, &view, &voxels, &s, field.grid.voxel);
     println!(
         "seed march: {} hits, {} silhouette pixels differ, depth ≤ {:.3} cells, hit point ≤ \
          {:.3} cells off, normal ≤ {:.2}°",
@@ -395,7 +388,7 @@ fn seed_march_hits_the_same_surface_with_more_steps() {
         ..seed
     };
     let shot = shoot(&ctx, &field, &view, Mat4::IDENTITY, &trilinear, 1.0);
-    let t = against_analytic(&shot, &view, &voxels, &s, field.grid.voxel_size as f64);
+    let t = against_analytic(&shot, &view, &voxels, &s, field.grid.voxel);
     println!(
         "seed steps, trilinear reads: hit point ≤ {:.3} cells off, normal ≤ {:.2}°",
         t.max_surface_err, t.max_normal_deg
@@ -729,14 +722,14 @@ fn edge_falloff_fades_the_density_at_the_box_faces() {
     let s = blob_settings();
     let cell = 1.0f32 / 12.0;
     // Front face at z = 0.3 cuts the blob (iso radius 0.57).
-    let grid = fieldkit::distance::Grid3 {
+    let grid = fieldkit::distance::Grid {
         size: [29, 29, 40],
-        voxel_size: cell,
-        origin: Vec3::new(-29.0 * cell / 2.0, -29.0 * cell / 2.0, 0.3 - 40.0 * cell),
+        voxel: cell as f64,
+        origin: Vec3::new(-29.0 * cell / 2.0, -29.0 * cell / 2.0, 0.3 - 40.0 * cell).as_dvec3(),
     };
     let (lo, hi) = (
-        grid.origin.as_dvec3(),
-        (grid.origin + Vec3::new(29.0, 29.0, 40.0) * cell).as_dvec3(),
+        grid.origin,
+        (grid.origin.as_vec3() + Vec3::new(29.0, 29.0, 40.0) * cell).as_dvec3(),
     );
     let balls = Metaballs::new(&ctx.device).unwrap();
     let inst = balls.upload(&ctx.device, &ctx.queue, &voxels).unwrap();
@@ -886,7 +879,7 @@ fn depth_composites_with_the_scene_standard_and_reversed() {
         let centre = open.depth[(H / 2 * W + W / 2) as usize];
         let ndc = Vec3::new(1.0 / W as f32, -1.0 / H as f32, centre);
         let front = view.view_proj.inverse().project_point3(ndc);
-        let cell = field.grid.voxel_size;
+        let cell = field.grid.voxel as f32;
         assert!(
             (front.z - r).abs() < 0.2 * cell,
             "reversed {reversed}: depth {centre} puts the front at z = {}, the sphere's is {r}",
@@ -923,10 +916,10 @@ fn cameras_inside_and_the_near_plane() {
     let s = blob_settings();
     // Inside the box, outside the blob: rays start at the near plane, inside the box.
     let eye = Vec3::new(0.0, 0.0, 0.8);
-    assert!(field.grid.origin.z + field.grid.size[2] as f32 * field.grid.voxel_size > 0.8);
+    assert!(field.grid.origin.z as f32 + field.grid.size[2] as f32 * field.grid.voxel as f32 > 0.8);
     let view = camera(eye, Vec3::ZERO, false);
     let shot = shoot(&ctx, &field, &view, Mat4::IDENTITY, &normals(), 1.0);
-    let a = against_analytic(&shot, &view, &voxels, &s, field.grid.voxel_size as f64);
+    let a = against_analytic(&shot, &view, &voxels, &s, field.grid.voxel);
     println!(
         "camera in the box: {} hits, {} silhouette off",
         a.hits, a.silhouette_off
@@ -1021,11 +1014,16 @@ fn placement_culling_and_bad_views() {
         (sx / n, sy / n)
     );
     let g = field.grid;
-    let hi =
-        g.origin + Vec3::new(g.size[0] as f32, g.size[1] as f32, g.size[2] as f32) * g.voxel_size;
-    assert!(box_visible(view.view_proj, Mat4::IDENTITY, g.origin, hi));
+    let hi = g.origin.as_vec3()
+        + Vec3::new(g.size[0] as f32, g.size[1] as f32, g.size[2] as f32) * g.voxel as f32;
+    assert!(box_visible(
+        view.view_proj,
+        Mat4::IDENTITY,
+        g.origin.as_vec3(),
+        hi
+    ));
     let away = Mat4::from_translation(Vec3::new(0.0, 0.0, 10.0));
-    assert!(!box_visible(view.view_proj, away, g.origin, hi));
+    assert!(!box_visible(view.view_proj, away, g.origin.as_vec3(), hi));
     let marcher = Raymarcher::new(
         &ctx.device,
         wgpu::TextureFormat::Rgba8Unorm,
@@ -1137,10 +1135,10 @@ fn empty_and_zero_scale_sets() {
     let ctx = Context::shared();
     let s = blob_settings();
     let balls = fieldkit::metaball::Metaballs::new(&ctx.device).unwrap();
-    let grid = fieldkit::distance::Grid3 {
+    let grid = fieldkit::distance::Grid {
         size: [16, 16, 16],
-        voxel_size: 1.0 / 12.0,
-        origin: Vec3::splat(-8.0 / 12.0),
+        voxel: 1.0 / 12.0,
+        origin: glam::DVec3::splat(-8.0 / 12.0),
     };
     for voxels in [vec![], vec![Vec4::new(0.0, 0.0, 0.0, 0.0)]] {
         let inst = balls.upload(&ctx.device, &ctx.queue, &voxels).unwrap();
@@ -1303,7 +1301,7 @@ fn grazing_rays_at_the_silhouette() {
     let field = metaball_field(&ctx, &voxels, 1.0, &s);
     let bins = blob_bins(&ctx, &voxels, &s);
     let view = camera(Vec3::new(0.2, -0.3, 1.6), Vec3::ZERO, false);
-    let cell = field.grid.voxel_size as f64;
+    let cell = field.grid.voxel;
     // The analytic answer per pixel: the hit distance and the cosine between ray and normal.
     let exact: Vec<Option<(f64, f64)>> = (0..W * H)
         .map(|i| {

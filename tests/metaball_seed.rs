@@ -2,7 +2,7 @@
 //! `falloffExtend`, the full-volume field, the extent/block grid builder, the animation, the
 //! march's step rule and the debug cubes' depth, culling and line-list wireframe.
 
-use fieldkit::distance::{Distance3d, Grid3, Method, Options3d, Unreached, Variant};
+use fieldkit::distance::{Distance3d, Grid, Method, Options3d, Unreached, Variant};
 use fieldkit::gpu::{Context, read_buffer, read_texture};
 use fieldkit::metaball::{
     Animation, FULL_VOLUME_FAR, Metaballs, Settings, animate, extent_grid, packed_grid,
@@ -46,7 +46,7 @@ fn falloff_extend_widens_the_support_by_half() {
     for z in 0..d {
         for y in 0..h {
             for x in 0..w {
-                let c = grid.voxel_centre([x, y, z]).as_dvec3();
+                let c = grid.voxel_centre([x, y, z]);
                 let d2 = (c - voxels[0].truncate().as_dvec3()).length_squared();
                 let q = (1.0 - d2 / (r * r)).max(0.0);
                 let want = (q * q * q * seeds.fixed_scale as f64).round();
@@ -84,10 +84,10 @@ fn full_volume_field_reaches_the_whole_grid() {
     assert!(settings.full_volume);
     // A grid well beyond the support: the far corners are ~20 cells from the surface.
     let fitted = settings.fit_grid(&voxels, 1.0).unwrap().unwrap();
-    let grid = Grid3 {
+    let grid = Grid {
         size: [40, 40, 40],
-        voxel_size: fitted.voxel_size,
-        origin: Vec3::splat(-20.0 * fitted.voxel_size),
+        voxel: fitted.voxel,
+        origin: glam::DVec3::splat(-20.0 * fitted.voxel),
     };
     let balls = Metaballs::new(&ctx.device).unwrap();
     let inst = balls.upload(&ctx.device, &ctx.queue, &voxels).unwrap();
@@ -99,13 +99,13 @@ fn full_volume_field_reaches_the_whole_grid() {
     let sdf: Vec<f32> = read_texture(&ctx, &field.sdf).unwrap();
     let r_iso = 1.5 * (1.0 - 0.5f64.cbrt()).sqrt();
     let centre = voxels[0].truncate().as_dvec3();
-    let cell = grid.voxel_size as f64;
+    let cell = grid.voxel;
     let (mut max_err, mut far) = (0.0f64, 0.0f64);
     for z in 0..40 {
         for y in 0..40 {
             for x in 0..40 {
                 let i = ((z * 40 + y) * 40 + x) as usize;
-                let exact = (grid.voxel_centre([x, y, z]).as_dvec3() - centre).length() - r_iso;
+                let exact = (grid.voxel_centre([x, y, z]) - centre).length() - r_iso;
                 max_err = max_err.max((sdf[i] as f64 - exact).abs() / cell);
                 far = far.max(sdf[i] as f64 / cell);
             }
@@ -118,11 +118,11 @@ fn full_volume_field_reaches_the_whole_grid() {
     // with JFA+2 in metaball_field's one-blob test), and plain JFA, the source's, can keep a
     // seed farther than the nearest (distance_3d_points measures it).
     assert!(max_err < 1.1, "{max_err}");
-    assert!(field.band / grid.voxel_size > 60.0, "band {}", field.band);
+    assert!(field.band / grid.voxel as f32 > 60.0, "band {}", field.band);
 
     // A grid the blob does not reach: no seeds, every voxel unreached and outside.
-    let away = Grid3 {
-        origin: Vec3::splat(10.0),
+    let away = Grid {
+        origin: glam::DVec3::splat(10.0),
         ..grid
     };
     let mut enc = ctx.encoder("unreached");

@@ -43,6 +43,7 @@ mod resolve;
 mod seeds;
 mod upload;
 
+pub use crate::grid::Grid;
 pub use check::{
     MAX_SIDE_2D_EXACT, MAX_SIDE_3D, MAX_SIDE_EXACT_3D, VOLUME_FORMATS, check_size_2d_exact,
     check_size_3d,
@@ -56,7 +57,7 @@ pub use exact::plan::{
 };
 pub use field::{Field3d, FieldBuf2d, Slabs};
 pub use jfa2d::{Field2d, Jfa2d, Options, Variant};
-pub use options::{Grid3, Inside, Method, Options3d, Unreached};
+pub use options::{Inside, Method, Options3d, Unreached};
 pub use packing::{MAX_POINTS, SeedPacking, key_index, pack_seed3, unpack_seed3};
 pub use seeds::{
     Channels, FAR, MAX_PACKED_SIDE, NO_SEED, SEED_FORMATS, SeedRule, check_seed_texture,

@@ -1,45 +1,9 @@
 //! What [`super::Distance3d`] computes: the method, sign, marks, band and units, and where a
-//! volume sits in the world ([`Grid3`]).
-
-use glam::Vec3;
+//! volume sits in the world ([`Grid`]).
 
 use super::STAGE_3D as STAGE;
 use super::Variant;
 use crate::error::Error;
-
-/// Where a volume sits in the world: voxel `(i, j, k)` has its centre at
-/// `origin + (i + ½, j + ½, k + ½) · voxel_size`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct Grid3 {
-    /// Voxels per axis.
-    pub size: [u32; 3],
-    /// World units per voxel.
-    pub voxel_size: f32,
-    /// The volume's minimum corner.
-    pub origin: Vec3,
-}
-
-impl Grid3 {
-    /// A grid of `size` unit voxels at the origin.
-    pub fn new(size: [u32; 3]) -> Self {
-        Self {
-            size,
-            voxel_size: 1.0,
-            origin: Vec3::ZERO,
-        }
-    }
-
-    /// World position → voxel coordinates (voxel centres at integers).
-    pub fn to_voxel(&self, p: Vec3) -> Vec3 {
-        (p - self.origin) / self.voxel_size - Vec3::splat(0.5)
-    }
-
-    /// Centre of voxel `v` in the world.
-    pub fn voxel_centre(&self, v: [u32; 3]) -> Vec3 {
-        self.origin + (Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32) + 0.5) * self.voxel_size
-    }
-}
 
 /// Which voxels of the input volume are marked (seeds; for a signed field, inside).
 #[derive(Debug, Clone, Copy, PartialEq)]

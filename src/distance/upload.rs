@@ -5,7 +5,7 @@ use glam::Vec3;
 use super::STAGE_3D as STAGE;
 use super::buffers::upload_r8;
 use super::check::{MAX_SIDE_EXACT_3D, check_sides, check_size_3d, voxels};
-use super::{Grid3, MAX_POINTS, pack_seed3};
+use super::{Grid, MAX_POINTS, pack_seed3};
 use crate::error::Error;
 
 /// Sub-voxel seeds on the GPU: `count` points (`vec4<f32>`, xyz in voxel coordinates) and,
@@ -61,7 +61,7 @@ pub fn upload_volume(
 pub fn upload_points(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
-    grid: &Grid3,
+    grid: &Grid,
     points: &[Vec3],
 ) -> Result<PointSeeds, Error> {
     upload_points_inner(device, queue, grid, points, None)
@@ -72,7 +72,7 @@ pub fn upload_points(
 pub fn upload_points_with_homes(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
-    grid: &Grid3,
+    grid: &Grid,
     points: &[Vec3],
     homes: &[[u32; 3]],
 ) -> Result<PointSeeds, Error> {
@@ -88,20 +88,12 @@ pub fn upload_points_with_homes(
 pub(crate) fn upload_points_inner(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
-    grid: &Grid3,
+    grid: &Grid,
     points: &[Vec3],
     homes: Option<&[[u32; 3]]>,
 ) -> Result<PointSeeds, Error> {
     check_size_3d(device, grid.size)?;
-    if !(grid.voxel_size.is_finite() && grid.voxel_size > 0.0 && grid.origin.is_finite()) {
-        return Err(Error::Invalid {
-            stage: STAGE,
-            what: format!(
-                "grid voxel_size {} / origin {} must be finite (size positive)",
-                grid.voxel_size, grid.origin
-            ),
-        });
-    }
+    let (origin, voxel) = grid.as_f32(STAGE)?;
     if points.is_empty() || points.len() as u64 > MAX_POINTS as u64 {
         return Err(Error::Size {
             stage: STAGE,
@@ -117,7 +109,7 @@ pub(crate) fn upload_points_inner(
     ) - 0.5;
     let mut data = Vec::with_capacity(points.len());
     for (i, &p) in points.iter().enumerate() {
-        let v = grid.to_voxel(p);
+        let v = (p - origin) / voxel - Vec3::splat(0.5);
         if !p.is_finite() {
             return Err(Error::Invalid {
                 stage: STAGE,

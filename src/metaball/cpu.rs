@@ -48,18 +48,21 @@ pub fn splat_fixed(
     voxels: &[Vec4],
     edge: f32,
     settings: &Settings,
-    grid: &crate::distance::Grid3,
+    grid: &crate::distance::Grid,
     scale: f32,
 ) -> (Vec<u64>, Vec<u32>) {
     let [w, h, d] = grid.size.map(|s| s as usize);
     let mut sum = vec![0u64; w * h * d];
     let mut count = vec![0u32; w * h * d];
+    // The centres in f32, as the splat places them.
+    let (origin, cell) = (grid.origin.as_vec3(), grid.voxel as f32);
     for v in voxels.iter().filter(|v| v.w > 0.0) {
         let r = settings.radius(edge, v.w) as f64;
         for z in 0..d {
             for y in 0..h {
                 for x in 0..w {
-                    let c = grid.voxel_centre([x as u32, y as u32, z as u32]).as_dvec3();
+                    let i = glam::Vec3::new(x as f32, y as f32, z as f32);
+                    let c = (origin + (i + 0.5) * cell).as_dvec3();
                     let f = falloff((c - v.truncate().as_dvec3()).length_squared(), r);
                     let units = (f * scale as f64).round() as u64;
                     if units > 0 {

@@ -31,7 +31,7 @@ use glam::{Vec3, Vec4};
 
 use crate::bind::ComputePipeline;
 use crate::distance::{
-    Distance3d, Grid3, Inside, MAX_POINTS, Method, Options3d, Unreached, Variant,
+    Distance3d, Grid, Inside, MAX_POINTS, Method, Options3d, Unreached, Variant,
 };
 use crate::error::Error;
 use crate::gpu::{Record, uniform_buffer as uniform};
@@ -163,7 +163,7 @@ impl Settings {
 
     /// A grid fitted to the instances' support (plus one cell), with cells of
     /// `edge / cells_per_edge`. `None` for an empty set or one whose scales are all zero.
-    pub fn fit_grid(&self, voxels: &[Vec4], edge: f32) -> Result<Option<Grid3>, Error> {
+    pub fn fit_grid(&self, voxels: &[Vec4], edge: f32) -> Result<Option<Grid>, Error> {
         self.check()?;
         check_voxels(voxels, edge)?;
         let cell = edge / self.cells_per_edge;
@@ -210,36 +210,35 @@ impl Settings {
         let size = [size[0] as u32, size[1] as u32, size[2] as u32];
         // Centre the grid on the support so the extra fraction of a cell is split evenly.
         let extent = Vec3::new(size[0] as f32, size[1] as f32, size[2] as f32) * cell;
-        Ok(Some(Grid3 {
+        Ok(Some(Grid {
             size,
-            voxel_size: cell,
-            origin: (lo + hi) * 0.5 - extent * 0.5,
+            voxel: cell as f64,
+            origin: ((lo + hi) * 0.5 - extent * 0.5).as_dvec3(),
         }))
     }
 }
 
 /// The band of a full-volume field: no distance between two voxels of `grid` is longer than its
 /// diagonal (what the SDF debug view scales by; unreached voxels lie beyond it).
-fn full_band(grid: &Grid3) -> f32 {
-    Vec3::from_array(grid.size.map(|s| s as f32)).length() * grid.voxel_size
+fn full_band(grid: &Grid) -> f32 {
+    Vec3::from_array(grid.size.map(|s| s as f32)).length() * (grid.voxel as f32)
 }
 
 /// Settings, voxel edge and grid placement, checked before any stage is encoded.
 fn check_inputs(
     settings: &Settings,
     edge: f32,
-    grid: &Grid3,
+    grid: &Grid,
     stage: &'static str,
 ) -> Result<(), Error> {
     settings.check()?;
     check_voxels(&[], edge)?;
-    if !(grid.voxel_size.is_finite() && grid.voxel_size > 0.0 && grid.origin.is_finite()) {
+    // The stages place the field in f32.
+    let (origin, cell) = (grid.origin.as_vec3(), grid.voxel as f32);
+    if !(cell.is_finite() && cell > 0.0 && origin.is_finite()) {
         return Err(Error::Invalid {
             stage,
-            what: format!(
-                "grid cell {} and origin {} must be finite (cell positive)",
-                grid.voxel_size, grid.origin
-            ),
+            what: format!("grid cell {cell} and origin {origin} must be finite (cell positive)"),
         });
     }
     Ok(())
@@ -314,7 +313,7 @@ pub struct Instances {
 #[derive(Debug)]
 pub struct MetaballField {
     /// The grid the field lives on.
-    pub grid: Grid3,
+    pub grid: Grid,
     /// Fixed-point density sums (u32 per voxel) and the scale they use.
     pub density_fixed: wgpu::Buffer,
     /// Density = fixed / `fixed_scale`.
@@ -483,7 +482,7 @@ impl Metaballs {
         device: &wgpu::Device,
         rec: &mut impl Record,
         instances: &Instances,
-        grid: &Grid3,
+        grid: &Grid,
         edge: f32,
         settings: &Settings,
     ) -> Result<MetaballField, Error> {
@@ -492,10 +491,10 @@ impl Metaballs {
             method: settings.method,
             signed: true,
             inside: Inside::Threshold(settings.threshold),
-            voxel_size: grid.voxel_size,
+            voxel_size: (grid.voxel as f32),
             band: (!settings.full_volume).then_some(settings.band),
             unreached: settings.full_volume.then_some(Unreached {
-                inside: grid.voxel_size,
+                inside: (grid.voxel as f32),
                 outside: FULL_VOLUME_FAR,
             }),
         };
@@ -524,7 +523,7 @@ impl Metaballs {
             band: if settings.full_volume {
                 full_band(grid)
             } else {
-                settings.band * grid.voxel_size
+                settings.band * (grid.voxel as f32)
             },
             threshold: settings.threshold,
         })
@@ -538,12 +537,12 @@ impl Metaballs {
         device: &wgpu::Device,
         rec: &mut impl Record,
         instances: &Instances,
-        grid: &Grid3,
+        grid: &Grid,
         edge: f32,
         settings: &Settings,
     ) -> Result<BlobBins, Error> {
         check_inputs(settings, edge, grid, bin_blobs::STAGE)?;
-        let extent = Vec3::from_array(grid.size.map(|s| s as f32)) * grid.voxel_size;
+        let extent = Vec3::from_array(grid.size.map(|s| s as f32)) * (grid.voxel as f32);
         let r_max = settings.radius(edge, instances.max_scale);
         let mut bin_size = if r_max > 0.0 {
             r_max
@@ -583,7 +582,7 @@ impl Metaballs {
             &bin_blobs::BinParams {
                 bins: bins.into(),
                 count: instances.count,
-                origin: grid.origin,
+                origin: grid.origin.as_vec3(),
                 bin_size,
                 radius_per_scale: settings.radius(edge, 1.0),
                 capacity: capacity as u32,
@@ -638,13 +637,13 @@ impl Metaballs {
             .dispatch(&mut pass, &bound, [bin_total.div_ceil(64), 1, 1]);
         drop(pass);
         Ok(BlobBins {
-            origin: grid.origin,
+            origin: grid.origin.as_vec3(),
             bin_size,
             bins,
             starts,
             items,
             stats,
-            cell: grid.voxel_size,
+            cell: (grid.voxel as f32),
             threshold: settings.threshold,
         })
     }
@@ -654,7 +653,7 @@ impl Metaballs {
         &self,
         device: &wgpu::Device,
         rec: &mut impl Record,
-        grid: &Grid3,
+        grid: &Grid,
         sdf: &wgpu::Texture,
         density: &wgpu::Texture,
     ) -> Result<wgpu::Texture, Error> {
@@ -669,7 +668,7 @@ impl Metaballs {
             "march field params",
             &march_field::PackParams {
                 size: grid.size.into(),
-                inv_cell: 1.0 / grid.voxel_size,
+                inv_cell: 1.0 / (grid.voxel as f32),
             },
         );
         let (sv, dv, pv) = (
@@ -698,7 +697,7 @@ impl Metaballs {
         device: &wgpu::Device,
         rec: &mut impl Record,
         instances: &Instances,
-        grid: &Grid3,
+        grid: &Grid,
         edge: f32,
         settings: &Settings,
     ) -> Result<SurfaceSeeds, Error> {
@@ -734,8 +733,8 @@ impl Metaballs {
                 &splat::SplatParams {
                     size: grid.size.into(),
                     count: instances.count,
-                    origin: grid.origin,
-                    cell: grid.voxel_size,
+                    origin: grid.origin.as_vec3(),
+                    cell: (grid.voxel as f32),
                     radius_per_scale: settings.radius(edge, 1.0),
                     fixed_scale: scale,
                 },

@@ -646,9 +646,8 @@ impl Raymarcher {
         settings: &RaymarchSettings,
     ) -> Result<Option<Marched>, Error> {
         let g = &field.grid;
-        let lo = g.origin;
-        let hi = g.origin
-            + Vec3::new(g.size[0] as f32, g.size[1] as f32, g.size[2] as f32) * g.voxel_size;
+        let (lo, cell) = (g.origin.as_vec3(), g.voxel as f32);
+        let hi = lo + Vec3::new(g.size[0] as f32, g.size[1] as f32, g.size[2] as f32) * cell;
         let Some(Frame {
             rect,
             rect_size,
@@ -669,7 +668,7 @@ impl Raymarcher {
                 world_to_local: local_to_world.inverse(),
                 local_to_world,
                 box_min: lo,
-                cell: g.voxel_size,
+                cell,
                 box_max: hi,
                 threshold: field.threshold,
                 light_dir: settings.light_dir.normalize(),
@@ -692,7 +691,7 @@ impl Raymarcher {
                 band: field.band,
                 pile_colour: pile(settings),
                 near_safety: settings.near_safety.unwrap_or(settings.safety),
-                min_step: settings.min_step(g.voxel_size),
+                min_step: settings.min_step(cell),
                 hermite: (settings.filter == Filter::Hermite) as u32,
                 edge_falloff: settings.edge_falloff as u32,
                 view_origin: glam::UVec2::from_array(view.origin),

@@ -512,12 +512,7 @@ fn check_render(
             ),
         ));
     }
-    if !(grid.origin.is_finite() && grid.voxel.is_finite() && grid.voxel > 0.0) {
-        return Err(Error::invalid(
-            stage::STAGE,
-            format!("the grid needs a finite origin and voxel > 0, got {grid:?}"),
-        ));
-    }
+    grid.check(stage::STAGE)?;
     let (level, footprint) = match settings.lod {
         Lod::Level(l) if l <= octree.log_side => (l, 1.0),
         Lod::Level(l) => {

@@ -247,7 +247,12 @@ impl Voxelizer {
             }
             .constants(),
         )?;
-        let no_ids = storage(device, "no fragment triangles", 4, wgpu::BufferUsages::empty());
+        let no_ids = storage(
+            device,
+            "no fragment triangles",
+            4,
+            wgpu::BufferUsages::empty(),
+        );
         let mut fragments = Fragments {
             size: grid.size,
             parts: Vec::with_capacity(parts.len()),

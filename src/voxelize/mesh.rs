@@ -5,6 +5,7 @@ use glam::{DVec3, Vec4};
 
 use super::{MAX_SPARSE_SIDE, STAGE, check_grid, check_model, check_sides};
 use crate::error::Error;
+use crate::grid::Grid;
 
 /// A triangle mesh in world units.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -24,25 +25,9 @@ pub struct Mesh {
     pub texcoords: Vec<[glam::Vec2; 3]>,
 }
 
-/// Where the voxels are: the world position of voxel (0, 0, 0)'s min corner, the voxel edge and
-/// the number of voxels per axis.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct Grid {
-    /// World position of the grid's lowest corner.
-    pub origin: DVec3,
-    /// Edge of a voxel, world units.
-    pub voxel: f64,
-    /// Voxels per axis.
-    pub size: [u32; 3],
-}
-
+// The fitting of a grid to a mesh lives with the mesh; the grid itself is the crate's shared
+// `crate::Grid`.
 impl Grid {
-    /// Voxels in the grid.
-    pub fn voxels(&self) -> u64 {
-        self.size.iter().map(|&n| n as u64).product()
-    }
-
     /// A cube-voxel grid of about `n` voxels along the mesh's longest side, fitted to its
     /// bounds with one voxel of margin on each side. An empty mesh, a non-finite position, a
     /// mesh with no extent or `n` below 3 is refused ([`Error::Invalid`]).

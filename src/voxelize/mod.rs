@@ -33,6 +33,7 @@ mod view;
 
 pub use view::{ColourBy, Light, VoxelView};
 
+pub use crate::grid::Grid;
 pub use attributes::{
     AttributeVolumes, Attributes, PendingAttributes, VoxelAttributes, occupied_bound,
 };
@@ -41,7 +42,7 @@ pub use listing::{
     CHUNK, GIANT_MIN_COLUMNS, GpuListing, LIST_BUDGET, Listing, MAX_CHUNKS, MAX_GIANTS,
     heavy_chunk_bound,
 };
-pub use mesh::{Grid, GridMesh, Mesh};
+pub use mesh::{GridMesh, Mesh};
 pub use placed::GpuMesh;
 
 use glam::Vec4;
@@ -121,27 +122,7 @@ fn check_grid(grid: &Grid) -> Result<(), Error> {
 
 /// A finite origin, a voxel edge > 0 and sides from 1 to `max_side`.
 fn check_sides(grid: &Grid, max_side: u32) -> Result<(), Error> {
-    if !(grid.origin.is_finite() && grid.voxel.is_finite() && grid.voxel > 0.0) {
-        return Err(Error::invalid(
-            STAGE,
-            format!("the grid needs a finite origin and a voxel edge > 0, got {grid:?}"),
-        ));
-    }
-    for (axis, &n) in ["x", "y", "z"].iter().zip(&grid.size) {
-        if n == 0 || n > max_side {
-            return Err(Error::Size {
-                stage: STAGE,
-                what: match *axis {
-                    "x" => "grid side x",
-                    "y" => "grid side y",
-                    _ => "grid side z",
-                },
-                got: n as u64,
-                max: max_side as u64,
-            });
-        }
-    }
-    Ok(())
+    grid.check_sides(STAGE, max_side)
 }
 
 /// An empty occupancy bitset for `grid`: a new buffer, which wgpu hands over zeroed (it clears

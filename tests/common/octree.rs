@@ -14,7 +14,12 @@ pub fn unit_grid(size: [u32; 3]) -> Grid {
     }
 }
 
-pub fn build(ctx: &Context, mesh: &Mesh, grid: &Grid, separation: Separation) -> (Octree, OctreeData) {
+pub fn build(
+    ctx: &Context,
+    mesh: &Mesh,
+    grid: &Grid,
+    separation: Separation,
+) -> (Octree, OctreeData) {
     let voxelizer = Voxelizer::new(&ctx.device).unwrap();
     let builder = OctreeBuilder::new(&ctx.device).unwrap();
     let octree = ctx

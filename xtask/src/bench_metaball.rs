@@ -14,7 +14,7 @@ use std::io::Write;
 use std::process::ExitCode;
 
 use fieldkit::distance::Variant;
-use fieldkit::distance::{Grid3, Method};
+use fieldkit::distance::{Grid, Method};
 use fieldkit::gpu::{Context, read_texture};
 use fieldkit::metaball::{BlobBins, MetaballField, Metaballs, Settings, animate, cpu, packed_grid};
 use fieldkit::metaball::{Direct, Output, RaymarchSettings, Raymarcher};
@@ -151,8 +151,8 @@ fn bench(
         let inst = balls
             .upload(&ctx.device, &ctx.queue, &voxels)
             .map_err(|e| e.to_string())?;
-        let extent = Vec3::from_array(fitted.size.map(|s| s as f32)) * fitted.voxel_size;
-        let centre = fitted.origin + extent * 0.5;
+        let extent = Vec3::from_array(fitted.size.map(|s| s as f32)) * fitted.voxel as f32;
+        let centre = fitted.origin.as_vec3() + extent * 0.5;
         let proj = glam::camera::rh::proj::directx::perspective(
             0.8,
             width as f32 / height as f32,
@@ -223,10 +223,10 @@ fn bench(
         for &n in grids {
             let cell = extent.max_element() / n as f32;
             let size = (extent / cell).ceil();
-            let grid = Grid3 {
+            let grid = Grid {
                 size: [size.x as u32, size.y as u32, size.z as u32],
-                voxel_size: cell,
-                origin: centre - size * cell * 0.5,
+                voxel: cell as f64,
+                origin: (centre - size * cell * 0.5).as_dvec3(),
             };
             let label = format!("{}×{}×{}", grid.size[0], grid.size[1], grid.size[2]);
             // The distance stage's two methods for sub-voxel seeds (see `Settings::method`).
@@ -450,11 +450,11 @@ struct Reference {
 }
 
 impl Reference {
-    fn new(voxels: &[Vec4], edge: f32, s: &Settings, view: &View, grid: &Grid3) -> Self {
+    fn new(voxels: &[Vec4], edge: f32, s: &Settings, view: &View, grid: &Grid) -> Self {
         let radius = |v: &Vec4| s.radius(edge, v.w) as f64;
         let r_max = voxels.iter().map(radius).fold(0.0, f64::max).max(1e-6);
-        let lo = grid.origin.as_dvec3();
-        let hi = lo + glam::DVec3::from_array(grid.size.map(|n| n as f64)) * grid.voxel_size as f64;
+        let lo = grid.origin;
+        let hi = lo + glam::DVec3::from_array(grid.size.map(|n| n as f64)) * grid.voxel;
         let n = ((hi - lo) / r_max).ceil().max(glam::DVec3::ONE);
         let dims = [n.x as usize, n.y as usize, n.z as usize];
         let mut bins: Vec<Vec<(DVec3, f64)>> = vec![Vec::new(); dims[0] * dims[1] * dims[2]];

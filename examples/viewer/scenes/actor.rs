@@ -223,7 +223,7 @@ impl Actor {
         &self,
         device: &wgpu::Device,
         s: &ActorSettings,
-        grid: &fieldkit::distance::Grid3,
+        grid: &fieldkit::distance::Grid,
         frame: &mut Frame,
     ) -> Result<(), Error> {
         let instances = &self.instances.as_ref().expect("prepared").0;
