@@ -15,7 +15,7 @@
 //! runs the same code on lavapipe and checks the numbers against CPU references.
 
 use fieldkit::Error;
-use fieldkit::distance::{Distance2d, Distance3d, Options2d, Options3d, upload_mask};
+use fieldkit::distance::{Distance2d, Distance3d, Settings2d, Settings3d, upload_mask};
 use fieldkit::gpu::{Readback, readback_texture};
 use fieldkit::metaball::{Metaballs, Settings, packed_grid};
 use fieldkit::metaball::{RaymarchSettings, Raymarcher};
@@ -143,9 +143,9 @@ pub fn run(device: &wgpu::Device, queue: &wgpu::Queue, adapter: String) -> Resul
         device,
         &mut enc,
         &seeds,
-        &Options2d {
+        &Settings2d {
             signed: true,
-            ..Options2d::default()
+            ..Settings2d::default()
         },
     )?;
     queue.submit([enc.finish()]);
@@ -166,10 +166,10 @@ pub fn run(device: &wgpu::Device, queue: &wgpu::Queue, adapter: String) -> Resul
         device,
         &mut enc,
         &occupancy,
-        &Options3d {
+        &Settings3d {
             signed: true,
             voxel_size: grid.voxel as f32,
-            ..Options3d::default()
+            ..Settings3d::default()
         },
     )?;
     queue.submit([enc.finish()]);

@@ -9,7 +9,7 @@ mod common;
 mod gallery;
 
 use common::*;
-use fieldkit::distance::{FAR, Jfa2d, NO_SEED, Options, Variant, cpu, unpack_seed};
+use fieldkit::distance::{FAR, Jfa2d, JfaSettings2d, NO_SEED, Variant, cpu, unpack_seed};
 use fieldkit::gpu::Context;
 
 /// One test configuration.
@@ -228,7 +228,14 @@ fn jfa_variants_against_exact_transform() {
 fn no_seeds_gives_no_seed_and_far_everywhere() {
     let ctx = Context::shared();
     let jfa = Jfa2d::new(&ctx.device).unwrap();
-    let (nearest, dist) = run_jfa(&ctx, &jfa, &[false; 30 * 20], 30, 20, Options::default());
+    let (nearest, dist) = run_jfa(
+        &ctx,
+        &jfa,
+        &[false; 30 * 20],
+        30,
+        20,
+        JfaSettings2d::default(),
+    );
     assert!(nearest.iter().all(|&s| s == NO_SEED));
     assert!(dist.iter().all(|&d| d == FAR));
 }
@@ -242,10 +249,10 @@ fn signed_distance_matches_reference() {
         .iter()
         .map(|&m| m != 0)
         .collect();
-    let options = Options {
+    let options = JfaSettings2d {
         signed: true,
         texel_size: 0.25,
-        ..Options::default()
+        ..JfaSettings2d::default()
     };
     let (_, dist) = run_jfa(&ctx, &jfa, &mask, w, h, options);
     let reference = cpu::signed_2d(&mask, w, h);
@@ -276,9 +283,9 @@ fn full_mask_signed_is_minus_far() {
         &[true; 12 * 9],
         12,
         9,
-        Options {
+        JfaSettings2d {
             signed: true,
-            ..Options::default()
+            ..JfaSettings2d::default()
         },
     );
     assert!(dist.iter().all(|&d| d == -FAR));

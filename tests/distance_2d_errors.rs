@@ -2,7 +2,7 @@
 //! a wgpu validation error or a lost device.
 
 use fieldkit::Error;
-use fieldkit::distance::{Jfa2d, MAX_PACKED_SIDE, Options, upload_mask};
+use fieldkit::distance::{Jfa2d, JfaSettings2d, MAX_PACKED_SIDE, upload_mask};
 use fieldkit::gpu::Context;
 
 fn seed_texture(
@@ -23,7 +23,7 @@ fn seed_texture(
     })
 }
 
-fn encode(ctx: &Context, seeds: &wgpu::Texture, options: Options) -> Result<(), Error> {
+fn encode(ctx: &Context, seeds: &wgpu::Texture, options: JfaSettings2d) -> Result<(), Error> {
     let jfa = Jfa2d::new(&ctx.device)?;
     let mut enc = ctx.encoder("bad input");
     jfa.encode(&ctx.device, &mut enc, seeds, &options)?;
@@ -91,7 +91,7 @@ fn unsupported_seed_format() {
         EXT,
         wgpu::TextureDimension::D2,
     );
-    let e = encode(&ctx, &t, Options::default()).unwrap_err();
+    let e = encode(&ctx, &t, JfaSettings2d::default()).unwrap_err();
     assert!(
         matches!(
             e,
@@ -121,7 +121,7 @@ fn three_d_seed_texture() {
         wgpu::TextureDimension::D3,
     );
     assert!(matches!(
-        encode(&ctx, &t, Options::default()),
+        encode(&ctx, &t, JfaSettings2d::default()),
         Err(Error::Invalid { .. })
     ));
 }
@@ -134,9 +134,9 @@ fn nan_and_negative_texel_size() {
         let e = encode(
             &ctx,
             &t,
-            Options {
+            JfaSettings2d {
                 texel_size: bad,
-                ..Options::default()
+                ..JfaSettings2d::default()
             },
         )
         .unwrap_err();

@@ -2,7 +2,7 @@
 //! float PFM, and a normalised 8-bit picture, of a field computed on the GPU. Decoded here with
 //! the `png` crate and by hand, against the formulas the docs state.
 
-use fieldkit::distance::{Distance2d, FAR, Options2d, export};
+use fieldkit::distance::{Distance2d, FAR, Settings2d, export};
 use fieldkit::gpu::{Context, read_texture};
 
 const W: u32 = 29;
@@ -42,10 +42,10 @@ fn field(ctx: &Context) -> Vec<f32> {
             &ctx.device,
             &mut enc,
             &tex,
-            &Options2d {
+            &Settings2d {
                 signed: true,
                 texel_size: 0.25,
-                ..Options2d::default()
+                ..Settings2d::default()
             },
         )
         .unwrap();

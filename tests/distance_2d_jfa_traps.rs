@@ -8,7 +8,7 @@
 mod common;
 
 use common::*;
-use fieldkit::distance::{Distance2d, Method2d, Options2d, Variant, cpu, upload_mask};
+use fieldkit::distance::{Distance2d, Method2d, Settings2d, Variant, cpu, upload_mask};
 use fieldkit::gpu::Context;
 use fieldkit::gpu::read_texture;
 
@@ -83,9 +83,9 @@ fn jfa_plus_2_fails_on_sparse_non_square_sets_and_exact_does_not() {
                     &ctx.device,
                     &mut enc,
                     &seeds,
-                    &Options2d {
+                    &Settings2d {
                         method,
-                        ..Options2d::default()
+                        ..Settings2d::default()
                     },
                 )
                 .unwrap();

@@ -4,7 +4,7 @@
 //! the rule's formula gives, written out here.
 
 use fieldkit::distance::{
-    Channels, Distance2d, Jfa2d, Method2d, Options2d, SeedRule, Variant, cpu, unpack_seed,
+    Channels, Distance2d, Jfa2d, Method2d, SeedRule, Settings2d, Variant, cpu, unpack_seed,
 };
 use fieldkit::gpu::{Context, read_texture};
 use half::f16;
@@ -119,9 +119,9 @@ fn any_colour_format_and_rule_seeds_the_texels_the_rule_names() {
                     &ctx.device,
                     &mut enc,
                     &tex,
-                    &Options2d {
+                    &Settings2d {
                         seeds: *rule,
-                        ..Options2d::default()
+                        ..Settings2d::default()
                     },
                 )
                 .unwrap();
@@ -171,10 +171,10 @@ fn jfa_takes_the_rule_too() {
     let d2 = Distance2d::new(&ctx.device).unwrap();
     let tex = upload(&ctx, wgpu::TextureFormat::Rgba16Float, &image());
     let mut enc = ctx.encoder("jfa rule");
-    let run = |method| Options2d {
+    let run = |method| Settings2d {
         method,
         seeds: SeedRule::seed(),
-        ..Options2d::default()
+        ..Settings2d::default()
     };
     let exact = d2
         .encode(&ctx.device, &mut enc, &tex, &run(Method2d::Exact))
@@ -215,12 +215,12 @@ fn formats_and_thresholds_that_cannot_seed_are_typed_errors() {
             &ctx.device,
             &mut enc,
             &tex,
-            &Options2d {
+            &Settings2d {
                 seeds: SeedRule {
                     above: f32::NAN,
                     ..SeedRule::seed()
                 },
-                ..Options2d::default()
+                ..Settings2d::default()
             },
         )
         .expect_err("NaN threshold refused");
@@ -240,7 +240,7 @@ fn formats_and_thresholds_that_cannot_seed_are_typed_errors() {
         view_formats: &[],
     });
     let e = d2
-        .encode(&ctx.device, &mut enc, &uint, &Options2d::default())
+        .encode(&ctx.device, &mut enc, &uint, &Settings2d::default())
         .expect_err("an integer texture refused");
     assert!(matches!(e, fieldkit::Error::Format { .. }), "{e}");
 }

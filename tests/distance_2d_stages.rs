@@ -9,7 +9,7 @@ mod common;
 mod gallery;
 
 use common::*;
-use fieldkit::distance::{Jfa2d, Options, Variant, cpu, upload_mask};
+use fieldkit::distance::{Jfa2d, JfaSettings2d, Variant, cpu, upload_mask};
 use fieldkit::gpu::Context;
 use fieldkit::gpu::read_texture;
 use fieldkit::harness::{Summary, Tolerance, compare_image};
@@ -127,9 +127,9 @@ fn whole_chain_signed() {
         &m,
         W * 2,
         H * 2,
-        Options {
+        JfaSettings2d {
             signed: true,
-            ..Options::default()
+            ..JfaSettings2d::default()
         },
     );
     fieldkit::assert_summary!(
@@ -152,9 +152,9 @@ fn visualized_field_matches_reference_image() {
             &ctx.device,
             &mut enc,
             &seeds,
-            &Options {
+            &JfaSettings2d {
                 signed: true,
-                ..Options::default()
+                ..JfaSettings2d::default()
             },
         )
         .unwrap();

@@ -6,7 +6,9 @@
 mod common;
 
 use common::*;
-use fieldkit::distance::{ColumnPasses, Distance3d, Method, Options3d, tile_columns, unpack_seed3};
+use fieldkit::distance::{
+    ColumnPasses, Distance3d, Method, Settings3d, tile_columns, unpack_seed3,
+};
 use fieldkit::distance::{FAR, Variant, cpu};
 use fieldkit::gpu::Context;
 
@@ -253,9 +255,9 @@ fn exact_and_jfa_against_the_cpu_transform() {
                 &d3,
                 &case.mask,
                 case.size,
-                &Options3d {
+                &Settings3d {
                     method: *method,
-                    ..Options3d::default()
+                    ..Settings3d::default()
                 },
             );
             let e = score(&case, &nearest, &dist, &exact);
@@ -336,7 +338,7 @@ fn every_column_band_count_is_exact() {
         for case in cases() {
             let exact = cpu::edt_3d_squared(&case.mask, case.size);
             let (nearest, _, dist) =
-                run_3d(&ctx, &d3, &case.mask, case.size, &Options3d::default());
+                run_3d(&ctx, &d3, &case.mask, case.size, &Settings3d::default());
             let e = score(&case, &nearest, &dist, &exact);
             assert_eq!(
                 e.wrong, 0,
@@ -346,9 +348,9 @@ fn every_column_band_count_is_exact() {
             // At 8 bands the resolving z pass sweeps where every voxel is near a site
             // (`edt_columns.wgsl`'s SCAN), in the signed entry too.
             if bands == 8 {
-                let options = Options3d {
+                let options = Settings3d {
                     signed: true,
-                    ..Options3d::default()
+                    ..Settings3d::default()
                 };
                 let (_, _, dist) = run_3d(&ctx, &d3, &case.mask, case.size, &options);
                 let signed = cpu::signed_3d(&case.mask, case.size);
@@ -368,7 +370,7 @@ fn every_column_band_count_is_exact() {
             &d3_defaults,
             &case.mask,
             case.size,
-            &Options3d::default(),
+            &Settings3d::default(),
         );
         let e = score(&case, &nearest, &dist, &exact);
         assert_eq!(
@@ -437,12 +439,12 @@ fn the_sweep_after_a_workgroup_y_pass_is_exact() {
             jfa: false,
         };
         let exact = cpu::edt_3d_squared(&case.mask, s);
-        let (nearest, _, dist) = run_3d(&ctx, &d3, &case.mask, s, &Options3d::default());
+        let (nearest, _, dist) = run_3d(&ctx, &d3, &case.mask, s, &Settings3d::default());
         let e = score(&case, &nearest, &dist, &exact);
         assert_eq!(e.wrong, 0, "hollow x < {x_end}: {} wrong voxels", e.wrong);
-        let options = Options3d {
+        let options = Settings3d {
             signed: true,
-            ..Options3d::default()
+            ..Settings3d::default()
         };
         let (_, _, dist) = run_3d(&ctx, &d3, &case.mask, s, &options);
         check_signed(
@@ -494,16 +496,16 @@ fn the_y_pass_of_a_split_field_sweeps_exactly() {
                 jfa: false,
             };
             let exact = cpu::edt_3d_squared(mask, s);
-            let (nearest, _, dist) = run_3d(&ctx, &d3, mask, s, &Options3d::default());
+            let (nearest, _, dist) = run_3d(&ctx, &d3, mask, s, &Settings3d::default());
             let e = score(&case, &nearest, &dist, &exact);
             assert_eq!(
                 e.wrong, 0,
                 "{name}, split, bands {bands:?}: {} wrong voxels",
                 e.wrong
             );
-            let options = Options3d {
+            let options = Settings3d {
                 signed: true,
-                ..Options3d::default()
+                ..Settings3d::default()
             };
             let (_, _, dist) = run_3d(&ctx, &d3, mask, s, &options);
             check_signed(
@@ -618,9 +620,9 @@ fn every_column_path_is_exact() {
             d3.set_column_passes(passes);
             for ((name, size, mask), (exact, signed)) in all.iter().zip(&references) {
                 for is_signed in [false, true] {
-                    let options = Options3d {
+                    let options = Settings3d {
                         signed: is_signed,
-                        ..Options3d::default()
+                        ..Settings3d::default()
                     };
                     let (nearest, _, dist) = run_3d(ctx, &d3, mask, *size, &options);
                     let case = Case {
@@ -653,7 +655,7 @@ fn every_column_path_is_exact() {
     )
     .unwrap();
     let mut enc = defaults.encoder("too long");
-    match d3.encode_exact_2d(&defaults.device, &mut enc, &tall, &Options3d::default()) {
+    match d3.encode_exact_2d(&defaults.device, &mut enc, &tall, &Settings3d::default()) {
         Err(fieldkit::Error::Size { got, max, .. }) => assert_eq!((got, max), (4000, 3613)),
         other => panic!("expected Error::Size, got {other:?}"),
     }
@@ -714,7 +716,7 @@ fn fields_split_across_bindings_are_exact() {
             .unwrap();
             let mut enc = ctx.encoder("split");
             let field = d3
-                .encode(&ctx.device, &mut enc, &volume, &Options3d::default())
+                .encode(&ctx.device, &mut enc, &volume, &Settings3d::default())
                 .unwrap();
             assert!(
                 field.nearest.buffers.len() >= 2 && field.nearest.whole().is_none(),
@@ -745,9 +747,9 @@ fn fields_split_across_bindings_are_exact() {
             ] {
                 d3.set_column_passes(passes);
                 for is_signed in [false, true] {
-                    let options = Options3d {
+                    let options = Settings3d {
                         signed: is_signed,
-                        ..Options3d::default()
+                        ..Settings3d::default()
                     };
                     let what =
                         format!("{name} ({device_name}, split, {passes:?}, signed {is_signed})");
@@ -779,7 +781,7 @@ fn fields_split_across_bindings_are_exact() {
             d3.set_column_passes(ColumnPasses::Auto);
             d3.set_split_bytes(Some(64));
             let mut enc = ctx.encoder("split, too fine");
-            match d3.encode(&ctx.device, &mut enc, &volume, &Options3d::default()) {
+            match d3.encode(&ctx.device, &mut enc, &volume, &Settings3d::default()) {
                 Err(fieldkit::Error::Size { what, got, max, .. }) => {
                     assert!(what.contains("tile of columns"), "{what}");
                     assert!(got > max && max == 64, "{got} vs {max}");
@@ -863,9 +865,9 @@ fn tall_grids_pack_seeds_with_the_bits_they_need() {
                         [w as u32, h as u32, size[2] as u32],
                     )
                     .unwrap();
-                    let options = Options3d {
+                    let options = Settings3d {
                         signed: is_signed,
-                        ..Options3d::default()
+                        ..Settings3d::default()
                     };
                     let mut enc = ctx.encoder("tall");
                     let field = d3
@@ -921,9 +923,9 @@ fn tall_grids_pack_seeds_with_the_bits_they_need() {
     .unwrap();
     let d3 = Distance3d::new(&shared.device).unwrap();
     let mut enc = shared.encoder("tall jfa");
-    let jfa = Options3d {
+    let jfa = Settings3d {
         method: Method::Jfa(Variant::JfaPlus2),
-        ..Options3d::default()
+        ..Settings3d::default()
     };
     match d3.encode(&shared.device, &mut enc, &volume, &jfa) {
         Err(fieldkit::Error::Size { got, max, .. }) => assert_eq!((got, max), (2048, 1024)),

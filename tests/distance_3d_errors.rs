@@ -4,7 +4,7 @@
 use fieldkit::Error;
 use fieldkit::distance::{ColumnPasses, Variant};
 use fieldkit::distance::{
-    Distance3d, Grid, Inside, MAX_SIDE_3D, Method, Options3d, check_size_2d_exact, check_size_3d,
+    Distance3d, Grid, Inside, MAX_SIDE_3D, Method, Settings3d, check_size_2d_exact, check_size_3d,
     upload_points, upload_points_with_homes, upload_volume,
 };
 use fieldkit::gpu::Context;
@@ -168,25 +168,25 @@ fn bad_options_and_textures() {
     let volume = upload_volume(&ctx.device, &ctx.queue, &[255; 64], [4, 4, 4]).unwrap();
     let mut enc = ctx.encoder("bad");
     let bad = [
-        Options3d {
+        Settings3d {
             voxel_size: f32::NAN,
-            ..Options3d::default()
+            ..Settings3d::default()
         },
-        Options3d {
+        Settings3d {
             voxel_size: -1.0,
-            ..Options3d::default()
+            ..Settings3d::default()
         },
-        Options3d {
+        Settings3d {
             band: Some(0.0),
-            ..Options3d::default()
+            ..Settings3d::default()
         },
-        Options3d {
+        Settings3d {
             band: Some(f32::INFINITY),
-            ..Options3d::default()
+            ..Settings3d::default()
         },
-        Options3d {
+        Settings3d {
             inside: Inside::Threshold(f32::NAN),
-            ..Options3d::default()
+            ..Settings3d::default()
         },
     ];
     for o in bad {
@@ -214,7 +214,7 @@ fn bad_options_and_textures() {
         view_formats: &[],
     });
     let e = d3
-        .encode(&ctx.device, &mut enc, &rgba, &Options3d::default())
+        .encode(&ctx.device, &mut enc, &rgba, &Settings3d::default())
         .unwrap_err();
     assert!(
         matches!(
@@ -229,7 +229,7 @@ fn bad_options_and_textures() {
     // A 2D texture where a volume is expected.
     let flat = fieldkit::distance::upload_mask(&ctx.device, &ctx.queue, &[255; 16], 4, 4).unwrap();
     assert!(matches!(
-        d3.encode(&ctx.device, &mut enc, &flat, &Options3d::default()),
+        d3.encode(&ctx.device, &mut enc, &flat, &Settings3d::default()),
         Err(Error::Invalid { .. })
     ));
     // Sub-voxel seeds with the exact method, and an inside volume of another size.
@@ -242,7 +242,7 @@ fn bad_options_and_textures() {
             &pts,
             [4, 4, 4],
             None,
-            &Options3d::default(),
+            &Settings3d::default(),
         )
         .unwrap_err();
     assert!(
@@ -250,9 +250,9 @@ fn bad_options_and_textures() {
         "{e}"
     );
     let other = upload_volume(&ctx.device, &ctx.queue, &[0; 27], [3, 3, 3]).unwrap();
-    let jfa = Options3d {
+    let jfa = Settings3d {
         method: Method::Jfa(Variant::JfaPlus2),
-        ..Options3d::default()
+        ..Settings3d::default()
     };
     assert!(matches!(
         d3.encode_points(&ctx.device, &mut enc, &pts, [4, 4, 4], Some(&other), &jfa),

@@ -5,7 +5,7 @@ mod common;
 
 use common::*;
 use fieldkit::distance::{
-    ColumnPasses, Distance3d, Grid, Inside, Method, Options3d, upload_points,
+    ColumnPasses, Distance3d, Grid, Inside, Method, Settings3d, upload_points,
     upload_points_with_homes, upload_volume,
 };
 use fieldkit::distance::{Variant, cpu, upload_mask};
@@ -37,10 +37,10 @@ fn signed_matches_cpu_for_exact_and_jfa_plus_2() {
             &d3,
             &m,
             size,
-            &Options3d {
+            &Settings3d {
                 method,
                 signed: true,
-                ..Options3d::default()
+                ..Settings3d::default()
             },
         );
         assert!(outside.is_some());
@@ -74,10 +74,10 @@ fn exact_resolves_in_whichever_pass_is_last() {
                 &d3,
                 &m,
                 size,
-                &Options3d {
+                &Settings3d {
                     signed: is_signed,
                     voxel_size: 0.5,
-                    ..Options3d::default()
+                    ..Settings3d::default()
                 },
             );
             for i in 0..d.len() {
@@ -109,9 +109,9 @@ fn world_units_band_and_threshold() {
         &d3,
         &m,
         size,
-        &Options3d {
+        &Settings3d {
             voxel_size: 0.25,
-            ..Options3d::default()
+            ..Settings3d::default()
         },
     );
     for i in 0..d.len() {
@@ -129,10 +129,10 @@ fn world_units_band_and_threshold() {
             &d3,
             &m,
             size,
-            &Options3d {
+            &Settings3d {
                 method,
                 band: Some(3.0),
-                ..Options3d::default()
+                ..Settings3d::default()
             },
         );
         for i in 0..d.len() {
@@ -146,17 +146,17 @@ fn world_units_band_and_threshold() {
         }
     }
     assert_eq!(
-        Options3d {
+        Settings3d {
             band: Some(3.0),
-            ..Options3d::default()
+            ..Settings3d::default()
         }
         .steps(Variant::JfaPlus2, 20),
         vec![4, 2, 1, 2, 1]
     );
     assert_eq!(
-        Options3d {
+        Settings3d {
             band: Some(3.0),
-            ..Options3d::default()
+            ..Settings3d::default()
         }
         .steps(Variant::OnePlusJfa, 64),
         vec![1, 4, 2, 1]
@@ -170,9 +170,9 @@ fn world_units_band_and_threshold() {
             &ctx.device,
             &mut enc,
             &volume,
-            &Options3d {
+            &Settings3d {
                 inside: Inside::Threshold(0.5),
-                ..Options3d::default()
+                ..Settings3d::default()
             },
         )
         .unwrap();
@@ -248,10 +248,10 @@ fn analytic_error(
         .collect();
     let volume = upload_volume(&ctx.device, &ctx.queue, &inside, grid.size).unwrap();
     let mut enc = ctx.encoder("points");
-    let options = Options3d {
+    let options = Settings3d {
         method: Method::Jfa(Variant::JfaPlus2),
         voxel_size,
-        ..Options3d::default()
+        ..Settings3d::default()
     };
     let field = d3
         .encode_points(
@@ -358,9 +358,9 @@ fn exact_2d_matches_cpu() {
                     &ctx.device,
                     &mut enc,
                     &tex,
-                    &Options3d {
+                    &Settings3d {
                         signed: is_signed,
-                        ..Options3d::default()
+                        ..Settings3d::default()
                     },
                 )
                 .unwrap();
@@ -412,27 +412,27 @@ fn recycled_fields_are_taken_again_and_written_whole() {
     let jfa = Method::Jfa(fieldkit::distance::Variant::JfaPlus2);
     // (case, bytes per binding, options)
     let cases = [
-        ("exact", None, Options3d::default()),
+        ("exact", None, Settings3d::default()),
         (
             "exact signed",
             None,
-            Options3d {
+            Settings3d {
                 signed: true,
-                ..Options3d::default()
+                ..Settings3d::default()
             },
         ),
         (
             "exact split",
             Some(40 * 33 * 21 * 4 / 2),
-            Options3d::default(),
+            Settings3d::default(),
         ),
         (
             "jfa signed",
             None,
-            Options3d {
+            Settings3d {
                 method: jfa,
                 signed: true,
-                ..Options3d::default()
+                ..Settings3d::default()
             },
         ),
     ];
@@ -525,9 +525,9 @@ fn recycled_fields_are_taken_again_and_written_whole() {
         upload_points(&ctx.device, &ctx.queue, &grid, &world).unwrap()
     };
     let (many, few) = (points(300, 1), points(4, 2));
-    let options = Options3d {
+    let options = Settings3d {
         method: jfa,
-        ..Options3d::default()
+        ..Settings3d::default()
     };
     let pooled = Distance3d::new(&ctx.device).unwrap();
     let fresh = Distance3d::new(&ctx.device).unwrap();
@@ -555,9 +555,9 @@ fn recycled_fields_are_taken_again_and_written_whole() {
     });
     let pooled = Distance3d::new(&ctx.device).unwrap();
     let fresh = Distance3d::new(&ctx.device).unwrap();
-    let signed = Options3d {
+    let signed = Settings3d {
         signed: true,
-        ..Options3d::default()
+        ..Settings3d::default()
     };
     let bits_2d = |f: &fieldkit::distance::FieldBuf2d| {
         let mut words = read_buffer(&ctx, &f.nearest).unwrap();

@@ -6,7 +6,7 @@ mod common;
 
 use common::*;
 use fieldkit::distance::Variant;
-use fieldkit::distance::{Distance3d, Inside, Method, Options3d, PointSeeds};
+use fieldkit::distance::{Distance3d, Inside, Method, PointSeeds, Settings3d};
 use fieldkit::gpu::{Context, read_buffer, read_texture};
 use fieldkit::metaball::{Metaballs, Settings};
 use glam::{Vec3, Vec4};
@@ -95,8 +95,8 @@ fn point_seeds(ctx: &Context, table: &[Vec4]) -> PointSeeds {
     }
 }
 
-fn options(method: Method, band: f32) -> Options3d {
-    Options3d {
+fn options(method: Method, band: f32) -> Settings3d {
+    Settings3d {
         method,
         signed: false,
         inside: Inside::Mask,
@@ -247,7 +247,7 @@ fn line_passes_need_a_band_and_sub_voxel_seeds() {
     let size = [8u32, 8, 8];
     let table = [Vec4::new(3.0, 4.0, 2.0, 1.0)];
     let seeds = point_seeds(&ctx, &table);
-    let no_band = Options3d {
+    let no_band = Settings3d {
         band: None,
         ..options(Method::Lines, 1.0)
     };

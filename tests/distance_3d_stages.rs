@@ -6,7 +6,7 @@ mod common;
 use common::*;
 use fieldkit::distance::cpu;
 use fieldkit::distance::{
-    ColumnPasses, Distance3d, Grid, Inside, Options3d, key_index, upload_points, upload_volume,
+    ColumnPasses, Distance3d, Grid, Inside, Settings3d, key_index, upload_points, upload_volume,
 };
 use fieldkit::gpu::{Context, read_buffer, read_texture};
 use fieldkit::harness::Summary;
@@ -237,9 +237,9 @@ fn resolve_stage() {
         inside.whole().expect("one buffer"),
         outside.whole().expect("one buffer"),
     );
-    let opts = Options3d {
+    let opts = Settings3d {
         voxel_size: 0.5,
-        ..Options3d::default()
+        ..Settings3d::default()
     };
     let unsigned = d3
         .encode_resolve(&ctx.device, &mut enc, size_u32(SIZE), inside, None, &opts)
@@ -294,9 +294,9 @@ fn seed_points_stage() {
     ];
     let seeds = upload_points(&ctx.device, &ctx.queue, &grid, &pts).unwrap();
     let mut enc = ctx.encoder("points");
-    let opts = Options3d {
+    let opts = Settings3d {
         method: fieldkit::distance::Method::Jfa(fieldkit::distance::Variant::JfaPlus2),
-        ..Options3d::default()
+        ..Settings3d::default()
     };
     let field = d3
         .encode_points(&ctx.device, &mut enc, &seeds, size_u32(SIZE), None, &opts)

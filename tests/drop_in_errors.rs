@@ -4,7 +4,7 @@
 //! not a lost device).
 
 use fieldkit::Error;
-use fieldkit::distance::{Distance2d, Method2d, Options2d, Variant, upload_mask};
+use fieldkit::distance::{Distance2d, Method2d, Settings2d, Variant, upload_mask};
 use fieldkit::gpu::{Context, readback_buffer};
 use fieldkit::voxelize::{Grid, Mesh};
 use glam::DVec3;
@@ -64,11 +64,11 @@ fn distance_2d_refuses_bad_texel_sizes_for_both_methods() {
                     &ctx.device,
                     &mut enc,
                     &mask,
-                    &Options2d {
+                    &Settings2d {
                         method,
                         signed: false,
                         texel_size,
-                        ..Options2d::default()
+                        ..Settings2d::default()
                     },
                 )
                 .err()

@@ -7,7 +7,7 @@
 //! wgpu sees it, and that nothing it refused or allocated leaves the device unusable.)
 
 use fieldkit::Error;
-use fieldkit::distance::{Distance3d, Options3d, check_size_3d, cpu, upload_volume};
+use fieldkit::distance::{Distance3d, Settings3d, check_size_3d, cpu, upload_volume};
 use fieldkit::gpu::Context;
 
 /// The largest cube side `check_size_3d` accepts on this device.
@@ -98,7 +98,7 @@ fn the_largest_grid_runs_one_larger_is_refused_and_the_device_stays_usable() {
     let mut enc = ctx.encoder("largest");
     let fields: Vec<_> = (0..3)
         .map(|_| {
-            d3.encode(&ctx.device, &mut enc, &volume, &Options3d::default())
+            d3.encode(&ctx.device, &mut enc, &volume, &Settings3d::default())
                 .expect("the largest grid the limits allow")
         })
         .collect();
@@ -113,7 +113,7 @@ fn the_largest_grid_runs_one_larger_is_refused_and_the_device_stays_usable() {
     let volume = upload_volume(&ctx.device, &ctx.queue, &small, [7, 5, 6]).unwrap();
     let mut enc = ctx.encoder("small after");
     let f = d3
-        .encode(&ctx.device, &mut enc, &volume, &Options3d::default())
+        .encode(&ctx.device, &mut enc, &volume, &Settings3d::default())
         .unwrap();
     ctx.submit_and_wait("small after", enc).unwrap();
     let words = f.nearest.read(&ctx.device, &ctx.queue).wait(&ctx).unwrap();

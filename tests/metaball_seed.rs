@@ -2,7 +2,7 @@
 //! `falloffExtend`, the full-volume field, the extent/block grid builder, the animation, the
 //! march's step rule and the debug cubes' depth, culling and line-list wireframe.
 
-use fieldkit::distance::{Distance3d, Grid, Method, Options3d, Unreached, Variant};
+use fieldkit::distance::{Distance3d, Grid, Method, Settings3d, Unreached, Variant};
 use fieldkit::gpu::{Context, read_buffer, read_texture};
 use fieldkit::metaball::{
     Animation, FULL_VOLUME_FAR, Metaballs, Settings, animate, extent_grid, packed_grid,
@@ -190,9 +190,9 @@ fn full_volume_and_unreached_refuse_what_cannot_write_them() {
                 &ctx.device,
                 &mut enc,
                 &volume,
-                &Options3d {
+                &Settings3d {
                     unreached: Some(unreached),
-                    ..Options3d::default()
+                    ..Settings3d::default()
                 },
             )
             .unwrap_err();

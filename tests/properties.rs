@@ -13,7 +13,7 @@ use std::sync::OnceLock;
 
 use fieldkit::Error;
 use fieldkit::distance::{
-    ColumnPasses, Distance2d, Distance3d, Method, Method2d, Options2d, Options3d, Variant, cpu,
+    ColumnPasses, Distance2d, Distance3d, Method, Method2d, Settings2d, Settings3d, Variant, cpu,
     upload_mask, upload_volume,
 };
 use fieldkit::gpu::Context;
@@ -218,7 +218,7 @@ proptest! {
         if let Some(mask) = typed(upload_mask(&ctx.device, &ctx.queue, &vec![255u8; len], w, h)) {
             prop_assert_eq!((mask.width(), mask.height()), (w, h));
             let method = [Method2d::Exact, Method2d::Jfa(Variant::JfaPlus2), Method2d::Jfa(Variant::Jfa)][method];
-            let options = Options2d { method, signed, texel_size: texel, ..Options2d::default() };
+            let options = Settings2d { method, signed, texel_size: texel, ..Settings2d::default() };
             let mut enc = ctx.encoder("prop 2d");
             if let Some(f) = typed(n.d2.encode(&ctx.device, &mut enc, &mask, &options)) {
                 prop_assert_eq!((f.width, f.height), (w, h));
@@ -243,7 +243,7 @@ proptest! {
         let data = vec![1u8; volume_of(size).min(1 << 20) as usize];
         if let Some(volume) = typed(upload_volume(&ctx.device, &ctx.queue, &data, size)) {
             let method = [Method::Exact, Method::Jfa(Variant::JfaPlus2), Method::Lines][method];
-            let options = Options3d { method, signed, voxel_size: voxel, band, ..Options3d::default() };
+            let options = Settings3d { method, signed, voxel_size: voxel, band, ..Settings3d::default() };
             let mut enc = ctx.encoder("prop 3d");
             if let Some(f) = typed(n.d3.encode(&ctx.device, &mut enc, &volume, &options)) {
                 prop_assert_eq!(f.size, size);
@@ -423,7 +423,7 @@ proptest! {
         let mask = mask_bytes(&inside);
         let tex = upload_mask(&ctx.device, &ctx.queue, &mask, w, h).unwrap();
         let mut enc = ctx.encoder("prop exact 2d");
-        let f = d2.encode(&ctx.device, &mut enc, &tex, &Options2d { signed: true, ..Options2d::default() }).unwrap();
+        let f = d2.encode(&ctx.device, &mut enc, &tex, &Settings2d { signed: true, ..Settings2d::default() }).unwrap();
         ctx.submit_and_wait("prop exact 2d", enc).unwrap();
         let got: Vec<f32> = fieldkit::gpu::read_texture(ctx, &f.distance).unwrap();
         let want = cpu::signed_2d(&inside, w as usize, h as usize);
@@ -466,7 +466,7 @@ proptest! {
             d3.set_column_passes(passes);
             d3.set_column_bands(bands).unwrap();
             let mut enc = ctx.encoder("prop exact 3d");
-            let field = d3.encode(&ctx.device, &mut enc, &volume, &Options3d::default()).unwrap();
+            let field = d3.encode(&ctx.device, &mut enc, &volume, &Settings3d::default()).unwrap();
             ctx.submit_and_wait("prop exact 3d", enc).unwrap();
             field
         };
@@ -548,7 +548,7 @@ fn exact_grids_past_every_packing_are_refused() {
             view_formats: &[],
         })
     };
-    let options = fieldkit::distance::Options3d::default();
+    let options = fieldkit::distance::Settings3d::default();
     let mut enc = ctx.encoder("large exact");
     let wraps =
         n.d3.encode(

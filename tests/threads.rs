@@ -5,7 +5,7 @@
 use std::sync::Arc;
 
 use fieldkit::distance::{
-    Distance2d, Distance3d, Jfa2d, Options2d, Options3d, upload_mask, upload_volume,
+    Distance2d, Distance3d, Jfa2d, Settings2d, Settings3d, upload_mask, upload_volume,
 };
 use fieldkit::gpu::{Context, read_texture};
 use fieldkit::metaball::{Cubes, Raymarcher};
@@ -77,7 +77,7 @@ fn the_same_technique_from_several_threads_gives_the_same_results() {
         move |ctx| {
             let mut enc = ctx.encoder("thread distance");
             let f = d3
-                .encode(&ctx.device, &mut enc, &volume, &Options3d::default())
+                .encode(&ctx.device, &mut enc, &volume, &Settings3d::default())
                 .unwrap();
             ctx.submit_and_wait("thread distance", enc).unwrap();
             f.nearest.read(&ctx.device, &ctx.queue).wait(ctx).unwrap()
@@ -93,10 +93,10 @@ fn the_same_technique_from_several_threads_gives_the_same_results() {
     let m2: Vec<u8> = (0..64 * 48).map(|i| u8::from(i % 53 == 0) * 255).collect();
     let mask2 = Arc::new(upload_mask(&ctx.device, &ctx.queue, &m2, 64, 48).unwrap());
     for options in [
-        Options2d::default(),
-        Options2d {
+        Settings2d::default(),
+        Settings2d {
             method: fieldkit::distance::Method2d::Jfa(fieldkit::distance::Variant::JfaPlus2),
-            ..Options2d::default()
+            ..Settings2d::default()
         },
     ] {
         let out = on_threads(&ctx, {

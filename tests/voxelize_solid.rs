@@ -221,7 +221,7 @@ fn binvox_and_vox_read_back() {
 /// shape; with the surface ORed in it would be fattened by up to a voxel.
 #[test]
 fn voxels_feed_the_distance_stages() {
-    use fieldkit::distance::{Distance3d, Options3d};
+    use fieldkit::distance::{Distance3d, Settings3d};
     use fieldkit::gpu::read_texture;
     let ctx = Context::shared();
     let v = Voxelizer::new(&ctx.device).unwrap();
@@ -245,9 +245,9 @@ fn voxels_feed_the_distance_stages() {
             &ctx.device,
             &mut enc,
             &volume,
-            &Options3d {
+            &Settings3d {
                 signed: true,
-                ..Options3d::default()
+                ..Settings3d::default()
             },
         )
         .unwrap();

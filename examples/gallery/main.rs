@@ -27,7 +27,7 @@ use std::path::{Path, PathBuf};
 
 use fieldkit::Error;
 use fieldkit::bind::{RenderPipeline, RenderTargets};
-use fieldkit::distance::{Distance2d, Options2d};
+use fieldkit::distance::{Distance2d, Settings2d};
 use fieldkit::gpu::{Context, read_texture};
 use fieldkit::shaders::distance::visualize;
 
@@ -72,9 +72,9 @@ fn run(
         &ctx.device,
         &mut enc,
         &seeds,
-        &Options2d {
+        &Settings2d {
             signed: true,
-            ..Options2d::default()
+            ..Settings2d::default()
         },
     )?;
     ctx.submit_and_wait("gallery distance", enc)?;

@@ -91,7 +91,7 @@ pub fn voxelize_distance_slice(
     n: u32,
     zoom: u32,
 ) -> Result<(Vec<u8>, u32, u32), Error> {
-    use fieldkit::distance::{Distance3d, Options3d};
+    use fieldkit::distance::{Distance3d, Settings3d};
     use fieldkit::voxelize::Voxelizer;
     let device = &ctx.device;
     let grid = fieldkit::voxelize::Grid::fit(mesh, n)?;
@@ -103,9 +103,9 @@ pub fn voxelize_distance_slice(
         device,
         &mut enc,
         &volume,
-        &Options3d {
+        &Settings3d {
             signed: true,
-            ..Options3d::default()
+            ..Settings3d::default()
         },
     )?;
     ctx.submit_and_wait("gallery mesh distance", enc)?;

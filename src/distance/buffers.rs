@@ -88,7 +88,7 @@ impl Pool {
     ///
     /// ```
     /// # fn f(ctx: &fieldkit::gpu::Context, volume: &wgpu::Texture) -> Result<(), fieldkit::Error> {
-    /// use fieldkit::distance::{Distance3d, Options3d};
+    /// use fieldkit::distance::{Distance3d, Settings3d};
     /// let d3 = Distance3d::new(&ctx.device)?;
     /// let mut last = None;
     /// for _frame in 0..3 {
@@ -96,7 +96,7 @@ impl Pool {
     ///         d3.recycle(field);
     ///     }
     ///     let mut encoder = ctx.encoder("distance");
-    ///     last = Some(d3.encode(&ctx.device, &mut encoder, volume, &Options3d::default())?);
+    ///     last = Some(d3.encode(&ctx.device, &mut encoder, volume, &Settings3d::default())?);
     ///     ctx.submit_and_wait("distance", encoder)?;
     /// }
     /// # Ok(()) }

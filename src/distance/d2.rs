@@ -4,7 +4,7 @@
 use super::buffers::Pool;
 use super::exact::Exact;
 use super::resolve::Resolver;
-use super::{Inside, Jfa2d, Options, Options3d, SeedRule, Variant};
+use super::{Inside, Jfa2d, JfaSettings2d, SeedRule, Settings3d, Variant};
 use crate::error::Error;
 use crate::gpu::{Readback, readback_buffer, readback_texture};
 
@@ -26,7 +26,7 @@ pub enum Method2d {
 /// What [`Distance2d::encode`] computes.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct Options2d {
+pub struct Settings2d {
     /// Exact (default) or a JFA variant.
     pub method: Method2d,
     /// Treat the mask as inside (non-zero) and produce signed distance, negative inside.
@@ -39,7 +39,7 @@ pub struct Options2d {
     pub seeds: SeedRule,
 }
 
-impl Default for Options2d {
+impl Default for Settings2d {
     fn default() -> Self {
         Self {
             method: Method2d::Exact,
@@ -78,7 +78,7 @@ impl Nearest2d {
 
 /// A 2D distance field from [`Distance2d`], on the GPU.
 #[derive(Debug)]
-pub struct DistanceField2d {
+pub struct Field2d {
     /// Width in texels.
     pub width: u32,
     /// Height in texels.
@@ -92,8 +92,8 @@ pub struct DistanceField2d {
     pub nearest_outside: Option<Nearest2d>,
 }
 
-impl DistanceField2d {
-    /// Read [`DistanceField2d::nearest`] back (see [`Nearest2d::read`]).
+impl Field2d {
+    /// Read [`Field2d::nearest`] back (see [`Nearest2d::read`]).
     pub fn read_nearest(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Readback<Vec<u32>> {
         self.nearest
             .read(device, queue, self.width as usize * self.height as usize)
@@ -129,8 +129,8 @@ impl Distance2d {
         device: &wgpu::Device,
         rec: &mut impl crate::gpu::Record,
         mask: &wgpu::Texture,
-        options: &Options2d,
-    ) -> Result<DistanceField2d, Error> {
+        options: &Settings2d,
+    ) -> Result<Field2d, Error> {
         if !(options.texel_size.is_finite() && options.texel_size > 0.0) {
             return Err(Error::Invalid {
                 stage: "distance::d2",
@@ -146,15 +146,15 @@ impl Distance2d {
                     device,
                     rec,
                     mask,
-                    &Options3d {
+                    &Settings3d {
                         signed: options.signed,
                         voxel_size: options.texel_size,
                         inside: Inside::Mask,
-                        ..Options3d::default()
+                        ..Settings3d::default()
                     },
                     &options.seeds,
                 )?;
-                Ok(DistanceField2d {
+                Ok(Field2d {
                     width: f.width,
                     height: f.height,
                     distance: f.distance,
@@ -167,14 +167,14 @@ impl Distance2d {
                     device,
                     rec,
                     mask,
-                    &Options {
+                    &JfaSettings2d {
                         variant,
                         signed: options.signed,
                         texel_size: options.texel_size,
                         seeds: options.seeds,
                     },
                 )?;
-                Ok(DistanceField2d {
+                Ok(Field2d {
                     width: f.width,
                     height: f.height,
                     distance: f.distance,

@@ -8,7 +8,7 @@
 //!
 //! ```no_run
 //! # fn main() -> Result<(), fieldkit::Error> {
-//! use fieldkit::distance::{Distance3d, Method, Options3d, upload_volume};
+//! use fieldkit::distance::{Distance3d, Method, Settings3d, upload_volume};
 //! let ctx = fieldkit::gpu::Context::new()?;
 //! let distance = Distance3d::new(&ctx.device)?;
 //! // A 32×24×16 occupancy volume with one occupied voxel.
@@ -17,7 +17,7 @@
 //! mask[(8 * 24 + 12) * 32 + 5] = 255;
 //! let volume = upload_volume(&ctx.device, &ctx.queue, &mask, size)?;
 //! let mut encoder = ctx.encoder("distance");
-//! let options = Options3d { method: Method::Exact, signed: true, ..Options3d::default() };
+//! let options = Settings3d { method: Method::Exact, signed: true, ..Settings3d::default() };
 //! let field = distance.encode(&ctx.device, &mut encoder, &volume, &options)?;
 //! ctx.submit_and_wait("distance", encoder)?;
 //! let sdf: Vec<f32> = fieldkit::gpu::read_texture(&ctx, &field.distance)?;
@@ -34,8 +34,8 @@ use super::options::Marks;
 use super::points::Points;
 use super::resolve::{Fuse, Resolver};
 use super::{
-    ColumnPasses, Field3d, FieldBuf2d, Inside, Method, Options3d, PointSeeds, STAGE_3D as STAGE,
-    SeedPacking, Slabs,
+    ColumnPasses, Field3d, FieldBuf2d, Inside, Method, PointSeeds, STAGE_3D as STAGE, SeedPacking,
+    Settings3d, Slabs,
 };
 use crate::error::Error;
 use crate::gpu::{Record, Recorder};
@@ -132,7 +132,7 @@ impl Distance3d {
         device: &wgpu::Device,
         rec: &mut impl Record,
         volume: &wgpu::Texture,
-        options: &Options3d,
+        options: &Settings3d,
     ) -> Result<Field3d, Error> {
         options.check()?;
         let variant = match options.method {
@@ -229,7 +229,7 @@ impl Distance3d {
         size: [u32; 3],
         nearest: &wgpu::Buffer,
         nearest_outside: Option<&wgpu::Buffer>,
-        options: &Options3d,
+        options: &Settings3d,
     ) -> Result<wgpu::Texture, Error> {
         options.check()?;
         check_size_3d(device, size)?;
@@ -260,7 +260,7 @@ impl Distance3d {
         points: &PointSeeds,
         size: [u32; 3],
         inside: Option<&wgpu::Texture>,
-        options: &Options3d,
+        options: &Settings3d,
     ) -> Result<Field3d, Error> {
         let keys = self
             .points
@@ -281,7 +281,7 @@ impl Distance3d {
         points: &wgpu::Buffer,
         size: [u32; 3],
         inside: Option<&wgpu::Texture>,
-        options: &Options3d,
+        options: &Settings3d,
     ) -> Result<Field3d, Error> {
         options.check()?;
         check_size_3d(device, size)?;
@@ -311,7 +311,7 @@ impl Distance3d {
                 })
             }
             // `check_points` refuses the rest.
-            _ => unreachable!("checked by Options3d::check_points"),
+            _ => unreachable!("checked by Settings3d::check_points"),
         }
     }
 
@@ -459,7 +459,7 @@ impl Distance3d {
         device: &wgpu::Device,
         rec: &mut impl Record,
         mask: &wgpu::Texture,
-        options: &Options3d,
+        options: &Settings3d,
     ) -> Result<FieldBuf2d, Error> {
         self.exact.encode_exact_2d(device, rec, mask, options)
     }
@@ -471,7 +471,7 @@ impl Distance3d {
         device: &wgpu::Device,
         rec: &mut impl Record,
         mask: &wgpu::Texture,
-        options: &Options3d,
+        options: &Settings3d,
         rule: &super::SeedRule,
     ) -> Result<FieldBuf2d, Error> {
         self.exact
@@ -493,7 +493,7 @@ impl Distance3d {
     ///
     /// ```
     /// # fn f(ctx: &fieldkit::gpu::Context, volume: &wgpu::Texture) -> Result<(), fieldkit::Error> {
-    /// use fieldkit::distance::{Distance3d, Options3d};
+    /// use fieldkit::distance::{Distance3d, Settings3d};
     /// let d3 = Distance3d::new(&ctx.device)?;
     /// let mut last = None;
     /// for _frame in 0..3 {
@@ -501,7 +501,7 @@ impl Distance3d {
     ///         d3.recycle(field);
     ///     }
     ///     let mut encoder = ctx.encoder("distance");
-    ///     last = Some(d3.encode(&ctx.device, &mut encoder, volume, &Options3d::default())?);
+    ///     last = Some(d3.encode(&ctx.device, &mut encoder, volume, &Settings3d::default())?);
     ///     ctx.submit_and_wait("distance", encoder)?;
     /// }
     /// # Ok(()) }

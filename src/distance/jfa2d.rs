@@ -70,7 +70,7 @@ impl Variant {
 /// What [`Jfa2d::encode`] computes.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct Options {
+pub struct JfaSettings2d {
     /// Which passes run.
     pub variant: Variant,
     /// Treat the seed texture as a mask (non-zero inside) and produce signed distance,
@@ -83,7 +83,7 @@ pub struct Options {
     pub seeds: SeedRule,
 }
 
-impl Default for Options {
+impl Default for JfaSettings2d {
     fn default() -> Self {
         Self {
             variant: Variant::default(),
@@ -95,7 +95,7 @@ impl Default for Options {
 }
 
 /// The result of a 2D distance computation, on the GPU.
-pub struct Field2d {
+pub struct JfaField2d {
     /// Width in texels.
     pub width: u32,
     /// Height in texels.
@@ -341,8 +341,8 @@ impl Jfa2d {
         device: &wgpu::Device,
         rec: &mut impl Record,
         seeds: &wgpu::Texture,
-        options: &Options,
-    ) -> Result<Field2d, Error> {
+        options: &JfaSettings2d,
+    ) -> Result<JfaField2d, Error> {
         let (w, h) = check_seed_texture(device, seeds)?;
         if !(options.texel_size.is_finite() && options.texel_size > 0.0) {
             return Err(Error::Invalid {
@@ -369,7 +369,7 @@ impl Jfa2d {
             nearest_outside.as_ref(),
             options.texel_size,
         )?;
-        Ok(Field2d {
+        Ok(JfaField2d {
             width: w,
             height: h,
             nearest,

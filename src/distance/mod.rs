@@ -9,7 +9,7 @@
 //!
 //! ```no_run
 //! # fn main() -> Result<(), fieldkit::Error> {
-//! use fieldkit::distance::{Distance2d, Options2d, upload_mask};
+//! use fieldkit::distance::{Distance2d, Settings2d, upload_mask};
 //! let ctx = fieldkit::gpu::Context::new()?;
 //! let distance = Distance2d::new(&ctx.device)?;
 //! // A 64×32 mask with one seed; non-zero texels are seeds.
@@ -17,7 +17,7 @@
 //! mask[10 * 64 + 20] = 255;
 //! let seeds = upload_mask(&ctx.device, &ctx.queue, &mask, 64, 32)?;
 //! let mut encoder = ctx.encoder("distance");
-//! let field = distance.encode(&ctx.device, &mut encoder, &seeds, &Options2d::default())?;
+//! let field = distance.encode(&ctx.device, &mut encoder, &seeds, &Settings2d::default())?;
 //! ctx.submit_and_wait("distance", encoder)?;
 //! let distances: Vec<f32> = fieldkit::gpu::read_texture(&ctx, &field.distance)?;
 //! assert_eq!(distances[10 * 64 + 23], 3.0);
@@ -48,7 +48,7 @@ pub use check::{
     MAX_SIDE_2D_EXACT, MAX_SIDE_3D, MAX_SIDE_EXACT_3D, VOLUME_FORMATS, check_size_2d_exact,
     check_size_3d,
 };
-pub use d2::{Distance2d, DistanceField2d, Method2d, Nearest2d, Options2d};
+pub use d2::{Distance2d, Field2d, Method2d, Nearest2d, Settings2d};
 pub use d3::Distance3d;
 pub use exact::plan::{
     AUTO_TILE_BAND, AUTO_TILE_MAX_COLUMNS_Y, AUTO_TILE_MAX_LENGTH, AUTO_TILE_MAX_LENGTH_2D,
@@ -56,14 +56,27 @@ pub use exact::plan::{
     tile_columns_3d,
 };
 pub use field::{Field3d, FieldBuf2d, Slabs};
-pub use jfa2d::{Field2d, Jfa2d, Options, Variant};
-pub use options::{Inside, Method, Options3d, Unreached};
+pub use jfa2d::{Jfa2d, JfaField2d, JfaSettings2d, Variant};
+pub use options::{Inside, Method, Settings3d, Unreached};
 pub use packing::{MAX_POINTS, SeedPacking, key_index, pack_seed3, unpack_seed3};
 pub use seeds::{
     Channels, FAR, MAX_PACKED_SIDE, NO_SEED, SEED_FORMATS, SeedRule, check_seed_texture,
     check_size, is_seed_format, pack_seed, unpack_seed, upload_mask,
 };
 pub use upload::{PointSeeds, upload_points, upload_points_with_homes, upload_volume};
+
+/// The former name of [`Settings3d`].
+#[deprecated(note = "renamed to Settings3d: every technique's knobs are its `…Settings`")]
+#[doc(hidden)]
+pub type Options3d = Settings3d;
+/// The former name of [`Settings2d`].
+#[deprecated(note = "renamed to Settings2d: every technique's knobs are its `…Settings`")]
+#[doc(hidden)]
+pub type Options2d = Settings2d;
+/// The former name of [`JfaSettings2d`].
+#[deprecated(note = "renamed to JfaSettings2d: every technique's knobs are its `…Settings`")]
+#[doc(hidden)]
+pub type Options = JfaSettings2d;
 
 /// The 3D methods' stage name in their errors.
 const STAGE_3D: &str = "distance::d3";

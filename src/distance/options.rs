@@ -34,7 +34,7 @@ pub enum Method {
     /// Jump flooding with the given variant.
     Jfa(Variant),
     /// Sub-voxel seeds within a band: three line passes (x, y, z), each scanning ±band voxels
-    /// (`point_lines.wgsl`); the cost grows with the band. Needs [`Options3d::band`], and each
+    /// (`point_lines.wgsl`); the cost grows with the band. Needs [`Settings3d::band`], and each
     /// point within one voxel of the voxel its key is held in (as surface seeds and
     /// [`Distance3d::encode_points`](super::Distance3d::encode_points) without homes place them). Integer seeds take
     /// [`Method::Exact`]. Not exact for sub-voxel seeds: it can keep one up to about half a voxel
@@ -57,7 +57,7 @@ impl Method {
 #[derive(Debug, Clone, Copy, PartialEq)]
 /// What [`Distance3d`](super::Distance3d) computes.
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct Options3d {
+pub struct Settings3d {
     /// Exact (default), JFA or the line passes.
     pub method: Method,
     /// Signed distance, negative inside (marked voxels).
@@ -86,7 +86,7 @@ pub struct Unreached {
     pub outside: f32,
 }
 
-impl Default for Options3d {
+impl Default for Settings3d {
     fn default() -> Self {
         Self {
             method: Method::Exact,
@@ -99,7 +99,7 @@ impl Default for Options3d {
     }
 }
 
-impl Options3d {
+impl Settings3d {
     /// The band in world units distances are clamped to; `f32::MAX` for none.
     pub(crate) fn world_band(&self) -> f32 {
         self.band.map_or(f32::MAX, |b| b * self.voxel_size)

@@ -6,7 +6,7 @@ use std::sync::Arc;
 use super::buffers::{Pool, view};
 use super::check::{check_bytes, check_inside, check_size_3d, voxels};
 use super::resolve::resolve_params;
-use super::{Field3d, MAX_POINTS, Options3d, PointSeeds, STAGE_3D as STAGE, SeedPacking, Slabs};
+use super::{Field3d, MAX_POINTS, PointSeeds, STAGE_3D as STAGE, SeedPacking, Settings3d, Slabs};
 use crate::bind::ComputePipeline;
 use crate::error::Error;
 use crate::gpu::{Record, uniform_buffer as uniform};
@@ -48,7 +48,7 @@ impl Points {
         points: &PointSeeds,
         size: [u32; 3],
         inside: Option<&wgpu::Texture>,
-        options: &Options3d,
+        options: &Settings3d,
     ) -> Result<wgpu::Buffer, Error> {
         options.check()?;
         check_size_3d(device, size)?;
@@ -128,7 +128,7 @@ impl Points {
         points: &wgpu::Buffer,
         size: [u32; 3],
         inside: Option<&wgpu::Texture>,
-        options: &Options3d,
+        options: &Settings3d,
     ) -> Result<Field3d, Error> {
         let params = resolve_params(device, size, options);
         let distance = self
@@ -189,7 +189,7 @@ impl Points {
         points: &wgpu::Buffer,
         size: [u32; 3],
         inside: Option<&wgpu::Texture>,
-        options: &Options3d,
+        options: &Settings3d,
         band: f32,
     ) -> Result<(wgpu::Buffer, wgpu::Texture), Error> {
         // Each voxel carries an 8-byte candidate between passes.

@@ -2,7 +2,7 @@
 //! the exact transform's where no column pass ran to resolve as it answered. [`Fuse`] says where
 //! and how a field's distances are written.
 
-use super::{Options3d, Unreached};
+use super::{Settings3d, Unreached};
 use crate::bind::ComputePipeline;
 use crate::error::Error;
 use crate::gpu::{Record, uniform_buffer as uniform};
@@ -140,7 +140,7 @@ impl Resolver {
 pub(crate) fn resolve_params(
     device: &wgpu::Device,
     size: [u32; 3],
-    options: &Options3d,
+    options: &Settings3d,
 ) -> wgpu::Buffer {
     let band = options.world_band();
     let unreached = options.unreached.unwrap_or(Unreached {

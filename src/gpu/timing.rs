@@ -82,14 +82,14 @@ impl Timer {
 /// ```no_run
 /// # fn f(device: &wgpu::Device, queue: &wgpu::Queue, volume: &wgpu::Texture)
 /// #     -> Result<(), fieldkit::Error> {
-/// use fieldkit::distance::{Distance3d, Options3d};
+/// use fieldkit::distance::{Distance3d, Settings3d};
 /// let distance = Distance3d::new(device)?;
 /// let mut encoder = device.create_command_encoder(&Default::default());
 /// // Untimed, as a renderer records it:
-/// distance.encode(device, &mut encoder, volume, &Options3d::default())?;
+/// distance.encode(device, &mut encoder, volume, &Settings3d::default())?;
 /// // Timed pass by pass:
 /// if let Some(mut profiler) = fieldkit::gpu::Profiler::new(device, queue, 64) {
-///     distance.encode(device, &mut profiler.record(&mut encoder), volume, &Options3d::default())?;
+///     distance.encode(device, &mut profiler.record(&mut encoder), volume, &Settings3d::default())?;
 ///     profiler.resolve(&mut encoder);
 /// }
 /// # Ok(()) }

@@ -31,7 +31,7 @@ use glam::{Vec3, Vec4};
 
 use crate::bind::ComputePipeline;
 use crate::distance::{
-    Distance3d, Grid, Inside, MAX_POINTS, Method, Options3d, Unreached, Variant,
+    Distance3d, Grid, Inside, MAX_POINTS, Method, Settings3d, Unreached, Variant,
 };
 use crate::error::Error;
 use crate::gpu::{Record, uniform_buffer as uniform};
@@ -487,7 +487,7 @@ impl Metaballs {
         settings: &Settings,
     ) -> Result<MetaballField, Error> {
         let seeds = self.encode_seeds(device, rec, instances, grid, edge, settings)?;
-        let options = Options3d {
+        let options = Settings3d {
             method: settings.method,
             signed: true,
             inside: Inside::Threshold(settings.threshold),

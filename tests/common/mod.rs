@@ -3,7 +3,7 @@
 
 pub mod octree;
 
-use fieldkit::distance::{Jfa2d, Options, Variant, upload_mask};
+use fieldkit::distance::{Jfa2d, JfaSettings2d, Variant, upload_mask};
 use fieldkit::gpu::{Context, read_texture};
 
 /// Deterministic pseudo-random mask (no RNG crate needed, same on every machine).
@@ -30,7 +30,7 @@ pub fn run_jfa(
     mask: &[bool],
     w: usize,
     h: usize,
-    options: Options,
+    options: JfaSettings2d,
 ) -> (Vec<u32>, Vec<f32>) {
     let seeds =
         upload_mask(&ctx.device, &ctx.queue, &to_bytes(mask), w as u32, h as u32).expect("upload");
@@ -45,10 +45,10 @@ pub fn run_jfa(
     )
 }
 
-pub fn variant_options(variant: Variant) -> Options {
-    Options {
+pub fn variant_options(variant: Variant) -> JfaSettings2d {
+    JfaSettings2d {
         variant,
-        ..Options::default()
+        ..JfaSettings2d::default()
     }
 }
 
@@ -75,7 +75,7 @@ pub fn run_3d(
     d3: &fieldkit::distance::Distance3d,
     mask: &[bool],
     size: [usize; 3],
-    options: &fieldkit::distance::Options3d,
+    options: &fieldkit::distance::Settings3d,
 ) -> (Vec<u32>, Option<Vec<u32>>, Vec<f32>) {
     let volume =
         fieldkit::distance::upload_volume(&ctx.device, &ctx.queue, &to_bytes(mask), size_u32(size))

@@ -11,9 +11,9 @@ use std::path::Path;
 use std::process::ExitCode;
 
 use fieldkit::distance::{
-    ColumnPasses, Distance3d, Method, Options3d, tile_columns, tile_columns_3d, upload_volume,
+    ColumnPasses, Distance3d, Method, Settings3d, tile_columns, tile_columns_3d, upload_volume,
 };
-use fieldkit::distance::{Jfa2d, Options, Variant, cpu, upload_mask};
+use fieldkit::distance::{Jfa2d, JfaSettings2d, Variant, cpu, upload_mask};
 use fieldkit::gpu::{Context, read_buffer, read_texture};
 
 use crate::measure::{Args, time_runs};
@@ -387,33 +387,36 @@ fn distance(args: &Args) -> Result<(), String> {
     let heater = heater.as_ref();
     let jfa2 = Jfa2d::new(&ctx.device).map_err(|e| e.to_string())?;
     let banded = format!("JFA+2 band {}", args.band);
-    let methods3: Vec<(String, Options3d)> =
-        std::iter::once(("exact".to_string(), Options3d::default()))
-            .chain(std::iter::once((GLOBAL.to_string(), Options3d::default())))
+    let methods3: Vec<(String, Settings3d)> =
+        std::iter::once(("exact".to_string(), Settings3d::default()))
+            .chain(std::iter::once((GLOBAL.to_string(), Settings3d::default())))
             .chain(std::iter::once((
                 WORKGROUP.to_string(),
-                Options3d::default(),
+                Settings3d::default(),
             )))
             .chain(std::iter::once((
                 ROWS_PASS.to_string(),
-                Options3d::default(),
+                Settings3d::default(),
             )))
-            .chain(std::iter::once((UNSWEPT.to_string(), Options3d::default())))
+            .chain(std::iter::once((
+                UNSWEPT.to_string(),
+                Settings3d::default(),
+            )))
             .chain(Variant::ALL.into_iter().map(|v| {
                 (
                     v.name().to_string(),
-                    Options3d {
+                    Settings3d {
                         method: Method::Jfa(v),
-                        ..Options3d::default()
+                        ..Settings3d::default()
                     },
                 )
             }))
             .chain(std::iter::once((
                 banded.clone(),
-                Options3d {
+                Settings3d {
                     method: Method::Jfa(Variant::JfaPlus2),
                     band: Some(args.band),
-                    ..Options3d::default()
+                    ..Settings3d::default()
                 },
             )))
             .take(if args.exact_only { 5 } else { usize::MAX })
@@ -574,7 +577,7 @@ fn distance(args: &Args) -> Result<(), String> {
                     &ctx.device,
                     &mut enc,
                     &volume,
-                    Options3d::default().inside,
+                    Settings3d::default().inside,
                     false,
                 )
                 .map_err(|e| e.to_string())?;
@@ -649,7 +652,7 @@ fn distance(args: &Args) -> Result<(), String> {
         let peer = peers2.remove(&n);
         // Exact.
         bar.set_message(format!("{n}² exact"));
-        let opts = Options3d::default();
+        let opts = Settings3d::default();
         let (med, min, max, passes) =
             time_runs(&ctx, args.warmup, args.reps, heater, |enc, prof| {
                 d3.encode_exact_2d(&ctx.device, &mut prof.record(enc), &tex, &opts)
@@ -723,9 +726,9 @@ fn distance(args: &Args) -> Result<(), String> {
         bar.inc(1);
         for &v in variants2 {
             bar.set_message(format!("{n}² {}", v.name()));
-            let opts = Options {
+            let opts = JfaSettings2d {
                 variant: v,
-                ..Options::default()
+                ..JfaSettings2d::default()
             };
             let (med, min, max, passes) =
                 time_runs(&ctx, args.warmup, args.reps, heater, |enc, prof| {

@@ -9,7 +9,7 @@ pub struct DistanceSettings {
     /// Mask width and height, texels.
     pub size: [u32; 2],
     /// Exact (default) or a JFA variant; signed or not; texel size.
-    pub options: Options2d,
+    pub options: Settings2d,
     /// The seed texels.
     pub seeds: Vec<[u32; 2]>,
     /// Texels between iso-lines.
@@ -33,7 +33,7 @@ impl Default for DistanceSettings {
         seeds.extend((60..140).map(|i| [i, 60]));
         Self {
             size: [200, 120],
-            options: Options2d::default(),
+            options: Settings2d::default(),
             seeds,
             iso_period: 8.0,
             brush: 1,
@@ -193,7 +193,7 @@ impl Distance2dScene {
             let [w, h] = s.size;
             let mask = upload_mask(device, queue, &s.mask()?, w, h)?;
             let field = self.distance.encode(device, frame.rec, &mask, &s.options)?;
-            let exact_options = Options2d {
+            let exact_options = Settings2d {
                 method: Method2d::Exact,
                 ..s.options
             };

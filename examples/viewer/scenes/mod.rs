@@ -3,7 +3,7 @@
 //! settings structs, gathered in [`Saved`] (the settings file), never copied.
 
 use fieldkit::Error;
-use fieldkit::distance::{Distance2d, Method2d, Options2d, Variant, upload_mask};
+use fieldkit::distance::{Distance2d, Method2d, Settings2d, Variant, upload_mask};
 use fieldkit::gpu::{Readback, Recorder, readback_texture};
 use fieldkit::metaball::{Animation, Instances, Metaballs, Settings, packed_grid};
 use fieldkit::metaball::{CubeStyle, Cubes, Direct, RaymarchSettings, Raymarcher};
@@ -88,9 +88,9 @@ impl Saved {
             ocean: OceanSettings::seed(),
             volume: VolumeSettings::seed(),
             distance: DistanceSettings {
-                options: Options2d {
+                options: Settings2d {
                     seeds: fieldkit::distance::SeedRule::seed(),
-                    ..Options2d::default()
+                    ..Settings2d::default()
                 },
                 ..DistanceSettings::default()
             },

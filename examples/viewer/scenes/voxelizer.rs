@@ -269,7 +269,7 @@ impl VoxelizerScene {
                 device,
                 frame.rec,
                 &volume,
-                &fieldkit::distance::Options3d::default(),
+                &fieldkit::distance::Settings3d::default(),
             )?;
             self.field = Some(field.distance);
         }

@@ -6,7 +6,7 @@ use super::plan::Pass;
 use crate::distance::buffers::view;
 use crate::distance::check::check_size_2d_exact;
 use crate::distance::resolve::{Fuse, resolve_params};
-use crate::distance::{FieldBuf2d, Inside, Options3d, SeedRule, check_seed_texture};
+use crate::distance::{FieldBuf2d, Inside, SeedRule, Settings3d, check_seed_texture};
 use crate::error::Error;
 use crate::gpu::{Record, Recorder, uniform_buffer as uniform};
 use crate::shaders::distance::edt_rows;
@@ -18,7 +18,7 @@ impl Exact {
         device: &wgpu::Device,
         rec: &mut impl Record,
         mask: &wgpu::Texture,
-        options: &Options3d,
+        options: &Settings3d,
     ) -> Result<FieldBuf2d, Error> {
         let rule = SeedRule {
             above: match options.inside {
@@ -38,7 +38,7 @@ impl Exact {
         device: &wgpu::Device,
         rec: &mut impl Record,
         mask: &wgpu::Texture,
-        options: &Options3d,
+        options: &Settings3d,
         rule: &SeedRule,
     ) -> Result<FieldBuf2d, Error> {
         options.check()?;

@@ -23,7 +23,7 @@ use crate::distance::buffers::{Pool, kept_buffer, new_field_buffer};
 use crate::distance::check::{check_column_axis, check_len, exact_volume_size, voxels};
 use crate::distance::options::Marks;
 use crate::distance::resolve::{Fuse, Resolver};
-use crate::distance::{Field3d, Options3d, SeedPacking, Slabs};
+use crate::distance::{Field3d, SeedPacking, Settings3d, Slabs};
 use crate::error::Error;
 use crate::gpu::Record;
 use crate::shaders::distance::{edt_columns, edt_rows, edt_tile};
@@ -232,7 +232,7 @@ impl Exact {
         device: &wgpu::Device,
         rec: &mut impl Record,
         volume: &wgpu::Texture,
-        options: &Options3d,
+        options: &Settings3d,
     ) -> Result<Field3d, Error> {
         // Checked against the split it takes where the field is larger than one binding.
         let size = exact_volume_size(device, volume)?;
