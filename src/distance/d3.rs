@@ -152,15 +152,9 @@ impl Distance3d {
         let rec = &mut rec.recorder();
         let steps = options.steps(variant, size.into_iter().max().unwrap());
         let flood = |rec: &mut Recorder<'_>, invert: bool| -> Result<wgpu::Buffer, Error> {
-            let seeds = self.jfa.encode_seed(
-                device,
-                rec,
-                Marks {
-                    volume,
-                    inside: options.inside,
-                    invert,
-                },
-            )?;
+            let seeds =
+                self.jfa
+                    .encode_seed(device, rec, Marks::new(volume, options.inside, invert))?;
             self.jfa.flood(device, rec, seeds, size, &steps, None)
         };
         let nearest = flood(rec, false)?;
@@ -209,16 +203,8 @@ impl Distance3d {
         inside: Inside,
         invert: bool,
     ) -> Result<Slabs, Error> {
-        self.exact.encode_exact_fused(
-            device,
-            rec,
-            Marks {
-                volume,
-                inside,
-                invert,
-            },
-            None,
-        )
+        self.exact
+            .encode_exact_fused(device, rec, Marks::new(volume, inside, invert), None)
     }
 
     /// Resolve stage alone: packed nearest seeds (and, for signed, the outside field) to distance.
@@ -325,15 +311,8 @@ impl Distance3d {
         inside: Inside,
         invert: bool,
     ) -> Result<wgpu::Buffer, Error> {
-        self.jfa.encode_seed(
-            device,
-            rec,
-            Marks {
-                volume,
-                inside,
-                invert,
-            },
-        )
+        self.jfa
+            .encode_seed(device, rec, Marks::new(volume, inside, invert))
     }
 
     /// First exact pass alone: per row, the nearest marked voxel along x (a new buffer).
@@ -345,15 +324,8 @@ impl Distance3d {
         inside: Inside,
         invert: bool,
     ) -> Result<wgpu::Buffer, Error> {
-        self.exact.encode_rows(
-            device,
-            rec,
-            Marks {
-                volume,
-                inside,
-                invert,
-            },
-        )
+        self.exact
+            .encode_rows(device, rec, Marks::new(volume, inside, invert))
     }
 
     /// The 3D row pass as words (`row_words`): per 32 voxels of a row, their marks and the
@@ -367,16 +339,8 @@ impl Distance3d {
         inside: Inside,
         invert: bool,
     ) -> Result<wgpu::Buffer, Error> {
-        self.exact.row_words(
-            device,
-            rec,
-            Marks {
-                volume,
-                inside,
-                invert,
-            },
-            false,
-        )
+        self.exact
+            .row_words(device, rec, Marks::new(volume, inside, invert), false)
     }
 
     /// The y column pass of a 3D field of `size` from the row words of

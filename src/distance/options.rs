@@ -210,3 +210,13 @@ pub(crate) struct Marks<'a> {
     pub(crate) inside: Inside,
     pub(crate) invert: bool,
 }
+
+impl<'a> Marks<'a> {
+    pub(crate) fn new(volume: &'a wgpu::Texture, inside: Inside, invert: bool) -> Self {
+        Self {
+            volume,
+            inside,
+            invert,
+        }
+    }
+}

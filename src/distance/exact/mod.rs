@@ -248,11 +248,7 @@ impl Exact {
             band: options.world_band(),
             inside_field,
         };
-        let marks = |invert| Marks {
-            volume,
-            inside: options.inside,
-            invert,
-        };
+        let marks = |invert| Marks::new(volume, options.inside, invert);
         let nearest = self.encode_exact_fused(
             device,
             rec,
