@@ -220,22 +220,15 @@ impl Scene {
 }
 
 fn depth_target(device: &wgpu::Device, [width, height]: [u32; 2]) -> wgpu::TextureView {
-    device
-        .create_texture(&wgpu::TextureDescriptor {
-            label: Some("depth"),
-            size: wgpu::Extent3d {
-                width,
-                height,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: DEPTH,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-            view_formats: &[],
-        })
-        .create_view(&Default::default())
+    fieldkit::gpu::texture(
+        device,
+        "depth",
+        [width, height, 1],
+        wgpu::TextureDimension::D2,
+        DEPTH,
+        wgpu::TextureUsages::RENDER_ATTACHMENT,
+    )
+    .create_view(&Default::default())
 }
 
 /// Copy mip 0 of a 2D RGBA8 or BGRA8 `texture` (with `COPY_SRC`) into RGBA8 rows, blocking.
@@ -272,20 +265,14 @@ pub fn render_offscreen(
 ) -> Result<Vec<u8>, Error> {
     let mut scene = Scene::new(device, queue, format)?;
     let [width, height] = SIZE;
-    let target = device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("offscreen"),
-        size: wgpu::Extent3d {
-            width,
-            height,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
+    let target = fieldkit::gpu::texture(
+        device,
+        "offscreen",
+        [width, height, 1],
+        wgpu::TextureDimension::D2,
         format,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    });
+        wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+    );
     let depth = depth_target(device, SIZE);
     let mut encoder = device.create_command_encoder(&Default::default());
     let view = target.create_view(&Default::default());

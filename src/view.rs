@@ -198,24 +198,18 @@ impl Targets {
         colour: wgpu::TextureFormat,
         depth: wgpu::TextureFormat,
     ) -> Self {
+        // Read back by tests, sampled by later stages (the ocean's fade reads the depth).
         let make = |format, label| {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size: wgpu::Extent3d {
-                    width,
-                    height,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
+            crate::gpu::texture(
+                device,
+                label,
+                [width, height, 1],
+                wgpu::TextureDimension::D2,
                 format,
-                // Read back by tests, sampled by later stages (the ocean's fade reads the depth).
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                wgpu::TextureUsages::RENDER_ATTACHMENT
                     | wgpu::TextureUsages::COPY_SRC
                     | wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            })
+            )
         };
         let colour = make(colour, "fieldkit colour target");
         let depth = make(depth, "fieldkit depth target");

@@ -28,20 +28,14 @@ fn texture(
     format: wgpu::TextureFormat,
     usage: wgpu::TextureUsages,
 ) -> wgpu::Texture {
-    ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: None,
-        size: wgpu::Extent3d {
-            width: 8,
-            height: 8,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
+    fieldkit::gpu::texture(
+        &ctx.device,
+        "test texture",
+        [8, 8, 1],
+        wgpu::TextureDimension::D2,
         format,
         usage,
-        view_formats: &[],
-    })
+    )
 }
 
 fn buffer(ctx: &Context, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {

@@ -225,20 +225,14 @@ fn formats_and_thresholds_that_cannot_seed_are_typed_errors() {
         )
         .expect_err("NaN threshold refused");
     assert!(e.to_string().contains("seed threshold"), "{e}");
-    let uint = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: None,
-        size: wgpu::Extent3d {
-            width: 4,
-            height: 4,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::R8Uint,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING,
-        view_formats: &[],
-    });
+    let uint = fieldkit::gpu::texture(
+        &ctx.device,
+        "test texture",
+        [4, 4, 1],
+        wgpu::TextureDimension::D2,
+        wgpu::TextureFormat::R8Uint,
+        wgpu::TextureUsages::TEXTURE_BINDING,
+    );
     let e = d2
         .encode(&ctx.device, &mut enc, &uint, &Settings2d::default())
         .expect_err("an integer texture refused");

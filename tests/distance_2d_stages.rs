@@ -68,20 +68,14 @@ fn resolve_stage() {
     let m = mask();
     // Resolve alone, from a nearest-seed texture made on the CPU.
     let nearest = cpu::jfa_2d(&m, W, H, &Variant::JfaPlus2.steps(W as u32));
-    let tex = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: None,
-        size: wgpu::Extent3d {
-            width: W as u32,
-            height: H as u32,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::R32Uint,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-        view_formats: &[],
-    });
+    let tex = fieldkit::gpu::texture(
+        &ctx.device,
+        "test texture",
+        [W as u32, H as u32, 1],
+        wgpu::TextureDimension::D2,
+        wgpu::TextureFormat::R32Uint,
+        wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+    );
     ctx.queue.write_texture(
         tex.as_image_copy(),
         bytemuck::cast_slice(&nearest),

@@ -199,20 +199,14 @@ fn bad_options_and_textures() {
         );
     }
     // A 3D texture of a format the stages do not read.
-    let rgba = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: None,
-        size: wgpu::Extent3d {
-            width: 4,
-            height: 4,
-            depth_or_array_layers: 4,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D3,
-        format: wgpu::TextureFormat::Rgba8Unorm,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING,
-        view_formats: &[],
-    });
+    let rgba = fieldkit::gpu::texture(
+        &ctx.device,
+        "test texture",
+        [4, 4, 4],
+        wgpu::TextureDimension::D3,
+        wgpu::TextureFormat::Rgba8Unorm,
+        wgpu::TextureUsages::TEXTURE_BINDING,
+    );
     let e = d3
         .encode(&ctx.device, &mut enc, &rgba, &Settings3d::default())
         .unwrap_err();
@@ -347,20 +341,14 @@ fn bad_options_and_textures() {
     // texture of the grid's size, and record with one in either memory; a wrong one, or one
     // along y, is a typed error naming what was wrong.
     let texture = |size: [u32; 3], format, dimension| {
-        ctx.device.create_texture(&wgpu::TextureDescriptor {
-            label: None,
-            size: wgpu::Extent3d {
-                width: size[0],
-                height: size[1],
-                depth_or_array_layers: size[2],
-            },
-            mip_level_count: 1,
-            sample_count: 1,
+        fieldkit::gpu::texture(
+            &ctx.device,
+            "test texture",
+            [size[0], size[1], size[2]],
             dimension,
             format,
-            usage: wgpu::TextureUsages::STORAGE_BINDING,
-            view_formats: &[],
-        })
+            wgpu::TextureUsages::STORAGE_BINDING,
+        )
     };
     let d3d = wgpu::TextureDimension::D3;
     let good = texture([4, 4, 4], wgpu::TextureFormat::R32Float, d3d);

@@ -529,20 +529,14 @@ fn gbuffer_holds_the_surface_for_the_scene_lighting() {
     )
     .unwrap();
     let make = |format| {
-        ctx.device.create_texture(&wgpu::TextureDescriptor {
-            label: None,
-            size: wgpu::Extent3d {
-                width: W,
-                height: H,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
+        fieldkit::gpu::texture(
+            &ctx.device,
+            "test texture",
+            [W, H, 1],
+            wgpu::TextureDimension::D2,
             format,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        })
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        )
     };
     let gb: Vec<wgpu::Texture> = (0..4).map(|_| make(f16)).collect();
     let depth = make(wgpu::TextureFormat::Depth32Float);
@@ -1032,22 +1026,15 @@ fn placement_culling_and_bad_views() {
     )
     .unwrap();
     let tex = |format| {
-        ctx.device
-            .create_texture(&wgpu::TextureDescriptor {
-                label: None,
-                size: wgpu::Extent3d {
-                    width: W,
-                    height: H,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-                view_formats: &[],
-            })
-            .create_view(&Default::default())
+        fieldkit::gpu::texture(
+            &ctx.device,
+            "test texture",
+            [W, H, 1],
+            wgpu::TextureDimension::D2,
+            format,
+            wgpu::TextureUsages::RENDER_ATTACHMENT,
+        )
+        .create_view(&Default::default())
     };
     let cv = tex(wgpu::TextureFormat::Rgba8Unorm);
     let dv = tex(wgpu::TextureFormat::Depth32Float);

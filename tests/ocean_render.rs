@@ -66,22 +66,16 @@ fn patches(cam: &OceanCamera) -> Vec<Patch> {
 }
 
 fn target(ctx: &Context, format: wgpu::TextureFormat) -> wgpu::Texture {
-    ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("test target"),
-        size: wgpu::Extent3d {
-            width: W,
-            height: H,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
+    fieldkit::gpu::texture(
+        &ctx.device,
+        "test target",
+        [W, H, 1],
+        wgpu::TextureDimension::D2,
         format,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+        wgpu::TextureUsages::RENDER_ATTACHMENT
             | wgpu::TextureUsages::COPY_SRC
             | wgpu::TextureUsages::TEXTURE_BINDING,
-        view_formats: &[],
-    })
+    )
 }
 
 /// Clear `views` to CLEAR and `depth` to `clear_depth`.
@@ -1270,20 +1264,14 @@ fn user_height_and_normal_maps() {
         renderer.set_maps(&ctx.device, None, Some(&heights)),
         Err(Error::Format { .. })
     ));
-    let volume = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: None,
-        size: wgpu::Extent3d {
-            width: 4,
-            height: 4,
-            depth_or_array_layers: 4,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D3,
-        format: wgpu::TextureFormat::R8Unorm,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING,
-        view_formats: &[],
-    });
+    let volume = fieldkit::gpu::texture(
+        &ctx.device,
+        "test texture",
+        [4, 4, 4],
+        wgpu::TextureDimension::D3,
+        wgpu::TextureFormat::R8Unorm,
+        wgpu::TextureUsages::TEXTURE_BINDING,
+    );
     let e = renderer
         .set_maps(&ctx.device, Some(&volume), None)
         .unwrap_err();

@@ -188,20 +188,14 @@ fn albedo_attributes_equal_the_dense_list() {
         "{:?}",
         e.err()
     );
-    let integer = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("integer albedo"),
-        size: wgpu::Extent3d {
-            width: 4,
-            height: 4,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Rgba8Uint,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING,
-        view_formats: &[],
-    });
+    let integer = fieldkit::gpu::texture(
+        &ctx.device,
+        "integer albedo",
+        [4, 4, 1],
+        wgpu::TextureDimension::D2,
+        wgpu::TextureFormat::Rgba8Uint,
+        wgpu::TextureUsages::TEXTURE_BINDING,
+    );
     let e = ctx.block_on(builder.voxelize_with_albedo(
         &ctx.device,
         &ctx.queue,

@@ -533,20 +533,14 @@ fn exact_grids_past_every_packing_are_refused() {
     let n = noop();
     let ctx = &n.ctx;
     let texture = |size: [u32; 3]| {
-        ctx.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("large volume"),
-            size: wgpu::Extent3d {
-                width: size[0],
-                height: size[1],
-                depth_or_array_layers: size[2],
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D3,
-            format: wgpu::TextureFormat::R8Unorm,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        })
+        fieldkit::gpu::texture(
+            &ctx.device,
+            "large volume",
+            [size[0], size[1], size[2]],
+            wgpu::TextureDimension::D3,
+            wgpu::TextureFormat::R8Unorm,
+            wgpu::TextureUsages::TEXTURE_BINDING,
+        )
     };
     let options = fieldkit::distance::Settings3d::default();
     let mut enc = ctx.encoder("large exact");

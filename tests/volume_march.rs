@@ -651,20 +651,14 @@ fn rays_stop_at_the_scene_depth_standard_and_reversed() {
         // An opaque wall facing the camera 2 units away (view z = −2): through the box's middle.
         let wall =
             (proj * Vec4::new(0.0, 0.0, -2.0, 1.0)).z / (proj * Vec4::new(0.0, 0.0, -2.0, 1.0)).w;
-        let depth = rig.ctx.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("scene depth"),
-            size: wgpu::Extent3d {
-                width: SIZE,
-                height: SIZE,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Depth32Float,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        });
+        let depth = fieldkit::gpu::texture(
+            &rig.ctx.device,
+            "scene depth",
+            [SIZE, SIZE, 1],
+            wgpu::TextureDimension::D2,
+            wgpu::TextureFormat::Depth32Float,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+        );
         let dv = depth.create_view(&Default::default());
         let mut enc = rig.ctx.encoder("clear depth");
         enc.begin_render_pass(&wgpu::RenderPassDescriptor {

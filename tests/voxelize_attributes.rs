@@ -561,20 +561,14 @@ fn albedo_is_sampled_at_each_voxels_texture_coordinates() {
         .err()
         .unwrap();
     assert!(e.to_string().contains("texture coordinates"), "{e}");
-    let r32 = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: None,
-        size: wgpu::Extent3d {
-            width: 2,
-            height: 2,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::R32Uint,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING,
-        view_formats: &[],
-    });
+    let r32 = fieldkit::gpu::texture(
+        &ctx.device,
+        "test texture",
+        [2, 2, 1],
+        wgpu::TextureDimension::D2,
+        wgpu::TextureFormat::R32Uint,
+        wgpu::TextureUsages::TEXTURE_BINDING,
+    );
     assert!(matches!(
         v.encode_attributes_with(&ctx.device, &mut enc, &mesh, &grid, Some(&r32)),
         Err(Error::Format { .. })

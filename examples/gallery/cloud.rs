@@ -52,20 +52,14 @@ pub fn cloud_scene_with(
         reversed_z: false,
         origin: [0, 0],
     };
-    let colour = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("gallery cloud"),
-        size: wgpu::Extent3d {
-            width: w,
-            height: h,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Rgba8Unorm,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    });
+    let colour = fieldkit::gpu::texture(
+        &ctx.device,
+        "gallery cloud",
+        [w, h, 1],
+        wgpu::TextureDimension::D2,
+        wgpu::TextureFormat::Rgba8Unorm,
+        wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+    );
     let cv = colour.create_view(&Default::default());
     let mut enc = ctx.encoder("gallery cloud");
     enc.begin_render_pass(&wgpu::RenderPassDescriptor {

@@ -1,8 +1,22 @@
 //! Allocation helpers every technique shares: textures of one mip and sample, the storage
 //! textures stages write volumes into, and storage buffers.
 
-/// A texture of `size` (`[width, height, depth or layers]`), one mip level and one sample.
-pub(crate) fn texture(
+/// A texture of `size` (`[width, height, depth or layers]`), one mip level and one sample: the
+/// texture every fieldkit stage makes, and what tests and demos make their targets with.
+///
+/// ```no_run
+/// # fn f(device: &wgpu::Device) {
+/// let depth = fieldkit::gpu::texture(
+///     device,
+///     "depth",
+///     [1920, 1080, 1],
+///     wgpu::TextureDimension::D2,
+///     wgpu::TextureFormat::Depth32Float,
+///     wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+/// );
+/// # }
+/// ```
+pub fn texture(
     device: &wgpu::Device,
     label: &str,
     size: [u32; 3],

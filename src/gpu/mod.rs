@@ -14,7 +14,8 @@ mod timing;
 
 #[cfg(feature = "techniques")]
 pub(crate) use albedo::AlbedoBinding;
-pub(crate) use alloc::{storage_buffer, texture, volume_texture};
+pub use alloc::texture;
+pub(crate) use alloc::{storage_buffer, volume_texture};
 #[cfg(feature = "context")]
 pub use context::{ADAPTER_ENV, Context, read_buffer, read_texture};
 pub use readback::{Readback, readback_buffer, readback_buffers, readback_texture};

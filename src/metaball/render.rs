@@ -267,23 +267,15 @@ struct Scratch {
 impl Scratch {
     fn new(device: &wgpu::Device, size: [u32; 2]) -> Self {
         let make = |label, format| {
-            device
-                .create_texture(&wgpu::TextureDescriptor {
-                    label: Some(label),
-                    size: wgpu::Extent3d {
-                        width: size[0],
-                        height: size[1],
-                        depth_or_array_layers: 1,
-                    },
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format,
-                    usage: wgpu::TextureUsages::STORAGE_BINDING
-                        | wgpu::TextureUsages::TEXTURE_BINDING,
-                    view_formats: &[],
-                })
-                .create_view(&Default::default())
+            crate::gpu::texture(
+                device,
+                label,
+                [size[0], size[1], 1],
+                wgpu::TextureDimension::D2,
+                format,
+                wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING,
+            )
+            .create_view(&Default::default())
         };
         Self {
             size,

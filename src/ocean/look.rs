@@ -279,20 +279,14 @@ pub(super) struct Maps {
 impl Maps {
     /// A 1×1 stand-in bound where no maps are set.
     pub(super) fn none(device: &wgpu::Device, label: &str) -> Self {
-        let t = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some(label),
-            size: wgpu::Extent3d {
-                width: 1,
-                height: 1,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Rgba8Unorm,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        });
+        let t = crate::gpu::texture(
+            device,
+            label,
+            [1, 1, 1],
+            wgpu::TextureDimension::D2,
+            wgpu::TextureFormat::Rgba8Unorm,
+            wgpu::TextureUsages::TEXTURE_BINDING,
+        );
         Self {
             view: array_view(&t),
             layers: 0,

@@ -186,20 +186,14 @@ impl<M: Entry, B: Entry, K: Entry> DensityMarch<M, B, K> {
         check_entry(M::INFO, "march")?;
         check_entry(B::INFO, "bricks")?;
         check_entry(K::INFO, "bake")?;
-        let no_depth = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("no scene depth"),
-            size: wgpu::Extent3d {
-                width: 1,
-                height: 1,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Depth32Float,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        });
+        let no_depth = crate::gpu::texture(
+            device,
+            "no scene depth",
+            [1, 1, 1],
+            wgpu::TextureDimension::D2,
+            wgpu::TextureFormat::Depth32Float,
+            wgpu::TextureUsages::TEXTURE_BINDING,
+        );
         Ok(Self {
             march: (0..24).map(|_| std::sync::OnceLock::new()).collect(),
             bricks: ComputePipeline::new(device)?,

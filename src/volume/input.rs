@@ -121,22 +121,16 @@ impl Volume {
             _ => (bytemuck::cast_slice(data).to_vec(), 4),
         };
         let texture = crate::gpu::scoped(device, STAGE, || {
-            let t = device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("density volume"),
-                size: wgpu::Extent3d {
-                    width: dims[0],
-                    height: dims[1],
-                    depth_or_array_layers: dims[2],
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D3,
+            let t = crate::gpu::texture(
+                device,
+                "density volume",
+                [dims[0], dims[1], dims[2]],
+                wgpu::TextureDimension::D3,
                 format,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING
+                wgpu::TextureUsages::TEXTURE_BINDING
                     | wgpu::TextureUsages::COPY_DST
                     | wgpu::TextureUsages::COPY_SRC,
-                view_formats: &[],
-            });
+            );
             queue.write_texture(
                 t.as_image_copy(),
                 &bytes,

@@ -295,20 +295,14 @@ impl VolumeRenderer {
         // Bound in place of a light volume's own texture and of the caller's depth when there
         // are none (the march reads them only when told to).
         let tiny = |label, format, dimension| {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size: wgpu::Extent3d {
-                    width: 1,
-                    height: 1,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
+            crate::gpu::texture(
+                device,
+                label,
+                [1, 1, 1],
                 dimension,
                 format,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            })
+                wgpu::TextureUsages::TEXTURE_BINDING,
+            )
         };
         let no_light = tiny(
             "no light volume",
@@ -505,22 +499,16 @@ impl VolumeRenderer {
         };
         // Nodes on every other voxel centre, one past the last voxel when the size is even.
         let size = volume.dims.map(|d| d / 2 + 1);
-        let texture = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("light volume"),
-            size: wgpu::Extent3d {
-                width: size[0],
-                height: size[1],
-                depth_or_array_layers: size[2],
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D3,
-            format: wgpu::TextureFormat::Rgba16Float,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING
+        let texture = crate::gpu::texture(
+            device,
+            "light volume",
+            [size[0], size[1], size[2]],
+            wgpu::TextureDimension::D3,
+            wgpu::TextureFormat::Rgba16Float,
+            wgpu::TextureUsages::TEXTURE_BINDING
                 | wgpu::TextureUsages::STORAGE_BINDING
                 | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
+        );
         // The light pass reads only the volume fields of the view-independent parameters.
         let view = View {
             view_proj: Mat4::IDENTITY,
@@ -586,22 +574,16 @@ impl VolumeRenderer {
         light: &wgpu::TextureView,
     ) -> Result<wgpu::Texture, Error> {
         let [w, h, d] = volume.dims;
-        let texture = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("lit density"),
-            size: wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: d,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D3,
-            format: lit_format(volume.texture.format()),
-            usage: wgpu::TextureUsages::TEXTURE_BINDING
+        let texture = crate::gpu::texture(
+            device,
+            "lit density",
+            [w, h, d],
+            wgpu::TextureDimension::D3,
+            lit_format(volume.texture.format()),
+            wgpu::TextureUsages::TEXTURE_BINDING
                 | wgpu::TextureUsages::STORAGE_BINDING
                 | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
+        );
         let out = texture.create_view(&Default::default());
         let mut rec = rec.recorder();
         let mut pass = rec.compute_pass(lit_density::STAGE, "lit density");
@@ -920,22 +902,16 @@ fn march_rect(view: &View, local_to_world: Mat4, lo: Vec3, hi: Vec3) -> Option<[
 
 /// The premultiplied image a march writes: viewport-sized `Rgba16Float`.
 fn march_target(device: &wgpu::Device, view: &View) -> wgpu::Texture {
-    device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("volume march"),
-        size: wgpu::Extent3d {
-            width: view.viewport[0],
-            height: view.viewport[1],
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Rgba16Float,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING
+    crate::gpu::texture(
+        device,
+        "volume march",
+        [view.viewport[0], view.viewport[1], 1],
+        wgpu::TextureDimension::D2,
+        wgpu::TextureFormat::Rgba16Float,
+        wgpu::TextureUsages::TEXTURE_BINDING
             | wgpu::TextureUsages::STORAGE_BINDING
             | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    })
+    )
 }
 
 fn check_transform(m: Mat4) -> Result<(), Error> {

@@ -25,22 +25,15 @@ pub fn run(args: &crate::measure::Args) -> ExitCode {
 }
 
 fn texture(ctx: &Context) -> wgpu::TextureView {
-    ctx.device
-        .create_texture(&wgpu::TextureDescriptor {
-            label: Some("bind bench"),
-            size: wgpu::Extent3d {
-                width: 64,
-                height: 64,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::R32Uint,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::STORAGE_BINDING,
-            view_formats: &[],
-        })
-        .create_view(&Default::default())
+    fieldkit::gpu::texture(
+        &ctx.device,
+        "bind bench",
+        [64, 64, 1],
+        wgpu::TextureDimension::D2,
+        wgpu::TextureFormat::R32Uint,
+        wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::STORAGE_BINDING,
+    )
+    .create_view(&Default::default())
 }
 
 /// Nanoseconds per bind over one run of [`BINDS`].

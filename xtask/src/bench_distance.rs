@@ -585,20 +585,14 @@ fn distance(args: &Args) -> Result<(), String> {
                 .map_err(|e| e.to_string())?;
             // The z pass resolves: its copy is timed again with the distance store as well.
             let edge = size.map(|s| s as u32);
-            let distance = ctx.device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("bench copy distance"),
-                size: wgpu::Extent3d {
-                    width: edge[0],
-                    height: edge[1],
-                    depth_or_array_layers: edge[2],
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D3,
-                format: wgpu::TextureFormat::R32Float,
-                usage: wgpu::TextureUsages::STORAGE_BINDING,
-                view_formats: &[],
-            });
+            let distance = fieldkit::gpu::texture(
+                &ctx.device,
+                "bench copy distance",
+                [edge[0], edge[1], edge[2]],
+                wgpu::TextureDimension::D3,
+                wgpu::TextureFormat::R32Float,
+                wgpu::TextureUsages::STORAGE_BINDING,
+            );
             for axis in [1u32, 2] {
                 let mut tile = false;
                 let mut copy = |store: Option<&wgpu::Texture>| {

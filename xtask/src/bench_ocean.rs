@@ -44,20 +44,14 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
     let renderer = OceanRenderer::new(&ctx.device, &ctx.queue, Output::Forward(format), false)
         .map_err(|e| e.to_string())?;
     let make = |format, usage| {
-        ctx.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("bench ocean target"),
-            size: wgpu::Extent3d {
-                width,
-                height,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
+        fieldkit::gpu::texture(
+            &ctx.device,
+            "bench ocean target",
+            [width, height, 1],
+            wgpu::TextureDimension::D2,
             format,
             usage,
-            view_formats: &[],
-        })
+        )
     };
     let colour = make(format, wgpu::TextureUsages::RENDER_ATTACHMENT);
     let depth = make(
