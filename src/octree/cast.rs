@@ -6,7 +6,7 @@ use std::sync::OnceLock;
 use glam::{Mat4, Vec3};
 
 use super::Octree;
-use crate::bind::ComputePipeline;
+use crate::bind::{ComputePipeline, Variants};
 use crate::error::Error;
 use crate::gpu::{Readback, Record, readback_buffer, uniform_buffer as uniform};
 use crate::shaders::octree::cast::{self as stage, CastParams};
@@ -128,7 +128,7 @@ impl Casts {
 #[derive(Default)]
 pub struct OctreeCaster {
     /// Without and with attributes.
-    render: [OnceLock<ComputePipeline<stage::render::Entry>>; 2],
+    render: Variants<stage::render::Entry, stage::Overrides>,
     cast_rays: OnceLock<ComputePipeline<stage::cast_rays::Entry>>,
     lookup: OnceLock<ComputePipeline<stage::lookup::Entry>>,
     expand: OnceLock<ComputePipeline<stage::expand::Entry>>,
@@ -233,13 +233,12 @@ impl OctreeCaster {
             image.depth.create_view(&Default::default()),
         );
         let attributes = octree.attributes.as_ref().filter(|_| settings.attributes);
-        let pipeline = ComputePipeline::cached(
-            &self.render[attributes.is_some() as usize],
+        let pipeline = self.render.get(
             device,
             &stage::Overrides {
                 attributes: attributes.is_some(),
-            }
-            .constants(),
+            },
+            true,
         )?;
         let none = storage(
             device,

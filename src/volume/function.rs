@@ -10,7 +10,7 @@ use super::{
     check_scene_depth, check_transform, check_view, march_rect, march_target, step_guard,
     tf_buffer,
 };
-use crate::bind::{ComputePipeline, Entry, EntryInfo, Resource};
+use crate::bind::{ComputePipeline, Entry, EntryInfo, Resource, Variants};
 use crate::error::Error;
 use crate::gpu::{Record, uniform_buffer as uniform};
 use crate::shaders::volume::cloud_march;
@@ -142,7 +142,7 @@ fn check_entry(info: &EntryInfo, name: &str) -> Result<(), Error> {
 /// [`VolumeMarched`] it returns blends with [`super::VolumeRenderer::encode_composite`].
 pub struct DensityMarch<M, B, K> {
     /// One pipeline per mode × shadow × skip × sample count, made on first use.
-    march: Vec<std::sync::OnceLock<ComputePipeline<ByName<M>>>>,
+    march: Variants<ByName<M>, cloud_march::Overrides>,
     bricks: ComputePipeline<ByName<B>>,
     bake: ComputePipeline<ByName<K>>,
     no_depth: wgpu::Texture,
@@ -195,7 +195,7 @@ impl<M: Entry, B: Entry, K: Entry> DensityMarch<M, B, K> {
             wgpu::TextureUsages::TEXTURE_BINDING,
         );
         Ok(Self {
-            march: (0..24).map(|_| std::sync::OnceLock::new()).collect(),
+            march: Variants::default(),
             bricks: ComputePipeline::new(device)?,
             bake: ComputePipeline::new(device)?,
             no_depth,
@@ -426,9 +426,7 @@ impl<M: Entry, B: Entry, K: Entry> DensityMarch<M, B, K> {
             super::Mode::MaximumIntensity => 1,
             super::Mode::IsoSurface { .. } => 2,
         };
-        let march = ComputePipeline::cached(
-            &self.march[((mode * 2 + shadow) * 2 + settings.skip as usize) * 2
-                + settings.count_samples as usize],
+        let march = self.march.get(
             device,
             // Every density march is made from one template, so the built-in cloud's generated
             // overrides name the template's (`check_entry` holds each stage to the template).
@@ -437,8 +435,8 @@ impl<M: Entry, B: Entry, K: Entry> DensityMarch<M, B, K> {
                 shadow: shadow as u32,
                 skip: settings.skip,
                 count_samples: settings.count_samples,
-            }
-            .constants(),
+            },
+            true,
         )?;
         march.record(
             device,

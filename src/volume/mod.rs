@@ -49,7 +49,7 @@ pub use input::{BRICK, TransferFunction, Volume};
 
 use glam::{Mat4, Vec3};
 
-use crate::bind::{ComputePipeline, RenderPipeline, RenderTargets};
+use crate::bind::{ComputePipeline, RenderPipeline, RenderTargets, Variants};
 use crate::error::Error;
 use crate::gpu::{Record, uniform_buffer as uniform};
 use crate::shaders::volume::{bricks, lit_density, volume_composite, volume_march};
@@ -269,7 +269,7 @@ pub struct VolumeRenderer {
     bricks: ComputePipeline<bricks::bricks::Entry>,
     /// One march pipeline per mode × shadow × skip × sample count (`march_index`), made on
     /// first use.
-    march: Vec<std::sync::OnceLock<ComputePipeline<volume_march::march::Entry>>>,
+    march: Variants<volume_march::march::Entry, volume_march::Overrides>,
     light: ComputePipeline<volume_march::light_volume::Entry>,
     composite: RenderPipeline<volume_composite::fs_main::Entry>,
     lit: LitPipelines,
@@ -316,7 +316,7 @@ impl VolumeRenderer {
         );
         Ok(Self {
             bricks: ComputePipeline::new(device)?,
-            march: (0..48).map(|_| std::sync::OnceLock::new()).collect(),
+            march: Variants::default(),
             light: ComputePipeline::new(device)?,
             composite,
             lit: LitPipelines {
@@ -698,17 +698,15 @@ impl VolumeRenderer {
             colour.create_view(&Default::default()),
         );
         let (mode, shadow) = march_variant(settings, light);
-        let march = ComputePipeline::cached(
-            &self.march[((mode * 4 + shadow) * 2 + settings.skip as usize) * 2
-                + settings.count_samples as usize],
+        let march = self.march.get(
             device,
             &volume_march::Overrides {
                 mode: mode as u32,
                 shadow: shadow as u32,
                 skip: settings.skip,
                 count_samples: settings.count_samples,
-            }
-            .constants(),
+            },
+            true,
         )?;
         let groups = [
             (rect[2] - rect[0]).div_ceil(8),

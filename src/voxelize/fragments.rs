@@ -2,10 +2,8 @@
 //! coordinates instead of a dense bitset, for grids too large to hold densely (up to
 //! [`super::MAX_SPARSE_SIDE`] per side). The sparse voxel octree ([`crate::octree`]) is built from it.
 
-use std::sync::OnceLock;
-
 use super::{Grid, GridMesh, Listed, Mesh, SLACK, Separation, Voxelizer, box_columns};
-use crate::bind::ComputePipeline;
+use crate::bind::Variants;
 use crate::error::Error;
 use crate::gpu::{Readback, Record, storage_buffer as storage, uniform_buffer as uniform};
 use crate::shaders::voxelize::fragments::{self as stage, FragmentParams};
@@ -16,7 +14,7 @@ const FRAGMENT_BYTES: u64 = 8;
 /// Per separation (conservative, six), without and with triangle ids.
 #[derive(Default)]
 pub(super) struct FragmentPipelines {
-    variants: [OnceLock<ComputePipeline<stage::fragments_listed::Entry>>; 4],
+    variants: Variants<stage::fragments_listed::Entry, stage::Overrides>,
 }
 
 /// The voxels of a mesh's surface as lists on the GPU, one entry per (triangle, voxel) it
@@ -238,14 +236,13 @@ impl Voxelizer {
             });
         }
         let six = separation == Separation::Six;
-        let pipeline = ComputePipeline::cached(
-            &self.fragment_pipelines.variants[six as usize * 2 + ids as usize],
+        let pipeline = self.fragment_pipelines.variants.get(
             device,
             &stage::Overrides {
                 six_separating: six,
                 triangle_ids: ids,
-            }
-            .constants(),
+            },
+            true,
         )?;
         let no_ids = storage(
             device,
