@@ -156,6 +156,37 @@ struct Agreement {
     max_normal_deg: f64,
 }
 
+impl Agreement {
+    /// Print what `what` measured, then hold it to `bound`: more hits than `bound.hits`, at most
+    /// `bound.silhouette_off` silhouette pixels that differ, each error below the bound's.
+    fn check(&self, what: &str, bound: &Agreement) {
+        println!(
+            "{what}: {} hits, {} silhouette pixels differ, depth ≤ {:.4} cells, hit point ≤ \
+             {:.4} cells off, normal ≤ {:.3}°",
+            self.hits,
+            self.silhouette_off,
+            self.max_depth_err,
+            self.max_surface_err,
+            self.max_normal_deg
+        );
+        assert!(self.hits > bound.hits, "{what}: {} hits", self.hits);
+        let off = self.silhouette_off;
+        assert!(
+            off <= bound.silhouette_off,
+            "{what}: {off} silhouette pixels"
+        );
+        let depth = self.max_depth_err;
+        assert!(depth < bound.max_depth_err, "{what}: depth {depth}");
+        let surface = self.max_surface_err;
+        assert!(
+            surface < bound.max_surface_err,
+            "{what}: hit point {surface}"
+        );
+        let normal = self.max_normal_deg;
+        assert!(normal < bound.max_normal_deg, "{what}: normal {normal}");
+    }
+}
+
 /// Compare a shot with f64 bisection on the analytic field (identity placement).
 fn against_analytic(
     shot: &Shot,
@@ -241,11 +272,6 @@ fn one_blob_is_a_sphere() {
     let view = camera(Vec3::new(0.3, 0.4, 2.5), Vec3::ZERO, false);
     let shot = shoot(&ctx, &field, &view, Mat4::IDENTITY, &normals(), 1.0);
     let a = against_analytic(&shot, &view, &voxels, &s, field.grid.voxel);
-    println!(
-        "one blob: {} hits, {} silhouette pixels differ, depth error ≤ {:.3} cells (≤ 60° from \
-         the normal), hit point ≤ {:.3} cells off the surface, normal ≤ {:.2}°",
-        a.hits, a.silhouette_off, a.max_depth_err, a.max_surface_err, a.max_normal_deg
-    );
     // The analytic radius itself, as a check on the reference.
     let r = cpu::blob_iso_radius(s.radius(1.0, 1.0) as f64, 0.5);
     let on = cpu::density_at(
@@ -255,15 +281,21 @@ fn one_blob_is_a_sphere() {
         voxels[0].truncate().as_dvec3() + DVec3::X * r,
     );
     assert!((on - 0.5).abs() < 1e-12);
-    assert!(a.hits > 200, "the blob covers part of the image");
-    // Measured on llvmpipe, which set the bounds: silhouette 2 pixels, depth 0.130 cells, hit
-    // point 0.100 cells, normal 5.73° (half-float field, hardware trilinear). The surface traced is the iso-surface of the grid's
-    // trilinear density, not the analytic field, so a grazing pixel can fall either side of the
-    // silhouette, and the normal is a one-cell central difference of that density.
-    assert!(a.silhouette_off <= 6, "{}", a.silhouette_off);
-    assert!(a.max_depth_err < 0.2, "{}", a.max_depth_err);
-    assert!(a.max_surface_err < 0.15, "{}", a.max_surface_err);
-    assert!(a.max_normal_deg < 6.5, "{}", a.max_normal_deg);
+    // Measured on llvmpipe, which set the bounds: silhouette 2 pixels, depth 0.130 cells (rays
+    // within 60° of the normal), hit point 0.100 cells off the surface, normal 5.73°
+    // (half-float field, hardware trilinear). The surface traced is the iso-surface of the
+    // grid's trilinear density, not the analytic field, so a grazing pixel can fall either side
+    // of the silhouette, and the normal is a one-cell central difference of that density.
+    a.check(
+        "one blob",
+        &Agreement {
+            hits: 200,
+            silhouette_off: 6,
+            max_depth_err: 0.2,
+            max_surface_err: 0.15,
+            max_normal_deg: 6.5,
+        },
+    );
 }
 
 /// Two blobs far enough apart that only a thin neck joins them, and a third off to the side:
@@ -285,11 +317,6 @@ fn several_blobs_and_a_thin_neck() {
     let view = camera(Vec3::new(0.0, 0.2, 2.8), Vec3::ZERO, false);
     let shot = shoot(&ctx, &field, &view, Mat4::IDENTITY, &normals(), 1.0);
     let a = against_analytic(&shot, &view, &voxels, &s, field.grid.voxel);
-    println!(
-        "three blobs: {} hits, {} silhouette pixels differ, depth ≤ {:.3} cells, hit point ≤ \
-         {:.3} cells off, normal ≤ {:.2}°",
-        a.hits, a.silhouette_off, a.max_depth_err, a.max_surface_err, a.max_normal_deg
-    );
     // The neck's centre pixel is hit (the neck is not lost between grid samples).
     let (o, d, _) = ray(&view, W / 2, H / 2);
     assert!(cpu::ray_hit(&voxels, 1.0, &s, o, d, 10.0, 0.01).is_some());
@@ -297,13 +324,19 @@ fn several_blobs_and_a_thin_neck() {
         shot.hits[(H / 2 * W + W / 2) as usize].is_some(),
         "neck pixel missed"
     );
-    assert!(a.hits > 300);
-    assert!(a.silhouette_off <= 10, "{}", a.silhouette_off);
-    assert!(a.max_depth_err < 0.3, "{}", a.max_depth_err);
-    assert!(a.max_surface_err < 0.2, "{}", a.max_surface_err);
-    // Measured on llvmpipe: 17.5° at the neck, whose radius is 1.2 cells: a one-cell central
-    // difference of the trilinear density cannot follow that curvature (the failure shown).
-    assert!(a.max_normal_deg < 20.0, "{}", a.max_normal_deg);
+    // Measured on llvmpipe: normals 17.5° off at the neck, whose radius is 1.2 cells: a
+    // one-cell central difference of the trilinear density cannot follow that curvature (the
+    // failure shown).
+    a.check(
+        "three blobs",
+        &Agreement {
+            hits: 300,
+            silhouette_off: 10,
+            max_depth_err: 0.3,
+            max_surface_err: 0.2,
+            max_normal_deg: 20.0,
+        },
+    );
 }
 
 /// A non-uniform scale with a rotation places the surface where the analytic field, placed the
@@ -324,18 +357,18 @@ fn scaled_placement_matches_the_analytic_field() {
         * Mat4::from_translation(Vec3::new(0.1, 0.0, 0.0));
     let shot = shoot(&ctx, &field, &view, place, &normals(), 1.0);
     let a = against_analytic_placed(&shot, &view, &voxels, &s, field.grid.voxel, place);
-    println!(
-        "scaled placement: {} hits, {} silhouette pixels differ, depth ≤ {:.3} cells, hit point \
-         ≤ {:.3} cells off, normal ≤ {:.2}°",
-        a.hits, a.silhouette_off, a.max_depth_err, a.max_surface_err, a.max_normal_deg
-    );
-    assert!(a.hits > 300, "{}", a.hits);
     // Bounds as for one blob (llvmpipe), the depth error in world cells: the largest scale is
     // 1.4, so 0.2 local cells along a ray can be 0.28 world cells.
-    assert!(a.silhouette_off <= 8, "{}", a.silhouette_off);
-    assert!(a.max_depth_err < 0.3, "{}", a.max_depth_err);
-    assert!(a.max_surface_err < 0.15, "{}", a.max_surface_err);
-    assert!(a.max_normal_deg < 7.0, "{}", a.max_normal_deg);
+    a.check(
+        "scaled placement",
+        &Agreement {
+            hits: 300,
+            silhouette_off: 8,
+            max_depth_err: 0.3,
+            max_surface_err: 0.15,
+            max_normal_deg: 7.0,
+        },
+    );
     // Without the inverse transpose the normals would be off by up to 25° here: the check can
     // tell.
     let wrong = glam::DMat3::from_mat4(place.as_dmat4());
@@ -366,21 +399,21 @@ fn seed_march_hits_the_same_surface_with_more_steps() {
     };
     let shot = shoot(&ctx, &field, &view, Mat4::IDENTITY, &seed, 1.0);
     let a = against_analytic(&shot, &view, &voxels, &s, field.grid.voxel);
-    println!(
-        "seed march: {} hits, {} silhouette pixels differ, depth ≤ {:.3} cells, hit point ≤ \
-         {:.3} cells off, normal ≤ {:.2}°",
-        a.hits, a.silhouette_off, a.max_depth_err, a.max_surface_err, a.max_normal_deg
-    );
-    assert!(a.hits > 200);
     // Measured on llvmpipe: 11 silhouette pixels, depth 0.449 cells, hit point 0.249 cells,
     // normal 9.76°, against 2, 0.130, 0.100 and 5.73° for the default march
     // (`one_blob_is_a_sphere`). The Hermite weights are flat at voxel centres and steep between
     // them, so the interpolated density's iso-surface ripples by a quarter cell: the reason
     // fieldkit's default reads trilinearly. The bounds leave the same margin as the default's.
-    assert!(a.silhouette_off <= 16, "{}", a.silhouette_off);
-    assert!(a.max_depth_err < 0.6, "{}", a.max_depth_err);
-    assert!(a.max_surface_err < 0.35, "{}", a.max_surface_err);
-    assert!(a.max_normal_deg < 13.0, "{}", a.max_normal_deg);
+    a.check(
+        "seed march",
+        &Agreement {
+            hits: 200,
+            silhouette_off: 16,
+            max_depth_err: 0.6,
+            max_surface_err: 0.35,
+            max_normal_deg: 13.0,
+        },
+    );
     // The ripple is the filter's: the source's steps with trilinear reads hit the default's
     // surface.
     let trilinear = RaymarchSettings {
@@ -910,7 +943,7 @@ fn cameras_inside_and_the_near_plane() {
     let s = blob_settings();
     // Inside the box, outside the blob: rays start at the near plane, inside the box.
     let eye = Vec3::new(0.0, 0.0, 0.8);
-    assert!(field.grid.origin.z as f32 + field.grid.size[2] as f32 * field.grid.voxel as f32 > 0.8);
+    assert!(field.grid.origin.z + field.grid.size[2] as f64 * field.grid.voxel > 0.8);
     let view = camera(eye, Vec3::ZERO, false);
     let shot = shoot(&ctx, &field, &view, Mat4::IDENTITY, &normals(), 1.0);
     let a = against_analytic(&shot, &view, &voxels, &s, field.grid.voxel);
@@ -1208,34 +1241,18 @@ fn direct_tracing_matches_the_analytic_field() {
                 1.0,
             );
             let a = against_analytic(&shot, &view, &voxels, &s, bins.cell as f64);
-            println!(
-                "{name}, {method:?}: {} hits, {} silhouette off, depth ≤ {:.4} cells, hit point \
-                 ≤ {:.4} cells off, normal ≤ {:.3}°",
-                a.hits, a.silhouette_off, a.max_depth_err, a.max_surface_err, a.max_normal_deg
-            );
             // Measured on llvmpipe: 0 silhouette pixels off, depth and hit point ≤ 0.0001 cells
-            // (six bisections and a secant on f32 sums), normals ≤ 0.011°; the grid-free tracers are two
-            // orders of magnitude closer than the SDF march above.
-            assert!(a.hits > 200, "{name} {method:?}");
-            assert!(
-                a.silhouette_off <= 1,
-                "{name} {method:?}: {}",
-                a.silhouette_off
-            );
-            assert!(
-                a.max_depth_err < 0.005,
-                "{name} {method:?}: {}",
-                a.max_depth_err
-            );
-            assert!(
-                a.max_surface_err < 0.005,
-                "{name} {method:?}: {}",
-                a.max_surface_err
-            );
-            assert!(
-                a.max_normal_deg < 0.1,
-                "{name} {method:?}: {}",
-                a.max_normal_deg
+            // (six bisections and a secant on f32 sums), normals ≤ 0.011°; the grid-free tracers
+            // are two orders of magnitude closer than the SDF march above.
+            a.check(
+                &format!("{name}, {method:?}"),
+                &Agreement {
+                    hits: 200,
+                    silhouette_off: 1,
+                    max_depth_err: 0.005,
+                    max_surface_err: 0.005,
+                    max_normal_deg: 0.1,
+                },
             );
         }
     }
