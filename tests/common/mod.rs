@@ -1,7 +1,11 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
+pub mod metaball;
+pub mod ocean;
 pub mod octree;
+pub mod volume;
+pub mod voxelize;
 
 use fieldkit::distance::{Jfa2d, JfaSettings2d, Variant, upload_mask};
 use fieldkit::gpu::{Context, read_texture};
