@@ -23,9 +23,13 @@
 //! `--soak FRAMES` runs the four animated techniques (or `--scene`'s) for FRAMES frames each,
 //! offscreen (`--size`, default 320×240), sampling memory after every frame, and fails when a
 //! frame errs or memory grows after warm-up (see `soak.rs`; `cargo xtask soak` runs 10 000).
+//! `--frame-cost FRAMES` measures what a frame of each scene (or `--scene`'s) costs at 1920×1080
+//! (or `--size`): CPU to record and submit, submit → done, the GPU's compute passes, the loop's
+//! floor, the first frame and a resize (see `frame.rs`; `cargo xtask bench frame` runs it).
 
 pub mod camera;
 pub mod draw;
+pub mod frame;
 pub mod panels;
 pub mod scenes;
 pub mod soak;
@@ -62,6 +66,10 @@ pub struct Args {
     pub soak: Option<u32>,
     /// `--preset seed`: start from every scene's seed preset (the sources' settings).
     pub seed: bool,
+    /// Frame cost: frames measured per scene.
+    pub frame_cost: Option<u32>,
+    /// Where `--frame-cost` writes `frame.csv`.
+    pub out: Option<PathBuf>,
 }
 
 fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
@@ -84,6 +92,10 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
                 other => return Err(format!("--preset {other:?}: seed or fieldkit")),
             },
             "--soak" => a.soak = Some(value()?.parse().map_err(|e| format!("--soak: {e}"))?),
+            "--frame-cost" => {
+                a.frame_cost = Some(value()?.parse().map_err(|e| format!("--frame-cost: {e}"))?)
+            }
+            "--out" => a.out = Some(value()?.into()),
             "--size" => {
                 let v = value()?;
                 let (w, h) = v.split_once('x').ok_or("--size WxH")?;
@@ -109,7 +121,8 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
 }
 
 const HELP: &str = "viewer [--scene NAME] [--frames N] [--screenshot FILE.png] [--settings FILE.ron] \
-[--mesh FILE.obj] [--size WxH] [--window] [--soak FRAMES] [--preset seed|fieldkit]";
+[--mesh FILE.obj] [--size WxH] [--window] [--soak FRAMES] [--frame-cost FRAMES [--out DIR]] \
+[--preset seed|fieldkit]";
 
 /// Read a settings file (RON). Missing fields take their defaults.
 pub fn load_settings(path: &Path) -> Result<Saved, String> {
@@ -372,7 +385,15 @@ fn main() -> std::process::ExitCode {
     if let Some(mesh) = &args.mesh {
         saved.voxelizer.mesh = mesh.clone();
     }
-    let result = if let Some(frames) = args.soak {
+    let result = if let Some(frames) = args.frame_cost {
+        if let Some(e) = &load_error {
+            eprintln!("settings: {e}");
+            return std::process::ExitCode::from(2);
+        }
+        let scenes: Vec<String> = args.scene.iter().cloned().collect();
+        let size = if args.sized { args.size } else { [1920, 1080] };
+        frame::run(&scenes, &saved, size, frames, args.out.as_deref())
+    } else if let Some(frames) = args.soak {
         if let Some(e) = &load_error {
             eprintln!("settings: {e}");
             return std::process::ExitCode::from(2);

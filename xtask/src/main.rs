@@ -5,6 +5,7 @@ use fieldkit_build as toolchain;
 mod bench_bind;
 mod bench_build;
 mod bench_distance;
+mod bench_frame;
 mod bench_metaball;
 mod bench_ocean;
 mod bench_octree;
@@ -181,6 +182,9 @@ enum Technique {
     Voxelize,
     /// The sparse voxel octree against the dense grid: memory, build and render time.
     Octree,
+    /// What a frame of every viewer scene costs the app: CPU record + submit, submit → done,
+    /// GPU compute, the loop's floor, the first frame and a resize (the viewer's `--frame-cost`).
+    Frame,
 }
 
 /// `--shapes`: a 3D grid's shape written `XxYxZ`, every side at least 1.
@@ -305,6 +309,7 @@ fn main() -> ExitCode {
                 Technique::Ocean => bench_ocean::run(&args),
                 Technique::Voxelize => bench_voxelize::run(&args),
                 Technique::Octree => bench_octree::run(&args),
+                Technique::Frame => bench_frame::run(&args),
             }
         }
     }

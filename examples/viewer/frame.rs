@@ -1,0 +1,264 @@
+//! `--frame-cost FRAMES`: what a frame of each scene costs the application, measured the way an
+//! engine programmer profiles a frame: the CPU time to record and submit it, the wall time from
+//! the start of recording to the GPU finishing it (submit → done), the GPU time of its compute
+//! passes (timestamp queries), and the loop's own floor (an empty frame submitted and waited
+//! for, the same way). Besides the steady frames it times the first frame of the scene (its
+//! pipelines made on the spot) and the frame after the screen size changes (the hitch a resize
+//! costs). Medians with min–max over FRAMES frames after 30 frames of warm-up.
+//!
+//! `cargo xtask bench frame` runs it for every scene and writes `frame.csv`; on its own it prints
+//! a table (`--out DIR` writes the CSV there too).
+
+use std::path::Path;
+use std::time::Instant;
+
+use fieldkit::gpu::{Context, Profiler};
+use fieldkit::view::Targets;
+
+use super::scenes::{COLOUR, DEPTH, NAMES, Saved, Scenes};
+use super::{draw_frame, frame_time, wait};
+
+/// Frames drawn before the measured ones.
+const WARM_UP: u32 = 30;
+
+/// Frames whose recording takes longer than this on the CPU are counted (a 144 Hz frame is
+/// 6.9 ms in all).
+const SLOW_CPU_MS: f64 = 2.0;
+
+/// Median, min and max of a series, milliseconds.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Spread {
+    pub median: f64,
+    pub min: f64,
+    pub max: f64,
+}
+
+impl Spread {
+    fn of(mut v: Vec<f64>) -> Self {
+        if v.is_empty() {
+            return Self::default();
+        }
+        v.sort_by(f64::total_cmp);
+        Self {
+            median: v[v.len() / 2],
+            min: v[0],
+            max: v[v.len() - 1],
+        }
+    }
+
+    fn csv(&self) -> String {
+        format!("{:.4},{:.4},{:.4}", self.median, self.min, self.max)
+    }
+}
+
+/// One scene's frame cost.
+#[derive(Debug)]
+pub struct FrameCost {
+    pub scene: String,
+    pub size: [u32; 2],
+    /// The first frame, pipelines made on the spot: record + submit + done.
+    pub first_ms: f64,
+    /// Record + submit, CPU.
+    pub cpu: Spread,
+    /// Start of recording to the GPU done.
+    pub wall: Spread,
+    /// The frame's compute passes on the GPU, summed (render passes are not timed).
+    pub gpu_compute: Spread,
+    /// Frames whose CPU time passed [`SLOW_CPU_MS`].
+    pub slow_frames: usize,
+    /// The frame after the screen size changed: CPU, and wall.
+    pub resize_cpu_ms: f64,
+    pub resize_wall_ms: f64,
+    /// The loop's floor: an empty encoder submitted and waited for.
+    pub floor: Spread,
+    /// The scene's typed error, if it refused its settings.
+    pub error: Option<String>,
+}
+
+/// Measure `scenes` (all of them where empty) at `size`, print the table, write `frame.csv`
+/// into `out` where given.
+pub fn run(
+    scenes: &[String],
+    saved: &Saved,
+    size: [u32; 2],
+    frames: u32,
+    out: Option<&Path>,
+) -> Result<(), String> {
+    let ctx = Context::new().map_err(|e| e.to_string())?;
+    let adapter = ctx.adapter_name();
+    let names: Vec<String> = if scenes.is_empty() {
+        NAMES.iter().map(|s| s.to_string()).collect()
+    } else {
+        scenes.to_vec()
+    };
+    let mut costs = Vec::new();
+    for scene in &names {
+        let cost = measure(&ctx, scene, saved, size, frames.max(1)).map_err(|e| e.to_string())?;
+        costs.push(cost);
+    }
+    print_table(&adapter, &costs);
+    if let Some(dir) = out {
+        std::fs::create_dir_all(dir).map_err(|e| e.to_string())?;
+        write_csv(&dir.join("frame.csv"), &adapter, &costs)?;
+        println!("wrote {}", dir.join("frame.csv").display());
+    }
+    Ok(())
+}
+
+/// One frame of `scene`: (CPU record + submit ms, wall ms to done).
+#[allow(clippy::too_many_arguments)]
+fn timed_frame(
+    ctx: &Context,
+    scenes: &mut Scenes,
+    saved: &Saved,
+    scene: &str,
+    targets: &Targets,
+    size: [u32; 2],
+    i: u32,
+    profiler: Option<&mut Profiler>,
+) -> Result<(f64, f64, Option<String>), fieldkit::Error> {
+    let start = Instant::now();
+    let (report, index) = draw_frame(
+        &ctx.device,
+        &ctx.queue,
+        scenes,
+        saved,
+        scene,
+        targets,
+        size,
+        frame_time(i),
+        i,
+        profiler,
+    );
+    let cpu = start.elapsed().as_secs_f64() * 1e3;
+    ctx.device
+        .poll(wgpu::PollType::Wait {
+            submission_index: Some(index),
+            timeout: None,
+        })
+        .map_err(|e| fieldkit::Error::Readback(e.to_string()))?;
+    let wall = start.elapsed().as_secs_f64() * 1e3;
+    Ok((cpu, wall, report.error.map(|e| e.to_string())))
+}
+
+fn measure(
+    ctx: &Context,
+    scene: &str,
+    saved: &Saved,
+    size: [u32; 2],
+    frames: u32,
+) -> Result<FrameCost, fieldkit::Error> {
+    let targets = Targets::new(&ctx.device, size, COLOUR, DEPTH);
+    let mut scenes = Scenes::new();
+    let (_, first_ms, _) = timed_frame(ctx, &mut scenes, saved, scene, &targets, size, 0, None)?;
+    for i in 1..WARM_UP {
+        timed_frame(ctx, &mut scenes, saved, scene, &targets, size, i, None)?;
+    }
+    let (mut cpu, mut wall, mut error) = (Vec::new(), Vec::new(), None);
+    for i in WARM_UP..WARM_UP + frames {
+        let (c, w, e) = timed_frame(ctx, &mut scenes, saved, scene, &targets, size, i, None)?;
+        cpu.push(c);
+        wall.push(w);
+        error = error.or(e);
+    }
+    // The GPU's share, in frames of their own: timestamp queries change what they measure.
+    let mut gpu = Vec::new();
+    if let Some(mut profiler) = Profiler::new(&ctx.device, &ctx.queue, 256) {
+        for i in 0..frames.min(20) {
+            let n = WARM_UP + frames + i;
+            let p = Some(&mut profiler);
+            timed_frame(ctx, &mut scenes, saved, scene, &targets, size, n, p)?;
+            let mut enc = ctx.device.create_command_encoder(&Default::default());
+            profiler.resolve(&mut enc);
+            ctx.queue.submit([enc.finish()]);
+            let (passes, _) = wait(&ctx.device, profiler.read(&ctx.device, &ctx.queue))?;
+            gpu.push(passes.iter().fold(0.0, |t, p| t + p.1));
+        }
+    }
+    // A new screen size: the targets a window's resize hands over, then one frame.
+    let resized = [size[0] * 9 / 10, size[1] * 9 / 10];
+    let small = Targets::new(&ctx.device, resized, COLOUR, DEPTH);
+    let n = WARM_UP + 2 * frames;
+    let (resize_cpu_ms, resize_wall_ms, _) =
+        timed_frame(ctx, &mut scenes, saved, scene, &small, resized, n, None)?;
+    let floor = (0..frames)
+        .map(|_| {
+            let start = Instant::now();
+            let enc = ctx.device.create_command_encoder(&Default::default());
+            let index = ctx.queue.submit([enc.finish()]);
+            ctx.device
+                .poll(wgpu::PollType::Wait {
+                    submission_index: Some(index),
+                    timeout: None,
+                })
+                .map_err(|e| fieldkit::Error::Readback(e.to_string()))?;
+            Ok(start.elapsed().as_secs_f64() * 1e3)
+        })
+        .collect::<Result<Vec<_>, fieldkit::Error>>()?;
+    Ok(FrameCost {
+        scene: scene.to_string(),
+        size,
+        first_ms,
+        slow_frames: cpu.iter().filter(|&&c| c > SLOW_CPU_MS).count(),
+        cpu: Spread::of(cpu),
+        wall: Spread::of(wall),
+        gpu_compute: Spread::of(gpu),
+        resize_cpu_ms,
+        resize_wall_ms,
+        floor: Spread::of(floor),
+        error,
+    })
+}
+
+fn print_table(adapter: &str, costs: &[FrameCost]) {
+    println!("frame cost on {adapter}");
+    println!(
+        "| scene | size | CPU record + submit ms | submit → done ms | GPU compute ms | loop floor ms | frames > {SLOW_CPU_MS} ms CPU | first frame ms | resize frame CPU / wall ms |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|");
+    let s = |x: &Spread| format!("{:.3} ({:.3}–{:.3})", x.median, x.min, x.max);
+    for c in costs {
+        println!(
+            "| {} | {}×{} | {} | {} | {} | {} | {} | {:.1} | {:.2} / {:.2} |{}",
+            c.scene,
+            c.size[0],
+            c.size[1],
+            s(&c.cpu),
+            s(&c.wall),
+            s(&c.gpu_compute),
+            s(&c.floor),
+            c.slow_frames,
+            c.first_ms,
+            c.resize_cpu_ms,
+            c.resize_wall_ms,
+            c.error
+                .as_ref()
+                .map_or(String::new(), |e| format!(" error: {e}"))
+        );
+    }
+}
+
+fn write_csv(path: &Path, adapter: &str, costs: &[FrameCost]) -> Result<(), String> {
+    let mut text = String::from(
+        "adapter,scene,width,height,cpu_ms_median,cpu_ms_min,cpu_ms_max,wall_ms_median,wall_ms_min,\
+         wall_ms_max,gpu_compute_ms_median,gpu_compute_ms_min,gpu_compute_ms_max,floor_ms_median,\
+         floor_ms_min,floor_ms_max,slow_cpu_frames,first_frame_ms,resize_cpu_ms,resize_wall_ms\n",
+    );
+    for c in costs {
+        text += &format!(
+            "\"{adapter}\",{},{},{},{},{},{},{},{},{:.3},{:.4},{:.4}\n",
+            c.scene,
+            c.size[0],
+            c.size[1],
+            c.cpu.csv(),
+            c.wall.csv(),
+            c.gpu_compute.csv(),
+            c.floor.csv(),
+            c.slow_frames,
+            c.first_ms,
+            c.resize_cpu_ms,
+            c.resize_wall_ms
+        );
+    }
+    std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))
+}
