@@ -428,3 +428,40 @@ fn the_soak_judge_catches_a_leak() {
     // Too short to judge.
     assert!(Drift::of(&run(&flat)[..22]).is_none());
 }
+
+/// `--frame-cost` writes one row a scene whose parts hold together: each frame's wall time
+/// contains its CPU time, so the medians do too; the first frame, the floor and the resized
+/// frame all took time; the GPU's compute passes are timed on a scene that has some.
+#[test]
+fn frame_cost_measures_every_part_of_a_frame() {
+    let out = temp("frame-cost");
+    let scenes = ["distance2d".to_string(), "actor".to_string()];
+    viewer::frame::run(&scenes, &settings(), SIZE, 3, Some(&out)).unwrap();
+    let csv = std::fs::read_to_string(out.join("frame.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert_eq!(rows.len(), 2, "{csv}");
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let col = |row: &[&str], name: &str| -> f64 {
+        let i = header.iter().position(|h| *h == name).unwrap();
+        // The adapter is quoted and may hold commas: count from the end.
+        row[row.len() - (header.len() - i)].parse().unwrap()
+    };
+    for row in &rows {
+        let (cpu, wall) = (col(row, "cpu_ms_median"), col(row, "wall_ms_median"));
+        assert!(cpu > 0.0 && wall >= cpu, "{row:?}");
+        assert!(col(row, "first_frame_ms") > 0.0, "{row:?}");
+        assert!(col(row, "floor_ms_median") > 0.0, "{row:?}");
+        assert!(
+            col(row, "resize_wall_ms") >= col(row, "resize_cpu_ms"),
+            "{row:?}"
+        );
+    }
+    // The actor's field is made by compute passes; the 2D tool only draws.
+    assert!(col(&rows[1], "gpu_compute_ms_median") > 0.0, "{csv}");
+    assert_eq!(col(&rows[0], "gpu_compute_ms_median"), 0.0, "{csv}");
+    std::fs::remove_dir_all(&out).unwrap();
+}
