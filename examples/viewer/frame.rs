@@ -1,7 +1,8 @@
 //! `--frame-cost FRAMES`: what a frame of each scene costs the application, measured the way an
 //! engine programmer profiles a frame: the CPU time to record and submit it, the wall time from
-//! the start of recording to the GPU finishing it (submit → done), the GPU time of its compute
-//! passes (timestamp queries), and the loop's own floor (an empty frame submitted and waited
+//! the start of recording to the GPU finishing it (submit → done), the GPU time of the whole
+//! frame (timestamps written into its encoder before its first pass and after its last, render
+//! passes included) and of its compute passes alone, and the loop's own floor (an empty frame submitted and waited
 //! for, the same way). Besides the steady frames it times the first frame of the scene (its
 //! pipelines made on the spot) and the frame after the screen size changes (the hitch a resize
 //! costs). Medians with min–max over FRAMES frames after 30 frames of warm-up.
@@ -16,7 +17,7 @@ use fieldkit::gpu::{Context, Profiler};
 use fieldkit::view::Targets;
 
 use super::scenes::{COLOUR, DEPTH, NAMES, Saved, Scenes};
-use super::{draw_frame, frame_time, wait};
+use super::{FrameShot, draw_frame, frame_time, record_frame, wait};
 
 /// Frames drawn before the measured ones.
 const WARM_UP: u32 = 30;
@@ -62,7 +63,10 @@ pub struct FrameCost {
     pub cpu: Spread,
     /// Start of recording to the GPU done.
     pub wall: Spread,
-    /// The frame's compute passes on the GPU, summed (render passes are not timed).
+    /// The whole frame on the GPU: every pass, render passes included, and the gaps between
+    /// them (adapters with timestamps inside encoders).
+    pub gpu_frame: Spread,
+    /// The frame's compute passes on the GPU, summed.
     pub gpu_compute: Spread,
     /// Frames whose CPU time passed [`SLOW_CPU_MS`].
     pub slow_frames: usize,
@@ -175,6 +179,7 @@ fn measure(
             gpu.push(passes.iter().fold(0.0, |t, p| t + p.1));
         }
     }
+    let gpu_frame = gpu_frame_times(ctx, &mut scenes, saved, scene, &targets, size, frames)?;
     // A new screen size: the targets a window's resize hands over, then one frame.
     let resized = [size[0] * 9 / 10, size[1] * 9 / 10];
     let small = Targets::new(&ctx.device, resized, COLOUR, DEPTH);
@@ -202,6 +207,7 @@ fn measure(
         slow_frames: cpu.iter().filter(|&&c| c > SLOW_CPU_MS).count(),
         cpu: Spread::of(cpu),
         wall: Spread::of(wall),
+        gpu_frame: Spread::of(gpu_frame),
         gpu_compute: Spread::of(gpu),
         resize_cpu_ms,
         resize_wall_ms,
@@ -210,21 +216,85 @@ fn measure(
     })
 }
 
+/// The GPU time of whole frames, each in a submission of its own: timestamps written into the
+/// frame's encoder before its first pass and after its last. Empty where the adapter has no
+/// timestamps inside encoders.
+fn gpu_frame_times(
+    ctx: &Context,
+    scenes: &mut Scenes,
+    saved: &Saved,
+    scene: &str,
+    targets: &Targets,
+    size: [u32; 2],
+    frames: u32,
+) -> Result<Vec<f64>, fieldkit::Error> {
+    let need = wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
+    if !ctx.device.features().contains(need) {
+        return Ok(Vec::new());
+    }
+    let set = ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
+        label: Some("frame cost stamps"),
+        ty: wgpu::QueryType::Timestamp,
+        count: 2,
+    });
+    let resolved = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("frame cost stamps"),
+        size: 16,
+        usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let period = ctx.queue.get_timestamp_period() as f64;
+    let mut times = Vec::new();
+    for i in 0..frames.min(20) {
+        let number = WARM_UP + frames + 20 + i;
+        let shot = FrameShot {
+            scene,
+            targets,
+            size,
+            time: frame_time(number),
+            number,
+        };
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        encoder.write_timestamp(&set, 0);
+        record_frame(
+            &ctx.device,
+            &ctx.queue,
+            scenes,
+            saved,
+            &shot,
+            &mut encoder,
+            None,
+        );
+        encoder.write_timestamp(&set, 1);
+        encoder.resolve_query_set(&set, 0..2, &resolved, 0);
+        ctx.queue.submit([encoder.finish()]);
+        scenes.submitted(&ctx.device, &ctx.queue);
+        let ticks = wait(
+            &ctx.device,
+            fieldkit::gpu::readback_buffer(&ctx.device, &ctx.queue, &resolved),
+        )?;
+        let t: &[u64] = bytemuck::cast_slice(&ticks);
+        times.push(t[1].saturating_sub(t[0]) as f64 * period / 1e6);
+    }
+    Ok(times)
+}
+
 fn print_table(adapter: &str, costs: &[FrameCost]) {
     println!("frame cost on {adapter}");
     println!(
-        "| scene | size | CPU record + submit ms | submit → done ms | GPU compute ms | loop floor ms | frames > {SLOW_CPU_MS} ms CPU | first frame ms | resize frame CPU / wall ms |"
+        "| scene | size | CPU record + submit ms | submit → done ms | GPU frame ms | GPU compute ms | loop floor ms | frames > {SLOW_CPU_MS} ms CPU | first frame ms | resize frame CPU / wall ms |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
     let s = |x: &Spread| format!("{:.3} ({:.3}–{:.3})", x.median, x.min, x.max);
     for c in costs {
         println!(
-            "| {} | {}×{} | {} | {} | {} | {} | {} | {:.1} | {:.2} / {:.2} |{}",
+            "| {} | {}×{} | {} | {} | {} | {} | {} | {} | {:.1} | {:.2} / {:.2} |{}",
             c.scene,
             c.size[0],
             c.size[1],
             s(&c.cpu),
             s(&c.wall),
+            s(&c.gpu_frame),
             s(&c.gpu_compute),
             s(&c.floor),
             c.slow_frames,
@@ -241,17 +311,18 @@ fn print_table(adapter: &str, costs: &[FrameCost]) {
 fn write_csv(path: &Path, adapter: &str, costs: &[FrameCost]) -> Result<(), String> {
     let mut text = String::from(
         "adapter,scene,width,height,cpu_ms_median,cpu_ms_min,cpu_ms_max,wall_ms_median,wall_ms_min,\
-         wall_ms_max,gpu_compute_ms_median,gpu_compute_ms_min,gpu_compute_ms_max,floor_ms_median,\
+         wall_ms_max,gpu_frame_ms_median,gpu_frame_ms_min,gpu_frame_ms_max,gpu_compute_ms_median,gpu_compute_ms_min,gpu_compute_ms_max,floor_ms_median,\
          floor_ms_min,floor_ms_max,slow_cpu_frames,first_frame_ms,resize_cpu_ms,resize_wall_ms\n",
     );
     for c in costs {
         text += &format!(
-            "\"{adapter}\",{},{},{},{},{},{},{},{},{:.3},{:.4},{:.4}\n",
+            "\"{adapter}\",{},{},{},{},{},{},{},{},{},{:.3},{:.4},{:.4}\n",
             c.scene,
             c.size[0],
             c.size[1],
             c.cpu.csv(),
             c.wall.csv(),
+            c.gpu_frame.csv(),
             c.gpu_compute.csv(),
             c.floor.csv(),
             c.slow_frames,

@@ -165,41 +165,72 @@ pub fn draw_frame(
     number: u32,
     profiler: Option<&mut Profiler>,
 ) -> (FrameReport, wgpu::SubmissionIndex) {
-    let index = NAMES.iter().position(|n| *n == scene).unwrap_or(0);
+    let mut encoder = device.create_command_encoder(&Default::default());
+    let shot = FrameShot {
+        scene,
+        targets,
+        size,
+        time,
+        number,
+    };
+    let report = record_frame(device, queue, scenes, saved, &shot, &mut encoder, profiler);
+    let index = queue.submit([encoder.finish()]);
+    scenes.submitted(device, queue);
+    (report, index)
+}
+
+/// Which frame of which scene to record, into which targets.
+pub struct FrameShot<'a> {
+    pub scene: &'a str,
+    pub targets: &'a Targets,
+    pub size: [u32; 2],
+    /// Seconds of animation.
+    pub time: f32,
+    pub number: u32,
+}
+
+/// Record one frame of `shot.scene` into `encoder` (the caller submits it, then calls
+/// `scenes.submitted`); `profiler` times its compute passes.
+pub fn record_frame(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    scenes: &mut Scenes,
+    saved: &Saved,
+    shot: &FrameShot,
+    encoder: &mut wgpu::CommandEncoder,
+    profiler: Option<&mut Profiler>,
+) -> FrameReport {
+    let index = NAMES.iter().position(|n| *n == shot.scene).unwrap_or(0);
     let camera = saved
         .cameras
         .get(index)
         .copied()
-        .unwrap_or_else(|| scenes::default_camera(scene));
-    let mut encoder = device.create_command_encoder(&Default::default());
+        .unwrap_or_else(|| scenes::default_camera(shot.scene));
     let result = {
         let mut rec = match profiler {
-            Some(p) => p.record(&mut encoder),
+            Some(p) => p.record(encoder),
             None => Recorder {
-                encoder: &mut encoder,
+                encoder,
                 profiler: None,
             },
         };
         let mut frame = Frame {
             rec: &mut rec,
-            targets,
-            size,
+            targets: shot.targets,
+            size: shot.size,
             camera,
-            time,
-            number,
+            time: shot.time,
+            number: shot.number,
         };
-        scenes.encode(device, queue, scene, saved, &mut frame)
+        scenes.encode(device, queue, shot.scene, saved, &mut frame)
     };
-    let report = match result {
+    match result {
         Ok(stats) => FrameReport { stats, error: None },
         Err(e) => FrameReport {
             stats: Vec::new(),
             error: Some(e),
         },
-    };
-    let index = queue.submit([encoder.finish()]);
-    scenes.submitted(device, queue);
-    (report, index)
+    }
 }
 
 /// RGBA8 pixels of the colour target, blocking (screenshots only).
