@@ -234,13 +234,7 @@ fn check_inputs(
     settings.check()?;
     check_voxels(&[], edge)?;
     // The stages place the field in f32.
-    let (origin, cell) = (grid.origin.as_vec3(), grid.voxel as f32);
-    if !(cell.is_finite() && cell > 0.0 && origin.is_finite()) {
-        return Err(Error::Invalid {
-            stage,
-            what: format!("grid cell {cell} and origin {origin} must be finite (cell positive)"),
-        });
-    }
+    grid.as_f32(stage)?;
     Ok(())
 }
 
