@@ -2,7 +2,8 @@
 //! engine programmer profiles a frame: the CPU time to record and submit it, the wall time from
 //! the start of recording to the GPU finishing it (submit → done), the GPU time of the whole
 //! frame (timestamps written into its encoder before its first pass and after its last, render
-//! passes included) and of its compute passes alone, and the loop's own floor (an empty frame submitted and waited
+//! passes included) and of its timed passes alone (every compute pass, and the render passes
+//! recorded through a `Recorder`: the ocean's), and the loop's own floor (an empty frame submitted and waited
 //! for, the same way). Besides the steady frames it times the first frame of the scene (its
 //! pipelines made on the spot) and the frame after the screen size changes (the hitch a resize
 //! costs). Medians with min–max over FRAMES frames after 30 frames of warm-up.
@@ -66,7 +67,8 @@ pub struct FrameCost {
     /// The whole frame on the GPU: every pass, render passes included, and the gaps between
     /// them (adapters with timestamps inside encoders).
     pub gpu_frame: Spread,
-    /// The frame's compute passes on the GPU, summed.
+    /// The frame's timed passes on the GPU, summed: every compute pass, and the render passes
+    /// recorded through a `Recorder`.
     pub gpu_compute: Spread,
     /// Frames whose CPU time passed [`SLOW_CPU_MS`].
     pub slow_frames: usize,
@@ -77,6 +79,8 @@ pub struct FrameCost {
     pub floor: Spread,
     /// The scene's typed error, if it refused its settings.
     pub error: Option<String>,
+    /// The timed passes of the last profiled frame, GPU ms each.
+    pub passes: Vec<(String, f64)>,
 }
 
 /// Measure `scenes` (all of them where empty) at `size`, print the table, write `frame.csv`
@@ -167,6 +171,7 @@ fn measure(
     }
     // The GPU's share, in frames of their own: timestamp queries change what they measure.
     let mut gpu = Vec::new();
+    let mut last_passes = Vec::new();
     if let Some(mut profiler) = Profiler::new(&ctx.device, &ctx.queue, 256) {
         for i in 0..frames.min(20) {
             let n = WARM_UP + frames + i;
@@ -177,6 +182,7 @@ fn measure(
             ctx.queue.submit([enc.finish()]);
             let (passes, _) = wait(&ctx.device, profiler.read(&ctx.device, &ctx.queue))?;
             gpu.push(passes.iter().fold(0.0, |t, p| t + p.1));
+            last_passes = passes;
         }
     }
     let gpu_frame = gpu_frame_times(ctx, &mut scenes, saved, scene, &targets, size, frames)?;
@@ -213,6 +219,7 @@ fn measure(
         resize_wall_ms,
         floor: Spread::of(floor),
         error,
+        passes: last_passes,
     })
 }
 
@@ -282,7 +289,7 @@ fn gpu_frame_times(
 fn print_table(adapter: &str, costs: &[FrameCost]) {
     println!("frame cost on {adapter}");
     println!(
-        "| scene | size | CPU record + submit ms | submit → done ms | GPU frame ms | GPU compute ms | loop floor ms | frames > {SLOW_CPU_MS} ms CPU | first frame ms | resize frame CPU / wall ms |"
+        "| scene | size | CPU record + submit ms | submit → done ms | GPU frame ms | GPU timed passes ms | loop floor ms | frames > {SLOW_CPU_MS} ms CPU | first frame ms | resize frame CPU / wall ms |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|");
     let s = |x: &Spread| format!("{:.3} ({:.3}–{:.3})", x.median, x.min, x.max);
@@ -305,6 +312,14 @@ fn print_table(adapter: &str, costs: &[FrameCost]) {
                 .as_ref()
                 .map_or(String::new(), |e| format!(" error: {e}"))
         );
+    }
+    for c in costs.iter().filter(|c| !c.passes.is_empty()) {
+        let passes: Vec<String> = c
+            .passes
+            .iter()
+            .map(|(n, ms)| format!("{n} {ms:.3}"))
+            .collect();
+        println!("{} timed passes (ms): {}", c.scene, passes.join(", "));
     }
 }
 

@@ -126,6 +126,20 @@ impl Record for Recorder<'_> {
 }
 
 impl Recorder<'_> {
+    /// Begin the render pass `desc`, timed under `name` when profiling (its own
+    /// `timestamp_writes` are replaced).
+    pub fn render_pass(
+        &mut self,
+        desc: &wgpu::RenderPassDescriptor<'_>,
+        name: &str,
+    ) -> wgpu::RenderPass<'_> {
+        let timestamp_writes = self.profiler.as_mut().and_then(|p| p.next_render(name));
+        self.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            timestamp_writes,
+            ..desc.clone()
+        })
+    }
+
     /// Begin a compute pass labelled `label`, timed under `name` when profiling.
     pub fn compute_pass(&mut self, label: &str, name: &str) -> wgpu::ComputePass<'_> {
         let timestamp_writes = self.profiler.as_mut().and_then(|p| p.next(name));
@@ -137,8 +151,9 @@ impl Recorder<'_> {
     }
 }
 
-/// Named GPU time per pass: hand [`Profiler::next`] to each compute pass as it is recorded; passes
-/// past the capacity go untimed. Used by `cargo xtask bench`.
+/// Named GPU time per pass: hand [`Profiler::next`] to each compute pass and
+/// [`Profiler::next_render`] to each render pass as it is recorded (or record them through
+/// [`Recorder::compute_pass`] and [`Recorder::render_pass`]); passes past the capacity go untimed. Used by `cargo xtask bench`.
 pub struct Profiler {
     timer: Timer,
     capacity: u32,
@@ -174,6 +189,19 @@ impl Profiler {
         }
         self.names.push(name.into());
         Some(self.timer.compute_pass_writes(i))
+    }
+
+    /// Timestamp writes for the next render pass, recorded under `name`.
+    pub fn next_render(
+        &mut self,
+        name: impl Into<String>,
+    ) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
+        let i = self.names.len() as u32;
+        if i >= self.capacity {
+            return None;
+        }
+        self.names.push(name.into());
+        Some(self.timer.render_pass_writes(i))
     }
 
     /// Resolve the passes recorded so far; call once, after the last pass, before submitting.

@@ -15,7 +15,7 @@ use super::Waves;
 use super::look::{Look, Maps, detail_texels, layer_uniforms, map_indices};
 use crate::bind::{ComputePipeline, RenderPipeline, RenderTargets};
 use crate::error::Error;
-use crate::gpu::uniform_buffer as uniform;
+use crate::gpu::{Record, Recorder, uniform_buffer as uniform};
 use crate::shaders::ocean::depth_copy;
 use crate::shaders::ocean::surface::{self as stage, FrameParams};
 
@@ -425,7 +425,7 @@ impl OceanRenderer {
     pub fn encode(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         waves: &Waves,
         time: f64,
         camera: &OceanCamera,
@@ -441,7 +441,8 @@ impl OceanRenderer {
         let origin = DVec2::new(eye.x, eye.z);
         let wave_set = waves.gpu(origin, time);
         let frame = self.frame_params(camera, look, origin, time, fade)?;
-        let copy_view = self.scene_depth(device, encoder, depth, fade)?;
+        let rec = &mut rec.recorder();
+        let copy_view = self.scene_depth(device, rec, depth, fade)?;
         if patches.is_empty() {
             return Ok(());
         }
@@ -485,21 +486,24 @@ impl OceanRenderer {
                         normal_maps: (&self.normal_maps.view).into(),
                     },
                 )?;
-                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some(STAGE),
-                    color_attachments: &attachments,
-                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                        view: &depth_view,
-                        // Read-only where the water does not write depth.
-                        depth_ops: self.depth.write.then_some(wgpu::Operations {
-                            load: wgpu::LoadOp::Load,
-                            store: wgpu::StoreOp::Store,
+                let mut pass = rec.render_pass(
+                    &wgpu::RenderPassDescriptor {
+                        label: Some(STAGE),
+                        color_attachments: &attachments,
+                        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                            view: &depth_view,
+                            // Read-only where the water does not write depth.
+                            depth_ops: self.depth.write.then_some(wgpu::Operations {
+                                load: wgpu::LoadOp::Load,
+                                store: wgpu::StoreOp::Store,
+                            }),
+                            // The stencil (where the format has one) is left as it is.
+                            stencil_ops: None,
                         }),
-                        // The stencil (where the format has one) is left as it is.
-                        stencil_ops: None,
-                    }),
-                    ..Default::default()
-                });
+                        ..Default::default()
+                    },
+                    "ocean surface",
+                );
                 pass.set_pipeline(&$pipeline.pipeline);
                 bound.set_render(&mut pass);
                 pass.set_vertex_buffer(0, instance_buffer.slice(..));
@@ -651,7 +655,7 @@ impl OceanRenderer {
     fn scene_depth(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut Recorder<'_>,
         depth: &wgpu::Texture,
         fade: bool,
     ) -> Result<wgpu::TextureView, Error> {
@@ -688,7 +692,7 @@ impl OceanRenderer {
             });
             self.copy_depth.record(
                 device,
-                encoder,
+                rec,
                 &depth_copy::copy_depth::Resources {
                     depth_in: (&depth_in).into(),
                     depth_out: (&copy_view).into(),

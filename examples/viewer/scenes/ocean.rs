@@ -120,7 +120,7 @@ impl Ocean {
         match s.gbuffer {
             None => renderer.encode(
                 device,
-                frame.rec.encoder,
+                frame.rec,
                 &waves,
                 time,
                 &camera,
@@ -147,7 +147,7 @@ impl Ocean {
                 let views: Vec<&wgpu::TextureView> = g.iter().map(|t| &t.colour_view).collect();
                 renderer.encode(
                     device,
-                    frame.rec.encoder,
+                    frame.rec,
                     &waves,
                     time,
                     &camera,
