@@ -9,7 +9,7 @@ use fieldkit::gpu::Context;
 
 use super::{GLOBAL, ROWS_PASS, UNSWEPT, WORKGROUP, label3};
 use crate::heater::Heater;
-use crate::measure::Args;
+use crate::measure::{Args, Timing, time_runs};
 
 pub(super) struct Rig<'a> {
     pub(super) args: &'a Args,
@@ -83,6 +83,20 @@ impl<'a> Rig<'a> {
             storage: ctx.device.limits().max_compute_workgroup_storage_size,
             ctx,
         })
+    }
+
+    /// `record`'s runs timed with the sweep's warm-up, repetitions and heater.
+    pub(super) fn time(
+        &self,
+        record: impl FnMut(&mut wgpu::CommandEncoder, &mut fieldkit::gpu::Profiler),
+    ) -> Result<Timing, String> {
+        time_runs(
+            &self.ctx,
+            self.args.warmup,
+            self.args.reps,
+            self.heater.as_ref(),
+            record,
+        )
     }
 
     /// The transform a 3D method's row is timed with.

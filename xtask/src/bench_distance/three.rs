@@ -6,7 +6,6 @@ use fieldkit::distance::{Method, Settings3d, cpu, tile_columns_3d, upload_volume
 
 use super::rig::{EXACT, Rig};
 use super::{Peer, ROWS_PASS, Row, UNSWEPT, WORKGROUP, d2_of, errors, label3, mask3, pass_bytes};
-use crate::measure::time_runs;
 
 /// A column pass's floor: the size, the pass's name as the per-pass table has it, its copy's
 /// median ms, and for the resolving z pass its copy's with the distance store.
@@ -110,16 +109,10 @@ impl Rig<'_> {
         exact_d2: &mut Vec<u64>,
     ) -> Result<Row, String> {
         let (ctx, d3) = (&self.ctx, self.transform(name));
-        let (med, min, max, passes) = time_runs(
-            ctx,
-            self.args.warmup,
-            self.args.reps,
-            self.heater.as_ref(),
-            |enc, prof| {
-                d3.encode(&ctx.device, &mut prof.record(enc), &case.volume, opts)
-                    .expect("encode");
-            },
-        )?;
+        let (med, min, max, passes) = self.time(|enc, prof| {
+            d3.encode(&ctx.device, &mut prof.record(enc), &case.volume, opts)
+                .expect("encode");
+        })?;
         if name == EXACT {
             self.host_times(case, opts)?;
         }
@@ -232,32 +225,18 @@ impl Rig<'_> {
         for axis in [1u32, 2] {
             let mut tile = false;
             let mut copy = |store: Option<&wgpu::Texture>| {
-                time_runs(
-                    ctx,
-                    self.args.warmup,
-                    self.args.reps,
-                    self.heater.as_ref(),
-                    |enc, prof| {
-                        let rec = &mut prof.record(enc);
-                        tile = d3
-                            .encode_tile_copy(&ctx.device, rec, &buffer, edge, axis, store)
-                            .expect("encode")
-                            .is_some();
-                        if !tile {
-                            let words = (axis == 1).then_some(&words);
-                            d3.encode_global_copy(
-                                &ctx.device,
-                                rec,
-                                &buffer,
-                                words,
-                                edge,
-                                axis,
-                                store,
-                            )
+                self.time(|enc, prof| {
+                    let rec = &mut prof.record(enc);
+                    tile = d3
+                        .encode_tile_copy(&ctx.device, rec, &buffer, edge, axis, store)
+                        .expect("encode")
+                        .is_some();
+                    if !tile {
+                        let words = (axis == 1).then_some(&words);
+                        d3.encode_global_copy(&ctx.device, rec, &buffer, words, edge, axis, store)
                             .expect("encode");
-                        }
-                    },
-                )
+                    }
+                })
             };
             let timing = copy(None)?;
             let stored = if axis == 2 {

@@ -6,7 +6,6 @@ use fieldkit::gpu::read_texture;
 
 use super::rig::{EXACT, Rig};
 use super::{GLOBAL, Peer, Row, d2_of, errors, mask2, pass_bytes, words};
-use crate::measure::time_runs;
 
 impl Rig<'_> {
     pub(super) fn bench_2d(
@@ -54,16 +53,10 @@ impl Rig<'_> {
     ) -> Result<(Row, Vec<u64>), String> {
         let ctx = &self.ctx;
         let opts = Settings3d::default();
-        let timing = time_runs(
-            ctx,
-            self.args.warmup,
-            self.args.reps,
-            self.heater.as_ref(),
-            |enc, prof| {
-                d3.encode_exact_2d(&ctx.device, &mut prof.record(enc), tex, &opts)
-                    .expect("encode");
-            },
-        )?;
+        let timing = self.time(|enc, prof| {
+            d3.encode_exact_2d(&ctx.device, &mut prof.record(enc), tex, &opts)
+                .expect("encode");
+        })?;
         let mut enc = ctx.encoder("bench readback");
         let field = d3
             .encode_exact_2d(&ctx.device, &mut enc, tex, &opts)
@@ -95,16 +88,10 @@ impl Rig<'_> {
             variant: v,
             ..JfaSettings2d::default()
         };
-        let timing = time_runs(
-            ctx,
-            self.args.warmup,
-            self.args.reps,
-            self.heater.as_ref(),
-            |enc, prof| {
-                jfa2.encode(&ctx.device, &mut prof.record(enc), tex, &opts)
-                    .expect("encode");
-            },
-        )?;
+        let timing = self.time(|enc, prof| {
+            jfa2.encode(&ctx.device, &mut prof.record(enc), tex, &opts)
+                .expect("encode");
+        })?;
         let mut enc = ctx.encoder("bench readback");
         let field = jfa2
             .encode(&ctx.device, &mut enc, tex, &opts)
