@@ -655,7 +655,10 @@ fn every_column_path_is_exact() {
     )
     .unwrap();
     let mut enc = defaults.encoder("too long");
-    match d3.encode_exact_2d(&defaults.device, &mut enc, &tall, &Settings3d::default()) {
+    match d3
+        .exact()
+        .encode_exact_2d(&defaults.device, &mut enc, &tall, &Settings3d::default())
+    {
         Err(fieldkit::Error::Size { got, max, .. }) => assert_eq!((got, max), (4000, 3613)),
         other => panic!("expected Error::Size, got {other:?}"),
     }

@@ -262,16 +262,19 @@ fn bad_options_and_textures() {
         })
     };
     assert!(matches!(
-        d3.encode_column_pass(&ctx.device, &mut enc, &buf(256), &buf(256), [4, 4, 4], 0),
+        d3.exact()
+            .encode_column_pass(&ctx.device, &mut enc, &buf(256), &buf(256), [4, 4, 4], 0),
         Err(Error::Invalid { .. })
     ));
     assert!(matches!(
-        d3.encode_column_pass(&ctx.device, &mut enc, &buf(256), &buf(128), [4, 4, 4], 1),
+        d3.exact()
+            .encode_column_pass(&ctx.device, &mut enc, &buf(256), &buf(128), [4, 4, 4], 1),
         Err(Error::Invalid { .. })
     ));
     // The benchmarks' copies check their buffers as the passes do.
     for axis in [1, 2] {
         let e = d3
+            .exact()
             .encode_tile_copy(&ctx.device, &mut enc, &buf(128), [4, 4, 4], axis, None)
             .unwrap_err();
         assert!(
@@ -279,6 +282,7 @@ fn bad_options_and_textures() {
             "{e}"
         );
         let e = d3
+            .exact()
             .encode_global_copy(
                 &ctx.device,
                 &mut enc,
@@ -295,6 +299,7 @@ fn bad_options_and_textures() {
         );
         // Words of a 4 × 4 × 4 field: one per row, 8 bytes each.
         let e = d3
+            .exact()
             .encode_global_copy(
                 &ctx.device,
                 &mut enc,
@@ -311,7 +316,8 @@ fn bad_options_and_textures() {
         );
     }
     assert!(matches!(
-        d3.encode_global_copy(&ctx.device, &mut enc, &buf(256), None, [4, 4, 4], 3, None),
+        d3.exact()
+            .encode_global_copy(&ctx.device, &mut enc, &buf(256), None, [4, 4, 4], 3, None),
         Err(Error::Invalid { .. })
     ));
     // With good buffers the global copies record (a placeholder bound both read-only and
@@ -321,6 +327,7 @@ fn bad_options_and_textures() {
     for axis in [1, 2] {
         for words in [None, Some(buf(128))] {
             let recorded = global
+                .exact()
                 .encode_global_copy(
                     &ctx.device,
                     &mut enc,
@@ -354,9 +361,11 @@ fn bad_options_and_textures() {
     let good = texture([4, 4, 4], wgpu::TextureFormat::R32Float, d3d);
     for copier in [&d3, &global] {
         let tile = copier
+            .exact()
             .encode_tile_copy(&ctx.device, &mut enc, &buf(256), [4, 4, 4], 2, Some(&good))
             .unwrap();
         let glob = copier
+            .exact()
             .encode_global_copy(
                 &ctx.device,
                 &mut enc,
@@ -394,8 +403,15 @@ fn bad_options_and_textures() {
     ];
     for (t, axis, says) in &bad {
         for e in [
-            d3.encode_tile_copy(&ctx.device, &mut enc, &buf(256), [4, 4, 4], *axis, Some(t)),
-            global.encode_global_copy(
+            d3.exact().encode_tile_copy(
+                &ctx.device,
+                &mut enc,
+                &buf(256),
+                [4, 4, 4],
+                *axis,
+                Some(t),
+            ),
+            global.exact().encode_global_copy(
                 &ctx.device,
                 &mut enc,
                 &buf(256),

@@ -354,6 +354,7 @@ fn exact_2d_matches_cpu() {
         for is_signed in [false, true] {
             let mut enc = ctx.encoder("exact 2d");
             let field = d3
+                .exact()
                 .encode_exact_2d(
                     &ctx.device,
                     &mut enc,
@@ -566,6 +567,7 @@ fn recycled_fields_are_taken_again_and_written_whole() {
     };
     let mut enc = ctx.encoder("recycle 2d");
     let old = pooled
+        .exact()
         .encode_exact_2d(&ctx.device, &mut enc, &textures[0], &signed)
         .unwrap();
     ctx.submit_and_wait("recycle 2d", enc).unwrap();
@@ -573,9 +575,11 @@ fn recycled_fields_are_taken_again_and_written_whole() {
     pooled.recycle_2d(old);
     let mut enc = ctx.encoder("recycle 2d");
     let got = pooled
+        .exact()
         .encode_exact_2d(&ctx.device, &mut enc, &textures[1], &signed)
         .unwrap();
     let want = fresh
+        .exact()
         .encode_exact_2d(&ctx.device, &mut enc, &textures[1], &signed)
         .unwrap();
     ctx.submit_and_wait("recycle 2d", enc).unwrap();

@@ -6,7 +6,8 @@ mod common;
 use common::*;
 use fieldkit::distance::cpu;
 use fieldkit::distance::{
-    ColumnPasses, Distance3d, Grid, Inside, Settings3d, key_index, upload_points, upload_volume,
+    ColumnPasses, Distance3d, Grid, Inside, Marks, Settings3d, key_index, upload_points,
+    upload_volume,
 };
 use fieldkit::gpu::{Context, read_buffer, read_texture};
 use fieldkit::harness::Summary;
@@ -42,7 +43,12 @@ fn seed_stage() {
     let (ctx, d3, m, volume) = setup();
     let mut enc = ctx.encoder("seed");
     let out = d3
-        .encode_seed(&ctx.device, &mut enc, &volume, Inside::Mask, false)
+        .jfa()
+        .encode_seed(
+            &ctx.device,
+            &mut enc,
+            Marks::new(&volume, Inside::Mask, false),
+        )
         .unwrap();
     ctx.submit_and_wait("seed", enc).unwrap();
     let nearest = words(&ctx, &out);
@@ -59,10 +65,16 @@ fn one_jump_pass() {
     let (ctx, d3, m, volume) = setup();
     let mut enc = ctx.encoder("jump");
     let seeds = d3
-        .encode_seed(&ctx.device, &mut enc, &volume, Inside::Mask, false)
+        .jfa()
+        .encode_seed(
+            &ctx.device,
+            &mut enc,
+            Marks::new(&volume, Inside::Mask, false),
+        )
         .unwrap();
     let out = d3
-        .encode_flood(&ctx.device, &mut enc, seeds, size_u32(SIZE), &[4])
+        .jfa()
+        .encode_flood(&ctx.device, &mut enc, seeds, size_u32(SIZE), &[4], None)
         .unwrap();
     ctx.submit_and_wait("jump", enc).unwrap();
     let nearest = words(&ctx, &out);
@@ -76,7 +88,12 @@ fn exact_rows_then_columns() {
     let [w, h, d] = SIZE;
     let mut enc = ctx.encoder("rows");
     let nearest = d3
-        .encode_rows(&ctx.device, &mut enc, &volume, Inside::Mask, false)
+        .exact()
+        .encode_rows(
+            &ctx.device,
+            &mut enc,
+            Marks::new(&volume, Inside::Mask, false),
+        )
         .unwrap();
     ctx.submit_and_wait("rows", enc).unwrap();
     let rows = words(&ctx, &nearest);
@@ -96,7 +113,8 @@ fn exact_rows_then_columns() {
         mapped_at_creation: false,
     });
     let mut enc = ctx.encoder("columns y");
-    d3.encode_column_pass(&ctx.device, &mut enc, &nearest, &stack, size_u32(SIZE), 1)
+    d3.exact()
+        .encode_column_pass(&ctx.device, &mut enc, &nearest, &stack, size_u32(SIZE), 1)
         .unwrap();
     ctx.submit_and_wait("columns y", enc).unwrap();
     let after_y = words(&ctx, &nearest);
@@ -111,7 +129,8 @@ fn exact_rows_then_columns() {
         }
     }
     let mut enc = ctx.encoder("columns z");
-    d3.encode_column_pass(&ctx.device, &mut enc, &nearest, &stack, size_u32(SIZE), 2)
+    d3.exact()
+        .encode_column_pass(&ctx.device, &mut enc, &nearest, &stack, size_u32(SIZE), 2)
         .unwrap();
     ctx.submit_and_wait("columns z", enc).unwrap();
     let after_z = words(&ctx, &nearest);
@@ -151,7 +170,12 @@ fn row_words_then_y(passes: ColumnPasses) {
     let volume = upload_volume(&ctx.device, &ctx.queue, &to_bytes(&m), size_u32(size)).unwrap();
     let mut enc = ctx.encoder("row words");
     let row_words = d3
-        .encode_row_words(&ctx.device, &mut enc, &volume, Inside::Mask, false)
+        .exact()
+        .encode_row_words(
+            &ctx.device,
+            &mut enc,
+            Marks::new(&volume, Inside::Mask, false),
+        )
         .unwrap();
     let nearest = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: None,
@@ -159,7 +183,8 @@ fn row_words_then_y(passes: ColumnPasses) {
         usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         mapped_at_creation: false,
     });
-    d3.encode_columns_from_words(&ctx.device, &mut enc, &row_words, &nearest, size_u32(size))
+    d3.exact()
+        .encode_columns_from_words(&ctx.device, &mut enc, &row_words, &nearest, size_u32(size))
         .unwrap();
     ctx.submit_and_wait("row words", enc).unwrap();
     let got = words(&ctx, &row_words);
@@ -205,7 +230,12 @@ fn row_words_then_y(passes: ColumnPasses) {
     }
     let mut enc = ctx.encoder("rows, columns y");
     let by_rows = d3
-        .encode_rows(&ctx.device, &mut enc, &volume, Inside::Mask, false)
+        .exact()
+        .encode_rows(
+            &ctx.device,
+            &mut enc,
+            Marks::new(&volume, Inside::Mask, false),
+        )
         .unwrap();
     let stack = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: None,
@@ -213,7 +243,8 @@ fn row_words_then_y(passes: ColumnPasses) {
         usage: wgpu::BufferUsages::STORAGE,
         mapped_at_creation: false,
     });
-    d3.encode_column_pass(&ctx.device, &mut enc, &by_rows, &stack, size_u32(size), 1)
+    d3.exact()
+        .encode_column_pass(&ctx.device, &mut enc, &by_rows, &stack, size_u32(size), 1)
         .unwrap();
     ctx.submit_and_wait("rows, columns y", enc).unwrap();
     assert_eq!(
@@ -228,10 +259,20 @@ fn resolve_stage() {
     let (ctx, d3, m, volume) = setup();
     let mut enc = ctx.encoder("resolve");
     let inside = d3
-        .encode_exact(&ctx.device, &mut enc, &volume, Inside::Mask, false)
+        .exact()
+        .encode(
+            &ctx.device,
+            &mut enc,
+            Marks::new(&volume, Inside::Mask, false),
+        )
         .unwrap();
     let outside = d3
-        .encode_exact(&ctx.device, &mut enc, &volume, Inside::Mask, true)
+        .exact()
+        .encode(
+            &ctx.device,
+            &mut enc,
+            Marks::new(&volume, Inside::Mask, true),
+        )
         .unwrap();
     let (inside, outside) = (
         inside.whole().expect("one buffer"),

@@ -34,7 +34,7 @@ use super::options::Marks;
 use super::points::Points;
 use super::resolve::{Fuse, Resolver};
 use super::{
-    ColumnPasses, Field3d, FieldBuf2d, Inside, Method, PointSeeds, STAGE_3D as STAGE, SeedPacking,
+    ColumnPasses, Field3d, FieldBuf2d, Method, PointSeeds, STAGE_3D as STAGE, SeedPacking,
     Settings3d, Slabs,
 };
 use crate::error::Error;
@@ -126,7 +126,28 @@ impl Distance3d {
         self.exact.set_column_passes(passes)
     }
 
-    /// Distance field of the marked voxels of `volume` (a mask or a density, see [`Inside`]).
+    /// The exact transform's stages, to run alone (tests, benchmarks, a pipeline of the
+    /// caller's own), and the exact transform of a 2D mask.
+    ///
+    /// ```no_run
+    /// # fn f(device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, volume: &wgpu::Texture)
+    /// # -> Result<(), fieldkit::Error> {
+    /// use fieldkit::distance::{Distance3d, Inside, Marks};
+    /// let d3 = Distance3d::new(device)?;
+    /// // Per row, the nearest marked voxel along x.
+    /// let rows = d3.exact().encode_rows(device, encoder, Marks::new(volume, Inside::Mask, false))?;
+    /// # Ok(()) }
+    /// ```
+    pub fn exact(&self) -> &Exact {
+        &self.exact
+    }
+
+    /// 3D jump flooding's stages, to run alone.
+    pub fn jfa(&self) -> &Jfa3d {
+        &self.jfa
+    }
+
+    /// Distance field of the marked voxels of `volume` (a mask or a density, see [`super::Inside`]).
     pub fn encode(
         &self,
         device: &wgpu::Device,
@@ -155,7 +176,8 @@ impl Distance3d {
             let seeds =
                 self.jfa
                     .encode_seed(device, rec, Marks::new(volume, options.inside, invert))?;
-            self.jfa.flood(device, rec, seeds, size, &steps, None)
+            self.jfa
+                .encode_flood(device, rec, seeds, size, &steps, None)
         };
         let nearest = flood(rec, false)?;
         let nearest_outside = if options.signed {
@@ -178,33 +200,6 @@ impl Distance3d {
             nearest_outside: nearest_outside.map(|b| Slabs::one(b, size[2])),
             distance,
         })
-    }
-
-    /// JFA passes of `steps` over packed seeds in `nearest` (ping-ponging with a second buffer);
-    /// returns the buffer holding the result.
-    pub fn encode_flood(
-        &self,
-        device: &wgpu::Device,
-        rec: &mut impl Record,
-        nearest: wgpu::Buffer,
-        size: [u32; 3],
-        steps: &[u32],
-    ) -> Result<wgpu::Buffer, Error> {
-        self.jfa.flood(device, rec, nearest, size, steps, None)
-    }
-
-    /// The exact transform (rows, then columns along y and z) of the marked voxels: packed
-    /// nearest seeds in a new buffer, or in slabs where the field is larger than one.
-    pub fn encode_exact(
-        &self,
-        device: &wgpu::Device,
-        rec: &mut impl Record,
-        volume: &wgpu::Texture,
-        inside: Inside,
-        invert: bool,
-    ) -> Result<Slabs, Error> {
-        self.exact
-            .encode_exact_fused(device, rec, Marks::new(volume, inside, invert), None)
     }
 
     /// Resolve stage alone: packed nearest seeds (and, for signed, the outside field) to distance.
@@ -277,9 +272,9 @@ impl Distance3d {
         match (options.method, options.band) {
             (Method::Jfa(variant), _) => {
                 let steps = options.steps(variant, size.into_iter().max().unwrap());
-                let nearest = self
-                    .jfa
-                    .flood(device, rec, keys, size, &steps, Some(points))?;
+                let nearest =
+                    self.jfa
+                        .encode_flood(device, rec, keys, size, &steps, Some(points))?;
                 self.points
                     .resolve(device, rec, nearest, points, size, inside, options)
             }
@@ -299,147 +294,6 @@ impl Distance3d {
             // `check_points` refuses the rest.
             _ => unreachable!("checked by Settings3d::check_points"),
         }
-    }
-
-    /// Seed stage alone: a new buffer of packed seeds from the marked (or, inverted, unmarked)
-    /// voxels.
-    pub fn encode_seed(
-        &self,
-        device: &wgpu::Device,
-        rec: &mut impl Record,
-        volume: &wgpu::Texture,
-        inside: Inside,
-        invert: bool,
-    ) -> Result<wgpu::Buffer, Error> {
-        self.jfa
-            .encode_seed(device, rec, Marks::new(volume, inside, invert))
-    }
-
-    /// First exact pass alone: per row, the nearest marked voxel along x (a new buffer).
-    pub fn encode_rows(
-        &self,
-        device: &wgpu::Device,
-        rec: &mut impl Record,
-        volume: &wgpu::Texture,
-        inside: Inside,
-        invert: bool,
-    ) -> Result<wgpu::Buffer, Error> {
-        self.exact
-            .encode_rows(device, rec, Marks::new(volume, inside, invert))
-    }
-
-    /// The 3D row pass as words (`row_words`): per 32 voxels of a row, their marks and the
-    /// nearest marks on either side (a new buffer of `vec2<u32>`, `ceil(width / 32)` per row),
-    /// which [`Self::encode_columns_from_words`] reads in place of the row pass's field.
-    pub fn encode_row_words(
-        &self,
-        device: &wgpu::Device,
-        rec: &mut impl Record,
-        volume: &wgpu::Texture,
-        inside: Inside,
-        invert: bool,
-    ) -> Result<wgpu::Buffer, Error> {
-        self.exact
-            .row_words(device, rec, Marks::new(volume, inside, invert), false)
-    }
-
-    /// The y column pass of a 3D field of `size` from the row words of
-    /// [`Self::encode_row_words`], in workgroup or global memory as the exact transform takes
-    /// it ([`Self::set_column_passes`]): writes the nearest seed of every voxel within its xy
-    /// plane into `nearest`, as [`Self::encode_rows`] followed by the y pass of
-    /// [`Self::encode_column_pass`] would.
-    pub fn encode_columns_from_words(
-        &self,
-        device: &wgpu::Device,
-        rec: &mut impl Record,
-        words: &wgpu::Buffer,
-        nearest: &wgpu::Buffer,
-        size: [u32; 3],
-    ) -> Result<(), Error> {
-        self.exact
-            .encode_columns_from_words(device, rec, words, nearest, size)
-    }
-
-    /// One exact column pass alone (`axis` 1 = y, 2 = z), in place on `nearest`; `stack` is
-    /// scratch of the same size.
-    #[allow(clippy::too_many_arguments)]
-    pub fn encode_column_pass(
-        &self,
-        device: &wgpu::Device,
-        rec: &mut impl Record,
-        nearest: &wgpu::Buffer,
-        stack: &wgpu::Buffer,
-        size: [u32; 3],
-        axis: u32,
-    ) -> Result<(), Error> {
-        self.exact
-            .encode_column_pass(device, rec, nearest, stack, size, axis)
-    }
-
-    /// For benchmarks: the loads and stores of the global-memory column pass along `axis` (1:
-    /// y, 2: z) of a 3D field of `size` in `nearest` (from the row words `words` where given, as
-    /// the y pass reads them), without the envelopes and their stack: the floor that pass is
-    /// measured against. `None` where the pass runs in workgroup memory
-    /// ([`Self::encode_tile_copy`]). With `distance` (along z) it also stores a value per voxel
-    /// there, as the resolving pass stores its distances.
-    #[doc(hidden)]
-    #[allow(clippy::too_many_arguments)]
-    pub fn encode_global_copy(
-        &self,
-        device: &wgpu::Device,
-        rec: &mut impl Record,
-        nearest: &wgpu::Buffer,
-        words: Option<&wgpu::Buffer>,
-        size: [u32; 3],
-        axis: u32,
-        distance: Option<&wgpu::Texture>,
-    ) -> Result<Option<()>, Error> {
-        self.exact
-            .encode_global_copy(device, rec, nearest, words, size, axis, distance)
-    }
-
-    /// For benchmarks: the loads and stores of one workgroup-memory column pass along `axis` (1:
-    /// y, 2: z) of a 3D field of `size` in `nearest`, without the envelopes, with the tile the
-    /// pass itself takes: the floor that pass is measured against. `None` where the pass runs
-    /// in global memory. With `distance` (along z) it also stores a value per voxel there, as
-    /// the resolving pass stores its distances.
-    #[doc(hidden)]
-    pub fn encode_tile_copy(
-        &self,
-        device: &wgpu::Device,
-        rec: &mut impl Record,
-        nearest: &wgpu::Buffer,
-        size: [u32; 3],
-        axis: u32,
-        distance: Option<&wgpu::Texture>,
-    ) -> Result<Option<()>, Error> {
-        self.exact
-            .encode_tile_copy(device, rec, nearest, size, axis, distance)
-    }
-
-    /// The exact transform of a 2D mask (any of [`super::SEED_FORMATS`]; red channel marks).
-    pub fn encode_exact_2d(
-        &self,
-        device: &wgpu::Device,
-        rec: &mut impl Record,
-        mask: &wgpu::Texture,
-        options: &Settings3d,
-    ) -> Result<FieldBuf2d, Error> {
-        self.exact.encode_exact_2d(device, rec, mask, options)
-    }
-
-    /// [`Distance3d::encode_exact_2d`] with `rule` choosing the seeds (its `inside` is not
-    /// read).
-    pub fn encode_exact_2d_with(
-        &self,
-        device: &wgpu::Device,
-        rec: &mut impl Record,
-        mask: &wgpu::Texture,
-        options: &Settings3d,
-        rule: &super::SeedRule,
-    ) -> Result<FieldBuf2d, Error> {
-        self.exact
-            .encode_exact_2d_with(device, rec, mask, options, rule)
     }
 
     /// Hand back a field no longer needed, so that the next calls take its buffers and

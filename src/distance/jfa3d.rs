@@ -11,8 +11,9 @@ use crate::error::Error;
 use crate::gpu::{Record, uniform_buffer as uniform};
 use crate::shaders::distance::{jfa3_seed, jfa3_step};
 
-/// The 3D JFA pipelines.
-pub(crate) struct Jfa3d {
+/// 3D jump flooding's stages, run alone: [`super::Distance3d::jfa`] (its
+/// [`super::Distance3d::encode`] with [`super::Method::Jfa`] runs them in turn and resolves).
+pub struct Jfa3d {
     seed: ComputePipeline<jfa3_seed::seed::Entry>,
     jump: ComputePipeline<jfa3_step::jump::Entry>,
     jump_points: ComputePipeline<jfa3_step::jump_points::Entry>,
@@ -29,9 +30,8 @@ impl Jfa3d {
         })
     }
 
-    /// Seed stage alone: a new buffer of packed seeds from the marked (or, inverted, unmarked)
-    /// voxels.
-    pub(crate) fn encode_seed(
+    /// Seed stage alone: a new buffer of packed seeds from the marked voxels.
+    pub fn encode_seed(
         &self,
         device: &wgpu::Device,
         rec: &mut impl Record,
@@ -63,8 +63,10 @@ impl Jfa3d {
         Ok(out)
     }
 
-    #[allow(clippy::too_many_arguments)]
-    pub(crate) fn flood(
+    /// JFA passes of `steps` over the seeds in `nearest` (ping-ponging with a second buffer):
+    /// packed seeds, or, with `points` (vec4 per point, voxel coordinates), keys into that
+    /// table. Returns the buffer holding the result.
+    pub fn encode_flood(
         &self,
         device: &wgpu::Device,
         rec: &mut impl Record,

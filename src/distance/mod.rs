@@ -50,6 +50,7 @@ pub use check::{
 };
 pub use d2::{Distance2d, Field2d, Method2d, Nearest2d, Settings2d};
 pub use d3::Distance3d;
+pub use exact::Exact;
 pub use exact::plan::{
     AUTO_TILE_BAND, AUTO_TILE_MAX_COLUMNS_Y, AUTO_TILE_MAX_LENGTH, AUTO_TILE_MAX_LENGTH_2D,
     AUTO_TILE_MAX_LENGTH_Y, ColumnPasses, MAX_TILE_COLUMNS, MIN_TILE_COLUMNS, tile_columns,
@@ -57,7 +58,8 @@ pub use exact::plan::{
 };
 pub use field::{Field3d, FieldBuf2d, Slabs};
 pub use jfa2d::{Jfa2d, JfaField2d, JfaSettings2d, Variant};
-pub use options::{Inside, Method, Settings3d, Unreached};
+pub use jfa3d::Jfa3d;
+pub use options::{Inside, Marks, Method, Settings3d, Unreached};
 pub use packing::{MAX_POINTS, SeedPacking, key_index, pack_seed3, unpack_seed3};
 pub use seeds::{
     Channels, FAR, MAX_PACKED_SIDE, NO_SEED, SEED_FORMATS, SeedRule, check_seed_texture,

@@ -203,16 +203,21 @@ impl Settings3d {
 }
 
 /// The voxels a pass marks as seeds: those of `volume` that `inside` marks, or, `invert`, the
-/// others (the outside seeds of a signed field).
+/// others (the outside seeds of a signed field). What the stages of [`super::Exact`] and
+/// [`super::Jfa3d`] read.
 #[derive(Clone, Copy)]
-pub(crate) struct Marks<'a> {
-    pub(crate) volume: &'a wgpu::Texture,
-    pub(crate) inside: Inside,
-    pub(crate) invert: bool,
+pub struct Marks<'a> {
+    /// A volume of one of [`super::VOLUME_FORMATS`].
+    pub volume: &'a wgpu::Texture,
+    /// Which values mark a voxel.
+    pub inside: Inside,
+    /// Mark the voxels `inside` does not mark instead.
+    pub invert: bool,
 }
 
 impl<'a> Marks<'a> {
-    pub(crate) fn new(volume: &'a wgpu::Texture, inside: Inside, invert: bool) -> Self {
+    /// The voxels of `volume` that `inside` marks (or, `invert`, the others).
+    pub fn new(volume: &'a wgpu::Texture, inside: Inside, invert: bool) -> Self {
         Self {
             volume,
             inside,

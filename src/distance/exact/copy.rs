@@ -76,7 +76,7 @@ impl Exact {
     /// there, as the resolving pass stores its distances.
     #[doc(hidden)]
     #[allow(clippy::too_many_arguments)]
-    pub(crate) fn encode_global_copy(
+    pub fn encode_global_copy(
         &self,
         device: &wgpu::Device,
         rec: &mut impl Record,
@@ -148,7 +148,7 @@ impl Exact {
     /// in global memory. With `distance` (along z) it also stores a value per voxel there, as
     /// the resolving pass stores its distances.
     #[doc(hidden)]
-    pub(crate) fn encode_tile_copy(
+    pub fn encode_tile_copy(
         &self,
         device: &wgpu::Device,
         rec: &mut impl Record,

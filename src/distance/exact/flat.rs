@@ -13,7 +13,7 @@ use crate::shaders::distance::edt_rows;
 
 impl Exact {
     /// The exact transform of a 2D mask (any of [`super::SEED_FORMATS`]; red channel marks).
-    pub(crate) fn encode_exact_2d(
+    pub fn encode_exact_2d(
         &self,
         device: &wgpu::Device,
         rec: &mut impl Record,
@@ -31,9 +31,9 @@ impl Exact {
         self.encode_exact_2d_with(device, rec, mask, options, &rule)
     }
 
-    /// [`Distance3d::encode_exact_2d`] with `rule` choosing the seeds (its `inside` is not
+    /// [`Self::encode_exact_2d`] with `rule` choosing the seeds (its `inside` is not
     /// read).
-    pub(crate) fn encode_exact_2d_with(
+    pub fn encode_exact_2d_with(
         &self,
         device: &wgpu::Device,
         rec: &mut impl Record,

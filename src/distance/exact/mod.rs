@@ -46,9 +46,11 @@ struct Kept {
     part: Mutex<Option<wgpu::Buffer>>,
 }
 
-/// The exact transform's pipelines (made on first use per variant), its settings and its kept
-/// scratch.
-pub(crate) struct Exact {
+/// The exact transform's stages, run alone: [`super::Distance3d::exact`]
+/// ([`super::Distance3d::encode`] with [`super::Method::Exact`] runs them in turn and resolves
+/// as the last one answers). Holds the pipelines (made on first use per variant), the
+/// settings `Distance3d`'s setters change and the scratch kept from call to call.
+pub struct Exact {
     /// By rows per workgroup (`rows_per_group`) and seed widths.
     rows: Variants<edt_rows::rows::Entry, edt_rows::Overrides>,
     rows_2d: ComputePipeline<edt_rows::rows_2d::Entry>,
@@ -59,24 +61,16 @@ pub(crate) struct Exact {
     columns_copy: Variants<edt_columns::columns_copy::Entry, edt_columns::Overrides>,
     columns_copy_resolve:
         Variants<edt_columns::columns_copy_resolve::Entry, edt_columns::Overrides>,
-    /// The last 3D column pass with the resolve folded in.
+    /// The last 3D column pass with the resolve (signed or not) folded in.
     columns_resolve: Variants<edt_columns::columns_resolve::Entry, edt_columns::Overrides>,
-    columns_resolve_signed:
-        Variants<edt_columns::columns_resolve_signed::Entry, edt_columns::Overrides>,
     /// The same for the column pass of a 2D field.
     columns_resolve_2d: Variants<edt_columns::columns_resolve_2d::Entry, edt_columns::Overrides>,
-    columns_resolve_signed_2d:
-        Variants<edt_columns::columns_resolve_signed_2d::Entry, edt_columns::Overrides>,
     /// The column passes in workgroup memory (`edt_tile.wgsl`), per tile size.
     tile_columns: Variants<edt_tile::tile_columns::Entry, edt_tile::Overrides>,
     tile_columns_words: Variants<edt_tile::tile_columns_words::Entry, edt_tile::Overrides>,
     tile_columns_resolve: Variants<edt_tile::tile_columns_resolve::Entry, edt_tile::Overrides>,
-    tile_columns_resolve_signed:
-        Variants<edt_tile::tile_columns_resolve_signed::Entry, edt_tile::Overrides>,
     tile_columns_resolve_2d:
         Variants<edt_tile::tile_columns_resolve_2d::Entry, edt_tile::Overrides>,
-    tile_columns_resolve_signed_2d:
-        Variants<edt_tile::tile_columns_resolve_signed_2d::Entry, edt_tile::Overrides>,
     tile_copy: Variants<edt_tile::tile_copy::Entry, edt_tile::Overrides>,
     tile_copy_resolve: Variants<edt_tile::tile_copy_resolve::Entry, edt_tile::Overrides>,
     /// Bands per column chosen by the caller; `None` picks by grid size.
@@ -127,15 +121,11 @@ impl Exact {
             columns_copy: Default::default(),
             columns_copy_resolve: Default::default(),
             columns_resolve: Default::default(),
-            columns_resolve_signed: Default::default(),
             columns_resolve_2d: Default::default(),
-            columns_resolve_signed_2d: Default::default(),
             tile_columns: Default::default(),
             tile_columns_words: Default::default(),
             tile_columns_resolve: Default::default(),
-            tile_columns_resolve_signed: Default::default(),
             tile_columns_resolve_2d: Default::default(),
-            tile_columns_resolve_signed_2d: Default::default(),
             tile_copy: Default::default(),
             tile_copy_resolve: Default::default(),
             column_bands: None,
@@ -270,8 +260,18 @@ impl Exact {
         })
     }
 
-    /// [`Self::encode_exact`], resolving into `fuse` in its last pass when given.
-    #[allow(clippy::too_many_arguments)]
+    /// The exact transform (rows, then columns along y and z) of the marked voxels: packed
+    /// nearest seeds in a new buffer, or in slabs where the field is larger than one.
+    pub fn encode(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        marks: Marks,
+    ) -> Result<Slabs, Error> {
+        self.encode_exact_fused(device, rec, marks, None)
+    }
+
+    /// [`Self::encode`], resolving into `fuse` in its last pass when given.
     pub(crate) fn encode_exact_fused(
         &self,
         device: &wgpu::Device,
@@ -344,8 +344,7 @@ impl Exact {
 
     /// One exact column pass alone (`axis` 1 = y, 2 = z), in place on `nearest`; `stack` is
     /// scratch of the same size.
-    #[allow(clippy::too_many_arguments)]
-    pub(crate) fn encode_column_pass(
+    pub fn encode_column_pass(
         &self,
         device: &wgpu::Device,
         rec: &mut impl Record,

@@ -49,7 +49,7 @@ pub(crate) fn row_words_bytes(size: [u32; 3]) -> u64 {
 
 impl Exact {
     /// First exact pass alone: per row, the nearest marked voxel along x (a new buffer).
-    pub(crate) fn encode_rows(
+    pub fn encode_rows(
         &self,
         device: &wgpu::Device,
         rec: &mut impl Record,
@@ -84,10 +84,19 @@ impl Exact {
     }
 
     /// The 3D row pass as words (`row_words`): per 32 voxels of a row, their marks and the
-    /// nearest marks on either side (`vec2<u32>`, `ceil(width / 32)` per row), which the y pass
-    /// reads in place of the row pass's field: into the words kept from call to call where
-    /// `kept` (the exact transform's own row words, which no caller sees), else into a new
-    /// buffer.
+    /// nearest marks on either side (a new buffer of `vec2<u32>`, `ceil(width / 32)` per row),
+    /// which [`Self::encode_columns_from_words`] reads in place of the row pass's field.
+    pub fn encode_row_words(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        marks: Marks,
+    ) -> Result<wgpu::Buffer, Error> {
+        self.row_words(device, rec, marks, false)
+    }
+
+    /// [`Self::encode_row_words`] into the words kept from call to call where `kept` (the
+    /// exact transform's own row words, which no caller sees), else into a new buffer.
     pub(crate) fn row_words(
         &self,
         device: &wgpu::Device,
@@ -131,10 +140,10 @@ impl Exact {
 
     /// The y column pass of a 3D field of `size` from the row words of
     /// [`Self::encode_row_words`], in workgroup or global memory as the exact transform takes
-    /// it ([`Self::set_column_passes`]): writes the nearest seed of every voxel within its xy
+    /// it ([`crate::distance::Distance3d::set_column_passes`]): writes the nearest seed of every voxel within its xy
     /// plane into `nearest`, as [`Self::encode_rows`] followed by the y pass of
     /// [`Self::encode_column_pass`] would.
-    pub(crate) fn encode_columns_from_words(
+    pub fn encode_columns_from_words(
         &self,
         device: &wgpu::Device,
         rec: &mut impl Record,

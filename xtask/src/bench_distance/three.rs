@@ -2,7 +2,7 @@
 //! transform (itself against the peer or the CPU), the CPU cost of recording it, and the
 //! column passes' load/store floors.
 
-use fieldkit::distance::{Method, Settings3d, cpu, tile_columns_3d, upload_volume};
+use fieldkit::distance::{Marks, Method, Settings3d, cpu, tile_columns_3d, upload_volume};
 
 use super::rig::{EXACT, Rig};
 use super::{Peer, ROWS_PASS, Row, UNSWEPT, WORKGROUP, d2_of, errors, label3, mask3, pass_bytes};
@@ -208,7 +208,12 @@ impl Rig<'_> {
         let mut enc = ctx.encoder("bench row words");
         let inside = Settings3d::default().inside;
         let words = d3
-            .encode_row_words(&ctx.device, &mut enc, &case.volume, inside, false)
+            .exact()
+            .encode_row_words(
+                &ctx.device,
+                &mut enc,
+                Marks::new(&case.volume, inside, false),
+            )
             .map_err(|e| e.to_string())?;
         ctx.submit_and_wait("bench row words", enc)
             .map_err(|e| e.to_string())?;
@@ -228,12 +233,14 @@ impl Rig<'_> {
                 self.time(|enc, prof| {
                     let rec = &mut prof.record(enc);
                     tile = d3
+                        .exact()
                         .encode_tile_copy(&ctx.device, rec, &buffer, edge, axis, store)
                         .expect("encode")
                         .is_some();
                     if !tile {
                         let words = (axis == 1).then_some(&words);
-                        d3.encode_global_copy(&ctx.device, rec, &buffer, words, edge, axis, store)
+                        d3.exact()
+                            .encode_global_copy(&ctx.device, rec, &buffer, words, edge, axis, store)
                             .expect("encode");
                     }
                 })

@@ -54,11 +54,13 @@ impl Rig<'_> {
         let ctx = &self.ctx;
         let opts = Settings3d::default();
         let timing = self.time(|enc, prof| {
-            d3.encode_exact_2d(&ctx.device, &mut prof.record(enc), tex, &opts)
+            d3.exact()
+                .encode_exact_2d(&ctx.device, &mut prof.record(enc), tex, &opts)
                 .expect("encode");
         })?;
         let mut enc = ctx.encoder("bench readback");
         let field = d3
+            .exact()
             .encode_exact_2d(&ctx.device, &mut enc, tex, &opts)
             .map_err(|e| e.to_string())?;
         ctx.submit_and_wait("bench", enc)
