@@ -32,7 +32,7 @@
 // column's bands that hold sites, so that empty bands are never visited.
 //
 // The last pass of a 3D transform can resolve distances as `field_resolve.wgsl` would, in the
-// same sweep (`columns_resolve`, `columns_resolve_signed`): that saves reading the field again.
+// same sweep (`columns_resolve`, SIGNED or not): that saves reading the field again.
 
 import fieldkit::seed::{NO_SEED, answer_distance, dist2, dist2_3, pack_seed3_bits, row_word_mark, separator, signed_at2, signed_at3_bits, unpack_seed2, unpack_seed3_bits};
 
@@ -66,7 +66,7 @@ struct ColumnParams {
 @group(0) @binding(0) var<uniform> params: ColumnParams;
 @group(0) @binding(1) var<storage, read_write> nearest: array<u32>;
 @group(0) @binding(2) var<storage, read_write> stack: array<u32>;
-// `columns_resolve_signed` runs in the outside seeds' field; this is the inside seeds' field.
+// The inside seeds' field beside a SIGNED resolving pass (which runs in the outside seeds').
 @group(0) @binding(3) var<storage, read> nearest_inside: array<u32>;
 @group(0) @binding(4) var distance: texture_storage_3d<r32float, write>;
 // The resolving entries of a 2D field write here.
@@ -110,6 +110,9 @@ override IN_STACK: bool = false;
 // z above; 11 and 11 for every grid up to 2048 × 2048 × 1024.
 override SEED_X_BITS: u32 = 11u;
 override SEED_Y_BITS: u32 = 11u;
+// The resolving entries write signed distances: they run in the outside seeds' field with the
+// inside seeds' field (`nearest_inside`) beside it. Unsigned, a placeholder is bound there.
+override SIGNED: bool = false;
 
 // "Nothing found yet": above any squared distance in range.
 const FAR_D2: i32 = 0x7fffffff;
@@ -830,22 +833,18 @@ fn columns_copy_resolve(@builtin(local_invocation_index) li: u32, @builtin(workg
     }
 }
 
-// Voxel p's answer at `at`: its site, and its distance clamped to the band.
+// Voxel p's answer at `at`: its site, and its distance clamped to the band; SIGNED, as
+// `field_resolve.wgsl`'s `resolve_signed` gives it from both fields.
 fn resolve_at(p: vec3<u32>, at: u32, found: vec2<u32>) {
     nearest[at] = found.x;
-    textureStore(distance, p, vec4<f32>(banded(answer_distance(found, params.voxel_size)), 0.0, 0.0, 0.0));
-}
-
-// The same, signed as `field_resolve.wgsl`'s `resolve_signed` gives it from both fields.
-fn resolve_signed_at(p: vec3<u32>, at: u32, found: vec2<u32>) {
-    nearest[at] = found.x;
-    let d = signed_at3_bits(nearest_inside[at], p, answer_distance(found, params.voxel_size), found.x,
-                            params.voxel_size, SEED_X_BITS, SEED_Y_BITS);
+    var d = answer_distance(found, params.voxel_size);
+    if SIGNED {
+        d = signed_at3_bits(nearest_inside[at], p, d, found.x, params.voxel_size, SEED_X_BITS, SEED_Y_BITS);
+    }
     textureStore(distance, p, vec4<f32>(banded(d), 0.0, 0.0, 0.0));
 }
 
-// `columns`, and the unsigned distance of every voxel it answers (3D). Each resolving entry
-// keeps its own loops: one loop shared by both would bind `nearest_inside` to this one too.
+// `columns`, and the distance (SIGNED or not) of every voxel it answers (3D).
 @compute @workgroup_size(32, 8)
 fn columns_resolve(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
     var verdict = HERE;
@@ -886,48 +885,7 @@ fn columns_resolve(@builtin(local_invocation_index) li: u32, @builtin(workgroup_
     }
 }
 
-// `columns` in the outside seeds' field, and the signed distance of every voxel it answers (3D).
-@compute @workgroup_size(32, 8)
-fn columns_resolve_signed(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
-    var verdict = HERE;
-    if SCAN {
-        var sw = sweep_of(li, wg);
-        let started = sweep_starts(sw);
-        if started {
-            for (var t = 0u; t * BANDS < sw.n; t++) {
-                if sweep_advance(&sw, t) != 0u {
-                    break;
-                }
-                let p = sweep_voxel(sw, t);
-                if p.x < params.x_end && p.w < sw.n {
-                    let found = sweep_answer(sw, t);
-                    if found.y > SCAN_REACH * SCAN_REACH {
-                        atomicAdd(&far_sites, 1u);
-                    } else {
-                        resolve_signed_at(p.xyz, place(params.dst, p.xyz), found);
-                    }
-                }
-            }
-        }
-        verdict = sweep_end(li, wg, started);
-    } else if AFTER_SCAN {
-        verdict = rest_verdict(li, wg);
-    }
-    if verdict != HERE {
-        return;
-    }
-    let s = start(li, wg);
-    let c = s.c;
-    if !c.valid {
-        return;
-    }
-    var walk = s.walk;
-    for (var i = c.lo; i < c.hi; i++) {
-        resolve_signed_at(vec3<u32>(voxel(c.x, c.other, i)), c.out + i * c.out_stride, query(c, &walk, i, false));
-    }
-}
-
-// `columns` in a 2D field, and the unsigned distance of every pixel it answers.
+// `columns` in a 2D field, and the distance (SIGNED or not) of every pixel it answers.
 @compute @workgroup_size(32, 8)
 fn columns_resolve_2d(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
     let s = start(li, wg);
@@ -941,25 +899,10 @@ fn columns_resolve_2d(@builtin(local_invocation_index) li: u32, @builtin(workgro
         let at = c.out + i * c.out_stride;
         nearest[at] = found.x;
         let p = vec3<u32>(voxel(c.x, c.other, i)).xy;
-        textureStore(distance_2d, p, vec4<f32>(banded(answer_distance(found, params.voxel_size)), 0.0, 0.0, 0.0));
-    }
-}
-
-// `columns` in the outside seeds' 2D field, and the signed distance of every pixel it answers.
-@compute @workgroup_size(32, 8)
-fn columns_resolve_signed_2d(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
-    let s = start(li, wg);
-    let c = s.c;
-    if !c.valid {
-        return;
-    }
-    var walk = s.walk;
-    for (var i = c.lo; i < c.hi; i++) {
-        let found = query(c, &walk, i, false);
-        let at = c.out + i * c.out_stride;
-        nearest[at] = found.x;
-        let p = vec3<u32>(voxel(c.x, c.other, i)).xy;
-        let d = signed_at2(nearest_inside[at], p, answer_distance(found, params.voxel_size), found.x, params.voxel_size);
+        var d = answer_distance(found, params.voxel_size);
+        if SIGNED {
+            d = signed_at2(nearest_inside[at], p, d, found.x, params.voxel_size);
+        }
         textureStore(distance_2d, p, vec4<f32>(banded(d), 0.0, 0.0, 0.0));
     }
 }

@@ -55,7 +55,7 @@ struct TileParams {
 
 @group(0) @binding(0) var<uniform> params: TileParams;
 @group(0) @binding(1) var<storage, read_write> nearest: array<u32>;
-// `tile_columns_resolve_signed` runs in the outside seeds' field; this is the inside seeds' field.
+// The inside seeds' field beside a SIGNED resolving pass (which runs in the outside seeds').
 @group(0) @binding(2) var<storage, read> nearest_inside: array<u32>;
 @group(0) @binding(3) var distance: texture_storage_3d<r32float, write>;
 // The resolving entries of a 2D field write here.
@@ -85,6 +85,9 @@ override CELLS: u32 = 3839u;
 // z above; 11 and 11 for every grid up to 2048 × 2048 × 1024.
 override SEED_X_BITS: u32 = 11u;
 override SEED_Y_BITS: u32 = 11u;
+// The resolving entries write signed distances: they run in the outside seeds' field with the
+// inside seeds' field (`nearest_inside`) beside it. Unsigned, a placeholder is bound there.
+override SIGNED: bool = false;
 
 const THREADS: u32 = 256u;
 // "Nothing found yet": above any squared distance in range.
@@ -686,9 +689,8 @@ fn tile_columns_words(@builtin(local_invocation_index) li: u32, @builtin(workgro
     }
 }
 
-// `tile_columns`, and the unsigned distance of every voxel it answers (3D). The scan and the
-// envelopes each have a loop of their own here and in `tile_columns_resolve_signed`: one loop
-// choosing per position (a `near` flag beside the walk) made the pass slower on the H100, z +
+// `tile_columns`, and the distance (SIGNED or not) of every voxel it answers (3D). The scan
+// and the envelopes each have a loop of their own: one loop choosing per position (a `near` flag beside the walk) made the pass slower on the H100, z +
 // resolve 0.210 → 0.213 ms at 256³ with 1% seeds and 0.379 → 0.395 with 1e-5.
 @compute @workgroup_size(256)
 fn tile_columns_resolve(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
@@ -710,45 +712,20 @@ fn tile_columns_resolve(@builtin(local_invocation_index) li: u32, @builtin(workg
     }
 }
 
-// Write position i's answer and its unsigned distance.
+// Write position i's answer and its distance; SIGNED, as `field_resolve.wgsl`'s
+// `resolve_signed` gives it from both fields.
 fn resolve_at(l: Lane, i: u32, found: vec2<u32>) {
-    nearest[l.at + i * l.stride] = found.x;
-    textureStore(distance, voxel(l, i), vec4<f32>(banded(answer_distance(found, params.voxel_size)), 0.0, 0.0, 0.0));
-}
-
-// `tile_columns` in the outside seeds' field, and the signed distance of every voxel it answers,
-// as `field_resolve.wgsl`'s `resolve_signed` gives it from both fields (3D).
-@compute @workgroup_size(256)
-fn tile_columns_resolve_signed(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
-    let l = lane_of(li, wg);
-    if load_near(li, wg) {
-        if l.valid {
-            for (var i = l.lo; i < l.hi; i++) {
-                resolve_signed_at(l, i, scan(l, i));
-            }
-        }
-        return;
-    }
-    var walk = envelopes(li, wg);
-    if !l.valid {
-        return;
-    }
-    for (var i = l.lo; i < l.hi; i++) {
-        resolve_signed_at(l, i, query(l, &walk, i));
-    }
-}
-
-// Write position i's answer and its signed distance (the inside seeds' field beside it).
-fn resolve_signed_at(l: Lane, i: u32, found: vec2<u32>) {
     let at = l.at + i * l.stride;
     nearest[at] = found.x;
     let p = voxel(l, i);
-    let d = signed_at3_bits(nearest_inside[at], p, answer_distance(found, params.voxel_size), found.x,
-                            params.voxel_size, SEED_X_BITS, SEED_Y_BITS);
+    var d = answer_distance(found, params.voxel_size);
+    if SIGNED {
+        d = signed_at3_bits(nearest_inside[at], p, d, found.x, params.voxel_size, SEED_X_BITS, SEED_Y_BITS);
+    }
     textureStore(distance, p, vec4<f32>(banded(d), 0.0, 0.0, 0.0));
 }
 
-// `tile_columns` in a 2D field, and the unsigned distance of every pixel it answers.
+// `tile_columns` in a 2D field, and the distance (SIGNED or not) of every pixel it answers.
 @compute @workgroup_size(256)
 fn tile_columns_resolve_2d(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
     var walk = start(li, wg);
@@ -761,24 +738,10 @@ fn tile_columns_resolve_2d(@builtin(local_invocation_index) li: u32, @builtin(wo
         let at = l.at + i * l.stride;
         nearest[at] = found.x;
         let p = voxel(l, i).xy;
-        textureStore(distance_2d, p, vec4<f32>(banded(answer_distance(found, params.voxel_size)), 0.0, 0.0, 0.0));
-    }
-}
-
-// `tile_columns` in the outside seeds' 2D field, and the signed distance of every pixel it answers.
-@compute @workgroup_size(256)
-fn tile_columns_resolve_signed_2d(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
-    var walk = start(li, wg);
-    let l = lane_of(li, wg);
-    if !l.valid {
-        return;
-    }
-    for (var i = l.lo; i < l.hi; i++) {
-        let found = query(l, &walk, i);
-        let at = l.at + i * l.stride;
-        nearest[at] = found.x;
-        let p = voxel(l, i).xy;
-        let d = signed_at2(nearest_inside[at], p, answer_distance(found, params.voxel_size), found.x, params.voxel_size);
+        var d = answer_distance(found, params.voxel_size);
+        if SIGNED {
+            d = signed_at2(nearest_inside[at], p, d, found.x, params.voxel_size);
+        }
         textureStore(distance_2d, p, vec4<f32>(banded(d), 0.0, 0.0, 0.0));
     }
 }

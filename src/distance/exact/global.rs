@@ -30,7 +30,7 @@ impl Exact {
         // A resolving 3D pass that sweeps is two dispatches: the sweep, then the envelopes of
         // the workgroups it left (the same entry point, other override constants).
         let resolve = Resolve::of(fuse.as_ref(), slab);
-        let volume = matches!(resolve, Resolve::Volume(_) | Resolve::SignedVolume(..));
+        let volume = matches!(resolve, Resolve::Volume(..));
         let (parts, swept): (&[SweepPart], _) = match io.sweep {
             Some(swept) if volume => (&[SweepPart::Sweep, SweepPart::Rest], swept),
             _ => (&[SweepPart::No], &self.no_swept),
@@ -73,12 +73,11 @@ impl Exact {
             record_resolved! {
                 record,
                 resolve,
+                &self.no_source,
                 volume { swept: swept },
                 self.columns => columns,
                 self.columns_resolve_2d => columns_resolve_2d,
-                self.columns_resolve_signed_2d => columns_resolve_signed_2d,
                 self.columns_resolve => columns_resolve,
-                self.columns_resolve_signed => columns_resolve_signed,
             }
         }
         Ok(())
@@ -130,6 +129,7 @@ impl Exact {
             in_stack: part != SweepPart::No && io.source.is_none(),
             ring: SWEEP_RING,
             ring_cells: if scan { SWEEP_RING * 256 / bands } else { 1 },
+            signed: fuse.is_some_and(|f| f.inside_field.is_some()),
         };
         let params = uniform(
             device,

@@ -261,6 +261,7 @@ impl TileGeometry {
             source_apart,
             seed_x_bits: packing.x_bits,
             seed_y_bits: packing.y_bits,
+            signed: fuse.is_some_and(|f| f.inside_field.is_some()),
         };
         (params, overrides)
     }

@@ -21,10 +21,10 @@ impl Exact {
     ) -> Result<(), Error> {
         let apart = io.source.is_some();
         let (params, overrides) = tile.bind(device, pass, fuse.as_ref(), &io.span, apart);
+        let resolve = Resolve::of(fuse.as_ref(), io.slab);
         let groups = tile.groups(&io.span, pass.others);
         let nearest = io.nearest.into();
         let source = io.source.unwrap_or(&self.no_source).into();
-        let slab = io.slab;
         let name = match (pass.axis, &fuse) {
             (1, None) => "columns (y, workgroup)",
             (1, Some(_)) => "columns (y, workgroup) + resolve",
@@ -53,12 +53,11 @@ impl Exact {
         }
         record_resolved! {
             record,
-            Resolve::of(fuse.as_ref(), slab),
+            resolve,
+            &self.no_source,
             self.tile_columns => tile_columns,
             self.tile_columns_resolve_2d => tile_columns_resolve_2d,
-            self.tile_columns_resolve_signed_2d => tile_columns_resolve_signed_2d,
             self.tile_columns_resolve => tile_columns_resolve,
-            self.tile_columns_resolve_signed => tile_columns_resolve_signed,
         }
     }
 
