@@ -690,8 +690,9 @@ fn tile_columns_words(@builtin(local_invocation_index) li: u32, @builtin(workgro
 }
 
 // `tile_columns`, and the distance (SIGNED or not) of every voxel it answers (3D). The scan
-// and the envelopes each have a loop of their own: one loop choosing per position (a `near` flag beside the walk) made the pass slower on the H100, z +
-// resolve 0.210 → 0.213 ms at 256³ with 1% seeds and 0.379 → 0.395 with 1e-5.
+// and the envelopes each have a loop of their own: one loop choosing per position (a `near`
+// flag beside the walk) made the pass slower on the H100, z + resolve 0.210 → 0.213 ms at 256³
+// with 1% seeds and 0.379 → 0.395 with 1e-5.
 @compute @workgroup_size(256)
 fn tile_columns_resolve(@builtin(local_invocation_index) li: u32, @builtin(workgroup_id) wg: vec3<u32>) {
     let l = lane_of(li, wg);
