@@ -53,6 +53,49 @@ impl Spread {
     }
 }
 
+/// The GPU objects a frame made (wgpu's internal counters, the `counters` feature): read just
+/// after its submission, against just before its recording, when the previous frame's
+/// temporaries are already freed (the loop waits for each frame), so every object it counts is
+/// one the frame made and still holds.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Made {
+    pub buffers: isize,
+    pub textures: isize,
+    pub views: isize,
+    pub bind_groups: isize,
+}
+
+impl Made {
+    fn now(device: &wgpu::Device) -> Self {
+        let hal = device.get_internal_counters().hal;
+        Self {
+            buffers: hal.buffers.read(),
+            textures: hal.textures.read(),
+            views: hal.texture_views.read(),
+            bind_groups: hal.bind_groups.read(),
+        }
+    }
+
+    fn since(self, before: Made) -> Self {
+        Self {
+            buffers: self.buffers - before.buffers,
+            textures: self.textures - before.textures,
+            views: self.views - before.views,
+            bind_groups: self.bind_groups - before.bind_groups,
+        }
+    }
+
+    /// Each count the largest of `a`'s and `b`'s.
+    fn max(self, b: Made) -> Self {
+        Self {
+            buffers: self.buffers.max(b.buffers),
+            textures: self.textures.max(b.textures),
+            views: self.views.max(b.views),
+            bind_groups: self.bind_groups.max(b.bind_groups),
+        }
+    }
+}
+
 /// One scene's frame cost.
 #[derive(Debug)]
 pub struct FrameCost {
@@ -81,6 +124,8 @@ pub struct FrameCost {
     pub error: Option<String>,
     /// The timed passes of the last profiled frame, GPU ms each.
     pub passes: Vec<(String, f64)>,
+    /// The most GPU objects any measured frame made (after warm-up).
+    pub made: Made,
 }
 
 /// Measure `scenes` (all of them where empty) at `size`, print the table, write `frame.csv`
@@ -124,7 +169,8 @@ fn timed_frame(
     size: [u32; 2],
     i: u32,
     profiler: Option<&mut Profiler>,
-) -> Result<(f64, f64, Option<String>), fieldkit::Error> {
+) -> Result<Timed, fieldkit::Error> {
+    let before = Made::now(&ctx.device);
     let start = Instant::now();
     let (report, index) = draw_frame(
         &ctx.device,
@@ -139,6 +185,7 @@ fn timed_frame(
         profiler,
     );
     let cpu = start.elapsed().as_secs_f64() * 1e3;
+    let made = Made::now(&ctx.device).since(before);
     ctx.device
         .poll(wgpu::PollType::Wait {
             submission_index: Some(index),
@@ -146,7 +193,22 @@ fn timed_frame(
         })
         .map_err(|e| fieldkit::Error::Readback(e.to_string()))?;
     let wall = start.elapsed().as_secs_f64() * 1e3;
-    Ok((cpu, wall, report.error.map(|e| e.to_string())))
+    Ok(Timed {
+        cpu,
+        wall,
+        error: report.error.map(|e| e.to_string()),
+        made,
+    })
+}
+
+/// What [`timed_frame`] measured of a frame.
+struct Timed {
+    /// Record + submit, CPU ms.
+    cpu: f64,
+    /// Start of recording to the GPU done, ms.
+    wall: f64,
+    error: Option<String>,
+    made: Made,
 }
 
 fn measure(
@@ -158,16 +220,17 @@ fn measure(
 ) -> Result<FrameCost, fieldkit::Error> {
     let targets = Targets::new(&ctx.device, size, COLOUR, DEPTH);
     let mut scenes = Scenes::new();
-    let (_, first_ms, _) = timed_frame(ctx, &mut scenes, saved, scene, &targets, size, 0, None)?;
+    let first_ms = timed_frame(ctx, &mut scenes, saved, scene, &targets, size, 0, None)?.wall;
     for i in 1..WARM_UP {
         timed_frame(ctx, &mut scenes, saved, scene, &targets, size, i, None)?;
     }
-    let (mut cpu, mut wall, mut error) = (Vec::new(), Vec::new(), None);
+    let (mut cpu, mut wall, mut error, mut made) = (Vec::new(), Vec::new(), None, Made::default());
     for i in WARM_UP..WARM_UP + frames {
-        let (c, w, e) = timed_frame(ctx, &mut scenes, saved, scene, &targets, size, i, None)?;
-        cpu.push(c);
-        wall.push(w);
-        error = error.or(e);
+        let t = timed_frame(ctx, &mut scenes, saved, scene, &targets, size, i, None)?;
+        cpu.push(t.cpu);
+        wall.push(t.wall);
+        error = error.or(t.error);
+        made = made.max(t.made);
     }
     // The GPU's share, in frames of their own: timestamp queries change what they measure.
     let mut gpu = Vec::new();
@@ -190,8 +253,8 @@ fn measure(
     let resized = [size[0] * 9 / 10, size[1] * 9 / 10];
     let small = Targets::new(&ctx.device, resized, COLOUR, DEPTH);
     let n = WARM_UP + 2 * frames;
-    let (resize_cpu_ms, resize_wall_ms, _) =
-        timed_frame(ctx, &mut scenes, saved, scene, &small, resized, n, None)?;
+    let resized_frame = timed_frame(ctx, &mut scenes, saved, scene, &small, resized, n, None)?;
+    let (resize_cpu_ms, resize_wall_ms) = (resized_frame.cpu, resized_frame.wall);
     let floor = (0..frames)
         .map(|_| {
             let start = Instant::now();
@@ -220,6 +283,7 @@ fn measure(
         floor: Spread::of(floor),
         error,
         passes: last_passes,
+        made,
     })
 }
 
@@ -289,13 +353,13 @@ fn gpu_frame_times(
 fn print_table(adapter: &str, costs: &[FrameCost]) {
     println!("frame cost on {adapter}");
     println!(
-        "| scene | size | CPU record + submit ms | submit → done ms | GPU frame ms | GPU timed passes ms | loop floor ms | frames > {SLOW_CPU_MS} ms CPU | first frame ms | resize frame CPU / wall ms |"
+        "| scene | size | CPU record + submit ms | submit → done ms | GPU frame ms | GPU timed passes ms | loop floor ms | frames > {SLOW_CPU_MS} ms CPU | first frame ms | resize frame CPU / wall ms | made a frame: buffers / textures / views / bind groups |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|");
     let s = |x: &Spread| format!("{:.3} ({:.3}–{:.3})", x.median, x.min, x.max);
     for c in costs {
         println!(
-            "| {} | {}×{} | {} | {} | {} | {} | {} | {} | {:.1} | {:.2} / {:.2} |{}",
+            "| {} | {}×{} | {} | {} | {} | {} | {} | {} | {:.1} | {:.2} / {:.2} | {} / {} / {} / {} |{}",
             c.scene,
             c.size[0],
             c.size[1],
@@ -308,6 +372,10 @@ fn print_table(adapter: &str, costs: &[FrameCost]) {
             c.first_ms,
             c.resize_cpu_ms,
             c.resize_wall_ms,
+            c.made.buffers,
+            c.made.textures,
+            c.made.views,
+            c.made.bind_groups,
             c.error
                 .as_ref()
                 .map_or(String::new(), |e| format!(" error: {e}"))
@@ -327,11 +395,12 @@ fn write_csv(path: &Path, adapter: &str, costs: &[FrameCost]) -> Result<(), Stri
     let mut text = String::from(
         "adapter,scene,width,height,cpu_ms_median,cpu_ms_min,cpu_ms_max,wall_ms_median,wall_ms_min,\
          wall_ms_max,gpu_frame_ms_median,gpu_frame_ms_min,gpu_frame_ms_max,gpu_compute_ms_median,gpu_compute_ms_min,gpu_compute_ms_max,floor_ms_median,\
-         floor_ms_min,floor_ms_max,slow_cpu_frames,first_frame_ms,resize_cpu_ms,resize_wall_ms\n",
+         floor_ms_min,floor_ms_max,slow_cpu_frames,first_frame_ms,resize_cpu_ms,resize_wall_ms,\
+         made_buffers,made_textures,made_views,made_bind_groups\n",
     );
     for c in costs {
         text += &format!(
-            "\"{adapter}\",{},{},{},{},{},{},{},{},{},{:.3},{:.4},{:.4}\n",
+            "\"{adapter}\",{},{},{},{},{},{},{},{},{},{:.3},{:.4},{:.4},{},{},{},{}\n",
             c.scene,
             c.size[0],
             c.size[1],
@@ -343,7 +412,11 @@ fn write_csv(path: &Path, adapter: &str, costs: &[FrameCost]) -> Result<(), Stri
             c.slow_frames,
             c.first_ms,
             c.resize_cpu_ms,
-            c.resize_wall_ms
+            c.resize_wall_ms,
+            c.made.buffers,
+            c.made.textures,
+            c.made.views,
+            c.made.bind_groups
         );
     }
     std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))
