@@ -432,12 +432,14 @@ fn the_soak_judge_catches_a_leak() {
 /// `--frame-cost` writes one row a scene whose parts hold together: each frame's wall time
 /// contains its CPU time, so the medians do too; the first frame, the floor and the resized
 /// frame all took time; the whole frame's GPU time holds its compute passes, which are timed on
-/// a scene that has some.
+/// a scene that has some; the objects a frame makes are counted (none can be negative); the
+/// pipeline cache starts cold, and warm on the next run, where the adapter keeps one.
 #[test]
 fn frame_cost_measures_every_part_of_a_frame() {
     let out = temp("frame-cost");
+    let cache = out.join("pipeline-cache");
     let scenes = ["distance2d".to_string(), "actor".to_string()];
-    viewer::frame::run(&scenes, &settings(), SIZE, 3, Some(&out)).unwrap();
+    viewer::frame::run(&scenes, &settings(), SIZE, 3, Some(&out), Some(&cache)).unwrap();
     let csv = std::fs::read_to_string(out.join("frame.csv")).unwrap();
     let rows: Vec<Vec<&str>> = csv
         .lines()
@@ -471,5 +473,32 @@ fn frame_cost_measures_every_part_of_a_frame() {
     // The actor's field is made by compute passes; the 2D tool only draws.
     assert!(col(&rows[1], "gpu_compute_ms_median") > 0.0, "{csv}");
     assert_eq!(col(&rows[0], "gpu_compute_ms_median"), 0.0, "{csv}");
+    for row in &rows {
+        for made in [
+            "made_buffers",
+            "made_textures",
+            "made_views",
+            "made_bind_groups",
+        ] {
+            assert!(col(row, made) >= 0.0, "{made}: {row:?}");
+        }
+    }
+    // How the pipeline cache started: the second column (after the quoted adapter).
+    let start = |csv: &str| -> String {
+        let row = csv.lines().nth(1).unwrap();
+        let after_adapter = row.rsplit_once('"').unwrap().1;
+        after_adapter.split(',').nth(1).unwrap().to_string()
+    };
+    let ctx = fieldkit::gpu::Context::shared();
+    let keeps = ctx
+        .device
+        .features()
+        .contains(wgpu::Features::PIPELINE_CACHE)
+        && ctx.adapter.as_ref().unwrap().get_info().backend == wgpu::Backend::Vulkan;
+    assert_eq!(start(&csv), if keeps { "cold" } else { "none" }, "{csv}");
+    let again = &scenes[..1];
+    viewer::frame::run(again, &settings(), SIZE, 3, Some(&out), Some(&cache)).unwrap();
+    let csv = std::fs::read_to_string(out.join("frame.csv")).unwrap();
+    assert_eq!(start(&csv), if keeps { "warm" } else { "none" }, "{csv}");
     std::fs::remove_dir_all(&out).unwrap();
 }

@@ -14,7 +14,7 @@
 use std::path::Path;
 use std::time::Instant;
 
-use fieldkit::gpu::{Context, Profiler};
+use fieldkit::gpu::{Context, PipelineCache, Profiler};
 use fieldkit::view::Targets;
 
 use super::scenes::{COLOUR, DEPTH, NAMES, Saved, Scenes};
@@ -129,16 +129,24 @@ pub struct FrameCost {
 }
 
 /// Measure `scenes` (all of them where empty) at `size`, print the table, write `frame.csv`
-/// into `out` where given.
+/// into `out` where given; with `cache`, every pipeline goes through the pipeline cache kept
+/// there (loaded first, saved after the last scene).
 pub fn run(
     scenes: &[String],
     saved: &Saved,
     size: [u32; 2],
     frames: u32,
     out: Option<&Path>,
+    cache: Option<&Path>,
 ) -> Result<(), String> {
     let ctx = Context::new().map_err(|e| e.to_string())?;
     let adapter = ctx.adapter_name();
+    let pipeline_cache = match (cache, &ctx.adapter) {
+        (Some(dir), Some(a)) => PipelineCache::open(&ctx.device, &a.get_info(), dir)
+            .map_err(|e| format!("pipeline cache {}: {e}", dir.display()))?,
+        _ => None,
+    };
+    let loaded = pipeline_cache.as_ref().map(PipelineCache::loaded_bytes);
     let names: Vec<String> = if scenes.is_empty() {
         NAMES.iter().map(|s| s.to_string()).collect()
     } else {
@@ -150,9 +158,23 @@ pub fn run(
         costs.push(cost);
     }
     print_table(&adapter, &costs);
+    let start = match loaded {
+        None => "none".to_string(),
+        Some(0) => "cold".to_string(),
+        Some(_) => "warm".to_string(),
+    };
+    if let Some(c) = &pipeline_cache {
+        c.save()
+            .map_err(|e| format!("saving the pipeline cache: {e}"))?;
+        println!(
+            "pipeline cache: started {start} ({} bytes), saved {} bytes",
+            c.loaded_bytes(),
+            c.data().map_or(0, |d| d.len())
+        );
+    }
     if let Some(dir) = out {
         std::fs::create_dir_all(dir).map_err(|e| e.to_string())?;
-        write_csv(&dir.join("frame.csv"), &adapter, &costs)?;
+        write_csv(&dir.join("frame.csv"), &adapter, &start, &costs)?;
         println!("wrote {}", dir.join("frame.csv").display());
     }
     Ok(())
@@ -391,16 +413,17 @@ fn print_table(adapter: &str, costs: &[FrameCost]) {
     }
 }
 
-fn write_csv(path: &Path, adapter: &str, costs: &[FrameCost]) -> Result<(), String> {
+/// `start`: how the pipeline cache started (none, cold, warm).
+fn write_csv(path: &Path, adapter: &str, start: &str, costs: &[FrameCost]) -> Result<(), String> {
     let mut text = String::from(
-        "adapter,scene,width,height,cpu_ms_median,cpu_ms_min,cpu_ms_max,wall_ms_median,wall_ms_min,\
+        "adapter,pipeline_cache,scene,width,height,cpu_ms_median,cpu_ms_min,cpu_ms_max,wall_ms_median,wall_ms_min,\
          wall_ms_max,gpu_frame_ms_median,gpu_frame_ms_min,gpu_frame_ms_max,gpu_compute_ms_median,gpu_compute_ms_min,gpu_compute_ms_max,floor_ms_median,\
          floor_ms_min,floor_ms_max,slow_cpu_frames,first_frame_ms,resize_cpu_ms,resize_wall_ms,\
          made_buffers,made_textures,made_views,made_bind_groups\n",
     );
     for c in costs {
         text += &format!(
-            "\"{adapter}\",{},{},{},{},{},{},{},{},{},{:.3},{:.4},{:.4},{},{},{},{}\n",
+            "\"{adapter}\",{start},{},{},{},{},{},{},{},{},{},{:.3},{:.4},{:.4},{},{},{},{}\n",
             c.scene,
             c.size[0],
             c.size[1],

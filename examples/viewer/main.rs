@@ -26,6 +26,9 @@
 //! `--frame-cost FRAMES` measures what a frame of each scene (or `--scene`'s) costs at 1920×1080
 //! (or `--size`): CPU to record and submit, submit → done, the GPU's compute passes, the loop's
 //! floor, the first frame and a resize (see `frame.rs`; `cargo xtask bench frame` runs it).
+//! `--pipeline-cache DIR` keeps fieldkit's pipeline cache there between launches (the window
+//! keeps one in the user's cache folder unless given `off`), so that a second launch's first
+//! frame does not compile its pipelines again.
 
 pub mod camera;
 pub mod draw;
@@ -70,6 +73,28 @@ pub struct Args {
     pub frame_cost: Option<u32>,
     /// Where `--frame-cost` writes `frame.csv`.
     pub out: Option<PathBuf>,
+    /// `--pipeline-cache DIR`: where the pipeline cache is kept between launches
+    /// (`--pipeline-cache off`: none). The window keeps one in the user's cache folder by
+    /// default; `--frame-cost` only where asked.
+    pub pipeline_cache: Option<PathBuf>,
+    /// `--pipeline-cache off`.
+    pub no_pipeline_cache: bool,
+}
+
+impl Args {
+    /// Where the window keeps its pipeline cache: `--pipeline-cache DIR`, else
+    /// `$XDG_CACHE_HOME/fieldkit` or `~/.cache/fieldkit`.
+    pub fn window_pipeline_cache(&self) -> Option<PathBuf> {
+        if self.no_pipeline_cache {
+            return None;
+        }
+        self.pipeline_cache.clone().or_else(|| {
+            let base = std::env::var_os("XDG_CACHE_HOME")
+                .map(PathBuf::from)
+                .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache")))?;
+            Some(base.join("fieldkit"))
+        })
+    }
 }
 
 fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
@@ -96,6 +121,10 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
                 a.frame_cost = Some(value()?.parse().map_err(|e| format!("--frame-cost: {e}"))?)
             }
             "--out" => a.out = Some(value()?.into()),
+            "--pipeline-cache" => match value()?.as_str() {
+                "off" => a.no_pipeline_cache = true,
+                dir => a.pipeline_cache = Some(dir.into()),
+            },
             "--size" => {
                 let v = value()?;
                 let (w, h) = v.split_once('x').ok_or("--size WxH")?;
@@ -122,7 +151,7 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
 
 const HELP: &str = "viewer [--scene NAME] [--frames N] [--screenshot FILE.png] [--settings FILE.ron] \
 [--mesh FILE.obj] [--size WxH] [--window] [--soak FRAMES] [--frame-cost FRAMES [--out DIR]] \
-[--preset seed|fieldkit]";
+[--preset seed|fieldkit] [--pipeline-cache DIR|off]";
 
 /// Read a settings file (RON). Missing fields take their defaults.
 pub fn load_settings(path: &Path) -> Result<Saved, String> {
@@ -423,7 +452,11 @@ fn main() -> std::process::ExitCode {
         }
         let scenes: Vec<String> = args.scene.iter().cloned().collect();
         let size = if args.sized { args.size } else { [1920, 1080] };
-        frame::run(&scenes, &saved, size, frames, args.out.as_deref())
+        let cache = args
+            .pipeline_cache
+            .as_deref()
+            .filter(|_| !args.no_pipeline_cache);
+        frame::run(&scenes, &saved, size, frames, args.out.as_deref(), cache)
     } else if let Some(frames) = args.soak {
         if let Some(e) = &load_error {
             eprintln!("settings: {e}");

@@ -8,7 +8,7 @@ use std::time::Instant;
 use eframe::egui;
 use egui::{ComboBox, DragValue, Slider, Ui};
 use fieldkit::distance::Method2d;
-use fieldkit::gpu::{Profiler, Readback};
+use fieldkit::gpu::{PipelineCache, Profiler, Readback};
 use fieldkit::metaball::{Direct, Output as MarchOutput};
 use fieldkit::view::Targets;
 use fieldkit::volume::{Mode, Shadow, TransferFunction};
@@ -43,6 +43,9 @@ struct Viewer {
     vsync: bool,
     /// `--frames N --screenshot FILE`: draw N frames at fixed steps, save, close.
     shot: Option<(u32, PathBuf)>,
+    /// fieldkit's pipelines kept between launches (saved after the first frames of each scene
+    /// and at exit).
+    pipeline_cache: Option<PipelineCache>,
 }
 
 /// Open the window and run until it closes.
@@ -53,7 +56,9 @@ pub fn run_window(args: Args, saved: Saved, load_error: Option<String>) -> Resul
         let base = new.device_descriptor.clone();
         new.device_descriptor = Arc::new(move |adapter| {
             let mut d = base(adapter);
-            d.required_features |= adapter.features() & wgpu::Features::TIMESTAMP_QUERY;
+            // A pipeline cache where the adapter keeps one: a second launch does not compile.
+            d.required_features |= adapter.features()
+                & (wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::PIPELINE_CACHE);
             d
         });
     }
@@ -71,6 +76,7 @@ pub fn run_window(args: Args, saved: Saved, load_error: Option<String>) -> Resul
         .as_deref()
         .and_then(|s| NAMES.iter().position(|n| *n == s))
         .unwrap_or(0);
+    let cache_dir = args.window_pipeline_cache();
     let shot = match (args.frames, args.screenshot) {
         (Some(n), Some(p)) => Some((n.max(1), p)),
         (None, Some(p)) => Some((1, p)),
@@ -90,6 +96,15 @@ pub fn run_window(args: Args, saved: Saved, load_error: Option<String>) -> Resul
                 .as_ref()
                 .ok_or("eframe started without wgpu")?;
             let profiler = Profiler::new(&rs.device, &rs.queue, 256);
+            // A cache that cannot be read is a note, not a reason to stop: pipelines are then
+            // compiled as without one.
+            let (pipeline_cache, cache_note) = match &cache_dir {
+                Some(dir) => match PipelineCache::open(&rs.device, &rs.adapter.get_info(), dir) {
+                    Ok(c) => (c, None),
+                    Err(e) => (None, Some(format!("pipeline cache {}: {e}", dir.display()))),
+                },
+                None => (None, None),
+            };
             Ok(Box::new(Viewer {
                 saved,
                 scene,
@@ -100,7 +115,7 @@ pub fn run_window(args: Args, saved: Saved, load_error: Option<String>) -> Resul
                 passes: (Vec::new(), 0.0),
                 stats: Vec::new(),
                 error: load_error.map(|e| format!("settings: {e}")),
-                note: None,
+                note: cache_note,
                 settings_path,
                 start: Instant::now(),
                 last: Instant::now(),
@@ -108,6 +123,7 @@ pub fn run_window(args: Args, saved: Saved, load_error: Option<String>) -> Resul
                 drawn: 0,
                 vsync: true,
                 shot,
+                pipeline_cache,
             }))
         }),
     )
@@ -115,6 +131,14 @@ pub fn run_window(args: Args, saved: Saved, load_error: Option<String>) -> Resul
 }
 
 impl eframe::App for Viewer {
+    fn on_exit(&mut self) {
+        if let Some(cache) = &self.pipeline_cache
+            && let Err(e) = cache.save()
+        {
+            eprintln!("viewer: saving the pipeline cache: {e}");
+        }
+    }
+
     fn ui(&mut self, ui: &mut Ui, frame: &mut eframe::Frame) {
         let Some(rs) = frame.wgpu_render_state().cloned() else {
             return;

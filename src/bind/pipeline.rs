@@ -332,7 +332,7 @@ pub(crate) fn build_compute(
             constants: overrides,
             zero_initialize_workgroup_memory,
         },
-        cache: None,
+        cache: crate::gpu::installed_pipeline_cache(device).as_ref(),
     })
 }
 
@@ -373,7 +373,7 @@ pub(crate) fn build_render(
         depth_stencil: targets.depth_stencil.clone(),
         multisample: targets.multisample,
         multiview_mask: None,
-        cache: None,
+        cache: crate::gpu::installed_pipeline_cache(device).as_ref(),
     })
 }
 

@@ -7,6 +7,7 @@
 #[cfg(feature = "techniques")]
 mod albedo;
 mod alloc;
+mod cache;
 #[cfg(feature = "context")]
 mod context;
 mod readback;
@@ -16,6 +17,8 @@ mod timing;
 pub(crate) use albedo::AlbedoBinding;
 pub use alloc::texture;
 pub(crate) use alloc::{storage_buffer, volume_texture};
+pub use cache::PipelineCache;
+pub(crate) use cache::installed as installed_pipeline_cache;
 #[cfg(feature = "context")]
 pub use context::{ADAPTER_ENV, Context, read_buffer, read_texture};
 pub use readback::{Readback, readback_buffer, readback_buffers, readback_texture};

@@ -2,6 +2,12 @@
 //! 1920×1080 (640×360 with `--quick`): the viewer's `--frame-cost` mode (see
 //! `examples/viewer/frame.rs`), at least 60 frames a scene, written to `frame.csv` in `--out`.
 //!
+//! Twice: first with an empty pipeline cache, then with the one the first run saved, the
+//! drivers' own shader caches turned off in both (`__GL_SHADER_DISK_CACHE=0`,
+//! `MESA_SHADER_CACHE_DISABLE=true`), so that the two first frames compare a cold start with a
+//! start from fieldkit's `PipelineCache` alone; `frame.csv` holds both runs (its
+//! `pipeline_cache` column: cold, warm).
+//!
 //! The viewer is an example, so this runs its binary: `viewer` beside this executable where it
 //! is there (as on the GPU machine, where both are carried in `.gpu/bin/`), else
 //! `target/release/examples/viewer`, built first.
@@ -26,14 +32,35 @@ fn frame(args: &Args) -> Result<(), String> {
     let viewer = viewer()?;
     let size = if args.quick { "640x360" } else { "1920x1080" };
     let frames = args.reps.max(60);
-    let status = Command::new(&viewer)
-        .args(["--frame-cost", &frames.to_string(), "--size", size, "--out"])
-        .arg(&args.out)
-        .status()
-        .map_err(|e| format!("{}: {e}", viewer.display()))?;
-    if !status.success() {
-        return Err(format!("{} --frame-cost: {status}", viewer.display()));
+    let cache = args.out.join("pipeline-cache");
+    let _ = std::fs::remove_dir_all(&cache);
+    let mut table = String::new();
+    for start in ["cold", "warm"] {
+        let out = args.out.join(start);
+        let status = Command::new(&viewer)
+            .args(["--frame-cost", &frames.to_string(), "--size", size, "--out"])
+            .arg(&out)
+            .arg("--pipeline-cache")
+            .arg(&cache)
+            .env("__GL_SHADER_DISK_CACHE", "0")
+            .env("MESA_SHADER_CACHE_DISABLE", "true")
+            .status()
+            .map_err(|e| format!("{}: {e}", viewer.display()))?;
+        if !status.success() {
+            return Err(format!("{} --frame-cost: {status}", viewer.display()));
+        }
+        let csv = out.join("frame.csv");
+        let text = std::fs::read_to_string(&csv).map_err(|e| format!("{}: {e}", csv.display()))?;
+        // One header for both runs.
+        let skip = usize::from(!table.is_empty());
+        for line in text.lines().skip(skip) {
+            table += line;
+            table.push('\n');
+        }
     }
+    let path = args.out.join("frame.csv");
+    std::fs::write(&path, table).map_err(|e| format!("{}: {e}", path.display()))?;
+    println!("wrote {}", path.display());
     Ok(())
 }
 
