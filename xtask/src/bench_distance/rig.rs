@@ -158,12 +158,19 @@ fn context(args: &Args) -> Result<Context, String> {
     Ok(ctx)
 }
 
-/// The 3D methods in the order the tables list them: the exact transform's ways (only these
-/// with `--exact-only`), then JFA's variants and the banded JFA+2.
+/// The 3D methods in the order the tables list them: the exact transform's ways and its
+/// signed field (only these with `--exact-only`), then JFA's variants and the banded JFA+2.
 pub(super) fn methods3(args: &Args) -> Vec<(String, Settings3d)> {
     let exact = [EXACT, GLOBAL, WORKGROUP, ROWS_PASS, UNSWEPT]
         .into_iter()
-        .map(|name| (name.to_string(), Settings3d::default()));
+        .map(|name| (name.to_string(), Settings3d::default()))
+        .chain(std::iter::once((
+            EXACT_SIGNED.to_string(),
+            Settings3d {
+                signed: true,
+                ..Settings3d::default()
+            },
+        )));
     let jfa = Variant::ALL.into_iter().map(|v| {
         (
             v.name().to_string(),
@@ -184,9 +191,12 @@ pub(super) fn methods3(args: &Args) -> Vec<(String, Settings3d)> {
     exact
         .chain(jfa)
         .chain(std::iter::once(banded))
-        .take(if args.exact_only { 5 } else { usize::MAX })
+        .take(if args.exact_only { 6 } else { usize::MAX })
         .collect()
 }
 
 /// The exact transform as a user gets it.
 pub(super) const EXACT: &str = "exact";
+/// The same, signed: a transform of the inside seeds and one of the outside seeds, the second
+/// resolving against the first.
+pub(super) const EXACT_SIGNED: &str = "exact signed";
