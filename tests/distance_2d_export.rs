@@ -2,6 +2,9 @@
 //! float PFM, and a normalised 8-bit picture, of a field computed on the GPU. Decoded here with
 //! the `png` crate and by hand, against the formulas the docs state.
 
+mod common;
+
+use common::upload_2d;
 use fieldkit::distance::{Distance2d, FAR, Settings2d, export};
 use fieldkit::gpu::{Context, read_texture};
 
@@ -9,32 +12,13 @@ const W: u32 = 29;
 const H: u32 = 17;
 
 fn field(ctx: &Context) -> Vec<f32> {
-    use wgpu::util::DeviceExt;
     let mut mask = vec![0u8; (W * H) as usize];
     for y in 5..11 {
         for x in 8..19 {
             mask[(y * W + x) as usize] = 255;
         }
     }
-    let tex = ctx.device.create_texture_with_data(
-        &ctx.queue,
-        &wgpu::TextureDescriptor {
-            label: None,
-            size: wgpu::Extent3d {
-                width: W,
-                height: H,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::R8Unorm,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        },
-        wgpu::util::TextureDataOrder::LayerMajor,
-        &mask,
-    );
+    let tex = upload_2d(&ctx, [W, H], wgpu::TextureFormat::R8Unorm, &mask);
     let d2 = Distance2d::new(&ctx.device).unwrap();
     let mut enc = ctx.encoder("export");
     let f = d2

@@ -3,6 +3,9 @@
 //! texels are found on the GPU from the texture itself. Against the CPU transform of the mask
 //! the rule's formula gives, written out here.
 
+mod common;
+
+use common::upload_2d;
 use fieldkit::distance::{
     Channels, Distance2d, Jfa2d, Method2d, SeedRule, Settings2d, Variant, cpu, unpack_seed,
 };
@@ -40,7 +43,6 @@ fn rule_mask(px: &[[f32; 4]], rule: &SeedRule) -> Vec<bool> {
 }
 
 fn upload(ctx: &Context, format: wgpu::TextureFormat, px: &[[f32; 4]]) -> wgpu::Texture {
-    use wgpu::util::DeviceExt;
     let bytes: Vec<u8> = match format {
         wgpu::TextureFormat::Rgba32Float => bytemuck::cast_slice(px).to_vec(),
         wgpu::TextureFormat::Rgba16Float => px
@@ -60,25 +62,7 @@ fn upload(ctx: &Context, format: wgpu::TextureFormat, px: &[[f32; 4]]) -> wgpu::
             .collect(),
         f => panic!("no upload for {f:?}"),
     };
-    ctx.device.create_texture_with_data(
-        &ctx.queue,
-        &wgpu::TextureDescriptor {
-            label: Some("colour seeds"),
-            size: wgpu::Extent3d {
-                width: W,
-                height: H,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        },
-        wgpu::util::TextureDataOrder::LayerMajor,
-        &bytes,
-    )
+    upload_2d(&ctx, [W, H], format, &bytes)
 }
 
 /// Every format and rule: the exact transform's distances equal the CPU transform of the

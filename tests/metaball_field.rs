@@ -3,6 +3,7 @@
 
 mod common;
 
+use common::metaball::run_stage;
 use common::*;
 use fieldkit::distance::Variant;
 use fieldkit::distance::{Grid, Method};
@@ -30,13 +31,9 @@ fn seed_stages(
     settings: &Settings,
 ) -> (Grid, fieldkit::metaball::SurfaceSeeds) {
     let grid = settings.fit_grid(voxels, 1.0).unwrap().unwrap();
-    let balls = Metaballs::new(&ctx.device).unwrap();
-    let inst = balls.upload(&ctx.device, &ctx.queue, voxels).unwrap();
-    let mut enc = ctx.encoder("seed stages");
-    let seeds = balls
-        .encode_seeds(&ctx.device, &mut enc, &inst, &grid, 1.0, settings)
-        .unwrap();
-    ctx.submit_and_wait("seed stages", enc).unwrap();
+    let seeds = run_stage(&ctx, voxels, |balls, enc, inst| {
+        balls.encode_seeds(&ctx.device, enc, inst, &grid, 1.0, settings)
+    });
     (grid, seeds)
 }
 
@@ -89,13 +86,9 @@ fn fixed_point_scale_keeps_sums_in_u32() {
         voxel: 0.25,
         origin: glam::DVec3::splat(-1.0),
     };
-    let balls = Metaballs::new(&ctx.device).unwrap();
-    let inst = balls.upload(&ctx.device, &ctx.queue, &voxels).unwrap();
-    let mut enc = ctx.encoder("huge");
-    let seeds = balls
-        .encode_seeds(&ctx.device, &mut enc, &inst, &grid, 1.0, &settings)
-        .unwrap();
-    ctx.submit_and_wait("huge", enc).unwrap();
+    let seeds = run_stage(&ctx, &voxels, |balls, enc, inst| {
+        balls.encode_seeds(&ctx.device, enc, inst, &grid, 1.0, &settings)
+    });
     let gpu = words(&ctx, &seeds.density_fixed);
     let max = *gpu.iter().max().unwrap();
     assert!(
@@ -330,13 +323,9 @@ fn blob_bins_hold_every_blob_that_reaches_them() {
         })
         .collect();
     let grid = s.fit_grid(&voxels, 1.0).unwrap().unwrap();
-    let balls = Metaballs::new(&ctx.device).unwrap();
-    let inst = balls.upload(&ctx.device, &ctx.queue, &voxels).unwrap();
-    let mut enc = ctx.encoder("bins");
-    let bins = balls
-        .encode_bins(&ctx.device, &mut enc, &inst, &grid, 1.0, &s)
-        .unwrap();
-    ctx.submit_and_wait("bins", enc).unwrap();
+    let bins = run_stage(&ctx, &voxels, |balls, enc, inst| {
+        balls.encode_bins(&ctx.device, enc, inst, &grid, 1.0, &s)
+    });
     let max_r = s.radius(1.0, voxels.iter().map(|v| v.w).fold(0.0, f32::max));
     assert_eq!(bins.bin_size, max_r, "bins are one largest radius wide");
     let starts = words(&ctx, &bins.starts);

@@ -9,7 +9,7 @@ mod common;
 use common::metaball::*;
 use common::*;
 use fieldkit::gpu::{Context, read_texture};
-use fieldkit::metaball::{self, Metaballs, Settings, cpu};
+use fieldkit::metaball::{self, Settings, cpu};
 use fieldkit::metaball::{Material, Output, RaymarchSettings, Raymarcher};
 use fieldkit::view::{Targets, View, box_visible};
 
@@ -510,13 +510,9 @@ fn edge_falloff_fades_the_density_at_the_box_faces() {
         grid.origin,
         (grid.origin.as_vec3() + Vec3::new(29.0, 29.0, 40.0) * cell).as_dvec3(),
     );
-    let balls = Metaballs::new(&ctx.device).unwrap();
-    let inst = balls.upload(&ctx.device, &ctx.queue, &voxels).unwrap();
-    let mut enc = ctx.encoder("cut blob");
-    let field = balls
-        .encode(&ctx.device, &mut enc, &inst, &grid, 1.0, &s)
-        .unwrap();
-    ctx.submit_and_wait("cut blob", enc).unwrap();
+    let field = run_stage(&ctx, &voxels, |balls, enc, inst| {
+        balls.encode(&ctx.device, enc, inst, &grid, 1.0, &s)
+    });
     let view = camera(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, false);
     let with = |edge_falloff: bool| {
         let settings = RaymarchSettings {

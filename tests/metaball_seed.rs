@@ -2,6 +2,9 @@
 //! `falloffExtend`, the full-volume field, the extent/block grid builder, the animation, the
 //! march's step rule and the debug cubes' depth, culling and line-list wireframe.
 
+mod common;
+
+use common::metaball::run_stage;
 use fieldkit::distance::{Distance3d, Grid, Method, Settings3d, Unreached, Variant};
 use fieldkit::gpu::{Context, read_buffer, read_texture};
 use fieldkit::metaball::{
@@ -31,13 +34,9 @@ fn falloff_extend_widens_the_support_by_half() {
         ..Settings::seed()
     };
     let grid = settings.fit_grid(&voxels, 1.0).unwrap().unwrap();
-    let balls = Metaballs::new(&ctx.device).unwrap();
-    let inst = balls.upload(&ctx.device, &ctx.queue, &voxels).unwrap();
-    let mut enc = ctx.encoder("seed splat");
-    let seeds = balls
-        .encode_seeds(&ctx.device, &mut enc, &inst, &grid, 1.0, &settings)
-        .unwrap();
-    ctx.submit_and_wait("seed splat", enc).unwrap();
+    let seeds = run_stage(&ctx, &voxels, |balls, enc, inst| {
+        balls.encode_seeds(&ctx.device, enc, inst, &grid, 1.0, &settings)
+    });
     let fixed: Vec<u32> =
         bytemuck::cast_slice(&read_buffer(&ctx, &seeds.density_fixed).unwrap()).to_vec();
     let r = 1.5f64; // edge 1 × scale 1 × ½ × 2 × 1.5

@@ -4,6 +4,8 @@
 
 mod common;
 
+use common::metaball::run_stage;
+
 // The gallery example's scenes and test pictures (the example is the one place they live).
 #[path = "../examples/gallery/main.rs"]
 #[allow(dead_code)]
@@ -16,7 +18,7 @@ use fieldkit::distance::Variant;
 use fieldkit::gpu::{Context, read_buffer, read_texture};
 use fieldkit::harness::Summary;
 use fieldkit::metaball::Output;
-use fieldkit::metaball::{Metaballs, Settings, SurfaceSeeds};
+use fieldkit::metaball::{Settings, SurfaceSeeds};
 use glam::Vec4;
 
 fn voxels() -> Vec<Vec4> {
@@ -42,13 +44,9 @@ fn seeds(ctx: &Context) -> (SurfaceSeeds, [usize; 3]) {
     let s = settings();
     let v = voxels();
     let grid = s.fit_grid(&v, 1.0).unwrap().unwrap();
-    let balls = Metaballs::new(&ctx.device).unwrap();
-    let inst = balls.upload(&ctx.device, &ctx.queue, &v).unwrap();
-    let mut enc = ctx.encoder("seeds");
-    let out = balls
-        .encode_seeds(&ctx.device, &mut enc, &inst, &grid, 1.0, &s)
-        .unwrap();
-    ctx.submit_and_wait("seeds", enc).unwrap();
+    let out = run_stage(&ctx, &v, |balls, enc, inst| {
+        balls.encode_seeds(&ctx.device, enc, inst, &grid, 1.0, &s)
+    });
     let [w, h, d] = grid.size.map(|x| x as usize);
     (out, [d, h, w])
 }

@@ -4,6 +4,8 @@
 
 mod common;
 
+use common::upload_2d;
+
 use common::octree::*;
 use fieldkit::Error;
 use fieldkit::gpu::Context;
@@ -77,7 +79,6 @@ fn voxel_attributes_equal_the_dense_list() {
 /// or in a format that cannot be filtered is a typed error.
 #[test]
 fn albedo_attributes_equal_the_dense_list() {
-    use wgpu::util::DeviceExt;
     let ctx = Context::shared();
     let mut mesh = painted_torus();
     let uv = |p: DVec3| {
@@ -103,25 +104,7 @@ fn albedo_attributes_equal_the_dense_list() {
             ]
         })
         .collect();
-    let albedo = ctx.device.create_texture_with_data(
-        &ctx.queue,
-        &wgpu::TextureDescriptor {
-            label: Some("albedo"),
-            size: wgpu::Extent3d {
-                width: 4,
-                height: 4,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Rgba8Unorm,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        },
-        wgpu::util::TextureDataOrder::LayerMajor,
-        &texels,
-    );
+    let albedo = upload_2d(&ctx, [4, 4], wgpu::TextureFormat::Rgba8Unorm, &texels);
     let voxelizer = Voxelizer::new(&ctx.device).unwrap();
     let builder = OctreeBuilder::new(&ctx.device).unwrap();
     let tree = ctx

@@ -5,6 +5,8 @@
 
 mod common;
 
+use common::upload_2d;
+
 use fieldkit::Error;
 use fieldkit::gpu::{Context, read_buffer};
 use fieldkit::voxelize::{Attributes, Grid, Mesh, VoxelAttributes, Voxelizer, cpu};
@@ -487,7 +489,7 @@ fn the_bound_counts_each_triangle_box() {
 #[test]
 fn albedo_is_sampled_at_each_voxels_texture_coordinates() {
     use glam::Vec2;
-    use wgpu::util::DeviceExt;
+
     let ctx = Context::shared();
     let u = |x: f64| 0.25 + 0.5 * x / 8.0;
     let corners = [
@@ -506,23 +508,10 @@ fn albedo_is_sampled_at_each_voxels_texture_coordinates() {
         voxel: 1.0,
         size: [8, 4, 3],
     };
-    let albedo = ctx.device.create_texture_with_data(
-        &ctx.queue,
-        &wgpu::TextureDescriptor {
-            label: Some("albedo"),
-            size: wgpu::Extent3d {
-                width: 2,
-                height: 1,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Rgba8Unorm,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        },
-        wgpu::util::TextureDataOrder::LayerMajor,
+    let albedo = upload_2d(
+        &ctx,
+        [2, 1],
+        wgpu::TextureFormat::Rgba8Unorm,
         &[255, 0, 0, 255, 0, 0, 255, 255],
     );
     let v = Voxelizer::new(&ctx.device).unwrap();

@@ -3,7 +3,7 @@
 //! field.
 
 use fieldkit::gpu::{Context, read_texture};
-use fieldkit::metaball::{BlobBins, MetaballField, Metaballs, Settings, cpu};
+use fieldkit::metaball::{BlobBins, Instances, MetaballField, Metaballs, Settings, cpu};
 use fieldkit::metaball::{Direct, Output, RaymarchSettings, Raymarcher};
 use fieldkit::view::{Targets, View};
 use glam::{DVec3, Mat4, Vec3, Vec4};
@@ -272,15 +272,10 @@ pub fn count(shot: &Shot) -> usize {
 
 /// Blob bins over the fitted grid of `voxels` (edge 1).
 pub fn blob_bins(ctx: &Context, voxels: &[Vec4], s: &Settings) -> BlobBins {
-    let balls = Metaballs::new(&ctx.device).unwrap();
     let grid = s.fit_grid(voxels, 1.0).unwrap().unwrap();
-    let inst = balls.upload(&ctx.device, &ctx.queue, voxels).unwrap();
-    let mut enc = ctx.encoder("bins");
-    let bins = balls
-        .encode_bins(&ctx.device, &mut enc, &inst, &grid, 1.0, s)
-        .unwrap();
-    ctx.submit_and_wait("bins", enc).unwrap();
-    bins
+    run_stage(ctx, voxels, |balls, enc, inst| {
+        balls.encode_bins(&ctx.device, enc, inst, &grid, 1.0, s)
+    })
 }
 
 pub fn three_blobs() -> Vec<Vec4> {
@@ -300,4 +295,19 @@ pub fn mean_steps(shot: &Shot, max_steps: u32) -> f64 {
         .map(|c| ((c[0] + c[1] + c[2]) as f64 / 3.0 * max_steps as f64).round())
         .collect();
     steps.iter().sum::<f64>() / steps.len().max(1) as f64
+}
+
+/// `voxels` uploaded to a new `Metaballs`, then `stage` recorded into one encoder, submitted and
+/// waited for: what a single-stage test runs.
+pub fn run_stage<R>(
+    ctx: &Context,
+    voxels: &[Vec4],
+    stage: impl FnOnce(&Metaballs, &mut wgpu::CommandEncoder, &Instances) -> Result<R, fieldkit::Error>,
+) -> R {
+    let balls = Metaballs::new(&ctx.device).unwrap();
+    let inst = balls.upload(&ctx.device, &ctx.queue, voxels).unwrap();
+    let mut enc = ctx.encoder("metaball stage");
+    let out = stage(&balls, &mut enc, &inst).unwrap();
+    ctx.submit_and_wait("metaball stage", enc).unwrap();
+    out
 }

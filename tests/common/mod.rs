@@ -184,3 +184,32 @@ pub fn repeated(one: &fieldkit::voxelize::Mesh, copies: u32) -> fieldkit::voxeli
     }
     mesh
 }
+
+/// A 2D texture of `size` and `format` holding `bytes` (rows packed), for sampling.
+pub fn upload_2d(
+    ctx: &Context,
+    size: [u32; 2],
+    format: wgpu::TextureFormat,
+    bytes: &[u8],
+) -> wgpu::Texture {
+    use wgpu::util::DeviceExt;
+    ctx.device.create_texture_with_data(
+        &ctx.queue,
+        &wgpu::TextureDescriptor {
+            label: Some("test upload"),
+            size: wgpu::Extent3d {
+                width: size[0],
+                height: size[1],
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        },
+        wgpu::util::TextureDataOrder::LayerMajor,
+        bytes,
+    )
+}
