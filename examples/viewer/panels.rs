@@ -39,6 +39,8 @@ struct Viewer {
     start: Instant,
     last: Instant,
     frame_ms: f64,
+    /// CPU time to record and submit the scene's frame (smoothed), ms.
+    record_ms: f64,
     drawn: u32,
     vsync: bool,
     /// `--frames N --screenshot FILE`: draw N frames at fixed steps, save, close.
@@ -120,6 +122,7 @@ pub fn run_window(args: Args, saved: Saved, load_error: Option<String>) -> Resul
                 start: Instant::now(),
                 last: Instant::now(),
                 frame_ms: 0.0,
+                record_ms: 0.0,
                 drawn: 0,
                 vsync: true,
                 shot,
@@ -200,13 +203,23 @@ impl Viewer {
             ui.label(n);
         }
         ui.separator();
-        // Cost and accuracy.
-        ui.label(format!("frame (CPU, smoothed): {:.2} ms", self.frame_ms));
+        // Cost and accuracy: the scene's CPU and GPU time a frame side by side, each number of
+        // fixed width so that nothing below moves as they change.
+        let gpu = self.passes.0.iter().map(|p| p.1).sum::<f64>();
+        let gpu = match self.profiler {
+            Some(_) => format!("{gpu:7.3} ms"),
+            None => "     — ms".into(),
+        };
+        ui.monospace(format!(
+            "CPU record+submit {:7.3} ms | GPU passes {gpu}",
+            self.record_ms
+        ));
+        ui.monospace(format!(
+            "frame interval    {:7.2} ms | {:5.0} fps",
+            self.frame_ms,
+            1e3 / self.frame_ms.max(1e-3)
+        ));
         if self.profiler.is_some() {
-            ui.label(format!(
-                "compute passes (GPU): {:.3} ms first start to last end",
-                self.passes.1
-            ));
             egui::CollapsingHeader::new("per pass")
                 .default_open(false)
                 .show(ui, |ui| {
@@ -314,6 +327,7 @@ impl Viewer {
         }
         let profile = self.reading.is_none();
         let targets = &self.targets.as_ref().expect("set above").1;
+        let recording = Instant::now();
         let (report, _) = draw_frame(
             device,
             queue,
@@ -326,6 +340,8 @@ impl Viewer {
             self.drawn,
             self.profiler.as_mut().filter(|_| profile),
         );
+        let record_ms = recording.elapsed().as_secs_f64() * 1e3;
+        self.record_ms = 0.9 * self.record_ms + 0.1 * record_ms;
         if profile && let Some(p) = self.profiler.as_mut() {
             let mut enc = device.create_command_encoder(&Default::default());
             p.resolve(&mut enc);
