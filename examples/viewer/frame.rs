@@ -126,6 +126,8 @@ pub struct FrameCost {
     pub passes: Vec<(String, f64)>,
     /// The most GPU objects any measured frame made (after warm-up).
     pub made: Made,
+    /// What the scene reported of its last measured frame (patches, instances, grid).
+    pub stats: Vec<String>,
 }
 
 /// Measure `scenes` (all of them where empty) at `size`, print the table, write `frame.csv`
@@ -220,6 +222,7 @@ fn timed_frame(
         wall,
         error: report.error.map(|e| e.to_string()),
         made,
+        stats: report.stats,
     })
 }
 
@@ -231,6 +234,7 @@ struct Timed {
     wall: f64,
     error: Option<String>,
     made: Made,
+    stats: Vec<String>,
 }
 
 fn measure(
@@ -247,12 +251,14 @@ fn measure(
         timed_frame(ctx, &mut scenes, saved, scene, &targets, size, i, None)?;
     }
     let (mut cpu, mut wall, mut error, mut made) = (Vec::new(), Vec::new(), None, Made::default());
+    let mut stats = Vec::new();
     for i in WARM_UP..WARM_UP + frames {
         let t = timed_frame(ctx, &mut scenes, saved, scene, &targets, size, i, None)?;
         cpu.push(t.cpu);
         wall.push(t.wall);
         error = error.or(t.error);
         made = made.max(t.made);
+        stats = t.stats;
     }
     // The GPU's share, in frames of their own: timestamp queries change what they measure.
     let mut gpu = Vec::new();
@@ -306,6 +312,7 @@ fn measure(
         error,
         passes: last_passes,
         made,
+        stats,
     })
 }
 
@@ -410,6 +417,9 @@ fn print_table(adapter: &str, costs: &[FrameCost]) {
             .map(|(n, ms)| format!("{n} {ms:.3}"))
             .collect();
         println!("{} timed passes (ms): {}", c.scene, passes.join(", "));
+    }
+    for c in costs.iter().filter(|c| !c.stats.is_empty()) {
+        println!("{}: {}", c.scene, c.stats.join("; "));
     }
 }
 
