@@ -67,7 +67,7 @@ pub fn run(shaders: &ShaderDir, config: &LintConfig) -> ExitCode {
             stages.len()
         );
         for l in lint::all() {
-            eprintln!("  lint {:<20} {}", l.name(), l.summary());
+            eprintln!("  lint {:<20} {}", l.name, l.summary);
         }
         ExitCode::SUCCESS
     }

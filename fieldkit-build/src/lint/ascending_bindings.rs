@@ -1,43 +1,32 @@
-use super::{Lint, Violation, locate_binding};
+use super::{Violation, locate_binding};
 use crate::{Stage, reflect::Reflection};
 
+/// Its name in findings, `--only` and allow comments.
+pub(super) const NAME: &str = "ascending-bindings";
+
 /// Bindings are declared in ascending `(group, binding)` order.
-pub struct AscendingBindings;
-
-impl Lint for AscendingBindings {
-    fn name(&self) -> &'static str {
-        "ascending-bindings"
-    }
-    fn summary(&self) -> &'static str {
-        "declare bindings in ascending (group, binding) order"
-    }
-    fn explanation(&self) -> &'static str {
-        "Reading the declarations top to bottom then gives the bind-group layout in order, which is how host code and the reflection tables list them."
-    }
-    fn check(&self, stage: &Stage, r: &Reflection) -> Vec<Violation> {
-        let mut decl_order = r.bindings.clone();
-        decl_order.sort_by_key(|b| b.linked_offset);
-        let mut out = Vec::new();
-        for pair in decl_order.windows(2) {
-            let (a, b) = (&pair[0], &pair[1]);
-            if (b.group, b.binding) <= (a.group, a.binding) {
-                let (line, column) = locate_binding(&stage.original, &b.name);
-                out.push(Violation {
-                    lint: self.name(),
-                    file: stage.file.rel_path.clone(),
-                    line,
-                    column,
-                    message: format!(
-                        "`{}` (@group({}) @binding({})) is declared after `{}` (@group({}) @binding({}))",
-                        b.name, b.group, b.binding, a.name, a.group, a.binding
-                    ),
-                });
-            }
+pub(super) fn check(stage: &Stage, r: &Reflection) -> Vec<Violation> {
+    let mut decl_order = r.bindings.clone();
+    decl_order.sort_by_key(|b| b.linked_offset);
+    let mut out = Vec::new();
+    for pair in decl_order.windows(2) {
+        let (a, b) = (&pair[0], &pair[1]);
+        if (b.group, b.binding) <= (a.group, a.binding) {
+            let (line, column) = locate_binding(&stage.original, &b.name);
+            out.push(Violation {
+                lint: NAME,
+                file: stage.file.rel_path.clone(),
+                line,
+                column,
+                message: format!(
+                    "`{}` (@group({}) @binding({})) is declared after `{}` (@group({}) @binding({}))",
+                    b.name, b.group, b.binding, a.name, a.group, a.binding
+                ),
+            });
         }
-        out
     }
+    out
 }
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -50,12 +39,12 @@ mod tests {
         let bad = stage(&format!(
             "@group(0) @binding(1) var<uniform> a: u32;\n@group(0) @binding(0) var<uniform> b: u32;\n{BODY}"
         ));
-        let v = AscendingBindings.check(&bad, &reflect(&bad));
+        let v = check(&bad, &reflect(&bad));
         assert_eq!(v.len(), 1);
         assert_eq!(v[0].line, 2);
         let good = stage(&format!(
             "@group(0) @binding(0) var<uniform> a: u32;\n@group(0) @binding(1) var<uniform> b: u32;\n{BODY}"
         ));
-        assert!(AscendingBindings.check(&good, &reflect(&good)).is_empty());
+        assert!(check(&good, &reflect(&good)).is_empty());
     }
 }

@@ -1,36 +1,24 @@
-use super::{Lint, Violation};
+use super::Violation;
 use crate::{Stage, reflect::Reflection};
 
+/// Its name in findings, `--only` and allow comments.
+pub(super) const NAME: &str = "header-comment";
+
 /// A stage file opens with a comment saying what it does (and the source it follows).
-pub struct HeaderComment;
-
-impl Lint for HeaderComment {
-    fn name(&self) -> &'static str {
-        "header-comment"
+pub(super) fn check(stage: &Stage, _: &Reflection) -> Vec<Violation> {
+    let first = stage.original.lines().next().unwrap_or("");
+    if first.trim_start().starts_with("//") && first.trim().len() > 3 {
+        return vec![];
     }
-    fn summary(&self) -> &'static str {
-        "a stage file starts with a `//` comment saying what the stage does"
-    }
-    fn explanation(&self) -> &'static str {
-        "The first line is what a reader and the generated docs see; it names the technique and its source."
-    }
-    fn check(&self, stage: &Stage, _: &Reflection) -> Vec<Violation> {
-        let first = stage.original.lines().next().unwrap_or("");
-        if first.trim_start().starts_with("//") && first.trim().len() > 3 {
-            return vec![];
-        }
-        vec![Violation {
-            lint: self.name(),
-            file: stage.file.rel_path.clone(),
-            line: 1,
-            column: 1,
-            message:
-                "no header comment: start the file with `// <what this stage does> (<source>)`"
-                    .into(),
-        }]
-    }
+    vec![Violation {
+        lint: NAME,
+        file: stage.file.rel_path.clone(),
+        line: 1,
+        column: 1,
+        message: "no header comment: start the file with `// <what this stage does> (<source>)`"
+            .into(),
+    }]
 }
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -39,8 +27,8 @@ mod tests {
     #[test]
     fn flags_missing_header_and_accepts_present_one() {
         let bad = stage("@compute @workgroup_size(1) fn main() {}");
-        assert_eq!(HeaderComment.check(&bad, &reflect(&bad)).len(), 1);
+        assert_eq!(check(&bad, &reflect(&bad)).len(), 1);
         let good = stage("// Does nothing, for tests.\n@compute @workgroup_size(1) fn main() {}");
-        assert!(HeaderComment.check(&good, &reflect(&good)).is_empty());
+        assert!(check(&good, &reflect(&good)).is_empty());
     }
 }

@@ -30,23 +30,61 @@ impl std::fmt::Display for Violation {
     }
 }
 
-pub trait Lint {
-    fn name(&self) -> &'static str;
+/// A lint: its name (in findings, `--only` and allow comments), what it wants in one line,
+/// why it matters, and the pass over a stage that finds what breaks it.
+pub struct Lint {
+    pub name: &'static str,
     /// One line: what the lint wants.
-    fn summary(&self) -> &'static str;
+    pub summary: &'static str,
     /// Why it matters.
-    fn explanation(&self) -> &'static str;
-    fn check(&self, stage: &Stage, reflection: &Reflection) -> Vec<Violation>;
+    pub explanation: &'static str,
+    check: fn(&Stage, &Reflection) -> Vec<Violation>,
 }
 
-pub fn all() -> Vec<Box<dyn Lint>> {
-    vec![
-        Box::new(header_comment::HeaderComment),
-        Box::new(ascending_bindings::AscendingBindings),
-        Box::new(unused_binding::UnusedBinding),
-        Box::new(workgroup_limits::WorkgroupLimits),
-        Box::new(webgpu_limits::WebgpuLimits),
-    ]
+impl Lint {
+    /// What breaks the lint in `stage`.
+    pub fn check(&self, stage: &Stage, reflection: &Reflection) -> Vec<Violation> {
+        (self.check)(stage, reflection)
+    }
+}
+
+/// Every lint, in the order they run. Each file holds a lint's pass and its name; what it
+/// says about itself is here, in one table.
+const LINTS: &[Lint] = &[
+    Lint {
+        name: header_comment::NAME,
+        summary: "a stage file starts with a `//` comment saying what the stage does",
+        explanation: "The first line is what a reader and the generated docs see; it names the technique and its source.",
+        check: header_comment::check,
+    },
+    Lint {
+        name: ascending_bindings::NAME,
+        summary: "declare bindings in ascending (group, binding) order",
+        explanation: "Reading the declarations top to bottom then gives the bind-group layout in order, which is how host code and the reflection tables list them.",
+        check: ascending_bindings::check,
+    },
+    Lint {
+        name: unused_binding::NAME,
+        summary: "every binding is used by at least one entry point",
+        explanation: "An unused binding still appears to callers as something to provide; generated layouts leave it out, so it only misleads.",
+        check: unused_binding::check,
+    },
+    Lint {
+        name: workgroup_limits::NAME,
+        summary: "workgroup size within WebGPU default limits (256 x 256 x 64, 256 invocations)",
+        explanation: "Larger workgroups fail pipeline creation on adapters that only offer the default limits (many mobile and web targets).",
+        check: workgroup_limits::check,
+    },
+    Lint {
+        name: webgpu_limits::NAME,
+        summary: "bindings per stage, bind groups, workgroup memory, uniform size and storage-texture access within WebGPU defaults",
+        explanation: "Past WebGPU's default limits a pipeline needs a device created with higher limits or a native feature; browsers and many mobile adapters refuse it. A file that needs more says so with `// lint: allow(webgpu-limits): why` and the host asks for the limit.",
+        check: webgpu_limits::check,
+    },
+];
+
+pub fn all() -> &'static [Lint] {
+    LINTS
 }
 
 /// Run every lint on a stage (as [`run_with`] with the default configuration: every lint, less
@@ -82,11 +120,11 @@ impl LintConfig {
 }
 
 fn is_lint(name: &str) -> bool {
-    all().iter().any(|l| l.name() == name)
+    all().iter().any(|l| l.name == name)
 }
 
 fn unknown(name: &str) -> String {
-    let names: Vec<_> = all().iter().map(|l| l.name()).collect();
+    let names: Vec<_> = all().iter().map(|l| l.name).collect();
     format!("`{name}` is not a lint (lints: {})", names.join(", "))
 }
 
@@ -136,7 +174,7 @@ fn file_allows(stage: &Stage) -> (Vec<String>, Vec<Violation>) {
 pub fn run_with(stage: &Stage, reflection: &Reflection, config: &LintConfig) -> Vec<Violation> {
     let (allowed, mut findings) = file_allows(stage);
     for l in all() {
-        if config.runs(l.name()) && !allowed.iter().any(|n| n == l.name()) {
+        if config.runs(l.name) && !allowed.iter().any(|n| n == l.name) {
             findings.extend(l.check(stage, reflection));
         }
     }

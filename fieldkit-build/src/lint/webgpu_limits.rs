@@ -1,4 +1,4 @@
-use super::{Lint, Violation, locate};
+use super::{Violation, locate};
 use crate::Stage;
 use crate::reflect::{BindingKind, Reflection};
 
@@ -15,128 +15,116 @@ pub const UNIFORM_BINDING: u32 = 65536;
 /// Storage texture formats WebGPU allows `read_write` without a feature.
 pub const READ_WRITE_FORMATS: &[&str] = &["r32float", "r32uint", "r32sint"];
 
-/// Each entry point fits WebGPU's default limits, so it runs on every adapter wgpu supports.
-pub struct WebgpuLimits;
+/// Its name in findings, `--only` and allow comments.
+pub(super) const NAME: &str = "webgpu-limits";
 
-impl Lint for WebgpuLimits {
-    fn name(&self) -> &'static str {
-        "webgpu-limits"
-    }
-    fn summary(&self) -> &'static str {
-        "bindings per stage, bind groups, workgroup memory, uniform size and storage-texture access within WebGPU defaults"
-    }
-    fn explanation(&self) -> &'static str {
-        "Past WebGPU's default limits a pipeline needs a device created with higher limits or a native feature; browsers and many mobile adapters refuse it. A file that needs more says so with `// lint: allow(webgpu-limits): why` and the host asks for the limit."
-    }
-    fn check(&self, stage: &Stage, r: &Reflection) -> Vec<Violation> {
-        let mut out = Vec::new();
-        for ep in &r.entry_points {
-            let (line, column) = locate(&stage.original, &format!("fn {}", ep.name));
-            let mut say = |message: String| {
-                out.push(Violation {
-                    lint: self.name(),
-                    file: stage.file.rel_path.clone(),
-                    line,
-                    column,
-                    message: format!("`{}`: {message}", ep.name),
-                })
-            };
-            // Binding arrays and immediates are native features, not WebGPU.
-            let native: Vec<&str> = r
-                .features
-                .iter()
-                .map(String::as_str)
-                .filter(|_| {
-                    ep.uses_immediate
-                        || ep.uses.iter().any(|u| {
-                            r.bindings.iter().any(|b| {
-                                b.group == u.group && b.binding == u.binding && b.count.is_some()
-                            })
+/// Each entry point fits WebGPU's default limits, so it runs on every adapter wgpu supports.
+pub(super) fn check(stage: &Stage, r: &Reflection) -> Vec<Violation> {
+    let mut out = Vec::new();
+    for ep in &r.entry_points {
+        let (line, column) = locate(&stage.original, &format!("fn {}", ep.name));
+        let mut say = |message: String| {
+            out.push(Violation {
+                lint: NAME,
+                file: stage.file.rel_path.clone(),
+                line,
+                column,
+                message: format!("`{}`: {message}", ep.name),
+            })
+        };
+        // Binding arrays and immediates are native features, not WebGPU.
+        let native: Vec<&str> = r
+            .features
+            .iter()
+            .map(String::as_str)
+            .filter(|_| {
+                ep.uses_immediate
+                    || ep.uses.iter().any(|u| {
+                        r.bindings.iter().any(|b| {
+                            b.group == u.group && b.binding == u.binding && b.count.is_some()
                         })
-                })
-                .collect();
-            if !native.is_empty() {
+                    })
+            })
+            .collect();
+        if !native.is_empty() {
+            say(format!(
+                "needs the native features {} (binding arrays, immediates), which WebGPU lacks",
+                native.join(", ")
+            ));
+        }
+        let n = ep.needs;
+        let counts = [
+            (
+                "storage buffers",
+                n.max_storage_buffers_per_shader_stage,
+                STORAGE_BUFFERS,
+            ),
+            (
+                "storage textures",
+                n.max_storage_textures_per_shader_stage,
+                STORAGE_TEXTURES,
+            ),
+            (
+                "sampled textures",
+                n.max_sampled_textures_per_shader_stage,
+                SAMPLED_TEXTURES,
+            ),
+            ("samplers", n.max_samplers_per_shader_stage, SAMPLERS),
+            (
+                "uniform buffers",
+                n.max_uniform_buffers_per_shader_stage,
+                UNIFORM_BUFFERS,
+            ),
+        ];
+        for (what, got, max) in counts {
+            if got > max {
                 say(format!(
-                    "needs the native features {} (binding arrays, immediates), which WebGPU lacks",
-                    native.join(", ")
+                    "{got} {what} in one stage, past WebGPU's default {max}"
                 ));
-            }
-            let n = ep.needs;
-            let counts = [
-                (
-                    "storage buffers",
-                    n.max_storage_buffers_per_shader_stage,
-                    STORAGE_BUFFERS,
-                ),
-                (
-                    "storage textures",
-                    n.max_storage_textures_per_shader_stage,
-                    STORAGE_TEXTURES,
-                ),
-                (
-                    "sampled textures",
-                    n.max_sampled_textures_per_shader_stage,
-                    SAMPLED_TEXTURES,
-                ),
-                ("samplers", n.max_samplers_per_shader_stage, SAMPLERS),
-                (
-                    "uniform buffers",
-                    n.max_uniform_buffers_per_shader_stage,
-                    UNIFORM_BUFFERS,
-                ),
-            ];
-            for (what, got, max) in counts {
-                if got > max {
-                    say(format!(
-                        "{got} {what} in one stage, past WebGPU's default {max}"
-                    ));
-                }
-            }
-            if n.max_bind_groups > BIND_GROUPS {
-                say(format!(
-                    "bind group {} needs {} bind groups, past WebGPU's default {BIND_GROUPS}",
-                    n.max_bind_groups - 1,
-                    n.max_bind_groups
-                ));
-            }
-            if n.max_compute_workgroup_storage_size > WORKGROUP_STORAGE {
-                say(format!(
-                    "{} bytes of workgroup memory, past WebGPU's default {WORKGROUP_STORAGE}",
-                    n.max_compute_workgroup_storage_size
-                ));
-            }
-            let used = ep.uses.iter().filter_map(|u| {
-                r.bindings
-                    .iter()
-                    .find(|b| b.group == u.group && b.binding == u.binding)
-            });
-            for b in used {
-                match &b.kind {
-                    BindingKind::Uniform { min_size, .. } if *min_size > UNIFORM_BINDING => {
-                        say(format!(
-                            "uniform `{}` is {min_size} bytes, past WebGPU's default {UNIFORM_BINDING}",
-                            b.name
-                        ))
-                    }
-                    BindingKind::StorageTexture { format, access, .. }
-                        if access == "read_write"
-                            && !READ_WRITE_FORMATS
-                                .contains(&format.to_ascii_lowercase().as_str()) =>
-                    {
-                        let format = format.to_ascii_lowercase();
-                        say(format!(
-                            "storage texture `{}` is read_write in {format}, which WebGPU allows only for r32float, r32uint and r32sint without a native feature",
-                            b.name
-                        ))
-                    }
-                    _ => {}
-                }
             }
         }
-        out
+        if n.max_bind_groups > BIND_GROUPS {
+            say(format!(
+                "bind group {} needs {} bind groups, past WebGPU's default {BIND_GROUPS}",
+                n.max_bind_groups - 1,
+                n.max_bind_groups
+            ));
+        }
+        if n.max_compute_workgroup_storage_size > WORKGROUP_STORAGE {
+            say(format!(
+                "{} bytes of workgroup memory, past WebGPU's default {WORKGROUP_STORAGE}",
+                n.max_compute_workgroup_storage_size
+            ));
+        }
+        let used = ep.uses.iter().filter_map(|u| {
+            r.bindings
+                .iter()
+                .find(|b| b.group == u.group && b.binding == u.binding)
+        });
+        for b in used {
+            match &b.kind {
+                BindingKind::Uniform { min_size, .. } if *min_size > UNIFORM_BINDING => {
+                    say(format!(
+                        "uniform `{}` is {min_size} bytes, past WebGPU's default {UNIFORM_BINDING}",
+                        b.name
+                    ))
+                }
+                BindingKind::StorageTexture { format, access, .. }
+                    if access == "read_write"
+                        && !READ_WRITE_FORMATS.contains(&format.to_ascii_lowercase().as_str()) =>
+                {
+                    let format = format.to_ascii_lowercase();
+                    say(format!(
+                        "storage texture `{}` is read_write in {format}, which WebGPU allows only for r32float, r32uint and r32sint without a native feature",
+                        b.name
+                    ))
+                }
+                _ => {}
+            }
+        }
     }
+    out
 }
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -154,7 +142,7 @@ mod tests {
     textureStore(img, vec2<u32>(i, 0u), textureLoad(img, vec2<u32>(0u, i)));
 }",
         );
-        let v = WebgpuLimits.check(&bad, &reflect(&bad));
+        let v = check(&bad, &reflect(&bad));
         let text: Vec<_> = v.iter().map(|v| v.message.clone()).collect();
         assert_eq!(v.len(), 3, "{text:#?}");
         assert!(
@@ -179,7 +167,7 @@ mod tests {
     textureStore(img, vec2<u32>(i, 0u), textureLoad(img, vec2<u32>(0u, i)));
 }",
         );
-        let v = WebgpuLimits.check(&good, &reflect(&good));
+        let v = check(&good, &reflect(&good));
         assert!(v.is_empty(), "{v:#?}");
     }
 
@@ -198,7 +186,7 @@ var<immediate> push: Push;
     a[i] = 1.0;
 }",
         );
-        let v = WebgpuLimits.check(&native, &reflect(&native));
+        let v = check(&native, &reflect(&native));
         let text: Vec<_> = v.iter().map(|v| v.message.clone()).collect();
         assert_eq!(v.len(), 1, "{text:#?}");
         assert!(

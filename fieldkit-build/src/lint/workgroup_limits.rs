@@ -1,4 +1,4 @@
-use super::{Lint, Violation, locate};
+use super::{Violation, locate};
 use crate::{Stage, reflect::Reflection};
 
 /// WebGPU's default limits: every adapter wgpu supports must accept these.
@@ -7,39 +7,28 @@ pub const MAX_Y: u32 = 256;
 pub const MAX_Z: u32 = 64;
 pub const MAX_INVOCATIONS: u32 = 256;
 
+/// Its name in findings, `--only` and allow comments.
+pub(super) const NAME: &str = "workgroup-limits";
+
 /// Workgroup sizes stay within WebGPU's default limits.
-pub struct WorkgroupLimits;
-
-impl Lint for WorkgroupLimits {
-    fn name(&self) -> &'static str {
-        "workgroup-limits"
-    }
-    fn summary(&self) -> &'static str {
-        "workgroup size within WebGPU default limits (256 x 256 x 64, 256 invocations)"
-    }
-    fn explanation(&self) -> &'static str {
-        "Larger workgroups fail pipeline creation on adapters that only offer the default limits (many mobile and web targets)."
-    }
-    fn check(&self, stage: &Stage, r: &Reflection) -> Vec<Violation> {
-        let mut out = Vec::new();
-        for ep in r.entry_points.iter().filter(|e| e.stage == "compute") {
-            let [x, y, z] = ep.workgroup_size;
-            let total = x as u64 * y as u64 * z as u64;
-            if x > MAX_X || y > MAX_Y || z > MAX_Z || total > MAX_INVOCATIONS as u64 {
-                let (line, column) = locate(&stage.original, &format!("fn {}", ep.name));
-                out.push(Violation {
-                    lint: self.name(),
-                    file: stage.file.rel_path.clone(),
-                    line,
-                    column,
-                    message: format!("`{}` has workgroup size ({x}, {y}, {z}) = {total} invocations, past WebGPU's default limits", ep.name),
-                });
-            }
+pub(super) fn check(stage: &Stage, r: &Reflection) -> Vec<Violation> {
+    let mut out = Vec::new();
+    for ep in r.entry_points.iter().filter(|e| e.stage == "compute") {
+        let [x, y, z] = ep.workgroup_size;
+        let total = x as u64 * y as u64 * z as u64;
+        if x > MAX_X || y > MAX_Y || z > MAX_Z || total > MAX_INVOCATIONS as u64 {
+            let (line, column) = locate(&stage.original, &format!("fn {}", ep.name));
+            out.push(Violation {
+                lint: NAME,
+                file: stage.file.rel_path.clone(),
+                line,
+                column,
+                message: format!("`{}` has workgroup size ({x}, {y}, {z}) = {total} invocations, past WebGPU's default limits", ep.name),
+            });
         }
-        out
     }
+    out
 }
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -48,8 +37,8 @@ mod tests {
     #[test]
     fn flags_too_many_invocations() {
         let bad = stage("@compute @workgroup_size(32, 16) fn main() {}");
-        assert_eq!(WorkgroupLimits.check(&bad, &reflect(&bad)).len(), 1);
+        assert_eq!(check(&bad, &reflect(&bad)).len(), 1);
         let good = stage("@compute @workgroup_size(16, 16) fn main() {}");
-        assert!(WorkgroupLimits.check(&good, &reflect(&good)).is_empty());
+        assert!(check(&good, &reflect(&good)).is_empty());
     }
 }
