@@ -103,10 +103,7 @@ fn bench(
     band: f32,
     out: &std::path::Path,
 ) -> Result<(), String> {
-    let ctx = Context::new().map_err(|e| e.to_string())?;
-    let adapter = ctx.adapter_name();
-    println!("adapter: {adapter}");
-    let stamps = Stamps::new(&ctx)?;
+    let (ctx, adapter, stamps) = crate::measure::bench_gpu()?;
     let sides: &[u32] = if quick { &[8, 16] } else { &[16, 32] };
     let (width, height) = if quick { (480, 270) } else { (1920, 1080) };
     let grids: &[u32] = if quick { &[32, 64] } else { &[64, 128, 192] };

@@ -35,10 +35,7 @@ struct Row {
 }
 
 fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Result<(), String> {
-    let ctx = Context::new().map_err(|e| e.to_string())?;
-    let adapter = ctx.adapter_name();
-    println!("adapter: {adapter}");
-    let stamps = Stamps::new(&ctx)?;
+    let (ctx, adapter, stamps) = crate::measure::bench_gpu()?;
     let (width, height) = if quick { (480, 270) } else { (1920, 1080) };
     let format = wgpu::TextureFormat::Rgba8Unorm;
     let renderer = OceanRenderer::new(&ctx.device, &ctx.queue, Output::Forward(format), false)

@@ -85,15 +85,8 @@ fn timed(
 }
 
 fn bench(args: &crate::measure::Args) -> Result<(), String> {
-    let ctx = Context::new().map_err(|e| e.to_string())?;
-    let adapter = ctx.adapter_name();
-    println!("adapter: {adapter}");
-    let stamps = Stamps::new(&ctx)?;
-    let heater = if ctx.is_software() {
-        None
-    } else {
-        Some(crate::heater::Heater::new(&ctx, 20.0)?)
-    };
+    let (ctx, adapter, stamps) = crate::measure::bench_gpu()?;
+    let heater = crate::heater::Heater::for_gpu(&ctx, 20.0)?;
     let e = |e: fieldkit::Error| e.to_string();
     let voxelizer = Voxelizer::new(&ctx.device).map_err(e)?;
     let builder = OctreeBuilder::new(&ctx.device).map_err(e)?;

@@ -169,18 +169,11 @@ fn bench(
     only: &[usize],
     out: &std::path::Path,
 ) -> Result<(), String> {
-    let ctx = Context::new().map_err(|e| e.to_string())?;
-    let adapter = ctx.adapter_name();
-    println!("adapter: {adapter}");
-    let stamps = Stamps::new(&ctx)?;
+    let (ctx, adapter, stamps) = crate::measure::bench_gpu()?;
     // Building a 512³ cloud on the CPU leaves the GPU idle for seconds and its clocks low: the
     // rows after it read up to 3× slow until a heavy row (shadow rays) brought the clocks back.
     // A 20 ms spin before each timed frame keeps them up (`heater`); not on a software adapter.
-    let heater = if ctx.is_software() {
-        None
-    } else {
-        Some(crate::heater::Heater::new(&ctx, 20.0)?)
-    };
+    let heater = crate::heater::Heater::for_gpu(&ctx, 20.0)?;
     let sizes: Vec<u32> = if !only.is_empty() {
         only.iter().map(|&n| n as u32).collect()
     } else if quick {

@@ -76,18 +76,11 @@ fn bench(args: &crate::measure::Args) -> Result<(), String> {
         println!("wrote {}", args.out.join("voxelize.png").display());
         return Ok(());
     }
-    let ctx = Context::new().map_err(|e| e.to_string())?;
-    let adapter = ctx.adapter_name();
-    println!("adapter: {adapter}");
-    let stamps = Stamps::new(&ctx)?;
+    let (ctx, adapter, stamps) = crate::measure::bench_gpu()?;
     // Each run transforms and uploads the mesh on the CPU, leaving the GPU mostly idle and its
     // clocks falling; a 20 ms spin before each timed submission keeps them up (`heater`). Not on
     // a software adapter, whose clocks are the CPU's.
-    let heater = if ctx.is_software() {
-        None
-    } else {
-        Some(crate::heater::Heater::new(&ctx, 20.0)?)
-    };
+    let heater = crate::heater::Heater::for_gpu(&ctx, 20.0)?;
     let mut v = Voxelizer::new(&ctx.device).map_err(|e| e.to_string())?;
     let empty = EmptyPass::new(&ctx);
     // `FIELDKIT_BENCH_FLOOR_THREADS=174000`: the floor rows' threads (default: one a triangle).

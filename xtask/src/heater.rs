@@ -35,6 +35,14 @@ pub(crate) struct Heater {
 }
 
 impl Heater {
+    /// A heater of `ms` on a GPU, none on a software adapter (whose clocks are the CPU's).
+    pub(crate) fn for_gpu(ctx: &Context, ms: f64) -> Result<Option<Self>, String> {
+        if ctx.is_software() {
+            return Ok(None);
+        }
+        Self::new(ctx, ms).map(Some)
+    }
+
     /// A heater whose run takes about `ms` milliseconds of GPU time at full clocks.
     pub(crate) fn new(ctx: &Context, ms: f64) -> Result<Self, String> {
         let device = &ctx.device;

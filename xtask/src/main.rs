@@ -105,67 +105,8 @@ enum Command {
     /// Time against accuracy for a technique, charted (release build; GPU timestamp queries).
     Bench {
         technique: Technique,
-        /// Small sizes for software adapters (3D 32³, 64³; 2D 256², 512²) instead of the full sweep.
-        #[arg(long)]
-        quick: bool,
-        /// Timed runs per point; the median is reported.
-        #[arg(long, default_value_t = 20)]
-        reps: usize,
-        /// Untimed runs first: at least this many, and at least 2 s of them (`measure::WARMUP_TIME`).
-        #[arg(long, default_value_t = 3)]
-        warmup: usize,
-        /// Fraction of cells that are seeds.
-        #[arg(long, default_value_t = 0.01)]
-        density: f64,
-        /// Narrow band (voxels) of the banded JFA entry; for `metaball`, the field's band (cells).
-        #[arg(long, default_value_t = 8.0)]
-        band: f32,
-        /// Peer command, run on the same mask (e.g. `python3 .gpu/peers/edt_cupyx.py`).
-        #[arg(long)]
-        peer: Option<String>,
-        #[arg(long, default_value = "bench")]
-        out: PathBuf,
-        /// Only the exact transform (and the peer).
-        #[arg(long)]
-        exact_only: bool,
-        /// Bands per column in the exact transform (1, 2, 4, 8, 16, 32); by grid size if absent.
-        #[arg(long)]
-        column_bands: Option<u32>,
-        /// Columns per tile (at least) of the y pass where the exact transform splits a field
-        /// too large for one binding (1024³); 4 if absent.
-        #[arg(long)]
-        split_columns: Option<u32>,
-        /// Split the exact transform's field across bindings of at most this many bytes (to
-        /// time the split path at sizes one binding holds); the device's binding size if absent.
-        #[arg(long)]
-        split_bytes: Option<u64>,
-        /// `distance`: open the device with this `max_compute_workgroup_storage_size` (bytes)
-        /// instead of the adapter's, to time the column-pass tiles each limit gives.
-        #[arg(long)]
-        workgroup_storage: Option<u32>,
-        /// Only these edge lengths (3D edges from the sweep's 3D sizes, 2D from its 2D sizes;
-        /// comma-separated), e.g. `--sizes 512` for one point. `volume` and `voxelize` take
-        /// any sizes, in the order given.
-        #[arg(long, value_delimiter = ',')]
-        sizes: Vec<usize>,
-        /// `distance`: 3D grids of these shapes (`XxYxZ`, comma-separated, e.g.
-        /// `128x128x1024`) instead of the cubes; no 2D sizes then.
-        #[arg(long, value_delimiter = ',', value_parser = parse_shape)]
-        shapes: Vec<[usize; 3]>,
-        /// `voxelize`, `octree`: a mesh to time beside the torus: an OBJ file (the peers'
-        /// Stanford bunny, `stanford-bunny.obj`); for `voxelize` also the npm bunny's `index.js`
-        /// from `scripts/fetch-bunny.sh` (timed as it is and split twice).
-        #[arg(long)]
-        mesh: Option<PathBuf>,
-        /// `voxelize`: only these modes (surface, resident, raster, solid, attributes; comma-separated;
-        /// `empty`, `zeroed`, `cleared` and `loaded`, an empty pass's floor, only where named).
-        #[arg(long, value_delimiter = ',')]
-        modes: Vec<String>,
-        /// `voxelize`, `distance`: draw `voxelize.png` / `distance.png` into `--out` from this
-        /// saved `voxelize.csv` / `distance.csv` instead of measuring (for a run cut short
-        /// after its table was saved, or the tables of several runs joined into one file).
-        #[arg(long)]
-        replot: Option<PathBuf>,
+        #[command(flatten)]
+        args: measure::Args,
     },
 }
 
@@ -252,54 +193,17 @@ fn main() -> ExitCode {
             scene,
             mesh,
         } => soak(frames, &size, scene.as_deref(), mesh.as_deref()),
-        Command::Bench {
-            technique,
-            quick,
-            reps,
-            warmup,
-            density,
-            band,
-            peer,
-            out,
-            exact_only,
-            column_bands,
-            split_columns,
-            split_bytes,
-            workgroup_storage,
-            sizes,
-            shapes,
-            mesh,
-            modes,
-            replot,
-        } => {
+        Command::Bench { technique, args } => {
             if cfg!(debug_assertions) && std::env::var_os("FIELDKIT_BENCH_NO_REEXEC").is_none() {
                 return rerun_release();
             }
+            let (reps, density, band) = (args.reps, args.density, args.band);
             if reps == 0 || !(density > 0.0 && density < 1.0) || !(band.is_finite() && band > 0.0) {
                 eprintln!(
                     "bench: --reps must be ≥ 1, --density in (0, 1), --band finite and positive"
                 );
                 return ExitCode::FAILURE;
             }
-            let args = measure::Args {
-                quick,
-                reps,
-                warmup,
-                density,
-                out,
-                peer,
-                band,
-                exact_only,
-                column_bands,
-                split_columns,
-                split_bytes,
-                workgroup_storage,
-                sizes,
-                shapes,
-                mesh,
-                modes,
-                replot,
-            };
             match technique {
                 Technique::Bind => bench_bind::run(&args),
                 Technique::Build => bench_build::run(&args),

@@ -10,37 +10,69 @@ use fieldkit::gpu::{Context, Profiler, read_buffer};
 use crate::heater::Heater;
 
 /// Settings of `cargo xtask bench`, shared by every technique.
+#[derive(clap::Args)]
 pub struct Args {
+    /// Small sizes for software adapters (3D 32³, 64³; 2D 256², 512²) instead of the full sweep.
+    #[arg(long)]
     pub quick: bool,
+    /// Timed runs per point; the median is reported.
+    #[arg(long, default_value_t = 20)]
     pub reps: usize,
+    /// Untimed runs first: at least this many, and at least 2 s of them (`measure::WARMUP_TIME`).
+    #[arg(long, default_value_t = 3)]
     pub warmup: usize,
+    /// Fraction of cells that are seeds.
+    #[arg(long, default_value_t = 0.01)]
     pub density: f64,
-    pub out: PathBuf,
-    /// Command line of the peer script, e.g. `python3 .gpu/peers/edt_cupyx.py`.
-    pub peer: Option<String>,
-    /// Narrow band (voxels) for the banded JFA entry.
+    /// Narrow band (voxels) of the banded JFA entry; for `metaball`, the field's band (cells).
+    #[arg(long, default_value_t = 8.0)]
     pub band: f32,
-    /// Only the exact transform (and the peer): for quick comparisons.
+    /// Peer command, run on the same mask (e.g. `python3 .gpu/peers/edt_cupyx.py`).
+    #[arg(long)]
+    pub peer: Option<String>,
+    /// Where the tables and charts go.
+    #[arg(long, default_value = "bench")]
+    pub out: PathBuf,
+    /// Only the exact transform (and the peer).
+    #[arg(long)]
     pub exact_only: bool,
-    /// Bands per column of the exact transform; `None` lets the library choose.
+    /// Bands per column in the exact transform (1, 2, 4, 8, 16, 32); by grid size if absent.
+    #[arg(long)]
     pub column_bands: Option<u32>,
-    /// `distance`: columns per tile (at least) of a split field's passes.
+    /// Columns per tile (at least) of the y pass where the exact transform splits a field
+    /// too large for one binding (1024³); 4 if absent.
+    #[arg(long)]
     pub split_columns: Option<u32>,
-    /// `distance`: the largest binding (bytes) of a split field; the device's if `None`.
+    /// Split the exact transform's field across bindings of at most this many bytes (to
+    /// time the split path at sizes one binding holds); the device's binding size if absent.
+    #[arg(long)]
     pub split_bytes: Option<u64>,
-    /// `distance`: the device's `max_compute_workgroup_storage_size` (bytes); the adapter's if
-    /// `None`.
+    /// `distance`: open the device with this `max_compute_workgroup_storage_size` (bytes)
+    /// instead of the adapter's, to time the column-pass tiles each limit gives.
+    #[arg(long)]
     pub workgroup_storage: Option<u32>,
-    /// Only these sizes of the sweep (empty: all).
+    /// Only these edge lengths (3D edges from the sweep's 3D sizes, 2D from its 2D sizes;
+    /// comma-separated), e.g. `--sizes 512` for one point. `volume` and `voxelize` take
+    /// any sizes, in the order given.
+    #[arg(long, value_delimiter = ',')]
     pub sizes: Vec<usize>,
-    /// `distance`: 3D shapes (x, y, z) instead of the cubes of the sweep (empty: the cubes).
+    /// `distance`: 3D grids of these shapes (`XxYxZ`, comma-separated, e.g.
+    /// `128x128x1024`) instead of the cubes; no 2D sizes then.
+    #[arg(long, value_delimiter = ',', value_parser = crate::parse_shape)]
     pub shapes: Vec<[usize; 3]>,
-    /// `voxelize`: the bunny's `index.js` (`scripts/fetch-bunny.sh`).
+    /// `voxelize`, `octree`: a mesh to time beside the torus: an OBJ file (the peers'
+    /// Stanford bunny, `stanford-bunny.obj`); for `voxelize` also the npm bunny's `index.js`
+    /// from `scripts/fetch-bunny.sh` (timed as it is and split twice).
+    #[arg(long)]
     pub mesh: Option<PathBuf>,
-    /// `voxelize`: only these modes (empty: all).
+    /// `voxelize`: only these modes (surface, resident, raster, solid, attributes; comma-separated;
+    /// `empty`, `zeroed`, `cleared` and `loaded`, an empty pass's floor, only where named).
+    #[arg(long, value_delimiter = ',')]
     pub modes: Vec<String>,
-    /// `voxelize`, `distance`: chart this saved `voxelize.csv` / `distance.csv` instead of
-    /// measuring.
+    /// `voxelize`, `distance`: draw `voxelize.png` / `distance.png` into `--out` from this
+    /// saved `voxelize.csv` / `distance.csv` instead of measuring (for a run cut short
+    /// after its table was saved, or the tables of several runs joined into one file).
+    #[arg(long)]
     pub replot: Option<PathBuf>,
 }
 
@@ -201,6 +233,16 @@ pub(crate) fn time_runs(
         max,
         per_pass.into_iter().map(|(n, v)| (n, median(v))).collect(),
     ))
+}
+
+/// The benches' device: a context of fieldkit's choosing, its adapter's name (printed), and
+/// timestamp queries on it.
+pub(crate) fn bench_gpu() -> Result<(Context, String, Stamps), String> {
+    let ctx = Context::new().map_err(|e| e.to_string())?;
+    let adapter = ctx.adapter_name();
+    println!("adapter: {adapter}");
+    let stamps = Stamps::new(&ctx)?;
+    Ok((ctx, adapter, stamps))
 }
 
 pub(crate) struct Stamps {
