@@ -118,6 +118,11 @@ pub struct FrameCost {
     /// The frame after the screen size changed: CPU, and wall.
     pub resize_cpu_ms: f64,
     pub resize_wall_ms: f64,
+    /// The frame after a size setting changed ([`size_change`]): CPU, and wall; and the most
+    /// CPU any of the frames after it took.
+    pub change_cpu_ms: f64,
+    pub change_wall_ms: f64,
+    pub after_change_cpu_ms: f64,
     /// The loop's floor: an empty encoder submitted and waited for.
     pub floor: Spread,
     /// The scene's typed error, if it refused its settings.
@@ -283,6 +288,27 @@ fn measure(
     let n = WARM_UP + 2 * frames;
     let resized_frame = timed_frame(ctx, &mut scenes, saved, scene, &small, resized, n, None)?;
     let (resize_cpu_ms, resize_wall_ms) = (resized_frame.cpu, resized_frame.wall);
+    // A size setting changes (the grid, the mask, the cloud): that frame, then a few more.
+    let changed = size_change(scene, saved);
+    let n = n + 1;
+    let change = timed_frame(ctx, &mut scenes, &changed, scene, &small, resized, n, None)?;
+    let after_change_cpu_ms = (1..=5)
+        .map(|k| {
+            timed_frame(
+                ctx,
+                &mut scenes,
+                &changed,
+                scene,
+                &small,
+                resized,
+                n + k,
+                None,
+            )
+            .map(|t| t.cpu)
+        })
+        .collect::<Result<Vec<_>, _>>()?
+        .into_iter()
+        .fold(0.0, f64::max);
     let floor = (0..frames)
         .map(|_| {
             let start = Instant::now();
@@ -308,12 +334,36 @@ fn measure(
         gpu_compute: Spread::of(gpu),
         resize_cpu_ms,
         resize_wall_ms,
+        change_cpu_ms: change.cpu,
+        change_wall_ms: change.wall,
+        after_change_cpu_ms,
         floor: Spread::of(floor),
         error,
         passes: last_passes,
         made,
         stats,
     })
+}
+
+/// `saved` with the size setting of `scene` changed, as a user drags a slider: the actor's
+/// extent (its grid), the cloud's voxels, the 2D tool's mask and the voxelizer's grid each
+/// grow by a little over a tenth; the ocean's LOD error halves; the composite takes the
+/// actor's and the cloud's changes.
+pub fn size_change(scene: &str, saved: &Saved) -> Saved {
+    let mut s = saved.clone();
+    let grow = |n: u32| n + n / 10 + 1;
+    match scene {
+        "actor" => s.actor.extent = s.actor.extent.map(|e| e * 1.1),
+        "ocean" => s.ocean.lod.max_error_px *= 0.5,
+        "volume" => s.volume.size = grow(s.volume.size),
+        "distance2d" => s.distance.size = s.distance.size.map(grow),
+        "voxelizer" => s.voxelizer.grid = grow(s.voxelizer.grid),
+        _ => {
+            s.actor.extent = s.actor.extent.map(|e| e * 1.1);
+            s.volume.size = grow(s.volume.size);
+        }
+    }
+    s
 }
 
 /// The GPU time of whole frames, each in a submission of its own: timestamps written into the
@@ -382,13 +432,13 @@ fn gpu_frame_times(
 fn print_table(adapter: &str, costs: &[FrameCost]) {
     println!("frame cost on {adapter}");
     println!(
-        "| scene | size | CPU record + submit ms | submit → done ms | GPU frame ms | GPU timed passes ms | loop floor ms | frames > {SLOW_CPU_MS} ms CPU | first frame ms | resize frame CPU / wall ms | made a frame: buffers / textures / views / bind groups |"
+        "| scene | size | CPU record + submit ms | submit → done ms | GPU frame ms | GPU timed passes ms | loop floor ms | frames > {SLOW_CPU_MS} ms CPU | first frame ms | resize frame CPU / wall ms | size change CPU / wall ms, then CPU at most | made a frame: buffers / textures / views / bind groups |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     let s = |x: &Spread| format!("{:.3} ({:.3}–{:.3})", x.median, x.min, x.max);
     for c in costs {
         println!(
-            "| {} | {}×{} | {} | {} | {} | {} | {} | {} | {:.1} | {:.2} / {:.2} | {} / {} / {} / {} |{}",
+            "| {} | {}×{} | {} | {} | {} | {} | {} | {} | {:.1} | {:.2} / {:.2} | {:.2} / {:.2}, {:.2} | {} / {} / {} / {} |{}",
             c.scene,
             c.size[0],
             c.size[1],
@@ -401,6 +451,9 @@ fn print_table(adapter: &str, costs: &[FrameCost]) {
             c.first_ms,
             c.resize_cpu_ms,
             c.resize_wall_ms,
+            c.change_cpu_ms,
+            c.change_wall_ms,
+            c.after_change_cpu_ms,
             c.made.buffers,
             c.made.textures,
             c.made.views,
@@ -429,11 +482,11 @@ fn write_csv(path: &Path, adapter: &str, start: &str, costs: &[FrameCost]) -> Re
         "adapter,pipeline_cache,scene,width,height,cpu_ms_median,cpu_ms_min,cpu_ms_max,wall_ms_median,wall_ms_min,\
          wall_ms_max,gpu_frame_ms_median,gpu_frame_ms_min,gpu_frame_ms_max,gpu_compute_ms_median,gpu_compute_ms_min,gpu_compute_ms_max,floor_ms_median,\
          floor_ms_min,floor_ms_max,slow_cpu_frames,first_frame_ms,resize_cpu_ms,resize_wall_ms,\
-         made_buffers,made_textures,made_views,made_bind_groups\n",
+         change_cpu_ms,change_wall_ms,after_change_cpu_ms,made_buffers,made_textures,made_views,made_bind_groups\n",
     );
     for c in costs {
         text += &format!(
-            "\"{adapter}\",{start},{},{},{},{},{},{},{},{},{},{:.3},{:.4},{:.4},{},{},{},{}\n",
+            "\"{adapter}\",{start},{},{},{},{},{},{},{},{},{},{:.3},{:.4},{:.4},{:.4},{:.4},{:.4},{},{},{},{}\n",
             c.scene,
             c.size[0],
             c.size[1],
@@ -446,6 +499,9 @@ fn write_csv(path: &Path, adapter: &str, start: &str, costs: &[FrameCost]) -> Re
             c.first_ms,
             c.resize_cpu_ms,
             c.resize_wall_ms,
+            c.change_cpu_ms,
+            c.change_wall_ms,
+            c.after_change_cpu_ms,
             c.made.buffers,
             c.made.textures,
             c.made.views,
