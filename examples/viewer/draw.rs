@@ -49,9 +49,15 @@ fn fs(v: Out) -> @location(0) vec4<f32> { return v.colour; }
 "#;
 
 /// Draws an RGBA8 image into a rectangle of the colour target (nearest texel, no blending).
+/// A redraw of the same image into the same rectangle makes no GPU object and writes nothing:
+/// the rectangle is written only when it changes, the bind group made only for a new image.
 pub struct Blit {
     pipeline: wgpu::RenderPipeline,
     rect: wgpu::Buffer,
+    /// What `rect` holds.
+    written: std::cell::Cell<Option<[u32; 8]>>,
+    /// The bind group of the image drawn last.
+    group: std::cell::RefCell<Option<(wgpu::TextureView, wgpu::BindGroup)>>,
 }
 
 impl Blit {
@@ -88,7 +94,12 @@ impl Blit {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        Self { pipeline, rect }
+        Self {
+            pipeline,
+            rect,
+            written: Default::default(),
+            group: Default::default(),
+        }
     }
 
     /// Draw `image` into `rect` = [x0, y0, x1, y1] (fractions of the `size` target, y down).
@@ -118,24 +129,31 @@ impl Blit {
             *w = f.to_bits();
         }
         words[4..].copy_from_slice(&[x0, y0, x1.saturating_sub(x0), y1.saturating_sub(y0)]);
-        queue.write_buffer(&self.rect, 0, bytemuck::cast_slice(&words));
-        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("viewer blit"),
-            layout: &self.pipeline.get_bind_group_layout(0),
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: self.rect.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: wgpu::BindingResource::TextureView(image),
-                },
-            ],
-        });
+        if self.written.get() != Some(words) {
+            queue.write_buffer(&self.rect, 0, bytemuck::cast_slice(&words));
+            self.written.set(Some(words));
+        }
+        let mut group = self.group.borrow_mut();
+        if group.as_ref().map(|g| &g.0) != Some(image) {
+            let made = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("viewer blit"),
+                layout: &self.pipeline.get_bind_group_layout(0),
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: self.rect.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::TextureView(image),
+                    },
+                ],
+            });
+            *group = Some((image.clone(), made));
+        }
         let mut pass = colour_pass(encoder, "viewer blit", target);
         pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &group, &[]);
+        pass.set_bind_group(0, &group.as_ref().expect("made above").1, &[]);
         pass.draw(0..6, 0..1);
     }
 }

@@ -107,7 +107,7 @@ pub struct Distance2dScene {
     pub(super) blit: Blit,
     pub(super) recorded: Option<Recorded2d>,
     pub(super) pending: Option<Pending2d>,
-    pub(super) shown: Option<(DistanceSettings, wgpu::Texture, usize, f32)>,
+    pub(super) shown: Option<(DistanceSettings, wgpu::TextureView, usize, f32)>,
 }
 
 /// Where the field image sits in the frame: the largest rectangle of its aspect, centred
@@ -183,7 +183,8 @@ impl Distance2dScene {
             let [w, h] = p.key.size;
             let pixels = colour_field(&field, &p.key);
             let texture = upload_rgba(device, queue, &pixels, w, h);
-            self.shown = Some((p.key, texture, wrong, worst));
+            let view = texture.create_view(&Default::default());
+            self.shown = Some((p.key, view, wrong, worst));
         }
         // Start a new computation when the settings changed and none is running.
         if self.pending.is_none()
@@ -207,8 +208,7 @@ impl Distance2dScene {
             });
         }
         let mut stats = vec![format!("seeds: {}", s.seeds.len())];
-        if let Some((key, texture, wrong, worst)) = &self.shown {
-            let view = texture.create_view(&Default::default());
+        if let Some((key, view, wrong, worst)) = &self.shown {
             let rect = field_rect(frame.size, key.size);
             self.blit.encode(
                 device,
@@ -216,7 +216,7 @@ impl Distance2dScene {
                 frame.rec.encoder,
                 &frame.targets.colour_view,
                 frame.size,
-                &view,
+                view,
                 rect,
             );
             stats.push(format!(

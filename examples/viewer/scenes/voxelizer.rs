@@ -96,7 +96,7 @@ pub struct VoxelizerScene {
     /// The distance field recorded with the job (read back once submitted), then its slice.
     pub(super) field: Option<wgpu::Texture>,
     pub(super) field_read: Option<Readback<Vec<f32>>>,
-    pub(super) slice: Option<(wgpu::Texture, [u32; 2], f32)>,
+    pub(super) slice: Option<(wgpu::TextureView, [u32; 2], f32)>,
     pub(super) view: Option<(bool, VoxelView)>,
     pub(super) cubes: Option<(bool, Cubes)>,
     pub(super) balls: Metaballs,
@@ -307,7 +307,8 @@ impl VoxelizerScene {
                         }
                     })
                     .collect();
-                self.slice = Some((upload_rgba(device, queue, &px, w, h), [w, h], max));
+                let texture = upload_rgba(device, queue, &px, w, h);
+                self.slice = Some((texture.create_view(&Default::default()), [w, h], max));
             }
         }
         Ok(())
@@ -408,18 +409,17 @@ impl VoxelizerScene {
         frame: &mut Frame,
         stats: &mut Vec<String>,
     ) {
-        if let Some((texture, [w, h], max)) = &self.slice {
+        if let Some((view, [w, h], max)) = &self.slice {
             // Lower-right corner, a third of the frame's height, the slice's aspect.
             let fh = 1.0 / 3.0;
             let fw = fh * (*w as f32 / *h as f32) * frame.size[1] as f32 / frame.size[0] as f32;
-            let view = texture.create_view(&Default::default());
             self.blit.encode(
                 device,
                 queue,
                 frame.rec.encoder,
                 &frame.targets.colour_view,
                 frame.size,
-                &view,
+                view,
                 [1.0 - fw - 0.01, 1.0 - fh - 0.01, 0.99, 0.99],
             );
             stats.push(format!(
