@@ -164,3 +164,49 @@ fn visualized_field_matches_reference_image() {
     };
     compare_image(&dir, "distance_2d_visualize", &rgba, w, h, tol).unwrap();
 }
+
+/// A kept `Distance2d` makes its pipelines for the first mask and none for the next sizes (a
+/// new size is a slider's step in an editor: it must not wait on a shader compile). Counted
+/// by wgpu's own pipeline counter on a device of the test's own.
+#[test]
+fn a_new_mask_size_makes_no_pipeline() {
+    let ctx = Context::new().expect("a GPU adapter (apt-get install mesa-vulkan-drivers)");
+    let d2 = fieldkit::distance::Distance2d::new(&ctx.device).unwrap();
+    let pipelines = || {
+        ctx.device
+            .get_internal_counters()
+            .hal
+            .compute_pipelines
+            .read()
+    };
+    let run = |w: u32, h: u32, signed: bool| {
+        let mut mask = vec![0u8; (w * h) as usize];
+        mask[(h / 2 * w + w / 3) as usize] = 255;
+        mask[(w * h - 1) as usize] = 255;
+        let tex = upload_mask(&ctx.device, &ctx.queue, &mask, w, h).unwrap();
+        let mut enc = ctx.encoder("sizes");
+        let settings = fieldkit::distance::Settings2d {
+            signed,
+            ..Default::default()
+        };
+        let field = d2.encode(&ctx.device, &mut enc, &tex, &settings).unwrap();
+        ctx.submit_and_wait("sizes", enc).unwrap();
+        let d: Vec<f32> = read_texture(&ctx, &field.distance).unwrap();
+        // The seed at the last texel is 0 away from itself (signed: half a texel inside).
+        assert_eq!(
+            d[(w * h - 1) as usize],
+            if signed { -0.5 } else { 0.0 },
+            "{w}×{h}"
+        );
+    };
+    for signed in [false, true] {
+        run(40, 30, signed);
+    }
+    let made = pipelines();
+    for (w, h) in [(41, 37), (45, 60), (200, 120), (221, 133), (17, 256)] {
+        for signed in [false, true] {
+            run(w, h, signed);
+        }
+    }
+    assert_eq!(pipelines(), made, "pipelines made for new mask sizes");
+}

@@ -111,6 +111,10 @@ pub const AUTO_TILE_MAX_LENGTH_2D: u32 = 256;
 /// Band length [`ColumnPasses::Auto`] aims for: at most `256 · 8 / n` columns per tile.
 pub const AUTO_TILE_BAND: u32 = 8;
 
+/// Workgroup memory of a tile pass beside its tile, in 4-byte cells: the 256 envelope sizes and
+/// the resolving entries' `far_sites` flag.
+const TILE_EXTRA_CELLS: u32 = 257;
+
 /// How a column of length `n` is laid out in a workgroup-memory tile (`edt_tile.wgsl`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct TileGeometry {
@@ -143,8 +147,7 @@ impl TileGeometry {
             } else {
                 need + (32 / columns + 32 - need % 32) % 32
             };
-            // The tile, the 256 envelope sizes and the resolving entries' `far_sites` flag.
-            let bytes = (column_cells as u64 * columns as u64 + 257) * 4;
+            let bytes = (column_cells as u64 * columns as u64 + TILE_EXTRA_CELLS as u64) * 4;
             // A band's envelope size is 8 bits in the shader's `envelope_size`.
             if bytes <= storage as u64 && band_len <= 128 {
                 return Some(Self {
@@ -253,10 +256,20 @@ impl TileGeometry {
             },
         );
         let packing = packing_of(size);
+        // A 2D pass sizes its tile for the most the device holds, not for this height: every
+        // mask then takes the same pipeline, so a new mask size makes none (it cost a new
+        // height 129 ms on the H200 with the driver's cache cold). The 2D tile passes are small
+        // (columns of at most 256), so the larger tile costs them nothing measurable; the 3D
+        // passes keep their tile to the cell, for occupancy.
+        let cells = if pack_2d {
+            device.limits().max_compute_workgroup_storage_size / 4 - TILE_EXTRA_CELLS
+        } else {
+            self.column_cells << self.lg_columns
+        };
         let overrides = edt_tile::Overrides {
             pack_2d,
             axis,
-            cells: self.column_cells << self.lg_columns,
+            cells,
             y_after_z: span.y_after_z,
             source_apart,
             seed_x_bits: packing.x_bits,
