@@ -257,10 +257,11 @@ impl TileGeometry {
         );
         let packing = packing_of(size);
         // A 2D pass sizes its tile for the most the device holds, not for this height: every
-        // mask then takes the same pipeline, so a new mask size makes none (it cost a new
-        // height 129 ms on the H200 with the driver's cache cold). The 2D tile passes are small
-        // (columns of at most 256), so the larger tile costs them nothing measurable; the 3D
-        // passes keep their tile to the cell, for occupancy.
+        // mask then takes the same pipeline, so a new mask size makes none (the viewer's mask
+        // growing took 139 ms on the H200 with the driver's shader cache off, 0.78 ms now). The
+        // 2D tile passes are small (columns of at most 256): 256² took 0.0342 ms either way
+        // (`docs/bench/distance_2d_tile_cells_h200.csv`). The 3D passes keep their tile to the
+        // cell, for occupancy.
         let cells = if pack_2d {
             device.limits().max_compute_workgroup_storage_size / 4 - TILE_EXTRA_CELLS
         } else {
