@@ -68,6 +68,46 @@ pub fn uniform_buffer<T: encase::ShaderType + encase::internal::WriteInto>(
     })
 }
 
+/// One uniform buffer kept from call to call: [`KeptUniform::get`] hands back the buffer it
+/// made last while the value is the same, and makes a new one only when the value changes (the
+/// old one lives on in any command still using it). A renderer drawn every frame with the same
+/// parameters then makes no buffer a frame, and its bind group can be kept too.
+// Used by the techniques.
+#[cfg_attr(not(feature = "techniques"), allow(dead_code))]
+#[derive(Default)]
+pub(crate) struct KeptUniform(std::sync::Mutex<Option<(Vec<u8>, wgpu::Buffer)>>);
+
+#[cfg_attr(not(feature = "techniques"), allow(dead_code))]
+impl KeptUniform {
+    /// The buffer holding `value` (see [`uniform_buffer`]).
+    pub(crate) fn get<T: encase::ShaderType + encase::internal::WriteInto>(
+        &self,
+        device: &wgpu::Device,
+        label: &str,
+        value: &T,
+    ) -> wgpu::Buffer {
+        let mut bytes = encase::UniformBuffer::new(Vec::new());
+        bytes
+            .write(value)
+            .expect("a generated uniform struct always encodes");
+        let bytes = bytes.into_inner();
+        let mut kept = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((held, buffer)) = kept.as_ref()
+            && *held == bytes
+        {
+            return buffer.clone();
+        }
+        use wgpu::util::DeviceExt;
+        let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: &bytes,
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        *kept = Some((bytes, buffer.clone()));
+        buffer
+    }
+}
+
 /// Poll `f` once: its output if it is ready, else `None`. Never waits.
 pub(crate) fn ready_now<F: std::future::Future>(f: F) -> Option<F::Output> {
     let mut f = std::pin::pin!(f);

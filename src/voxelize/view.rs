@@ -1,12 +1,14 @@
 //! Debug view of voxel attributes (`voxelize/voxel_view`): one lit cube per occupied voxel,
 //! drawn straight from [`Attributes::voxels`] by instance index.
 
+use std::sync::Mutex;
+
 use glam::{Mat4, Vec3};
 
 use super::{Attributes, Grid};
-use crate::bind::{RenderPipeline, RenderTargets};
+use crate::bind::{Bound, RenderPipeline, RenderTargets};
 use crate::error::Error;
-use crate::gpu::uniform_buffer as uniform;
+use crate::gpu::KeptUniform;
 use crate::shaders::voxelize::voxel_view::{self as stage, ViewParams};
 use crate::view::{depth_state, load_pass};
 
@@ -80,8 +82,24 @@ impl Light {
 }
 
 /// Draws voxel attributes as cubes into a caller's colour and depth targets.
+///
+/// A redraw of the same voxels with the same camera and light makes no GPU object: the view
+/// keeps its parameters' buffer while they hold, the bind group of the voxels it drew last and
+/// their draw's arguments (it holds those voxels' buffer until it draws others or is dropped).
 pub struct VoxelView {
     pipeline: RenderPipeline<stage::fs_view::Entry>,
+    params: KeptUniform,
+    /// The voxels drawn last: their list, the bind group with the parameters' buffer it was
+    /// made with, and their indirect draw's arguments.
+    drawn: Mutex<Option<Drawn>>,
+}
+
+/// What [`VoxelView`] keeps of the voxels it drew last.
+struct Drawn {
+    voxels: wgpu::Buffer,
+    params: wgpu::Buffer,
+    bound: Bound<stage::fs_view::Entry>,
+    args: wgpu::Buffer,
 }
 
 impl VoxelView {
@@ -108,7 +126,11 @@ impl VoxelView {
                 ..Default::default()
             },
         )?;
-        Ok(Self { pipeline })
+        Ok(Self {
+            pipeline,
+            params: KeptUniform::default(),
+            drawn: Mutex::new(None),
+        })
     }
 
     /// Draw every occupied voxel of `voxels` (voxelized in `grid`) as a cube, loading what the
@@ -168,7 +190,7 @@ impl VoxelView {
         }
         let grid_to_world = Mat4::from_translation(grid.origin.as_vec3())
             * Mat4::from_scale(Vec3::splat(grid.voxel as f32));
-        let params = uniform(
+        let params = self.params.get(
             device,
             "voxel view params",
             &ViewParams {
@@ -186,26 +208,46 @@ impl VoxelView {
                 colour_by: (by == ColourBy::Colour) as u32,
             },
         );
-        let bound = self.pipeline.bind(
-            device,
-            &stage::fs_view::Resources {
-                params: (&params).into(),
-                voxels: (&voxels.voxels).into(),
-            },
-        )?;
-        // One cube per occupied voxel: the count is on the GPU (a list sized by a bound has
-        // room for more), so the draw is indirect, its instance count copied from it.
-        use wgpu::util::DeviceExt;
-        let args = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("voxel view draw"),
-            contents: bytemuck::cast_slice(&[36u32, 0, 0, 0]),
-            usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
-        });
-        encoder.copy_buffer_to_buffer(&voxels.occupied, 0, &args, 4, 4);
+        let mut drawn = self.drawn.lock().unwrap_or_else(|e| e.into_inner());
+        let kept = drawn
+            .as_ref()
+            .is_some_and(|d| d.voxels == voxels.voxels && d.params == params);
+        if !kept {
+            let bound = self.pipeline.bind(
+                device,
+                &stage::fs_view::Resources {
+                    params: (&params).into(),
+                    voxels: (&voxels.voxels).into(),
+                },
+            )?;
+            // One cube per occupied voxel: the count is on the GPU (a list sized by a bound has
+            // room for more), so the draw is indirect, its instance count copied from it.
+            let same_voxels = drawn.as_ref().is_some_and(|d| d.voxels == voxels.voxels);
+            let args = match drawn.take() {
+                Some(d) if same_voxels => d.args,
+                _ => {
+                    use wgpu::util::DeviceExt;
+                    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                        label: Some("voxel view draw"),
+                        contents: bytemuck::cast_slice(&[36u32, 0, 0, 0]),
+                        usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
+                    })
+                }
+            };
+            *drawn = Some(Drawn {
+                voxels: voxels.voxels.clone(),
+                params,
+                bound,
+                args,
+            });
+        }
+        let d = drawn.as_ref().expect("kept or made above");
+        // The count again each draw: the voxels may have been made anew in the same buffers.
+        encoder.copy_buffer_to_buffer(&voxels.occupied, 0, &d.args, 4, 4);
         let mut pass = load_pass(encoder, stage::STAGE, colour, depth);
         pass.set_pipeline(&self.pipeline.pipeline);
-        bound.set_render(&mut pass);
-        pass.draw_indirect(&args, 0);
+        d.bound.set_render(&mut pass);
+        pass.draw_indirect(&d.args, 0);
         Ok(())
     }
 }
