@@ -167,7 +167,7 @@ fn a_point_light_shades_by_distance() {
         let targets = Targets::new(device, [32, 32], format, wgpu::TextureFormat::Depth32Float);
         let mut enc = ctx.encoder("point light");
         targets.clear(&mut enc, wgpu::Color::BLACK, 1.0);
-        view.encode_lit(
+        view.encode(
             device,
             &mut enc,
             &targets.colour_view,
@@ -212,7 +212,7 @@ fn a_point_light_shades_by_distance() {
         },
     ] {
         let err = view
-            .encode_lit(
+            .encode(
                 device,
                 &mut enc,
                 &targets.colour_view,

@@ -65,7 +65,7 @@ pub fn voxelize_scene_with(
             range: radius * 3.5,
         },
     };
-    view.encode_lit(
+    view.encode(
         device,
         &mut enc,
         &targets.colour_view,

@@ -56,14 +56,24 @@ pub fn uniform_buffer<T: encase::ShaderType + encase::internal::WriteInto>(
     label: &str,
     value: &T,
 ) -> wgpu::Buffer {
-    use wgpu::util::DeviceExt;
+    uniform_of(device, label, &uniform_bytes(value))
+}
+
+/// `value` laid out by encase as a uniform.
+fn uniform_bytes<T: encase::ShaderType + encase::internal::WriteInto>(value: &T) -> Vec<u8> {
     let mut bytes = encase::UniformBuffer::new(Vec::new());
     bytes
         .write(value)
         .expect("a generated uniform struct always encodes");
+    bytes.into_inner()
+}
+
+/// A uniform buffer holding `bytes`.
+fn uniform_of(device: &wgpu::Device, label: &str, bytes: &[u8]) -> wgpu::Buffer {
+    use wgpu::util::DeviceExt;
     device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some(label),
-        contents: &bytes.into_inner(),
+        contents: bytes,
         usage: wgpu::BufferUsages::UNIFORM,
     })
 }
@@ -86,23 +96,14 @@ impl KeptUniform {
         label: &str,
         value: &T,
     ) -> wgpu::Buffer {
-        let mut bytes = encase::UniformBuffer::new(Vec::new());
-        bytes
-            .write(value)
-            .expect("a generated uniform struct always encodes");
-        let bytes = bytes.into_inner();
+        let bytes = uniform_bytes(value);
         let mut kept = self.0.lock().unwrap_or_else(|e| e.into_inner());
         if let Some((held, buffer)) = kept.as_ref()
             && *held == bytes
         {
             return buffer.clone();
         }
-        use wgpu::util::DeviceExt;
-        let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some(label),
-            contents: &bytes,
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
+        let buffer = uniform_of(device, label, &bytes);
         *kept = Some((bytes, buffer.clone()));
         buffer
     }

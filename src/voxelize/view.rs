@@ -47,6 +47,13 @@ pub enum Light {
     },
 }
 
+/// A direction toward a light at infinity.
+impl From<Vec3> for Light {
+    fn from(toward: Vec3) -> Self {
+        Light::Directional(toward)
+    }
+}
+
 impl Light {
     /// Ambient 0.35 plus 0.65 × N·L × attenuation: what each cube corner gets (the shader's
     /// formula, for tests and users).
@@ -134,7 +141,8 @@ impl VoxelView {
     }
 
     /// Draw every occupied voxel of `voxels` (voxelized in `grid`) as a cube, loading what the
-    /// targets hold. `light` points toward the light.
+    /// targets hold, under `light`: a direction toward a light at infinity (a `Vec3`) or any
+    /// [`Light`] (a point light as the source's demo scene).
     #[allow(clippy::too_many_arguments)]
     pub fn encode(
         &self,
@@ -145,36 +153,10 @@ impl VoxelView {
         voxels: &Attributes,
         grid: &Grid,
         view_proj: Mat4,
-        light: Vec3,
+        light: impl Into<Light>,
         by: ColourBy,
     ) -> Result<(), Error> {
-        self.encode_lit(
-            device,
-            encoder,
-            colour,
-            depth,
-            voxels,
-            grid,
-            view_proj,
-            Light::Directional(light),
-            by,
-        )
-    }
-
-    /// [`VoxelView::encode`] under any [`Light`]: a point light as the source's demo scene.
-    #[allow(clippy::too_many_arguments)]
-    pub fn encode_lit(
-        &self,
-        device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
-        colour: &wgpu::TextureView,
-        depth: &wgpu::TextureView,
-        voxels: &Attributes,
-        grid: &Grid,
-        view_proj: Mat4,
-        light: Light,
-        by: ColourBy,
-    ) -> Result<(), Error> {
+        let light = light.into();
         light.check()?;
         if voxels.surface.size != grid.size {
             return Err(refused(format!(

@@ -4,7 +4,6 @@
 //! blocking wait. Both run in the same process on the same pipeline, interleaved, so the ratio
 //! holds on any machine. Median, fastest and slowest of `--reps` runs of 1000 binds each.
 
-use std::process::ExitCode;
 use std::time::Instant;
 
 use fieldkit::bind::ComputePipeline;
@@ -14,14 +13,8 @@ use fieldkit::shaders::distance::jfa_step::{self, jump};
 /// Binds per timed run.
 const BINDS: u32 = 1000;
 
-pub fn run(args: &crate::measure::Args) -> ExitCode {
-    match bench(args.reps.max(20), args.warmup) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e}");
-            ExitCode::FAILURE
-        }
-    }
+pub fn run(args: &crate::measure::Args) -> Result<(), String> {
+    bench(args.reps.max(20), args.warmup)
 }
 
 fn texture(ctx: &Context) -> wgpu::TextureView {

@@ -8,17 +8,10 @@
 //! builds build scripts here: `[profile.dev.build-override] opt-level = 3`).
 
 use std::path::Path;
-use std::process::ExitCode;
 use std::time::Instant;
 
-pub fn run(args: &crate::measure::Args) -> ExitCode {
-    match bench(args.reps.max(20), args.warmup) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e}");
-            ExitCode::FAILURE
-        }
-    }
+pub fn run(args: &crate::measure::Args) -> Result<(), String> {
+    bench(args.reps.max(20), args.warmup)
 }
 
 /// Copy every file under `from` into `to`, keeping the tree.

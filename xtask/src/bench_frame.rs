@@ -13,19 +13,13 @@
 //! `target/release/examples/viewer`, built first.
 
 use std::path::PathBuf;
-use std::process::{Command, ExitCode};
+use std::process::Command;
 
 use crate::crate_root;
 use crate::measure::Args;
 
-pub fn run(args: &Args) -> ExitCode {
-    match frame(args) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("bench frame: {e}");
-            ExitCode::FAILURE
-        }
-    }
+pub fn run(args: &Args) -> Result<(), String> {
+    frame(args)
 }
 
 fn frame(args: &Args) -> Result<(), String> {

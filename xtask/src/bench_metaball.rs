@@ -11,7 +11,6 @@
 //! does not are counted apart. Writes `metaball.csv` and `metaball.png`.
 
 use std::io::Write;
-use std::process::ExitCode;
 
 use fieldkit::distance::Variant;
 use fieldkit::distance::{Grid, Method};
@@ -23,14 +22,8 @@ use glam::{DVec3, Mat4, Vec3, Vec4};
 
 use crate::measure::{Stamps, median};
 
-pub fn run(args: &crate::measure::Args) -> ExitCode {
-    match bench(args.quick, args.reps, args.warmup, args.band, &args.out) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("bench metaball: {e}");
-            ExitCode::FAILURE
-        }
-    }
+pub fn run(args: &crate::measure::Args) -> Result<(), String> {
+    bench(args.quick, args.reps, args.warmup, args.band, &args.out)
 }
 
 /// One tracer on one voxel set.

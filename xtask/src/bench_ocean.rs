@@ -6,8 +6,6 @@
 //! with depth fade on, median of the timed runs. Error: the projected height error the LOD
 //! computes (`fieldkit::ocean::lod`), in pixels. Writes `ocean.csv` and `ocean.png`.
 
-use std::process::ExitCode;
-
 use fieldkit::gpu::Context;
 use fieldkit::ocean::Waves;
 use fieldkit::ocean::{LodSettings, select, writeup_patches};
@@ -16,14 +14,8 @@ use glam::{DVec2, DVec3};
 
 use crate::measure::{Stamps, median};
 
-pub fn run(args: &crate::measure::Args) -> ExitCode {
-    match bench(args.quick, args.reps, args.warmup, &args.out) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("bench ocean: {e}");
-            ExitCode::FAILURE
-        }
-    }
+pub fn run(args: &crate::measure::Args) -> Result<(), String> {
+    bench(args.quick, args.reps, args.warmup, &args.out)
 }
 
 struct Row {

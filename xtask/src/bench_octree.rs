@@ -18,8 +18,6 @@
 //! `octree_build.png` (build time against grid side) and `octree_render.png` (frame time
 //! against level).
 
-use std::process::ExitCode;
-
 use fieldkit::gpu::Context;
 use fieldkit::octree::{Lod, OctreeBuilder, OctreeCaster, RenderSettings};
 use fieldkit::voxelize::{Grid, Mesh, Separation, Voxelizer};
@@ -27,14 +25,8 @@ use glam::{DVec3, Vec3};
 
 use crate::measure::{Stamps, median};
 
-pub fn run(args: &crate::measure::Args) -> ExitCode {
-    match bench(args) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("bench octree: {e}");
-            ExitCode::FAILURE
-        }
-    }
+pub fn run(args: &crate::measure::Args) -> Result<(), String> {
+    bench(args)
 }
 
 struct Row {

@@ -13,8 +13,6 @@
 //! quarter-voxel step, no skipping, no jitter, the same light volume), over every pixel.
 //! Writes `volume.csv` and `volume.png`.
 
-use std::process::ExitCode;
-
 use fieldkit::gpu::{Context, read_texture};
 use fieldkit::view::View;
 use fieldkit::volume::{
@@ -25,14 +23,8 @@ use glam::{Mat4, Vec3};
 
 use crate::measure::{Stamps, median};
 
-pub fn run(args: &crate::measure::Args) -> ExitCode {
-    match bench(args.quick, args.reps, args.warmup, &args.sizes, &args.out) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("bench volume: {e}");
-            ExitCode::FAILURE
-        }
-    }
+pub fn run(args: &crate::measure::Args) -> Result<(), String> {
+    bench(args.quick, args.reps, args.warmup, &args.sizes, &args.out)
 }
 
 struct Row {

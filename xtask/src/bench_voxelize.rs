@@ -21,8 +21,6 @@
 //! empty,zeroed,cleared,loaded` adds the floor rows of `floor.rs`: an empty pass timed the same
 //! way (`FIELDKIT_BENCH_FLOOR_THREADS` sets its threads).
 
-use std::process::ExitCode;
-
 use fieldkit::gpu::Context;
 use fieldkit::voxelize::{Mesh, Surface, Voxelizer};
 use glam::DVec3;
@@ -30,14 +28,8 @@ use glam::DVec3;
 use crate::floor::EmptyPass;
 use crate::measure::{Stamps, median};
 
-pub fn run(args: &crate::measure::Args) -> ExitCode {
-    match bench(args) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("bench voxelize: {e}");
-            ExitCode::FAILURE
-        }
-    }
+pub fn run(args: &crate::measure::Args) -> Result<(), String> {
+    bench(args)
 }
 
 /// An OBJ file (tobj), or the npm package `bunny`'s `index.js`.

@@ -204,16 +204,25 @@ fn main() -> ExitCode {
                 );
                 return ExitCode::FAILURE;
             }
-            match technique {
-                Technique::Bind => bench_bind::run(&args),
-                Technique::Build => bench_build::run(&args),
-                Technique::Distance => bench_distance::run(&args),
-                Technique::Metaball => bench_metaball::run(&args),
-                Technique::Volume => bench_volume::run(&args),
-                Technique::Ocean => bench_ocean::run(&args),
-                Technique::Voxelize => bench_voxelize::run(&args),
-                Technique::Octree => bench_octree::run(&args),
-                Technique::Frame => bench_frame::run(&args),
+            let run = match technique {
+                Technique::Bind => bench_bind::run,
+                Technique::Build => bench_build::run,
+                Technique::Distance => bench_distance::run,
+                Technique::Metaball => bench_metaball::run,
+                Technique::Volume => bench_volume::run,
+                Technique::Ocean => bench_ocean::run,
+                Technique::Voxelize => bench_voxelize::run,
+                Technique::Octree => bench_octree::run,
+                Technique::Frame => bench_frame::run,
+            };
+            match run(&args) {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(e) => {
+                    let name = clap::ValueEnum::to_possible_value(&technique)
+                        .map_or(String::new(), |v| v.get_name().to_string());
+                    eprintln!("bench {name}: {e}");
+                    ExitCode::FAILURE
+                }
             }
         }
     }

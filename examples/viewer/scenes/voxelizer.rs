@@ -359,7 +359,7 @@ impl VoxelizerScene {
                     } else {
                         fieldkit::voxelize::Light::Directional(Vec3::new(0.4, 0.8, 0.5))
                     };
-                    v.encode_lit(
+                    v.encode(
                         device,
                         frame.rec.encoder,
                         cv,

@@ -11,8 +11,6 @@ mod rig;
 mod three;
 mod two;
 
-use std::process::ExitCode;
-
 use fieldkit::gpu::{Context, read_buffer};
 
 use crate::measure::Args;
@@ -236,14 +234,8 @@ fn words(ctx: &Context, b: &wgpu::Buffer) -> Result<Vec<u32>, String> {
     Ok(bytemuck::cast_slice::<u8, u32>(&read_buffer(ctx, b).map_err(|e| e.to_string())?).to_vec())
 }
 
-pub fn run(args: &Args) -> ExitCode {
-    match distance(args) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("bench distance: {e}");
-            ExitCode::FAILURE
-        }
-    }
+pub fn run(args: &Args) -> Result<(), String> {
+    distance(args)
 }
 
 /// The whole sweep: the peer first (see [`peers`]), then every 3D and 2D size on this
