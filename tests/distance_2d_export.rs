@@ -18,7 +18,7 @@ fn field(ctx: &Context) -> Vec<f32> {
             mask[(y * W + x) as usize] = 255;
         }
     }
-    let tex = upload_2d(&ctx, [W, H], wgpu::TextureFormat::R8Unorm, &mask);
+    let tex = upload_2d(ctx, [W, H], wgpu::TextureFormat::R8Unorm, &mask);
     let d2 = Distance2d::new(&ctx.device).unwrap();
     let mut enc = ctx.encoder("export");
     let f = d2

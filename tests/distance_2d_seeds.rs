@@ -62,7 +62,7 @@ fn upload(ctx: &Context, format: wgpu::TextureFormat, px: &[[f32; 4]]) -> wgpu::
             .collect(),
         f => panic!("no upload for {f:?}"),
     };
-    upload_2d(&ctx, [W, H], format, &bytes)
+    upload_2d(ctx, [W, H], format, &bytes)
 }
 
 /// Every format and rule: the exact transform's distances equal the CPU transform of the

@@ -31,7 +31,7 @@ fn seed_stages(
     settings: &Settings,
 ) -> (Grid, fieldkit::metaball::SurfaceSeeds) {
     let grid = settings.fit_grid(voxels, 1.0).unwrap().unwrap();
-    let seeds = run_stage(&ctx, voxels, |balls, enc, inst| {
+    let seeds = run_stage(ctx, voxels, |balls, enc, inst| {
         balls.encode_seeds(&ctx.device, enc, inst, &grid, 1.0, settings)
     });
     (grid, seeds)

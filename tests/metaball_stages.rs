@@ -44,7 +44,7 @@ fn seeds(ctx: &Context) -> (SurfaceSeeds, [usize; 3]) {
     let s = settings();
     let v = voxels();
     let grid = s.fit_grid(&v, 1.0).unwrap().unwrap();
-    let out = run_stage(&ctx, &v, |balls, enc, inst| {
+    let out = run_stage(ctx, &v, |balls, enc, inst| {
         balls.encode_seeds(&ctx.device, enc, inst, &grid, 1.0, &s)
     });
     let [w, h, d] = grid.size.map(|x| x as usize);
