@@ -154,27 +154,52 @@ pub fn load_pass<'e>(
     colour: &wgpu::TextureView,
     depth: &wgpu::TextureView,
 ) -> wgpu::RenderPass<'e> {
-    fn load<T>() -> wgpu::Operations<T> {
-        wgpu::Operations {
-            load: wgpu::LoadOp::Load,
-            store: wgpu::StoreOp::Store,
-        }
+    let colour = load_colour(colour);
+    encoder.begin_render_pass(&load_desc(label, &colour, depth))
+}
+
+/// [`load_pass`] through a recorder: timed under `label` when it carries a profiler.
+pub fn load_pass_recorded<'r>(
+    rec: &'r mut crate::gpu::Recorder<'_>,
+    label: &str,
+    colour: &wgpu::TextureView,
+    depth: &wgpu::TextureView,
+) -> wgpu::RenderPass<'r> {
+    let colour = load_colour(colour);
+    rec.render_pass(&load_desc(label, &colour, depth), label)
+}
+
+fn load<T>() -> wgpu::Operations<T> {
+    wgpu::Operations {
+        load: wgpu::LoadOp::Load,
+        store: wgpu::StoreOp::Store,
     }
-    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+}
+
+fn load_colour(colour: &wgpu::TextureView) -> [Option<wgpu::RenderPassColorAttachment<'_>>; 1] {
+    [Some(wgpu::RenderPassColorAttachment {
+        view: colour,
+        depth_slice: None,
+        resolve_target: None,
+        ops: load(),
+    })]
+}
+
+fn load_desc<'a>(
+    label: &'a str,
+    colour: &'a [Option<wgpu::RenderPassColorAttachment<'a>>],
+    depth: &'a wgpu::TextureView,
+) -> wgpu::RenderPassDescriptor<'a> {
+    wgpu::RenderPassDescriptor {
         label: Some(label),
-        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-            view: colour,
-            depth_slice: None,
-            resolve_target: None,
-            ops: load(),
-        })],
+        color_attachments: colour,
         depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
             view: depth,
             depth_ops: Some(load()),
             stencil_ops: None,
         }),
         ..Default::default()
-    })
+    }
 }
 
 /// Colour and depth targets of one size, readable back (`COPY_SRC`) and sampled

@@ -6,9 +6,9 @@ use glam::{Mat4, Vec4};
 use super::Instances;
 use crate::bind::{RenderPipeline, RenderTargets};
 use crate::error::Error;
-use crate::gpu::uniform_buffer as uniform;
+use crate::gpu::{Record, uniform_buffer as uniform};
 use crate::shaders::metaball::voxel_cubes;
-use crate::view::{box_visible, depth_state, load_pass};
+use crate::view::{box_visible, depth_state, load_pass_recorded};
 
 /// How the debug cubes are drawn.
 ///
@@ -157,7 +157,7 @@ impl Cubes {
     pub fn encode(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         colour: &wgpu::TextureView,
         depth: &wgpu::TextureView,
         instances: &Instances,
@@ -206,7 +206,8 @@ impl Cubes {
                 params: (&params).into(),
             },
         )?;
-        let mut pass = load_pass(encoder, stage, colour, depth);
+        let mut rec = rec.recorder();
+        let mut pass = load_pass_recorded(&mut rec, stage, colour, depth);
         pass.set_pipeline(&self.pipeline.pipeline);
         bound.set_render(&mut pass);
         pass.set_vertex_buffer(0, instances.buffer.slice(..instances.count as u64 * 16));

@@ -32,9 +32,9 @@ use glam::{Mat4, Vec3, Vec4};
 use super::{BlobBins, MetaballField};
 use crate::bind::{ComputePipeline, RenderPipeline, RenderTargets};
 use crate::error::Error;
-use crate::gpu::uniform_buffer as uniform;
+use crate::gpu::{Record, uniform_buffer as uniform};
 use crate::shaders::metaball::{blob_trace, composite, sdf_raymarch};
-use crate::view::{View, box_visible, depth_state, load_pass, screen_rect};
+use crate::view::{View, box_visible, depth_state, load_pass_recorded, screen_rect};
 
 /// What the raymarcher writes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -734,7 +734,7 @@ impl Raymarcher {
     pub fn encode_composite(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         colour: &wgpu::TextureView,
         depth: &wgpu::TextureView,
         marched: &Marched,
@@ -784,7 +784,8 @@ impl Raymarcher {
             },
         )?;
         let [x0, y0, x1, y1] = marched.rect;
-        let mut pass = load_pass(encoder, composite::STAGE, colour, depth);
+        let mut rec = rec.recorder();
+        let mut pass = load_pass_recorded(&mut rec, composite::STAGE, colour, depth);
         pass.set_pipeline(&pipeline.pipeline);
         bound.set_render(&mut pass);
         pass.set_scissor_rect(x0, y0, x1 - x0, y1 - y0);

@@ -8,9 +8,9 @@ use glam::{Mat4, Vec3};
 use super::{Attributes, Grid};
 use crate::bind::{Bound, RenderPipeline, RenderTargets};
 use crate::error::Error;
-use crate::gpu::KeptUniform;
+use crate::gpu::{KeptUniform, Record};
 use crate::shaders::voxelize::voxel_view::{self as stage, ViewParams};
-use crate::view::{depth_state, load_pass};
+use crate::view::{depth_state, load_pass_recorded};
 
 /// Bad input to the voxel view: an error of its own stage.
 fn refused(what: String) -> Error {
@@ -147,7 +147,7 @@ impl VoxelView {
     pub fn encode(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         colour: &wgpu::TextureView,
         depth: &wgpu::TextureView,
         voxels: &Attributes,
@@ -225,8 +225,10 @@ impl VoxelView {
         }
         let d = drawn.as_ref().expect("kept or made above");
         // The count again each draw: the voxels may have been made anew in the same buffers.
-        encoder.copy_buffer_to_buffer(&voxels.occupied, 0, &d.args, 4, 4);
-        let mut pass = load_pass(encoder, stage::STAGE, colour, depth);
+        let mut rec = rec.recorder();
+        rec.encoder
+            .copy_buffer_to_buffer(&voxels.occupied, 0, &d.args, 4, 4);
+        let mut pass = load_pass_recorded(&mut rec, stage::STAGE, colour, depth);
         pass.set_pipeline(&self.pipeline.pipeline);
         d.bound.set_render(&mut pass);
         pass.draw_indirect(&d.args, 0);

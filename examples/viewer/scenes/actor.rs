@@ -157,7 +157,7 @@ impl Actor {
             let cubes = &self.cubes.as_ref().expect("set above").1;
             cubes.encode(
                 device,
-                frame.rec.encoder,
+                &mut *frame.rec,
                 cv,
                 dv,
                 instances,
@@ -189,7 +189,7 @@ impl Actor {
                     &view,
                     &s.raymarch,
                 )? {
-                    marcher.encode_composite(device, frame.rec.encoder, cv, dv, &m)?;
+                    marcher.encode_composite(device, &mut *frame.rec, cv, dv, &m)?;
                 }
             }
             ActorDraw::Cubes => {}
@@ -242,7 +242,7 @@ impl Actor {
         )? {
             marcher.encode_composite(
                 device,
-                frame.rec.encoder,
+                &mut *frame.rec,
                 &frame.targets.colour_view,
                 &frame.targets.depth_view,
                 &m,

@@ -361,7 +361,7 @@ impl VoxelizerScene {
                     };
                     v.encode(
                         device,
-                        frame.rec.encoder,
+                        &mut *frame.rec,
                         cv,
                         dv,
                         attrs,
@@ -386,7 +386,7 @@ impl VoxelizerScene {
                     let c = &self.cubes.as_ref().expect("set above").1;
                     c.encode(
                         device,
-                        frame.rec.encoder,
+                        &mut *frame.rec,
                         cv,
                         dv,
                         instances,
