@@ -736,7 +736,7 @@ impl VolumeRenderer {
     pub fn encode_composite(
         &self,
         device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut impl Record,
         colour: &wgpu::TextureView,
         marched: &VolumeMarched,
     ) -> Result<(), Error> {
@@ -760,7 +760,8 @@ impl VolumeRenderer {
                 marched: (&mv).into(),
             },
         )?;
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        let mut rec = rec.recorder();
+        let desc = wgpu::RenderPassDescriptor {
             label: Some(volume_composite::STAGE),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
                 view: colour,
@@ -775,7 +776,8 @@ impl VolumeRenderer {
             timestamp_writes: None,
             occlusion_query_set: None,
             multiview_mask: None,
-        });
+        };
+        let mut pass = rec.render_pass(&desc, volume_composite::STAGE);
         pass.set_pipeline(&self.composite.pipeline);
         bound.set_render(&mut pass);
         let [x0, y0, x1, y1] = marched.rect;

@@ -109,7 +109,7 @@ impl VolumeScene {
         )? {
             self.renderer.encode_composite(
                 device,
-                frame.rec.encoder,
+                &mut *frame.rec,
                 &frame.targets.colour_view,
                 &m,
             )?;
@@ -184,7 +184,7 @@ impl VolumeScene {
         )? {
             self.renderer.encode_composite(
                 device,
-                frame.rec.encoder,
+                &mut *frame.rec,
                 &frame.targets.colour_view,
                 &m,
             )?;
