@@ -1,6 +1,9 @@
 //! Bad input to the 2D distance stages: each a typed error naming the problem, never a panic,
 //! a wgpu validation error or a lost device.
 
+mod common;
+
+use common::seed_pair;
 use fieldkit::Error;
 use fieldkit::distance::{Jfa2d, JfaSettings2d, MAX_PACKED_SIDE, upload_mask};
 use fieldkit::gpu::Context;
@@ -153,12 +156,7 @@ fn zero_step_and_mismatched_ping_pong() {
     let jfa = Jfa2d::new(&ctx.device).unwrap();
     let seeds = upload_mask(&ctx.device, &ctx.queue, &[255; 64], 8, 8).unwrap();
     let mut enc = ctx.encoder("bad");
-    let a = jfa
-        .encode_seed(&ctx.device, &mut enc, &seeds, false)
-        .unwrap();
-    let b = jfa
-        .encode_seed(&ctx.device, &mut enc, &seeds, false)
-        .unwrap();
+    let (a, b) = seed_pair(&ctx, &jfa, &mut enc, &seeds);
     assert!(matches!(
         jfa.encode_jump(&ctx.device, &mut enc, &a, &b, 0),
         Err(Error::Invalid { .. })

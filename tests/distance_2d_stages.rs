@@ -48,12 +48,7 @@ fn one_jump_pass() {
     let m = mask();
     let seeds = upload_mask(&ctx.device, &ctx.queue, &to_bytes(&m), W as u32, H as u32).unwrap();
     let mut enc = ctx.encoder("jump");
-    let a = jfa
-        .encode_seed(&ctx.device, &mut enc, &seeds, false)
-        .unwrap();
-    let b = jfa
-        .encode_seed(&ctx.device, &mut enc, &seeds, false)
-        .unwrap();
+    let (a, b) = seed_pair(&ctx, &jfa, &mut enc, &seeds);
     jfa.encode_jump(&ctx.device, &mut enc, &a, &b, 4).unwrap();
     ctx.submit_and_wait("jump", enc).unwrap();
     let nearest: Vec<u32> = read_texture(&ctx, &b).unwrap();

@@ -4,6 +4,9 @@
 //! passes it timed and orders its numbers sensibly; it does not judge speed (that is
 //! `xtask bench`).
 
+mod common;
+
+use common::seed_pair;
 use fieldkit::distance::{Jfa2d, upload_mask};
 use fieldkit::gpu::{Context, Profiler};
 
@@ -20,12 +23,7 @@ fn profiler_times_the_passes_recorded_through_it() {
     let seeds = upload_mask(&ctx.device, &ctx.queue, &vec![0u8; 256 * 256], 256, 256).unwrap();
     let mut enc = ctx.encoder("timed");
     // Recorded into the bare encoder: not timed.
-    let a = jfa
-        .encode_seed(&ctx.device, &mut enc, &seeds, false)
-        .unwrap();
-    let b = jfa
-        .encode_seed(&ctx.device, &mut enc, &seeds, false)
-        .unwrap();
+    let (a, b) = seed_pair(&ctx, &jfa, &mut enc, &seeds);
     {
         let mut rec = profiler.record(&mut enc);
         jfa.encode_jump(&ctx.device, &mut rec, &a, &b, 64).unwrap();

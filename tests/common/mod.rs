@@ -213,3 +213,17 @@ pub fn upload_2d(
         bytes,
     )
 }
+
+/// Two seed textures of `seeds` (a JFA pass's source and destination), recorded into `enc`.
+pub fn seed_pair(
+    ctx: &Context,
+    jfa: &Jfa2d,
+    enc: &mut wgpu::CommandEncoder,
+    seeds: &wgpu::Texture,
+) -> (wgpu::Texture, wgpu::Texture) {
+    let mut seed = || {
+        jfa.encode_seed(&ctx.device, &mut *enc, seeds, false)
+            .unwrap()
+    };
+    (seed(), seed())
+}
