@@ -184,7 +184,7 @@ fn unknown_override_is_an_error() {
 }
 
 /// A stage's `Overrides` hold the shader's defaults (`override ROWS: u32 = 1u;` in
-/// `edt_rows.wgsl`; `PACK_2D`, `AXIS`, `Y_AFTER_Z`, `SOURCE_APART` and `CELLS = 3839u` in
+/// `edt_rows.wgsl`; `PACK_2D`, `AXIS`, `Y_AFTER_Z`, `SOURCE_APART`, `CELLS = 3839u` and `SIGNED` in
 /// `edt_tile.wgsl`; `SEED_X_BITS = SEED_Y_BITS = 11u` in both), and their `constants()` make
 /// pipelines.
 #[test]
@@ -220,7 +220,8 @@ fn typed_overrides_hold_the_shader_defaults_and_make_pipelines() {
             ("SOURCE_APART", 0.0),
             ("CELLS", 2336.0),
             ("SEED_X_BITS", 11.0),
-            ("SEED_Y_BITS", 11.0)
+            ("SEED_Y_BITS", 11.0),
+            ("SIGNED", 0.0)
         ]
     );
     edt_rows::row_words::Pipeline::with_overrides(&ctx.device, &rows.constants())
