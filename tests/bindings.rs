@@ -184,9 +184,9 @@ fn unknown_override_is_an_error() {
 }
 
 /// A stage's `Overrides` hold the shader's defaults (`override ROWS: u32 = 1u;` in
-/// `edt_rows.wgsl`; `PACK_2D`, `AXIS`, `Y_AFTER_Z`, `SOURCE_APART`, `CELLS = 3839u` and `SIGNED` in
-/// `edt_tile.wgsl`; `SEED_X_BITS = SEED_Y_BITS = 11u` in both), and their `constants()` make
-/// pipelines.
+/// `edt_rows.wgsl`; `PACK_2D`, `AXIS`, `Y_AFTER_Z`, `SOURCE_APART`, `CELLS = 3839u` and
+/// `SIGNED` in `edt_tile.wgsl`; `SEED_X_BITS = SEED_Y_BITS = 11u` in both), and their
+/// `constants()` make pipelines.
 #[test]
 fn typed_overrides_hold_the_shader_defaults_and_make_pipelines() {
     use fieldkit::shaders::distance::{edt_rows, edt_tile};
