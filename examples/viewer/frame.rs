@@ -85,6 +85,11 @@ impl Made {
         }
     }
 
+    /// Buffers, textures, views, bind groups: the table's and the CSV's order.
+    fn counts(&self) -> [isize; 4] {
+        [self.buffers, self.textures, self.views, self.bind_groups]
+    }
+
     /// Each count the largest of `a`'s and `b`'s.
     fn max(self, b: Made) -> Self {
         Self {
@@ -133,6 +138,21 @@ pub struct FrameCost {
     pub made: Made,
     /// What the scene reported of its last measured frame (patches, instances, grid).
     pub stats: Vec<String>,
+}
+
+impl FrameCost {
+    /// The frames that follow a change, ms: the resized frame's CPU and wall, the size-changed
+    /// frame's CPU and wall, and the most CPU of the frames after it (the table's and the CSV's
+    /// order).
+    fn hitches(&self) -> [f64; 5] {
+        [
+            self.resize_cpu_ms,
+            self.resize_wall_ms,
+            self.change_cpu_ms,
+            self.change_wall_ms,
+            self.after_change_cpu_ms,
+        ]
+    }
 }
 
 /// Measure `scenes` (all of them where empty) at `size`, print the table, write `frame.csv`
@@ -437,8 +457,14 @@ fn print_table(adapter: &str, costs: &[FrameCost]) {
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     let s = |x: &Spread| format!("{:.3} ({:.3}–{:.3})", x.median, x.min, x.max);
     for c in costs {
+        let [r_cpu, r_wall, c_cpu, c_wall, after] = c.hitches();
+        let made = c.made.counts().map(|n| n.to_string()).join(" / ");
+        let error = c
+            .error
+            .as_ref()
+            .map_or(String::new(), |e| format!(" error: {e}"));
         println!(
-            "| {} | {}×{} | {} | {} | {} | {} | {} | {} | {:.1} | {:.2} / {:.2} | {:.2} / {:.2}, {:.2} | {} / {} / {} / {} |{}",
+            "| {} | {}×{} | {} | {} | {} | {} | {} | {} | {:.1} | {r_cpu:.2} / {r_wall:.2} | {c_cpu:.2} / {c_wall:.2}, {after:.2} | {made} |{error}",
             c.scene,
             c.size[0],
             c.size[1],
@@ -449,18 +475,6 @@ fn print_table(adapter: &str, costs: &[FrameCost]) {
             s(&c.floor),
             c.slow_frames,
             c.first_ms,
-            c.resize_cpu_ms,
-            c.resize_wall_ms,
-            c.change_cpu_ms,
-            c.change_wall_ms,
-            c.after_change_cpu_ms,
-            c.made.buffers,
-            c.made.textures,
-            c.made.views,
-            c.made.bind_groups,
-            c.error
-                .as_ref()
-                .map_or(String::new(), |e| format!(" error: {e}"))
         );
     }
     for c in costs.iter().filter(|c| !c.passes.is_empty()) {
@@ -486,7 +500,7 @@ fn write_csv(path: &Path, adapter: &str, start: &str, costs: &[FrameCost]) -> Re
     );
     for c in costs {
         text += &format!(
-            "\"{adapter}\",{start},{},{},{},{},{},{},{},{},{},{:.3},{:.4},{:.4},{:.4},{:.4},{:.4},{},{},{},{}\n",
+            "\"{adapter}\",{start},{},{},{},{},{},{},{},{},{},{:.3},{},{}\n",
             c.scene,
             c.size[0],
             c.size[1],
@@ -497,15 +511,8 @@ fn write_csv(path: &Path, adapter: &str, start: &str, costs: &[FrameCost]) -> Re
             c.floor.csv(),
             c.slow_frames,
             c.first_ms,
-            c.resize_cpu_ms,
-            c.resize_wall_ms,
-            c.change_cpu_ms,
-            c.change_wall_ms,
-            c.after_change_cpu_ms,
-            c.made.buffers,
-            c.made.textures,
-            c.made.views,
-            c.made.bind_groups
+            c.hitches().map(|ms| format!("{ms:.4}")).join(","),
+            c.made.counts().map(|n| n.to_string()).join(","),
         );
     }
     std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))

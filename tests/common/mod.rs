@@ -192,6 +192,17 @@ pub fn upload_2d(
     format: wgpu::TextureFormat,
     bytes: &[u8],
 ) -> wgpu::Texture {
+    upload_layers(ctx, [size[0], size[1], 1], format, bytes)
+}
+
+/// A 2D texture (array) of `size` = [width, height, layers] and `format` holding `bytes`
+/// (rows packed, layer after layer), for sampling.
+pub fn upload_layers(
+    ctx: &Context,
+    size: [u32; 3],
+    format: wgpu::TextureFormat,
+    bytes: &[u8],
+) -> wgpu::Texture {
     use wgpu::util::DeviceExt;
     ctx.device.create_texture_with_data(
         &ctx.queue,
@@ -200,7 +211,7 @@ pub fn upload_2d(
             size: wgpu::Extent3d {
                 width: size[0],
                 height: size[1],
-                depth_or_array_layers: 1,
+                depth_or_array_layers: size[2],
             },
             mip_level_count: 1,
             sample_count: 1,

@@ -291,23 +291,5 @@ pub fn constant_maps(
         .iter()
         .flat_map(|c| std::iter::repeat_n(c[..channels].to_vec(), (side * side) as usize).flatten())
         .collect();
-    ctx.device.create_texture_with_data(
-        &ctx.queue,
-        &wgpu::TextureDescriptor {
-            label: Some("test maps"),
-            size: wgpu::Extent3d {
-                width: side,
-                height: side,
-                depth_or_array_layers: layers.len() as u32,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        },
-        wgpu::util::TextureDataOrder::LayerMajor,
-        &texels,
-    )
+    super::upload_layers(ctx, [side, side, layers.len() as u32], format, &texels)
 }
