@@ -517,22 +517,6 @@ fn the_y_pass_of_a_split_field_sweeps_exactly() {
     }
 }
 
-/// A device on the same adapter with WebGPU's default limits: 16 KiB of workgroup memory, so the
-/// workgroup-memory column passes take 8 or 4 columns per tile, or the global path, by length.
-fn default_limits(ctx: &Context) -> Context {
-    let adapter = ctx
-        .adapter
-        .as_ref()
-        .expect("Context::shared opens an adapter");
-    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-        label: Some("default limits"),
-        required_limits: wgpu::Limits::default(),
-        ..Default::default()
-    }))
-    .expect("every WebGPU adapter takes the default limits");
-    Context::from_device(device, queue)
-}
-
 /// The column passes in workgroup memory (`edt_tile.wgsl`) and in global memory
 /// (`edt_columns.wgsl`), chosen automatically or forced, at the adapter's limits and at WebGPU's
 /// defaults, unsigned and signed, against the CPU transform: exact everywhere. The extra shapes

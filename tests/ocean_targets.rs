@@ -327,6 +327,109 @@ fn gbuffer_subsurface_target_and_material() {
     assert!(e.to_string().contains("takes 5"), "{e}");
 }
 
+/// Every G-buffer output within WebGPU's default 32 bytes a sample: the four targets in
+/// `Output::gbuffer()` and the five packed ones of `Output::gbuffer_subsurface()` (material and
+/// subsurface colour as `pack4x8unorm` words), drawn on a default-limits device, hold what the
+/// wide `Rgba32Float` targets hold at the adapter's limits, to the formats' own rounding; the
+/// wide outputs there are a typed error naming the limit.
+#[test]
+fn gbuffers_fit_webgpu_default_limits() {
+    let shared = Context::shared();
+    let ctx = common::default_limits(&shared);
+    assert_eq!(
+        ctx.device.limits().max_color_attachment_bytes_per_sample,
+        32
+    );
+    for output in [
+        Output::GBuffer([RGBA32; 4]),
+        Output::GBufferSubsurface([wgpu::TextureFormat::Rgba8Unorm; 5]),
+    ] {
+        let e = OceanRenderer::new(&ctx.device, &ctx.queue, output, false)
+            .err()
+            .expect("past 32 bytes a sample");
+        assert!(matches!(e, Error::Unsupported { .. }), "{e}");
+        assert!(
+            e.to_string()
+                .contains("max_color_attachment_bytes_per_sample"),
+            "{e}"
+        );
+    }
+    let look = Look {
+        metallic: 0.25,
+        specular: 0.75,
+        subsurface_colour: Vec3::new(0.2, 0.6, 0.1),
+        ..calm_look()
+    };
+    let depth_of = |ctx: &Context| target(ctx, wgpu::TextureFormat::Depth32Float);
+    let wide = OceanRenderer::new(
+        &shared.device,
+        &shared.queue,
+        Output::GBufferSubsurface([RGBA32; 5]),
+        false,
+    )
+    .unwrap();
+    let wide_targets: Vec<_> = (0..5).map(|_| target(&shared, RGBA32)).collect();
+    draw(
+        &shared,
+        &wide,
+        &calm(),
+        &look,
+        &wide_targets,
+        &depth_of(&shared),
+        1.0,
+        false,
+    );
+    let want: Vec<Vec<[f32; 4]>> = wide_targets
+        .iter()
+        .map(|t| common::read_rgba(&shared, t))
+        .collect();
+    for output in [Output::gbuffer(), Output::gbuffer_subsurface()] {
+        let formats = output.formats();
+        assert!(
+            fieldkit::gpu::target_bytes_per_sample(&formats) <= Some(32),
+            "{formats:?}"
+        );
+        let renderer = OceanRenderer::new(&ctx.device, &ctx.queue, output, false).unwrap();
+        let targets: Vec<_> = formats.iter().map(|f| target(&ctx, *f)).collect();
+        draw(
+            &ctx,
+            &renderer,
+            &calm(),
+            &look,
+            &targets,
+            &depth_of(&ctx),
+            1.0,
+            false,
+        );
+        let mut drawn = 0;
+        for (k, (t, f)) in targets.iter().zip(&formats).enumerate() {
+            let got = common::read_rgba(&ctx, t);
+            // The format's own rounding (a step; half floats relative to the value), set on
+            // llvmpipe and bound by the formats, so it holds on any adapter. The packed words
+            // are integers: WGSL defines pack4x8unorm as ⌊0.5 + 255 v⌋, so they compare exactly.
+            let step = common::format_step(*f);
+            for (i, (g, w)) in got.iter().zip(&want[k]).enumerate() {
+                if w[0] as f64 == CLEAR {
+                    continue;
+                }
+                drawn += 1;
+                for c in 0..4 {
+                    let ok = if *f == wgpu::TextureFormat::R32Uint {
+                        (g[c] * 255.0).round() == (0.5 + 255.0 * w[c]).floor()
+                    } else {
+                        (g[c] - w[c]).abs() <= step * w[c].abs().max(1.0) + 1e-6
+                    };
+                    assert!(
+                        ok,
+                        "{output:?} target {k} channel {c} at {i}: {g:?} vs {w:?}"
+                    );
+                }
+            }
+        }
+        assert!(drawn > 500 * formats.len(), "{drawn}");
+    }
+}
+
 /// The user's maps: a height layer lifts the calm sea by strength × its map's height (the
 /// second layer of the array, as `Layer::map` picks it), and a normal layer tilts the normal by
 /// its map's (−n.x/n.z, −n.y/n.z) × strength.

@@ -1,8 +1,10 @@
 // The ocean surface: the Gerstner wave sum (`fieldkit::gerstner`) drawn as patches of a grid, with
 // scrolling height-map layers in the vertex stage, scrolling normal-map layers and depth fade in
 // the fragment stage, written to one forward-shaded colour target (`fs_forward`), to four
-// G-buffer targets (`fs_gbuffer`) or to five (`fs_gbuffer_subsurface`). `displace_grid` evaluates the same sum on a grid for reading
-// back (the f64 reference and the CPU query are tested against it).
+// G-buffer targets (`fs_gbuffer`) or to five (`fs_gbuffer_subsurface`, or
+// `fs_gbuffer_subsurface_packed` within WebGPU's default 32 bytes a sample). `displace_grid`
+// evaluates the same sum on a grid for reading back (the f64 reference and the CPU query are
+// tested against it).
 //
 // Positions are relative to the waves' origin (the host puts it at the camera), so f32 holds
 // small numbers however far out the camera is; phases and scroll offsets are folded in f64.
@@ -127,6 +129,17 @@ struct GBufferSubsurface {
     @location(2) material: vec4<f32>,
     @location(3) base_colour: vec4<f32>,
     @location(4) subsurface_colour: vec4<f32>,
+}
+
+// The five targets within WebGPU's default 32 bytes a sample (`fs_gbuffer_subsurface_packed`):
+// the material and the subsurface colour each packed into one `R32Uint` texel, four 8-bit
+// unorm channels (`pack4x8unorm`; `unpack4x8unorm` reads them back), x in the low byte.
+struct GBufferSubsurfacePacked {
+    @location(0) scene_colour: vec4<f32>,
+    @location(1) normal: vec4<f32>,
+    @location(2) material: u32,
+    @location(3) base_colour: vec4<f32>,
+    @location(4) subsurface_colour: u32,
 }
 
 @group(0) @binding(4) var<uniform> frame: FrameParams;
@@ -288,25 +301,47 @@ fn fs_forward(in: SurfaceOut) -> @location(0) vec4<f32> {
     return vec4<f32>(s.diffuse + s.emissive, 1.0);
 }
 
-@fragment
-fn fs_gbuffer(in: SurfaceOut) -> GBuffer {
+// Metallic, specular, roughness, shading model ÷ 255: the material target's four channels.
+fn material() -> vec4<f32> {
+    return vec4<f32>(frame.metallic, frame.specular, frame.roughness, f32(frame.shading_model) / 255.0);
+}
+
+// The four G-buffer targets of the fragment `in`.
+fn gbuffer(in: SurfaceOut) -> GBuffer {
     let s = shade(in);
     var out: GBuffer;
     out.scene_colour = vec4<f32>(s.emissive, 1.0);
     out.normal = vec4<f32>(s.normal * 0.5 + 0.5, 1.0);
-    out.material = vec4<f32>(frame.metallic, frame.specular, frame.roughness, f32(frame.shading_model) / 255.0);
+    out.material = material();
     out.base_colour = vec4<f32>(s.base, 1.0);
     return out;
 }
 
 @fragment
+fn fs_gbuffer(in: SurfaceOut) -> GBuffer {
+    return gbuffer(in);
+}
+
+@fragment
 fn fs_gbuffer_subsurface(in: SurfaceOut) -> GBufferSubsurface {
-    let s = shade(in);
+    let g = gbuffer(in);
     var out: GBufferSubsurface;
-    out.scene_colour = vec4<f32>(s.emissive, 1.0);
-    out.normal = vec4<f32>(s.normal * 0.5 + 0.5, 1.0);
-    out.material = vec4<f32>(frame.metallic, frame.specular, frame.roughness, f32(frame.shading_model) / 255.0);
-    out.base_colour = vec4<f32>(s.base, 1.0);
+    out.scene_colour = g.scene_colour;
+    out.normal = g.normal;
+    out.material = g.material;
+    out.base_colour = g.base_colour;
     out.subsurface_colour = vec4<f32>(frame.subsurface_colour, 1.0);
+    return out;
+}
+
+@fragment
+fn fs_gbuffer_subsurface_packed(in: SurfaceOut) -> GBufferSubsurfacePacked {
+    let g = gbuffer(in);
+    var out: GBufferSubsurfacePacked;
+    out.scene_colour = g.scene_colour;
+    out.normal = g.normal;
+    out.material = pack4x8unorm(g.material);
+    out.base_colour = g.base_colour;
+    out.subsurface_colour = pack4x8unorm(vec4<f32>(frame.subsurface_colour, 1.0));
     return out;
 }

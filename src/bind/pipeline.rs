@@ -293,6 +293,9 @@ impl<E: Entry> RenderPipeline<E> {
                 });
             }
         }
+        let formats: Vec<wgpu::TextureFormat> =
+            targets.color.iter().flatten().map(|t| t.format).collect();
+        crate::gpu::check_target_bytes(device, info.stage, &formats)?;
         crate::gpu::scoped(device, info.stage, || {
             let layouts = info.layouts(device);
             let pipeline = build_render(device, info, relinked, &layouts, targets);

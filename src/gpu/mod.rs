@@ -11,6 +11,7 @@ mod cache;
 #[cfg(feature = "context")]
 mod context;
 mod readback;
+mod targets;
 mod timing;
 
 #[cfg(feature = "techniques")]
@@ -22,6 +23,8 @@ pub(crate) use cache::installed as installed_pipeline_cache;
 #[cfg(feature = "context")]
 pub use context::{ADAPTER_ENV, Context, read_buffer, read_texture};
 pub use readback::{Readback, readback_buffer, readback_buffers, readback_texture};
+pub(crate) use targets::check_target_bytes;
+pub use targets::{GBUFFER_FORMATS, target_bytes_per_sample};
 pub use timing::{Profiler, Record, Recorder, Timer};
 
 use crate::error::Error;

@@ -41,15 +41,44 @@ pub enum Output {
     /// the source's five, in its order (UE's base pass puts its velocity target before
     /// GBufferD when velocity is written there).
     GBufferSubsurface([wgpu::TextureFormat; 5]),
+    /// [`Output::GBufferSubsurface`] within WebGPU's default 32 bytes a sample: the material
+    /// (target 2) and the subsurface colour (target 4) are `R32Uint`, each four 8-bit unorm
+    /// channels packed by WGSL's `pack4x8unorm` (x in the low byte; `unpack4x8unorm` reads them
+    /// back). The formats given are the scene colour's, the normal's and the base colour's
+    /// (float formats; [`Output::gbuffer_subsurface`] picks ones that fit).
+    GBufferSubsurfacePacked([wgpu::TextureFormat; 3]),
 }
 
 impl Output {
+    /// The four G-buffer targets in [`gpu::GBUFFER_FORMATS`](crate::gpu::GBUFFER_FORMATS):
+    /// 32 bytes a sample, within every WebGPU device's limit.
+    pub fn gbuffer() -> Self {
+        Output::GBuffer(crate::gpu::GBUFFER_FORMATS)
+    }
+
+    /// The five targets packed within every WebGPU device's 32 bytes a sample
+    /// ([`Output::GBufferSubsurfacePacked`]): scene colour `Rgba16Float`, normal
+    /// `Rgb10a2Unorm`, material `R32Uint`, base colour `Rgba8Unorm`, subsurface `R32Uint`.
+    pub fn gbuffer_subsurface() -> Self {
+        let [scene, normal, _, base] = crate::gpu::GBUFFER_FORMATS;
+        Output::GBufferSubsurfacePacked([scene, normal, base])
+    }
+
     /// Colour targets the output writes.
     pub fn targets(&self) -> usize {
-        match self {
-            Output::Forward(_) => 1,
-            Output::GBuffer(_) => 4,
-            Output::GBufferSubsurface(_) => 5,
+        self.formats().len()
+    }
+
+    /// The colour targets' formats, in location order: what to make the targets with.
+    pub fn formats(&self) -> Vec<wgpu::TextureFormat> {
+        match *self {
+            Output::Forward(f) => vec![f],
+            Output::GBuffer(fs) => fs.to_vec(),
+            Output::GBufferSubsurface(fs) => fs.to_vec(),
+            Output::GBufferSubsurfacePacked([scene, normal, base]) => {
+                let packed = wgpu::TextureFormat::R32Uint;
+                vec![scene, normal, packed, base, packed]
+            }
         }
     }
 }
@@ -184,9 +213,7 @@ pub struct OceanRenderer {
     output: Output,
     reversed_z: bool,
     depth: DepthMode,
-    forward: Option<RenderPipeline<stage::fs_forward::Entry>>,
-    gbuffer: Option<RenderPipeline<stage::fs_gbuffer::Entry>>,
-    gbuffer_subsurface: Option<RenderPipeline<stage::fs_gbuffer_subsurface::Entry>>,
+    pipeline: Pipeline,
     height_maps: Maps,
     normal_maps: Maps,
     /// Index buffers per quad count, made on first use.
@@ -196,6 +223,14 @@ pub struct OceanRenderer {
     /// The copy of the scene's depth the fade reads (`R32Float`), kept while the size holds.
     depth_copy: Mutex<Option<wgpu::Texture>>,
     copy_depth: ComputePipeline<depth_copy::copy_depth::Entry>,
+}
+
+/// The surface's pipeline: one per [`Output`].
+enum Pipeline {
+    Forward(RenderPipeline<stage::fs_forward::Entry>),
+    GBuffer(RenderPipeline<stage::fs_gbuffer::Entry>),
+    GBufferSubsurface(RenderPipeline<stage::fs_gbuffer_subsurface::Entry>),
+    GBufferSubsurfacePacked(RenderPipeline<stage::fs_gbuffer_subsurface_packed::Entry>),
 }
 
 /// Triangle indices of one patch: (n + 1)² grid vertices, x fastest, then the skirt ring under
@@ -282,39 +317,22 @@ impl OceanRenderer {
                 write_mask: wgpu::ColorWrites::ALL,
             })
         };
-        let (mut forward, mut gbuffer, mut gbuffer_subsurface) = (None, None, None);
-        match output {
-            Output::Forward(f) => {
-                forward = Some(RenderPipeline::new(
-                    device,
-                    &RenderTargets {
-                        color: &[target(f)],
-                        depth_stencil,
-                        ..Default::default()
-                    },
-                )?)
+        let color: Vec<_> = output.formats().into_iter().map(target).collect();
+        let targets = RenderTargets {
+            color: &color,
+            depth_stencil,
+            ..Default::default()
+        };
+        let pipeline = match output {
+            Output::Forward(_) => Pipeline::Forward(RenderPipeline::new(device, &targets)?),
+            Output::GBuffer(_) => Pipeline::GBuffer(RenderPipeline::new(device, &targets)?),
+            Output::GBufferSubsurface(_) => {
+                Pipeline::GBufferSubsurface(RenderPipeline::new(device, &targets)?)
             }
-            Output::GBuffer(fs) => {
-                gbuffer = Some(RenderPipeline::new(
-                    device,
-                    &RenderTargets {
-                        color: &fs.map(target),
-                        depth_stencil,
-                        ..Default::default()
-                    },
-                )?)
+            Output::GBufferSubsurfacePacked(_) => {
+                Pipeline::GBufferSubsurfacePacked(RenderPipeline::new(device, &targets)?)
             }
-            Output::GBufferSubsurface(fs) => {
-                gbuffer_subsurface = Some(RenderPipeline::new(
-                    device,
-                    &RenderTargets {
-                        color: &fs.map(target),
-                        depth_stencil,
-                        ..Default::default()
-                    },
-                )?)
-            }
-        }
+        };
         use wgpu::util::DeviceExt;
         let texels: Vec<u8> = detail_texels(DETAIL_SIZE, 7)
             .iter()
@@ -344,9 +362,7 @@ impl OceanRenderer {
             output,
             reversed_z,
             depth,
-            forward,
-            gbuffer,
-            gbuffer_subsurface,
+            pipeline,
             height_maps: Maps::none(device, "ocean height maps (none)"),
             normal_maps: Maps::none(device, "ocean normal maps (none)"),
             indices: Mutex::new(Default::default()),
@@ -513,11 +529,11 @@ impl OceanRenderer {
                 }
             }};
         }
-        match (&self.forward, &self.gbuffer, &self.gbuffer_subsurface) {
-            (Some(p), _, _) => draw!(p, fs_forward),
-            (_, Some(p), _) => draw!(p, fs_gbuffer),
-            (_, _, Some(p)) => draw!(p, fs_gbuffer_subsurface),
-            _ => unreachable!("one pipeline is made in new"),
+        match &self.pipeline {
+            Pipeline::Forward(p) => draw!(p, fs_forward),
+            Pipeline::GBuffer(p) => draw!(p, fs_gbuffer),
+            Pipeline::GBufferSubsurface(p) => draw!(p, fs_gbuffer_subsurface),
+            Pipeline::GBufferSubsurfacePacked(p) => draw!(p, fs_gbuffer_subsurface_packed),
         }
         Ok(())
     }
@@ -567,6 +583,18 @@ impl OceanRenderer {
                 STAGE,
                 format!("{} targets given, the output takes {want}", targets.len()),
             ));
+        }
+        for (i, (v, f)) in targets.iter().zip(self.output.formats()).enumerate() {
+            if v.texture().format().remove_srgb_suffix() != f.remove_srgb_suffix() {
+                return Err(Error::invalid(
+                    STAGE,
+                    format!(
+                        "target {i} is {:?}; this renderer's output writes {f:?} there \
+                         (Output::formats)",
+                        v.texture().format()
+                    ),
+                ));
+            }
         }
         if depth.format() != self.depth.format {
             return Err(Error::invalid(

@@ -238,3 +238,71 @@ pub fn seed_pair(
     };
     (seed(), seed())
 }
+
+/// A device on the same adapter as `ctx` with WebGPU's default limits (16 KiB of workgroup
+/// memory, 32 colour bytes a sample, …): what every WebGPU device offers.
+pub fn default_limits(ctx: &Context) -> Context {
+    let adapter = ctx
+        .adapter
+        .as_ref()
+        .expect("Context::shared opens an adapter");
+    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        label: Some("default limits"),
+        required_limits: wgpu::Limits::default(),
+        ..Default::default()
+    }))
+    .expect("every WebGPU adapter takes the default limits");
+    Context::from_device(device, queue)
+}
+
+/// A colour target read back as four floats a texel, whatever its format: float formats as
+/// they are, unorm formats scaled to [0, 1], and an `R32Uint` as the four 8-bit unorm channels
+/// WGSL's `pack4x8unorm` packs (x in the low byte).
+pub fn read_rgba(ctx: &Context, t: &wgpu::Texture) -> Vec<[f32; 4]> {
+    use wgpu::TextureFormat as F;
+    let unorm8 = |b: u32| std::array::from_fn(|k| ((b >> (8 * k)) & 255) as f32 / 255.0);
+    match t.format() {
+        F::Rgba32Float => read_texture(ctx, t).unwrap(),
+        F::Rgba16Float => {
+            let bits: Vec<[u16; 4]> = read_texture(ctx, t).unwrap();
+            bits.iter()
+                .map(|p| p.map(|h| half::f16::from_bits(h).to_f32()))
+                .collect()
+        }
+        F::Rgba8Unorm | F::R32Uint => {
+            let words: Vec<u32> = read_texture(ctx, t).unwrap();
+            words.into_iter().map(unorm8).collect()
+        }
+        F::Rgb10a2Unorm => {
+            let words: Vec<u32> = read_texture(ctx, t).unwrap();
+            let field = |w: u32, shift: u32, bits: u32| ((w >> shift) & ((1 << bits) - 1)) as f32;
+            words
+                .into_iter()
+                .map(|w| {
+                    [
+                        field(w, 0, 10) / 1023.0,
+                        field(w, 10, 10) / 1023.0,
+                        field(w, 20, 10) / 1023.0,
+                        field(w, 30, 2) / 3.0,
+                    ]
+                })
+                .collect()
+        }
+        f => panic!("read_rgba does not read {f:?}"),
+    }
+}
+
+/// The largest rounding error of a colour target of `format` on [0, 1]: one step, as Vulkan,
+/// Metal and D3D let a float → unorm or float → half conversion take either neighbour (8 and
+/// 10 bits for the unorm formats and an `R32Uint` of four 8-bit channels; half floats' 11
+/// bits, relative to the value from 1 up), 0 for `Rgba32Float`.
+pub fn format_step(format: wgpu::TextureFormat) -> f32 {
+    use wgpu::TextureFormat as F;
+    match format {
+        F::Rgba32Float => 0.0,
+        F::Rgba16Float => 1.0 / 1024.0,
+        F::Rgba8Unorm | F::R32Uint => 1.0 / 255.0,
+        F::Rgb10a2Unorm => 1.0 / 1023.0,
+        f => panic!("format_step does not know {f:?}"),
+    }
+}

@@ -1,0 +1,65 @@
+//! Colour targets within a device's limits: what a set of render targets costs per sample
+//! (WebGPU's `maxColorAttachmentBytesPerSample`, 32 bytes on a default-limits device), and the
+//! G-buffer formats the ocean and the metaball raymarcher write that fit it.
+
+/// The G-buffer both the ocean ([`Output::GBuffer`](crate::ocean::Output::GBuffer)) and the
+/// metaball raymarcher ([`Raymarcher::gbuffer`](crate::metaball::Raymarcher::gbuffer))
+/// write, in formats that fit WebGPU's default 32 bytes a sample: scene colour (emissive, HDR)
+/// `Rgba16Float`, world normal × ½ + ½ `Rgb10a2Unorm` (steps of 1/1023), material (metallic,
+/// specular, roughness, shading model ÷ 255) `Rgba8Unorm`, base colour `Rgba8Unorm`. Any float
+/// formats may be given instead (`Rgba32Float` for exact values) on a device whose limit
+/// holds them: [`target_bytes_per_sample`] says what a set costs.
+pub const GBUFFER_FORMATS: [wgpu::TextureFormat; 4] = [
+    wgpu::TextureFormat::Rgba16Float,
+    wgpu::TextureFormat::Rgb10a2Unorm,
+    wgpu::TextureFormat::Rgba8Unorm,
+    wgpu::TextureFormat::Rgba8Unorm,
+];
+
+/// Bytes a sample that colour targets of `formats` (in location order) take against the
+/// device's `max_color_attachment_bytes_per_sample`, as WebGPU counts them: each format's
+/// render-target byte cost (`Rgba8Unorm` counts 8, `Rg16Float` and `R32Uint` 4,
+/// `Rgba32Float` 16), each target aligned to its component size. `None` for a format that is
+/// not a colour target.
+///
+/// ```
+/// use fieldkit::gpu::{GBUFFER_FORMATS, target_bytes_per_sample};
+/// use wgpu::TextureFormat::Rgba32Float;
+/// assert_eq!(target_bytes_per_sample(&GBUFFER_FORMATS), Some(32));
+/// assert_eq!(target_bytes_per_sample(&[Rgba32Float; 4]), Some(64));
+/// assert!(target_bytes_per_sample(&GBUFFER_FORMATS) <= Some(wgpu::Limits::default().max_color_attachment_bytes_per_sample));
+/// ```
+pub fn target_bytes_per_sample(formats: &[wgpu::TextureFormat]) -> Option<u32> {
+    formats.iter().try_fold(0u32, |total, f| {
+        let cost = f.target_pixel_byte_cost()?;
+        let align = f.target_component_alignment()?;
+        Some(total.next_multiple_of(align) + cost)
+    })
+}
+
+/// A typed error where colour targets of `formats` do not fit `device`'s
+/// `max_color_attachment_bytes_per_sample` (wgpu would refuse the pipeline with a validation
+/// error instead), naming the formats, their cost, the limit and the way out.
+pub(crate) fn check_target_bytes(
+    device: &wgpu::Device,
+    stage: &'static str,
+    formats: &[wgpu::TextureFormat],
+) -> Result<(), crate::Error> {
+    let limit = device.limits().max_color_attachment_bytes_per_sample;
+    match target_bytes_per_sample(formats) {
+        Some(bytes) if bytes <= limit => Ok(()),
+        Some(bytes) => Err(crate::Error::Unsupported {
+            stage,
+            what: format!(
+                "max_color_attachment_bytes_per_sample ≥ {bytes} for colour targets {formats:?} \
+                 (it allows {limit}; WebGPU's default is 32): give narrower formats, such as \
+                 fieldkit::gpu::GBUFFER_FORMATS for a G-buffer, or raise the limit where the \
+                 adapter has it"
+            ),
+        }),
+        None => Err(crate::Error::Invalid {
+            stage,
+            what: format!("colour targets {formats:?}: not every format is a colour target"),
+        }),
+    }
+}
