@@ -538,3 +538,84 @@ fn bad_input_gets_typed_errors() {
         )
         .unwrap();
 }
+
+/// One renderer drawn twice into one encoder (two looks, two cameras, two sets of targets)
+/// draws each as it draws alone: the renderer keeps its buffers and bind groups from call to
+/// call, and each call still reads its own patches and parameters. Same adapter, same inputs:
+/// the images compare to the bit.
+#[test]
+fn two_draws_in_one_encoder_keep_their_own_parameters() {
+    let ctx = Context::shared();
+    let renderer =
+        OceanRenderer::new(&ctx.device, &ctx.queue, Output::Forward(RGBA32), false).unwrap();
+    let looks = [
+        calm_look(),
+        Look {
+            deep_colour: Vec3::new(0.9, 0.1, 0.1),
+            sun_direction: Vec3::new(0.3, 0.5, -0.8),
+            ..calm_look()
+        },
+    ];
+    let eye = DVec3::new(2.0e4 + 7.0, 9.0, -3.5e4 + 3.0);
+    let cams = [
+        camera(),
+        OceanCamera::look_at(
+            eye,
+            eye + DVec3::new(2.0, -6.0, -20.0),
+            glam::camera::rh::proj::directx::perspective(0.8, W as f32 / H as f32, 0.1, 400.0),
+        ),
+    ];
+    let depth = || target(&ctx, wgpu::TextureFormat::Depth32Float);
+    let alone: Vec<Vec<Vec4>> = (0..2)
+        .map(|k| {
+            let t = [target(&ctx, RGBA32)];
+            draw_from(
+                &ctx,
+                &renderer,
+                &sea(),
+                &looks[k],
+                &t,
+                &depth(),
+                1.0,
+                false,
+                cams[k],
+            );
+            read_texture(&ctx, &t[0]).unwrap()
+        })
+        .collect();
+    assert_ne!(alone[0], alone[1]);
+    let colour = [target(&ctx, RGBA32), target(&ctx, RGBA32)];
+    let depths = [depth(), depth()];
+    let mut enc = ctx.encoder("two draws");
+    for k in 0..2 {
+        let view = colour[k].create_view(&Default::default());
+        clear(
+            &mut enc,
+            &[&view],
+            &depths[k].create_view(&Default::default()),
+            1.0,
+        );
+        renderer
+            .encode(
+                &ctx.device,
+                &mut enc,
+                &sea(),
+                12.5,
+                &cams[k],
+                &looks[k],
+                &patches(&cams[k]),
+                &[&view],
+                &depths[k],
+                false,
+            )
+            .unwrap();
+    }
+    ctx.submit_and_wait("two draws", enc).unwrap();
+    for k in 0..2 {
+        let together: Vec<Vec4> = read_texture(&ctx, &colour[k]).unwrap();
+        assert!(
+            together == alone[k],
+            "draw {k} differs when drawn with the other"
+        );
+    }
+}

@@ -17,11 +17,15 @@ use std::time::Instant;
 use fieldkit::gpu::{Context, PipelineCache, Profiler};
 use fieldkit::view::Targets;
 
+use super::made::{self, Made};
 use super::scenes::{COLOUR, DEPTH, NAMES, Saved, Scenes};
 use super::{FrameShot, draw_frame, frame_time, record_frame, wait};
 
 /// Frames drawn before the measured ones.
 const WARM_UP: u32 = 30;
+
+/// Frames whose GPU objects are counted, after the timed ones.
+const COUNTED: u32 = 5;
 
 /// Frames whose recording takes longer than this on the CPU are counted (a 144 Hz frame is
 /// 6.9 ms in all).
@@ -50,54 +54,6 @@ impl Spread {
 
     fn csv(&self) -> String {
         format!("{:.4},{:.4},{:.4}", self.median, self.min, self.max)
-    }
-}
-
-/// The GPU objects a frame made (wgpu's internal counters, the `counters` feature): read just
-/// after its submission, against just before its recording, when the previous frame's
-/// temporaries are already freed (the loop waits for each frame), so every object it counts is
-/// one the frame made and still holds.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Made {
-    pub buffers: isize,
-    pub textures: isize,
-    pub views: isize,
-    pub bind_groups: isize,
-}
-
-impl Made {
-    fn now(device: &wgpu::Device) -> Self {
-        let hal = device.get_internal_counters().hal;
-        Self {
-            buffers: hal.buffers.read(),
-            textures: hal.textures.read(),
-            views: hal.texture_views.read(),
-            bind_groups: hal.bind_groups.read(),
-        }
-    }
-
-    fn since(self, before: Made) -> Self {
-        Self {
-            buffers: self.buffers - before.buffers,
-            textures: self.textures - before.textures,
-            views: self.views - before.views,
-            bind_groups: self.bind_groups - before.bind_groups,
-        }
-    }
-
-    /// Buffers, textures, views, bind groups: the table's and the CSV's order.
-    fn counts(&self) -> [isize; 4] {
-        [self.buffers, self.textures, self.views, self.bind_groups]
-    }
-
-    /// Each count the largest of `a`'s and `b`'s.
-    fn max(self, b: Made) -> Self {
-        Self {
-            buffers: self.buffers.max(b.buffers),
-            textures: self.textures.max(b.textures),
-            views: self.views.max(b.views),
-            bind_groups: self.bind_groups.max(b.bind_groups),
-        }
     }
 }
 
@@ -219,7 +175,6 @@ fn timed_frame(
     i: u32,
     profiler: Option<&mut Profiler>,
 ) -> Result<Timed, fieldkit::Error> {
-    let before = Made::now(&ctx.device);
     let start = Instant::now();
     let (report, index) = draw_frame(
         &ctx.device,
@@ -234,7 +189,6 @@ fn timed_frame(
         profiler,
     );
     let cpu = start.elapsed().as_secs_f64() * 1e3;
-    let made = Made::now(&ctx.device).since(before);
     ctx.device
         .poll(wgpu::PollType::Wait {
             submission_index: Some(index),
@@ -246,7 +200,6 @@ fn timed_frame(
         cpu,
         wall,
         error: report.error.map(|e| e.to_string()),
-        made,
         stats: report.stats,
     })
 }
@@ -258,7 +211,6 @@ struct Timed {
     /// Start of recording to the GPU done, ms.
     wall: f64,
     error: Option<String>,
-    made: Made,
     stats: Vec<String>,
 }
 
@@ -275,15 +227,25 @@ fn measure(
     for i in 1..WARM_UP {
         timed_frame(ctx, &mut scenes, saved, scene, &targets, size, i, None)?;
     }
-    let (mut cpu, mut wall, mut error, mut made) = (Vec::new(), Vec::new(), None, Made::default());
+    let (mut cpu, mut wall, mut error) = (Vec::new(), Vec::new(), None);
     let mut stats = Vec::new();
     for i in WARM_UP..WARM_UP + frames {
         let t = timed_frame(ctx, &mut scenes, saved, scene, &targets, size, i, None)?;
         cpu.push(t.cpu);
         wall.push(t.wall);
         error = error.or(t.error);
-        made = made.max(t.made);
         stats = t.stats;
+    }
+    // The objects a frame makes, in frames of their own: counting them costs CPU time.
+    let mut made = Made::default();
+    for i in 0..COUNTED {
+        let n = WARM_UP + frames + i;
+        let (t, m) =
+            made::count(|| timed_frame(ctx, &mut scenes, saved, scene, &targets, size, n, None));
+        t?;
+        made = made.max(m.ok_or_else(|| {
+            fieldkit::Error::invalid("frame cost", "another logger is installed")
+        })?);
     }
     // The GPU's share, in frames of their own: timestamp queries change what they measure.
     let mut gpu = Vec::new();

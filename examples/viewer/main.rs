@@ -33,6 +33,7 @@
 pub mod camera;
 pub mod draw;
 pub mod frame;
+pub mod made;
 pub mod panels;
 pub mod scenes;
 pub mod soak;

@@ -141,6 +141,78 @@ pub(crate) fn has_dynamic_offset(slot: &Slot) -> bool {
     )
 }
 
+/// The bind groups one call site made last and the resources they hold, so that a stage bound
+/// to the same resources every frame (its kept buffers and views) makes its groups once: see
+/// [`ComputePipeline::bind_kept`]. Resources compare by identity (wgpu's handles are equal
+/// only to clones of themselves), and the key holds clones, so an identity is never reused
+/// while it is kept; it is replaced, freeing the old groups, when other resources come.
+// Used by the techniques' per-frame stages.
+#[cfg_attr(not(feature = "techniques"), allow(dead_code))]
+pub(crate) struct KeptBound<E> {
+    kept: std::sync::Mutex<Option<(Vec<ResourceKey>, Bound<E>)>>,
+}
+
+impl<E> Default for KeptBound<E> {
+    fn default() -> Self {
+        Self {
+            kept: Default::default(),
+        }
+    }
+}
+
+/// A resource by identity, holding a clone of it (see [`KeptBound`]).
+#[derive(PartialEq)]
+enum ResourceKey {
+    Buffer(wgpu::Buffer, u64, Option<std::num::NonZeroU64>),
+    View(wgpu::TextureView),
+    Sampler(wgpu::Sampler),
+}
+
+impl ResourceKey {
+    /// The key of `r`; `None` for binding arrays (never kept).
+    fn of(r: &Resource<'_>) -> Option<Self> {
+        Some(match r {
+            Resource::Buffer(b) => ResourceKey::Buffer(b.buffer.clone(), b.offset, b.size),
+            Resource::Texture(v) | Resource::StorageTexture(v) => ResourceKey::View((*v).clone()),
+            Resource::Sampler(s) => ResourceKey::Sampler((*s).clone()),
+            _ => return None,
+        })
+    }
+}
+
+#[cfg_attr(not(feature = "techniques"), allow(dead_code))]
+impl<E: Entry> KeptBound<E> {
+    /// The groups kept for `resources` where they are the same as last time, else `make`'s,
+    /// kept for next time. Shared groups are keyed too (their groups by identity).
+    pub(crate) fn get(
+        &self,
+        resources: &E::Resources<'_>,
+        make: impl FnOnce() -> Result<Bound<E>, Error>,
+    ) -> Result<Bound<E>, Error> {
+        let keys: Option<Vec<ResourceKey>> = E::resources(resources)
+            .iter()
+            .map(ResourceKey::of)
+            .collect();
+        let shared: Vec<wgpu::BindGroup> = E::groups(resources)
+            .iter()
+            .map(|(_, g)| (*g).clone())
+            .collect();
+        let Some(keys) = keys else {
+            return make();
+        };
+        let mut kept = self.kept.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((k, bound)) = kept.as_ref()
+            && *k == keys
+            && bound.shared_are(&shared)
+        {
+            return Ok(bound.clone());
+        }
+        let bound = make()?;
+        *kept = Some((keys, bound.clone()));
+        Ok(bound)
+    }
+}
+
 /// Bind groups for one dispatch or draw, made by [`ComputePipeline::bind`] / [`RenderPipeline::bind`].
 pub struct Bound<E> {
     /// Each group, and how many of its bindings take a dynamic offset.
@@ -149,7 +221,24 @@ pub struct Bound<E> {
     _e: PhantomData<E>,
 }
 
+impl<E> Clone for Bound<E> {
+    fn clone(&self) -> Self {
+        Self {
+            groups: self.groups.clone(),
+            stage: self.stage,
+            _e: PhantomData,
+        }
+    }
+}
+
 impl<E: Entry> Bound<E> {
+    /// Whether the shared groups among these are `shared` (by identity).
+    fn shared_are(&self, shared: &[wgpu::BindGroup]) -> bool {
+        shared
+            .iter()
+            .all(|s| self.groups.iter().any(|(_, g, _)| g == s))
+    }
+
     /// Set every bind group on a compute pass (a binding with a dynamic offset at offset 0).
     pub fn set_compute(&self, pass: &mut wgpu::ComputePass<'_>) {
         for (g, group, dynamic) in &self.groups {

@@ -188,6 +188,19 @@ impl<E: Entry> ComputePipeline<E> {
         bind_groups(device, &self.layouts, resources)
     }
 
+    /// [`Self::bind`], keeping the groups in `kept` for the next call with the same resources
+    /// (a per-frame stage's kept buffers and views): no bind group a frame.
+    // Used by the techniques' per-frame stages.
+    #[cfg_attr(not(feature = "techniques"), allow(dead_code))]
+    pub(crate) fn bind_kept(
+        &self,
+        device: &wgpu::Device,
+        kept: &KeptBound<E>,
+        resources: &E::Resources<'_>,
+    ) -> Result<Bound<E>, Error> {
+        kept.get(resources, || self.bind(device, resources))
+    }
+
     /// Record one dispatch of `groups` workgroups into `pass`.
     pub fn dispatch(&self, pass: &mut wgpu::ComputePass<'_>, bound: &Bound<E>, groups: [u32; 3]) {
         pass.set_pipeline(&self.pipeline);
@@ -314,6 +327,18 @@ impl<E: Entry> RenderPipeline<E> {
         resources: &E::Resources<'_>,
     ) -> Result<Bound<E>, Error> {
         bind_groups(device, &self.layouts, resources)
+    }
+
+    /// [`Self::bind`], keeping the groups in `kept` (see [`ComputePipeline::bind_kept`]).
+    // Used by the techniques' per-frame stages.
+    #[cfg_attr(not(feature = "techniques"), allow(dead_code))]
+    pub(crate) fn bind_kept(
+        &self,
+        device: &wgpu::Device,
+        kept: &KeptBound<E>,
+        resources: &E::Resources<'_>,
+    ) -> Result<Bound<E>, Error> {
+        kept.get(resources, || self.bind(device, resources))
     }
 }
 

@@ -4,27 +4,8 @@
 
 use super::check::voxels;
 use super::{Field3d, FieldBuf2d};
+pub(crate) use crate::gpu::kept_buffer;
 use crate::gpu::{storage_buffer, texture};
-
-/// The buffer kept in `slot` where it holds `bytes` (exactly `bytes` where `exact`, for
-/// buffers that passes check to be their field's size), else a new one from `make`, kept for
-/// the next call.
-pub(crate) fn kept_buffer(
-    slot: &std::sync::Mutex<Option<wgpu::Buffer>>,
-    bytes: u64,
-    exact: bool,
-    make: impl FnOnce() -> wgpu::Buffer,
-) -> wgpu::Buffer {
-    let mut kept = slot.lock().unwrap_or_else(|e| e.into_inner());
-    match kept.as_ref() {
-        Some(b) if b.size() == bytes || (!exact && b.size() > bytes) => b.clone(),
-        _ => {
-            let b = make();
-            *kept = Some(b.clone());
-            b
-        }
-    }
-}
 
 /// What [`Distance3d::recycle`] was handed: nearest-seed buffers (all made by `field_buffer`,
 /// so of one usage) and distance textures (all made by `distance_texture`).

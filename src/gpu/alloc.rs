@@ -77,3 +77,48 @@ pub(crate) fn storage_buffer(
         mapped_at_creation: false,
     })
 }
+
+/// The buffer kept in `slot` where it holds `bytes` (exactly `bytes` where `exact`, for
+/// buffers that passes check to be their field's size), else a new one from `make`, kept for
+/// the next call.
+pub(crate) fn kept_buffer(
+    slot: &std::sync::Mutex<Option<wgpu::Buffer>>,
+    bytes: u64,
+    exact: bool,
+    make: impl FnOnce() -> wgpu::Buffer,
+) -> wgpu::Buffer {
+    let mut kept = slot.lock().unwrap_or_else(|e| e.into_inner());
+    match kept.as_ref() {
+        Some(b) if b.size() == bytes || (!exact && b.size() > bytes) => b.clone(),
+        _ => {
+            let b = make();
+            *kept = Some(b.clone());
+            b
+        }
+    }
+}
+
+/// A view of the texture given last, kept while the same texture comes again: a stage handed
+/// the caller's target every frame makes its view once. Keyed by identity (the kept clone of
+/// the texture keeps its identity from being reused).
+#[derive(Default)]
+pub(crate) struct KeptView(std::sync::Mutex<Option<(wgpu::Texture, wgpu::TextureView)>>);
+
+impl KeptView {
+    /// The view of `texture` made by `make`, or the one kept for it.
+    pub(crate) fn get(
+        &self,
+        texture: &wgpu::Texture,
+        make: impl FnOnce(&wgpu::Texture) -> wgpu::TextureView,
+    ) -> wgpu::TextureView {
+        let mut kept = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((t, v)) = kept.as_ref()
+            && t == texture
+        {
+            return v.clone();
+        }
+        let view = make(texture);
+        *kept = Some((texture.clone(), view.clone()));
+        view
+    }
+}

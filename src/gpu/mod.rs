@@ -13,11 +13,12 @@ mod context;
 mod readback;
 mod targets;
 mod timing;
+mod upload;
 
 #[cfg(feature = "techniques")]
 pub(crate) use albedo::AlbedoBinding;
 pub use alloc::texture;
-pub(crate) use alloc::{storage_buffer, volume_texture};
+pub(crate) use alloc::{KeptView, kept_buffer, storage_buffer, volume_texture};
 pub use cache::PipelineCache;
 pub(crate) use cache::installed as installed_pipeline_cache;
 #[cfg(feature = "context")]
@@ -26,6 +27,7 @@ pub use readback::{Readback, readback_buffer, readback_buffers, readback_texture
 pub(crate) use targets::check_target_bytes;
 pub use targets::{GBUFFER_FORMATS, target_bytes_per_sample};
 pub use timing::{Profiler, Record, Recorder, Timer};
+pub(crate) use upload::Uploads;
 
 use crate::error::Error;
 
@@ -63,7 +65,9 @@ pub fn uniform_buffer<T: encase::ShaderType + encase::internal::WriteInto>(
 }
 
 /// `value` laid out by encase as a uniform.
-fn uniform_bytes<T: encase::ShaderType + encase::internal::WriteInto>(value: &T) -> Vec<u8> {
+pub(crate) fn uniform_bytes<T: encase::ShaderType + encase::internal::WriteInto>(
+    value: &T,
+) -> Vec<u8> {
     let mut bytes = encase::UniformBuffer::new(Vec::new());
     bytes
         .write(value)

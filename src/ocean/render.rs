@@ -13,9 +13,9 @@ use glam::{DMat4, DVec2, DVec3, Mat4, Vec3};
 
 use super::Waves;
 use super::look::{Look, Maps, detail_texels, layer_uniforms, map_indices};
-use crate::bind::{ComputePipeline, RenderPipeline, RenderTargets};
+use crate::bind::{ComputePipeline, KeptBound, RenderPipeline, RenderTargets};
 use crate::error::Error;
-use crate::gpu::{Record, Recorder, uniform_buffer as uniform};
+use crate::gpu::{KeptView, Record, Recorder, Uploads, kept_buffer, uniform_bytes};
 use crate::shaders::ocean::depth_copy;
 use crate::shaders::ocean::surface::{self as stage, FrameParams};
 
@@ -214,23 +214,81 @@ pub struct OceanRenderer {
     reversed_z: bool,
     depth: DepthMode,
     pipeline: Pipeline,
+    /// What a frame draws with, kept from frame to frame: no object made a frame.
+    kept: Kept,
     height_maps: Maps,
     normal_maps: Maps,
     /// Index buffers per quad count, made on first use.
     indices: Mutex<std::collections::HashMap<u32, wgpu::Buffer>>,
-    detail: wgpu::Texture,
+    /// The built-in detail texture's view.
+    detail_view: wgpu::TextureView,
     sampler: wgpu::Sampler,
-    /// The copy of the scene's depth the fade reads (`R32Float`), kept while the size holds.
-    depth_copy: Mutex<Option<wgpu::Texture>>,
+    /// The copy of the scene's depth the fade reads (`R32Float`) and its view, kept while the
+    /// size holds.
+    depth_copy: Mutex<Option<(wgpu::Texture, wgpu::TextureView)>>,
     copy_depth: ComputePipeline<depth_copy::copy_depth::Entry>,
+}
+
+/// The ocean's per-frame objects, made on the first frame (or when a size grows) and reused:
+/// the patch instances and the two uniforms, written through `uploads`; the views of the
+/// caller's depth target; the bind groups of both passes.
+struct Kept {
+    uploads: Uploads,
+    instances: Mutex<Option<wgpu::Buffer>>,
+    waves: Mutex<Option<wgpu::Buffer>>,
+    frame: Mutex<Option<wgpu::Buffer>>,
+    depth_view: KeptView,
+    depth_in: KeptView,
+    copy_bound: KeptBound<depth_copy::copy_depth::Entry>,
+}
+
+impl Kept {
+    /// A buffer kept in `slot` holding `bytes`, staged through the upload ring in `encoder`.
+    fn upload(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: &Mutex<Option<wgpu::Buffer>>,
+        label: &str,
+        usage: wgpu::BufferUsages,
+        bytes: &[u8],
+    ) -> wgpu::Buffer {
+        let len = (bytes.len() as u64).next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT);
+        let buffer = kept_buffer(slot, len, false, || {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                // Room to grow: a few more patches next frame make no new buffer.
+                size: len.next_power_of_two().max(256),
+                usage: usage | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        });
+        self.uploads.write(device, encoder, &buffer, bytes);
+        buffer
+    }
 }
 
 /// The surface's pipeline: one per [`Output`].
 enum Pipeline {
-    Forward(RenderPipeline<stage::fs_forward::Entry>),
-    GBuffer(RenderPipeline<stage::fs_gbuffer::Entry>),
-    GBufferSubsurface(RenderPipeline<stage::fs_gbuffer_subsurface::Entry>),
-    GBufferSubsurfacePacked(RenderPipeline<stage::fs_gbuffer_subsurface_packed::Entry>),
+    Forward(Surface<stage::fs_forward::Entry>),
+    GBuffer(Surface<stage::fs_gbuffer::Entry>),
+    GBufferSubsurface(Surface<stage::fs_gbuffer_subsurface::Entry>),
+    GBufferSubsurfacePacked(Surface<stage::fs_gbuffer_subsurface_packed::Entry>),
+}
+
+/// The surface pipeline for one fragment entry, and the bind groups it drew with last.
+struct Surface<E> {
+    pipeline: RenderPipeline<E>,
+    bound: KeptBound<E>,
+}
+
+impl<E: crate::bind::Entry> Surface<E> {
+    fn new(device: &wgpu::Device, targets: &RenderTargets<'_>) -> Result<Self, Error> {
+        Ok(Self {
+            pipeline: RenderPipeline::new(device, targets)?,
+            bound: KeptBound::default(),
+        })
+    }
 }
 
 /// Triangle indices of one patch: (n + 1)² grid vertices, x fastest, then the skirt ring under
@@ -324,13 +382,13 @@ impl OceanRenderer {
             ..Default::default()
         };
         let pipeline = match output {
-            Output::Forward(_) => Pipeline::Forward(RenderPipeline::new(device, &targets)?),
-            Output::GBuffer(_) => Pipeline::GBuffer(RenderPipeline::new(device, &targets)?),
+            Output::Forward(_) => Pipeline::Forward(Surface::new(device, &targets)?),
+            Output::GBuffer(_) => Pipeline::GBuffer(Surface::new(device, &targets)?),
             Output::GBufferSubsurface(_) => {
-                Pipeline::GBufferSubsurface(RenderPipeline::new(device, &targets)?)
+                Pipeline::GBufferSubsurface(Surface::new(device, &targets)?)
             }
             Output::GBufferSubsurfacePacked(_) => {
-                Pipeline::GBufferSubsurfacePacked(RenderPipeline::new(device, &targets)?)
+                Pipeline::GBufferSubsurfacePacked(Surface::new(device, &targets)?)
             }
         };
         use wgpu::util::DeviceExt;
@@ -363,10 +421,19 @@ impl OceanRenderer {
             reversed_z,
             depth,
             pipeline,
+            kept: Kept {
+                uploads: Uploads::new(queue),
+                instances: Mutex::new(None),
+                waves: Mutex::new(None),
+                frame: Mutex::new(None),
+                depth_view: KeptView::default(),
+                depth_in: KeptView::default(),
+                copy_bound: KeptBound::default(),
+            },
             height_maps: Maps::none(device, "ocean height maps (none)"),
             normal_maps: Maps::none(device, "ocean normal maps (none)"),
             indices: Mutex::new(Default::default()),
-            detail,
+            detail_view: detail.create_view(&Default::default()),
             sampler: device.create_sampler(&wgpu::SamplerDescriptor {
                 label: Some("ocean detail"),
                 address_mode_u: wgpu::AddressMode::Repeat,
@@ -464,16 +531,38 @@ impl OceanRenderer {
         }
         let (instances, draws) = patch_draws(patches, origin);
         let index_buffers = self.index_buffers(device, draws);
-        use wgpu::util::DeviceExt;
-        let instance_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("ocean patches"),
-            contents: bytemuck::cast_slice(&instances),
-            usage: wgpu::BufferUsages::VERTEX,
-        });
-        let wave_buffer = uniform(device, "ocean waves", &wave_set);
-        let frame_buffer = uniform(device, "ocean frame", &frame);
-        let detail_view = self.detail.create_view(&Default::default());
-        let depth_view = depth.create_view(&Default::default());
+        let kept = &self.kept;
+        let instance_buffer = kept.upload(
+            device,
+            rec.encoder,
+            &kept.instances,
+            "ocean patches",
+            wgpu::BufferUsages::VERTEX,
+            bytemuck::cast_slice(&instances),
+        );
+        let uniform = wgpu::BufferUsages::UNIFORM;
+        let wave_bytes = uniform_bytes(&wave_set);
+        let wave_buffer = kept.upload(
+            device,
+            rec.encoder,
+            &kept.waves,
+            "ocean waves",
+            uniform,
+            &wave_bytes,
+        );
+        let frame_bytes = uniform_bytes(&frame);
+        let frame_buffer = kept.upload(
+            device,
+            rec.encoder,
+            &kept.frame,
+            "ocean frame",
+            uniform,
+            &frame_bytes,
+        );
+        let detail_view = &self.detail_view;
+        let depth_view = kept
+            .depth_view
+            .get(depth, |d| d.create_view(&Default::default()));
         let attachments: Vec<Option<wgpu::RenderPassColorAttachment>> = targets
             .iter()
             .map(|v| {
@@ -489,13 +578,14 @@ impl OceanRenderer {
             })
             .collect();
         macro_rules! draw {
-            ($pipeline:expr, $module:ident) => {{
-                let bound = $pipeline.bind(
+            ($surface:expr, $module:ident) => {{
+                let bound = $surface.pipeline.bind_kept(
                     device,
+                    &$surface.bound,
                     &stage::$module::Resources {
                         waves: (&wave_buffer).into(),
                         frame: (&frame_buffer).into(),
-                        detail: (&detail_view).into(),
+                        detail: detail_view.into(),
                         detail_sampler: (&self.sampler).into(),
                         scene_depth: (&copy_view).into(),
                         height_maps: (&self.height_maps.view).into(),
@@ -520,7 +610,7 @@ impl OceanRenderer {
                     },
                     "ocean surface",
                 );
-                pass.set_pipeline(&$pipeline.pipeline);
+                pass.set_pipeline(&$surface.pipeline.pipeline);
                 bound.set_render(&mut pass);
                 pass.set_vertex_buffer(0, instance_buffer.slice(..));
                 for (indices, part, range) in &index_buffers {
@@ -698,8 +788,8 @@ impl OceanRenderer {
                 depth_or_array_layers: 1,
             }
         };
-        if cache.as_ref().is_none_or(|c| c.size() != copy_size) {
-            *cache = Some(device.create_texture(&wgpu::TextureDescriptor {
+        if cache.as_ref().is_none_or(|c| c.0.size() != copy_size) {
+            let copy = device.create_texture(&wgpu::TextureDescriptor {
                 label: Some("ocean scene depth copy"),
                 size: copy_size,
                 mip_level_count: 1,
@@ -708,30 +798,33 @@ impl OceanRenderer {
                 format: wgpu::TextureFormat::R32Float,
                 usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::STORAGE_BINDING,
                 view_formats: &[],
-            }));
-        }
-        let copy = cache.as_ref().expect("made above").clone();
-        drop(cache);
-        let copy_view = copy.create_view(&Default::default());
-        if fade {
-            let depth_in = depth.create_view(&wgpu::TextureViewDescriptor {
-                aspect: wgpu::TextureAspect::DepthOnly,
-                ..Default::default()
             });
-            self.copy_depth.record(
-                device,
-                rec,
-                &depth_copy::copy_depth::Resources {
-                    depth_in: (&depth_in).into(),
-                    depth_out: (&copy_view).into(),
-                },
-                ComputePipeline::<depth_copy::copy_depth::Entry>::groups_for([
-                    size.width,
-                    size.height,
-                    1,
-                ]),
-                depth_copy::STAGE,
-            )?;
+            let view = copy.create_view(&Default::default());
+            *cache = Some((copy, view));
+        }
+        let copy_view = cache.as_ref().expect("made above").1.clone();
+        drop(cache);
+        if fade {
+            let depth_in = self.kept.depth_in.get(depth, |d| {
+                d.create_view(&wgpu::TextureViewDescriptor {
+                    aspect: wgpu::TextureAspect::DepthOnly,
+                    ..Default::default()
+                })
+            });
+            let resources = depth_copy::copy_depth::Resources {
+                depth_in: (&depth_in).into(),
+                depth_out: (&copy_view).into(),
+            };
+            let bound = self
+                .copy_depth
+                .bind_kept(device, &self.kept.copy_bound, &resources)?;
+            let groups = ComputePipeline::<depth_copy::copy_depth::Entry>::groups_for([
+                size.width,
+                size.height,
+                1,
+            ]);
+            let mut pass = rec.compute_pass(depth_copy::STAGE, depth_copy::STAGE);
+            self.copy_depth.dispatch(&mut pass, &bound, groups);
         }
         Ok(copy_view)
     }

@@ -1,0 +1,100 @@
+//! The GPU objects a frame makes, counted as wgpu-core creates them: a `log` logger that reads
+//! wgpu-core's own trace lines (`Device::create_buffer -> …`, `Texture::create_view(…) -> …`),
+//! on only while [`count`] runs its closure. Creations are counted, not the objects alive
+//! after: an object made this frame that replaces last frame's counts, and the staging buffer
+//! wgpu makes inside `Queue::write_buffer` does not (it is wgpu's own, not a `create_*` call).
+
+use std::sync::atomic::{AtomicIsize, Ordering};
+
+/// Objects a frame made: buffers, textures, texture views, bind groups.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Made {
+    pub buffers: isize,
+    pub textures: isize,
+    pub views: isize,
+    pub bind_groups: isize,
+}
+
+impl Made {
+    /// Buffers, textures, views, bind groups: the table's and the CSV's order.
+    pub fn counts(&self) -> [isize; 4] {
+        [self.buffers, self.textures, self.views, self.bind_groups]
+    }
+
+    /// Each count the largest of `self`'s and `b`'s.
+    pub fn max(self, b: Made) -> Self {
+        Self {
+            buffers: self.buffers.max(b.buffers),
+            textures: self.textures.max(b.textures),
+            views: self.views.max(b.views),
+            bind_groups: self.bind_groups.max(b.bind_groups),
+        }
+    }
+}
+
+/// What wgpu-core's trace line for each creation starts with (`Device::create_buffer(label)`,
+/// `Device::create_bind_group -> id`, …), and its counter.
+static KINDS: [(&str, AtomicIsize); 4] = [
+    ("Device::create_buffer", AtomicIsize::new(0)),
+    ("Device::create_texture", AtomicIsize::new(0)),
+    ("Texture::create_view", AtomicIsize::new(0)),
+    ("Device::create_bind_group", AtomicIsize::new(0)),
+];
+
+struct Counter;
+
+impl log::Log for Counter {
+    fn enabled(&self, meta: &log::Metadata) -> bool {
+        meta.target().starts_with("wgpu_core")
+    }
+
+    fn log(&self, record: &log::Record) {
+        if !self.enabled(record.metadata()) {
+            return;
+        }
+        let line = record.args().to_string();
+        let kind = KINDS.iter().find(|(start, _)| {
+            line.strip_prefix(start)
+                .is_some_and(|rest| rest.starts_with([' ', '(']))
+        });
+        if let Some((_, n)) = kind {
+            n.fetch_add(1, Ordering::Relaxed);
+            if std::env::var_os("VIEWER_MADE_LOG").is_some() {
+                eprintln!("made: {line}");
+            }
+        }
+    }
+
+    fn flush(&self) {}
+}
+
+static COUNTER: Counter = Counter;
+
+/// Run `f`, counting the objects wgpu creates meanwhile (on every thread). The logger is
+/// installed on first use and left at level `Off` outside `count`, so frames not counted pay
+/// nothing for it; if the process already has another logger, nothing is counted (`None`).
+pub fn count<T>(f: impl FnOnce() -> T) -> (T, Option<Made>) {
+    let installed = log::set_logger(&COUNTER).is_ok() || is_ours();
+    if !installed {
+        return (f(), None);
+    }
+    for (_, n) in &KINDS {
+        n.store(0, Ordering::Relaxed);
+    }
+    log::set_max_level(log::LevelFilter::Trace);
+    let out = f();
+    log::set_max_level(log::LevelFilter::Off);
+    let [b, t, v, g] = std::array::from_fn(|i| KINDS[i].1.load(Ordering::Relaxed));
+    let made = Made {
+        buffers: b,
+        textures: t,
+        views: v,
+        bind_groups: g,
+    };
+    (out, Some(made))
+}
+
+/// Whether the installed logger is this one.
+fn is_ours() -> bool {
+    std::ptr::addr_eq(log::logger(), &COUNTER as &dyn log::Log)
+}

@@ -1,0 +1,77 @@
+//! Per-frame data into buffers kept from frame to frame, without a new buffer a frame and
+//! without the hazard of writing one buffer twice before a submission.
+//!
+//! `Queue::write_buffer` straight into a kept uniform is not enough for a stage drawn several
+//! times before its encoder is submitted (two views, a test that records two settings): every
+//! write lands at the start of the next submission, so each draw would read the last value.
+//! [`Uploads`] writes each call's bytes to a fresh span of a staging ring with the queue and
+//! records a copy from that span into the kept buffer in the caller's encoder, ordered with the
+//! passes that read it: each draw reads its own bytes. A span is written again only after the
+//! ring wraps, [`RING_BYTES`] of uploads later; an encoder submitted after that many bytes of
+//! later calls by the same object would read newer bytes. The ring grows (one new buffer) when
+//! a single upload is larger.
+
+use std::sync::Mutex;
+
+/// The staging ring's size: 256 calls of the ocean's 1 KiB of uniforms and patches.
+pub(crate) const RING_BYTES: u64 = 256 * 1024;
+
+/// A staging ring and the queue that writes it (see the module docs).
+// Used by the techniques' per-frame stages.
+#[cfg_attr(not(feature = "techniques"), allow(dead_code))]
+pub(crate) struct Uploads {
+    queue: wgpu::Queue,
+    /// The ring and the offset of its next free byte.
+    ring: Mutex<Option<(wgpu::Buffer, u64)>>,
+}
+
+#[cfg_attr(not(feature = "techniques"), allow(dead_code))]
+impl Uploads {
+    pub(crate) fn new(queue: &wgpu::Queue) -> Self {
+        Self {
+            queue: queue.clone(),
+            ring: Mutex::new(None),
+        }
+    }
+
+    /// Record into `encoder` a copy of `bytes` to the start of `dst` (which has `COPY_DST` and
+    /// room for them), staged through the ring. Bytes are padded to the copy alignment (4).
+    pub(crate) fn write(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        dst: &wgpu::Buffer,
+        bytes: &[u8],
+    ) {
+        if bytes.is_empty() {
+            return;
+        }
+        let align = wgpu::COPY_BUFFER_ALIGNMENT;
+        let len = (bytes.len() as u64).next_multiple_of(align);
+        let mut ring = self.ring.lock().unwrap_or_else(|e| e.into_inner());
+        if ring.as_ref().is_none_or(|(b, _)| b.size() < len) {
+            let size = RING_BYTES.max(len.next_power_of_two());
+            let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("fieldkit upload ring"),
+                size,
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            *ring = Some((buffer, 0));
+        }
+        let (buffer, next) = ring.as_mut().expect("made above");
+        if *next + len > buffer.size() {
+            *next = 0;
+        }
+        let at = *next;
+        *next += len;
+        if len == bytes.len() as u64 {
+            self.queue.write_buffer(buffer, at, bytes);
+        } else {
+            let mut padded = bytes.to_vec();
+            padded.resize(len as usize, 0);
+            self.queue.write_buffer(buffer, at, &padded);
+        }
+        encoder.copy_buffer_to_buffer(buffer, at, dst, 0, len);
+    }
+}
