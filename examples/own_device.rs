@@ -297,7 +297,7 @@ fn frame(
             CLOUD.1 / 48.0,
             CLOUD.0,
         )?;
-        let renderer = VolumeRenderer::new(device, colour_format)?;
+        let renderer = VolumeRenderer::new(device, queue, colour_format)?;
         let tf = TransferFunction::cloud();
         let march = MarchSettings {
             step: 0.25,

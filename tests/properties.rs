@@ -55,7 +55,7 @@ fn noop() -> &'static Noop {
                 false,
             )
             .unwrap(),
-            volume: VolumeRenderer::new(d, wgpu::TextureFormat::Rgba8Unorm).unwrap(),
+            volume: VolumeRenderer::new(d, &ctx.queue, wgpu::TextureFormat::Rgba8Unorm).unwrap(),
             vox: Voxelizer::new(d).unwrap(),
             ctx,
         }

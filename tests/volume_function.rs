@@ -9,7 +9,9 @@
 //! Tolerances were set on llvmpipe (lavapipe, Mesa 22.3): the march writes Rgba16Float (about
 //! 2.5e-4 on values ≤ 1); the rest is the march's midpoint rule against the fine integral.
 
-use fieldkit::gpu::{Context, read_buffer, read_texture};
+mod common;
+
+use fieldkit::gpu::{Context, read_buffer};
 use fieldkit::view::View;
 use fieldkit::volume::{
     CloudMarch, FunctionVolume, MarchSettings, Mode, Shadow, TransferFunction, fbm_cloud,
@@ -70,10 +72,7 @@ fn march(
         .unwrap()
         .expect("the box is on screen");
     ctx.submit_and_wait("density march test", enc).unwrap();
-    let px: Vec<[u16; 4]> = read_texture(ctx, &marched.colour).unwrap();
-    px.iter()
-        .map(|p| p.map(|h| half::f16::from_bits(h).to_f32()))
-        .collect()
+    common::volume::read_marched(ctx, &marched)
 }
 
 /// A pixel's ray as the shader builds it: near-plane point, unit direction, length to the far

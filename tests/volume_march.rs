@@ -619,3 +619,62 @@ fn bad_input_is_a_typed_error() {
         assert!(err(r).contains("FLOAT32_FILTERABLE"));
     }
 }
+
+/// The renderer keeps its march textures: a march whose output is still held gets a texture
+/// of its own, one after the output is dropped gets a kept one back, and two marches recorded
+/// into one encoder (two views, both outputs held) each come out as they do alone.
+#[test]
+fn marches_reuse_dropped_outputs_and_keep_their_own_parameters() {
+    let rig = Rig::new();
+    let ctx = &rig.ctx;
+    let volume = rig.cloud(16, 3);
+    let tf = TransferFunction::extinction(Vec3::ONE, 6.0, 1.0 / 64.0, [0.0, 1.0], 64);
+    let views = [
+        view_from(Vec3::new(0.4, 0.5, 1.6), Vec3::ZERO, 0.05),
+        view_from(Vec3::new(-1.2, 0.3, 0.9), Vec3::ZERO, 0.05),
+    ];
+    let settings = plain(1.0 / 64.0, 1.0 / 64.0);
+    let alone = views.map(|v| rig.march(&volume, &tf, &v, None, &settings));
+    assert_ne!(alone[0], alone[1]);
+    let mut enc = ctx.encoder("two marches");
+    let bricks = rig
+        .renderer
+        .encode_bricks(&ctx.device, &mut enc, &volume)
+        .unwrap();
+    let march = |enc: &mut wgpu::CommandEncoder, view: &View| {
+        rig.renderer
+            .encode_march(
+                &ctx.device,
+                enc,
+                &volume,
+                &bricks,
+                None,
+                &tf,
+                Mat4::IDENTITY,
+                view,
+                None,
+                &settings,
+            )
+            .unwrap()
+            .expect("on screen")
+    };
+    let both = views.each_ref().map(|v| march(&mut enc, v));
+    ctx.submit_and_wait("two marches", enc).unwrap();
+    assert!(
+        both[0].colour != both[1].colour,
+        "a held output was marched into"
+    );
+    for k in 0..2 {
+        assert!(read_marched(ctx, &both[k]) == alone[k], "march {k} differs");
+    }
+    let textures = both.each_ref().map(|m| m.colour.clone());
+    drop(both);
+    let mut enc = ctx.encoder("again");
+    let again = march(&mut enc, &views[0]);
+    ctx.submit_and_wait("again", enc).unwrap();
+    assert!(
+        textures.contains(&again.colour),
+        "a dropped output's texture was not taken back"
+    );
+    assert!(read_marched(ctx, &again) == alone[0]);
+}

@@ -39,7 +39,7 @@ pub fn cloud_scene_with(
         glam::Vec3::splat(1.0 / 96.0),
         glam::Vec3::splat(-0.5),
     )?;
-    let renderer = VolumeRenderer::new(&ctx.device, wgpu::TextureFormat::Rgba8Unorm)?;
+    let renderer = VolumeRenderer::new(&ctx.device, &ctx.queue, wgpu::TextureFormat::Rgba8Unorm)?;
     let tf = TransferFunction::cloud();
     let settings = MarchSettings {
         step: 1.0 / 96.0,

@@ -149,7 +149,8 @@ pub(crate) fn has_dynamic_offset(slot: &Slot) -> bool {
 // Used by the techniques' per-frame stages.
 #[cfg_attr(not(feature = "techniques"), allow(dead_code))]
 pub(crate) struct KeptBound<E> {
-    kept: std::sync::Mutex<Option<(Vec<ResourceKey>, Bound<E>)>>,
+    /// The layouts (a variant of the pipeline may have others) and resources, and the groups.
+    kept: std::sync::Mutex<Option<KeptGroups<E>>>,
 }
 
 impl<E> Default for KeptBound<E> {
@@ -159,6 +160,8 @@ impl<E> Default for KeptBound<E> {
         }
     }
 }
+
+type KeptGroups<E> = (Vec<wgpu::BindGroupLayout>, Vec<ResourceKey>, Bound<E>);
 
 /// A resource by identity, holding a clone of it (see [`KeptBound`]).
 #[derive(PartialEq)]
@@ -186,6 +189,7 @@ impl<E: Entry> KeptBound<E> {
     /// kept for next time. Shared groups are keyed too (their groups by identity).
     pub(crate) fn get(
         &self,
+        layouts: &[(u32, wgpu::BindGroupLayout)],
         resources: &E::Resources<'_>,
         make: impl FnOnce() -> Result<Bound<E>, Error>,
     ) -> Result<Bound<E>, Error> {
@@ -200,15 +204,17 @@ impl<E: Entry> KeptBound<E> {
         let Some(keys) = keys else {
             return make();
         };
+        let layouts: Vec<wgpu::BindGroupLayout> = layouts.iter().map(|(_, l)| l.clone()).collect();
         let mut kept = self.kept.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some((k, bound)) = kept.as_ref()
+        if let Some((l, k, bound)) = kept.as_ref()
+            && *l == layouts
             && *k == keys
             && bound.shared_are(&shared)
         {
             return Ok(bound.clone());
         }
         let bound = make()?;
-        *kept = Some((keys, bound.clone()));
+        *kept = Some((layouts, keys, bound.clone()));
         Ok(bound)
     }
 }

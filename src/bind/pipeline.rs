@@ -198,7 +198,7 @@ impl<E: Entry> ComputePipeline<E> {
         kept: &KeptBound<E>,
         resources: &E::Resources<'_>,
     ) -> Result<Bound<E>, Error> {
-        kept.get(resources, || self.bind(device, resources))
+        kept.get(&self.layouts, resources, || self.bind(device, resources))
     }
 
     /// Record one dispatch of `groups` workgroups into `pass`.
@@ -219,6 +219,25 @@ impl<E: Entry> ComputePipeline<E> {
         name: &str,
     ) -> Result<(), Error> {
         let bound = self.bind(device, resources)?;
+        let mut rec = rec.recorder();
+        let mut pass = rec.compute_pass(E::INFO.stage, name);
+        self.dispatch(&mut pass, &bound, groups);
+        Ok(())
+    }
+
+    /// [`Self::record`] binding through `kept` ([`Self::bind_kept`]).
+    // Used by the techniques' per-frame stages.
+    #[cfg_attr(not(feature = "techniques"), allow(dead_code))]
+    pub(crate) fn record_kept(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl crate::gpu::Record,
+        kept: &KeptBound<E>,
+        resources: &E::Resources<'_>,
+        groups: [u32; 3],
+        name: &str,
+    ) -> Result<(), Error> {
+        let bound = self.bind_kept(device, kept, resources)?;
         let mut rec = rec.recorder();
         let mut pass = rec.compute_pass(E::INFO.stage, name);
         self.dispatch(&mut pass, &bound, groups);
@@ -338,7 +357,7 @@ impl<E: Entry> RenderPipeline<E> {
         kept: &KeptBound<E>,
         resources: &E::Resources<'_>,
     ) -> Result<Bound<E>, Error> {
-        kept.get(resources, || self.bind(device, resources))
+        kept.get(&self.layouts, resources, || self.bind(device, resources))
     }
 }
 

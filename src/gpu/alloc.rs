@@ -122,3 +122,52 @@ impl KeptView {
         view
     }
 }
+
+/// A hold on an output a stage handed out: the stage takes the output's textures back for a
+/// later call once every clone of its lease is dropped (see [`Leased`]).
+#[derive(Clone, Debug, Default)]
+pub struct Lease(std::sync::Arc<()>);
+
+/// Outputs a per-frame stage keeps and hands out again: a call takes one the caller no longer
+/// holds (every clone of its [`Lease`] dropped) that fits what it needs, else makes one and
+/// keeps it. A loop that drops each frame's output before the next frame's call so makes no
+/// texture a frame, and one that keeps outputs gets new ones, never its own overwritten.
+/// Commands run in the order recorded, so an output may be dropped as soon as the passes that
+/// read it are recorded. A clone of one of its textures kept past its output sees later values.
+// Used by the techniques' per-frame stages.
+#[cfg_attr(not(feature = "techniques"), allow(dead_code))]
+pub(crate) struct Leased<T> {
+    kept: std::sync::Mutex<Vec<(Lease, T)>>,
+}
+
+impl<T> Default for Leased<T> {
+    fn default() -> Self {
+        Self {
+            kept: Default::default(),
+        }
+    }
+}
+
+/// Outputs kept at most per stage: a caller holding more makes new ones, which are not kept.
+const LEASED_MAX: usize = 4;
+
+#[cfg_attr(not(feature = "techniques"), allow(dead_code))]
+impl<T: Clone> Leased<T> {
+    /// A kept output that `fits` and is free, or `make`'s (kept while there is room, replacing
+    /// a free one that does not fit), with its lease.
+    pub(crate) fn take(&self, fits: impl Fn(&T) -> bool, make: impl FnOnce() -> T) -> (T, Lease) {
+        let mut kept = self.kept.lock().unwrap_or_else(|e| e.into_inner());
+        let free = |l: &Lease| std::sync::Arc::strong_count(&l.0) == 1;
+        if let Some((lease, t)) = kept.iter().find(|(l, t)| free(l) && fits(t)) {
+            return (t.clone(), lease.clone());
+        }
+        // Free outputs of another size are of no more use.
+        kept.retain(|(l, _)| !free(l));
+        let t = make();
+        let lease = Lease::default();
+        if kept.len() < LEASED_MAX {
+            kept.push((lease.clone(), t.clone()));
+        }
+        (t, lease)
+    }
+}

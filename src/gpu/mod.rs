@@ -17,8 +17,8 @@ mod upload;
 
 #[cfg(feature = "techniques")]
 pub(crate) use albedo::AlbedoBinding;
-pub use alloc::texture;
-pub(crate) use alloc::{KeptView, kept_buffer, storage_buffer, volume_texture};
+pub(crate) use alloc::{KeptView, Leased, kept_buffer, storage_buffer, volume_texture};
+pub use alloc::{Lease, texture};
 pub use cache::PipelineCache;
 pub(crate) use cache::installed as installed_pipeline_cache;
 #[cfg(feature = "context")]

@@ -34,6 +34,32 @@ impl Uploads {
         }
     }
 
+    /// The buffer kept in `slot` (made there with `label` and `usage` + `COPY_DST` when there is
+    /// none or it is too small, with room to grow) holding `bytes` from the copy recorded now
+    /// into `encoder` on: a per-frame uniform or instance list, no buffer made a frame.
+    pub(crate) fn kept(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: &Mutex<Option<wgpu::Buffer>>,
+        label: &str,
+        usage: wgpu::BufferUsages,
+        bytes: &[u8],
+    ) -> wgpu::Buffer {
+        let len = (bytes.len() as u64).next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT);
+        let buffer = super::kept_buffer(slot, len, false, || {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                // Room to grow: a few more patches next frame make no new buffer.
+                size: len.next_power_of_two().max(256),
+                usage: usage | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        });
+        self.write(device, encoder, &buffer, bytes);
+        buffer
+    }
+
     /// Record into `encoder` a copy of `bytes` to the start of `dst` (which has `COPY_DST` and
     /// room for them), staged through the ring. Bytes are padded to the copy alignment (4).
     pub(crate) fn write(

@@ -15,7 +15,7 @@ use super::Waves;
 use super::look::{Look, Maps, detail_texels, layer_uniforms, map_indices};
 use crate::bind::{ComputePipeline, KeptBound, RenderPipeline, RenderTargets};
 use crate::error::Error;
-use crate::gpu::{KeptView, Record, Recorder, Uploads, kept_buffer, uniform_bytes};
+use crate::gpu::{KeptView, Record, Recorder, Uploads, uniform_bytes};
 use crate::shaders::ocean::depth_copy;
 use crate::shaders::ocean::surface::{self as stage, FrameParams};
 
@@ -240,32 +240,6 @@ struct Kept {
     depth_view: KeptView,
     depth_in: KeptView,
     copy_bound: KeptBound<depth_copy::copy_depth::Entry>,
-}
-
-impl Kept {
-    /// A buffer kept in `slot` holding `bytes`, staged through the upload ring in `encoder`.
-    fn upload(
-        &self,
-        device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
-        slot: &Mutex<Option<wgpu::Buffer>>,
-        label: &str,
-        usage: wgpu::BufferUsages,
-        bytes: &[u8],
-    ) -> wgpu::Buffer {
-        let len = (bytes.len() as u64).next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT);
-        let buffer = kept_buffer(slot, len, false, || {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                // Room to grow: a few more patches next frame make no new buffer.
-                size: len.next_power_of_two().max(256),
-                usage: usage | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            })
-        });
-        self.uploads.write(device, encoder, &buffer, bytes);
-        buffer
-    }
 }
 
 /// The surface's pipeline: one per [`Output`].
@@ -532,7 +506,7 @@ impl OceanRenderer {
         let (instances, draws) = patch_draws(patches, origin);
         let index_buffers = self.index_buffers(device, draws);
         let kept = &self.kept;
-        let instance_buffer = kept.upload(
+        let instance_buffer = kept.uploads.kept(
             device,
             rec.encoder,
             &kept.instances,
@@ -542,7 +516,7 @@ impl OceanRenderer {
         );
         let uniform = wgpu::BufferUsages::UNIFORM;
         let wave_bytes = uniform_bytes(&wave_set);
-        let wave_buffer = kept.upload(
+        let wave_buffer = kept.uploads.kept(
             device,
             rec.encoder,
             &kept.waves,
@@ -551,7 +525,7 @@ impl OceanRenderer {
             &wave_bytes,
         );
         let frame_bytes = uniform_bytes(&frame);
-        let frame_buffer = kept.upload(
+        let frame_buffer = kept.uploads.kept(
             device,
             rec.encoder,
             &kept.frame,

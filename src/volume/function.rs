@@ -5,14 +5,14 @@ use std::marker::PhantomData;
 
 use glam::{Mat4, UVec3, Vec3};
 
+use super::kept::Target;
 use super::{
     Bricks, MarchScalars, MarchSettings, Shadow, TransferFunction, VolumeMarched,
-    check_scene_depth, check_transform, check_view, march_rect, march_target, step_guard,
-    tf_buffer,
+    check_scene_depth, check_transform, check_view, march_rect, step_guard, tf_buffer,
 };
 use crate::bind::{ComputePipeline, Entry, EntryInfo, Resource, Variants};
 use crate::error::Error;
-use crate::gpu::{Record, uniform_buffer as uniform};
+use crate::gpu::{Leased, Record, uniform_buffer as uniform};
 use crate::shaders::volume::cloud_march;
 use crate::view::View;
 
@@ -145,7 +145,9 @@ pub struct DensityMarch<M, B, K> {
     march: Variants<ByName<M>, cloud_march::Overrides>,
     bricks: ComputePipeline<ByName<B>>,
     bake: ComputePipeline<ByName<K>>,
-    no_depth: wgpu::Texture,
+    no_depth: wgpu::TextureView,
+    /// The march's outputs, taken back once dropped.
+    marched: Leased<Target>,
 }
 
 /// The density march over seed 002's procedural cloud (`shaders/shared/fbm_cloud.wesl`: the
@@ -198,7 +200,8 @@ impl<M: Entry, B: Entry, K: Entry> DensityMarch<M, B, K> {
             march: Variants::default(),
             bricks: ComputePipeline::new(device)?,
             bake: ComputePipeline::new(device)?,
-            no_depth,
+            no_depth: no_depth.create_view(&Default::default()),
+            marched: Leased::default(),
         })
     }
 
@@ -417,10 +420,21 @@ impl<M: Entry, B: Entry, K: Entry> DensityMarch<M, B, K> {
             rect,
             scene_depth.is_some(),
         );
-        let colour = march_target(device, view);
+        let size = [view.viewport[0], view.viewport[1], 1];
+        let format = wgpu::TextureFormat::Rgba16Float;
+        let (colour, lease) = self.marched.take(
+            |t| t.is(size, format),
+            || {
+                Target::new(
+                    device,
+                    "volume march",
+                    size,
+                    wgpu::TextureDimension::D2,
+                    format,
+                )
+            },
+        );
         let tf_buffer = tf_buffer(device, tf);
-        let no_depth = self.no_depth.create_view(&Default::default());
-        let cv = colour.create_view(&Default::default());
         let mode = match settings.mode {
             super::Mode::EmissionAbsorption => 0,
             super::Mode::MaximumIntensity => 1,
@@ -453,9 +467,9 @@ impl<M: Entry, B: Entry, K: Entry> DensityMarch<M, B, K> {
                 ),
                 (
                     "scene_depth",
-                    Resource::Texture(scene_depth.unwrap_or(&no_depth)),
+                    Resource::Texture(scene_depth.unwrap_or(&self.no_depth)),
                 ),
-                ("colour_out", Resource::StorageTexture(&cv)),
+                ("colour_out", Resource::StorageTexture(&colour.view)),
             ],
             [
                 (rect[2] - rect[0]).div_ceil(8),
@@ -464,6 +478,6 @@ impl<M: Entry, B: Entry, K: Entry> DensityMarch<M, B, K> {
             ],
             STAGE,
         )?;
-        Ok(Some(VolumeMarched { rect, colour }))
+        Ok(Some(VolumeMarched::new(rect, colour, lease)))
     }
 }

@@ -12,7 +12,7 @@
 //! let dims = [64, 64, 64];
 //! let volume = Volume::upload(&ctx.device, &ctx.queue, &fbm_cloud(dims, 7), dims, wgpu::TextureFormat::R8Unorm,
 //!     Vec3::splat(1.0 / 64.0), Vec3::splat(-0.5))?;
-//! let renderer = VolumeRenderer::new(&ctx.device, wgpu::TextureFormat::Rgba8Unorm)?;
+//! let renderer = VolumeRenderer::new(&ctx.device, &ctx.queue, wgpu::TextureFormat::Rgba8Unorm)?;
 //! let tf = TransferFunction::cloud();
 //! let proj = glam::camera::rh::proj::directx::perspective(0.8, 16.0 / 9.0, 0.05, 100.0);
 //! let view = View {
@@ -41,19 +41,24 @@
 mod cloud;
 mod function;
 mod input;
+mod kept;
+mod light;
 pub mod load;
 
 pub use cloud::{fbm_cloud, fbm_cloud_at};
 pub use function::{CloudMarch, DensityMarch, FunctionVolume};
 pub use input::{BRICK, TransferFunction, Volume};
+pub use light::{FOLD_MAX_BYTES, LightVolume, folds};
 
 use glam::{Mat4, Vec3};
 
 use crate::bind::{ComputePipeline, RenderPipeline, RenderTargets, Variants};
 use crate::error::Error;
-use crate::gpu::{Record, uniform_buffer as uniform};
-use crate::shaders::volume::{bricks, lit_density, volume_composite, volume_march};
+use crate::gpu::{Lease, Record, uniform_buffer as uniform, uniform_bytes};
+use crate::shaders::volume::{bricks, volume_composite, volume_march};
 use crate::view::{View, box_visible, screen_rect};
+use kept::{Kept, Target};
+use light::LitPipelines;
 
 const STAGE: &str = volume_march::STAGE;
 
@@ -189,55 +194,6 @@ pub struct Bricks {
     pub count: [u32; 3],
 }
 
-/// Transmittance toward the light, built by [`VolumeRenderer::encode_light`] for one volume,
-/// transfer function, light, shadow step and transform.
-pub struct LightVolume {
-    /// Transmittance at every other voxel centre (red, `Rgba16Float`): texel i at the centre
-    /// of density voxel 2i, `dims / 2 + 1` per axis.
-    pub texture: wgpu::Texture,
-    /// When folded ([`VolumeRenderer::encode_light_folded`]), what the march samples in place
-    /// of the density: at the density's resolution, the density in red, copied exactly, and the
-    /// trilinear interpolant of `texture` at each voxel centre in green, so one fetch gives
-    /// both. `Rgba8Unorm` for an `R8Unorm` volume (4 bytes a voxel), `Rgba16Float` for
-    /// `R16Float`, `Rg32Float` for `R32Float` (blue and alpha unused: two-channel 8- and 16-bit
-    /// formats are not writable by a shader in WebGPU). `None`: the march fetches `texture` as
-    /// well.
-    pub lit_density: Option<wgpu::Texture>,
-    /// What it was built for: a march with anything else is refused, not drawn wrong.
-    built_for: (Vec3, f32, Mat4, TransferFunction, wgpu::Texture),
-}
-
-/// The lit-density format for a density format: the smallest a shader may write.
-fn lit_format(density: wgpu::TextureFormat) -> wgpu::TextureFormat {
-    match density {
-        wgpu::TextureFormat::R8Unorm => wgpu::TextureFormat::Rgba8Unorm,
-        wgpu::TextureFormat::R16Float => wgpu::TextureFormat::Rgba16Float,
-        _ => wgpu::TextureFormat::Rg32Float,
-    }
-}
-
-/// The lit-density pass, one entry point per format.
-struct LitPipelines {
-    unorm8: ComputePipeline<lit_density::lit_unorm8::Entry>,
-    float16: ComputePipeline<lit_density::lit_float16::Entry>,
-    float32: ComputePipeline<lit_density::lit_float32::Entry>,
-}
-
-/// The largest lit density [`VolumeRenderer::encode_light`] folds, in bytes: a bound on memory
-/// (an `R8Unorm` volume folds into 4 bytes a voxel, so 512³ takes 512 MiB), not on speed. On the
-/// H100 folding took the 256³ cloud's frame from inside from 1.16 to 0.89 ms and 512³ from
-/// 2.17 to 1.54 ms, and cost 0.16 ms more to build at 256³ (`cargo xtask bench volume`).
-pub const FOLD_MAX_BYTES: u64 = 512 << 20;
-
-/// Whether [`VolumeRenderer::encode_light`] folds the light volume of `volume` into a copy of
-/// its density: when that copy takes at most [`FOLD_MAX_BYTES`].
-pub fn folds(volume: &Volume) -> bool {
-    let texel = lit_format(volume.texture.format())
-        .block_copy_size(None)
-        .expect("colour format") as u64;
-    volume.dims.iter().map(|&d| d as u64).product::<u64>() * texel <= FOLD_MAX_BYTES
-}
-
 /// The march's `MODE` and `SHADOW` overrides for `settings` with `light`.
 fn march_variant(settings: &MarchSettings, light: Option<&LightVolume>) -> (usize, usize) {
     let mode = match settings.mode {
@@ -256,12 +212,29 @@ fn march_variant(settings: &MarchSettings, light: Option<&LightVolume>) -> (usiz
     (mode, shadow)
 }
 
-/// A march waiting to be composited: premultiplied colour and coverage over `rect`.
+/// A march waiting to be composited: premultiplied colour and coverage over `rect`. The
+/// renderer takes its texture back for a later march once this is dropped (see
+/// [`gpu::Lease`](crate::gpu::Lease)).
 pub struct VolumeMarched {
     /// Pixels marched: `[x0, y0, x1, y1)`.
     pub rect: [u32; 4],
-    /// Premultiplied colour and transmittance of the marched rectangle.
+    /// Premultiplied colour and transmittance of the marched rectangle (viewport-sized
+    /// `Rgba16Float`; texels outside `rect` are left from earlier marches).
     pub colour: wgpu::Texture,
+    /// The view the composite samples.
+    view: wgpu::TextureView,
+    _lease: Lease,
+}
+
+impl VolumeMarched {
+    fn new(rect: [u32; 4], target: Target, lease: Lease) -> Self {
+        Self {
+            rect,
+            colour: target.texture,
+            view: target.view,
+            _lease: lease,
+        }
+    }
 }
 
 /// The volume pipelines. Create once, encode every frame.
@@ -274,13 +247,18 @@ pub struct VolumeRenderer {
     composite: RenderPipeline<volume_composite::fs_main::Entry>,
     lit: LitPipelines,
     sampler: wgpu::Sampler,
-    no_light: wgpu::Texture,
-    no_depth: wgpu::Texture,
+    /// What a frame draws with, kept from frame to frame: no object made a frame.
+    kept: Kept,
 }
 
 impl VolumeRenderer {
-    /// `colour`: the format of the targets [`Self::encode_composite`] blends into.
-    pub fn new(device: &wgpu::Device, colour: wgpu::TextureFormat) -> Result<Self, Error> {
+    /// `colour`: the format of the targets [`Self::encode_composite`] blends into. `queue`
+    /// writes each frame's parameters into buffers the renderer keeps.
+    pub fn new(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        colour: wgpu::TextureFormat,
+    ) -> Result<Self, Error> {
         let composite = RenderPipeline::new(
             device,
             &RenderTargets {
@@ -292,28 +270,6 @@ impl VolumeRenderer {
                 ..Default::default()
             },
         )?;
-        // Bound in place of a light volume's own texture and of the caller's depth when there
-        // are none (the march reads them only when told to).
-        let tiny = |label, format, dimension| {
-            crate::gpu::texture(
-                device,
-                label,
-                [1, 1, 1],
-                dimension,
-                format,
-                wgpu::TextureUsages::TEXTURE_BINDING,
-            )
-        };
-        let no_light = tiny(
-            "no light volume",
-            wgpu::TextureFormat::Rgba16Float,
-            wgpu::TextureDimension::D3,
-        );
-        let no_depth = tiny(
-            "no scene depth",
-            wgpu::TextureFormat::Depth32Float,
-            wgpu::TextureDimension::D2,
-        );
         Ok(Self {
             bricks: ComputePipeline::new(device)?,
             march: Variants::default(),
@@ -330,8 +286,7 @@ impl VolumeRenderer {
                 min_filter: wgpu::FilterMode::Linear,
                 ..Default::default()
             }),
-            no_light,
-            no_depth,
+            kept: Kept::new(device, queue),
         })
     }
 
@@ -378,7 +333,6 @@ impl VolumeRenderer {
     #[allow(clippy::too_many_arguments)]
     fn params(
         &self,
-        device: &wgpu::Device,
         volume: &Volume,
         bricks: &Bricks,
         tf: &TransferFunction,
@@ -387,7 +341,7 @@ impl VolumeRenderer {
         settings: &MarchSettings,
         rect: [u32; 4],
         use_depth: bool,
-    ) -> Result<wgpu::Buffer, Error> {
+    ) -> Result<volume_march::MarchParams, Error> {
         let (lo, hi) = volume.bounds();
         let world_to_local = local_to_world.inverse();
         let light_local = world_to_local.transform_vector3(settings.light_dir.normalize());
@@ -400,218 +354,60 @@ impl VolumeRenderer {
             near_z,
             far_z,
         } = MarchScalars::new(settings, tf, view);
-        Ok(uniform(
-            device,
-            "volume march params",
-            &volume_march::MarchParams {
-                inv_view_proj: view.view_proj.inverse(),
-                world_to_local,
-                box_min: lo,
-                step: settings.step,
-                box_max: hi,
-                reference_step: settings.reference_step,
-                dims: volume.dims.into(),
-                bricks: bricks.count.into(),
-                brick_scale: Vec3::from_array(volume.dims.map(|d| d as f32)) / BRICK as f32,
-                brick_size: BRICK as f32 / Vec3::from_array(volume.dims.map(|d| d as f32)),
-                // Voxel-centre index v = uvw · dims − ½, node coordinate v / 2, light texture
-                // coordinate (v / 2 + ½) / nodes.
-                light_scale: Vec3::from_array(
-                    volume.dims.map(|d| d as f32 / (2 * (d / 2 + 1)) as f32),
-                ),
-                light_offset: Vec3::from_array(volume.dims.map(|d| 0.25 / (d / 2 + 1) as f32)),
-                // Unit world length along the light per unit of its parameter.
-                light_local,
-                light_colour: settings.light_colour,
-                ambient: settings.ambient,
-                viewport: glam::Vec2::new(view.viewport[0] as f32, view.viewport[1] as f32),
-                rect_origin: glam::UVec2::new(rect[0], rect[1]),
-                rect_size: glam::UVec2::new(rect[2] - rect[0], rect[3] - rect[1]),
-                near_z,
-                far_z,
-                tf_count: tf.entries.len() as u32,
-                tf_offset,
-                skip_below: tf.clear_below().clamp(f32::MIN, f32::MAX),
-                iso,
-                min_transmittance: settings.min_transmittance,
-                jitter: settings.jitter as u32,
-                frame: settings.frame,
-                max_steps: guard(settings.step),
-                shadow_step,
-                shadow_max_steps: guard(shadow_step),
-                use_depth: use_depth as u32,
-                inv_extent: (hi - lo).recip(),
-                tf_scale,
-                inv_reference_step: settings.reference_step.recip(),
-            },
-        ))
-    }
-
-    /// Transmittance toward the light for `settings.shadow == Shadow::LightVolume` (rebuild when
-    /// the volume, transfer function, light or transform changes), folded into a copy of the
-    /// density when that copy takes at most [`FOLD_MAX_BYTES`].
-    #[allow(clippy::too_many_arguments)]
-    pub fn encode_light(
-        &self,
-        device: &wgpu::Device,
-        rec: &mut impl Record,
-        volume: &Volume,
-        bricks: &Bricks,
-        tf: &TransferFunction,
-        local_to_world: Mat4,
-        settings: &MarchSettings,
-    ) -> Result<LightVolume, Error> {
-        self.encode_light_folded(
-            device,
-            rec,
-            volume,
-            bricks,
-            tf,
-            local_to_world,
-            settings,
-            folds(volume),
-        )
-    }
-
-    /// [`Self::encode_light`] with the choice made: `fold` builds [`LightVolume::lit_density`],
-    /// so the march takes density and light in one fetch per sample, at the cost of a copy of
-    /// the density with the light beside it.
-    #[allow(clippy::too_many_arguments)]
-    pub fn encode_light_folded(
-        &self,
-        device: &wgpu::Device,
-        rec: &mut impl Record,
-        volume: &Volume,
-        bricks: &Bricks,
-        tf: &TransferFunction,
-        local_to_world: Mat4,
-        settings: &MarchSettings,
-        fold: bool,
-    ) -> Result<LightVolume, Error> {
-        settings.check()?;
-        tf.check()?;
-        check_transform(local_to_world)?;
-        let Shadow::LightVolume { step } = settings.shadow else {
-            return Err(Error::Invalid {
-                stage: STAGE,
-                what: "encode_light needs settings.shadow = Shadow::LightVolume".into(),
-            });
-        };
-        // Nodes on every other voxel centre, one past the last voxel when the size is even.
-        let size = volume.dims.map(|d| d / 2 + 1);
-        let texture = crate::gpu::texture(
-            device,
-            "light volume",
-            [size[0], size[1], size[2]],
-            wgpu::TextureDimension::D3,
-            wgpu::TextureFormat::Rgba16Float,
-            wgpu::TextureUsages::TEXTURE_BINDING
-                | wgpu::TextureUsages::STORAGE_BINDING
-                | wgpu::TextureUsages::COPY_SRC,
-        );
-        // The light pass reads only the volume fields of the view-independent parameters.
-        let view = View {
-            view_proj: Mat4::IDENTITY,
-            viewport: [1, 1],
-            reversed_z: false,
-            origin: [0, 0],
-        };
-        let params = self.params(
-            device,
-            volume,
-            bricks,
-            tf,
-            local_to_world,
-            &view,
-            settings,
-            [0, 0, 1, 1],
-            false,
-        )?;
-        let tf_buffer = tf_buffer(device, tf);
-        let (dv, lv) = (
-            volume.texture.create_view(&Default::default()),
-            texture.create_view(&Default::default()),
-        );
-        let groups = ComputePipeline::<volume_march::light_volume::Entry>::groups_for(size);
-        self.light.record(
-            device,
-            rec,
-            &volume_march::light_volume::Resources {
-                params: (&params).into(),
-                density: (&dv).into(),
-                linear_clamp: (&self.sampler).into(),
-                tf: (&tf_buffer).into(),
-                light_out: (&lv).into(),
-            },
-            groups,
-            "volume light",
-        )?;
-        let lit_density = if fold {
-            Some(self.encode_lit_density(device, rec, volume, &dv, &lv)?)
-        } else {
-            None
-        };
-        Ok(LightVolume {
-            texture,
-            lit_density,
-            built_for: (
-                settings.light_dir,
-                step,
-                local_to_world,
-                tf.clone(),
-                volume.texture.clone(),
-            ),
+        Ok(volume_march::MarchParams {
+            inv_view_proj: view.view_proj.inverse(),
+            world_to_local,
+            box_min: lo,
+            step: settings.step,
+            box_max: hi,
+            reference_step: settings.reference_step,
+            dims: volume.dims.into(),
+            bricks: bricks.count.into(),
+            brick_scale: Vec3::from_array(volume.dims.map(|d| d as f32)) / BRICK as f32,
+            brick_size: BRICK as f32 / Vec3::from_array(volume.dims.map(|d| d as f32)),
+            // Voxel-centre index v = uvw · dims − ½, node coordinate v / 2, light texture
+            // coordinate (v / 2 + ½) / nodes.
+            light_scale: Vec3::from_array(volume.dims.map(|d| d as f32 / (2 * (d / 2 + 1)) as f32)),
+            light_offset: Vec3::from_array(volume.dims.map(|d| 0.25 / (d / 2 + 1) as f32)),
+            // Unit world length along the light per unit of its parameter.
+            light_local,
+            light_colour: settings.light_colour,
+            ambient: settings.ambient,
+            viewport: glam::Vec2::new(view.viewport[0] as f32, view.viewport[1] as f32),
+            rect_origin: glam::UVec2::new(rect[0], rect[1]),
+            rect_size: glam::UVec2::new(rect[2] - rect[0], rect[3] - rect[1]),
+            near_z,
+            far_z,
+            tf_count: tf.entries.len() as u32,
+            tf_offset,
+            skip_below: tf.clear_below().clamp(f32::MIN, f32::MAX),
+            iso,
+            min_transmittance: settings.min_transmittance,
+            jitter: settings.jitter as u32,
+            frame: settings.frame,
+            max_steps: guard(settings.step),
+            shadow_step,
+            shadow_max_steps: guard(shadow_step),
+            use_depth: use_depth as u32,
+            inv_extent: (hi - lo).recip(),
+            tf_scale,
+            inv_reference_step: settings.reference_step.recip(),
         })
     }
 
-    /// The lit density of `volume` (`density`) from its light volume's nodes (`light`).
-    fn encode_lit_density(
+    /// The transfer function as the march reads it, in the buffer kept for it.
+    fn kept_tf(
         &self,
         device: &wgpu::Device,
-        rec: &mut impl Record,
-        volume: &Volume,
-        density: &wgpu::TextureView,
-        light: &wgpu::TextureView,
-    ) -> Result<wgpu::Texture, Error> {
-        let [w, h, d] = volume.dims;
-        let texture = crate::gpu::texture(
-            device,
-            "lit density",
-            [w, h, d],
-            wgpu::TextureDimension::D3,
-            lit_format(volume.texture.format()),
-            wgpu::TextureUsages::TEXTURE_BINDING
-                | wgpu::TextureUsages::STORAGE_BINDING
-                | wgpu::TextureUsages::COPY_SRC,
-        );
-        let out = texture.create_view(&Default::default());
-        let mut rec = rec.recorder();
-        let mut pass = rec.compute_pass(lit_density::STAGE, "lit density");
-        let groups = [w.div_ceil(8), h.div_ceil(8), d];
-        // One entry point per format, each with its own generated bindings.
-        macro_rules! fold {
-            ($pipeline:expr, $entry:ident, $out:ident) => {{
-                let bound = $pipeline.bind(
-                    device,
-                    &lit_density::$entry::Resources {
-                        density: density.into(),
-                        light: light.into(),
-                        linear_clamp: (&self.sampler).into(),
-                        $out: (&out).into(),
-                    },
-                )?;
-                $pipeline.dispatch(&mut pass, &bound, groups);
-            }};
-        }
-        match texture.format() {
-            wgpu::TextureFormat::Rgba8Unorm => fold!(self.lit.unorm8, lit_unorm8, lit_out_unorm8),
-            wgpu::TextureFormat::Rgba16Float => {
-                fold!(self.lit.float16, lit_float16, lit_out_float16)
-            }
-            _ => fold!(self.lit.float32, lit_float32, lit_out_float32),
-        }
-        drop(pass);
-        Ok(texture)
+        encoder: &mut wgpu::CommandEncoder,
+        tf: &TransferFunction,
+    ) -> wgpu::Buffer {
+        let kept = &self.kept;
+        let rows = tf_rows(tf);
+        let usage = wgpu::BufferUsages::STORAGE;
+        let bytes = bytemuck::cast_slice(&rows);
+        kept.uploads
+            .kept(device, encoder, &kept.tf, "transfer function", usage, bytes)
     }
 
     /// March `volume` under `local_to_world` for `view` into a premultiplied image. Rays stop at
@@ -643,15 +439,14 @@ impl VolumeRenderer {
         }
         // With a folded light volume the march samples the lit density in place of the density;
         // with one not folded, its texture as well.
-        let (density, light_texture) = match (settings.shadow, light) {
-            (Shadow::LightVolume { step }, Some(l)) => {
-                let (dir, built_step, transform, built_tf, built_volume) = &l.built_for;
-                if *built_step != step
-                    || *dir != settings.light_dir
-                    || *transform != local_to_world
-                    || built_tf != tf
-                    || *built_volume != volume.texture
-                {
+        let kept = &self.kept;
+        let density_view = || {
+            kept.density_view
+                .get(&volume.texture, |t| t.create_view(&Default::default()))
+        };
+        let (dv, lv) = match (settings.shadow, light) {
+            (Shadow::LightVolume { .. }, Some(l)) => {
+                if !l.is_for(volume, tf, local_to_world, settings) {
                     return Err(Error::Invalid {
                         stage: STAGE,
                         what: "the light volume was built for another volume, light, shadow \
@@ -660,9 +455,9 @@ impl VolumeRenderer {
                             .into(),
                     });
                 }
-                match &l.lit_density {
-                    Some(lit) => (lit, &self.no_light),
-                    None => (&volume.texture, &l.texture),
+                match &l.views {
+                    (_, Some(lit)) => (lit.clone(), kept.no_light.clone()),
+                    (light, None) => (density_view(), light.clone()),
                 }
             }
             (Shadow::LightVolume { .. }, None) => {
@@ -671,7 +466,7 @@ impl VolumeRenderer {
                     what: "Shadow::LightVolume needs the light volume from encode_light".into(),
                 });
             }
-            _ => (&volume.texture, &self.no_light),
+            _ => (density_view(), kept.no_light.clone()),
         };
         check_scene_depth(scene_depth, view)?;
         let (lo, hi) = volume.bounds();
@@ -679,7 +474,6 @@ impl VolumeRenderer {
             return Ok(None);
         };
         let params = self.params(
-            device,
             volume,
             bricks,
             tf,
@@ -689,14 +483,30 @@ impl VolumeRenderer {
             rect,
             scene_depth.is_some(),
         )?;
-        let colour = march_target(device, view);
-        let tf_buffer = tf_buffer(device, tf);
-        let no_depth = self.no_depth.create_view(&Default::default());
-        let (dv, lv, cv) = (
-            density.create_view(&Default::default()),
-            light_texture.create_view(&Default::default()),
-            colour.create_view(&Default::default()),
+        let size = [view.viewport[0], view.viewport[1], 1];
+        let format = wgpu::TextureFormat::Rgba16Float;
+        let (colour, lease) = kept.marched.take(
+            |t| t.is(size, format),
+            || {
+                Target::new(
+                    device,
+                    "volume march",
+                    size,
+                    wgpu::TextureDimension::D2,
+                    format,
+                )
+            },
         );
+        let recorder = &mut rec.recorder();
+        let params = kept.uploads.kept(
+            device,
+            recorder.encoder,
+            &kept.march_params,
+            "volume march params",
+            wgpu::BufferUsages::UNIFORM,
+            &uniform_bytes(&params),
+        );
+        let tf_buffer = self.kept_tf(device, recorder.encoder, tf);
         let (mode, shadow) = march_variant(settings, light);
         let march = self.march.get(
             device,
@@ -713,9 +523,10 @@ impl VolumeRenderer {
             (rect[3] - rect[1]).div_ceil(8),
             1,
         ];
-        march.record(
+        march.record_kept(
             device,
-            rec,
+            recorder,
+            &kept.march_bound,
             &volume_march::march::Resources {
                 params: (&params).into(),
                 density: (&dv).into(),
@@ -723,13 +534,13 @@ impl VolumeRenderer {
                 tf: (&tf_buffer).into(),
                 ranges: (&bricks.ranges).into(),
                 light_in: (&lv).into(),
-                scene_depth: scene_depth.unwrap_or(&no_depth).into(),
-                colour_out: (&cv).into(),
+                scene_depth: scene_depth.unwrap_or(&kept.no_depth).into(),
+                colour_out: (&colour.view).into(),
             },
             groups,
             STAGE,
         )?;
-        Ok(Some(VolumeMarched { rect, colour }))
+        Ok(Some(VolumeMarched::new(rect, colour, lease)))
     }
 
     /// Blend a march over `colour` (the format this renderer was made for, the march's size).
@@ -753,11 +564,11 @@ impl VolumeRenderer {
                 ),
             });
         }
-        let mv = marched.colour.create_view(&Default::default());
-        let bound = self.composite.bind(
+        let bound = self.composite.bind_kept(
             device,
+            &self.kept.composite_bound,
             &volume_composite::fs_main::Resources {
-                marched: (&mv).into(),
+                marched: (&marched.view).into(),
             },
         )?;
         let mut rec = rec.recorder();
@@ -898,20 +709,6 @@ fn march_rect(view: &View, local_to_world: Mat4, lo: Vec3, hi: Vec3) -> Option<[
     }
     let rect = screen_rect(view, local_to_world, lo, hi);
     (rect[2] > rect[0] && rect[3] > rect[1]).then_some(rect)
-}
-
-/// The premultiplied image a march writes: viewport-sized `Rgba16Float`.
-fn march_target(device: &wgpu::Device, view: &View) -> wgpu::Texture {
-    crate::gpu::texture(
-        device,
-        "volume march",
-        [view.viewport[0], view.viewport[1], 1],
-        wgpu::TextureDimension::D2,
-        wgpu::TextureFormat::Rgba16Float,
-        wgpu::TextureUsages::TEXTURE_BINDING
-            | wgpu::TextureUsages::STORAGE_BINDING
-            | wgpu::TextureUsages::COPY_SRC,
-    )
 }
 
 fn check_transform(m: Mat4) -> Result<(), Error> {

@@ -5,8 +5,8 @@ use fieldkit::gpu::{Context, read_buffer, read_texture};
 use fieldkit::harness::Summary;
 use fieldkit::view::View;
 use fieldkit::volume::{
-    Bricks, LightVolume, MarchSettings, Mode, Shadow, TransferFunction, Volume, VolumeRenderer,
-    fbm_cloud, folds,
+    Bricks, LightVolume, MarchSettings, Mode, Shadow, TransferFunction, Volume, VolumeMarched,
+    VolumeRenderer, fbm_cloud, folds,
 };
 use glam::{Mat4, Vec3, Vec4};
 
@@ -46,7 +46,8 @@ pub struct Rig {
 impl Rig {
     pub fn new() -> Self {
         let ctx = Context::shared();
-        let renderer = VolumeRenderer::new(&ctx.device, wgpu::TextureFormat::Rgba8Unorm).unwrap();
+        let renderer =
+            VolumeRenderer::new(&ctx.device, &ctx.queue, wgpu::TextureFormat::Rgba8Unorm).unwrap();
         Self { ctx, renderer }
     }
 
@@ -155,14 +156,28 @@ impl Rig {
         ctx.submit_and_wait("volume test", enc).unwrap();
         match marched {
             None => vec![[0.0; 4]; (SIZE * SIZE) as usize],
-            Some(m) => {
-                let px: Vec<[u16; 4]> = read_texture(ctx, &m.colour).unwrap();
-                px.iter()
-                    .map(|p| p.map(|h| half::f16::from_bits(h).to_f32()))
-                    .collect()
-            }
+            Some(m) => read_marched(ctx, &m),
         }
     }
+}
+
+/// A march's premultiplied image, zero outside the rectangle it marched (what lies there is
+/// left from earlier marches into the same kept texture).
+pub fn read_marched(ctx: &Context, m: &VolumeMarched) -> Vec<[f32; 4]> {
+    let px: Vec<[u16; 4]> = read_texture(ctx, &m.colour).unwrap();
+    let w = m.colour.width();
+    let [x0, y0, x1, y1] = m.rect;
+    px.iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let (x, y) = (i as u32 % w, i as u32 / w);
+            if (x0..x1).contains(&x) && (y0..y1).contains(&y) {
+                p.map(|h| half::f16::from_bits(h).to_f32())
+            } else {
+                [0.0; 4]
+            }
+        })
+        .collect()
 }
 
 /// A pixel's ray as the shader builds it: near-plane point, unit direction, length to the far

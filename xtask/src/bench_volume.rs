@@ -174,7 +174,7 @@ fn bench(
         vec![256, 512]
     };
     let (width, height) = if quick { (480, 270) } else { (1920, 1080) };
-    let renderer = VolumeRenderer::new(&ctx.device, wgpu::TextureFormat::Rgba8Unorm)
+    let renderer = VolumeRenderer::new(&ctx.device, &ctx.queue, wgpu::TextureFormat::Rgba8Unorm)
         .map_err(|e| e.to_string())?;
     let cloud = CloudMarch::cloud(&ctx.device).map_err(|e| e.to_string())?;
     let target = ctx.device.create_texture(&wgpu::TextureDescriptor {

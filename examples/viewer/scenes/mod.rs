@@ -269,7 +269,7 @@ impl Scenes {
             "volume" => {
                 clear(frame, [0.32, 0.52, 0.82]);
                 if self.volume.is_none() {
-                    self.volume = Some(VolumeScene::new(device)?);
+                    self.volume = Some(VolumeScene::new(device, queue)?);
                 }
                 let v = self.volume.as_mut().expect("set above");
                 v.draw(device, queue, &s.volume, Mat4::IDENTITY, frame)
@@ -301,7 +301,7 @@ impl Scenes {
                 let ocean = self.ocean.get_or_insert_with(|| Ocean::new(device));
                 stats.extend(ocean.draw(device, queue, &s.ocean, frame)?);
                 if self.volume.is_none() {
-                    self.volume = Some(VolumeScene::new(device)?);
+                    self.volume = Some(VolumeScene::new(device, queue)?);
                 }
                 let v = self.volume.as_mut().expect("set above");
                 let cloud = Mat4::from_translation(Vec3::new(-6.0, 11.0, -20.0))

@@ -57,12 +57,16 @@ pub struct VolumeScene {
     /// The cloud as a function, made on first use, and its bricks for a lattice size.
     pub(super) cloud: Option<fieldkit::volume::CloudMarch>,
     pub(super) cloud_bricks: Option<(u32, fieldkit::volume::Bricks)>,
+    /// The light volume, kept while the cloud, its transfer function, the light and the
+    /// transform stay (`LightVolume::is_for`): rebuilt only when one changes.
+    pub(super) light: Option<fieldkit::volume::LightVolume>,
 }
 
 impl VolumeScene {
-    pub(super) fn new(device: &wgpu::Device) -> Result<Self, Error> {
+    pub(super) fn new(device: &wgpu::Device, queue: &wgpu::Queue) -> Result<Self, Error> {
         Ok(Self {
-            renderer: VolumeRenderer::new(device, COLOUR)?,
+            renderer: VolumeRenderer::new(device, queue, COLOUR)?,
+            light: None,
             volume: None,
             cloud: None,
             cloud_bricks: None,
@@ -158,15 +162,25 @@ impl VolumeScene {
         let mut march = s.march;
         march.frame = frame.number;
         let light = match march.shadow {
-            fieldkit::volume::Shadow::LightVolume { .. } => Some(self.renderer.encode_light(
-                device,
-                frame.rec,
-                volume,
-                bricks,
-                &s.tf,
-                local_to_world,
-                &march,
-            )?),
+            fieldkit::volume::Shadow::LightVolume { .. } => {
+                let kept = self
+                    .light
+                    .take()
+                    .filter(|l| l.is_for(volume, &s.tf, local_to_world, &march));
+                let light = match kept {
+                    Some(l) => l,
+                    None => self.renderer.encode_light(
+                        device,
+                        frame.rec,
+                        volume,
+                        bricks,
+                        &s.tf,
+                        local_to_world,
+                        &march,
+                    )?,
+                };
+                Some(&*self.light.insert(light))
+            }
             _ => None,
         };
         let view = frame.camera.view(frame.size);
@@ -175,7 +189,7 @@ impl VolumeScene {
             frame.rec,
             volume,
             bricks,
-            light.as_ref(),
+            light,
             &s.tf,
             local_to_world,
             &view,
