@@ -117,6 +117,8 @@ impl KeptView {
         {
             return v.clone();
         }
+        // The old view goes first, so its texture's memory is free for what comes next.
+        *kept = None;
         let view = make(texture);
         *kept = Some((texture.clone(), view.clone()));
         view
@@ -161,7 +163,8 @@ impl<T: Clone> Leased<T> {
         if let Some((lease, t)) = kept.iter().find(|(l, t)| free(l) && fits(t)) {
             return (t.clone(), lease.clone());
         }
-        // Free outputs of another size are of no more use.
+        // Free outputs of another size are of no more use: dropped before the new one is
+        // made, so their memory can hold it.
         kept.retain(|(l, _)| !free(l));
         let t = make();
         let lease = Lease::default();

@@ -763,6 +763,8 @@ impl OceanRenderer {
             }
         };
         if cache.as_ref().is_none_or(|c| c.0.size() != copy_size) {
+            // The old copy goes first, so its memory can hold the new one.
+            *cache = None;
             let copy = device.create_texture(&wgpu::TextureDescriptor {
                 label: Some("ocean scene depth copy"),
                 size: copy_size,
