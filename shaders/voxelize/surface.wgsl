@@ -21,7 +21,7 @@
 import fieldkit::triangle_box::{
     GIANT_BLOCK, GIANT_BLOCKS, GIANT_HEADER, GIANT_RECORDS, LIGHT, MAX_GIANTS, Setup,
     chunk_columns, column_at, column_coords, giant_blocks, giant_chunk_columns, giant_record_of,
-    listed_columns, next_column, overlaps_in, setup,
+    listed_columns, next_column, overlaps_in, setup, setup_moved,
 };
 import package::shared::scan::{scan_first, scan_partial};
 
@@ -89,8 +89,8 @@ fn load(t: u32) -> Setup {
     // moved / scale widens every test by `moved` more.
     let m = max(max(abs(a), abs(b)), abs(c));
     let scale = max(max(m.x, m.y), m.z) + 2.0;
-    return setup(a, b, c, vec3<i32>(params.grid), params.slack + params.moved / scale,
-                 SIX_SEPARATING);
+    return setup_moved(a, b, c, vec3<i32>(params.grid), params.slack + params.moved / scale,
+                       SIX_SEPARATING, params.moved);
 }
 
 // `load` for triangles already in grid-local coordinates (`surface_listed`'s, which the host

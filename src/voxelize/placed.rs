@@ -106,7 +106,8 @@ impl ChunkBound {
     /// matrix whose rows' largest lengths are `a` ≥ `b` (`axis_stretches`): a triangle of box
     /// diagonal d spans at most a · d and b · d voxels along two axes, so its box's largest face
     /// has at most (a · d + 3)(b · d + 3) columns (one more each way for closed boxes and one
-    /// for rounding), and it is heavy only when that exceeds `LIGHT`.
+    /// for rounding: the GPU grows the box by at most [`MOST_MOVED`] each way), and it is heavy
+    /// only when that exceeds `LIGHT`.
     ///
     /// The first `skip` (the pass's giants) list nothing. No triangle lists more than
     /// [`MAX_CHUNKS`]: those whose bound is larger (up to `capped`) count that many.
@@ -237,14 +238,23 @@ impl GpuMesh {
     }
 }
 
+/// The most, in voxels, that f32 rounding may move a placed mesh's vertex (its bound,
+/// `moved`, grows with the mesh's distance from the grid's origin: half a voxel at about
+/// 524 000 voxels): the GPU grows each triangle's box by the bound, and past this a placement
+/// is refused rather than voxelized with voxels the rounding could drop.
+const MOST_MOVED: f64 = 0.5;
+
 impl Voxelizer {
     /// Surface voxels of several resident meshes, each placed by its model matrix (any
     /// affine, invertible transform: rotation, non-uniform scale, mirror, translation), in
     /// one grid. Nothing is uploaded but the matrices: move the meshes every frame and
     /// voxelize again. The voxels are those of [`Voxelizer::encode_surface_with`] on the
     /// mesh moved in f64 (`Mesh::transformed`), up to the rounding of the move in f32, which
-    /// the tests' slack is widened to cover (it can add a voxel within about 10⁻⁵ voxels of a
-    /// triangle, never drop one). An empty `parts` gives an empty surface.
+    /// each triangle's box and tests are widened to cover (it can add a voxel within about
+    /// 10⁻⁵ voxels of a triangle, never drop one, even one a vertex touches at a single point
+    /// on a voxel plane). A mesh so far from the grid's origin that f32 places it only within
+    /// more than half a voxel is refused ([`Error::Invalid`]). An empty `parts` gives an empty
+    /// surface.
     pub fn encode_surface_placed(
         &self,
         device: &wgpu::Device,
@@ -412,6 +422,19 @@ fn placed_runs<'a>(
                 format!(
                     "part {i}: the model matrix moves the mesh {size} voxels from the grid, \
                  more than f32 can hold"
+                ),
+            ));
+        }
+        // The GPU grows each triangle's box by `moved` so that a vertex rounded past a voxel
+        // plane it lies on still reaches the voxel beyond; the work list's bound allows half a
+        // voxel of it each way (`ChunkBound::chunks`).
+        if moved > MOST_MOVED {
+            return Err(Error::invalid(
+                STAGE,
+                format!(
+                    "part {i}: the mesh reaches {size:.0} voxels from the grid's origin, where \
+                     f32 places it only within {moved:.2} voxels (at most {MOST_MOVED} keeps the \
+                     placed path conservative): voxelize it with encode_surface (moved in f64)"
                 ),
             ));
         }
