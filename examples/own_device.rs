@@ -226,7 +226,7 @@ fn frame(
     let settings = Settings::default();
     if let Some(grid) = settings.fit_grid(&voxels, edge)? {
         let field = balls.encode(device, &mut enc, &instances, &grid, edge, &settings)?;
-        let marcher = Raymarcher::new(device, colour_format, depth_format, false)?;
+        let marcher = Raymarcher::new(device, queue, colour_format, depth_format, false)?;
         marcher.encode(
             device,
             &mut enc,

@@ -119,7 +119,7 @@ impl Scene {
         let base = packed_grid([4, 3, 3], EDGE)?;
         let balls = Metaballs::new(device)?;
         let instances = balls.upload(device, queue, &base)?;
-        let marcher = Raymarcher::new(device, format, DEPTH, false)?;
+        let marcher = Raymarcher::new(device, queue, format, DEPTH, false)?;
         Ok(Self {
             floor,
             camera,

@@ -373,3 +373,98 @@ fn blob_bins_hold_every_blob_that_reaches_them() {
         "{bound} vs {most_slope}"
     );
 }
+
+/// A `Metaballs` rebuilding its field every frame on one grid keeps what it builds with: a
+/// field dropped before the next `encode` gives its textures and buffers back, one still held
+/// is never written again (the next field gets its own), and a field built into kept
+/// resources equals, bit for bit, the one a new `Metaballs` builds.
+#[test]
+fn an_animated_field_on_one_grid_reuses_what_was_dropped() {
+    use fieldkit::metaball::Animation;
+    let ctx = Context::shared();
+    let settings = Settings::default();
+    let base = three_blobs();
+    let animation = Animation::default();
+    let grid = settings
+        .fit_grid(&animation.envelope(&base, 1.0), 1.0)
+        .unwrap()
+        .unwrap();
+    let balls = Metaballs::new(&ctx.device).unwrap();
+    let frame = |t: f32| animation.apply(&base, 1.0, t).unwrap();
+    let mut inst = balls.upload(&ctx.device, &ctx.queue, &frame(0.0)).unwrap();
+    let build = |balls: &Metaballs, inst: &fieldkit::metaball::Instances| {
+        let mut enc = ctx.encoder("field");
+        let f = balls
+            .encode(&ctx.device, &mut enc, inst, &grid, 1.0, &settings)
+            .unwrap();
+        ctx.submit_and_wait("field", enc).unwrap();
+        f
+    };
+    let first = build(&balls, &inst);
+    let held = build(&balls, &inst);
+    assert!(
+        held.sdf != first.sdf && held.march != first.march,
+        "a held field was written"
+    );
+    let textures = (
+        first.sdf.clone(),
+        first.march.clone(),
+        first.nearest.clone(),
+    );
+    drop((first, held));
+    balls.update(&ctx.queue, &mut inst, &frame(0.7)).unwrap();
+    let again = build(&balls, &inst);
+    assert!(
+        [again.sdf.clone(), again.march.clone()]
+            .iter()
+            .any(|t| *t == textures.0 || *t == textures.1)
+            || again.nearest == textures.2,
+        "a dropped field's resources were not taken back"
+    );
+    // A new Metaballs, new resources: the same field.
+    let fresh_balls = Metaballs::new(&ctx.device).unwrap();
+    let fresh_inst = fresh_balls
+        .upload(&ctx.device, &ctx.queue, &frame(0.7))
+        .unwrap();
+    let fresh = build(&fresh_balls, &fresh_inst);
+    let sdf = |f: &fieldkit::metaball::MetaballField| read_texture::<f32>(&ctx, &f.sdf).unwrap();
+    let march =
+        |f: &fieldkit::metaball::MetaballField| read_texture::<[u16; 4]>(&ctx, &f.march).unwrap();
+    assert!(
+        sdf(&again) == sdf(&fresh),
+        "the kept field's distances differ"
+    );
+    assert!(
+        march(&again) == march(&fresh),
+        "the kept field's march volume differs"
+    );
+    assert_eq!(words(&ctx, &again.nearest), words(&ctx, &fresh.nearest));
+}
+
+/// `Animation::envelope` bounds every frame: on the grid fitted to it, every frame's blobs
+/// reach no farther than their supports, with the cell of margin `fit_grid` leaves.
+#[test]
+fn the_animation_envelope_holds_every_frame() {
+    use fieldkit::metaball::Animation;
+    use glam::DVec3;
+    let settings = Settings::default();
+    let base = packed_grid([4, 3, 2], 1.0).unwrap();
+    for animation in [Animation::default(), Animation::seed()] {
+        let outer = settings
+            .fit_grid(&animation.envelope(&base, 1.0), 1.0)
+            .unwrap()
+            .unwrap();
+        let top = outer.origin + DVec3::from_array(outer.size.map(f64::from)) * outer.voxel;
+        for k in 0..50 {
+            let t = k as f32 * 0.173;
+            for v in animation.apply(&base, 1.0, t).unwrap() {
+                let r = settings.radius(1.0, v.w) as f64 + outer.voxel;
+                let c = v.truncate().as_dvec3();
+                assert!(
+                    (c - r).cmpge(outer.origin - 1e-5).all() && (c + r).cmple(top + 1e-5).all(),
+                    "{animation:?} at t = {t}: a blob at {c} reaching {r} leaves {outer:?}"
+                );
+            }
+        }
+    }
+}

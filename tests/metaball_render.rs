@@ -228,6 +228,7 @@ fn viewport_origin_shifts_the_picture() {
     );
     let marcher = Raymarcher::new(
         &ctx.device,
+        &ctx.queue,
         wgpu::TextureFormat::Rgba32Float,
         wgpu::TextureFormat::Depth32Float,
         false,
@@ -309,6 +310,7 @@ fn gbuffer_holds_the_surface_for_the_scene_lighting() {
     gbuffer_on(&defaults, fieldkit::gpu::GBUFFER_FORMATS);
     let e = Raymarcher::gbuffer(
         &defaults.device,
+        &defaults.queue,
         [wgpu::TextureFormat::Rgba32Float; 4],
         wgpu::TextureFormat::Depth32Float,
         false,
@@ -330,6 +332,7 @@ fn gbuffer_on(ctx: &Context, formats: [wgpu::TextureFormat; 4]) {
     let f16 = wgpu::TextureFormat::Rgba16Float;
     let marcher = Raymarcher::gbuffer(
         &ctx.device,
+        &ctx.queue,
         formats,
         wgpu::TextureFormat::Depth32Float,
         false,
@@ -486,8 +489,14 @@ fn gbuffer_on(ctx: &Context, formats: [wgpu::TextureFormat; 4]) {
         )
         .unwrap_err();
     assert!(e.to_string().contains("roughness"), "{e}");
-    let forward_marcher =
-        Raymarcher::new(&ctx.device, f16, wgpu::TextureFormat::Depth32Float, false).unwrap();
+    let forward_marcher = Raymarcher::new(
+        &ctx.device,
+        &ctx.queue,
+        f16,
+        wgpu::TextureFormat::Depth32Float,
+        false,
+    )
+    .unwrap();
     let e = forward_marcher
         .encode_gbuffer(
             &ctx.device,
@@ -806,6 +815,7 @@ fn placement_culling_and_bad_views() {
     assert!(!box_visible(view.view_proj, away, g.origin.as_vec3(), hi));
     let marcher = Raymarcher::new(
         &ctx.device,
+        &ctx.queue,
         wgpu::TextureFormat::Rgba8Unorm,
         wgpu::TextureFormat::Depth32Float,
         false,
@@ -892,6 +902,7 @@ fn placement_culling_and_bad_views() {
     assert!(e.to_string().contains("reversed_z"), "{e}");
     let e = Raymarcher::new(
         &ctx.device,
+        &ctx.queue,
         wgpu::TextureFormat::Rgba8Unorm,
         wgpu::TextureFormat::Rgba8Unorm,
         false,
@@ -944,6 +955,7 @@ fn composite_refuses_a_stale_march_and_a_wrong_target() {
     let view = camera(Vec3::new(0.3, 0.4, 2.5), Vec3::ZERO, false);
     let marcher = Raymarcher::new(
         &ctx.device,
+        &ctx.queue,
         wgpu::TextureFormat::Rgba32Float,
         wgpu::TextureFormat::Depth32Float,
         false,
@@ -995,4 +1007,54 @@ fn composite_refuses_a_stale_march_and_a_wrong_target() {
     ctx.submit_and_wait("split", enc).unwrap();
     let px: Vec<[f32; 4]> = read_texture(&ctx, &targets.colour).unwrap();
     assert!(px.iter().filter(|p| p[3] != 0.0).count() > 200);
+}
+
+/// One raymarcher marching and compositing twice into one encoder (two views into two sets
+/// of targets) draws each as a raymarcher of its own does alone: it keeps its parameters'
+/// buffer and bind groups from call to call, and each march still reads its own view.
+#[test]
+fn two_marches_in_one_encoder_keep_their_own_parameters() {
+    use fieldkit::view::Targets;
+    let ctx = Context::shared();
+    let (_, field) = one_blob(&ctx);
+    let views = [
+        camera(Vec3::new(0.3, 0.4, 2.5), Vec3::ZERO, false),
+        camera(Vec3::new(-1.9, 0.8, 1.4), Vec3::ZERO, false),
+    ];
+    let settings = normals();
+    let alone = views
+        .each_ref()
+        .map(|v| shoot(&ctx, &field, v, Mat4::IDENTITY, &settings, 1.0).colour);
+    assert_ne!(alone[0], alone[1]);
+    let (colour, depth) = (
+        wgpu::TextureFormat::Rgba32Float,
+        wgpu::TextureFormat::Depth32Float,
+    );
+    let marcher = Raymarcher::new(&ctx.device, &ctx.queue, colour, depth, false).unwrap();
+    let targets = [0, 1].map(|_| Targets::new(&ctx.device, [W, H], colour, depth));
+    let mut enc = ctx.encoder("two marches");
+    for (t, v) in targets.iter().zip(&views) {
+        t.clear(&mut enc, wgpu::Color::TRANSPARENT, 1.0);
+        let drawn = marcher
+            .encode(
+                &ctx.device,
+                &mut enc,
+                &t.colour_view,
+                &t.depth_view,
+                &field,
+                Mat4::IDENTITY,
+                v,
+                &settings,
+            )
+            .unwrap();
+        assert!(drawn);
+    }
+    ctx.submit_and_wait("two marches", enc).unwrap();
+    for (k, t) in targets.iter().enumerate() {
+        let together: Vec<[f32; 4]> = read_texture(&ctx, &t.colour).unwrap();
+        assert!(
+            together == alone[k],
+            "march {k} differs when marched with the other"
+        );
+    }
 }

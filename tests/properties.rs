@@ -50,6 +50,7 @@ fn noop() -> &'static Noop {
             balls: Metaballs::new(d).unwrap(),
             marcher: Raymarcher::new(
                 d,
+                &ctx.queue,
                 wgpu::TextureFormat::Rgba8Unorm,
                 wgpu::TextureFormat::Depth32Float,
                 false,

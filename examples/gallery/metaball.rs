@@ -119,7 +119,7 @@ pub fn metaball_scene_with(
                 });
             };
             let field = balls.encode(device, &mut enc, &instances, &grid, edge, &settings)?;
-            let marcher = Raymarcher::new(device, colour_format, depth_format, false)?;
+            let marcher = Raymarcher::new(device, &ctx.queue, colour_format, depth_format, false)?;
             let rs = RaymarchSettings { output, ..march };
             marcher.encode(device, &mut enc, cv, dv, &field, Mat4::IDENTITY, &view, &rs)?;
         }
@@ -131,7 +131,7 @@ pub fn metaball_scene_with(
                 });
             };
             let bins = balls.encode_bins(device, &mut enc, &instances, &grid, edge, &settings)?;
-            let marcher = Raymarcher::new(device, colour_format, depth_format, false)?;
+            let marcher = Raymarcher::new(device, &ctx.queue, colour_format, depth_format, false)?;
             let rs = RaymarchSettings {
                 max_steps: 4096,
                 ..RaymarchSettings::default()

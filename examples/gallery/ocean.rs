@@ -64,7 +64,7 @@ pub fn ocean_scene_with(
     targets.clear(&mut enc, sky, 1.0);
     if let Some(grid) = settings.fit_grid(&voxels, edge)? {
         let field = balls.encode(device, &mut enc, &instances, &grid, edge, &settings)?;
-        let marcher = Raymarcher::new(device, colour_format, depth_format, false)?;
+        let marcher = Raymarcher::new(device, &ctx.queue, colour_format, depth_format, false)?;
         marcher.encode(
             device,
             &mut enc,

@@ -3,13 +3,13 @@
 
 use std::sync::Arc;
 
-use super::buffers::{Pool, view};
+use super::buffers::{Pool, kept_buffer, view};
 use super::check::{check_bytes, check_inside, check_size_3d, voxels};
 use super::resolve::resolve_params;
 use super::{Field3d, MAX_POINTS, PointSeeds, STAGE_3D as STAGE, SeedPacking, Settings3d, Slabs};
-use crate::bind::ComputePipeline;
+use crate::bind::{ComputePipeline, KeptBound};
 use crate::error::Error;
-use crate::gpu::{Record, uniform_buffer as uniform};
+use crate::gpu::{KeptUniform, KeptView, Record, uniform_buffer as uniform};
 use crate::shaders::distance::{field_resolve, jfa3_seed_points, point_lines};
 
 /// The pipelines of sub-voxel seeds: placing them, the line passes and the resolve from points.
@@ -22,6 +22,21 @@ pub(crate) struct Points {
     resolve_points: ComputePipeline<field_resolve::resolve_points::Entry>,
     resolve_points_signed: ComputePipeline<field_resolve::resolve_points_signed::Entry>,
     pool: Arc<Pool>,
+    /// The line passes' scratch, uniforms, views and bind groups, kept from call to call: a
+    /// field rebuilt every frame on one grid (and recycled) makes no object a frame.
+    lines: KeptLines,
+}
+
+#[derive(Default)]
+struct KeptLines {
+    candidates: [std::sync::Mutex<Option<wgpu::Buffer>>; 2],
+    params: KeptUniform,
+    inside: KeptView,
+    distance: KeptView,
+    x: KeptBound<point_lines::lines_x::Entry>,
+    y: KeptBound<point_lines::lines_y::Entry>,
+    z: KeptBound<point_lines::lines_z::Entry>,
+    z_signed: KeptBound<point_lines::lines_z_signed::Entry>,
 }
 
 impl Points {
@@ -35,6 +50,7 @@ impl Points {
             resolve_points: ComputePipeline::new(device)?,
             resolve_points_signed: ComputePipeline::new(device)?,
             pool,
+            lines: KeptLines::default(),
         })
     }
 
@@ -194,21 +210,24 @@ impl Points {
     ) -> Result<(wgpu::Buffer, wgpu::Texture), Error> {
         // Each voxel carries an 8-byte candidate between passes.
         check_bytes(&device.limits(), voxels(size) * 8)?;
-        let candidates = |label| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: voxels(size) * 8,
-                usage: wgpu::BufferUsages::STORAGE,
-                mapped_at_creation: false,
+        let kept = &self.lines;
+        let candidates = |k: usize, label| {
+            kept_buffer(&kept.candidates[k], voxels(size) * 8, false, || {
+                device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size: voxels(size) * 8,
+                    usage: wgpu::BufferUsages::STORAGE,
+                    mapped_at_creation: false,
+                })
             })
         };
         let (a, b) = (
-            candidates("line candidates x"),
-            candidates("line candidates y"),
+            candidates(0, "line candidates x"),
+            candidates(1, "line candidates y"),
         );
         // A point within `band` of a voxel centre lies within √3/2 of its own voxel's centre.
         let reach = (band + 0.8660254).floor().min(u32::MAX as f32) as u32;
-        let params = uniform(
+        let params = kept.params.get(
             device,
             "line params",
             &point_lines::LineParams {
@@ -219,9 +238,10 @@ impl Points {
                 threshold: options.inside.threshold(),
             },
         );
-        self.lines_x.record(
+        self.lines_x.record_kept(
             device,
             rec,
+            &kept.x,
             &point_lines::lines_x::Resources {
                 params: (&params).into(),
                 keys: (&keys).into(),
@@ -231,9 +251,10 @@ impl Points {
             ComputePipeline::<point_lines::lines_x::Entry>::groups_for(size),
             "lines x",
         )?;
-        self.lines_y.record(
+        self.lines_y.record_kept(
             device,
             rec,
+            &kept.y,
             &point_lines::lines_y::Resources {
                 params: (&params).into(),
                 src: (&a).into(),
@@ -246,13 +267,14 @@ impl Points {
         let distance = self
             .pool
             .distance_texture(device, size, wgpu::TextureDimension::D3);
-        let dv = view(&distance);
+        let dv = kept.distance.get(&distance, view);
         let groups = ComputePipeline::<point_lines::lines_z::Entry>::groups_for(size);
         match inside {
             None => {
-                self.lines_z.record(
+                self.lines_z.record_kept(
                     device,
                     rec,
+                    &kept.z,
                     &point_lines::lines_z::Resources {
                         params: (&params).into(),
                         keys: (&keys).into(),
@@ -266,10 +288,11 @@ impl Points {
                 )?;
             }
             Some(v) => {
-                let vv = view(v);
-                self.lines_z_signed.record(
+                let vv = kept.inside.get(v, view);
+                self.lines_z_signed.record_kept(
                     device,
                     rec,
+                    &kept.z_signed,
                     &point_lines::lines_z_signed::Resources {
                         params: (&params).into(),
                         keys: (&keys).into(),

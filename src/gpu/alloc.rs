@@ -173,4 +173,15 @@ impl<T: Clone> Leased<T> {
         }
         (t, lease)
     }
+
+    /// Change the kept output that `lease` holds (what a call learned while filling it).
+    pub(crate) fn update(&self, lease: &Lease, f: impl FnOnce(&mut T)) {
+        let mut kept = self.kept.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((_, t)) = kept
+            .iter_mut()
+            .find(|(l, _)| std::sync::Arc::ptr_eq(&l.0, &lease.0))
+        {
+            f(t);
+        }
+    }
 }

@@ -26,6 +26,12 @@ const MAGIC: &[u8; 8] = b"fkpipes1";
 /// through it, and [`PipelineCache::save`] writes what the driver compiled to disk for the next
 /// launch. Dropping it uninstalls it (drop it before the device).
 ///
+/// wgpu tells devices apart by an id that is unique only within their own `wgpu::Instance`:
+/// in a process with several instances (tests that each open their own), a cache installed for
+/// a device of one instance is found for the device of the same id in another, whose pipelines
+/// then fail. Keep to one instance where a cache is installed, or keep such devices apart in
+/// time (as `tests/viewer.rs` does).
+///
 /// Where the device cannot keep a pipeline cache ([`wgpu::Features::PIPELINE_CACHE`] not
 /// enabled, or a backend without one: wgpu has them on Vulkan), [`PipelineCache::open`]
 /// returns `None` and pipelines are made as before.

@@ -191,6 +191,22 @@ impl Animation {
         Ok(self.apply_unchecked(base, edge, t))
     }
 
+    /// Stand-ins for `base` whose fitted grid ([`Settings::fit_grid`](super::Settings::fit_grid))
+    /// holds every frame of the animation: two per instance, at its centre ± the largest
+    /// offset along every axis, at its full scale (the pulse never exceeds it). Fit the grid
+    /// once to these and keep it while the blocks and the animation stay: the field is then
+    /// built on one grid every frame, so nothing is made a frame (a grid fitted to each
+    /// frame's voxels changes size as they move, and every size makes new textures).
+    pub fn envelope(&self, base: &[Vec4], edge: f32) -> Vec<Vec4> {
+        let reach = Vec3::splat(self.offset_amplitude.abs() * edge);
+        base.iter()
+            .flat_map(|v| {
+                let c = v.truncate();
+                [(c - reach).extend(v.w), (c + reach).extend(v.w)]
+            })
+            .collect()
+    }
+
     fn apply_unchecked(&self, base: &[Vec4], edge: f32, t: f32) -> Vec<Vec4> {
         let tau = std::f32::consts::TAU;
         base.iter()

@@ -20,6 +20,7 @@
 
 pub mod cpu;
 mod cubes;
+mod field;
 mod layout;
 mod render;
 
@@ -30,9 +31,7 @@ pub use render::{Direct, Filter, Marched, Material, Output, RaymarchSettings, Ra
 use glam::{Vec3, Vec4};
 
 use crate::bind::ComputePipeline;
-use crate::distance::{
-    Distance3d, Grid, Inside, MAX_POINTS, Method, Settings3d, Unreached, Variant,
-};
+use crate::distance::{Distance3d, Grid, MAX_POINTS, Method, Variant};
 use crate::error::Error;
 use crate::gpu::{Record, uniform_buffer as uniform};
 use crate::shaders::metaball::{bin_blobs, march_field, splat, surface_seeds};
@@ -327,6 +326,8 @@ pub struct MetaballField {
     /// What the raymarch reads: distance in cells (r) and density (g) as `Rgba16Float`, one
     /// filtered fetch for both.
     pub march: wgpu::Texture,
+    /// The hold on these: [`Metaballs`] takes them back for a later field once dropped.
+    _lease: crate::gpu::Lease,
 }
 
 /// Blobs sorted into a uniform grid of bins for tracing the field directly
@@ -387,6 +388,8 @@ pub struct Metaballs {
     bin_fill: ComputePipeline<bin_blobs::bin_fill::Entry>,
     bin_bound: ComputePipeline<bin_blobs::bin_bound::Entry>,
     distance: Distance3d,
+    /// What `encode` keeps from call to call.
+    field: field::FieldKept,
 }
 
 impl Metaballs {
@@ -401,6 +404,7 @@ impl Metaballs {
             bin_fill: ComputePipeline::new(device)?,
             bin_bound: ComputePipeline::new(device)?,
             distance: Distance3d::new(device)?,
+            field: Default::default(),
         })
     }
 
@@ -467,60 +471,6 @@ impl Metaballs {
         instances.max_scale = max_scale(voxels);
         instances.centres = centre_bounds(voxels);
         Ok(())
-    }
-
-    /// Splat, seeds and signed distance for `instances` on `grid` (voxel edge `edge`), recorded
-    /// into `rec` (a command encoder, or [`crate::gpu::Profiler::record`] to time each pass).
-    pub fn encode(
-        &self,
-        device: &wgpu::Device,
-        rec: &mut impl Record,
-        instances: &Instances,
-        grid: &Grid,
-        edge: f32,
-        settings: &Settings,
-    ) -> Result<MetaballField, Error> {
-        let seeds = self.encode_seeds(device, rec, instances, grid, edge, settings)?;
-        let options = Settings3d {
-            method: settings.method,
-            signed: true,
-            inside: Inside::Threshold(settings.threshold),
-            voxel_size: (grid.voxel as f32),
-            band: (!settings.full_volume).then_some(settings.band),
-            unreached: settings.full_volume.then_some(Unreached {
-                inside: (grid.voxel as f32),
-                outside: FULL_VOLUME_FAR,
-            }),
-        };
-        // The flood starts from the keys buffer and may leave intermediate steps in it.
-        let mut field = self.distance.encode_keyed_points(
-            device,
-            rec,
-            seeds.keys,
-            &seeds.points,
-            grid.size,
-            Some(&seeds.density),
-            &options,
-        )?;
-        let march = self.encode_pack(device, rec, grid, &field.distance, &seeds.density)?;
-        Ok(MetaballField {
-            march,
-            grid: *grid,
-            density_fixed: seeds.density_fixed,
-            fixed_scale: seeds.fixed_scale,
-            density: seeds.density,
-            points: seeds.points,
-            // A field of sub-voxel seeds is one buffer (`check_size_3d`): only the exact
-            // transform splits.
-            nearest: field.nearest.buffers.swap_remove(0),
-            sdf: field.distance,
-            band: if settings.full_volume {
-                full_band(grid)
-            } else {
-                settings.band * (grid.voxel as f32)
-            },
-            threshold: settings.threshold,
-        })
     }
 
     /// Sort `instances` into bins over `grid`'s box for direct tracing: count, scan, fill, and
@@ -639,151 +589,6 @@ impl Metaballs {
             stats,
             cell: (grid.voxel as f32),
             threshold: settings.threshold,
-        })
-    }
-
-    /// The distance and density packed into one filterable volume for the raymarch.
-    fn encode_pack(
-        &self,
-        device: &wgpu::Device,
-        rec: &mut impl Record,
-        grid: &Grid,
-        sdf: &wgpu::Texture,
-        density: &wgpu::Texture,
-    ) -> Result<wgpu::Texture, Error> {
-        let packed = crate::gpu::volume_texture(
-            device,
-            "metaball march field",
-            grid.size,
-            wgpu::TextureFormat::Rgba16Float,
-        );
-        let params = uniform(
-            device,
-            "march field params",
-            &march_field::PackParams {
-                size: grid.size.into(),
-                inv_cell: 1.0 / (grid.voxel as f32),
-            },
-        );
-        let (sv, dv, pv) = (
-            sdf.create_view(&Default::default()),
-            density.create_view(&Default::default()),
-            packed.create_view(&Default::default()),
-        );
-        self.pack.record(
-            device,
-            rec,
-            &march_field::march_field::Resources {
-                params: (&params).into(),
-                sdf: (&sv).into(),
-                density: (&dv).into(),
-                packed: (&pv).into(),
-            },
-            ComputePipeline::<march_field::march_field::Entry>::groups_for(grid.size),
-            "pack",
-        )?;
-        Ok(packed)
-    }
-
-    /// The splat and surface-seed stages alone.
-    pub fn encode_seeds(
-        &self,
-        device: &wgpu::Device,
-        rec: &mut impl Record,
-        instances: &Instances,
-        grid: &Grid,
-        edge: f32,
-        settings: &Settings,
-    ) -> Result<SurfaceSeeds, Error> {
-        check_inputs(settings, edge, grid, STAGE)?;
-        crate::distance::check_size_3d(device, grid.size)?;
-        let cells: u64 = grid.size.iter().map(|&s| s as u64).product();
-        if cells > MAX_POINTS as u64 + 1 {
-            return Err(Error::Size {
-                stage: STAGE,
-                what: "grid cells (one seed point per cell)",
-                got: cells,
-                max: MAX_POINTS as u64 + 1,
-            });
-        }
-        if instances.buffer.size() < instances.count as u64 * 16 {
-            return Err(Error::Invalid {
-                stage: STAGE,
-                what: format!(
-                    "instance buffer has {} bytes for {} instances",
-                    instances.buffer.size(),
-                    instances.count
-                ),
-            });
-        }
-        let storage = |label: &str, bytes: u64| storage_buffer(device, label, bytes);
-        let density_fixed = storage("metaball density (fixed point)", cells * 4);
-        rec.recorder().encoder.clear_buffer(&density_fixed, 0, None);
-        let scale = fixed_scale(instances.count);
-        if instances.count > 0 {
-            let params = uniform(
-                device,
-                "splat params",
-                &splat::SplatParams {
-                    size: grid.size.into(),
-                    count: instances.count,
-                    origin: grid.origin.as_vec3(),
-                    cell: (grid.voxel as f32),
-                    radius_per_scale: settings.radius(edge, 1.0),
-                    fixed_scale: scale,
-                },
-            );
-            self.splat.record(
-                device,
-                rec,
-                &splat::splat::Resources {
-                    params: (&params).into(),
-                    instances: (&instances.buffer).into(),
-                    density: (&density_fixed).into(),
-                },
-                [instances.count.div_ceil(64), 1, 1],
-                "splat",
-            )?;
-        }
-        let density = crate::gpu::volume_texture(
-            device,
-            "metaball density",
-            grid.size,
-            wgpu::TextureFormat::R32Float,
-        );
-        let keys = storage("metaball seed keys", cells * 4);
-        let points = storage("metaball seed points", cells * 16);
-        {
-            let params = uniform(
-                device,
-                "surface seed params",
-                &surface_seeds::SurfaceParams {
-                    size: grid.size.into(),
-                    threshold: settings.threshold,
-                    inv_fixed_scale: 1.0 / scale,
-                },
-            );
-            let dv = density.create_view(&Default::default());
-            self.seeds.record(
-                device,
-                rec,
-                &surface_seeds::surface_seeds::Resources {
-                    params: (&params).into(),
-                    density: (&density_fixed).into(),
-                    density_out: (&dv).into(),
-                    keys: (&keys).into(),
-                    points: (&points).into(),
-                },
-                ComputePipeline::<surface_seeds::surface_seeds::Entry>::groups_for(grid.size),
-                "seeds",
-            )?;
-        }
-        Ok(SurfaceSeeds {
-            density_fixed,
-            fixed_scale: scale,
-            density,
-            keys,
-            points,
         })
     }
 }

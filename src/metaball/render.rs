@@ -16,6 +16,7 @@
 //! };
 //! let marcher = Raymarcher::new(
 //!     &ctx.device,
+//!     &ctx.queue,
 //!     wgpu::TextureFormat::Rgba8Unorm,
 //!     wgpu::TextureFormat::Depth32Float,
 //!     false,
@@ -30,9 +31,9 @@
 use glam::{Mat4, Vec3, Vec4};
 
 use super::{BlobBins, MetaballField};
-use crate::bind::{ComputePipeline, RenderPipeline, RenderTargets};
+use crate::bind::{ComputePipeline, KeptBound, RenderPipeline, RenderTargets};
 use crate::error::Error;
-use crate::gpu::{Record, uniform_buffer as uniform};
+use crate::gpu::{KeptView, Record, Uploads, uniform_bytes};
 use crate::shaders::metaball::{blob_trace, composite, sdf_raymarch};
 use crate::view::{View, box_visible, depth_state, load_pass_recorded, screen_rect};
 
@@ -350,6 +351,53 @@ pub struct Raymarcher {
     reversed_z: bool,
     sampler: wgpu::Sampler,
     scratch: std::sync::Mutex<Option<std::sync::Arc<Scratch>>>,
+    /// What a frame draws with, kept from frame to frame: no object made a frame.
+    kept: Kept,
+}
+
+/// The raymarcher's per-frame parameters (written through an upload ring), the view of the
+/// field it marches and the bind groups of its passes, kept from frame to frame.
+struct Kept {
+    uploads: Uploads,
+    march_params: std::sync::Mutex<Option<wgpu::Buffer>>,
+    trace_params: std::sync::Mutex<Option<wgpu::Buffer>>,
+    material: std::sync::Mutex<Option<wgpu::Buffer>>,
+    field_view: KeptView,
+    march: KeptBound<sdf_raymarch::march::Entry>,
+    trace: KeptBound<blob_trace::trace_blobs::Entry>,
+    forward: KeptBound<composite::fs_main::Entry>,
+    gbuffer: KeptBound<composite::fs_gbuffer::Entry>,
+}
+
+impl Kept {
+    fn new(queue: &wgpu::Queue) -> Self {
+        Self {
+            uploads: Uploads::new(queue),
+            march_params: Default::default(),
+            trace_params: Default::default(),
+            material: Default::default(),
+            field_view: KeptView::default(),
+            march: KeptBound::default(),
+            trace: KeptBound::default(),
+            forward: KeptBound::default(),
+            gbuffer: KeptBound::default(),
+        }
+    }
+
+    /// The uniform kept in `slot` holding `value` from the copy recorded now into `rec`.
+    fn uniform<T: encase::ShaderType + encase::internal::WriteInto>(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        slot: &std::sync::Mutex<Option<wgpu::Buffer>>,
+        label: &str,
+        value: &T,
+    ) -> wgpu::Buffer {
+        let bytes = uniform_bytes(value);
+        let usage = wgpu::BufferUsages::UNIFORM;
+        self.uploads
+            .kept(device, rec.recorder().encoder, slot, label, usage, &bytes)
+    }
 }
 
 impl Raymarcher {
@@ -357,6 +405,7 @@ impl Raymarcher {
     /// [`View`]s drawn with it.
     pub fn new(
         device: &wgpu::Device,
+        queue: &wgpu::Queue,
         colour: wgpu::TextureFormat,
         depth: wgpu::TextureFormat,
         reversed_z: bool,
@@ -369,7 +418,7 @@ impl Raymarcher {
                 ..Default::default()
             },
         )?);
-        Self::with_composite(device, composite, reversed_z)
+        Self::with_composite(device, queue, composite, reversed_z)
     }
 
     /// A raymarcher that writes a G-buffer, as the ocean's `Output::GBuffer` does: scene colour
@@ -379,6 +428,7 @@ impl Raymarcher {
     /// lighting, is what this lifts. Draw with [`Raymarcher::encode_gbuffer`].
     pub fn gbuffer(
         device: &wgpu::Device,
+        queue: &wgpu::Queue,
         formats: [wgpu::TextureFormat; 4],
         depth: wgpu::TextureFormat,
         reversed_z: bool,
@@ -392,7 +442,7 @@ impl Raymarcher {
                 ..Default::default()
             },
         )?);
-        Self::with_composite(device, composite, reversed_z)
+        Self::with_composite(device, queue, composite, reversed_z)
     }
 
     fn depth_test(
@@ -412,6 +462,7 @@ impl Raymarcher {
 
     fn with_composite(
         device: &wgpu::Device,
+        queue: &wgpu::Queue,
         composite: Composite,
         reversed_z: bool,
     ) -> Result<Self, Error> {
@@ -427,6 +478,7 @@ impl Raymarcher {
                 ..Default::default()
             }),
             scratch: std::sync::Mutex::new(None),
+            kept: Kept::new(queue),
         })
     }
 
@@ -551,8 +603,10 @@ impl Raymarcher {
         else {
             return Ok(None);
         };
-        let params = uniform(
+        let params = self.kept.uniform(
             device,
+            rec,
+            &self.kept.trace_params,
             "blob trace params",
             &blob_trace::TraceParams {
                 inv_view_proj: inv,
@@ -584,8 +638,9 @@ impl Raymarcher {
             },
         );
         let scratch = self.scratch(device, view.target_size());
-        let bound = self.direct.bind(
+        let bound = self.direct.bind_kept(
             device,
+            &self.kept.trace,
             &blob_trace::trace_blobs::Resources {
                 params: (&params).into(),
                 starts: (&bins.starts).into(),
@@ -651,8 +706,10 @@ impl Raymarcher {
         else {
             return Ok(None);
         };
-        let params = uniform(
+        let params = self.kept.uniform(
             device,
+            rec,
+            &self.kept.march_params,
             "raymarch params",
             &sdf_raymarch::RaymarchParams {
                 inv_view_proj: inv,
@@ -690,9 +747,13 @@ impl Raymarcher {
             },
         );
         let scratch = self.scratch(device, view.target_size());
-        let fv = field.march.create_view(&Default::default());
-        let marched = self.march.bind(
+        let fv = self
+            .kept
+            .field_view
+            .get(&field.march, |t| t.create_view(&Default::default()));
+        let marched = self.march.bind_kept(
             device,
+            &self.kept.march,
             &sdf_raymarch::march::Resources {
                 params: (&params).into(),
                 field: (&fv).into(),
@@ -776,8 +837,9 @@ impl Raymarcher {
                 what: "this raymarcher writes a G-buffer: draw with encode_gbuffer".into(),
             });
         };
-        let bound = pipeline.bind(
+        let bound = pipeline.bind_kept(
             device,
+            &self.kept.forward,
             &composite::fs_main::Resources {
                 marched_colour: (&marched.scratch.colour).into(),
                 marched_depth: (&marched.scratch.depth).into(),
@@ -842,8 +904,10 @@ impl Raymarcher {
                 });
             }
         }
-        let params = uniform(
+        let params = self.kept.uniform(
             device,
+            &mut *encoder,
+            &self.kept.material,
             "metaball material",
             &composite::Material {
                 metallic: material.metallic,
@@ -852,8 +916,9 @@ impl Raymarcher {
                 shading_model: material.shading_model as u32,
             },
         );
-        let bound = pipeline.bind(
+        let bound = pipeline.bind_kept(
             device,
+            &self.kept.gbuffer,
             &composite::fs_gbuffer::Resources {
                 marched_colour: (&marched.scratch.colour).into(),
                 marched_depth: (&marched.scratch.depth).into(),

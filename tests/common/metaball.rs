@@ -72,6 +72,7 @@ pub fn shoot<'a>(
     let (cv, dv) = (&targets.colour_view, &targets.depth_view);
     let marcher = Raymarcher::new(
         device,
+        &ctx.queue,
         wgpu::TextureFormat::Rgba32Float,
         wgpu::TextureFormat::Depth32Float,
         view.reversed_z,

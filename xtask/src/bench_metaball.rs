@@ -110,8 +110,8 @@ fn bench(
     // A raymarcher and full-size targets for one colour format.
     let pair = |format| -> Result<(Raymarcher, Targets), String> {
         let depth = wgpu::TextureFormat::Depth32Float;
-        let marcher =
-            Raymarcher::new(&ctx.device, format, depth, false).map_err(|e| e.to_string())?;
+        let marcher = Raymarcher::new(&ctx.device, &ctx.queue, format, depth, false)
+            .map_err(|e| e.to_string())?;
         Ok((
             marcher,
             Targets::new(&ctx.device, [width, height], format, depth),

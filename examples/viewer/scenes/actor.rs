@@ -103,7 +103,18 @@ pub struct Actor {
     pub(super) base: Option<([u32; 3], f32, Vec<glam::Vec4>)>,
     pub(super) marcher: Option<(bool, Raymarcher)>,
     pub(super) cubes: Option<(CubeStyle, Cubes)>,
+    /// The grid the field is built on, kept while the blocks, the animation and the field
+    /// settings stay: fitted to the animation's envelope, so it holds every frame.
+    pub(super) grid: Option<(GridKey, Option<fieldkit::distance::Grid>)>,
 }
+
+/// What the actor's grid is fitted from.
+type GridKey = (
+    [u32; 3],
+    f32,
+    Option<fieldkit::metaball::Animation>,
+    fieldkit::metaball::Settings,
+);
 
 impl Actor {
     pub(super) fn new(device: &wgpu::Device) -> Result<Self, Error> {
@@ -113,6 +124,7 @@ impl Actor {
             base: None,
             marcher: None,
             cubes: None,
+            grid: None,
         })
     }
 
@@ -166,7 +178,17 @@ impl Actor {
                 view.view_proj,
             )?;
         }
-        let Some(grid) = s.field.fit_grid(&voxels, s.block)? else {
+        let animation = s.animate.then_some(s.animation);
+        let key = (counts, s.block, animation, s.field);
+        if self.grid.as_ref().map(|g| &g.0) != Some(&key) {
+            let base = &self.base.as_ref().expect("set above").2;
+            let envelope = match animation {
+                Some(a) => a.envelope(base, s.block),
+                None => base.clone(),
+            };
+            self.grid = Some((key, s.field.fit_grid(&envelope, s.block)?));
+        }
+        let Some(grid) = self.grid.as_ref().expect("set above").1 else {
             return Ok(stats);
         };
         stats.push(format!(
@@ -213,7 +235,10 @@ impl Actor {
             _ => self.instances = Some((self.balls.upload(device, queue, voxels)?, voxels.len())),
         }
         if self.marcher.as_ref().map(|m| m.0) != Some(reversed) {
-            self.marcher = Some((reversed, Raymarcher::new(device, COLOUR, DEPTH, reversed)?));
+            self.marcher = Some((
+                reversed,
+                Raymarcher::new(device, queue, COLOUR, DEPTH, reversed)?,
+            ));
         }
         Ok(())
     }
