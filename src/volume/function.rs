@@ -5,7 +5,7 @@ use std::marker::PhantomData;
 
 use glam::{Mat4, UVec3, Vec3};
 
-use super::kept::Target;
+use super::kept::{self, Target};
 use super::{
     Bricks, MarchScalars, MarchSettings, Shadow, TransferFunction, VolumeMarched,
     check_scene_depth, check_transform, check_view, march_rect, step_guard, tf_buffer,
@@ -420,20 +420,7 @@ impl<M: Entry, B: Entry, K: Entry> DensityMarch<M, B, K> {
             rect,
             scene_depth.is_some(),
         );
-        let size = [view.viewport[0], view.viewport[1], 1];
-        let format = wgpu::TextureFormat::Rgba16Float;
-        let (colour, lease) = self.marched.take(
-            |t| t.is(size, format),
-            || {
-                Target::new(
-                    device,
-                    "volume march",
-                    size,
-                    wgpu::TextureDimension::D2,
-                    format,
-                )
-            },
-        );
+        let (colour, lease) = kept::march_target(&self.marched, device, view.viewport);
         let tf_buffer = tf_buffer(device, tf);
         let mode = match settings.mode {
             super::Mode::EmissionAbsorption => 0,

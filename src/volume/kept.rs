@@ -5,7 +5,7 @@
 use std::sync::Mutex;
 
 use crate::bind::KeptBound;
-use crate::gpu::{KeptView, Leased, Uploads};
+use crate::gpu::{KeptView, Lease, Leased, Uploads};
 use crate::shaders::volume::{lit_density, volume_composite, volume_march};
 
 /// A texture a pass writes and the view it is bound through.
@@ -110,4 +110,27 @@ impl Kept {
             ),
         }
     }
+}
+
+/// The premultiplied image a march writes (viewport-sized `Rgba16Float`): one of `marched`
+/// no longer held, else a new one.
+pub(super) fn march_target(
+    marched: &Leased<Target>,
+    device: &wgpu::Device,
+    viewport: [u32; 2],
+) -> (Target, Lease) {
+    let size = [viewport[0], viewport[1], 1];
+    let format = wgpu::TextureFormat::Rgba16Float;
+    marched.take(
+        |t| t.is(size, format),
+        || {
+            Target::new(
+                device,
+                "volume march",
+                size,
+                wgpu::TextureDimension::D2,
+                format,
+            )
+        },
+    )
 }

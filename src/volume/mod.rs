@@ -483,20 +483,7 @@ impl VolumeRenderer {
             rect,
             scene_depth.is_some(),
         )?;
-        let size = [view.viewport[0], view.viewport[1], 1];
-        let format = wgpu::TextureFormat::Rgba16Float;
-        let (colour, lease) = kept.marched.take(
-            |t| t.is(size, format),
-            || {
-                Target::new(
-                    device,
-                    "volume march",
-                    size,
-                    wgpu::TextureDimension::D2,
-                    format,
-                )
-            },
-        );
+        let (colour, lease) = kept::march_target(&kept.marched, device, view.viewport);
         let recorder = &mut rec.recorder();
         let params = kept.uploads.kept(
             device,
