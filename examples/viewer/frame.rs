@@ -6,7 +6,9 @@
 //! recorded through a `Recorder`: the ocean's), and the loop's own floor (an empty frame submitted and waited
 //! for, the same way). Besides the steady frames it times the first frame of the scene (its
 //! pipelines made on the spot) and the frame after the screen size changes (the hitch a resize
-//! costs). Medians with min–max over FRAMES frames after 30 frames of warm-up.
+//! costs). Medians with min–max over FRAMES frames after 30 frames of warm-up; then the GPU
+//! objects (buffers, textures, views, bind groups) the most any of 5 more frames creates,
+//! counted as wgpu-core creates them ([`super::made`]).
 //!
 //! `cargo xtask bench frame` runs it for every scene and writes `frame.csv`; on its own it prints
 //! a table (`--out DIR` writes the CSV there too).
