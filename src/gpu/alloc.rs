@@ -125,8 +125,11 @@ impl KeptView {
     }
 }
 
-/// A hold on an output a stage handed out: the stage takes the output's textures back for a
-/// later call once every clone of its lease is dropped (see [`Leased`]).
+/// A hold on an output a stage handed out (a `VolumeMarched`, a `LightVolume`, a
+/// `MetaballField`): the stage takes the output's buffers and textures back for a later call
+/// once every clone of its lease is dropped, so a loop that drops each frame's output before
+/// the next frame's call makes none a frame, and one that keeps outputs gets new ones, never
+/// its own overwritten. A clone of one of its textures kept past the output sees later values.
 #[derive(Clone, Debug, Default)]
 pub struct Lease(std::sync::Arc<()>);
 

@@ -27,6 +27,7 @@ pub use readback::{Readback, readback_buffer, readback_buffers, readback_texture
 pub(crate) use targets::check_target_bytes;
 pub use targets::{GBUFFER_FORMATS, target_bytes_per_sample};
 pub use timing::{Profiler, Record, Recorder, Timer};
+pub use upload::RING_UPLOADS;
 pub(crate) use upload::Uploads;
 
 use crate::error::Error;

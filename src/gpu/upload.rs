@@ -7,14 +7,24 @@
 //! [`Uploads`] writes each call's bytes to a fresh span of a staging ring with the queue and
 //! records a copy from that span into the kept buffer in the caller's encoder, ordered with the
 //! passes that read it: each draw reads its own bytes. A span is written again only after the
-//! ring wraps, [`RING_BYTES`] of uploads later; an encoder submitted after that many bytes of
-//! later calls by the same object would read newer bytes. The ring grows (one new buffer) when
-//! a single upload is larger.
+//! ring wraps; the ring holds at least [`RING_UPLOADS`] of the largest upload it has taken (and
+//! [`RING_BYTES`]), growing (one new buffer) when a larger one comes, so an encoder may hold
+//! that many draws of one object before its submission. One submitted after more would read a
+//! later draw's bytes: the bound the renderers' docs state.
 
 use std::sync::Mutex;
 
-/// The staging ring's size: 256 calls of the ocean's 1 KiB of uniforms and patches.
+/// The staging ring's least size.
 pub(crate) const RING_BYTES: u64 = 256 * 1024;
+
+/// How many draws of one renderer ([`OceanRenderer`](crate::ocean::OceanRenderer),
+/// [`VolumeRenderer`](crate::volume::VolumeRenderer),
+/// [`Raymarcher`](crate::metaball::Raymarcher)) one encoder may hold before it is submitted:
+/// each draw stages its parameters in a ring the renderer keeps, which holds at least this many
+/// of its largest, and a draw followed by more than this many before its encoder is submitted
+/// would read a later draw's parameters. Drawing a renderer once or twice a frame (a view, a
+/// reflection) is far within it.
+pub const RING_UPLOADS: u64 = 64;
 
 /// A staging ring and the queue that writes it (see the module docs).
 // Used by the techniques' per-frame stages.
@@ -75,8 +85,9 @@ impl Uploads {
         let align = wgpu::COPY_BUFFER_ALIGNMENT;
         let len = (bytes.len() as u64).next_multiple_of(align);
         let mut ring = self.ring.lock().unwrap_or_else(|e| e.into_inner());
-        if ring.as_ref().is_none_or(|(b, _)| b.size() < len) {
-            let size = RING_BYTES.max(len.next_power_of_two());
+        let want = RING_BYTES.max(len * RING_UPLOADS);
+        if ring.as_ref().is_none_or(|(b, _)| b.size() < want) {
+            let size = want.next_power_of_two();
             let buffer = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("fieldkit upload ring"),
                 size,

@@ -343,7 +343,9 @@ enum Composite {
 /// The SDF raymarch for one colour and depth format: a compute pass marches and shades the
 /// box's screen rectangle, and a scissored full-screen draw writes the hits into the caller's
 /// targets through their depth test. [`Raymarcher::gbuffer`] writes a G-buffer instead, so the
-/// surface takes the scene's own lighting.
+/// surface takes the scene's own lighting. A frame makes no GPU object: the view's parameters
+/// are staged through a ring it keeps (with the queue given to `new`; up to
+/// [`RING_UPLOADS`](crate::gpu::RING_UPLOADS) marches may wait in one encoder).
 pub struct Raymarcher {
     march: ComputePipeline<sdf_raymarch::march::Entry>,
     direct: ComputePipeline<blob_trace::trace_blobs::Entry>,

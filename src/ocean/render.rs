@@ -208,7 +208,10 @@ impl OceanCamera {
     }
 }
 
-/// The ocean's pipelines and detail textures. Create once, encode every frame.
+/// The ocean's pipelines and detail textures. Create once, encode every frame: a frame makes no
+/// GPU object (each draw's patches and parameters are staged through a ring it keeps, with the
+/// queue given to `new`; up to [`RING_UPLOADS`](crate::gpu::RING_UPLOADS) draws may wait in one
+/// encoder).
 pub struct OceanRenderer {
     output: Output,
     reversed_z: bool,

@@ -237,7 +237,9 @@ impl VolumeMarched {
     }
 }
 
-/// The volume pipelines. Create once, encode every frame.
+/// The volume pipelines. Create once, encode every frame: a frame makes no GPU object once its
+/// outputs are dropped (parameters staged through a ring it keeps, with the queue given to
+/// `new`; up to [`RING_UPLOADS`](crate::gpu::RING_UPLOADS) marches may wait in one encoder).
 pub struct VolumeRenderer {
     bricks: ComputePipeline<bricks::bricks::Entry>,
     /// One march pipeline per mode × shadow × skip × sample count (`march_index`), made on

@@ -12,7 +12,7 @@ use crate::gpu::{Record, Recorder, uniform_buffer as uniform};
 use crate::shaders::distance::edt_rows;
 
 impl Exact {
-    /// The exact transform of a 2D mask (any of [`super::SEED_FORMATS`]; red channel marks).
+    /// The exact transform of a 2D mask (any of [`SEED_FORMATS`](crate::distance::SEED_FORMATS); red channel marks).
     pub fn encode_exact_2d(
         &self,
         device: &wgpu::Device,
