@@ -70,6 +70,26 @@ impl Uploads {
         buffer
     }
 
+    /// [`Self::kept`] for a uniform holding `value` (laid out by encase).
+    pub(crate) fn uniform<T: encase::ShaderType + encase::internal::WriteInto>(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: &Mutex<Option<wgpu::Buffer>>,
+        label: &str,
+        value: &T,
+    ) -> wgpu::Buffer {
+        let bytes = super::uniform_bytes(value);
+        self.kept(
+            device,
+            encoder,
+            slot,
+            label,
+            wgpu::BufferUsages::UNIFORM,
+            &bytes,
+        )
+    }
+
     /// Record into `encoder` a copy of `bytes` to the start of `dst` (which has `COPY_DST` and
     /// room for them), staged through the ring. Bytes are padded to the copy alignment (4).
     pub(crate) fn write(

@@ -33,7 +33,7 @@ use glam::{Mat4, Vec3, Vec4};
 use super::{BlobBins, MetaballField};
 use crate::bind::{ComputePipeline, KeptBound, RenderPipeline, RenderTargets};
 use crate::error::Error;
-use crate::gpu::{KeptView, Record, Uploads, uniform_bytes};
+use crate::gpu::{KeptView, Record, Uploads};
 use crate::shaders::metaball::{blob_trace, composite, sdf_raymarch};
 use crate::view::{View, box_visible, depth_state, load_pass_recorded, screen_rect};
 
@@ -395,10 +395,8 @@ impl Kept {
         label: &str,
         value: &T,
     ) -> wgpu::Buffer {
-        let bytes = uniform_bytes(value);
-        let usage = wgpu::BufferUsages::UNIFORM;
         self.uploads
-            .kept(device, rec.recorder().encoder, slot, label, usage, &bytes)
+            .uniform(device, rec.recorder().encoder, slot, label, value)
     }
 }
 

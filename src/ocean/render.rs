@@ -15,7 +15,7 @@ use super::Waves;
 use super::look::{Look, Maps, detail_texels, layer_uniforms, map_indices};
 use crate::bind::{ComputePipeline, KeptBound, RenderPipeline, RenderTargets};
 use crate::error::Error;
-use crate::gpu::{KeptView, Record, Recorder, Uploads, uniform_bytes};
+use crate::gpu::{KeptView, Record, Recorder, Uploads};
 use crate::shaders::ocean::depth_copy;
 use crate::shaders::ocean::surface::{self as stage, FrameParams};
 
@@ -517,25 +517,9 @@ impl OceanRenderer {
             wgpu::BufferUsages::VERTEX,
             bytemuck::cast_slice(&instances),
         );
-        let uniform = wgpu::BufferUsages::UNIFORM;
-        let wave_bytes = uniform_bytes(&wave_set);
-        let wave_buffer = kept.uploads.kept(
-            device,
-            rec.encoder,
-            &kept.waves,
-            "ocean waves",
-            uniform,
-            &wave_bytes,
-        );
-        let frame_bytes = uniform_bytes(&frame);
-        let frame_buffer = kept.uploads.kept(
-            device,
-            rec.encoder,
-            &kept.frame,
-            "ocean frame",
-            uniform,
-            &frame_bytes,
-        );
+        let (up, enc) = (&kept.uploads, &mut *rec.encoder);
+        let wave_buffer = up.uniform(device, enc, &kept.waves, "ocean waves", &wave_set);
+        let frame_buffer = up.uniform(device, enc, &kept.frame, "ocean frame", &frame);
         let detail_view = &self.detail_view;
         let depth_view = kept
             .depth_view

@@ -11,7 +11,7 @@ use super::{
 };
 use crate::bind::ComputePipeline;
 use crate::error::Error;
-use crate::gpu::{Lease, Record, uniform_bytes};
+use crate::gpu::{Lease, Record};
 use crate::shaders::volume::{lit_density, volume_march};
 use crate::view::View;
 
@@ -176,15 +176,9 @@ impl VolumeRenderer {
             false,
         )?;
         let recorder = &mut rec.recorder();
-        let uniform = wgpu::BufferUsages::UNIFORM;
-        let params = kept.uploads.kept(
-            device,
-            recorder.encoder,
-            &kept.light_params,
-            "volume light params",
-            uniform,
-            &uniform_bytes(&params),
-        );
+        let label = "volume light params";
+        let params =
+            (kept.uploads).uniform(device, recorder.encoder, &kept.light_params, label, &params);
         let tf_buffer = self.kept_tf(device, recorder.encoder, tf);
         let dv = kept
             .density_view

@@ -54,7 +54,7 @@ use glam::{Mat4, Vec3};
 
 use crate::bind::{ComputePipeline, RenderPipeline, RenderTargets, Variants};
 use crate::error::Error;
-use crate::gpu::{Lease, Record, uniform_buffer as uniform, uniform_bytes};
+use crate::gpu::{Lease, Record, uniform_buffer as uniform};
 use crate::shaders::volume::{bricks, volume_composite, volume_march};
 use crate::view::{View, box_visible, screen_rect};
 use kept::{Kept, Target};
@@ -487,14 +487,9 @@ impl VolumeRenderer {
         )?;
         let (colour, lease) = kept::march_target(&kept.marched, device, view.viewport);
         let recorder = &mut rec.recorder();
-        let params = kept.uploads.kept(
-            device,
-            recorder.encoder,
-            &kept.march_params,
-            "volume march params",
-            wgpu::BufferUsages::UNIFORM,
-            &uniform_bytes(&params),
-        );
+        let label = "volume march params";
+        let params =
+            (kept.uploads).uniform(device, recorder.encoder, &kept.march_params, label, &params);
         let tf_buffer = self.kept_tf(device, recorder.encoder, tf);
         let (mode, shadow) = march_variant(settings, light);
         let march = self.march.get(
