@@ -59,8 +59,11 @@ pub fn run_window(args: Args, saved: Saved, load_error: Option<String>) -> Resul
         new.device_descriptor = Arc::new(move |adapter| {
             let mut d = base(adapter);
             // A pipeline cache where the adapter keeps one: a second launch does not compile.
+            // Indirect draws from a first instance: the ocean's patches chosen on the GPU.
             d.required_features |= adapter.features()
-                & (wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::PIPELINE_CACHE);
+                & (wgpu::Features::TIMESTAMP_QUERY
+                    | wgpu::Features::PIPELINE_CACHE
+                    | wgpu::Features::INDIRECT_FIRST_INSTANCE);
             d
         });
     }

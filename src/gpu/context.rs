@@ -128,8 +128,10 @@ impl Context {
         };
         let info = adapter.get_info();
         // Optional: timing, wireframe for the debug cubes, trilinear R32Float volumes, a pipeline
-        // cache kept on disk (`PipelineCache`). Used where the adapter has them.
+        // cache kept on disk (`PipelineCache`), the ocean's patches chosen on the GPU. Used where
+        // the adapter has them.
         let wanted = wgpu::Features::TIMESTAMP_QUERY
+            | wgpu::Features::INDIRECT_FIRST_INSTANCE
             | wgpu::Features::PIPELINE_CACHE
             | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS
             | wgpu::Features::POLYGON_MODE_LINE

@@ -182,7 +182,7 @@ pub fn height_error(waves: &Waves, look: &Look, h: f64) -> f64 {
 }
 
 /// Largest sideways and vertical reach of the surface from its undisplaced point.
-fn reach(waves: &Waves, look: &Look) -> (f64, f64) {
+pub(super) fn reach(waves: &Waves, look: &Look) -> (f64, f64) {
     let n = waves.waves().len() as f64;
     let q = waves.steepness() as f64;
     let sideways: f64 = waves
@@ -205,7 +205,7 @@ fn reach(waves: &Waves, look: &Look) -> (f64, f64) {
 
 /// Frustum planes (a·x + b·y + c·z + d ≥ 0 inside) of a world-to-clip matrix with depth in
 /// [0, 1].
-fn planes(view_proj: DMat4) -> [DVec4; 6] {
+pub(super) fn planes(view_proj: DMat4) -> [DVec4; 6] {
     let r = |i: usize| view_proj.row(i);
     [
         r(3) + r(0),
@@ -231,7 +231,7 @@ fn outside(planes: &[DVec4; 6], lo: DVec3, hi: DVec3) -> bool {
 
 /// What [`select`] refuses: a square, error bound, depth or patch size out of range, an
 /// empty viewport or a camera that is not finite.
-fn check_select(
+pub(super) fn check_select(
     camera: &OceanCamera,
     viewport_height: u32,
     settings: &LodSettings,

@@ -25,10 +25,12 @@
 //!
 #![doc = include_str!("../../docs/ocean.md")]
 
+mod gpu_lod;
 mod lod;
 mod look;
 mod render;
 
+pub use gpu_lod::LodDraws;
 pub use lod::{
     LodSettings, MAX_LOD_NODES, Selection, WriteupLayout, height_error, patch_triangles, select,
     writeup_patches,

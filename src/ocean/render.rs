@@ -12,6 +12,8 @@ use std::sync::Mutex;
 use glam::{DMat4, DVec2, DVec3, Mat4, Vec3};
 
 use super::Waves;
+use super::gpu_lod::{self, Chosen, GpuLod, LodDraws};
+use super::lod::{LodSettings, select};
 use super::look::{Look, Maps, detail_texels, layer_uniforms, map_indices};
 use crate::bind::{ComputePipeline, KeptBound, RenderPipeline, RenderTargets};
 use crate::error::Error;
@@ -230,6 +232,8 @@ pub struct OceanRenderer {
     /// size holds.
     depth_copy: Mutex<Option<(wgpu::Texture, wgpu::TextureView)>>,
     copy_depth: ComputePipeline<depth_copy::copy_depth::Entry>,
+    /// The patches chosen on the GPU, where the device can draw them.
+    gpu_lod: Option<GpuLod>,
 }
 
 /// The ocean's per-frame objects, made on the first frame (or when a size grows) and reused:
@@ -243,6 +247,44 @@ struct Kept {
     depth_view: KeptView,
     depth_in: KeptView,
     copy_bound: KeptBound<depth_copy::copy_depth::Entry>,
+    /// What the last GPU selection drew from.
+    last_lod: Mutex<Option<LodDraws>>,
+}
+
+/// What [`OceanRenderer::begin`] leaves for the draw.
+struct FrameBuffers {
+    /// The eye's (x, z): positions are relative to it.
+    origin: DVec2,
+    waves: wgpu::Buffer,
+    frame: wgpu::Buffer,
+    copy_view: wgpu::TextureView,
+    depth_view: wgpu::TextureView,
+}
+
+/// The patches' draws: listed on the CPU (an index buffer, index range and instance range
+/// each), or left by the GPU's selection as indirect draws.
+enum Draws<'a> {
+    Listed(&'a [(wgpu::Buffer, std::ops::Range<u32>, std::ops::Range<u32>)]),
+    Indirect(&'a Chosen),
+}
+
+impl Draws<'_> {
+    fn record(&self, pass: &mut wgpu::RenderPass<'_>) {
+        match self {
+            Draws::Listed(parts) => {
+                for (indices, part, range) in parts.iter() {
+                    pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+                    pass.draw_indexed(part.clone(), 0, range.clone());
+                }
+            }
+            Draws::Indirect(chosen) => {
+                pass.set_index_buffer(chosen.indices.slice(..), wgpu::IndexFormat::Uint32);
+                // One command for every draw (a loop of draws where the backend has no
+                // multi-draw).
+                pass.multi_draw_indexed_indirect(&chosen.drawn.draws, 0, chosen.drawn.draw_count);
+            }
+        }
+    }
 }
 
 /// The surface's pipeline: one per [`Output`].
@@ -406,6 +448,7 @@ impl OceanRenderer {
                 depth_view: KeptView::default(),
                 depth_in: KeptView::default(),
                 copy_bound: KeptBound::default(),
+                last_lod: Mutex::new(None),
             },
             height_maps: Maps::none(device, "ocean height maps (none)"),
             normal_maps: Maps::none(device, "ocean normal maps (none)"),
@@ -421,6 +464,12 @@ impl OceanRenderer {
             }),
             depth_copy: Mutex::new(None),
             copy_depth: ComputePipeline::new(device)?,
+            // Without depth writes, the order of the patches decides what is seen where the
+            // water overlaps itself on screen: the CPU lists them nearest first, every frame
+            // the same; the GPU's selection in no fixed order, which would flicker there.
+            gpu_lod: (gpu_lod::supported(device) && depth.write)
+                .then(|| GpuLod::new(device))
+                .transpose()?,
         })
     }
 
@@ -480,7 +529,7 @@ impl OceanRenderer {
     /// [`Output::Forward`], four for [`Output::GBuffer`], all the depth target's size), loading
     /// and storing what they hold, and testing and writing `depth` (`Depth32Float`, with
     /// `RENDER_ATTACHMENT` and, when `fade` is on, `TEXTURE_BINDING`: a compute pass copies it
-    /// for the fade to read).
+    /// for the fade to read). [`Self::encode_lod`] chooses the patches on the GPU instead.
     #[allow(clippy::too_many_arguments)]
     pub fn encode(
         &self,
@@ -496,34 +545,141 @@ impl OceanRenderer {
         fade: bool,
     ) -> Result<(), Error> {
         self.check_encode(time, camera, look, patches, targets, depth, fade)?;
+        let rec = &mut rec.recorder();
+        let frame = self.begin(device, rec, waves, time, camera, look, depth, fade)?;
+        if patches.is_empty() {
+            return Ok(());
+        }
+        let (instances, draws) = patch_draws(patches, frame.origin);
+        let parts = self.index_buffers(device, draws);
+        let instances = self.kept.uploads.kept(
+            device,
+            rec.encoder,
+            &self.kept.instances,
+            "ocean patches",
+            wgpu::BufferUsages::VERTEX,
+            bytemuck::cast_slice(&instances),
+        );
+        self.draw(
+            device,
+            rec,
+            &frame,
+            targets,
+            &instances,
+            Draws::Listed(&parts),
+        )
+    }
+
+    /// [`Self::encode`] with the patches [`select`](super::select) would choose for `lod`
+    /// (at the depth target's height), chosen on the GPU: a compute pass walks the quadtree and
+    /// leaves indirect draws, so the CPU's share of a frame does not grow with what the camera
+    /// sees. Needs [`wgpu::Features::INDIRECT_FIRST_INSTANCE`] on the device and a renderer
+    /// that writes depth (the GPU lists the patches in no fixed order, and without depth
+    /// writes the order decides what is seen where the water overlaps itself); otherwise the
+    /// patches are chosen by [`select`](super::select) on the CPU and drawn the same way
+    /// ([`Self::lod_on_gpu`] says which). Errors as [`select`](super::select) for settings it refuses, and
+    /// [`Error::Size`] where more than [`MAX_LOD_NODES`](super::MAX_LOD_NODES) nodes would be
+    /// looked at.
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode_lod(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        waves: &Waves,
+        time: f64,
+        camera: &OceanCamera,
+        look: &Look,
+        lod: &LodSettings,
+        targets: &[&wgpu::TextureView],
+        depth: &wgpu::Texture,
+        fade: bool,
+    ) -> Result<(), Error> {
+        let Some(gpu) = &self.gpu_lod else {
+            let chosen = select(waves, look, camera, depth.height(), lod)?;
+            let patches = &chosen.patches;
+            return self.encode(
+                device, rec, waves, time, camera, look, patches, targets, depth, fade,
+            );
+        };
+        self.check_encode(time, camera, look, &[], targets, depth, fade)?;
+        let rec = &mut rec.recorder();
+        let frame = self.begin(device, rec, waves, time, camera, look, depth, fade)?;
+        let uploads = &self.kept.uploads;
+        let chosen = gpu.encode(
+            device,
+            rec,
+            uploads,
+            waves,
+            look,
+            camera,
+            depth.height(),
+            lod,
+        )?;
+        let draws = Draws::Indirect(&chosen);
+        self.draw(device, rec, &frame, targets, &chosen.drawn.instances, draws)?;
+        *self.kept.last_lod.lock().unwrap_or_else(|e| e.into_inner()) = Some(chosen.drawn);
+        Ok(())
+    }
+
+    /// Whether [`Self::encode_lod`] chooses the patches on the GPU on this renderer's device.
+    pub fn lod_on_gpu(&self) -> bool {
+        self.gpu_lod.is_some()
+    }
+
+    /// The buffers the last [`Self::encode_lod`] drew from on the GPU (`None` before one, or
+    /// where the patches are chosen on the CPU): read them back after its submission to see
+    /// the patches ([`LodDraws::patches`]). The next `encode_lod` writes them again.
+    pub fn last_lod(&self) -> Option<LodDraws> {
+        self.kept
+            .last_lod
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .clone()
+    }
+
+    /// A frame's uniforms (staged through the ring) and depth views, the scene's depth copied
+    /// for the fade: everything the draw reads but the patches.
+    #[allow(clippy::too_many_arguments)]
+    fn begin(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut Recorder<'_>,
+        waves: &Waves,
+        time: f64,
+        camera: &OceanCamera,
+        look: &Look,
+        depth: &wgpu::Texture,
+        fade: bool,
+    ) -> Result<FrameBuffers, Error> {
         // Everything relative to the eye's (x, z): f32 sees small numbers.
         let eye = camera.eye();
         let origin = DVec2::new(eye.x, eye.z);
         let wave_set = waves.gpu(origin, time);
         let frame = self.frame_params(camera, look, origin, time, fade)?;
-        let rec = &mut rec.recorder();
         let copy_view = self.scene_depth(device, rec, depth, fade)?;
-        if patches.is_empty() {
-            return Ok(());
-        }
-        let (instances, draws) = patch_draws(patches, origin);
-        let index_buffers = self.index_buffers(device, draws);
         let kept = &self.kept;
-        let instance_buffer = kept.uploads.kept(
-            device,
-            rec.encoder,
-            &kept.instances,
-            "ocean patches",
-            wgpu::BufferUsages::VERTEX,
-            bytemuck::cast_slice(&instances),
-        );
         let (up, enc) = (&kept.uploads, &mut *rec.encoder);
-        let wave_buffer = up.uniform(device, enc, &kept.waves, "ocean waves", &wave_set);
-        let frame_buffer = up.uniform(device, enc, &kept.frame, "ocean frame", &frame);
-        let detail_view = &self.detail_view;
-        let depth_view = kept
-            .depth_view
-            .get(depth, |d| d.create_view(&Default::default()));
+        Ok(FrameBuffers {
+            origin,
+            waves: up.uniform(device, enc, &kept.waves, "ocean waves", &wave_set),
+            frame: up.uniform(device, enc, &kept.frame, "ocean frame", &frame),
+            copy_view,
+            depth_view: kept
+                .depth_view
+                .get(depth, |d| d.create_view(&Default::default())),
+        })
+    }
+
+    /// The surface's render pass: `draws` of `instances` into `targets`.
+    fn draw(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut Recorder<'_>,
+        frame: &FrameBuffers,
+        targets: &[&wgpu::TextureView],
+        instances: &wgpu::Buffer,
+        draws: Draws<'_>,
+    ) -> Result<(), Error> {
         let attachments: Vec<Option<wgpu::RenderPassColorAttachment>> = targets
             .iter()
             .map(|v| {
@@ -538,46 +694,41 @@ impl OceanRenderer {
                 })
             })
             .collect();
+        let desc = wgpu::RenderPassDescriptor {
+            label: Some(STAGE),
+            color_attachments: &attachments,
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &frame.depth_view,
+                // Read-only where the water does not write depth.
+                depth_ops: self.depth.write.then_some(wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                }),
+                // The stencil (where the format has one) is left as it is.
+                stencil_ops: None,
+            }),
+            ..Default::default()
+        };
         macro_rules! draw {
             ($surface:expr, $module:ident) => {{
                 let bound = $surface.pipeline.bind_kept(
                     device,
                     &$surface.bound,
                     &stage::$module::Resources {
-                        waves: (&wave_buffer).into(),
-                        frame: (&frame_buffer).into(),
-                        detail: detail_view.into(),
+                        waves: (&frame.waves).into(),
+                        frame: (&frame.frame).into(),
+                        detail: (&self.detail_view).into(),
                         detail_sampler: (&self.sampler).into(),
-                        scene_depth: (&copy_view).into(),
+                        scene_depth: (&frame.copy_view).into(),
                         height_maps: (&self.height_maps.view).into(),
                         normal_maps: (&self.normal_maps.view).into(),
                     },
                 )?;
-                let mut pass = rec.render_pass(
-                    &wgpu::RenderPassDescriptor {
-                        label: Some(STAGE),
-                        color_attachments: &attachments,
-                        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                            view: &depth_view,
-                            // Read-only where the water does not write depth.
-                            depth_ops: self.depth.write.then_some(wgpu::Operations {
-                                load: wgpu::LoadOp::Load,
-                                store: wgpu::StoreOp::Store,
-                            }),
-                            // The stencil (where the format has one) is left as it is.
-                            stencil_ops: None,
-                        }),
-                        ..Default::default()
-                    },
-                    "ocean surface",
-                );
+                let mut pass = rec.render_pass(&desc, "ocean surface");
                 pass.set_pipeline(&$surface.pipeline.pipeline);
                 bound.set_render(&mut pass);
-                pass.set_vertex_buffer(0, instance_buffer.slice(..));
-                for (indices, part, range) in &index_buffers {
-                    pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
-                    pass.draw_indexed(part.clone(), 0, range.clone());
-                }
+                pass.set_vertex_buffer(0, instances.slice(..));
+                draws.record(&mut pass);
             }};
         }
         match &self.pipeline {

@@ -2,8 +2,10 @@
 //! height error, the quadtree LOD at several error targets against the write-up's layout
 //! (patches of 256 vertices per row, split near the camera), 1920×1080 (480×270 with `--quick`).
 //!
-//! Time: GPU timestamps around the depth copy and the forward-shaded draw into an 8-bit target
-//! with depth fade on, median of the timed runs. Error: the projected height error the LOD
+//! Time: GPU timestamps around the targets' clear, the depth copy and the forward-shaded draw
+//! into an 8-bit target with depth fade on, median of the timed runs; with the patches chosen
+//! on the GPU, its selection pass too. The CPU's time to choose and record a frame both ways
+//! goes to `ocean_cpu.csv`. Error: the projected height error the LOD
 //! computes (`fieldkit::ocean::lod`), in pixels. Writes `ocean.csv` and `ocean.png`.
 
 use fieldkit::gpu::Context;
@@ -64,33 +66,64 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
     let settings = LodSettings::default();
     let one_wave =
         Waves::new(waves.waves()[..1].to_vec(), waves.steepness()).map_err(|e| e.to_string())?;
-    let time = |waves: &Waves, patches: &[Patch], look: &Look, fade: bool| -> Result<f64, String> {
+    // Each timed frame starts from cleared targets, as an app's frame does: drawn over its own
+    // depth, every fragment of the surface would fail the depth test and skip shading.
+    let depth_view = depth.create_view(&Default::default());
+    let clear = |enc: &mut wgpu::CommandEncoder| {
+        enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("bench ocean clear"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &colour_view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &depth_view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            ..Default::default()
+        });
+    };
+    let time_draw = |draw: &dyn Fn(&mut wgpu::CommandEncoder) -> Result<(), fieldkit::Error>| {
         let mut times = Vec::new();
         let start = std::time::Instant::now();
         let mut i = 0;
         while times.len() < reps {
             i += 1;
             let ms = stamps.time(&ctx, |enc| {
-                renderer
-                    .encode(
-                        &ctx.device,
-                        enc,
-                        waves,
-                        10.0,
-                        &camera,
-                        look,
-                        patches,
-                        &[&colour_view],
-                        &depth,
-                        fade,
-                    )
-                    .map_err(|e| e.to_string())
+                clear(enc);
+                draw(enc).map_err(|e| e.to_string())
             })?;
             if i > warmup.max(3) && start.elapsed() >= crate::measure::WARMUP_TIME {
                 times.push(ms);
             }
         }
-        Ok(median(times))
+        Ok::<f64, String>(median(times))
+    };
+    let time = |waves: &Waves, patches: &[Patch], look: &Look, fade: bool| -> Result<f64, String> {
+        time_draw(&|enc| {
+            let targets = [&colour_view];
+            renderer.encode(
+                &ctx.device,
+                enc,
+                waves,
+                10.0,
+                &camera,
+                look,
+                patches,
+                &targets,
+                &depth,
+                fade,
+            )
+        })
     };
     println!(
         "| layout | patches | triangles | largest error (px) | frame ms |\n|---|---|---|---|---|"
@@ -246,6 +279,86 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
         writeup.max_error_px,
         &look,
         true,
+    )?;
+    // The default error with the patches chosen on the GPU (the same patches: `tests/ocean_gpu_lod.rs`),
+    // its selection pass included.
+    let on_gpu = |enc: &mut wgpu::CommandEncoder| {
+        let targets = [&colour_view];
+        let d = &ctx.device;
+        renderer.encode_lod(
+            d, enc, &waves, 10.0, &camera, &look, &settings, &targets, &depth, true,
+        )
+    };
+    if renderer.lod_on_gpu() {
+        let ms = time_draw(&on_gpu)?;
+        let drawn = renderer.last_lod().ok_or("encode_lod left no draws")?;
+        let read =
+            |b: &wgpu::Buffer| fieldkit::gpu::read_buffer(&ctx, b).map_err(|e| e.to_string());
+        let patches = drawn.patches(&read(&drawn.draws)?, &read(&drawn.instances)?);
+        let cpu = select(&waves, &look, &camera, height, &settings).map_err(|e| e.to_string())?;
+        let triangles = patches.iter().map(Patch::triangles).sum();
+        let layout = format!(
+            "quadtree on the GPU, {} px (default)",
+            settings.max_error_px
+        );
+        println!(
+            "| {layout} | {} | {triangles} | {:.3} | {ms:.3} |",
+            patches.len(),
+            cpu.max_error_px
+        );
+        rows.push(Row {
+            layout,
+            patches: patches.len(),
+            triangles,
+            max_error_px: cpu.max_error_px,
+            frame_ms: ms,
+        });
+    } else {
+        println!(
+            "  {adapter} lacks INDIRECT_FIRST_INSTANCE: no row for the patches chosen on the GPU"
+        );
+    }
+    // The CPU's share of a frame: choosing and recording, submitted (median of at least 60).
+    let on_cpu = |enc: &mut wgpu::CommandEncoder| {
+        let sel = select(&waves, &look, &camera, height, &settings).map_err(|e| e.to_string())?;
+        let targets = [&colour_view];
+        renderer
+            .encode(
+                &ctx.device,
+                enc,
+                &waves,
+                10.0,
+                &camera,
+                &look,
+                &sel.patches,
+                &targets,
+                &depth,
+                true,
+            )
+            .map_err(|e| e.to_string())
+    };
+    let mut cpu_rows = Vec::new();
+    for (what, record) in [
+        (
+            "select on the CPU + encode",
+            &on_cpu as &dyn Fn(&mut wgpu::CommandEncoder) -> Result<(), String>,
+        ),
+        (
+            "encode_lod (chosen on the GPU)",
+            &|enc: &mut wgpu::CommandEncoder| on_gpu(enc).map_err(|e| e.to_string()),
+        ),
+    ] {
+        let (med, lo, hi) = crate::measure::host_times(&ctx, reps.max(60), record)?;
+        println!("  CPU a frame, {what}: {med:.4} ms (min {lo:.4}, max {hi:.4})");
+        cpu_rows.push(format!(
+            "\"{adapter}\",{width}x{height},\"{what}\",{med:.4},{lo:.4},{hi:.4}"
+        ));
+    }
+    crate::measure::write_table(
+        out,
+        "ocean_cpu.csv",
+        "adapter,resolution,frame,cpu_ms,min_ms,max_ms",
+        cpu_rows.into_iter(),
     )?;
     let floor = floor(
         &ctx,

@@ -97,7 +97,6 @@ impl Ocean {
     ) -> Result<Vec<String>, Error> {
         let waves = Waves::new(s.waves.clone(), s.steepness)?;
         let camera = frame.camera.ocean(frame.size);
-        let selection = select(&waves, &s.look, &camera, frame.size[1], &s.lod)?;
         let write = s.depth_write.unwrap_or(true);
         let key = (s.gbuffer.is_some(), frame.camera.reversed_z, write);
         if self.renderer.as_ref().map(|r| r.0) != Some(key) {
@@ -116,20 +115,34 @@ impl Ocean {
             ));
         }
         let renderer = &self.renderer.as_ref().expect("set above").1;
+        // The patches are chosen on the GPU; on the CPU only where the overlay draws them (or
+        // the device cannot draw the GPU's choice).
+        let selection = (s.overlay || !renderer.lod_on_gpu())
+            .then(|| select(&waves, &s.look, &camera, frame.size[1], &s.lod))
+            .transpose()?;
         let time = frame.time as f64;
+        let draw = |rec: &mut fieldkit::gpu::Recorder<'_>, views: &[&wgpu::TextureView]| {
+            let depth = &frame.targets.depth;
+            match &selection {
+                Some(sel) => renderer.encode(
+                    device,
+                    rec,
+                    &waves,
+                    time,
+                    &camera,
+                    &s.look,
+                    &sel.patches,
+                    views,
+                    depth,
+                    s.fade,
+                ),
+                None => renderer.encode_lod(
+                    device, rec, &waves, time, &camera, &s.look, &s.lod, views, depth, s.fade,
+                ),
+            }
+        };
         match s.gbuffer {
-            None => renderer.encode(
-                device,
-                frame.rec,
-                &waves,
-                time,
-                &camera,
-                &s.look,
-                &selection.patches,
-                &[&frame.targets.colour_view],
-                &frame.targets.depth,
-                s.fade,
-            )?,
+            None => draw(frame.rec, &[&frame.targets.colour_view])?,
             Some(shown) => {
                 if shown > 3 {
                     return Err(invalid(format!("G-buffer target {shown} (0–3)")));
@@ -145,18 +158,7 @@ impl Ocean {
                     t.clear(frame.rec.encoder, wgpu::Color::BLACK, 1.0);
                 }
                 let views: Vec<&wgpu::TextureView> = g.iter().map(|t| &t.colour_view).collect();
-                renderer.encode(
-                    device,
-                    frame.rec,
-                    &waves,
-                    time,
-                    &camera,
-                    &s.look,
-                    &selection.patches,
-                    &views,
-                    &frame.targets.depth,
-                    s.fade,
-                )?;
+                draw(frame.rec, &views)?;
                 frame.rec.encoder.copy_texture_to_texture(
                     g[shown].colour.as_image_copy(),
                     frame.targets.colour.as_image_copy(),
@@ -164,6 +166,11 @@ impl Ocean {
                 );
             }
         }
+        let Some(selection) = selection else {
+            return Ok(vec![
+                "patches: chosen on the GPU (the overlay lists them)".into(),
+            ]);
+        };
         if s.overlay {
             let segments: Vec<[Vec3; 2]> = selection
                 .patches
