@@ -307,7 +307,9 @@ fn without_depth_writes_the_cpu_chooses() {
     assert!(!r.lod_on_gpu());
     let t = targets(&ctx);
     let (waves, lod, cam) = (Waves::open_sea(), LodSettings::default(), cameras()[1]);
-    let patches = select(&waves, &Look::default(), &cam, VIEW[1], &lod).unwrap().patches;
+    let patches = select(&waves, &Look::default(), &cam, VIEW[1], &lod)
+        .unwrap()
+        .patches;
     let listed = draw(&ctx, &r, &waves, &cam, &lod, Some(&patches), &t);
     let chosen = draw(&ctx, &r, &waves, &cam, &lod, None, &t);
     assert!(r.last_lod().is_none());

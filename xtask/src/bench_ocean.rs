@@ -70,27 +70,7 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
     // depth, every fragment of the surface would fail the depth test and skip shading.
     let depth_view = depth.create_view(&Default::default());
     let clear = |enc: &mut wgpu::CommandEncoder| {
-        enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("bench ocean clear"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &colour_view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &depth_view,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
-            ..Default::default()
-        });
+        cleared(enc, "bench ocean clear", &colour_view, &depth_view);
     };
     let time_draw = |draw: &dyn Fn(&mut wgpu::CommandEncoder) -> Result<(), fieldkit::Error>| {
         let mut times = Vec::new();
@@ -507,27 +487,7 @@ struct P { n: u32 }
         while times.len() < reps {
             i += 1;
             let ms = stamps.time(ctx, |enc| {
-                let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("floor probe"),
-                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                        view: colour,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                            store: wgpu::StoreOp::Store,
-                        },
-                    })],
-                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                        view: &depth_view,
-                        depth_ops: Some(wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(1.0),
-                            store: wgpu::StoreOp::Store,
-                        }),
-                        stencil_ops: None,
-                    }),
-                    ..Default::default()
-                });
+                let mut pass = cleared(enc, "floor probe", colour, &depth_view);
                 pass.set_pipeline(&pipeline);
                 pass.set_bind_group(0, &bind, &[]);
                 pass.draw(0..n * n * 6, 0..1);
@@ -547,4 +507,34 @@ struct P { n: u32 }
         rows.push((triangles, ms));
     }
     Ok(rows)
+}
+
+/// A render pass into `colour` and `depth`, both cleared (black, far).
+fn cleared<'a>(
+    enc: &'a mut wgpu::CommandEncoder,
+    label: &str,
+    colour: &wgpu::TextureView,
+    depth: &wgpu::TextureView,
+) -> wgpu::RenderPass<'a> {
+    enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(label),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: colour,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                store: wgpu::StoreOp::Store,
+            },
+        })],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: depth,
+            depth_ops: Some(wgpu::Operations {
+                load: wgpu::LoadOp::Clear(1.0),
+                store: wgpu::StoreOp::Store,
+            }),
+            stencil_ops: None,
+        }),
+        ..Default::default()
+    })
 }
