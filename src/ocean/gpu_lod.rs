@@ -52,7 +52,6 @@ pub(super) struct GpuLod {
 }
 
 /// What the height-error table depends on.
-#[derive(Clone, PartialEq)]
 struct TableKey {
     waves: Waves,
     height_layers: Vec<super::Layer>,
@@ -285,18 +284,14 @@ impl GpuLod {
     }
 
     /// [`height_error`] of every level's spacing at every quad count the settings draw with,
-    /// per depth then quad count; kept while its inputs hold.
+    /// per depth then quad count; kept while its inputs hold (compared in place: a frame
+    /// allocates nothing for it).
     fn table(&self, waves: &Waves, look: &Look, s: &LodSettings) -> Vec<f32> {
-        let key = TableKey {
-            waves: waves.clone(),
-            height_layers: look.height_layers.clone(),
-            size: s.size,
-            max_depth: s.max_depth,
-            patch_quads: s.patch_quads,
-        };
         let mut kept = self.table.lock().unwrap_or_else(|e| e.into_inner());
         if let Some((k, t)) = kept.as_ref()
-            && *k == key
+            && k.waves == *waves
+            && k.height_layers == look.height_layers
+            && (k.size, k.max_depth, k.patch_quads) == (s.size, s.max_depth, s.patch_quads)
         {
             return t.clone();
         }
@@ -308,6 +303,13 @@ impl GpuLod {
                     .map(move |q| height_error(waves, look, side / q as f64) as f32)
             })
             .collect();
+        let key = TableKey {
+            waves: waves.clone(),
+            height_layers: look.height_layers.clone(),
+            size: s.size,
+            max_depth: s.max_depth,
+            patch_quads: s.patch_quads,
+        };
         *kept = Some((key, table.clone()));
         table
     }

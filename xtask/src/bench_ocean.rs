@@ -317,16 +317,41 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
             )
             .map_err(|e| e.to_string())
     };
+    // The parts: an empty frame (an encoder submitted), the frame without patches (uniforms,
+    // the depth copy), the CPU's choice alone.
+    let nothing = |_: &mut wgpu::CommandEncoder| Ok(());
+    let no_patches = |enc: &mut wgpu::CommandEncoder| {
+        let targets = [&colour_view];
+        let d = &ctx.device;
+        renderer
+            .encode(
+                d,
+                enc,
+                &waves,
+                10.0,
+                &camera,
+                &look,
+                &[],
+                &targets,
+                &depth,
+                true,
+            )
+            .map_err(|e| e.to_string())
+    };
+    let choice = |_: &mut wgpu::CommandEncoder| {
+        select(&waves, &look, &camera, height, &settings)
+            .map(drop)
+            .map_err(|e| e.to_string())
+    };
+    let on_gpu_frame = |enc: &mut wgpu::CommandEncoder| on_gpu(enc).map_err(|e| e.to_string());
+    type Frame<'a> = &'a dyn Fn(&mut wgpu::CommandEncoder) -> Result<(), String>;
     let mut cpu_rows = Vec::new();
     for (what, record) in [
-        (
-            "select on the CPU + encode",
-            &on_cpu as &dyn Fn(&mut wgpu::CommandEncoder) -> Result<(), String>,
-        ),
-        (
-            "encode_lod (chosen on the GPU)",
-            &|enc: &mut wgpu::CommandEncoder| on_gpu(enc).map_err(|e| e.to_string()),
-        ),
+        ("an empty encoder, submitted", &nothing as Frame),
+        ("encode with no patches (uniforms, depth copy)", &no_patches),
+        ("select alone", &choice),
+        ("select on the CPU + encode", &on_cpu),
+        ("encode_lod (chosen on the GPU)", &on_gpu_frame),
     ] {
         let (med, lo, hi) = crate::measure::host_times(&ctx, reps.max(60), record)?;
         println!("  CPU a frame, {what}: {med:.4} ms (min {lo:.4}, max {hi:.4})");

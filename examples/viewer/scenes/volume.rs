@@ -60,6 +60,9 @@ pub struct VolumeScene {
     /// The light volume, kept while the cloud, its transfer function, the light and the
     /// transform stay (`LightVolume::is_for`): rebuilt only when one changes.
     pub(super) light: Option<fieldkit::volume::LightVolume>,
+    /// A cloud being made on a worker thread for a new (size, seed): the frame draws the one
+    /// it has until this one is ready, so a new size costs the frame no wait.
+    pub(super) pending: Option<((u32, u32), std::sync::mpsc::Receiver<Vec<f32>>)>,
 }
 
 impl VolumeScene {
@@ -70,7 +73,31 @@ impl VolumeScene {
             volume: None,
             cloud: None,
             cloud_bricks: None,
+            pending: None,
         })
+    }
+
+    /// The fBm cloud for `key` (size, seed): made on a worker thread, and taken when it is
+    /// ready. The first cloud is waited for (there is nothing else to draw); later ones are
+    /// drawn from the frame they are ready on, the previous one until then.
+    fn cloud_for(&mut self, key: (u32, u32)) -> Option<Vec<f32>> {
+        if self.pending.as_ref().map(|p| p.0) != Some(key) {
+            let (tx, rx) = std::sync::mpsc::channel();
+            std::thread::spawn(move || {
+                let _ = tx.send(fbm_cloud([key.0; 3], key.1));
+            });
+            self.pending = Some((key, rx));
+        }
+        let (_, rx) = self.pending.as_ref().expect("set above");
+        let ready = if self.volume.is_none() {
+            rx.recv().ok()
+        } else {
+            rx.try_recv().ok()
+        };
+        if ready.is_some() {
+            self.pending = None;
+        }
+        ready
     }
 
     /// March the cloud *function* (`VolumeSettings::function`) into the frame.
@@ -146,19 +173,25 @@ impl VolumeScene {
                 });
             }
             let dims = [s.size; 3];
-            let volume = Volume::upload(
-                device,
-                queue,
-                &fbm_cloud(dims, s.seed),
-                dims,
-                wgpu::TextureFormat::R8Unorm,
-                Vec3::splat(1.0 / s.size as f32),
-                Vec3::splat(-0.5),
-            )?;
-            let bricks = self.renderer.encode_bricks(device, frame.rec, &volume)?;
-            self.volume = Some(((s.size, s.seed), volume, bricks));
+            if let Some(cloud) = self.cloud_for((s.size, s.seed)) {
+                let volume = Volume::upload(
+                    device,
+                    queue,
+                    &cloud,
+                    dims,
+                    wgpu::TextureFormat::R8Unorm,
+                    Vec3::splat(1.0 / s.size as f32),
+                    Vec3::splat(-0.5),
+                )?;
+                let bricks = self.renderer.encode_bricks(device, frame.rec, &volume)?;
+                self.volume = Some(((s.size, s.seed), volume, bricks));
+            }
         }
-        let (_, volume, bricks) = self.volume.as_ref().expect("set above");
+        let Some((_, volume, bricks)) = self.volume.as_ref() else {
+            return Err(invalid(
+                "the cloud's worker thread stopped before making it",
+            ));
+        };
         let mut march = s.march;
         march.frame = frame.number;
         let light = match march.shadow {
