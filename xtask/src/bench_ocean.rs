@@ -262,13 +262,14 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
     )?;
     // The default error with the patches chosen on the GPU (the same patches: `tests/ocean_gpu_lod.rs`),
     // its selection pass included.
-    let on_gpu = |enc: &mut wgpu::CommandEncoder| {
+    let on_gpu_with = |enc: &mut wgpu::CommandEncoder, lod: &LodSettings| {
         let targets = [&colour_view];
         let d = &ctx.device;
         renderer.encode_lod(
-            d, enc, &waves, 10.0, &camera, &look, &settings, &targets, &depth, true,
+            d, enc, &waves, 10.0, &camera, &look, lod, &targets, &depth, true,
         )
     };
+    let on_gpu = |enc: &mut wgpu::CommandEncoder| on_gpu_with(enc, &settings);
     if renderer.lod_on_gpu() {
         let ms = time_draw(&on_gpu)?;
         let drawn = renderer.last_lod().ok_or("encode_lod left no draws")?;
@@ -299,12 +300,13 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
         );
     }
     // The CPU's share of a frame: choosing and recording, submitted (median of at least 60).
-    let on_cpu = |enc: &mut wgpu::CommandEncoder| {
-        let sel = select(&waves, &look, &camera, height, &settings).map_err(|e| e.to_string())?;
+    let on_cpu_with = |enc: &mut wgpu::CommandEncoder, lod: &LodSettings| {
+        let sel = select(&waves, &look, &camera, height, lod).map_err(|e| e.to_string())?;
         let targets = [&colour_view];
+        let d = &ctx.device;
         renderer
             .encode(
-                &ctx.device,
+                d,
                 enc,
                 &waves,
                 10.0,
@@ -317,6 +319,15 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
             )
             .map_err(|e| e.to_string())
     };
+    let on_cpu = |enc: &mut wgpu::CommandEncoder| on_cpu_with(enc, &settings);
+    // Smaller patches: four times the nodes to walk.
+    let eight = LodSettings {
+        patch_quads: 8,
+        ..settings
+    };
+    let on_cpu_8 = |enc: &mut wgpu::CommandEncoder| on_cpu_with(enc, &eight);
+    let on_gpu_8 =
+        |enc: &mut wgpu::CommandEncoder| on_gpu_with(enc, &eight).map_err(|e| e.to_string());
     // The parts: an empty frame (an encoder submitted), the frame without patches (uniforms,
     // the depth copy), the CPU's choice alone.
     let nothing = |_: &mut wgpu::CommandEncoder| Ok(());
@@ -352,6 +363,8 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
         ("select alone", &choice),
         ("select on the CPU + encode", &on_cpu),
         ("encode_lod (chosen on the GPU)", &on_gpu_frame),
+        ("select on the CPU + encode, 8 quads a patch", &on_cpu_8),
+        ("encode_lod, 8 quads a patch", &on_gpu_8),
     ] {
         let (med, lo, hi) = crate::measure::host_times(&ctx, reps.max(60), record)?;
         println!("  CPU a frame, {what}: {med:.4} ms (min {lo:.4}, max {hi:.4})");
