@@ -300,24 +300,18 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
         );
     }
     // The CPU's share of a frame: choosing and recording, submitted (median of at least 60).
-    let on_cpu_with = |enc: &mut wgpu::CommandEncoder, lod: &LodSettings| {
-        let sel = select(&waves, &look, &camera, height, lod).map_err(|e| e.to_string())?;
+    let draw_list = |enc: &mut wgpu::CommandEncoder, patches: &[Patch]| {
         let targets = [&colour_view];
         let d = &ctx.device;
         renderer
             .encode(
-                d,
-                enc,
-                &waves,
-                10.0,
-                &camera,
-                &look,
-                &sel.patches,
-                &targets,
-                &depth,
-                true,
+                d, enc, &waves, 10.0, &camera, &look, patches, &targets, &depth, true,
             )
             .map_err(|e| e.to_string())
+    };
+    let on_cpu_with = |enc: &mut wgpu::CommandEncoder, lod: &LodSettings| {
+        let sel = select(&waves, &look, &camera, height, lod).map_err(|e| e.to_string())?;
+        draw_list(enc, &sel.patches)
     };
     let on_cpu = |enc: &mut wgpu::CommandEncoder| on_cpu_with(enc, &settings);
     // Smaller patches: four times the nodes to walk.
@@ -329,38 +323,27 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
     let on_gpu_8 =
         |enc: &mut wgpu::CommandEncoder| on_gpu_with(enc, &eight).map_err(|e| e.to_string());
     // The parts: an empty frame (an encoder submitted), the frame without patches (uniforms,
-    // the depth copy), the CPU's choice alone.
+    // the depth copy), the CPU's choice alone, the draw alone (select's list made beforehand,
+    // and a single patch).
     let nothing = |_: &mut wgpu::CommandEncoder| Ok(());
-    let no_patches = |enc: &mut wgpu::CommandEncoder| {
-        let targets = [&colour_view];
-        let d = &ctx.device;
-        renderer
-            .encode(
-                d,
-                enc,
-                &waves,
-                10.0,
-                &camera,
-                &look,
-                &[],
-                &targets,
-                &depth,
-                true,
-            )
-            .map_err(|e| e.to_string())
-    };
+    let no_patches = |enc: &mut wgpu::CommandEncoder| draw_list(enc, &[]);
     let choice = |_: &mut wgpu::CommandEncoder| {
         select(&waves, &look, &camera, height, &settings)
             .map(drop)
             .map_err(|e| e.to_string())
     };
     let on_gpu_frame = |enc: &mut wgpu::CommandEncoder| on_gpu(enc).map_err(|e| e.to_string());
+    let listed = select(&waves, &look, &camera, height, &settings).map_err(|e| e.to_string())?;
+    let made_before = |enc: &mut wgpu::CommandEncoder| draw_list(enc, &listed.patches);
+    let one_patch = |enc: &mut wgpu::CommandEncoder| draw_list(enc, &listed.patches[..1]);
     type Frame<'a> = &'a dyn Fn(&mut wgpu::CommandEncoder) -> Result<(), String>;
     let mut cpu_rows = Vec::new();
     for (what, record) in [
         ("an empty encoder, submitted", &nothing as Frame),
         ("encode with no patches (uniforms, depth copy)", &no_patches),
         ("select alone", &choice),
+        ("encode, select's list made beforehand", &made_before),
+        ("encode, one patch", &one_patch),
         ("select on the CPU + encode", &on_cpu),
         ("encode_lod (chosen on the GPU)", &on_gpu_frame),
         ("select on the CPU + encode, 8 quads a patch", &on_cpu_8),
