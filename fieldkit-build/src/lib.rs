@@ -5,8 +5,10 @@
 //!
 //! ```no_run
 //! // The body of `fn main` in the build.rs of a crate with `fieldkit` in [dependencies] and
-//! // `fieldkit-build` in [build-dependencies]; its shaders in `shaders/<technique>/<stage>.wgsl`,
-//! // helpers it imports (`import package::shared::name::item;`) in `shaders/shared/`.
+//! // `fieldkit-build` in [build-dependencies]; its shaders anywhere under `shaders/`
+//! // (`shaders/blur.wgsl` is generated as `shaders::blur`, `shaders/post/down.wgsl` as
+//! // `shaders::post::down`), helpers it imports (`import package::shared::name::item;`) in
+//! // `shaders/shared/`.
 //! fieldkit_build::Builder::new("shaders").build_or_exit();
 //! ```
 //!
@@ -34,9 +36,9 @@ use link::{link, render, unsupported_bindings};
 /// Folder under `shaders/` that holds importable helpers rather than stages.
 pub const SHARED_DIR: &str = "shared";
 
-/// A shader folder: `base.join(dir)`, laid out as fieldkit's `shaders/` is (one folder per
-/// technique, helpers under `shared/`). Messages name files `dir/room/file` (relative to `base`,
-/// which may be empty for a path relative to the working directory).
+/// A shader folder: `base.join(dir)`, stages at any depth in it ([`discover`]), helpers under
+/// `shared/`. Messages name files `dir/…/file` (relative to `base`, which may be empty for a
+/// path relative to the working directory).
 #[derive(Debug, Clone)]
 pub struct ShaderDir {
     pub base: PathBuf,
@@ -67,7 +69,7 @@ impl ShaderDir {
 /// One shader stage file: everything under `shaders/` except `shaders/shared/`.
 #[derive(Debug, Clone)]
 pub struct StageFile {
-    /// Technique folder ("distance").
+    /// Folder under the shader folder ("distance"; "a/b" nested; "" directly in it).
     pub room: String,
     /// File stem ("jfa_step"): the stage's name.
     pub name: String,
@@ -88,9 +90,13 @@ impl StageFile {
         }
     }
 
-    /// `room::name`, as used in messages and generated module paths.
+    /// `room::name` (`a::b::name` for a stage in `a/b/`, `name` for one directly in the
+    /// folder), as used in messages and generated module paths.
     pub fn id(&self) -> String {
-        format!("{}::{}", self.room, self.name)
+        if self.room.is_empty() {
+            return self.name.clone();
+        }
+        format!("{}::{}", self.room.replace('/', "::"), self.name)
     }
 }
 
@@ -111,39 +117,99 @@ pub struct Stage {
     pub shared: Vec<SharedDecl>,
 }
 
-/// Every shader file that is a stage, sorted by path for deterministic output.
+/// Every shader file that is a stage, sorted by path for deterministic output: every `.wgsl`
+/// and `.wesl` file under the folder at any depth but the folder's own `shared/` (importable
+/// helpers). A file directly in the folder is the stage `name` (generated as `shaders::name`),
+/// one in `a/b/` the stage `a::b::name`: module paths follow the folders. No file is passed
+/// over without a word: a file whose name or folder is not a Rust identifier is an error
+/// naming it.
 pub fn discover(shaders: &ShaderDir) -> std::io::Result<Vec<StageFile>> {
     let mut out = Vec::new();
-    let mut rooms: Vec<_> = std::fs::read_dir(shaders.root())?.collect::<Result<_, _>>()?;
-    rooms.sort_by_key(|e| e.file_name());
-    for room in rooms {
-        if !room.file_type()?.is_dir() || room.file_name() == SHARED_DIR {
+    walk(shaders, &shaders.root(), "", &mut out)?;
+    Ok(out)
+}
+
+/// The stages of `dir` (the folder `room` under the root, `""` for the root itself): its files
+/// first, then its folders', each sorted by name.
+fn walk(
+    shaders: &ShaderDir,
+    dir: &Path,
+    room: &str,
+    out: &mut Vec<StageFile>,
+) -> std::io::Result<()> {
+    let mut entries: Vec<_> = std::fs::read_dir(dir)?.collect::<Result<_, _>>()?;
+    entries.sort_by_key(|e| e.file_name());
+    let mut folders = Vec::new();
+    for e in entries {
+        let name = e.file_name().to_string_lossy().into_owned();
+        if e.file_type()?.is_dir() {
+            if !(room.is_empty() && name == SHARED_DIR) {
+                folders.push((e.path(), name));
+            }
             continue;
         }
-        let room_name = room.file_name().to_string_lossy().into_owned();
-        let mut files: Vec<_> = std::fs::read_dir(room.path())?.collect::<Result<_, _>>()?;
-        files.sort_by_key(|e| e.file_name());
-        for f in files {
-            let p = f.path();
-            let ext = p.extension().and_then(|e| e.to_str()).unwrap_or("");
-            if ext != "wgsl" && ext != "wesl" {
-                continue;
-            }
-            let name = p.file_stem().unwrap().to_string_lossy().into_owned();
-            out.push(StageFile {
-                rel_path: format!(
-                    "{}/{room_name}/{}",
-                    shaders.dir,
-                    f.file_name().to_string_lossy()
-                ),
-                room: room_name.clone(),
-                name,
-                abs_path: p,
-                source: None,
-            });
+        let p = e.path();
+        let ext = p.extension().and_then(|e| e.to_str()).unwrap_or("");
+        if ext != "wgsl" && ext != "wesl" {
+            continue;
         }
+        let stem = p.file_stem().unwrap().to_string_lossy().into_owned();
+        let rel = if room.is_empty() {
+            name.clone()
+        } else {
+            format!("{room}/{name}")
+        };
+        let rel_path = format!("{}/{rel}", shaders.dir);
+        for part in room
+            .split('/')
+            .filter(|r| !r.is_empty())
+            .chain([stem.as_str()])
+        {
+            if !is_module_name(part) {
+                return Err(std::io::Error::new(
+                    std::io::ErrorKind::InvalidInput,
+                    format!(
+                        "{rel_path}: `{part}` cannot name a Rust module (its generated bindings \
+                         live at the folder path): rename it to lowercase letters, digits and _"
+                    ),
+                ));
+            }
+        }
+        out.push(StageFile {
+            rel_path,
+            room: room.to_string(),
+            name: stem,
+            abs_path: p,
+            source: None,
+        });
     }
-    Ok(out)
+    for (path, name) in folders {
+        let inner = if room.is_empty() {
+            name
+        } else {
+            format!("{room}/{name}")
+        };
+        walk(shaders, &path, &inner, out)?;
+    }
+    Ok(())
+}
+
+/// Whether `s` can be a generated module's name: an identifier that is not a Rust keyword.
+fn is_module_name(s: &str) -> bool {
+    const KEYWORDS: &[&str] = &[
+        "as", "async", "await", "break", "const", "continue", "crate", "dyn", "else", "enum",
+        "extern", "false", "fn", "for", "gen", "if", "impl", "in", "let", "loop", "match", "mod",
+        "move", "mut", "pub", "ref", "return", "self", "static", "struct", "super", "trait",
+        "true", "type", "unsafe", "use", "where", "while", "abstract", "become", "box", "do",
+        "final", "macro", "override", "priv", "try", "typeof", "unsized", "virtual", "yield",
+        "groups", "ALL",
+    ];
+    let mut chars = s.chars();
+    chars
+        .next()
+        .is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+        && chars.all(|c| c.is_ascii_alphanumeric() || c == '_')
+        && !KEYWORDS.contains(&s)
 }
 
 /// All files under the shader root (stages and helpers), for rebuild tracking.

@@ -41,7 +41,7 @@ pub struct SharedDecl {
 /// Link one stage's imports with WESL and print the result declaration by declaration, keeping
 /// for each its source file and span so naga's errors can be reported against the original file.
 pub(crate) fn link(shaders: &ShaderDir, stage: &StageFile) -> Result<Linked, String> {
-    let root: wesl::ModulePath = format!("package::{}::{}", stage.room, stage.name)
+    let root: wesl::ModulePath = format!("package::{}", stage.id())
         .parse()
         .map_err(|e| format!("{}: bad module path: {e:?}", stage.rel_path))?;
     let mut resolver = wesl::StandardResolver::new(shaders.root());

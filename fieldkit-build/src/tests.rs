@@ -411,3 +411,46 @@ fn every_broken_stage_is_reported_at_its_original_line_and_column() {
     eprintln!("{}", errors.join("\n"));
     std::fs::remove_dir_all(root).ok();
 }
+
+/// Every shader file under the folder is a stage, at any depth: a file directly in it, one in a
+/// folder and one two folders down, generated at their folder paths (files before folders,
+/// each sorted); a name that cannot name a module is an error naming the file, never a skip.
+#[test]
+fn stages_are_found_at_any_depth() {
+    let stage = "// A stage.\n@compute @workgroup_size(1)\nfn main() {}\n";
+    let root = tree(&[("in_room", stage)]);
+    std::fs::write(root.join("shaders/top.wgsl"), stage).unwrap();
+    std::fs::create_dir_all(root.join("shaders/deep/er")).unwrap();
+    std::fs::write(root.join("shaders/deep/er/inner.wesl"), stage).unwrap();
+    let dir = ShaderDir::new(&root, "shaders");
+    let found: Vec<(String, String)> = discover(&dir)
+        .unwrap()
+        .iter()
+        .map(|s| (s.id(), s.rel_path.clone()))
+        .collect();
+    let want = [
+        ("top", "shaders/top.wgsl"),
+        ("deep::er::inner", "shaders/deep/er/inner.wesl"),
+        ("room::in_room", "shaders/room/in_room.wgsl"),
+    ];
+    assert_eq!(found, want.map(|(a, b)| (a.to_string(), b.to_string())));
+    let out = root.join("shaders.rs");
+    Builder::new("shaders")
+        .build_to(&root, &out)
+        .expect("builds");
+    let code = std::fs::read_to_string(&out).unwrap();
+    for needle in [
+        "pub mod top {",
+        "pub mod deep {",
+        "pub mod er {",
+        "pub mod inner {",
+        "&top::main::INFO",
+        "&deep::er::inner::main::INFO",
+        "&room::in_room::main::INFO",
+    ] {
+        assert!(code.contains(needle), "{needle} missing from\n{code}");
+    }
+    std::fs::write(root.join("shaders/deep/bad-name.wgsl"), stage).unwrap();
+    let err = discover(&dir).unwrap_err().to_string();
+    assert!(err.contains("shaders/deep/bad-name.wgsl"), "{err}");
+}

@@ -69,7 +69,7 @@ pub fn shared_groups(stages: &[Stage]) -> Vec<SharedGroupInfo> {
                 for b in r.bindings.iter().filter(|b| b.group == group) {
                     let stages: Vec<String> =
                         p.stages_using(b).into_iter().map(String::from).collect();
-                    let path = format!("super::super::{}::{}::", st.file.room, st.file.name);
+                    let path = format!("super::super::{}::", st.file.id());
                     let rust = qualify(&r, rust_of(&b.kind), &path);
                     let shared = &mut out[i];
                     match shared
