@@ -272,6 +272,15 @@ pub fn build_stage(shaders: &ShaderDir, stage: &StageFile) -> Result<Stage, Stri
             }
         }
     }
+    // A workgroup size the generated code cannot state would dispatch the wrong number of
+    // groups: an error at the entry point, not `[1, 1, 1]`.
+    for (ep, why) in reflect::workgroup_size_problems(&module) {
+        let (line, column) = lint::locate(&original, &format!("fn {ep}"));
+        unmapped.push(format!(
+            "error: {}:{line}:{column}: the workgroup size of `{ep}` cannot be known: {why}",
+            stage.rel_path
+        ));
+    }
     if !unmapped.is_empty() {
         return Err(unmapped.join("\n"));
     }

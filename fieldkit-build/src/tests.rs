@@ -454,3 +454,38 @@ fn stages_are_found_at_any_depth() {
     let err = discover(&dir).unwrap_err().to_string();
     assert!(err.contains("shaders/deep/bad-name.wgsl"), "{err}");
 }
+
+/// A workgroup sized by an expression of overrides, or by an override without a literal
+/// default, has no size the generated code can state: an error at the entry point saying so,
+/// not `[1, 1, 1]` (which dispatched 64 times too many groups).
+#[test]
+fn unknowable_workgroup_sizes_are_errors() {
+    let root = tree(&[
+        (
+            "product",
+            "// Sized by a product.\noverride A: u32 = 8u;\n@compute @workgroup_size(A * 2u)\nfn main() {}\n",
+        ),
+        (
+            "undefaulted",
+            "// Sized by an override with no default.\noverride B: u32;\n@compute @workgroup_size(B)\nfn main() {}\n",
+        ),
+        (
+            "plain",
+            "// Sized by a plain override: fine.\noverride C: u32 = 32u;\n@compute @workgroup_size(C, 2)\nfn main() {}\n",
+        ),
+    ]);
+    let errors = build_all(&root).err().expect("two stages fail");
+    assert_eq!(errors.len(), 2, "{errors:#?}");
+    assert!(
+        errors[0].contains("shaders/room/product.wgsl:4:")
+            && errors[0].contains("workgroup size of `main` cannot be known")
+            && errors[0].contains("expression of overrides"),
+        "{errors:#?}"
+    );
+    assert!(
+        errors[1].contains("shaders/room/undefaulted.wgsl:4:")
+            && errors[1].contains("`B`, which has no literal default"),
+        "{errors:#?}"
+    );
+    std::fs::remove_dir_all(&root).ok();
+}

@@ -73,8 +73,10 @@ pub struct TargetKind {
 pub enum EntryKind {
     /// A compute entry point.
     Compute {
-        /// Its `@workgroup_size`.
+        /// Its `@workgroup_size` (a dimension an override sets, at the override's default).
         workgroup_size: [u32; 3],
+        /// Per dimension, the `override` that sets it (`""` where the size is a constant).
+        sized_by: [&'static str; 3],
     },
     /// A fragment entry point with the vertex entry point it pairs with.
     Render {
@@ -205,12 +207,35 @@ impl EntryInfo {
         g
     }
 
-    /// `@workgroup_size`, for compute entries.
+    /// `@workgroup_size`, for compute entries (a dimension an override sets, at its default:
+    /// [`Self::workgroup_size_with`] gives it for other values).
     pub fn workgroup_size(&self) -> Option<[u32; 3]> {
         match self.kind {
-            EntryKind::Compute { workgroup_size } => Some(workgroup_size),
+            EntryKind::Compute { workgroup_size, .. } => Some(workgroup_size),
             _ => None,
         }
+    }
+
+    /// `@workgroup_size` with `overrides` (by name, as a pipeline is made with them): a
+    /// dimension an override sets takes its value there, else its default.
+    pub fn workgroup_size_with(&self, overrides: &[(&str, f64)]) -> Option<[u32; 3]> {
+        let EntryKind::Compute {
+            workgroup_size,
+            sized_by,
+        } = self.kind
+        else {
+            return None;
+        };
+        let mut size = workgroup_size;
+        for (i, name) in sized_by.iter().enumerate() {
+            if let Some((_, v)) = overrides
+                .iter()
+                .find(|(n, _)| !name.is_empty() && n == name)
+            {
+                size[i] = v.max(0.0).min(u32::MAX as f64) as u32;
+            }
+        }
+        Some(size)
     }
 
     fn layouts(&self, device: &wgpu::Device) -> Vec<(u32, wgpu::BindGroupLayout)> {

@@ -104,6 +104,8 @@ pub struct ComputePipeline<E> {
     /// The wgpu pipeline.
     pub pipeline: wgpu::ComputePipeline,
     layouts: Vec<(u32, wgpu::BindGroupLayout)>,
+    /// Its workgroup size, with the overrides it was made with.
+    workgroup_size: [u32; 3],
     _e: PhantomData<E>,
 }
 
@@ -161,6 +163,7 @@ impl<E: Entry> ComputePipeline<E> {
         let info = E::INFO;
         info.check_overrides(overrides)?;
         info.check_features(device)?;
+        let workgroup_size = check_workgroup_size(device, info, overrides)?;
         crate::gpu::scoped(device, info.stage, || {
             let layouts = info.layouts(device);
             let pipeline = build_compute(
@@ -174,6 +177,7 @@ impl<E: Entry> ComputePipeline<E> {
             Self {
                 pipeline,
                 layouts,
+                workgroup_size,
                 _e: PhantomData,
             }
         })
@@ -244,7 +248,20 @@ impl<E: Entry> ComputePipeline<E> {
         Ok(())
     }
 
-    /// Workgroups needed to cover `extent` invocations on each axis.
+    /// Its workgroup size, with the overrides it was made with.
+    pub fn workgroup_size(&self) -> [u32; 3] {
+        self.workgroup_size
+    }
+
+    /// Workgroups needed to cover `extent` invocations on each axis, at the size this pipeline
+    /// was made with (an entry sized by overrides: with the values given to it).
+    pub fn groups(&self, extent: [u32; 3]) -> [u32; 3] {
+        [0, 1, 2].map(|i| extent[i].div_ceil(self.workgroup_size[i].max(1)))
+    }
+
+    /// Workgroups needed to cover `extent` invocations on each axis, at the shader's
+    /// `@workgroup_size` (an entry sized by overrides: at their defaults; [`Self::groups`] on
+    /// a pipeline made with others, or the generated `groups_for(&Overrides, extent)`).
     pub fn groups_for(extent: [u32; 3]) -> [u32; 3] {
         let ws = E::INFO.workgroup_size().unwrap_or([1, 1, 1]);
         [
@@ -253,6 +270,40 @@ impl<E: Entry> ComputePipeline<E> {
             extent[2].div_ceil(ws[2]),
         ]
     }
+}
+
+/// `info`'s workgroup size with `overrides`, refused where the device cannot run it (a size an
+/// override sets is checked here, where its value is known).
+fn check_workgroup_size(
+    device: &wgpu::Device,
+    info: &EntryInfo,
+    overrides: &[(&str, f64)],
+) -> Result<[u32; 3], Error> {
+    let size = info.workgroup_size_with(overrides).unwrap_or([1, 1, 1]);
+    let l = device.limits();
+    let most = [
+        l.max_compute_workgroup_size_x,
+        l.max_compute_workgroup_size_y,
+        l.max_compute_workgroup_size_z,
+    ];
+    let total = size.iter().map(|&d| d as u64).product::<u64>();
+    if size.contains(&0) {
+        return Err(Error::invalid(
+            info.stage,
+            format!("`{}`: workgroup size {size:?} has a zero", info.entry_point),
+        ));
+    }
+    if (0..3).any(|i| size[i] > most[i]) || total > l.max_compute_invocations_per_workgroup as u64 {
+        return Err(Error::Unsupported {
+            stage: info.stage,
+            what: format!(
+                "`{}`: workgroup size {size:?} ({total} invocations) is past this device's \
+                 limits ({most:?}, {} invocations)",
+                info.entry_point, l.max_compute_invocations_per_workgroup
+            ),
+        });
+    }
+    Ok(size)
 }
 
 /// How a render pipeline draws: the parts the shader cannot say.

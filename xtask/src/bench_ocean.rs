@@ -359,7 +359,7 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
         out,
         "ocean_cpu.csv",
         "adapter,resolution,frame,cpu_ms,min_ms,max_ms",
-        cpu_rows.into_iter(),
+        cpu_rows,
     )?;
     let floor = floor(
         &ctx,

@@ -50,6 +50,9 @@ impl Default for VolumeSettings {
     }
 }
 
+/// A cloud being made on a worker thread: its (size, seed) and where it arrives.
+pub(super) type PendingCloud = ((u32, u32), std::sync::mpsc::Receiver<Vec<f32>>);
+
 /// The volume's GPU state.
 pub struct VolumeScene {
     pub(super) renderer: VolumeRenderer,
@@ -62,7 +65,7 @@ pub struct VolumeScene {
     pub(super) light: Option<fieldkit::volume::LightVolume>,
     /// A cloud being made on a worker thread for a new (size, seed): the frame draws the one
     /// it has until this one is ready, so a new size costs the frame no wait.
-    pub(super) pending: Option<((u32, u32), std::sync::mpsc::Receiver<Vec<f32>>)>,
+    pub(super) pending: Option<PendingCloud>,
 }
 
 impl VolumeScene {

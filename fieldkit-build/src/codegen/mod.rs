@@ -274,13 +274,7 @@ fn gen_pipeline(r: &Reflection, p: &PipelineDesc, shared: &[SharedGroupInfo], s:
     }
 
     if compute {
-        let [x, y, z] = p.entries[0].workgroup_size;
-        writeln!(
-            s,
-            "/// `@workgroup_size` of `{}`.\npub const WORKGROUP_SIZE: [u32; 3] = [{x}, {y}, {z}];",
-            p.entries[0].name
-        )
-        .unwrap();
+        gen_workgroup_size(p.entries[0], s);
     }
 
     let vb_consts = gen_vertex_buffers(p, s);
@@ -542,7 +536,17 @@ fn slot_literals(
 fn entry_kind(p: &PipelineDesc, vb_consts: &[String]) -> String {
     let compute = p.entries[0].stage == "compute";
     if compute {
-        "crate::bind::EntryKind::Compute { workgroup_size: WORKGROUP_SIZE }".to_string()
+        {
+            let by: Vec<String> = p.entries[0]
+                .workgroup_size_overrides
+                .iter()
+                .map(|o| format!("{:?}", o.as_deref().unwrap_or("")))
+                .collect();
+            format!(
+                "crate::bind::EntryKind::Compute {{ workgroup_size: WORKGROUP_SIZE, sized_by: [{}] }}",
+                by.join(", ")
+            )
+        }
     } else {
         let fs = p.entries.iter().find(|e| e.stage == "fragment").unwrap();
         let targets: Vec<String> = fs
@@ -645,6 +649,53 @@ fn override_literal(rust: &str, v: f64) -> String {
 /// `Overrides`: one typed field per `override` (snake case), `Default` where every override has
 /// a literal default (an override the shader computes from others is an `Option`, `None`
 /// leaving it to the shader), and `constants()` for the pipeline.
+/// `WORKGROUP_SIZE`, and for an entry sized by overrides the size and the groups for any
+/// `Overrides` value.
+fn gen_workgroup_size(ep: &super::reflect::EntryPoint, s: &mut String) {
+    let [x, y, z] = ep.workgroup_size;
+    let by = &ep.workgroup_size_overrides;
+    if by.iter().all(Option::is_none) {
+        writeln!(
+            s,
+            "/// `@workgroup_size` of `{}`.\npub const WORKGROUP_SIZE: [u32; 3] = [{x}, {y}, {z}];",
+            ep.name
+        )
+        .unwrap();
+        return;
+    }
+    let dims: Vec<String> = by
+        .iter()
+        .zip(ep.workgroup_size)
+        .map(|(o, n)| match o {
+            Some(name) => {
+                let mut field = name.to_lowercase();
+                if RUST_KEYWORDS.contains(&field.as_str()) {
+                    field = format!("r#{field}");
+                }
+                format!("overrides.{field} as u32")
+            }
+            None => n.to_string(),
+        })
+        .collect();
+    let names: Vec<String> = by.iter().flatten().map(|n| format!("`{n}`")).collect();
+    writeln!(
+        s,
+        "/// `@workgroup_size` of `{0}` at the defaults of {1}; [`workgroup_size`] gives it for\n\
+         /// other values, and a pipeline made with them says its own (`ComputePipeline::groups`).\n\
+         pub const WORKGROUP_SIZE: [u32; 3] = [{x}, {y}, {z}];\n\
+         /// `@workgroup_size` of `{0}` with `overrides` (set by {1}).\n\
+         pub fn workgroup_size(overrides: &Overrides) -> [u32; 3] {{\n    [{2}]\n}}\n\
+         /// Workgroups covering `extent` invocations on each axis with `overrides`.\n\
+         pub fn groups_for(overrides: &Overrides, extent: [u32; 3]) -> [u32; 3] {{\n    \
+         let size = workgroup_size(overrides);\n    \
+         [0, 1, 2].map(|i| extent[i].div_ceil(size[i].max(1)))\n}}",
+        ep.name,
+        names.join(", "),
+        dims.join(", ")
+    )
+    .unwrap();
+}
+
 fn gen_overrides(r: &Reflection, s: &mut String) {
     let mut fields = Vec::new();
     for o in &r.overrides {

@@ -115,7 +115,10 @@ pub struct BindingUse {
 pub struct EntryPoint {
     pub name: String,
     pub stage: String,
+    /// `@workgroup_size`, with a dimension set by an `override` at that override's default.
     pub workgroup_size: [u32; 3],
+    /// Per dimension, the `override` that sets it (`@workgroup_size(BLOCK)`), if one does.
+    pub workgroup_size_overrides: [Option<String>; 3],
     /// Bytes of `var<workgroup>` the entry point uses (array lengths from overrides at their
     /// defaults).
     pub workgroup_storage: u32,
@@ -634,17 +637,19 @@ fn reflect_entry(
         .global_variables
         .iter()
         .any(|(h, v)| v.space == AddressSpace::Immediate && !fi[h].is_empty());
+    let (workgroup_size, workgroup_size_overrides) = sized_by_overrides(module, ep);
     let needs = needs_of(
         bindings,
         &uses,
         workgroup_storage,
-        ep.workgroup_size,
+        workgroup_size,
         ep.stage == ShaderStage::Compute,
     );
     EntryPoint {
         name: ep.name.clone(),
         stage: stage_name.into(),
-        workgroup_size: ep.workgroup_size,
+        workgroup_size,
+        workgroup_size_overrides,
         workgroup_storage,
         needs,
         uses,
@@ -652,6 +657,63 @@ fn reflect_entry(
         fragment_outputs,
         uses_immediate,
     }
+}
+
+/// A compute entry's `@workgroup_size` with each dimension an `override` sets at that
+/// override's literal default, and per dimension the override's name.
+fn sized_by_overrides(
+    module: &naga::Module,
+    ep: &naga::EntryPoint,
+) -> ([u32; 3], [Option<String>; 3]) {
+    let mut size = ep.workgroup_size;
+    let mut names: [Option<String>; 3] = Default::default();
+    for (i, e) in ep.workgroup_size_overrides.iter().flatten().enumerate() {
+        let Some(h) = e else { continue };
+        if let naga::Expression::Override(o) = module.global_expressions[*h] {
+            let o = &module.overrides[o];
+            names[i] = o.name.clone();
+            if let Some(v) = literal_value(module, o.init) {
+                size[i] = v as u32;
+            }
+        }
+    }
+    (size, names)
+}
+
+/// What makes a compute entry's workgroup size unknowable before its pipeline is made, per
+/// entry: a dimension set by an expression of overrides (not one plain `override`), or by an
+/// override without a literal default.
+pub fn workgroup_size_problems(module: &naga::Module) -> Vec<(String, String)> {
+    let mut out = Vec::new();
+    for ep in &module.entry_points {
+        for (i, e) in ep.workgroup_size_overrides.iter().flatten().enumerate() {
+            let Some(h) = e else { continue };
+            let axis = ["x", "y", "z"][i];
+            let why = match module.global_expressions[*h] {
+                naga::Expression::Override(o) => {
+                    let o = &module.overrides[o];
+                    literal_value(module, o.init).is_none().then(|| {
+                        format!(
+                            "its {axis} size is the override `{}`, which has no literal default: \
+                             give it one (`override {}: u32 = 64u;`) so the generated \
+                             `WORKGROUP_SIZE` and `needs` hold a size",
+                            o.name.as_deref().unwrap_or("?"),
+                            o.name.as_deref().unwrap_or("?")
+                        )
+                    })
+                }
+                _ => Some(format!(
+                    "its {axis} size is an expression of overrides: size it by one plain \
+                     `override` with a literal default, so the generated \
+                     `workgroup_size(&Overrides)` can say it"
+                )),
+            };
+            if let Some(why) = why {
+                out.push((ep.name.clone(), why));
+            }
+        }
+    }
+    out
 }
 
 /// The module's named memory-layout structs (entry-point interface structs left out).

@@ -62,3 +62,49 @@ fn flat_and_nested_stages_are_built_and_run() {
     let got: Vec<u32> = bytemuck::cast_slice(&read_buffer(&ctx, &b).unwrap()).to_vec();
     assert_eq!(got, (0..100).map(|i| i * i).collect::<Vec<u32>>());
 }
+
+/// `@workgroup_size(BLOCK)` with `override BLOCK`: the generated size and groups follow the
+/// value given, the pipeline made with it dispatches enough groups of that size, and a size
+/// past the device's limits is a typed error when the pipeline is made.
+#[test]
+fn a_workgroup_sized_by_an_override_dispatches_at_that_size() {
+    use fieldkit_user_crate::shaders::math::blocks;
+    let sixteen = blocks::Overrides { block: 16 };
+    assert_eq!(blocks::main::WORKGROUP_SIZE, [64, 1, 1]);
+    assert_eq!(blocks::main::workgroup_size(&sixteen), [16, 1, 1]);
+    assert_eq!(blocks::main::groups_for(&sixteen, [100, 1, 1]), [7, 1, 1]);
+    assert_eq!(
+        blocks::main::INFO
+            .needs
+            .max_compute_invocations_per_workgroup,
+        64
+    );
+    let ctx = Context::shared();
+    let pipeline =
+        blocks::main::Pipeline::with_overrides(&ctx.device, &sixteen.constants()).unwrap();
+    assert_eq!(pipeline.workgroup_size(), [16, 1, 1]);
+    let out = values(&ctx, &[u32::MAX; 100]);
+    let mut encoder = ctx.encoder("blocks");
+    pipeline
+        .record(
+            &ctx.device,
+            &mut encoder,
+            &blocks::main::Resources {
+                values: (&out).into(),
+            },
+            pipeline.groups([100, 1, 1]),
+            "blocks",
+        )
+        .unwrap();
+    ctx.submit_and_wait("blocks", encoder).unwrap();
+    let got: Vec<u32> = bytemuck::cast_slice(&read_buffer(&ctx, &out).unwrap()).to_vec();
+    let want: Vec<u32> = (0..100).map(|i| (i / 16) * 1000 + i % 16).collect();
+    assert_eq!(got, want);
+    let huge = blocks::Overrides { block: 1 << 20 };
+    match blocks::main::Pipeline::with_overrides(&ctx.device, &huge.constants()) {
+        Err(fieldkit::Error::Unsupported { what, .. }) => {
+            assert!(what.contains("workgroup size"), "{what}")
+        }
+        other => panic!("a 2^20 workgroup: {:?}", other.map(|_| ())),
+    }
+}
