@@ -149,7 +149,7 @@ pub(super) fn gen_shared_groups(shared: &[SharedGroupInfo], s: &mut String) {
     if shared.is_empty() {
         return;
     }
-    writeln!(s, "/// Bind groups declared once in a module of `shared/` and used by several pipelines: make\n/// one `Group` and hand it to each.\npub mod groups {{").unwrap();
+    writeln!(s, "/// Bind groups declared once in a module of `shared/` and used by several pipelines: make\n/// one `Group` and hand it to each.\n#[allow(non_snake_case, non_camel_case_types)]\npub mod groups {{").unwrap();
     for g in shared {
         let name = if shared.iter().filter(|o| o.module == g.module).count() > 1 {
             format!("{}_{}", g.module, g.group)

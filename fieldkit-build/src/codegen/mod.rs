@@ -776,7 +776,14 @@ pub fn stage_module_with(stage: &Stage, shared: &[SharedGroupInfo]) -> String {
     {
         writeln!(s, "///\n/// {}", h.trim()).unwrap();
     }
-    writeln!(s, "pub mod {} {{", stage.file.name).unwrap();
+    // The shader's own names, as it spells them (`deltaT`, `particlesSrc`, `mainCS`), without
+    // a warning in the user's crate for each.
+    writeln!(
+        s,
+        "#[allow(non_snake_case, non_camel_case_types)]\npub mod {} {{",
+        stage.file.name
+    )
+    .unwrap();
     writeln!(
         s,
         "/// Stage name, `room::stage`.\npub const STAGE: &str = \"{}\";",
@@ -859,7 +866,11 @@ fn gen_folder(
     inner.dedup();
     for folder in inner {
         let path = format!("{prefix}{folder}");
-        writeln!(s, "/// Stages in `shaders/{path}/`.\npub mod {folder} {{").unwrap();
+        writeln!(
+            s,
+            "/// Stages in `shaders/{path}/`.\n#[allow(non_snake_case)]\npub mod {folder} {{"
+        )
+        .unwrap();
         gen_folder(stages, &path, shared, all, s);
         writeln!(s, "}}").unwrap();
     }
