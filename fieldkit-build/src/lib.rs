@@ -307,7 +307,7 @@ pub fn build_stage(shaders: &ShaderDir, stage: &StageFile) -> Result<Stage, Stri
             notes,
         )
     })?;
-    Ok(Stage {
+    let built = Stage {
         file: stage.clone(),
         source: linked.text,
         module,
@@ -316,7 +316,22 @@ pub fn build_stage(shaders: &ShaderDir, stage: &StageFile) -> Result<Stage, Stri
         features,
         dynamic_offsets: Vec::new(),
         shared: linked.shared,
-    })
+    };
+    // Every entry point gets a pipeline, or the build says why it cannot.
+    let dropped: Vec<String> = codegen::dropped_entries(&built)
+        .into_iter()
+        .map(|(ep, why)| {
+            let (line, column) = lint::locate(&built.original, &format!("fn {ep}"));
+            format!(
+                "error: {}:{line}:{column}: entry point `{ep}` would get no pipeline: {why}",
+                stage.rel_path
+            )
+        })
+        .collect();
+    if !dropped.is_empty() {
+        return Err(dropped.join("\n"));
+    }
+    Ok(built)
 }
 
 /// The naga capabilities wgpu grants for a device feature, as `wgpu-naga-bridge` maps them,

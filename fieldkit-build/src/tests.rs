@@ -489,3 +489,39 @@ fn unknowable_workgroup_sizes_are_errors() {
     );
     std::fs::remove_dir_all(&root).ok();
 }
+
+/// Entry points that would get no pipeline are build errors naming them and why: a fragment
+/// entry in a file without a vertex entry, and one that reads a location no vertex entry of
+/// its file writes. A vertex entry alone gets a depth-only pipeline.
+#[test]
+fn entries_without_a_pipeline_are_errors() {
+    let root = tree(&[
+        (
+            "alone",
+            "// A fragment entry alone.\n@fragment\nfn fs() -> @location(0) vec4<f32> {\n    return vec4<f32>(1.0);\n}\n",
+        ),
+        (
+            "mismatch",
+            "// A fragment reading what the vertex entry does not write.\n@vertex\nfn vs() -> @builtin(position) vec4<f32> {\n    return vec4<f32>(0.0);\n}\n@fragment\nfn fs(@location(2) x: f32) -> @location(0) vec4<f32> {\n    return vec4<f32>(x);\n}\n",
+        ),
+        (
+            "shadow",
+            "// A depth-only pass.\n@vertex\nfn vs() -> @builtin(position) vec4<f32> {\n    return vec4<f32>(0.0);\n}\n",
+        ),
+    ]);
+    let errors = build_all(&root).err().expect("two stages fail");
+    assert_eq!(errors.len(), 2, "{errors:#?}");
+    assert!(
+        errors[0].contains("shaders/room/alone.wgsl:3:")
+            && errors[0].contains("entry point `fs` would get no pipeline")
+            && errors[0].contains("has none"),
+        "{errors:#?}"
+    );
+    assert!(
+        errors[1].contains("shaders/room/mismatch.wgsl:")
+            && errors[1].contains("reads @location [2]")
+            && errors[1].contains("`vs` (writes [])"),
+        "{errors:#?}"
+    );
+    std::fs::remove_dir_all(&root).ok();
+}

@@ -461,7 +461,8 @@ pub(crate) fn build_render(
             compilation_options: Default::default(),
             buffers: vertex_buffers,
         },
-        fragment: Some(wgpu::FragmentState {
+        // A depth-only pipeline is named after its vertex entry and has no fragment stage.
+        fragment: (info.entry_point != vertex).then(|| wgpu::FragmentState {
             module: &module,
             entry_point: Some(info.entry_point),
             compilation_options: Default::default(),

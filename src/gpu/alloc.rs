@@ -102,8 +102,10 @@ pub(crate) fn kept_buffer(
 /// the caller's target every frame makes its view once. Keyed by identity (the kept clone of
 /// the texture keeps its identity from being reused).
 #[derive(Default)]
+#[cfg_attr(not(feature = "techniques"), allow(dead_code))]
 pub(crate) struct KeptView(std::sync::Mutex<Option<(wgpu::Texture, wgpu::TextureView)>>);
 
+#[cfg_attr(not(feature = "techniques"), allow(dead_code))]
 impl KeptView {
     /// The view of `texture` made by `make`, or the one kept for it.
     pub(crate) fn get(

@@ -17,7 +17,9 @@ mod upload;
 
 #[cfg(feature = "techniques")]
 pub(crate) use albedo::AlbedoBinding;
-pub(crate) use alloc::{KeptView, Leased, kept_buffer, storage_buffer, volume_texture};
+pub(crate) use alloc::kept_buffer;
+#[cfg(feature = "techniques")]
+pub(crate) use alloc::{KeptView, Leased, storage_buffer, volume_texture};
 pub use alloc::{Lease, texture};
 pub use cache::PipelineCache;
 pub(crate) use cache::installed as installed_pipeline_cache;
@@ -28,6 +30,7 @@ pub(crate) use targets::check_target_bytes;
 pub use targets::{GBUFFER_FORMATS, target_bytes_per_sample};
 pub use timing::{Profiler, Record, Recorder, Timer};
 pub use upload::RING_UPLOADS;
+#[cfg(feature = "techniques")]
 pub(crate) use upload::Uploads;
 
 use crate::error::Error;

@@ -168,26 +168,83 @@ impl PipelineDesc<'_> {
 
 fn pipelines(r: &Reflection) -> Vec<PipelineDesc<'_>> {
     let mut out = Vec::new();
-    let vertex: Vec<_> = r
-        .entry_points
-        .iter()
-        .filter(|e| e.stage == "vertex")
-        .collect();
+    let of = |stage: &str| -> Vec<&super::reflect::EntryPoint> {
+        r.entry_points.iter().filter(|e| e.stage == stage).collect()
+    };
+    let (vertex, fragment) = (of("vertex"), of("fragment"));
     for ep in &r.entry_points {
         match ep.stage.as_str() {
             "compute" => out.push(PipelineDesc {
                 module: ep.name.clone(),
                 entries: vec![ep],
             }),
-            // A fragment entry pairs with the file's vertex entry (the lints require exactly one).
-            "fragment" if vertex.len() == 1 => out.push(PipelineDesc {
+            // A fragment entry draws with every vertex entry of its file that writes what it
+            // reads: named after itself where the file has one vertex entry, after both where
+            // it has several.
+            "fragment" => {
+                for v in vertex.iter().filter(|v| pairs(v, ep)) {
+                    let module = if vertex.len() == 1 {
+                        ep.name.clone()
+                    } else {
+                        format!("{}_{}", v.name, ep.name)
+                    };
+                    out.push(PipelineDesc {
+                        module,
+                        entries: vec![v, ep],
+                    });
+                }
+            }
+            // A vertex entry no fragment entry draws with: a depth-only pipeline (a shadow or
+            // depth pre-pass).
+            "vertex" if !fragment.iter().any(|f| pairs(ep, f)) => out.push(PipelineDesc {
                 module: ep.name.clone(),
-                entries: vec![vertex[0], ep],
+                entries: vec![ep],
             }),
             _ => {}
         }
     }
     out
+}
+
+/// Whether vertex entry `v` writes every `@location` fragment entry `f` reads.
+fn pairs(v: &super::reflect::EntryPoint, f: &super::reflect::EntryPoint) -> bool {
+    f.stage_io.iter().all(|l| v.stage_io.contains(l))
+}
+
+/// The entry points of `stage` no generated pipeline holds, each with why: a fragment entry
+/// no vertex entry of its file writes the inputs of (the build refuses these rather than drop
+/// them).
+pub fn dropped_entries(stage: &Stage) -> Vec<(String, String)> {
+    let r = reflect(stage);
+    let made = pipelines(&r);
+    r.entry_points
+        .iter()
+        .filter(|e| {
+            !made
+                .iter()
+                .any(|p| p.entries.iter().any(|x| x.name == e.name))
+        })
+        .map(|e| {
+            let vertex: Vec<String> = r
+                .entry_points
+                .iter()
+                .filter(|v| v.stage == "vertex")
+                .map(|v| format!("`{}` (writes {:?})", v.name, v.stage_io))
+                .collect();
+            let why = if vertex.is_empty() {
+                "a fragment entry draws with a vertex entry of the same file, and this file has \
+                 none"
+                    .to_string()
+            } else {
+                format!(
+                    "it reads @location {:?}, which no vertex entry of the file writes all of: {}",
+                    e.stage_io,
+                    vertex.join(", ")
+                )
+            };
+            (e.name.clone(), why)
+        })
+        .collect()
 }
 
 fn gen_structs(r: &Reflection, s: &mut String) {
@@ -548,10 +605,12 @@ fn entry_kind(p: &PipelineDesc, vb_consts: &[String]) -> String {
             )
         }
     } else {
-        let fs = p.entries.iter().find(|e| e.stage == "fragment").unwrap();
-        let targets: Vec<String> = fs
-            .fragment_outputs
+        // None for a depth-only pipeline.
+        let targets: Vec<String> = p
+            .entries
             .iter()
+            .filter(|e| e.stage == "fragment")
+            .flat_map(|fs| &fs.fragment_outputs)
             .map(|o| format!("crate::bind::TargetKind {{ location: {}, scalar: crate::bind::ScalarClass::{} }}", o.location, pascal(&o.scalar)))
             .collect();
         format!(

@@ -11,7 +11,7 @@ mod types;
 
 use types::{access_name, dim_name, scalar_class};
 pub use types::{host_name, rust_type, storage_format_wgsl, wgsl_type};
-pub(crate) use types::{located_args, vertex_format};
+pub(crate) use types::{located_args, located_outputs, vertex_format};
 
 #[derive(Debug, Clone, Serialize)]
 pub struct Reflection {
@@ -119,6 +119,9 @@ pub struct EntryPoint {
     pub workgroup_size: [u32; 3],
     /// Per dimension, the `override` that sets it (`@workgroup_size(BLOCK)`), if one does.
     pub workgroup_size_overrides: [Option<String>; 3],
+    /// The `@location`s between stages: those a vertex entry writes, those a fragment entry
+    /// reads (a vertex and a fragment entry make a pipeline where the first covers the second).
+    pub stage_io: Vec<u32>,
     /// Bytes of `var<workgroup>` the entry point uses (array lengths from overrides at their
     /// defaults).
     pub workgroup_storage: u32,
@@ -650,6 +653,14 @@ fn reflect_entry(
         stage: stage_name.into(),
         workgroup_size,
         workgroup_size_overrides,
+        stage_io: match ep.stage {
+            ShaderStage::Vertex => located_outputs(module, &ep.function),
+            ShaderStage::Fragment => located_args(module, &ep.function)
+                .into_iter()
+                .map(|a| a.0)
+                .collect(),
+            _ => Vec::new(),
+        },
         workgroup_storage,
         needs,
         uses,

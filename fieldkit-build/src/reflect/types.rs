@@ -240,3 +240,23 @@ pub(crate) fn located_args(
     out.sort_by_key(|a| a.0);
     out
 }
+
+/// The `@location`s a vertex entry writes (its result, or its result struct's members).
+pub(crate) fn located_outputs(module: &naga::Module, func: &naga::Function) -> Vec<u32> {
+    let Some(result) = &func.result else {
+        return Vec::new();
+    };
+    let mut out = match (&result.binding, &module.types[result.ty].inner) {
+        (Some(naga::Binding::Location { location, .. }), _) => vec![*location],
+        (None, TypeInner::Struct { members, .. }) => members
+            .iter()
+            .filter_map(|m| match m.binding {
+                Some(naga::Binding::Location { location, .. }) => Some(location),
+                _ => None,
+            })
+            .collect(),
+        _ => Vec::new(),
+    };
+    out.sort_unstable();
+    out
+}

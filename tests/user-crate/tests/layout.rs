@@ -108,3 +108,131 @@ fn a_workgroup_sized_by_an_override_dispatches_at_that_size() {
         other => panic!("a 2^20 workgroup: {:?}", other.map(|_| ())),
     }
 }
+
+/// A forward renderer's file (a shadow pass's vertex entry, the main one, two fragment entries):
+/// every entry gets a pipeline, the shadow pass a depth-only one, and it writes depth.
+#[test]
+fn every_entry_of_a_forward_renderer_gets_a_pipeline() {
+    use fieldkit::bind::RenderTargets;
+    use fieldkit_user_crate::shaders::corpus::forward;
+    let ctx = Context::shared();
+    let depth_state = |write| wgpu::DepthStencilState {
+        format: wgpu::TextureFormat::Depth32Float,
+        depth_write_enabled: Some(write),
+        depth_compare: Some(wgpu::CompareFunction::Always),
+        stencil: Default::default(),
+        bias: Default::default(),
+    };
+    let colour = [Some(wgpu::ColorTargetState::from(
+        wgpu::TextureFormat::Rgba8Unorm,
+    ))];
+    let lit = RenderTargets {
+        color: &colour,
+        depth_stencil: Some(depth_state(false)),
+        ..Default::default()
+    };
+    forward::main_vs_fs_lit::Pipeline::new(&ctx.device, &lit).expect("lit pipeline");
+    forward::main_vs_fs_flat::Pipeline::new(&ctx.device, &lit).expect("flat pipeline");
+    let shadow = forward::shadow_vs::Pipeline::new(
+        &ctx.device,
+        &RenderTargets {
+            depth_stencil: Some(depth_state(true)),
+            ..Default::default()
+        },
+    )
+    .expect("depth-only pipeline");
+    let depth = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("shadow map"),
+        size: wgpu::Extent3d {
+            width: 8,
+            height: 8,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Depth32Float,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    });
+    let camera = forward::Camera {
+        depth: 0.375,
+        tint: glam::Vec3::ONE,
+    };
+    let mut bytes = encase::UniformBuffer::new(Vec::new());
+    bytes.write(&camera).unwrap();
+    let camera = ctx
+        .device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("camera"),
+            contents: &bytes.into_inner(),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+    let bound = shadow
+        .bind(
+            &ctx.device,
+            &forward::shadow_vs::Resources {
+                camera: (&camera).into(),
+            },
+        )
+        .unwrap();
+    let mut encoder = ctx.encoder("shadow");
+    {
+        let view = depth.create_view(&Default::default());
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("shadow"),
+            color_attachments: &[],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            ..Default::default()
+        });
+        pass.set_pipeline(&shadow.pipeline);
+        bound.set_render(&mut pass);
+        pass.draw(0..3, 0..1);
+    }
+    ctx.submit_and_wait("shadow", encoder).unwrap();
+    let got: Vec<f32> = fieldkit::gpu::read_texture(&ctx, &depth).unwrap();
+    // 0.375 is exact in every depth format's f32.
+    assert!(got.iter().all(|&d| d == 0.375), "{got:?}");
+}
+
+/// The rule, from the generated list: every entry point of every stage is the entry (or the
+/// vertex entry) of a generated pipeline.
+#[test]
+fn every_entry_point_of_every_stage_has_a_pipeline() {
+    use fieldkit::bind::EntryKind;
+    let mut stages: Vec<(&str, &str)> = ALL.iter().map(|i| (i.stage, i.source)).collect();
+    stages.sort();
+    stages.dedup();
+    // Every file under shaders/ but shared/ is a stage with pipelines (and build.rs adds one
+    // density march): a file whose every entry was dropped would be missing here.
+    fn files(dir: &std::path::Path) -> usize {
+        std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .map(|p| match p.is_dir() {
+                true if p.file_name().unwrap() != "shared" => files(&p),
+                true => 0,
+                false => usize::from(p.extension().is_some_and(|e| e == "wgsl" || e == "wesl")),
+            })
+            .sum()
+    }
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");
+    assert_eq!(stages.len(), files(&root) + 1, "{stages:?}");
+    for (stage, source) in stages {
+        let module = wgpu::naga::front::wgsl::parse_str(source).unwrap();
+        for ep in &module.entry_points {
+            let held = ALL.iter().filter(|i| i.stage == stage).any(|i| {
+                i.entry_point == ep.name
+                    || matches!(i.kind, EntryKind::Render { vertex, .. } if vertex == ep.name)
+            });
+            assert!(held, "{stage}: entry point `{}` has no pipeline", ep.name);
+        }
+    }
+}
