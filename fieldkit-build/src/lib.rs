@@ -318,16 +318,25 @@ pub fn build_stage(shaders: &ShaderDir, stage: &StageFile) -> Result<Stage, Stri
         shared: linked.shared,
     };
     // Every entry point gets a pipeline, or the build says why it cannot.
-    let dropped: Vec<String> = codegen::dropped_entries(&built)
+    let at = |ep: &str| lint::locate(&built.original, &format!("fn {ep}"));
+    let mut dropped: Vec<String> = codegen::dropped_entries(&built)
         .into_iter()
         .map(|(ep, why)| {
-            let (line, column) = lint::locate(&built.original, &format!("fn {ep}"));
+            let (line, column) = at(&ep);
             format!(
                 "error: {}:{line}:{column}: entry point `{ep}` would get no pipeline: {why}",
                 stage.rel_path
             )
         })
         .collect();
+    dropped.extend(
+        codegen::slot_conflicts(&built)
+            .into_iter()
+            .map(|(ep, why)| {
+                let (line, column) = at(&ep);
+                format!("error: {}:{line}:{column}: `{ep}`: {why}", stage.rel_path)
+            }),
+    );
     if !dropped.is_empty() {
         return Err(dropped.join("\n"));
     }

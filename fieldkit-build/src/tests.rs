@@ -525,3 +525,22 @@ fn entries_without_a_pipeline_are_errors() {
     );
     std::fs::remove_dir_all(&root).ok();
 }
+
+/// A pipeline whose vertex and fragment entries use different variables on one slot cannot be
+/// laid out: a build error naming the slot and both variables (compute entries that each use
+/// one of two such variables build: `tests/user-crate/shaders/corpus/views.wgsl`).
+#[test]
+fn two_variables_on_one_slot_in_one_pipeline_are_an_error() {
+    let root = tree(&[(
+        "clash",
+        "// A vertex and a fragment entry on one slot.\n@group(0) @binding(0) var<uniform> a: vec4<f32>;\n@group(0) @binding(0) var<uniform> b: vec4<f32>;\n@vertex\nfn vs() -> @builtin(position) vec4<f32> {\n    return a;\n}\n@fragment\nfn fs() -> @location(0) vec4<f32> {\n    return b;\n}\n",
+    )]);
+    let errors = build_all(&root).err().expect("the stage fails");
+    assert!(
+        errors.len() == 1
+            && errors[0].contains("shaders/room/clash.wgsl:")
+            && errors[0].contains("would bind both `a` and `b` at @group(0) @binding(0)"),
+        "{errors:#?}"
+    );
+    std::fs::remove_dir_all(&root).ok();
+}

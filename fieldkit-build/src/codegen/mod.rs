@@ -157,9 +157,11 @@ impl PipelineDesc<'_> {
         self.entries
             .iter()
             .filter(|e| {
+                // By variable too: two variables may share a slot where no entry point uses
+                // both (a storage and a uniform view of the same data, one per pipeline).
                 e.uses
                     .iter()
-                    .any(|u| u.group == b.group && u.binding == b.binding)
+                    .any(|u| u.group == b.group && u.binding == b.binding && u.name == b.name)
             })
             .map(|e| e.stage.as_str())
             .collect()
@@ -209,6 +211,34 @@ fn pipelines(r: &Reflection) -> Vec<PipelineDesc<'_>> {
 /// Whether vertex entry `v` writes every `@location` fragment entry `f` reads.
 fn pairs(v: &super::reflect::EntryPoint, f: &super::reflect::EntryPoint) -> bool {
     f.stage_io.iter().all(|l| v.stage_io.contains(l))
+}
+
+/// The pipelines of `stage` that would bind two variables on one `@group/@binding` (a vertex
+/// and a fragment entry using different variables on one slot), each with the slot and the
+/// variables: a build error, where wgpu would refuse the layout at run time.
+pub fn slot_conflicts(stage: &Stage) -> Vec<(String, String)> {
+    let r = reflect(stage);
+    let mut out = Vec::new();
+    for p in pipelines(&r) {
+        let used: Vec<&super::reflect::BindingUse> =
+            p.entries.iter().flat_map(|e| &e.uses).collect();
+        for (i, a) in used.iter().enumerate() {
+            if let Some(b) = used[..i]
+                .iter()
+                .find(|b| (b.group, b.binding) == (a.group, a.binding) && b.name != a.name)
+            {
+                out.push((
+                    p.entries.last().map_or(String::new(), |e| e.name.clone()),
+                    format!(
+                        "its pipeline `{}` would bind both `{}` and `{}` at @group({}) @binding({}): \
+                         give one another slot",
+                        p.module, b.name, a.name, a.group, a.binding
+                    ),
+                ));
+            }
+        }
+    }
+    out
 }
 
 /// The entry points of `stage` no generated pipeline holds, each with why: a fragment entry

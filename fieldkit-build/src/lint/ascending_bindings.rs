@@ -4,14 +4,15 @@ use crate::{Stage, reflect::Reflection};
 /// Its name in findings, `--only` and allow comments.
 pub(super) const NAME: &str = "ascending-bindings";
 
-/// Bindings are declared in ascending `(group, binding)` order.
+/// Bindings are declared in ascending `(group, binding)` order (two variables may share a slot
+/// where different entry points use them: declared one after the other).
 pub(super) fn check(stage: &Stage, r: &Reflection) -> Vec<Violation> {
     let mut decl_order = r.bindings.clone();
     decl_order.sort_by_key(|b| b.linked_offset);
     let mut out = Vec::new();
     for pair in decl_order.windows(2) {
         let (a, b) = (&pair[0], &pair[1]);
-        if (b.group, b.binding) <= (a.group, a.binding) {
+        if (b.group, b.binding) < (a.group, a.binding) {
             let (line, column) = locate_binding(&stage.original, &b.name);
             out.push(Violation {
                 lint: NAME,

@@ -236,3 +236,50 @@ fn every_entry_point_of_every_stage_has_a_pipeline() {
         }
     }
 }
+
+/// Two variables on one slot, each used by its own entry point: each pipeline's `Resources`
+/// and layout hold its own variable (a storage buffer for one, a uniform for the other), and
+/// both run on one buffer.
+#[test]
+fn a_slot_shared_by_two_variables_binds_each_pipelines_own() {
+    use fieldkit_user_crate::shaders::corpus::views;
+    let ctx = Context::shared();
+    let scale = ctx
+        .device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("scale"),
+            contents: bytemuck::cast_slice(&[5.0f32, 0.0, 0.0, 0.0]),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::UNIFORM,
+        });
+    let out = values(&ctx, &[0; 2]);
+    let mut encoder = ctx.encoder("views");
+    views::from_storage::Pipeline::new(&ctx.device)
+        .unwrap()
+        .record(
+            &ctx.device,
+            &mut encoder,
+            &views::from_storage::Resources {
+                scale_storage: (&scale).into(),
+                out: (&out).into(),
+            },
+            [1, 1, 1],
+            "from storage",
+        )
+        .unwrap();
+    views::from_uniform::Pipeline::new(&ctx.device)
+        .unwrap()
+        .record(
+            &ctx.device,
+            &mut encoder,
+            &views::from_uniform::Resources {
+                scale_uniform: (&scale).into(),
+                out: (&out).into(),
+            },
+            [1, 1, 1],
+            "from uniform",
+        )
+        .unwrap();
+    ctx.submit_and_wait("views", encoder).unwrap();
+    let got: Vec<f32> = bytemuck::cast_slice(&read_buffer(&ctx, &out).unwrap()).to_vec();
+    assert_eq!(got, [10.0, 15.0]);
+}
