@@ -20,6 +20,7 @@
 //! The generated code uses `fieldkit::bind` (the runtime half: resources, pipelines, typed
 //! binding errors) and derives from `bytemuck` and `encase`, which the crate depends on too.
 
+pub mod cli;
 pub mod codegen;
 pub mod drift;
 mod link;

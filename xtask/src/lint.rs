@@ -2,80 +2,20 @@
 
 use std::process::ExitCode;
 
-use crate::toolchain::lint::{self, LintConfig};
-use crate::toolchain::portability::translate_all;
-use crate::toolchain::{ShaderDir, Stage, reflect::reflect};
+use crate::toolchain::ShaderDir;
+#[cfg(test)]
+pub use crate::toolchain::cli::findings;
+use crate::toolchain::lint::LintConfig;
 
-/// What `lint` found over a folder.
-pub struct Report {
-    /// Every finding as `file:line:col: [lint] message` (portability first, per stage).
-    pub lines: Vec<String>,
-    /// Per stage (`room::name`), the languages it translated to.
-    pub translated: Vec<(String, Vec<&'static str>)>,
-}
-
-/// Translate every stage to every backend language and run the lints `config` selects.
-pub fn findings(stages: &[Stage], config: &LintConfig) -> Report {
-    let mut report = Report {
-        lines: Vec::new(),
-        translated: Vec::new(),
-    };
-    for stage in stages {
-        let mut langs = Vec::new();
-        for (lang, result) in translate_all(stage) {
-            match result {
-                Ok(_) => langs.push(lang),
-                Err(e) => report.lines.push(format!(
-                    "{}:1:1: [portability] cannot translate to {lang}: {e}",
-                    stage.file.rel_path
-                )),
-            }
-        }
-        report.translated.push((stage.file.id(), langs));
-        let r = reflect(stage);
-        report.lines.extend(
-            lint::run_with(stage, &r, config)
-                .iter()
-                .map(|v| v.to_string()),
-        );
-    }
-    report
-}
-
+/// `lint` over `shaders`: the `fieldkit-build lint` command's code (every file reported).
 pub fn run(shaders: &ShaderDir, config: &LintConfig) -> ExitCode {
-    if let Err(e) = config.check() {
-        eprintln!("{e}");
-        return ExitCode::FAILURE;
-    }
-    let Some(stages) = crate::stages_in(shaders) else {
-        return ExitCode::FAILURE;
-    };
-    let report = findings(&stages, config);
-    for line in &report.lines {
-        println!("{line}");
-    }
-    for (id, langs) in &report.translated {
-        eprintln!("  {id:<28} valid; {}", langs.join(", "));
-    }
-    let failures = report.lines.len();
-    if failures > 0 {
-        eprintln!("{failures} problem(s)");
-        ExitCode::FAILURE
-    } else {
-        eprintln!(
-            "{} stages: all valid, portable to SPIR-V, MSL, HLSL and GLSL, no lint findings",
-            stages.len()
-        );
-        for l in lint::all() {
-            eprintln!("  lint {:<20} {}", l.name, l.summary);
-        }
-        ExitCode::SUCCESS
-    }
+    crate::toolchain::cli::lint_folder(shaders, config)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::toolchain::{lint, portability::translate_all, reflect::reflect};
 
     #[test]
     fn every_stage_translates_to_every_backend() {

@@ -288,23 +288,7 @@ fn reflect(shaders: &toolchain::ShaderDir, filter: Option<&str>, json: bool) -> 
 }
 
 fn reflect_text(stages: &[toolchain::Stage], filter: Option<&str>, json: bool) -> String {
-    let reflections: Vec<_> = stages
-        .iter()
-        .filter(|s| filter.is_none_or(|f| s.file.id().contains(f)))
-        .map(toolchain::reflect::reflect)
-        .collect();
-    if reflections.is_empty() {
-        return String::new();
-    }
-    if json {
-        serde_json::to_string_pretty(&reflections).unwrap() + "\n"
-    } else {
-        reflections
-            .iter()
-            .map(|r| r.to_table())
-            .collect::<Vec<_>>()
-            .join("\n")
-    }
+    toolchain::cli::reflect_text(stages, filter, json)
 }
 
 /// The soak lives in the viewer example (`examples/viewer/soak.rs`), which has the scenes; this
