@@ -31,12 +31,20 @@ fn translate_each(stage: &Stage) -> Vec<(&'static str, Result<usize, String>)> {
     use naga::back::{glsl, hlsl, msl, spv};
     let mut out = Vec::new();
     // Backends take a module with its overrides already resolved, as wgpu does at pipeline
-    // creation; the shader's defaults stand in for the values a pipeline would give.
+    // creation; the shader's defaults stand in for the values a pipeline would give, and 1
+    // (true) for an override without a default, which a pipeline must give.
+    let stand_ins: naga::back::PipelineConstants = stage
+        .module
+        .overrides
+        .iter()
+        .filter(|(_, o)| o.init.is_none())
+        .filter_map(|(_, o)| Some((o.id.map(|i| i.to_string()).or(o.name.clone())?, 1.0)))
+        .collect();
     let (module, info) = match naga::back::pipeline_constants::process_overrides(
         &stage.module,
         &stage.info,
         None,
-        &Default::default(),
+        &stand_ins,
     ) {
         Ok(m) => m,
         Err(e) => return vec![("overrides", Err(e.to_string()))],
@@ -63,7 +71,7 @@ fn translate_each(stage: &Stage) -> Vec<(&'static str, Result<usize, String>)> {
         .map(|(s, _)| s.len())
         .map_err(|e| e.to_string()),
     ));
-    let hlsl_result = guarded(|| {
+    let hlsl_result = guarded("HLSL", || {
         let mut s = String::new();
         let opts = hlsl::Options::default();
         let popts = hlsl::PipelineOptions::default();
@@ -74,7 +82,7 @@ fn translate_each(stage: &Stage) -> Vec<(&'static str, Result<usize, String>)> {
     });
     out.push(("HLSL", hlsl_result));
     // GLSL is written one entry point at a time.
-    let glsl_result = guarded(|| {
+    let glsl_result = guarded("GLSL", || {
         let mut total = 0;
         for ep in &module.entry_points {
             let mut s = String::new();
@@ -105,14 +113,18 @@ fn translate_each(stage: &Stage) -> Vec<(&'static str, Result<usize, String>)> {
     out
 }
 
-/// Run one writer; a panic in it is an `Err` saying so.
-fn guarded(f: impl FnOnce() -> Result<usize, String>) -> Result<usize, String> {
+/// Run `lang`'s writer; a panic in it is an `Err` saying so and what it means.
+fn guarded(lang: &str, f: impl FnOnce() -> Result<usize, String>) -> Result<usize, String> {
     std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)).unwrap_or_else(|p| {
         let why = p
             .downcast_ref::<&str>()
             .map(|s| s.to_string())
             .or_else(|| p.downcast_ref::<String>().cloned())
             .unwrap_or_default();
-        Err(format!("naga's writer panicked: {why}"))
+        Err(format!(
+            "naga's {lang} writer panicked ({why}): a limit of that writer rather than an error \
+             in the shader; wgpu's backends that take {lang} would fail the same way, the \
+             others are unaffected"
+        ))
     })
 }

@@ -544,3 +544,43 @@ fn two_variables_on_one_slot_in_one_pipeline_are_an_error() {
     );
     std::fs::remove_dir_all(&root).ok();
 }
+
+/// An override without a default is a value the pipeline gives, not something a backend cannot
+/// translate: the portability check stands 1 in for it, and every language translates.
+#[cfg(feature = "portability")]
+#[test]
+fn overrides_without_defaults_translate() {
+    let root = tree(&[(
+        "lanes",
+        "// Sized by the pipeline.\noverride LANES: u32;\n@group(0) @binding(0) var<storage, read_write> out: array<u32>;\n@compute @workgroup_size(1)\nfn main() {\n    out[0] = LANES;\n}\n",
+    )]);
+    let stages = build_all(&root).expect("builds");
+    for (lang, result) in crate::portability::translate_all(&stages[0]) {
+        assert!(result.is_ok(), "{lang}: {result:?}");
+    }
+    std::fs::remove_dir_all(&root).ok();
+}
+
+/// A group imported from `shared/` is declared where the stage cannot reorder it: the
+/// ascending-bindings lint looks only at the stage's own declarations.
+#[test]
+fn ascending_bindings_leaves_imported_groups_alone() {
+    let root = tree(&[(
+        "user",
+        "// Uses a shared frame group.\nimport package::shared::frame::{frame, clock};\n@group(0) @binding(0) var<storage, read_write> out: array<f32>;\n@compute @workgroup_size(1)\nfn main() {\n    out[0] = frame.x + clock;\n}\n",
+    )]);
+    // Declared in descending order in the shared module.
+    std::fs::write(
+        root.join("shaders/shared/frame.wesl"),
+        "// A frame group.\n@group(1) @binding(1) var<uniform> frame: vec4<f32>;\n@group(1) @binding(0) var<uniform> clock: f32;\n",
+    )
+    .unwrap();
+    let stages = build_all(&root).expect("builds");
+    let r = crate::reflect::reflect(&stages[0]);
+    let found = crate::lint::run_with(&stages[0], &r, &Default::default());
+    assert!(
+        !found.iter().any(|v| v.lint == "ascending-bindings"),
+        "{found:?}"
+    );
+    std::fs::remove_dir_all(&root).ok();
+}

@@ -7,7 +7,14 @@ pub(super) const NAME: &str = "ascending-bindings";
 /// Bindings are declared in ascending `(group, binding)` order (two variables may share a slot
 /// where different entry points use them: declared one after the other).
 pub(super) fn check(stage: &Stage, r: &Reflection) -> Vec<Violation> {
-    let mut decl_order = r.bindings.clone();
+    // Only the file's own: a group imported from `shared/` is declared where the user cannot
+    // reorder it.
+    let mut decl_order: Vec<_> = r
+        .bindings
+        .iter()
+        .filter(|b| b.shared.is_none())
+        .cloned()
+        .collect();
     decl_order.sort_by_key(|b| b.linked_offset);
     let mut out = Vec::new();
     for pair in decl_order.windows(2) {
