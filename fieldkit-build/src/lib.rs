@@ -161,17 +161,18 @@ fn walk(
             format!("{room}/{name}")
         };
         let rel_path = format!("{}/{rel}", shaders.dir);
-        for part in room
-            .split('/')
-            .filter(|r| !r.is_empty())
-            .chain([stem.as_str()])
-        {
-            if !is_module_name(part) {
+        let parts = room.split('/').filter(|r| !r.is_empty());
+        for (depth, part) in parts.chain([stem.as_str()]).enumerate() {
+            // The generated file's own top-level names are taken there.
+            let taken = depth == 0 && ["groups", "shared", "ALL"].contains(&part);
+            if !is_module_name(part) || taken {
                 return Err(std::io::Error::new(
                     std::io::ErrorKind::InvalidInput,
                     format!(
-                        "{rel_path}: `{part}` cannot name a Rust module (its generated bindings \
-                         live at the folder path): rename it to lowercase letters, digits and _"
+                        "{rel_path}: `{part}` cannot name a generated module (its bindings live at \
+                         the folder path; not an identifier, a Rust keyword, or one of the names \
+                         the generated file takes at its top: groups, shared, ALL): rename it to \
+                         lowercase letters, digits and _"
                     ),
                 ));
             }
@@ -203,7 +204,6 @@ fn is_module_name(s: &str) -> bool {
         "move", "mut", "pub", "ref", "return", "self", "static", "struct", "super", "trait",
         "true", "type", "unsafe", "use", "where", "while", "abstract", "become", "box", "do",
         "final", "macro", "override", "priv", "try", "typeof", "unsized", "virtual", "yield",
-        "groups", "ALL",
     ];
     let mut chars = s.chars();
     chars

@@ -277,8 +277,68 @@ pub fn dropped_entries(stage: &Stage) -> Vec<(String, String)> {
         .collect()
 }
 
-fn gen_structs(r: &Reflection, s: &mut String) {
+/// The stage's host-shareable structs: its own defined here, one declared in a module of
+/// `shared/` re-exported from the one definition in the file's `shared` module.
+fn gen_structs(stage: &Stage, r: &Reflection, s: &mut String) {
+    let depth = stage.file.room.split('/').filter(|p| !p.is_empty()).count() + 1;
     for st in r.structs.iter().filter(|s| s.host_shareable) {
+        match stage.shared.iter().find(|d| d.linked == st.linked) {
+            Some(d) => writeln!(
+                s,
+                "/// WGSL `struct {0}` of `shared/{1}`, declared once for every stage.\npub use {2}shared::{1}::{0};",
+                st.name,
+                d.module,
+                "super::".repeat(depth)
+            )
+            .unwrap(),
+            None => gen_struct(st, s),
+        }
+    }
+}
+
+/// Structs declared in modules of `shared/` that some stage binds: per module, each once (as
+/// the first stage that binds it reflects it).
+fn shared_structs(stages: &[Stage]) -> Vec<(String, super::reflect::StructInfo)> {
+    let mut out: Vec<(String, super::reflect::StructInfo)> = Vec::new();
+    for stage in stages {
+        let r = reflect(stage);
+        for st in r.structs.into_iter().filter(|s| s.host_shareable) {
+            if let Some(d) = stage.shared.iter().find(|d| d.linked == st.linked)
+                && !out.iter().any(|(m, x)| *m == d.module && x.name == st.name)
+            {
+                out.push((d.module.clone(), st));
+            }
+        }
+    }
+    out.sort_by(|a, b| (&a.0, &a.1.name).cmp(&(&b.0, &b.1.name)));
+    out
+}
+
+/// The `shared` module: each struct of `shared/` defined once, by module.
+fn gen_shared_structs(structs: &[(String, super::reflect::StructInfo)], s: &mut String) {
+    if structs.is_empty() {
+        return;
+    }
+    writeln!(s, "/// Structs declared once in a module of `shared/`: every stage that binds one re-exports\n/// this definition.\n#[allow(non_snake_case, non_camel_case_types)]\npub mod shared {{").unwrap();
+    let mut modules: Vec<&str> = structs.iter().map(|(m, _)| m.as_str()).collect();
+    modules.dedup();
+    for m in modules {
+        writeln!(
+            s,
+            "/// Structs of `shared/{m}`.\npub mod {m} {{\n#[allow(unused_imports)]\nuse super::*;"
+        )
+        .unwrap();
+        for (_, st) in structs.iter().filter(|(x, _)| x == m) {
+            gen_struct(st, s);
+        }
+        writeln!(s, "}}").unwrap();
+    }
+    writeln!(s, "}}").unwrap();
+}
+
+/// One struct, with compile-time proofs of its layout.
+fn gen_struct(st: &super::reflect::StructInfo, s: &mut String) {
+    {
         let runtime = st
             .members
             .last()
@@ -891,7 +951,7 @@ pub fn stage_module_with(stage: &Stage, shared: &[SharedGroupInfo]) -> String {
             r.overrides.iter().map(|o| format!("\"{}\"", o.name)).collect::<Vec<_>>().join(", ")).unwrap();
         gen_overrides(&r, &mut s);
     }
-    gen_structs(&r, &mut s);
+    gen_structs(stage, &r, &mut s);
     for p in pipelines(&r) {
         gen_pipeline(&r, &p, shared, &mut s);
     }
@@ -912,6 +972,7 @@ pub fn generate_for(stages: &[Stage], runtime: &str) -> String {
     let mut all = Vec::new();
     let shared = shared_groups(stages);
     gen_shared_groups(&shared, &mut s);
+    gen_shared_structs(&shared_structs(stages), &mut s);
     gen_folder(stages, "", &shared, &mut all, &mut s);
     writeln!(s, "/// Every pipeline of every stage, for tests and tools that visit them all.\npub static ALL: &[&crate::bind::EntryInfo] = &[{}];", all.join(", ")).unwrap();
     if runtime == "crate" {

@@ -294,6 +294,8 @@ pub struct FragmentOutput {
 #[derive(Debug, Clone, Serialize)]
 pub struct StructInfo {
     pub name: String,
+    /// Its name in the linked WGSL (mangled where it was imported).
+    pub linked: String,
     pub size: u32,
     pub align: u32,
     pub members: Vec<Member>,
@@ -745,6 +747,7 @@ fn reflect_structs(
         }
         structs.push(StructInfo {
             name: host_name(name),
+            linked: name.clone(),
             size: *span,
             align: layouter[handle].alignment.round_up(1),
             members: members

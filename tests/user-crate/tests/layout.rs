@@ -283,3 +283,22 @@ fn a_slot_shared_by_two_variables_binds_each_pipelines_own() {
     let got: Vec<f32> = bytemuck::cast_slice(&read_buffer(&ctx, &out).unwrap()).to_vec();
     assert_eq!(got, [10.0, 15.0]);
 }
+
+/// A struct declared once in `shared/` is one Rust type for every stage that binds it, defined
+/// in the generated `shared` module and re-exported by each stage.
+#[test]
+fn a_shared_struct_is_one_type() {
+    use fieldkit_user_crate::shaders::{scene, shared};
+    let a: scene::advance::Frame = scene::stretch::Frame {
+        time: 1.0,
+        scale: 2.0,
+    };
+    let b: shared::frame::Frame = a;
+    assert_eq!(
+        b,
+        shared::frame::Frame {
+            time: 1.0,
+            scale: 2.0
+        }
+    );
+}
