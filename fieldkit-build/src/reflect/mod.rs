@@ -741,8 +741,9 @@ fn reflect_structs(
             continue;
         };
         let Some(name) = &ty.name else { continue };
-        // Entry-point interface structs (locations/builtins) are not memory layouts.
-        if members.iter().any(|m| m.binding.is_some()) {
+        // Entry-point interface structs (locations/builtins) are not memory layouts, unless a
+        // buffer holds them too (one struct as vertex input and storage element).
+        if members.iter().any(|m| m.binding.is_some()) && !shareable.contains(&handle) {
             continue;
         }
         structs.push(StructInfo {

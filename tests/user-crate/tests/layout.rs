@@ -302,3 +302,23 @@ fn a_shared_struct_is_one_type() {
         }
     );
 }
+
+/// A struct that is both a vertex input and a storage buffer's element gets its Rust type (it
+/// was left out as an interface struct, and the buffer's `Resources` field named a type that
+/// did not exist).
+#[test]
+fn a_vertex_struct_in_a_buffer_has_its_type() {
+    use fieldkit_user_crate::shaders::corpus::particles;
+    let p = particles::Particle {
+        position: glam::Vec4::ONE,
+        velocity: glam::Vec4::ZERO,
+    };
+    assert_eq!(
+        <particles::Particle as encase::ShaderType>::min_size().get(),
+        32
+    );
+    let _: fn(&particles::advance::Resources<'_>) = |r| {
+        let _ = &r.particles;
+    };
+    assert_eq!(p.position.x, 1.0);
+}
