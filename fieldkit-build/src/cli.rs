@@ -86,13 +86,10 @@ pub fn lint_folder(shaders: &ShaderDir, config: &LintConfig) -> ExitCode {
         eprintln!("{e}");
         return ExitCode::from(2);
     }
-    let built = match build_each(shaders) {
+    let built = match reported(shaders) {
         Ok(b) => b,
-        Err(e) => return unreadable(shaders, e),
+        Err(code) => return code,
     };
-    for e in &built.errors {
-        eprintln!("{e}");
-    }
     let report = findings(&built.stages, config);
     for line in &report.lines {
         println!("{line}");
@@ -147,9 +144,16 @@ pub fn reflect_text(stages: &[Stage], filter: Option<&str>, json: bool) -> Strin
     }
 }
 
-fn unreadable(shaders: &ShaderDir, e: std::io::Error) -> ExitCode {
-    eprintln!("error: cannot read {}: {e}", shaders.root().display());
-    ExitCode::from(2)
+/// [`build_each`], each error printed; a folder that cannot be read is the usage exit code.
+fn reported(shaders: &ShaderDir) -> Result<Built, ExitCode> {
+    let built = build_each(shaders).map_err(|e| {
+        eprintln!("error: cannot read {}: {e}", shaders.root().display());
+        ExitCode::from(2)
+    })?;
+    for e in &built.errors {
+        eprintln!("{e}");
+    }
+    Ok(built)
 }
 
 #[cfg(feature = "cli")]
@@ -182,13 +186,10 @@ pub fn run(args: impl IntoIterator<Item = String>) -> ExitCode {
             if let Some(extra) = rest.first() {
                 return usage(&format!("unexpected `{extra}`"));
             }
-            let built = match build_each(&shaders) {
+            let built = match reported(&shaders) {
                 Ok(b) => b,
-                Err(e) => return unreadable(&shaders, e),
+                Err(code) => return code,
             };
-            for e in &built.errors {
-                eprintln!("{e}");
-            }
             let code = crate::codegen::generate_for(&built.stages, "::fieldkit");
             if built.errors.is_empty() {
                 eprintln!(
@@ -224,13 +225,10 @@ pub fn run(args: impl IntoIterator<Item = String>) -> ExitCode {
             if let Some(bad) = rest.iter().find(|a| a.starts_with("--") && *a != "--json") {
                 return usage(&format!("unknown option `{bad}`"));
             }
-            let built = match build_each(&shaders) {
+            let built = match reported(&shaders) {
                 Ok(b) => b,
-                Err(e) => return unreadable(&shaders, e),
+                Err(code) => return code,
             };
-            for e in &built.errors {
-                eprintln!("{e}");
-            }
             let text = reflect_text(&built.stages, filter.map(String::as_str), json);
             if text.is_empty() {
                 eprintln!("no stage matches {:?}", filter.map_or("", |s| s.as_str()));
