@@ -17,7 +17,8 @@ use glam::{DMat4, DVec2, DVec3, DVec4};
 
 use super::Waves;
 use super::look::{DETAIL_OCTAVES, Look};
-use super::render::{MAX_PATCH_QUADS, OceanCamera, Patch};
+use super::patches::{MAX_PATCH_QUADS, Patch};
+use super::render::OceanCamera;
 use crate::error::Error;
 
 /// Most quadtree nodes [`select`] visits (split, culled or drawn) before it refuses the settings

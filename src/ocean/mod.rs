@@ -28,6 +28,7 @@
 mod gpu_lod;
 mod lod;
 mod look;
+mod patches;
 mod render;
 
 pub use gpu_lod::LodDraws;
@@ -36,10 +37,8 @@ pub use lod::{
     writeup_patches,
 };
 pub use look::{DETAIL_OCTAVES, Layer, Look, detail_texels};
-pub use render::{
-    ALL_SKIRTS, DETAIL_SIZE, DepthMode, MAX_LAYERS, MAX_PATCH_QUADS, OceanCamera, OceanRenderer,
-    Output, PATCH_QUADS, Patch, patch_indices,
-};
+pub use patches::{ALL_SKIRTS, MAX_PATCH_QUADS, PATCH_QUADS, Patch, patch_indices};
+pub use render::{DETAIL_SIZE, DepthMode, MAX_LAYERS, OceanCamera, OceanRenderer, Output};
 
 use std::sync::{Arc, RwLock};
 
