@@ -584,3 +584,24 @@ fn ascending_bindings_leaves_imported_groups_alone() {
     );
     std::fs::remove_dir_all(&root).ok();
 }
+
+/// The reflection's table names, for each entry point, the variable it uses on a shared slot
+/// (it showed the first variable declared there for both).
+#[test]
+fn the_table_names_each_entrys_own_variable_on_a_shared_slot() {
+    let root = tree(&[(
+        "views",
+        "// Two views of one slot.\n@group(0) @binding(0) var<storage, read> as_storage: array<f32>;\n@group(0) @binding(0) var<uniform> as_uniform: vec4<f32>;\n@group(0) @binding(1) var<storage, read_write> out: array<f32>;\n@compute @workgroup_size(1)\nfn from_storage() {\n    out[0] = as_storage[0];\n}\n@compute @workgroup_size(1)\nfn from_uniform() {\n    out[1] = as_uniform.x;\n}\n",
+    )]);
+    let stages = build_all(&root).expect("builds");
+    let table = crate::reflect::reflect(&stages[0]).to_table();
+    let uniform = table
+        .split("from_uniform")
+        .nth(1)
+        .expect("the uniform entry's section");
+    assert!(
+        uniform.contains("as_uniform") && !uniform.contains("as_storage"),
+        "{table}"
+    );
+    std::fs::remove_dir_all(&root).ok();
+}

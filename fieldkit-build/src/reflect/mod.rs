@@ -791,7 +791,7 @@ impl Reflection {
                 let b = self
                     .bindings
                     .iter()
-                    .find(|b| b.group == u.group && b.binding == u.binding)
+                    .find(|b| b.group == u.group && b.binding == u.binding && b.name == u.name)
                     .unwrap();
                 let kind = match &b.kind {
                     BindingKind::Uniform { .. } => "uniform",
