@@ -253,24 +253,18 @@ pub fn build_stage(shaders: &ShaderDir, stage: &StageFile) -> Result<Stage, Stri
     if !unsupported.is_empty() {
         return Err(unsupported.join("\n"));
     }
-    // A vertex input the generated vertex struct cannot hold would shift every attribute after
-    // it: an error at the entry point, not a silent gap.
+    // A vertex input the generated vertex struct cannot hold, or a declaration of its format
+    // that cannot be, would shift every attribute after it: an error at its line, not a gap.
     let mut unmapped = Vec::new();
     for ep in module
         .entry_points
         .iter()
         .filter(|e| e.stage == naga::ShaderStage::Vertex)
     {
-        for (location, name, ty) in reflect::located_args(&module, &ep.function) {
-            if reflect::vertex_format(&module, ty).is_none() {
-                let (line, column) = lint::locate(&original, &format!("fn {}", ep.name));
-                unmapped.push(format!(
-                    "error: {}:{line}:{column}: vertex input `{name}` (@location({location})) of `{}` is `{}`, which has no vertex format fieldkit's generated vertex structs hold (32-bit scalars and vectors: f32, u32, i32)",
-                    stage.rel_path,
-                    ep.name,
-                    reflect::wgsl_type(&module, ty)
-                ));
-            }
+        if let Err(problems) = reflect::vertex::inputs(&original, &module, ep) {
+            unmapped.extend(problems.into_iter().map(|(line, column, why)| {
+                format!("error: {}:{line}:{column}: {why}", stage.rel_path)
+            }));
         }
     }
     // A workgroup size the generated code cannot state would dispatch the wrong number of
@@ -350,6 +344,7 @@ const FEATURE_CAPABILITIES: &[(naga::valid::Capabilities, &[&str])] = {
     use naga::valid::Capabilities as C;
     &[
         (C::IMMEDIATES, &["IMMEDIATES"]),
+        (C::SHADER_FLOAT16, &["SHADER_F16"]),
         (
             C::TEXTURE_AND_SAMPLER_BINDING_ARRAY,
             &["TEXTURE_BINDING_ARRAY"],
@@ -383,7 +378,7 @@ const FEATURE_CAPABILITIES: &[(naga::valid::Capabilities, &[&str])] = {
 };
 
 /// The capabilities to validate `module` with, and the `wgpu::Features` it needs: for a module
-/// with binding arrays or immediates, each capability of [`FEATURE_CAPABILITIES`] whose
+/// with binding arrays, immediates or half floats, each capability of [`FEATURE_CAPABILITIES`] whose
 /// absence makes validation fail (so a binding array indexed only by constants does not ask
 /// for non-uniform indexing), and the features each binding array's layout entry needs
 /// (`wgpu-core` asks for them when the bind group layout is made).
@@ -402,7 +397,13 @@ pub(crate) fn needed_features(module: &naga::Module) -> (naga::valid::Capabiliti
         .global_variables
         .iter()
         .any(|(_, v)| v.space == naga::AddressSpace::Immediate);
-    if arrays.is_empty() && !immediates {
+    let halves = module.types.iter().any(|(_, t)| match t.inner {
+        TypeInner::Scalar(s)
+        | TypeInner::Vector { scalar: s, .. }
+        | TypeInner::Matrix { scalar: s, .. } => s.kind == naga::ScalarKind::Float && s.width == 2,
+        _ => false,
+    });
+    if arrays.is_empty() && !immediates && !halves {
         return (base, Vec::new());
     }
     let all = FEATURE_CAPABILITIES

@@ -427,14 +427,18 @@ fn gen_info(
 type Used<'r> = (&'r super::reflect::Binding, Vec<&'r str>);
 
 /// The vertex stage's inputs as structs (`Vertex` per vertex in buffer 0, `Instance` for the
-/// `instance_*` inputs in buffer 1), with each buffer's layout literal for the pipeline.
+/// per-instance inputs in buffer 1), with each buffer's layout literal for the pipeline.
+///
+/// Each attribute lies at the next offset its format allows (a multiple of its size, at most
+/// 4, as WebGPU asks), the gaps and the stride's rounding to 4 bytes filled by explicit `_pad`
+/// fields: the struct is exactly the buffer's element, with no hidden padding for
+/// `bytemuck::Pod` to refuse. Fields are scalars and arrays, not glam vectors: `Vec4` is
+/// 16-byte aligned and would pad a `vec4<f32>` beside a `vec2<f32>` to 32 bytes against a
+/// stride of 24. Size and every offset are asserted at compile time.
 fn gen_vertex_buffers(p: &PipelineDesc, s: &mut String) -> Vec<String> {
     let mut buffers: Vec<(&str, &str, Vec<&super::reflect::VertexInput>)> = Vec::new();
     if let Some(vs) = p.entries.iter().find(|e| e.stage == "vertex") {
-        let (inst, vert): (Vec<_>, Vec<_>) = vs
-            .vertex_inputs
-            .iter()
-            .partition(|v| v.name.starts_with("instance_"));
+        let (inst, vert): (Vec<_>, Vec<_>) = vs.vertex_inputs.iter().partition(|v| v.instance);
         if !vert.is_empty() {
             buffers.push(("Vertex", "Vertex", vert));
         }
@@ -442,7 +446,8 @@ fn gen_vertex_buffers(p: &PipelineDesc, s: &mut String) -> Vec<String> {
             buffers.push(("Instance", "Instance", inst));
         }
     }
-    for (name, _, inputs) in &buffers {
+    let mut vb_consts = Vec::new();
+    for (name, step, inputs) in &buffers {
         writeln!(
             s,
             "/// One {} of the vertex stage's input, laid out as the shader reads it.",
@@ -450,38 +455,55 @@ fn gen_vertex_buffers(p: &PipelineDesc, s: &mut String) -> Vec<String> {
         )
         .unwrap();
         writeln!(s, "#[repr(C)]\n#[derive(Debug, Clone, Copy, PartialEq, Default, bytemuck::Pod, bytemuck::Zeroable)]\npub struct {name} {{").unwrap();
-        for v in inputs {
-            writeln!(
-                s,
-                "/// `@location({})` `{}`\npub {}: {},",
-                v.location, v.ty, v.name, v.rust
-            )
-            .unwrap();
-        }
-        writeln!(s, "}}").unwrap();
-    }
-    let mut vb_consts = Vec::new();
-    for (name, step, inputs) in &buffers {
         let mut offset = 0;
         let mut attrs = Vec::new();
+        let mut offsets = Vec::new();
+        let pad = |s: &mut String, offset: &mut u32, align: u32| {
+            let to = offset.next_multiple_of(align);
+            if to > *offset {
+                writeln!(
+                    s,
+                    "#[doc(hidden)]\npub _pad{offset}: [u8; {}],",
+                    to - *offset
+                )
+                .unwrap();
+                *offset = to;
+            }
+        };
         for v in inputs {
+            pad(s, &mut offset, v.size.min(4));
+            writeln!(
+                s,
+                "/// `@location({})` `{}` (`{}`)\npub {}: {},",
+                v.location, v.ty, v.format, v.name, v.rust
+            )
+            .unwrap();
             attrs.push(format!(
                 "wgpu::VertexAttribute {{ format: wgpu::VertexFormat::{}, offset: {offset}, shader_location: {} }}",
                 v.format, v.location
             ));
+            offsets.push((v.name.as_str(), offset));
             offset += v.size;
         }
+        pad(s, &mut offset, 4);
+        writeln!(s, "}}").unwrap();
         writeln!(
             s,
             "const _: () = assert!(core::mem::size_of::<{name}>() == {offset});"
         )
         .unwrap();
+        for (field, at) in offsets {
+            writeln!(
+                s,
+                "const _: () = assert!(core::mem::offset_of!({name}, {field}) == {at});"
+            )
+            .unwrap();
+        }
         vb_consts.push(format!(
             "Some(wgpu::VertexBufferLayout {{ array_stride: {offset}, step_mode: wgpu::VertexStepMode::{step}, attributes: &[{}] }})",
             attrs.join(", ")
         ));
     }
-
     vb_consts
 }
 

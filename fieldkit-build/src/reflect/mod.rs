@@ -8,10 +8,11 @@ use serde::Serialize;
 use super::Stage;
 
 mod types;
+pub(crate) mod vertex;
 
 use types::{access_name, dim_name, scalar_class};
 pub use types::{host_name, rust_type, storage_format_wgsl, wgsl_type};
-pub(crate) use types::{located_args, located_outputs, vertex_format};
+pub(crate) use types::{located_args, located_outputs};
 
 #[derive(Debug, Clone, Serialize)]
 pub struct Reflection {
@@ -279,8 +280,12 @@ pub struct VertexInput {
     pub ty: String,
     /// `wgpu::VertexFormat` variant name.
     pub format: String,
+    /// The host field's type (`[f32; 3]`, `[u8; 4]`).
     pub rust: String,
+    /// Bytes in the buffer.
     pub size: u32,
+    /// Read per instance (from the second buffer), not per vertex.
+    pub instance: bool,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -610,20 +615,8 @@ fn reflect_entry(
         _ => "other",
     };
     let vertex_inputs = if ep.stage == ShaderStage::Vertex {
-        located_args(module, &ep.function)
-            .into_iter()
-            .filter_map(|(location, name, ty)| {
-                let (format, rust, size) = vertex_format(module, ty)?;
-                Some(VertexInput {
-                    location,
-                    name,
-                    ty: wgsl_type(module, ty),
-                    format,
-                    rust,
-                    size,
-                })
-            })
-            .collect()
+        // The build refused the stage where this fails.
+        vertex::inputs(&stage.original, module, ep).unwrap_or_default()
     } else {
         vec![]
     };

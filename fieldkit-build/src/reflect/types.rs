@@ -174,33 +174,6 @@ pub fn storage_format_wgsl(f: naga::StorageFormat) -> String {
     format!("{f:?}").to_lowercase()
 }
 
-pub(crate) fn vertex_format(
-    module: &naga::Module,
-    ty: naga::Handle<naga::Type>,
-) -> Option<(String, String, u32)> {
-    let (n, scalar) = match module.types[ty].inner {
-        TypeInner::Scalar(s) => (1u8, s),
-        TypeInner::Vector { size, scalar } => (size as u8, scalar),
-        _ => return None,
-    };
-    let (base, host) = match (scalar.kind, scalar.width) {
-        (ScalarKind::Float, 4) => ("Float32", "f32"),
-        (ScalarKind::Uint, 4) => ("Uint32", "u32"),
-        (ScalarKind::Sint, 4) => ("Sint32", "i32"),
-        _ => return None,
-    };
-    // A vertex buffer packs its attributes at 4-byte alignment, so the host struct's fields are
-    // scalars and arrays, not glam vectors: glam's `Vec4`/`UVec4` are 16-byte aligned, and a
-    // `vec4<f32>` beside a `vec2<f32>` would pad the struct to 32 bytes against a stride of 24
-    // (and `bytemuck::Pod` refuses padding). `glam::Vec4::to_array()` and `From` convert.
-    let (format, rust) = if n == 1 {
-        (base.to_string(), host.to_string())
-    } else {
-        (format!("{base}x{n}"), format!("[{host}; {n}]"))
-    };
-    Some((format, rust, 4 * n as u32))
-}
-
 pub(super) fn scalar_class(module: &naga::Module, ty: naga::Handle<naga::Type>) -> String {
     let s = match module.types[ty].inner {
         TypeInner::Scalar(s) | TypeInner::Vector { scalar: s, .. } => s,

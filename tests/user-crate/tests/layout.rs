@@ -322,3 +322,116 @@ fn a_vertex_struct_in_a_buffer_has_its_type() {
     };
     assert_eq!(p.position.x, 1.0);
 }
+
+/// Vertex inputs declared in packed formats (`// vertex: snorm16x2`, `unorm8x4`, `uint8`,
+/// `float16x2, instance`) reach the shader as those formats: a triangle made of 16-bit
+/// positions, scaled per instance by half floats to cover the target, writes the byte colour
+/// and tag it was given, exactly (unorm8 → f32 → unorm8 is exact).
+#[test]
+fn declared_vertex_formats_draw_what_the_buffers_hold() {
+    use fieldkit::bind::RenderTargets;
+    use fieldkit_user_crate::shaders::corpus::packed::fs_main::{
+        Instance, Pipeline, Resources, Vertex,
+    };
+    let ctx = Context::shared();
+    let colour = [
+        Some(wgpu::ColorTargetState::from(
+            wgpu::TextureFormat::Rgba8Unorm,
+        )),
+        Some(wgpu::ColorTargetState::from(wgpu::TextureFormat::R32Uint)),
+    ];
+    let pipeline = Pipeline::new(
+        &ctx.device,
+        &RenderTargets {
+            color: &colour,
+            ..Default::default()
+        },
+    )
+    .expect("packed pipeline");
+    let corner = |x: i16, y: i16| Vertex {
+        position: [x, y],
+        color: [255, 128, 0, 255],
+        tag: 7,
+        ..Default::default()
+    };
+    // snorm16: 32767 is 1; the half-float 4.0 scales the unit triangle to (0..4) − 1 in clip
+    // space, which covers the whole target.
+    let vertices = [corner(0, 0), corner(32767, 0), corner(0, 32767)];
+    let instance = Instance {
+        scale: [half::f16::from_f32(4.0).to_bits(); 2],
+    };
+    let buffer = |label, bytes: &[u8]| {
+        ctx.device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: bytes,
+                usage: wgpu::BufferUsages::VERTEX,
+            })
+    };
+    let vertex_buffer = buffer("vertices", bytemuck::cast_slice(&vertices));
+    let instance_buffer = buffer("instance", bytemuck::bytes_of(&instance));
+    let target = |format| {
+        ctx.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("target"),
+            size: wgpu::Extent3d {
+                width: 4,
+                height: 4,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        })
+    };
+    let (rgba, tags) = (
+        target(wgpu::TextureFormat::Rgba8Unorm),
+        target(wgpu::TextureFormat::R32Uint),
+    );
+    let bound = pipeline
+        .bind(
+            &ctx.device,
+            &Resources {
+                _marker: core::marker::PhantomData,
+            },
+        )
+        .unwrap();
+    let mut encoder = ctx.encoder("packed");
+    {
+        let views = [
+            rgba.create_view(&Default::default()),
+            tags.create_view(&Default::default()),
+        ];
+        let attachments: Vec<_> = views
+            .iter()
+            .map(|view| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    resolve_target: None,
+                    depth_slice: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })
+            })
+            .collect();
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("packed"),
+            color_attachments: &attachments,
+            ..Default::default()
+        });
+        pass.set_pipeline(&pipeline.pipeline);
+        bound.set_render(&mut pass);
+        pass.set_vertex_buffer(0, vertex_buffer.slice(..));
+        pass.set_vertex_buffer(1, instance_buffer.slice(..));
+        pass.draw(0..3, 0..1);
+    }
+    ctx.submit_and_wait("packed", encoder).unwrap();
+    let got: Vec<[u8; 4]> = fieldkit::gpu::read_texture(&ctx, &rgba).unwrap();
+    assert!(got.iter().all(|&c| c == [255, 128, 0, 255]), "{got:?}");
+    let got: Vec<u32> = fieldkit::gpu::read_texture(&ctx, &tags).unwrap();
+    assert!(got.iter().all(|&t| t == 7), "{got:?}");
+}
