@@ -37,6 +37,7 @@ pub fn build_each(shaders: &ShaderDir) -> std::io::Result<Built> {
             Err(e) => out.errors.push(e),
         }
     }
+    out.errors.extend(crate::pair_errors(&out.stages));
     Ok(out)
 }
 

@@ -312,26 +312,21 @@ pub fn build_stage(shaders: &ShaderDir, stage: &StageFile) -> Result<Stage, Stri
         dynamic_offsets: Vec::new(),
         shared: linked.shared,
     };
-    // Every entry point gets a pipeline, or the build says why it cannot.
-    let at = |ep: &str| lint::locate(&built.original, &format!("fn {ep}"));
-    let mut dropped: Vec<String> = codegen::dropped_entries(&built)
-        .into_iter()
-        .map(|(ep, why)| {
-            let (line, column) = at(&ep);
-            format!(
-                "error: {}:{line}:{column}: entry point `{ep}` would get no pipeline: {why}",
-                stage.rel_path
-            )
-        })
-        .collect();
-    dropped.extend(
-        codegen::slot_conflicts(&built)
-            .into_iter()
-            .map(|(ep, why)| {
-                let (line, column) = at(&ep);
-                format!("error: {}:{line}:{column}: `{ep}`: {why}", stage.rel_path)
-            }),
-    );
+    // Every entry point gets a pipeline, or the build says why it cannot (for a file that draws
+    // with another file's vertex entry, once the folder is built: [`pair_errors`]).
+    let mut dropped: Vec<String> = Vec::new();
+    if codegen::pairs::declared(&built.original).is_empty() {
+        dropped.extend(entry_errors(
+            &built,
+            codegen::pairs::dropped_entries(&built, &[]),
+            "would get no pipeline: ",
+        ));
+        dropped.extend(entry_errors(
+            &built,
+            codegen::pairs::slot_conflicts(&built, &[]),
+            "",
+        ));
+    }
     if !dropped.is_empty() {
         return Err(dropped.join("\n"));
     }
@@ -477,6 +472,52 @@ pub fn stage_from_linked(file: StageFile, linked: &str) -> Result<Stage, String>
     })
 }
 
+/// `(entry, why)` pairs as errors at each entry point of `stage`.
+fn entry_errors(stage: &Stage, found: Vec<(String, String)>, lead: &str) -> Vec<String> {
+    found
+        .into_iter()
+        .map(|(ep, why)| {
+            let (line, column) = lint::locate(&stage.original, &format!("fn {ep}"));
+            let what = if lead.is_empty() {
+                format!("`{ep}`: {why}")
+            } else {
+                format!("entry point `{ep}` {lead}{why}")
+            };
+            format!("error: {}:{line}:{column}: {what}", stage.file.rel_path)
+        })
+        .collect()
+}
+
+/// The errors of the stages that draw with another file's vertex entry (`// draw with:
+/// room::stage::entry`), once every stage of the folder is built: a declaration naming no
+/// vertex entry, a fragment entry still without a pipeline, two variables on one slot.
+pub fn pair_errors(stages: &[Stage]) -> Vec<String> {
+    let mut errors = Vec::new();
+    for stage in stages {
+        if codegen::pairs::declared(&stage.original).is_empty() {
+            continue;
+        }
+        match codegen::pairs::externals(stage, stages) {
+            Err(problems) => errors.extend(problems.into_iter().map(|(line, column, why)| {
+                format!("error: {}:{line}:{column}: {why}", stage.file.rel_path)
+            })),
+            Ok(externals) => {
+                errors.extend(entry_errors(
+                    stage,
+                    codegen::pairs::dropped_entries(stage, &externals),
+                    "would get no pipeline: ",
+                ));
+                errors.extend(entry_errors(
+                    stage,
+                    codegen::pairs::slot_conflicts(stage, &externals),
+                    "",
+                ));
+            }
+        }
+    }
+    errors
+}
+
 /// Build every stage of a crate's `shaders/`; on failure return *all* errors, one rendered
 /// message per broken stage.
 pub fn build_all(crate_root: &Path) -> Result<Vec<Stage>, Vec<String>> {
@@ -495,6 +536,7 @@ pub fn build_dir(shaders: &ShaderDir) -> Result<Vec<Stage>, Vec<String>> {
             Err(e) => errors.push(e),
         }
     }
+    errors.extend(pair_errors(&stages));
     if errors.is_empty() {
         Ok(stages)
     } else {
@@ -721,6 +763,7 @@ impl Builder {
             }
             stage.dynamic_offsets.push(binding.to_string());
         }
+        errors.extend(pair_errors(&stages));
         if !errors.is_empty() {
             return Err(errors);
         }

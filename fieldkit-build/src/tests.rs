@@ -526,6 +526,57 @@ fn entries_without_a_pipeline_are_errors() {
     std::fs::remove_dir_all(&root).ok();
 }
 
+/// A fragment file draws with another file's vertex entry it names in a `// draw with:` line;
+/// a line naming no stage, no entry, or a fragment entry, a vertex entry that does not write
+/// what the fragment reads, and one variable declared as two types in the two files are errors
+/// at their lines.
+#[test]
+fn draw_with_pairs_files_or_says_why_not() {
+    let vert = "// A vertex entry.\n@group(0) @binding(0) var<uniform> k: vec4<f32>;\nstruct O { @builtin(position) p: vec4<f32>, @location(0) c: vec4<f32> }\n@vertex\nfn vs() -> O {\n    return O(k, k);\n}\n";
+    let good = "// Draws with the vertex entry.\n// draw with: room::vert::vs\n@group(0) @binding(1) var<uniform> t: vec4<f32>;\n@fragment\nfn fs(@location(0) c: vec4<f32>) -> @location(0) vec4<f32> {\n    return c * t;\n}\n";
+    let root = tree(&[("vert", vert), ("frag", good)]);
+    let stages = build_all(&root).expect("the pair builds");
+    let code = crate::codegen::generate(&stages);
+    let flat: String = code.split_whitespace().collect();
+    assert!(
+        flat.contains("vertex_source:Some(super::super::super::room::vert::SOURCE)")
+            && flat.contains("pubk:crate::bind::Uniform<'a,glam::Vec4>")
+            && flat.contains("pubt:crate::bind::Uniform<'a,glam::Vec4>"),
+        "{code}"
+    );
+    std::fs::remove_dir_all(&root).ok();
+
+    let bad = |line: &str| good.replace("// draw with: room::vert::vs", line);
+    let root = tree(&[
+        ("vert", vert),
+        ("nostage", &bad("// draw with: room::nowhere::vs")),
+        ("noentry", &bad("// draw with: room::vert::main")),
+        ("notvertex", &bad("// draw with: room::good::fs")),
+        ("good", good),
+        ("unread", &good.replace("@location(0) c", "@location(3) c")),
+        (
+            "retyped",
+            &good
+                .replace("@binding(1) var<uniform> t", "@binding(0) var<uniform> k")
+                .replace("c * t", "c * k.x")
+                .replace("vec4<f32>;", "vec2<f32>;"),
+        ),
+    ]);
+    let errors = build_all(&root).err().expect("five stages fail");
+    let joined = errors.join("\n");
+    for want in [
+        "shaders/room/nostage.wgsl:2:1: `// draw with: room::nowhere::vs`: no stage `room::nowhere`",
+        "shaders/room/noentry.wgsl:2:1: `// draw with: room::vert::main`: `room::vert` has no entry point `main`",
+        "shaders/room/notvertex.wgsl:2:1: `// draw with: room::good::fs`: `room::good::fs` is a fragment entry, not a vertex entry",
+        "shaders/room/unread.wgsl:5:1: entry point `fs` would get no pipeline: it reads @location [3]",
+        "shaders/room/retyped.wgsl:5:1: `fs`: `k` at @group(0) @binding(0) is `vec2<f32>` here and `vec4<f32>` in `room::vert`",
+    ] {
+        assert!(joined.contains(want), "{want}\nin\n{joined}");
+    }
+    assert_eq!(errors.len(), 5, "{joined}");
+    std::fs::remove_dir_all(&root).ok();
+}
+
 /// A pipeline whose vertex and fragment entries use different variables on one slot cannot be
 /// laid out: a build error naming the slot and both variables (compute entries that each use
 /// one of two such variables build: `tests/user-crate/shaders/corpus/views.wgsl`).

@@ -82,6 +82,9 @@ pub enum EntryKind {
     Render {
         /// The vertex entry point paired with the fragment entry point.
         vertex: &'static str,
+        /// The linked WGSL of the vertex entry's own stage where it lives in another file than
+        /// the fragment entry (a `// draw with:` pairing); `None`: both are in `source`.
+        vertex_source: Option<&'static str>,
         /// Vertex buffer layouts from the vertex stage's inputs.
         vertex_buffers: &'static [Option<wgpu::VertexBufferLayout<'static>>],
         /// The fragment outputs.

@@ -444,6 +444,7 @@ pub(crate) fn build_render(
 ) -> wgpu::RenderPipeline {
     let EntryKind::Render {
         vertex,
+        vertex_source,
         vertex_buffers,
         ..
     } = info.kind
@@ -452,11 +453,15 @@ pub(crate) fn build_render(
     };
     let layout = info.pipeline_layout(device, layouts);
     let module = module(device, info, relinked);
+    // A vertex entry of another file: its own stage's module (never relinked: a reload
+    // relinks the fragment entry's file).
+    let vertex_module =
+        vertex_source.map(|source| self::module(device, &EntryInfo { source, ..*info }, None));
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some(info.stage),
         layout: Some(&layout),
         vertex: wgpu::VertexState {
-            module: &module,
+            module: vertex_module.as_ref().unwrap_or(&module),
             entry_point: Some(vertex),
             compilation_options: Default::default(),
             buffers: vertex_buffers,

@@ -50,7 +50,7 @@ pub fn shared_groups(stages: &[Stage]) -> Vec<SharedGroupInfo> {
     let mut out: Vec<SharedGroupInfo> = Vec::new();
     for st in stages {
         let r = reflect(st);
-        for p in pipelines(&r) {
+        for p in pipelines(&r, &[]) {
             for (group, module) in shared_groups_of(&r, &p) {
                 let i = match out
                     .iter()
@@ -111,7 +111,7 @@ pub fn shared_groups(stages: &[Stage]) -> Vec<SharedGroupInfo> {
     out
 }
 
-fn rust_of(kind: &BindingKind) -> &str {
+pub(super) fn rust_of(kind: &BindingKind) -> &str {
     match kind {
         BindingKind::Uniform { rust, .. } | BindingKind::Storage { rust, .. } => rust,
         _ => "",
@@ -119,7 +119,7 @@ fn rust_of(kind: &BindingKind) -> &str {
 }
 
 /// `rust` with each of the stage's struct names (whole words) reached through `path`.
-fn qualify(r: &Reflection, rust: &str, path: &str) -> String {
+pub(super) fn qualify(r: &Reflection, rust: &str, path: &str) -> String {
     let mut out = String::new();
     let mut word = String::new();
     let flush = |word: &mut String, out: &mut String| {

@@ -2,7 +2,7 @@
 //! get bindings at their folder paths, and both run.
 
 use fieldkit::gpu::{read_buffer, Context};
-use fieldkit_user_crate::shaders::{flat, scene::water::ripple, ALL};
+use fieldkit_user_crate::shaders::{flat, groups, scene::water::ripple, ALL};
 use wgpu::util::DeviceExt as _;
 
 fn values(ctx: &Context, v: &[u32]) -> wgpu::Buffer {
@@ -44,12 +44,35 @@ fn flat_and_nested_stages_are_built_and_run() {
             "flat",
         )
         .unwrap();
+    // The nested stage binds the shared group, reached from four modules down.
+    let mut bytes = encase::UniformBuffer::new(Vec::new());
+    bytes
+        .write(&ripple::Frame {
+            time: 0.0,
+            scale: 3.0,
+        })
+        .unwrap();
+    let frame = ctx
+        .device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("frame"),
+            contents: &bytes.into_inner(),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+    let frame = groups::frame::Group::new(
+        &ctx.device,
+        &groups::frame::Resources {
+            frame: (&frame).into(),
+        },
+    )
+    .unwrap();
     ripple::main::Pipeline::new(&ctx.device)
         .unwrap()
         .record(
             &ctx.device,
             &mut encoder,
             &ripple::main::Resources {
+                frame: &frame,
                 heights: (&b).into(),
             },
             ripple::main::Pipeline::groups_for([100, 1, 1]),
@@ -60,7 +83,7 @@ fn flat_and_nested_stages_are_built_and_run() {
     let got: Vec<u32> = bytemuck::cast_slice(&read_buffer(&ctx, &a).unwrap()).to_vec();
     assert_eq!(got, (0..100).map(|i| 7 * i + 1).collect::<Vec<u32>>());
     let got: Vec<u32> = bytemuck::cast_slice(&read_buffer(&ctx, &b).unwrap()).to_vec();
-    assert_eq!(got, (0..100).map(|i| i * i).collect::<Vec<u32>>());
+    assert_eq!(got, (0..100).map(|i| i * i + 3).collect::<Vec<u32>>());
 }
 
 /// `@workgroup_size(BLOCK)` with `override BLOCK`: the generated size and groups follow the
@@ -434,4 +457,123 @@ fn declared_vertex_formats_draw_what_the_buffers_hold() {
     assert!(got.iter().all(|&c| c == [255, 128, 0, 255]), "{got:?}");
     let got: Vec<u32> = fieldkit::gpu::read_texture(&ctx, &tags).unwrap();
     assert!(got.iter().all(|&t| t == 7), "{got:?}");
+}
+
+/// A fragment entry alone in its file draws with another file's vertex entry it names in a
+/// `// draw with:` line: one pipeline, its `Resources` the union of both files' bindings (the
+/// vertex file's camera, the fragment file's tint), each read by its own stage.
+#[test]
+fn a_fragment_file_draws_with_another_files_vertex_entry() {
+    use fieldkit::bind::RenderTargets;
+    use fieldkit_user_crate::shaders::corpus::{pair_frag, pair_vert};
+    use pair_frag::fs_main::{Pipeline, Resources, Vertex};
+    let ctx = Context::shared();
+    let colour = [Some(wgpu::ColorTargetState::from(
+        wgpu::TextureFormat::Rgba8Unorm,
+    ))];
+    let pipeline = Pipeline::new(
+        &ctx.device,
+        &RenderTargets {
+            color: &colour,
+            ..Default::default()
+        },
+    )
+    .expect("pipeline of two files");
+    let uniform = |label, bytes: Vec<u8>| {
+        ctx.device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: &bytes,
+                usage: wgpu::BufferUsages::UNIFORM,
+            })
+    };
+    let mut camera = encase::UniformBuffer::new(Vec::new());
+    // The triangle's corners are (0,0), (2,0), (0,2): moved by −1 it covers the left, lower
+    // half of clip space's square, and exactly the texels below the diagonal.
+    camera
+        .write(&pair_vert::Camera {
+            offset: glam::Vec2::splat(-1.0),
+        })
+        .unwrap();
+    let mut tint = encase::UniformBuffer::new(Vec::new());
+    tint.write(&pair_frag::Tint {
+        color: glam::Vec4::new(1.0, 0.0, 1.0, 1.0),
+    })
+    .unwrap();
+    let (camera, tint) = (
+        uniform("camera", camera.into_inner()),
+        uniform("tint", tint.into_inner()),
+    );
+    let bound = pipeline
+        .bind(
+            &ctx.device,
+            &Resources {
+                camera: (&camera).into(),
+                tint: (&tint).into(),
+            },
+        )
+        .unwrap();
+    let corners = [
+        Vertex { corner: [0.0, 0.0] },
+        Vertex { corner: [2.0, 0.0] },
+        Vertex { corner: [0.0, 2.0] },
+    ];
+    let corners = ctx
+        .device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("corners"),
+            contents: bytemuck::cast_slice(&corners),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+    let target = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("target"),
+        size: wgpu::Extent3d {
+            width: 4,
+            height: 4,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba8Unorm,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    });
+    let mut encoder = ctx.encoder("pair");
+    {
+        let view = target.create_view(&Default::default());
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("pair"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &view,
+                resolve_target: None,
+                depth_slice: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            ..Default::default()
+        });
+        pass.set_pipeline(&pipeline.pipeline);
+        bound.set_render(&mut pass);
+        pass.set_vertex_buffer(0, corners.slice(..));
+        pass.draw(0..3, 0..1);
+    }
+    ctx.submit_and_wait("pair", encoder).unwrap();
+    let got: Vec<[u8; 4]> = fieldkit::gpu::read_texture(&ctx, &target).unwrap();
+    // Texel (x, y), y down, has its centre at clip ((x + ½)/2 − 1, 1 − (y + ½)/2): inside the
+    // triangle (x + y < 0 in clip space) where x < y.
+    for (i, c) in got.iter().enumerate() {
+        let (x, y) = (i % 4, i / 4);
+        let want = if x < y {
+            [255, 0, 255, 255]
+        } else if x > y {
+            [0, 0, 0, 255]
+        } else {
+            *c // on the diagonal: the rasterizer's tie rule decides
+        };
+        assert_eq!(*c, want, "texel ({x}, {y}) of {got:?}");
+    }
+    assert!(got.contains(&[255, 0, 255, 255]) && got.contains(&[0, 0, 0, 255]));
 }

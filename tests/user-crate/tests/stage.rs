@@ -56,7 +56,7 @@ fn the_users_stage_runs_with_typed_bindings_and_overrides() {
     }
     // The generated list names the user's files, not fieldkit's (and the three entry points
     // of the density march build.rs asks for).
-    assert_eq!(ALL.len(), 27);
+    assert_eq!(ALL.len(), 29);
     assert_eq!(scale::PATH, "shaders/math/scale.wgsl");
 }
 
