@@ -534,15 +534,51 @@ fn entries_without_a_pipeline_are_errors() {
 fn draw_with_pairs_files_or_says_why_not() {
     let vert = "// A vertex entry.\n@group(0) @binding(0) var<uniform> k: vec4<f32>;\nstruct O { @builtin(position) p: vec4<f32>, @location(0) c: vec4<f32> }\n@vertex\nfn vs() -> O {\n    return O(k, k);\n}\n";
     let good = "// Draws with the vertex entry.\n// draw with: room::vert::vs\n@group(0) @binding(1) var<uniform> t: vec4<f32>;\n@fragment\nfn fs(@location(0) c: vec4<f32>) -> @location(0) vec4<f32> {\n    return c * t;\n}\n";
-    let root = tree(&[("vert", vert), ("frag", good)]);
-    let stages = build_all(&root).expect("the pair builds");
+    // The same uniform under another name (as GLSL translated per file names it): one resource.
+    let alias = "// Reads the vertex file's uniform by its own name.\n// draw with: room::vert::vs\n@group(0) @binding(0) var<uniform> kk: vec4<f32>;\n@fragment\nfn fs(@location(0) c: vec4<f32>) -> @location(0) vec4<f32> {\n    return c * kk;\n}\n";
+    // Another resource under the vertex file's name: the vertex file's is `vertex_k`.
+    let clash = good
+        .replace("var<uniform> t", "var<uniform> k")
+        .replace("c * t", "c * k");
+    let root = tree(&[
+        ("vert", vert),
+        ("frag", good),
+        ("alias", alias),
+        ("clash", &clash),
+    ]);
+    let stages = build_all(&root).expect("the pairs build");
     let code = crate::codegen::generate(&stages);
     let flat: String = code.split_whitespace().collect();
+    let module = |name: &str| {
+        let at = flat.find(&format!("pubmod{name}{{")).expect("stage module");
+        flat[at..]
+            .split("pubtypePipeline")
+            .next()
+            .unwrap()
+            .to_string()
+    };
+    let frag = module("frag");
     assert!(
-        flat.contains("vertex_source:Some(super::super::super::room::vert::SOURCE)")
-            && flat.contains("pubk:crate::bind::Uniform<'a,glam::Vec4>")
-            && flat.contains("pubt:crate::bind::Uniform<'a,glam::Vec4>"),
+        frag.contains("vertex_source:Some(super::super::super::room::vert::SOURCE)")
+            && frag.contains("pubk:crate::bind::Uniform<'a,glam::Vec4>")
+            && frag.contains("pubt:crate::bind::Uniform<'a,glam::Vec4>"),
         "{code}"
+    );
+    let clash = module("clash");
+    assert!(
+        clash.contains("pubvertex_k:crate::bind::Uniform<'a,glam::Vec4>")
+            && clash.contains("pubk:crate::bind::Uniform<'a,glam::Vec4>")
+            && clash.contains("r.vertex_k"),
+        "{clash}"
+    );
+    let alias = module("alias");
+    assert!(
+        alias.contains("pubkk:crate::bind::Uniform<'a,glam::Vec4>")
+            && !alias.contains("pubk:")
+            && alias.contains(
+                "visibility:wgpu::ShaderStages::FRAGMENT.union(wgpu::ShaderStages::VERTEX)"
+            ),
+        "{alias}"
     );
     std::fs::remove_dir_all(&root).ok();
 

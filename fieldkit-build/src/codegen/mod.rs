@@ -190,7 +190,7 @@ fn gen_pipeline(own: &Reflection, p: &PipelineDesc, shared: &[SharedGroupInfo], 
     }
 
     if compute {
-        gen_workgroup_size(p.entries[0], s);
+        gen_workgroup_size(&p.entries[0], s);
     }
 
     let vb_consts = gen_vertex_buffers(p, s);

@@ -4,7 +4,9 @@
 //! of its file draws with, alone (depth only). And the build errors where that cannot hold.
 
 use super::super::Stage;
-use super::super::reflect::{EntryPoint, Reflection, reflect};
+use std::borrow::Cow;
+
+use super::super::reflect::{Binding, EntryPoint, Reflection, reflect};
 
 /// The marker of a line naming a vertex entry of another file to draw this file's fragment
 /// entries with.
@@ -33,7 +35,9 @@ impl External {
 pub(super) struct PipelineDesc<'r> {
     /// Module name inside the stage module.
     pub module: String,
-    pub entries: Vec<&'r EntryPoint>,
+    /// The entries; a vertex entry of another file is a copy whose uses are named as this
+    /// file names the same resources.
+    pub entries: Vec<Cow<'r, EntryPoint>>,
     /// The vertex entry's stage, where it is another file's.
     pub vertex_stage: Option<&'r str>,
     /// Where the vertex entry is another file's: the fragment stage's reflection with that
@@ -73,7 +77,7 @@ pub(super) fn pipelines<'r>(r: &'r Reflection, externals: &'r [External]) -> Vec
     let candidates = vertex.len() + externals.len();
     let single = |e: &'r EntryPoint| PipelineDesc {
         module: e.name.clone(),
-        entries: vec![e],
+        entries: vec![Cow::Borrowed(e)],
         vertex_stage: None,
         merged: None,
     };
@@ -94,7 +98,7 @@ pub(super) fn pipelines<'r>(r: &'r Reflection, externals: &'r [External]) -> Vec
                 for v in vertex.iter().filter(|v| pairs(v, ep)) {
                     out.push(PipelineDesc {
                         module: name(v),
-                        entries: vec![v, ep],
+                        entries: vec![Cow::Borrowed(*v), Cow::Borrowed(ep)],
                         vertex_stage: None,
                         merged: None,
                     });
@@ -102,11 +106,12 @@ pub(super) fn pipelines<'r>(r: &'r Reflection, externals: &'r [External]) -> Vec
                 for x in externals {
                     let v = x.entry_point();
                     if pairs(v, ep) {
+                        let (v, merged) = merged(r, &x.reflection, v);
                         out.push(PipelineDesc {
-                            module: name(v),
-                            entries: vec![v, ep],
+                            module: name(&v),
+                            entries: vec![Cow::Owned(v), Cow::Borrowed(ep)],
                             vertex_stage: Some(&x.stage),
-                            merged: Some(merged(r, &x.reflection, v)),
+                            merged: Some(merged),
                         });
                     }
                 }
@@ -120,39 +125,56 @@ pub(super) fn pipelines<'r>(r: &'r Reflection, externals: &'r [External]) -> Vec
     out
 }
 
-/// `own` with the bindings of `other` that vertex entry `v` uses and `own` lacks (their struct
-/// types reached in `other`'s generated module), and the features of both.
-fn merged(own: &Reflection, other: &Reflection, v: &EntryPoint) -> Reflection {
+/// Whether `a` and `b` bind the same kind of resource of the same type (the same resource where
+/// two files declare it on one slot, whatever each names it).
+fn same_resource(a: &Binding, b: &Binding) -> bool {
+    (a.group, a.binding) == (b.group, b.binding) && a.kind == b.kind && a.ty == b.ty
+}
+
+/// Vertex entry `v` of `other` with its uses named as `own` names the same resources, and
+/// `own` with the bindings of `other` that `v` uses and `own` lacks (their struct types reached
+/// in `other`'s generated module), and the features of both.
+fn merged(own: &Reflection, other: &Reflection, v: &EntryPoint) -> (EntryPoint, Reflection) {
     use super::super::reflect::BindingKind;
     let mut r = own.clone();
+    let mut v = v.clone();
     let path = format!(
         "{}{}::",
         "super::".repeat(1 + own.stage.split("::").count()),
         other.stage
     );
-    for b in &other.bindings {
-        let used = v.uses.iter().any(|u| {
-            (u.group, u.binding, u.name.as_str()) == (b.group, b.binding, b.name.as_str())
-        });
-        let known = r.bindings.iter().any(|o| {
-            (o.group, o.binding, o.name.as_str()) == (b.group, b.binding, b.name.as_str())
-        });
-        if used && !known {
-            let mut b = b.clone();
-            let qualified = super::groups::qualify(other, super::groups::rust_of(&b.kind), &path);
-            if let BindingKind::Uniform { rust, .. } | BindingKind::Storage { rust, .. } =
-                &mut b.kind
-            {
-                *rust = qualified;
-            }
-            r.bindings.push(b);
+    for u in &mut v.uses {
+        let Some(b) = other.bindings.iter().find(|b| {
+            (b.group, b.binding, b.name.as_str()) == (u.group, u.binding, u.name.as_str())
+        }) else {
+            continue;
+        };
+        if let Some(o) = own.bindings.iter().find(|o| same_resource(o, b)) {
+            u.name = o.name.clone();
+            continue;
         }
+        let mut b = b.clone();
+        // A name the fragment's file gives another resource: `vertex_<name>` in `Resources`.
+        // (On the same slot it is the same name for another type: an error, below.)
+        while r
+            .bindings
+            .iter()
+            .any(|o| o.name == b.name && (o.group, o.binding) != (b.group, b.binding))
+        {
+            b.name = format!("vertex_{}", b.name);
+        }
+        u.name = b.name.clone();
+        let qualified = super::groups::qualify(other, super::groups::rust_of(&b.kind), &path);
+        if let BindingKind::Uniform { rust, .. } | BindingKind::Storage { rust, .. } = &mut b.kind {
+            *rust = qualified;
+        }
+        r.bindings.push(b);
     }
     r.bindings.sort_by_key(|b| (b.group, b.binding));
     r.features.extend(other.features.iter().cloned());
     r.features.sort();
     r.features.dedup();
-    r
+    (v, r)
 }
 
 /// Whether vertex entry `v` writes every `@location` fragment entry `f` reads.
@@ -214,9 +236,17 @@ pub fn externals(
             Some(e) if e.uses_immediate => Some(format!(
                 "`{id}::{entry}` uses immediates, which a pipeline of two files cannot hold yet"
             )),
-            Some(_) if stage.module.entry_points.iter().any(|e| e.name == entry) => Some(format!(
-                "this file has an entry point `{entry}` too: the pipelines would share a name"
-            )),
+            Some(_)
+                if stage
+                    .module
+                    .entry_points
+                    .iter()
+                    .any(|e| e.name == entry && e.stage == naga::ShaderStage::Vertex) =>
+            {
+                Some(format!(
+                    "this file has a vertex entry `{entry}` too: the pipelines would share a name"
+                ))
+            }
             Some(_) => None,
         };
         match why {
@@ -261,15 +291,17 @@ pub fn slot_conflicts(stage: &Stage, externals: &[External]) -> Vec<(String, Str
                 ));
             }
         }
-        // One variable declared in both files: the same resource only where both say so.
+        // One slot declared in both files: the same resource only where both bind the same
+        // type there.
         if let Some(x) = p
             .vertex_stage
             .and_then(|id| externals.iter().find(|x| x.stage == id))
         {
             for b in &x.reflection.bindings {
                 if let Some(o) = r.bindings.iter().find(|o| {
-                    (o.group, o.binding, &o.name) == (b.group, b.binding, &b.name)
-                        && (o.kind != b.kind || o.ty != b.ty)
+                    (o.group, o.binding) == (b.group, b.binding)
+                        && o.name == b.name
+                        && !same_resource(o, b)
                 }) {
                     out.push((
                         entry(),
