@@ -69,7 +69,7 @@ impl<E: Entry> ComputePipeline<E> {
         overrides: &[(&str, f64)],
     ) -> Result<Self, Error> {
         let source = crate::hot::relink(E::INFO, crate_root)?;
-        Self::make(device, Some(&source), overrides, true)
+        Self::make(device, Some(&source), overrides, &[], true)
     }
 }
 
@@ -82,6 +82,6 @@ impl<E: Entry> RenderPipeline<E> {
         targets: &RenderTargets<'_>,
     ) -> Result<Self, Error> {
         let source = crate::hot::relink(E::INFO, crate_root)?;
-        Self::make(device, Some(&source), targets)
+        Self::make(device, Some(&source), targets, &[])
     }
 }

@@ -245,10 +245,8 @@ pub(crate) fn unsupported_bindings(
         .filter_map(|(_, var)| {
             let rb = var.binding.as_ref()?;
             let why = match &module.types[var.ty].inner {
-                TypeInner::BindingArray {
-                    size: naga::ArraySize::Constant(_),
-                    base,
-                } => match &module.types[*base].inner {
+                // Sized or not: an unsized array's length is given when its pipeline is made.
+                TypeInner::BindingArray { base, .. } => match &module.types[*base].inner {
                     TypeInner::AccelerationStructure { .. } | TypeInner::BindingArray { .. } => {
                         "binding arrays of acceleration structures or of binding arrays are not \
                          supported by fieldkit's generated bindings"
@@ -259,10 +257,6 @@ pub(crate) fn unsupported_bindings(
                     } => "external textures are not supported by fieldkit's generated bindings",
                     _ => return None,
                 },
-                TypeInner::BindingArray { .. } => {
-                    "a binding array needs a length here (`binding_array<T, N>`): its bind group \
-                     layout holds a count"
-                }
                 TypeInner::Image {
                     class: naga::ImageClass::External,
                     ..

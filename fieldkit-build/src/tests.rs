@@ -191,14 +191,15 @@ fn builder_writes_bindings_for_a_user_crate() {
 }
 
 /// Bindings the generated code cannot hold are build errors at their declaration, not
-/// silently left out (an unsized binding array, an external texture); a file that imports
-/// nothing reaches naga even where the pinned WESL parser refuses it (`binding_array`).
+/// silently left out (a binding array of external textures, an external texture); a file that
+/// imports nothing reaches naga even where the pinned WESL parser refuses it (`binding_array`).
+/// An unsized binding array builds (its length is given when the pipeline is made).
 #[test]
 fn unsupported_bindings_are_errors_naming_the_binding() {
     let root = tree(&[
         (
             "a_array",
-            "// Binding array without a length, no imports.\nenable wgpu_binding_array;\n@group(0) @binding(0) var textures: binding_array<texture_2d<f32>>;\n@group(0) @binding(1) var<storage, read_write> out: array<f32>;\n@compute @workgroup_size(1)\nfn main() {\n    out[0] = textureLoad(textures[0], vec2<i32>(0, 0), 0).x;\n}\n",
+            "// Binding array of external textures, no imports.\nenable wgpu_binding_array;\n@group(0) @binding(0) var videos: binding_array<texture_external, 2>;\n@group(0) @binding(1) var<storage, read_write> out: array<f32>;\n@compute @workgroup_size(1)\nfn main() {\n    out[0] = textureLoad(videos[0], vec2<u32>(0u, 0u)).x;\n}\n",
         ),
         (
             "b_external",
@@ -208,13 +209,17 @@ fn unsupported_bindings_are_errors_naming_the_binding() {
             "c_fine",
             "// A valid stage.\n@compute @workgroup_size(1)\nfn main() {}\n",
         ),
+        (
+            "d_unsized",
+            "// Binding array without a length.\nenable wgpu_binding_array;\n@group(0) @binding(0) var textures: binding_array<texture_2d<f32>>;\n@group(0) @binding(1) var<storage, read_write> out: array<f32>;\n@compute @workgroup_size(1)\nfn main() {\n    out[0] = textureLoad(textures[0], vec2<i32>(0, 0), 0).x;\n}\n",
+        ),
     ]);
     let errors = build_all(&root).err().expect("unsupported bindings fail");
     assert_eq!(errors.len(), 2, "{errors:#?}");
     assert!(
         errors[0].contains("shaders/room/a_array.wgsl:3:")
-            && errors[0].contains("binding `textures` (@group(0) @binding(0))")
-            && errors[0].contains("needs a length"),
+            && errors[0].contains("binding `videos` (@group(0) @binding(0))")
+            && errors[0].contains("external textures"),
         "{}",
         errors[0]
     );

@@ -42,8 +42,13 @@ pub(crate) fn check(slot: &Slot, res: &Resource<'_>, device: &wgpu::Device) -> R
         (None, None) => check_one(slot, res, device),
         (Some(count), Some(elements)) => {
             if elements.len() != count.get() as usize {
+                let holds = if slot.unsized_array {
+                    "the pipeline was made with a length of"
+                } else {
+                    "holds"
+                };
                 return Err(format!(
-                    "{} resources bound, the shader's `{}` holds {count}",
+                    "{} resources bound, the shader's `{}` {holds} {count}",
                     elements.len(),
                     slot.wgsl
                 ));

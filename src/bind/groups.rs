@@ -9,14 +9,14 @@ use super::check::check;
 pub(crate) fn bind_groups<E: Entry>(
     device: &wgpu::Device,
     layouts: &[(u32, wgpu::BindGroupLayout)],
+    slots: &[Slot],
     resources: &E::Resources<'_>,
 ) -> Result<Bound<E>, Error> {
     let info = E::INFO;
     let res = E::resources(resources);
     let shared = E::groups(resources);
     // The slots bound one by one: all but the shared groups', in the order `res` lists them.
-    let own: Vec<Slot> = info
-        .slots
+    let own: Vec<Slot> = slots
         .iter()
         .filter(|s| !info.shared_groups.contains(&s.group))
         .copied()

@@ -44,8 +44,27 @@ pub struct Slot {
     /// The binding type the layout declares (from real use: access, sample type, size); for a
     /// binding array, the type of each element.
     pub ty: wgpu::BindingType,
-    /// A binding array's length (`binding_array<T, N>`); `None` for a single resource.
+    /// A binding array's length (`binding_array<T, N>`, or an unsized array's as the pipeline
+    /// was made); `None` for a single resource.
     pub count: Option<std::num::NonZeroU32>,
+    /// An unsized binding array (`binding_array<T>`): its length is given when the pipeline is
+    /// made ([`ComputePipeline::with_counts`], [`RenderPipeline::with_counts`]).
+    pub unsized_array: bool,
+}
+
+/// The lengths of a pipeline's unsized binding arrays, as one typed value: the generated
+/// `ArrayCounts` struct of every pipeline with such an array implements it (one field per
+/// array), so a renamed array is a compile error.
+pub trait Counts {
+    /// `(binding name, length)` for each unsized binding array.
+    fn counts(&self) -> Vec<(&'static str, u32)>;
+}
+
+/// No unsized binding arrays.
+impl Counts for () {
+    fn counts(&self) -> Vec<(&'static str, u32)> {
+        Vec::new()
+    }
 }
 
 /// Scalar class of a fragment output: which colour target formats it can write.
@@ -241,16 +260,81 @@ impl EntryInfo {
         Some(size)
     }
 
-    fn layouts(&self, device: &wgpu::Device) -> Vec<(u32, wgpu::BindGroupLayout)> {
+    /// The slots with each unsized binding array's length from `counts`; an error naming an
+    /// array without a length (or of length 0), a length for no such array, or one past the
+    /// device's limits.
+    pub(crate) fn slots_with(
+        &self,
+        device: &wgpu::Device,
+        counts: &[(&str, u32)],
+    ) -> Result<Vec<Slot>, Error> {
+        for (name, _) in counts {
+            if !self
+                .slots
+                .iter()
+                .any(|s| s.unsized_array && s.name == *name)
+            {
+                return Err(Error::invalid(
+                    self.stage,
+                    format!(
+                        "`{}`: no unsized binding array `{name}` to give a length",
+                        self.entry_point
+                    ),
+                ));
+            }
+        }
+        let limits = device.limits();
+        self.slots
+            .iter()
+            .map(|s| {
+                if !s.unsized_array {
+                    return Ok(*s);
+                }
+                let n = counts.iter().find(|(name, _)| *name == s.name).map(|c| c.1);
+                let Some(count) = n.and_then(std::num::NonZeroU32::new) else {
+                    return Err(Error::invalid(
+                        self.stage,
+                        format!(
+                            "`{}`: `{}` is an unsized binding array (`{}`): make the pipeline \
+                             with `with_counts`, giving its length (not 0)",
+                            self.entry_point, s.name, s.wgsl
+                        ),
+                    ));
+                };
+                let (most, limit) = if matches!(s.ty, wgpu::BindingType::Sampler(_)) {
+                    (
+                        limits.max_binding_array_sampler_elements_per_shader_stage,
+                        "max_binding_array_sampler_elements_per_shader_stage",
+                    )
+                } else {
+                    (
+                        limits.max_binding_array_elements_per_shader_stage,
+                        "max_binding_array_elements_per_shader_stage",
+                    )
+                };
+                if count.get() > most {
+                    return Err(Error::Unsupported {
+                        stage: self.stage,
+                        what: format!(
+                            "`{}`: {count} elements of `{}`, past this device's {limit} ({most})",
+                            self.entry_point, s.name
+                        ),
+                    });
+                }
+                Ok(Slot {
+                    count: Some(count),
+                    ..*s
+                })
+            })
+            .collect()
+    }
+
+    /// One bind group layout per group of `slots`.
+    fn layouts(&self, device: &wgpu::Device, slots: &[Slot]) -> Vec<(u32, wgpu::BindGroupLayout)> {
         self.groups()
             .into_iter()
             .map(|g| {
-                let slots: Vec<Slot> = self
-                    .slots
-                    .iter()
-                    .filter(|s| s.group == g)
-                    .copied()
-                    .collect();
+                let slots: Vec<Slot> = slots.iter().filter(|s| s.group == g).copied().collect();
                 let label = format!("{}::{} group {g}", self.stage, self.entry_point);
                 (g, layout_of(device, &slots, &label))
             })

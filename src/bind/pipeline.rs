@@ -104,6 +104,8 @@ pub struct ComputePipeline<E> {
     /// The wgpu pipeline.
     pub pipeline: wgpu::ComputePipeline,
     layouts: Vec<(u32, wgpu::BindGroupLayout)>,
+    /// The shader's slots, unsized binding arrays at the lengths the pipeline was made with.
+    slots: Vec<Slot>,
     /// Its workgroup size, with the overrides it was made with.
     workgroup_size: [u32; 3],
     _e: PhantomData<E>,
@@ -151,21 +153,46 @@ impl<E: Entry> ComputePipeline<E> {
         overrides: &[(&str, f64)],
         zero_initialize_workgroup_memory: bool,
     ) -> Result<Self, Error> {
-        Self::make(device, None, overrides, zero_initialize_workgroup_memory)
+        Self::make(
+            device,
+            None,
+            overrides,
+            &[],
+            zero_initialize_workgroup_memory,
+        )
+    }
+
+    /// Create the pipeline with the lengths of the shader's unsized binding arrays
+    /// (`binding_array<T>`), given as its generated `ArrayCounts`: the bind group layout holds
+    /// them, and `bind` takes exactly that many elements.
+    pub fn with_counts(device: &wgpu::Device, counts: &impl Counts) -> Result<Self, Error> {
+        Self::make(device, None, &[], &counts.counts(), true)
+    }
+
+    /// [`Self::with_counts`] with the stage's typed `override` values too.
+    pub fn with_constants_and_counts(
+        device: &wgpu::Device,
+        overrides: &impl Constants,
+        counts: &impl Counts,
+    ) -> Result<Self, Error> {
+        Self::make(device, None, &overrides.constants(), &counts.counts(), true)
     }
 
     pub(crate) fn make(
         device: &wgpu::Device,
         relinked: Option<&str>,
         overrides: &[(&str, f64)],
+        counts: &[(&str, u32)],
         zero_initialize_workgroup_memory: bool,
     ) -> Result<Self, Error> {
         let info = E::INFO;
         info.check_overrides(overrides)?;
+        // Lengths first: a missing one is the caller's to give on any device.
+        let slots = info.slots_with(device, counts)?;
         info.check_features(device)?;
         let workgroup_size = check_workgroup_size(device, info, overrides)?;
         crate::gpu::scoped(device, info.stage, || {
-            let layouts = info.layouts(device);
+            let layouts = info.layouts(device, &slots);
             let pipeline = build_compute(
                 device,
                 info,
@@ -177,6 +204,7 @@ impl<E: Entry> ComputePipeline<E> {
             Self {
                 pipeline,
                 layouts,
+                slots,
                 workgroup_size,
                 _e: PhantomData,
             }
@@ -189,7 +217,7 @@ impl<E: Entry> ComputePipeline<E> {
         device: &wgpu::Device,
         resources: &E::Resources<'_>,
     ) -> Result<Bound<E>, Error> {
-        bind_groups(device, &self.layouts, resources)
+        bind_groups(device, &self.layouts, &self.slots, resources)
     }
 
     /// [`Self::bind`], keeping the groups in `kept` for the next call with the same resources
@@ -324,21 +352,35 @@ pub struct RenderPipeline<E> {
     /// The wgpu pipeline.
     pub pipeline: wgpu::RenderPipeline,
     layouts: Vec<(u32, wgpu::BindGroupLayout)>,
+    /// The shader's slots, unsized binding arrays at the lengths the pipeline was made with.
+    slots: Vec<Slot>,
     _e: PhantomData<E>,
 }
 
 impl<E: Entry> RenderPipeline<E> {
     /// Create the pipeline; colour targets are checked against the fragment outputs first.
     pub fn new(device: &wgpu::Device, targets: &RenderTargets<'_>) -> Result<Self, Error> {
-        Self::make(device, None, targets)
+        Self::make(device, None, targets, &[])
+    }
+
+    /// [`Self::new`] with the lengths of the shader's unsized binding arrays (see
+    /// [`ComputePipeline::with_counts`]).
+    pub fn with_counts(
+        device: &wgpu::Device,
+        targets: &RenderTargets<'_>,
+        counts: &impl Counts,
+    ) -> Result<Self, Error> {
+        Self::make(device, None, targets, &counts.counts())
     }
 
     pub(crate) fn make(
         device: &wgpu::Device,
         relinked: Option<&str>,
         targets: &RenderTargets<'_>,
+        counts: &[(&str, u32)],
     ) -> Result<Self, Error> {
         let info = E::INFO;
+        let slots = info.slots_with(device, counts)?;
         info.check_features(device)?;
         let EntryKind::Render {
             targets: outputs, ..
@@ -380,11 +422,12 @@ impl<E: Entry> RenderPipeline<E> {
             targets.color.iter().flatten().map(|t| t.format).collect();
         crate::gpu::check_target_bytes(device, info.stage, &formats)?;
         crate::gpu::scoped(device, info.stage, || {
-            let layouts = info.layouts(device);
+            let layouts = info.layouts(device, &slots);
             let pipeline = build_render(device, info, relinked, &layouts, targets);
             Self {
                 pipeline,
                 layouts,
+                slots,
                 _e: PhantomData,
             }
         })
@@ -396,7 +439,7 @@ impl<E: Entry> RenderPipeline<E> {
         device: &wgpu::Device,
         resources: &E::Resources<'_>,
     ) -> Result<Bound<E>, Error> {
-        bind_groups(device, &self.layouts, resources)
+        bind_groups(device, &self.layouts, &self.slots, resources)
     }
 
     /// [`Self::bind`], keeping the groups in `kept` (see [`ComputePipeline::bind_kept`]).
@@ -486,8 +529,16 @@ pub(crate) fn build_render(
 /// each output's scalar class, and a depth target.
 pub fn create_any(device: &wgpu::Device, info: &'static EntryInfo) -> Result<(), Error> {
     info.check_features(device)?;
+    // An unsized binding array at length 1.
+    let ones: Vec<(&str, u32)> = info
+        .slots
+        .iter()
+        .filter(|s| s.unsized_array)
+        .map(|s| (s.name, 1))
+        .collect();
+    let slots = info.slots_with(device, &ones)?;
     crate::gpu::scoped(device, info.stage, || {
-        let layouts = info.layouts(device);
+        let layouts = info.layouts(device, &slots);
         match info.kind {
             EntryKind::Compute { .. } => {
                 let _ = build_compute(device, info, None, &layouts, &[], true);

@@ -170,9 +170,10 @@ pub(super) fn gen_shared_groups(shared: &[SharedGroupInfo], s: &mut String) {
                 .map_or(b.name.as_str(), |r| r.name.as_str());
             let ty = match &b.kind {
                 BindingKind::Uniform { rust: r, .. } | BindingKind::Storage { rust: r, .. } => {
-                    resource_field_type(&b.kind, b.count).replace(r.as_str(), rust)
+                    resource_field_type(&b.kind, b.count.is_some() || b.unsized_array)
+                        .replace(r.as_str(), rust)
                 }
-                _ => resource_field_type(&b.kind, b.count),
+                _ => resource_field_type(&b.kind, b.count.is_some() || b.unsized_array),
             };
             writeln!(
                 s,
@@ -211,7 +212,7 @@ pub(super) fn gen_shared_groups(shared: &[SharedGroupInfo], s: &mut String) {
 /// The `Slot` literal of a binding used by `stages`.
 pub(super) fn slot_literal(b: &crate::reflect::Binding, stages: &[&str]) -> String {
     format!(
-        "crate::bind::Slot {{ group: {}, binding: {}, name: \"{}\", wgsl: \"{}\", visibility: {}, ty: {}, count: {} }}",
+        "crate::bind::Slot {{ group: {}, binding: {}, name: \"{}\", wgsl: \"{}\", visibility: {}, ty: {}, count: {}, unsized_array: {} }}",
         b.group,
         b.binding,
         b.shared
@@ -222,7 +223,8 @@ pub(super) fn slot_literal(b: &crate::reflect::Binding, stages: &[&str]) -> Stri
         wgpu_binding_type(&b.kind, b.dynamic_offset),
         b.count.map_or("None".to_string(), |n| format!(
             "core::num::NonZeroU32::new({n})"
-        ))
+        )),
+        b.unsized_array
     )
 }
 

@@ -105,8 +105,10 @@ fn wgpu_binding_type(kind: &BindingKind, dynamic: bool) -> String {
     }
 }
 
-fn resource_field_type(kind: &BindingKind, count: Option<u32>) -> String {
-    if count.is_some() {
+/// The `Resources` field type of a binding: one resource, or a slice of them for a binding
+/// array (`array`).
+fn resource_field_type(kind: &BindingKind, array: bool) -> String {
+    if array {
         return match kind {
             BindingKind::Uniform { rust, .. } | BindingKind::Storage { rust, .. } => {
                 format!("crate::bind::Buffers<'a, {rust}>")
@@ -195,6 +197,7 @@ fn gen_pipeline(own: &Reflection, p: &PipelineDesc, shared: &[SharedGroupInfo], 
 
     let vb_consts = gen_vertex_buffers(p, s);
     gen_resources(&used, &whole, &root, s);
+    gen_array_counts(&used, s);
 
     let kind = entry_kind(p, &vb_consts, &root);
     gen_info(r, p, shared, &used, &whole, &kind, s);
@@ -420,7 +423,7 @@ fn gen_resources(used: &[Used], whole: &[(u32, String)], root: &str, s: &mut Str
             s,
             "pub {}: {},",
             b.name,
-            resource_field_type(&b.kind, b.count)
+            resource_field_type(&b.kind, b.count.is_some() || b.unsized_array)
         )
         .unwrap();
     }
@@ -432,6 +435,37 @@ fn gen_resources(used: &[Used], whole: &[(u32, String)], root: &str, s: &mut Str
         .unwrap();
     }
     writeln!(s, "}}").unwrap();
+}
+
+/// `ArrayCounts`, where the entries use unsized binding arrays: one length per array, given
+/// when the pipeline is made (`Pipeline::with_counts`).
+fn gen_array_counts(used: &[Used], s: &mut String) {
+    let arrays: Vec<&str> = used
+        .iter()
+        .filter(|(b, _)| b.unsized_array)
+        .map(|(b, _)| b.name.as_str())
+        .collect();
+    if arrays.is_empty() {
+        return;
+    }
+    writeln!(
+        s,
+        "/// The lengths of the unsized binding arrays: make the pipeline with\n/// `Pipeline::with_counts(&device, &ArrayCounts {{ .. }})`.\n#[derive(Debug, Clone, Copy, PartialEq, Eq)]\npub struct ArrayCounts {{"
+    )
+    .unwrap();
+    for a in &arrays {
+        writeln!(s, "/// Elements of `{a}`.\npub {a}: u32,").unwrap();
+    }
+    writeln!(
+        s,
+        "}}\nimpl crate::bind::Counts for ArrayCounts {{\n    fn counts(&self) -> Vec<(&'static str, u32)> {{\n        vec![{}]\n    }}\n}}",
+        arrays
+            .iter()
+            .map(|a| format!("(\"{a}\", self.{a})"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    )
+    .unwrap();
 }
 
 /// The pipeline's slot literals, ascending; a shared group's are the module's, as every user

@@ -45,8 +45,12 @@ pub struct Binding {
     pub kind: BindingKind,
     /// WGSL spelling of the bound type.
     pub ty: String,
-    /// A binding array's length (`binding_array<T, N>`); `None` for one resource.
+    /// A binding array's length (`binding_array<T, N>`); `None` for one resource or an unsized
+    /// array.
     pub count: Option<u32>,
+    /// An unsized binding array (`binding_array<T>`): its length is given when the pipeline is
+    /// made.
+    pub unsized_array: bool,
     /// Its layout takes a dynamic offset (buffers the build script names).
     pub dynamic_offset: bool,
     /// Declared in a module of the folder's `shared/` (its module and its name there): a
@@ -481,14 +485,14 @@ fn reflect_bindings(
     for (handle, var) in module.global_variables.iter() {
         let Some(rb) = &var.binding else { continue };
         // A binding array is described by its element, with its length beside it (an
-        // unsized one is refused before reflection: a layout needs a count).
-        let (elem, count) = match &module.types[var.ty].inner {
+        // unsized one's is given when the pipeline is made).
+        let (elem, count, unsized_array) = match &module.types[var.ty].inner {
             TypeInner::BindingArray {
                 base,
                 size: naga::ArraySize::Constant(n),
-            } => (*base, Some(n.get())),
-            TypeInner::BindingArray { base, .. } => (*base, None),
-            _ => (var.ty, None),
+            } => (*base, Some(n.get()), false),
+            TypeInner::BindingArray { base, .. } => (*base, None, true),
+            _ => (var.ty, None, false),
         };
         let ty_inner = &module.types[elem].inner;
         let kind = match (var.space, ty_inner) {
@@ -557,6 +561,7 @@ fn reflect_bindings(
             kind,
             ty: wgsl_type(module, var.ty),
             count,
+            unsized_array,
             dynamic_offset: stage
                 .dynamic_offsets
                 .iter()

@@ -88,6 +88,7 @@ fn every_pipeline_is_made_or_refused_for_its_features() {
             );
         }
     }
-    // Everything but the binding arrays runs on lavapipe too.
-    assert!(made >= ALL.len() - 2, "{made} of {}", ALL.len());
+    // Everything but the three binding-array pipelines (math::layers, corpus::arrays,
+    // corpus::any_layers) runs on lavapipe too.
+    assert!(made >= ALL.len() - 3, "{made} of {}", ALL.len());
 }

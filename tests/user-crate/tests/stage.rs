@@ -56,7 +56,7 @@ fn the_users_stage_runs_with_typed_bindings_and_overrides() {
     }
     // The generated list names the user's files, not fieldkit's (and the three entry points
     // of the density march build.rs asks for).
-    assert_eq!(ALL.len(), 29);
+    assert_eq!(ALL.len(), 30);
     assert_eq!(scale::PATH, "shaders/math/scale.wgsl");
 }
 
@@ -455,5 +455,153 @@ fn a_dynamic_offset_picks_the_uniform_block() {
         // The second block: the first 40 values doubled (exact), the rest untouched.
         let want = if i < 40 { i as f32 * 2.0 } else { i as f32 };
         assert_eq!(v, want, "value {i}");
+    }
+}
+
+/// An unsized binding array (`binding_array<texture_2d<f32>>`, `corpus/any_layers.wgsl`): its
+/// length is given when the pipeline is made, through the generated `ArrayCounts`. Without a
+/// length, or with 0, making the pipeline is a typed error naming the array on any device; a
+/// length past the device's limit is `Error::Unsupported`. Where the adapter has binding arrays
+/// (not the lavapipe of Debian's Mesa 22.3, see above) the stage runs at the length given, and
+/// binding another number of textures is a binding error.
+#[test]
+fn unsized_binding_arrays_take_their_length_when_the_pipeline_is_made() {
+    use fieldkit_user_crate::shaders::corpus::any_layers::main::{
+        self as stage, ArrayCounts, Pipeline, Resources, INFO,
+    };
+    let shared = Context::shared();
+    assert!(INFO.slots[0].unsized_array && INFO.slots[0].count.is_none());
+    for made in [
+        Pipeline::new(&shared.device),
+        Pipeline::with_counts(&shared.device, &ArrayCounts { layers: 0 }),
+    ] {
+        match made {
+            Err(fieldkit::Error::Invalid { what, .. }) => assert!(
+                what.contains("`layers` is an unsized binding array")
+                    && what.contains("with_counts"),
+                "{what}"
+            ),
+            other => panic!("expected Error::Invalid, got {:?}", other.err()),
+        }
+    }
+    let needed = INFO.required_features();
+    let adapter = shared.adapter.as_ref().expect("an adapter");
+    if !adapter.features().contains(needed) {
+        match Pipeline::with_counts(&shared.device, &ArrayCounts { layers: 4 }) {
+            // The length past the device's limit, or (where the limit allows it) the features.
+            Err(fieldkit::Error::Unsupported { what, .. }) => assert!(
+                what.contains("max_binding_array_elements_per_shader_stage")
+                    || what.contains("TEXTURE_BINDING_ARRAY"),
+                "{what}"
+            ),
+            other => panic!("expected Error::Unsupported, got {:?}", other.err()),
+        }
+        eprintln!(
+            "{} lacks {:?}: unsized binding arrays checked for their typed errors only",
+            adapter.get_info().name,
+            needed - adapter.features()
+        );
+        return;
+    }
+    let ctx = device_with(&shared, needed, |_| {
+        let mut limits = stage::required_limits();
+        limits.max_binding_array_elements_per_shader_stage = 4;
+        limits
+    });
+    match Pipeline::with_counts(&ctx.device, &ArrayCounts { layers: 5 }) {
+        Err(fieldkit::Error::Unsupported { what, .. }) => assert!(what.contains("(4)"), "{what}"),
+        other => panic!("expected Error::Unsupported, got {:?}", other.err()),
+    }
+    let [w, h] = [9u32, 6];
+    let texel = |k: u32, x: u32, y: u32| (k * 100 + y * w + x) as f32 * 0.5;
+    let views: Vec<wgpu::TextureView> = (0..4)
+        .map(|k| {
+            let data: Vec<f32> = (0..h)
+                .flat_map(|y| (0..w).map(move |x| texel(k, x, y)))
+                .collect();
+            ctx.device
+                .create_texture_with_data(
+                    &ctx.queue,
+                    &wgpu::TextureDescriptor {
+                        label: Some("layer"),
+                        size: wgpu::Extent3d {
+                            width: w,
+                            height: h,
+                            depth_or_array_layers: 1,
+                        },
+                        mip_level_count: 1,
+                        sample_count: 1,
+                        dimension: wgpu::TextureDimension::D2,
+                        format: wgpu::TextureFormat::R32Float,
+                        usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                        view_formats: &[],
+                    },
+                    wgpu::util::TextureDataOrder::LayerMajor,
+                    bytemuck::cast_slice(&data),
+                )
+                .create_view(&Default::default())
+        })
+        .collect();
+    let views: Vec<&wgpu::TextureView> = views.iter().collect();
+    for n in [4u32, 2] {
+        let pipeline =
+            Pipeline::with_counts(&ctx.device, &ArrayCounts { layers: n }).expect("made");
+        let sums = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("sums"),
+            size: (w * h * 4) as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let count = ctx
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("count"),
+                contents: bytemuck::bytes_of(&n),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+        let other = if n == 4 { &views[..3] } else { &views[..] };
+        match pipeline.bind(
+            &ctx.device,
+            &Resources {
+                layers: other.into(),
+                sums: (&sums).into(),
+                count: (&count).into(),
+            },
+        ) {
+            Err(fieldkit::Error::Binding(e)) => assert!(
+                e.problem
+                    .contains(&format!("the pipeline was made with a length of {n}")),
+                "{}",
+                e.problem
+            ),
+            other => panic!("expected a binding error, got {:?}", other.err()),
+        }
+        let mut encoder = ctx.encoder("any layers");
+        pipeline
+            .record(
+                &ctx.device,
+                &mut encoder,
+                &Resources {
+                    layers: views[..n as usize].into(),
+                    sums: (&sums).into(),
+                    count: (&count).into(),
+                },
+                Pipeline::groups_for([w, h, 1]),
+                "any layers",
+            )
+            .expect("binds");
+        ctx.submit_and_wait("any layers", encoder).unwrap();
+        let got = common::read_f32(&ctx, &sums);
+        for y in 0..h {
+            for x in 0..w {
+                // Halves of small integers times small integers: exact in f32.
+                let want: f32 = (0..n).map(|k| texel(k, x, y) * (k + 1) as f32).sum();
+                assert_eq!(
+                    got[(y * w + x) as usize],
+                    want,
+                    "{n} layers, texel ({x}, {y})"
+                );
+            }
+        }
     }
 }
