@@ -115,6 +115,67 @@ fn readbacks_say_what_is_wrong() {
     assert!(matches!(readback.try_take(), Some(Err(Error::Readback(_)))));
 }
 
+/// What each readback sees of a texture written in an encoder not yet submitted: the copy
+/// recorded into that encoder (`readback_texture_in`) sees the write; the one that submits its
+/// own copy at once (`readback_texture`) sees the texture as it was (zeros), as documented; and
+/// waiting for a readback whose encoder is never submitted is an error, not a hang.
+#[test]
+fn readbacks_see_what_their_encoder_order_says() {
+    use fieldkit::gpu::{readback_texture, readback_texture_in};
+    let ctx = Context::shared();
+    let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("written later"),
+        size: wgpu::Extent3d {
+            width: 3,
+            height: 2,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::R32Float,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    });
+    let write = |encoder: &mut wgpu::CommandEncoder| {
+        let view = texture.create_view(&Default::default());
+        encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("write 9.875"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &view,
+                resolve_target: None,
+                depth_slice: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color {
+                        r: 9.875,
+                        g: 0.0,
+                        b: 0.0,
+                        a: 1.0,
+                    }),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            ..Default::default()
+        });
+    };
+    let mut encoder = ctx.encoder("user's frame");
+    write(&mut encoder);
+    let in_encoder = readback_texture_in::<f32>(&ctx.device, &mut encoder, &texture);
+    let submitted_before = readback_texture::<f32>(&ctx.device, &ctx.queue, &texture);
+    ctx.queue.submit([encoder.finish()]);
+    assert_eq!(in_encoder.wait(&ctx).unwrap(), vec![9.875; 6]);
+    assert_eq!(submitted_before.wait(&ctx).unwrap(), vec![0.0; 6]);
+
+    let mut never = ctx.encoder("never submitted");
+    write(&mut never);
+    let orphan = readback_texture_in::<f32>(&ctx.device, &mut never, &texture);
+    drop(never);
+    match orphan.wait(&ctx) {
+        Err(Error::Readback(m)) => assert!(m.contains("never submitted"), "{m}"),
+        other => panic!("expected a readback error, got {other:?}"),
+    }
+}
+
 #[test]
 fn a_rejected_submission_reports_wgpu_s_message_not_a_lost_device() {
     // A device of its own: the uncaptured error below must not reach the other tests' waits.

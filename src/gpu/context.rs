@@ -283,9 +283,21 @@ impl<T: 'static> Readback<T> {
                 return r;
             }
             // The copy finished; the mapping callback runs on the next poll.
-            ctx.device
+            let status = ctx
+                .device
                 .poll(wgpu::PollType::wait_indefinitely())
                 .map_err(|e| Error::Readback(e.to_string()))?;
+            if status.is_queue_empty() {
+                // Every callback of finished work ran in that poll: nothing left can map it.
+                return self.try_take().unwrap_or_else(|| {
+                    Err(Error::Readback(
+                        "the copy was never submitted: submit the encoder the readback was \
+                         recorded into (`readback_texture_in`, `readback_buffer_in`) before \
+                         waiting"
+                            .into(),
+                    ))
+                });
+            }
         }
     }
 }

@@ -25,7 +25,10 @@ pub use cache::PipelineCache;
 pub(crate) use cache::installed as installed_pipeline_cache;
 #[cfg(feature = "context")]
 pub use context::{ADAPTER_ENV, Context, read_buffer, read_texture};
-pub use readback::{Readback, readback_buffer, readback_buffers, readback_texture};
+pub use readback::{
+    Readback, readback_buffer, readback_buffer_in, readback_buffers, readback_texture,
+    readback_texture_in,
+};
 pub(crate) use targets::check_target_bytes;
 pub use targets::{GBUFFER_FORMATS, target_bytes_per_sample};
 pub use timing::{Profiler, Record, Recorder, Timer};
