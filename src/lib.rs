@@ -33,6 +33,9 @@ pub mod voxelize;
 pub use error::{BindingError, Error};
 pub use grid::Grid;
 pub use wgpu;
+/// glam, the vector maths of fieldkit's API (`DVec3` mesh placement, `Mat4` cameras), at the version fieldkit
+/// uses: `fieldkit::glam::DVec3` needs no dependency of your own.
+pub use glam;
 
 /// Generated bindings, one module per stage (`shaders::<room>::<stage>`). See [`bind`].
 #[cfg(feature = "techniques")]
@@ -46,3 +49,12 @@ pub mod shaders {
 #[doc = include_str!("../README.md")]
 #[cfg(doctest)]
 pub struct ReadmeDoctests;
+
+// So do the pages that are no module's: users' own shaders, and a frame's cost.
+#[doc = include_str!("../docs/shaders.md")]
+#[cfg(doctest)]
+pub struct ShadersDoctests;
+
+#[doc = include_str!("../docs/frame.md")]
+#[cfg(doctest)]
+pub struct FrameDoctests;

@@ -1,5 +1,6 @@
 //! A crate outside the workspace that depends on fieldkit by path with default features, as a
-//! user's would: it must build on this toolchain on editions 2021 and 2024 (edition 2021 uses
+//! user's would (the README's dependency block), holding every Rust example of the README and
+//! the technique pages: it must build on this toolchain on editions 2021 and 2024 (edition 2021 uses
 //! resolver 2, which picks the newest compatible versions: an unpinned wesl sibling once
 //! resolved to a release needing a newer rustc), and fieldkit's runtime tree must stay within
 //! the dependency budget the README states.
@@ -45,6 +46,81 @@ fn cargo() -> Command {
     Command::new(env!("CARGO"))
 }
 
+/// The pages a user reads first: the README and each technique's page (and the pages for
+/// users' own shaders and a frame's cost).
+const PAGES: &[&str] = &[
+    "README.md",
+    "docs/distance.md",
+    "docs/metaball.md",
+    "docs/voxelize.md",
+    "docs/octree.md",
+    "docs/volume.md",
+    "docs/ocean.md",
+    "docs/shaders.md",
+    "docs/frame.md",
+];
+
+/// Every Rust block of `text` that rustdoc would compile (a fence with no language or `rust`,
+/// not `ignore` or `compile_fail`), its hidden `# ` lines shown, as rustdoc compiles it.
+fn rust_blocks(text: &str) -> Vec<String> {
+    let mut blocks = Vec::new();
+    let mut open: Option<Vec<&str>> = None;
+    for line in text.lines() {
+        let trimmed = line.trim_start();
+        if let Some(info) = trimmed.strip_prefix("```") {
+            match open.take() {
+                Some(lines) => blocks.push(lines.join("\n")),
+                None => {
+                    let words: Vec<&str> = info.split(',').map(str::trim).collect();
+                    let rust = words[0].is_empty() || words[0] == "rust";
+                    let skipped = words.iter().any(|w| *w == "ignore" || *w == "compile_fail");
+                    open = Some(Vec::new());
+                    if !rust || skipped {
+                        // Read to its end and drop it.
+                        open = Some(vec!["\u{0}"]);
+                    }
+                }
+            }
+            continue;
+        }
+        if let Some(lines) = open.as_mut() {
+            let shown = if trimmed == "#" {
+                ""
+            } else if let Some(rest) = trimmed.strip_prefix("# ") {
+                rest
+            } else {
+                line
+            };
+            lines.push(shown);
+        }
+    }
+    blocks.retain(|b| !b.starts_with('\u{0}'));
+    blocks
+}
+
+/// The pages' Rust blocks as modules of a user's crate, each wrapped in a function where it
+/// is statements rather than items (as rustdoc wraps it in `main`).
+fn page_examples() -> String {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut out = String::new();
+    for page in PAGES {
+        let text = std::fs::read_to_string(root.join(page)).unwrap();
+        for (i, block) in rust_blocks(&text).into_iter().enumerate() {
+            let name = page.replace(['/', '.'], "_");
+            let items = block.contains("fn ") || block.trim_start().starts_with("use ");
+            let body = if items {
+                block
+            } else {
+                format!("fn example() -> Result<(), Box<dyn std::error::Error>> {{\n{block}\nOk(())\n}}")
+            };
+            out.push_str(&format!(
+                "\n/// `{page}`, Rust block {i}.\n#[allow(dead_code, unused)]\nmod {name}_{i} {{\n{body}\n}}\n"
+            ));
+        }
+    }
+    out
+}
+
 fn consumer(root: &Path, edition: &str) -> PathBuf {
     let dir = root.join(format!("edition{edition}"));
     std::fs::create_dir_all(dir.join("src")).unwrap();
@@ -53,12 +129,16 @@ fn consumer(root: &Path, edition: &str) -> PathBuf {
         dir.join("Cargo.toml"),
         format!(
             "[package]\nname = \"consumer{edition}\"\nversion = \"0.0.0\"\nedition = \"{edition}\"\n\
-             publish = false\n\n[dependencies]\nfieldkit = {{ path = \"{fieldkit}\" }}\n\n\
+             publish = false\n\n[dependencies]\nfieldkit = {{ path = \"{fieldkit}\" }}\n\
+             wgpu = \"30\"\n\n\
              # Its own workspace, not fieldkit's.\n[workspace]\n"
         ),
     )
     .unwrap();
-    std::fs::write(dir.join("src/main.rs"), MAIN).unwrap();
+    // The README's dependency block (fieldkit and wgpu, default features: no `context`), and
+    // the pages' examples compiled in it: an example that needs a feature, a crate or a name
+    // the README does not give a user fails here, whatever the workspace's own tests enable.
+    std::fs::write(dir.join("src/main.rs"), format!("{MAIN}{}", page_examples())).unwrap();
     // Resolve afresh, as a new user's crate does.
     std::fs::remove_file(dir.join("Cargo.lock")).ok();
     dir
@@ -169,5 +249,56 @@ fn the_runtime_alone_builds_without_the_techniques() {
     assert!(
         !output.status.success() && stderr.contains("distance"),
         "fieldkit::distance compiled without the techniques feature:\n{stderr}"
+    );
+}
+
+/// Every text file under `dir`, recursively.
+fn text_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    for entry in std::fs::read_dir(dir).unwrap().flatten() {
+        let path = entry.path();
+        if path.is_dir() {
+            text_files(&path, out);
+        } else if path
+            .extension()
+            .is_some_and(|e| ["md", "txt", "csv", "jsonl"].contains(&e.to_str().unwrap_or("")))
+        {
+            out.push(path);
+        }
+    }
+}
+
+/// The project's documentation speaks of the project, its API and its measured behaviour, not
+/// of how or when the work was done: no page mentions a working session, and no page is dated
+/// (a measurement names its adapter, command and commit instead).
+#[test]
+fn the_docs_are_no_diary() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files: Vec<PathBuf> = ["README.md", "CHANGELOG.md", "CONTRIBUTING.md"]
+        .iter()
+        .map(|f| root.join(f))
+        .collect();
+    text_files(&root.join("docs"), &mut files);
+    assert!(files.len() > 20, "found only {files:?}");
+    let mut found = Vec::new();
+    for file in &files {
+        let text = std::fs::read_to_string(file).unwrap();
+        let page = file.extension().is_some_and(|e| e == "md");
+        for (n, line) in text.lines().enumerate() {
+            let dated = line.as_bytes().windows(10).any(|w| {
+                w[..4].iter().all(u8::is_ascii_digit)
+                    && w[4] == b'-'
+                    && w[5..7].iter().all(u8::is_ascii_digit)
+                    && w[7] == b'-'
+                    && w[8..].iter().all(u8::is_ascii_digit)
+            });
+            if line.to_lowercase().contains("session") || (page && dated) {
+                found.push(format!("{}:{}: {}", file.display(), n + 1, line.trim()));
+            }
+        }
+    }
+    assert!(
+        found.is_empty(),
+        "documentation that reads as a diary:\n{}",
+        found.join("\n")
     );
 }

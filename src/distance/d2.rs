@@ -29,7 +29,14 @@ pub enum Method2d {
 pub struct Settings2d {
     /// Exact (default) or a JFA variant.
     pub method: Method2d,
-    /// Treat the mask as inside (non-zero) and produce signed distance, negative inside.
+    /// Treat the mask as inside (seed texels) and produce signed distance, negative inside.
+    ///
+    /// **Convention:** distances are between texel centres, and a signed field takes half a
+    /// texel off so that zero lies between the last inside and the first outside texel: an
+    /// outside texel holds (its distance to the nearest inside texel − ½) × `texel_size`, an
+    /// inside texel −(its distance to the nearest outside texel − ½) × `texel_size`. A texel
+    /// beside the boundary reads ±0.5 texel, not 1 or 0. Unsigned fields (`false`) hold the
+    /// plain distance to the nearest seed texel's centre (0 on a seed).
     pub signed: bool,
     /// World units per texel; distances are multiplied by it.
     pub texel_size: f32,
@@ -83,8 +90,10 @@ pub struct Field2d {
     pub width: u32,
     /// Height in texels.
     pub height: u32,
-    /// `R32Float`: distance to the nearest seed (signed: negative inside), times `texel_size`;
-    /// [`FAR`](super::FAR) where there is no seed.
+    /// `R32Float`, texel (x, y) at column x, row y (row 0 the mask's first): distance to the
+    /// nearest seed texel's centre times `texel_size` (world units); signed fields are negative
+    /// inside and half a texel closer to zero than the centre distance (see
+    /// [`Settings2d::signed`]). [`FAR`](super::FAR) where there is no seed.
     pub distance: wgpu::Texture,
     /// Nearest seed per texel (signed: nearest *inside* texel).
     pub nearest: Nearest2d,
@@ -102,6 +111,17 @@ impl Field2d {
 
 /// The 2D distance API: the exact transform by default, JFA on request. Create once, encode
 /// many times.
+///
+/// ```no_run
+/// # fn f(device: &wgpu::Device, queue: &wgpu::Queue, mask: &wgpu::Texture) -> Result<(), fieldkit::Error> {
+/// use fieldkit::distance::{Distance2d, Settings2d};
+/// let distance = Distance2d::new(device)?; // once
+/// let mut encoder = device.create_command_encoder(&Default::default());
+/// let field = distance.encode(device, &mut encoder, mask, &Settings2d { signed: true, ..Default::default() })?;
+/// queue.submit([encoder.finish()]);
+/// // field.distance: R32Float, negative inside (see `Settings2d::signed` for the ½-texel rule).
+/// # let _ = field; Ok(()) }
+/// ```
 pub struct Distance2d {
     jfa: Jfa2d,
     exact: Exact,

@@ -47,6 +47,19 @@ use crate::gpu::{Record, Recorder};
 /// columns ran there; 512 MiB after a 512³ field), so that a transform run every frame does
 /// not allocate, and have wgpu zero, a buffer that size each time. Drop the `Distance3d` to
 /// free it.
+///
+/// ```no_run
+/// # fn f(device: &wgpu::Device, queue: &wgpu::Queue, occupancy: &[u8]) -> Result<(), fieldkit::Error> {
+/// use fieldkit::distance::{upload_volume, Distance3d, Settings3d};
+/// let distance = Distance3d::new(device)?; // once
+/// let volume = upload_volume(device, queue, occupancy, [64, 64, 64])?; // x fastest, non-zero seeds
+/// let mut encoder = device.create_command_encoder(&Default::default());
+/// let field = distance.encode(device, &mut encoder, &volume, &Settings3d::default())?;
+/// queue.submit([encoder.finish()]);
+/// // Use field.distance (R32Float 3D), then hand the buffers back for the next call:
+/// distance.recycle(field);
+/// # Ok(()) }
+/// ```
 pub struct Distance3d {
     exact: Exact,
     jfa: Jfa3d,

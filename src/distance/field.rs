@@ -71,8 +71,11 @@ pub struct Field3d {
     pub nearest: Slabs,
     /// For a signed field of integer seeds, the nearest *outside* voxel.
     pub nearest_outside: Option<Slabs>,
-    /// `R32Float`: distance in world units (signed: negative inside), clamped to the band.
-    /// `±f32::MAX` where no seed exists.
+    /// `R32Float` 3D texture, voxel (x, y, z) at texel (x, y, z): distance in world units
+    /// (`voxel_size` per voxel) to the nearest seed, clamped to the band. Integer seeds are
+    /// voxel centres, and a signed field (negative inside) is half a voxel closer to zero than
+    /// the centre distance, so zero lies between voxels (see `Settings3d::signed`); sub-voxel
+    /// seeds are the points themselves. `±f32::MAX` where no seed exists.
     pub distance: wgpu::Texture,
 }
 

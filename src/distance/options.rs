@@ -61,6 +61,13 @@ pub struct Settings3d {
     /// Exact (default), JFA or the line passes.
     pub method: Method,
     /// Signed distance, negative inside (marked voxels).
+    ///
+    /// **Convention** (integer seeds): distances are between voxel centres, and a signed field
+    /// takes half a voxel off so that zero lies between the last inside and the first outside
+    /// voxel: an outside voxel holds (its distance to the nearest inside voxel − ½) ×
+    /// `voxel_size`, an inside one −(its distance to the nearest outside voxel − ½) ×
+    /// `voxel_size`. Unsigned fields hold the plain centre distance (0 on a seed). Sub-voxel
+    /// seeds (`Distance3d::encode_points`) lie on the surface: their distance is to the point.
     pub signed: bool,
     /// Which voxels are marked.
     pub inside: Inside,

@@ -379,6 +379,22 @@ pub struct SurfaceSeeds {
 }
 
 /// The field pipelines. Create once, encode many times.
+///
+/// ```no_run
+/// # fn f(device: &wgpu::Device, queue: &wgpu::Queue) -> Result<(), fieldkit::Error> {
+/// use fieldkit::metaball::{packed_grid, Metaballs, Settings};
+/// let balls = Metaballs::new(device)?; // once
+/// let voxels = packed_grid([6, 4, 3], 1.0)?; // centres and scales
+/// let settings = Settings::default();
+/// let instances = balls.upload(device, queue, &voxels)?;
+/// if let Some(grid) = settings.fit_grid(&voxels, 1.0)? {
+///     let mut encoder = device.create_command_encoder(&Default::default());
+///     let field = balls.encode(device, &mut encoder, &instances, &grid, 1.0, &settings)?;
+///     queue.submit([encoder.finish()]); // field: the SDF a `Raymarcher` draws
+///     # let _ = field;
+/// }
+/// # Ok(()) }
+/// ```
 pub struct Metaballs {
     splat: ComputePipeline<splat::splat::Entry>,
     seeds: ComputePipeline<surface_seeds::surface_seeds::Entry>,

@@ -346,6 +346,20 @@ enum Composite {
 /// surface takes the scene's own lighting. A frame makes no GPU object: the view's parameters
 /// are staged through a ring it keeps (with the queue given to `new`; up to
 /// [`RING_UPLOADS`](crate::gpu::RING_UPLOADS) marches may wait in one encoder).
+///
+/// ```no_run
+/// # fn f(device: &wgpu::Device, queue: &wgpu::Queue, encoder: &mut wgpu::CommandEncoder,
+/// #      field: &fieldkit::metaball::MetaballField, view: &fieldkit::view::View,
+/// #      colour: &wgpu::TextureView, depth: &wgpu::TextureView) -> Result<(), fieldkit::Error> {
+/// use fieldkit::metaball::{RaymarchSettings, Raymarcher};
+/// // Once, for your targets' formats (standard depth: `reversed_z` false).
+/// let marcher = Raymarcher::new(device, queue, wgpu::TextureFormat::Rgba8Unorm,
+///     wgpu::TextureFormat::Depth32Float, false)?;
+/// // Each frame, into your encoder: colour and depth where the surface is nearer.
+/// marcher.encode(device, encoder, colour, depth, field, fieldkit::glam::Mat4::IDENTITY, view,
+///     &RaymarchSettings::default())?;
+/// # Ok(()) }
+/// ```
 pub struct Raymarcher {
     march: ComputePipeline<sdf_raymarch::march::Entry>,
     direct: ComputePipeline<blob_trace::trace_blobs::Entry>,

@@ -167,6 +167,18 @@ impl OceanCamera {
 /// GPU object (each draw's patches and parameters are staged through a ring it keeps, with the
 /// queue given to `new`; up to [`RING_UPLOADS`](crate::gpu::RING_UPLOADS) draws may wait in one
 /// encoder).
+///
+/// ```no_run
+/// # fn f(device: &wgpu::Device, queue: &wgpu::Queue, encoder: &mut wgpu::CommandEncoder,
+/// #      waves: &fieldkit::ocean::Waves, camera: &fieldkit::ocean::OceanCamera,
+/// #      colour: &wgpu::TextureView, depth: &wgpu::Texture, time: f64) -> Result<(), fieldkit::Error> {
+/// use fieldkit::ocean::{LodSettings, Look, OceanRenderer, Output};
+/// let sea = OceanRenderer::new(device, queue, Output::Forward(wgpu::TextureFormat::Rgba8Unorm), false)?;
+/// // Each frame: patches chosen on the GPU, drawn against your Depth32Float target.
+/// sea.encode_lod(device, encoder, waves, time, camera, &Look::default(), &LodSettings::default(),
+///     &[colour], depth, false)?;
+/// # Ok(()) }
+/// ```
 pub struct OceanRenderer {
     output: Output,
     reversed_z: bool,

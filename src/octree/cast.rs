@@ -125,6 +125,16 @@ impl Casts {
 }
 
 /// The cast pipelines. Create once, cast many times.
+///
+/// ```no_run
+/// # fn f(device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, octree: &fieldkit::octree::Octree,
+/// #      grid: &fieldkit::voxelize::Grid, view: &fieldkit::view::View) -> Result<(), fieldkit::Error> {
+/// use fieldkit::octree::{Lod, OctreeCaster, RenderSettings};
+/// let caster = OctreeCaster::new(); // once
+/// let settings = RenderSettings { lod: Lod::Footprint(1.0), ..Default::default() };
+/// let image = caster.encode_render(device, encoder, octree, grid, view, &settings)?; // first hits
+/// # let _ = image; Ok(()) }
+/// ```
 #[derive(Default)]
 pub struct OctreeCaster {
     /// Without and with attributes.

@@ -55,6 +55,18 @@ const ENTRY_BYTES: u64 = 8;
 const MIN_LOG_SIDE: u32 = 3;
 
 /// The octree build pipelines. Create once, build many times.
+///
+/// ```no_run
+/// # async fn f(device: &wgpu::Device, queue: &wgpu::Queue, mesh: &fieldkit::voxelize::Mesh)
+/// #     -> Result<(), fieldkit::Error> {
+/// use fieldkit::octree::OctreeBuilder;
+/// use fieldkit::voxelize::{Grid, Separation, Voxelizer};
+/// let (voxelizer, builder) = (Voxelizer::new(device)?, OctreeBuilder::new(device)?); // once
+/// let grid = Grid::fit(mesh, 4096)?;
+/// // Finishes as the app's loop polls the device (its sizes come from counts read back).
+/// let octree = builder.voxelize(device, queue, &voxelizer, mesh, &grid, Separation::Conservative).await?;
+/// # let _ = octree; Ok(()) }
+/// ```
 pub struct OctreeBuilder {
     flag: OnceLock<ComputePipeline<stage::flag::Entry>>,
     scan_nodes: OnceLock<ComputePipeline<stage::scan_nodes::Entry>>,

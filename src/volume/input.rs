@@ -10,6 +10,15 @@ use crate::error::Error;
 pub const BRICK: u32 = 8;
 
 /// A density volume: a 3D texture and where its voxels sit in local space.
+///
+/// ```no_run
+/// # fn f(device: &wgpu::Device, queue: &wgpu::Queue, density: &[f32]) -> Result<(), fieldkit::Error> {
+/// use fieldkit::glam::Vec3;
+/// // 128³ densities in [0, 1], x fastest; 0.1 m voxels, the low corner at the origin.
+/// let volume = fieldkit::volume::Volume::upload(device, queue, density, [128; 3],
+///     wgpu::TextureFormat::R8Unorm, Vec3::splat(0.1), Vec3::ZERO)?;
+/// # let _ = volume; Ok(()) }
+/// ```
 pub struct Volume {
     /// The density, a 3D texture (R8Unorm, R16Float or R32Float).
     pub texture: wgpu::Texture,

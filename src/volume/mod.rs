@@ -240,6 +240,22 @@ impl VolumeMarched {
 /// The volume pipelines. Create once, encode every frame: a frame makes no GPU object once its
 /// outputs are dropped (parameters staged through a ring it keeps, with the queue given to
 /// `new`; up to [`RING_UPLOADS`](crate::gpu::RING_UPLOADS) marches may wait in one encoder).
+///
+/// ```no_run
+/// # fn f(device: &wgpu::Device, queue: &wgpu::Queue, encoder: &mut wgpu::CommandEncoder,
+/// #      volume: &fieldkit::volume::Volume, view: &fieldkit::view::View,
+/// #      colour: &wgpu::TextureView) -> Result<(), fieldkit::Error> {
+/// use fieldkit::volume::{MarchSettings, TransferFunction, VolumeRenderer};
+/// let renderer = VolumeRenderer::new(device, queue, wgpu::TextureFormat::Rgba8Unorm)?; // once
+/// let bricks = renderer.encode_bricks(device, encoder, volume)?; // once per volume
+/// let (tf, march) = (TransferFunction::cloud(), MarchSettings::default());
+/// let identity = fieldkit::glam::Mat4::IDENTITY;
+/// if let Some(marched) = renderer.encode_march(device, encoder, volume, &bricks, None, &tf,
+///     identity, view, None, &march)? {
+///     renderer.encode_composite(device, encoder, colour, &marched)?; // blended over colour
+/// }
+/// # Ok(()) }
+/// ```
 pub struct VolumeRenderer {
     bricks: ComputePipeline<bricks::bricks::Entry>,
     /// One march pipeline per mode × shadow × skip × sample count (`march_index`), made on

@@ -227,6 +227,20 @@ impl SurfacePipelines {
 pub const LIGHT: u32 = 16;
 
 /// The voxelization pipelines. Create once, encode many times.
+///
+/// ```no_run
+/// # fn f(device: &wgpu::Device, queue: &wgpu::Queue) -> Result<(), fieldkit::Error> {
+/// use fieldkit::glam::DVec3;
+/// use fieldkit::voxelize::{Grid, Mesh, Voxelizer};
+/// let voxelizer = Voxelizer::new(device)?; // once
+/// let mesh = Mesh::cuboid(DVec3::ZERO, DVec3::ONE);
+/// let grid = Grid::fit(&mesh, 64)?;
+/// let mut encoder = device.create_command_encoder(&Default::default());
+/// let surface = voxelizer.encode_surface(device, &mut encoder, &mesh, &grid)?; // a bitset
+/// queue.submit([encoder.finish()]);
+/// let voxels = surface.read(device, queue); // a `Readback<Vec<bool>>`, x fastest
+/// # let _ = voxels; Ok(()) }
+/// ```
 pub struct Voxelizer {
     surface: SurfacePipelines,
     surface_six: SurfacePipelines,

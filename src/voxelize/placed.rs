@@ -584,8 +584,8 @@ mod tests {
     /// Not loose where it need not be: a flat square in 64 × 64 tiles, unmoved. A tile's
     /// triangles have boxes of up to 66² columns (closed boxes reach a voxel past each integer
     /// edge), 138 368 chunks for the 128; the bound counts (64√2 + 3)² / 4 + 1 = 2 187 each,
-    /// 279 938 (2.02 times). The Frobenius norm of the matrix as the stretch of both sides, as
-    /// before 2026-11-26 (seventh session), counted about 6 times.
+    /// 279 938 (2.02 times). The Frobenius norm of the matrix as the stretch of both sides
+    /// would count about 6 times.
     #[test]
     fn the_bound_is_within_about_twice_the_count_unmoved() {
         let mut stored = Vec::new();
