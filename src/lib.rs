@@ -31,11 +31,11 @@ pub mod volume;
 pub mod voxelize;
 
 pub use error::{BindingError, Error};
-pub use grid::Grid;
-pub use wgpu;
 /// glam, the vector maths of fieldkit's API (`DVec3` mesh placement, `Mat4` cameras), at the version fieldkit
 /// uses: `fieldkit::glam::DVec3` needs no dependency of your own.
 pub use glam;
+pub use grid::Grid;
+pub use wgpu;
 
 /// Generated bindings, one module per stage (`shaders::<room>::<stage>`). See [`bind`].
 #[cfg(feature = "techniques")]

@@ -111,7 +111,9 @@ fn page_examples() -> String {
             let body = if items {
                 block
             } else {
-                format!("fn example() -> Result<(), Box<dyn std::error::Error>> {{\n{block}\nOk(())\n}}")
+                format!(
+                    "fn example() -> Result<(), Box<dyn std::error::Error>> {{\n{block}\nOk(())\n}}"
+                )
             };
             out.push_str(&format!(
                 "\n/// `{page}`, Rust block {i}.\n#[allow(dead_code, unused)]\nmod {name}_{i} {{\n{body}\n}}\n"
@@ -138,7 +140,11 @@ fn consumer(root: &Path, edition: &str) -> PathBuf {
     // The README's dependency block (fieldkit and wgpu, default features: no `context`), and
     // the pages' examples compiled in it: an example that needs a feature, a crate or a name
     // the README does not give a user fails here, whatever the workspace's own tests enable.
-    std::fs::write(dir.join("src/main.rs"), format!("{MAIN}{}", page_examples())).unwrap();
+    std::fs::write(
+        dir.join("src/main.rs"),
+        format!("{MAIN}{}", page_examples()),
+    )
+    .unwrap();
     // Resolve afresh, as a new user's crate does.
     std::fs::remove_file(dir.join("Cargo.lock")).ok();
     dir

@@ -89,9 +89,11 @@ impl Context {
     /// [`Context::new`] without blocking: the adapter whose name contains `name`, if given.
     pub async fn new_async(name: Option<&str>) -> Result<Self, Error> {
         let backends = wgpu::Backends::from_env().unwrap_or(wgpu::Backends::PRIMARY);
+        // wgpu's defaults, and its `WGPU_*` variables for the instance's flags (say
+        // `WGPU_VALIDATION_INDIRECT_CALL=0`), as an app's own instance may set them.
         let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
             backends,
-            ..wgpu::InstanceDescriptor::new_without_display_handle()
+            ..wgpu::InstanceDescriptor::new_without_display_handle_from_env()
         });
         Self::from_instance(instance, backends, name, None).await
     }

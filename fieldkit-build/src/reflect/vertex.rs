@@ -22,90 +22,72 @@ use naga::{ScalarKind, TypeInner};
 use super::VertexInput;
 
 /// One WebGPU vertex format: its WGSL-side name, `wgpu::VertexFormat` variant, the scalar kind
-/// it feeds, and its host element type and count.
-struct Format {
-    name: &'static str,
-    variant: &'static str,
-    kind: ScalarKind,
-    host: &'static str,
-    count: u32,
-    bytes: u32,
-}
-
-const fn f(
-    name: &'static str,
-    variant: &'static str,
-    kind: ScalarKind,
-    host: &'static str,
-    count: u32,
-    bytes: u32,
-) -> Format {
-    Format {
-        name,
-        variant,
-        kind,
-        host,
-        count,
-        bytes,
-    }
-}
+/// it feeds, its host element type and count, and its bytes.
+type Format = (
+    &'static str,
+    &'static str,
+    ScalarKind,
+    &'static str,
+    u32,
+    u32,
+);
 
 use ScalarKind::{Float, Sint, Uint};
 
 /// Every vertex format wgpu offers without a feature (64-bit floats need one and are left out).
 const FORMATS: &[Format] = &[
-    f("uint8", "Uint8", Uint, "u8", 1, 1),
-    f("uint8x2", "Uint8x2", Uint, "u8", 2, 2),
-    f("uint8x4", "Uint8x4", Uint, "u8", 4, 4),
-    f("sint8", "Sint8", Sint, "i8", 1, 1),
-    f("sint8x2", "Sint8x2", Sint, "i8", 2, 2),
-    f("sint8x4", "Sint8x4", Sint, "i8", 4, 4),
-    f("unorm8", "Unorm8", Float, "u8", 1, 1),
-    f("unorm8x2", "Unorm8x2", Float, "u8", 2, 2),
-    f("unorm8x4", "Unorm8x4", Float, "u8", 4, 4),
-    f("unorm8x4-bgra", "Unorm8x4Bgra", Float, "u8", 4, 4),
-    f("snorm8", "Snorm8", Float, "i8", 1, 1),
-    f("snorm8x2", "Snorm8x2", Float, "i8", 2, 2),
-    f("snorm8x4", "Snorm8x4", Float, "i8", 4, 4),
-    f("uint16", "Uint16", Uint, "u16", 1, 2),
-    f("uint16x2", "Uint16x2", Uint, "u16", 2, 4),
-    f("uint16x4", "Uint16x4", Uint, "u16", 4, 8),
-    f("sint16", "Sint16", Sint, "i16", 1, 2),
-    f("sint16x2", "Sint16x2", Sint, "i16", 2, 4),
-    f("sint16x4", "Sint16x4", Sint, "i16", 4, 8),
-    f("unorm16", "Unorm16", Float, "u16", 1, 2),
-    f("unorm16x2", "Unorm16x2", Float, "u16", 2, 4),
-    f("unorm16x4", "Unorm16x4", Float, "u16", 4, 8),
-    f("snorm16", "Snorm16", Float, "i16", 1, 2),
-    f("snorm16x2", "Snorm16x2", Float, "i16", 2, 4),
-    f("snorm16x4", "Snorm16x4", Float, "i16", 4, 8),
+    ("uint8", "Uint8", Uint, "u8", 1, 1),
+    ("uint8x2", "Uint8x2", Uint, "u8", 2, 2),
+    ("uint8x4", "Uint8x4", Uint, "u8", 4, 4),
+    ("sint8", "Sint8", Sint, "i8", 1, 1),
+    ("sint8x2", "Sint8x2", Sint, "i8", 2, 2),
+    ("sint8x4", "Sint8x4", Sint, "i8", 4, 4),
+    ("unorm8", "Unorm8", Float, "u8", 1, 1),
+    ("unorm8x2", "Unorm8x2", Float, "u8", 2, 2),
+    ("unorm8x4", "Unorm8x4", Float, "u8", 4, 4),
+    ("unorm8x4-bgra", "Unorm8x4Bgra", Float, "u8", 4, 4),
+    ("snorm8", "Snorm8", Float, "i8", 1, 1),
+    ("snorm8x2", "Snorm8x2", Float, "i8", 2, 2),
+    ("snorm8x4", "Snorm8x4", Float, "i8", 4, 4),
+    ("uint16", "Uint16", Uint, "u16", 1, 2),
+    ("uint16x2", "Uint16x2", Uint, "u16", 2, 4),
+    ("uint16x4", "Uint16x4", Uint, "u16", 4, 8),
+    ("sint16", "Sint16", Sint, "i16", 1, 2),
+    ("sint16x2", "Sint16x2", Sint, "i16", 2, 4),
+    ("sint16x4", "Sint16x4", Sint, "i16", 4, 8),
+    ("unorm16", "Unorm16", Float, "u16", 1, 2),
+    ("unorm16x2", "Unorm16x2", Float, "u16", 2, 4),
+    ("unorm16x4", "Unorm16x4", Float, "u16", 4, 8),
+    ("snorm16", "Snorm16", Float, "i16", 1, 2),
+    ("snorm16x2", "Snorm16x2", Float, "i16", 2, 4),
+    ("snorm16x4", "Snorm16x4", Float, "i16", 4, 8),
     // Half floats travel as their bits (`half::f16::to_bits`).
-    f("float16", "Float16", Float, "u16", 1, 2),
-    f("float16x2", "Float16x2", Float, "u16", 2, 4),
-    f("float16x4", "Float16x4", Float, "u16", 4, 8),
-    f("float32", "Float32", Float, "f32", 1, 4),
-    f("float32x2", "Float32x2", Float, "f32", 2, 8),
-    f("float32x3", "Float32x3", Float, "f32", 3, 12),
-    f("float32x4", "Float32x4", Float, "f32", 4, 16),
-    f("uint32", "Uint32", Uint, "u32", 1, 4),
-    f("uint32x2", "Uint32x2", Uint, "u32", 2, 8),
-    f("uint32x3", "Uint32x3", Uint, "u32", 3, 12),
-    f("uint32x4", "Uint32x4", Uint, "u32", 4, 16),
-    f("sint32", "Sint32", Sint, "i32", 1, 4),
-    f("sint32x2", "Sint32x2", Sint, "i32", 2, 8),
-    f("sint32x3", "Sint32x3", Sint, "i32", 3, 12),
-    f("sint32x4", "Sint32x4", Sint, "i32", 4, 16),
+    ("float16", "Float16", Float, "u16", 1, 2),
+    ("float16x2", "Float16x2", Float, "u16", 2, 4),
+    ("float16x4", "Float16x4", Float, "u16", 4, 8),
+    ("float32", "Float32", Float, "f32", 1, 4),
+    ("float32x2", "Float32x2", Float, "f32", 2, 8),
+    ("float32x3", "Float32x3", Float, "f32", 3, 12),
+    ("float32x4", "Float32x4", Float, "f32", 4, 16),
+    ("uint32", "Uint32", Uint, "u32", 1, 4),
+    ("uint32x2", "Uint32x2", Uint, "u32", 2, 8),
+    ("uint32x3", "Uint32x3", Uint, "u32", 3, 12),
+    ("uint32x4", "Uint32x4", Uint, "u32", 4, 16),
+    ("sint32", "Sint32", Sint, "i32", 1, 4),
+    ("sint32x2", "Sint32x2", Sint, "i32", 2, 8),
+    ("sint32x3", "Sint32x3", Sint, "i32", 3, 12),
+    ("sint32x4", "Sint32x4", Sint, "i32", 4, 16),
     // Three 10-bit channels and a 2-bit one, packed in one `u32`.
-    f("unorm10-10-10-2", "Unorm10_10_10_2", Float, "u32", 1, 4),
+    ("unorm10-10-10-2", "Unorm10_10_10_2", Float, "u32", 1, 4),
 ];
 
-impl Format {
-    fn rust(&self) -> String {
-        if self.count == 1 {
-            self.host.to_string()
-        } else {
-            format!("[{}; {}]", self.host, self.count)
-        }
+/// The host field's type of a format: its element, or an array of them.
+fn rust_of(f: &Format) -> String {
+    let (_, _, _, host, count, _) = *f;
+    if count == 1 {
+        host.to_string()
+    } else {
+        format!("[{host}; {count}]")
     }
 }
 
@@ -149,7 +131,7 @@ pub(crate) fn inputs(
                 match word {
                     "vertex" => instance = false,
                     "instance" => instance = true,
-                    _ => match FORMATS.iter().find(|f| f.name == word) {
+                    _ => match FORMATS.iter().find(|f| f.0 == word) {
                         Some(f) if format.is_none() => format = Some(f),
                         Some(_) => problem(i, at, format!("`{name}` declares two formats")),
                         None => problem(
@@ -157,11 +139,7 @@ pub(crate) fn inputs(
                             at,
                             format!(
                                 "`{word}` is not a vertex format or step (formats: {}; steps: vertex, instance)",
-                                FORMATS
-                                    .iter()
-                                    .map(|f| f.name)
-                                    .collect::<Vec<_>>()
-                                    .join(", ")
+                                FORMATS.iter().map(|f| f.0).collect::<Vec<_>>().join(", ")
                             ),
                         ),
                     },
@@ -181,7 +159,7 @@ pub(crate) fn inputs(
             continue;
         };
         let format = match format {
-            Some(f) if f.kind == kind => f,
+            Some(f) if f.2 == kind => f,
             Some(f) => {
                 let (i, at, _) = declared.expect("a format was declared");
                 problem(
@@ -189,8 +167,8 @@ pub(crate) fn inputs(
                     at,
                     format!(
                         "`{name}` is `{wgsl}`, but `{}` feeds {} inputs",
-                        f.name,
-                        kind_name(f.kind)
+                        f.0,
+                        kind_name(f.2)
                     ),
                 );
                 continue;
@@ -215,9 +193,9 @@ pub(crate) fn inputs(
             location,
             name,
             ty: wgsl,
-            format: format.variant.to_string(),
-            rust: format.rust(),
-            size: format.bytes,
+            format: format.1.to_string(),
+            rust: rust_of(format),
+            size: format.5,
             instance,
         });
     }
@@ -256,10 +234,7 @@ fn default_format(
     (width == 4)
         .then(|| {
             FORMATS.iter().find(|f| {
-                f.kind == kind
-                    && f.bytes == 4 * n
-                    && f.host.ends_with("32")
-                    && !f.name.starts_with("unorm10")
+                f.2 == kind && f.5 == 4 * n && f.3.ends_with("32") && !f.0.starts_with("unorm10")
             })
         })
         .flatten()

@@ -1,6 +1,8 @@
 //! Stages wherever a project keeps them: a file directly in `shaders/` and one two folders down
 //! get bindings at their folder paths, and both run.
 
+mod common;
+
 use fieldkit::gpu::{read_buffer, Context};
 use fieldkit_user_crate::shaders::{flat, groups, scene::water::ripple, ALL};
 use wgpu::util::DeviceExt as _;
@@ -45,20 +47,14 @@ fn flat_and_nested_stages_are_built_and_run() {
         )
         .unwrap();
     // The nested stage binds the shared group, reached from four modules down.
-    let mut bytes = encase::UniformBuffer::new(Vec::new());
-    bytes
-        .write(&ripple::Frame {
+    let frame = common::uniform(
+        &ctx,
+        "frame",
+        &ripple::Frame {
             time: 0.0,
             scale: 3.0,
-        })
-        .unwrap();
-    let frame = ctx
-        .device
-        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("frame"),
-            contents: &bytes.into_inner(),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
+        },
+    );
     let frame = groups::frame::Group::new(
         &ctx.device,
         &groups::frame::Resources {
@@ -393,25 +389,9 @@ fn declared_vertex_formats_draw_what_the_buffers_hold() {
     };
     let vertex_buffer = buffer("vertices", bytemuck::cast_slice(&vertices));
     let instance_buffer = buffer("instance", bytemuck::bytes_of(&instance));
-    let target = |format| {
-        ctx.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("target"),
-            size: wgpu::Extent3d {
-                width: 4,
-                height: 4,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        })
-    };
     let (rgba, tags) = (
-        target(wgpu::TextureFormat::Rgba8Unorm),
-        target(wgpu::TextureFormat::R32Uint),
+        common::target(&ctx, 4, 4, wgpu::TextureFormat::Rgba8Unorm),
+        common::target(&ctx, 4, 4, wgpu::TextureFormat::R32Uint),
     );
     let bound = pipeline
         .bind(
@@ -427,25 +407,7 @@ fn declared_vertex_formats_draw_what_the_buffers_hold() {
             rgba.create_view(&Default::default()),
             tags.create_view(&Default::default()),
         ];
-        let attachments: Vec<_> = views
-            .iter()
-            .map(|view| {
-                Some(wgpu::RenderPassColorAttachment {
-                    view,
-                    resolve_target: None,
-                    depth_slice: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })
-            })
-            .collect();
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("packed"),
-            color_attachments: &attachments,
-            ..Default::default()
-        });
+        let mut pass = common::colour_pass(&mut encoder, &views, wgpu::Color::TRANSPARENT);
         pass.set_pipeline(&pipeline.pipeline);
         bound.set_render(&mut pass);
         pass.set_vertex_buffer(0, vertex_buffer.slice(..));
@@ -479,30 +441,21 @@ fn a_fragment_file_draws_with_another_files_vertex_entry() {
         },
     )
     .expect("pipeline of two files");
-    let uniform = |label, bytes: Vec<u8>| {
-        ctx.device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: &bytes,
-                usage: wgpu::BufferUsages::UNIFORM,
-            })
-    };
-    let mut camera = encase::UniformBuffer::new(Vec::new());
     // The triangle's corners are (0,0), (2,0), (0,2): moved by −1 it covers the left, lower
     // half of clip space's square, and exactly the texels below the diagonal.
-    camera
-        .write(&pair_vert::Camera {
+    let camera = common::uniform(
+        &ctx,
+        "camera",
+        &pair_vert::Camera {
             offset: glam::Vec2::splat(-1.0),
-        })
-        .unwrap();
-    let mut tint = encase::UniformBuffer::new(Vec::new());
-    tint.write(&pair_frag::Tint {
-        color: glam::Vec4::new(1.0, 0.0, 1.0, 1.0),
-    })
-    .unwrap();
-    let (camera, tint) = (
-        uniform("camera", camera.into_inner()),
-        uniform("tint", tint.into_inner()),
+        },
+    );
+    let tint = common::uniform(
+        &ctx,
+        "tint",
+        &pair_frag::Tint {
+            color: glam::Vec4::new(1.0, 0.0, 1.0, 1.0),
+        },
     );
     let bound = pipeline
         .bind(
@@ -525,36 +478,11 @@ fn a_fragment_file_draws_with_another_files_vertex_entry() {
             contents: bytemuck::cast_slice(&corners),
             usage: wgpu::BufferUsages::VERTEX,
         });
-    let target = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("target"),
-        size: wgpu::Extent3d {
-            width: 4,
-            height: 4,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Rgba8Unorm,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    });
+    let target = common::target(&ctx, 4, 4, wgpu::TextureFormat::Rgba8Unorm);
     let mut encoder = ctx.encoder("pair");
     {
-        let view = target.create_view(&Default::default());
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("pair"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &view,
-                resolve_target: None,
-                depth_slice: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            ..Default::default()
-        });
+        let views = [target.create_view(&Default::default())];
+        let mut pass = common::colour_pass(&mut encoder, &views, wgpu::Color::BLACK);
         pass.set_pipeline(&pipeline.pipeline);
         bound.set_render(&mut pass);
         pass.set_vertex_buffer(0, corners.slice(..));

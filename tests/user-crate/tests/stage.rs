@@ -300,43 +300,9 @@ fn binding_arrays_say_what_they_need_and_run_where_the_device_has_it() {
     let pipeline = layers::main::Pipeline::new(&ctx.device).expect("the user's pipeline");
     let [w, h] = [11u32, 5];
     let texel = |k: u32, x: u32, y: u32| (k * 100 + y * w + x) as f32 * 0.25;
-    let textures: Vec<wgpu::Texture> = (0..3)
-        .map(|k| {
-            let data: Vec<f32> = (0..h)
-                .flat_map(|y| (0..w).map(move |x| texel(k, x, y)))
-                .collect();
-            ctx.device.create_texture_with_data(
-                &ctx.queue,
-                &wgpu::TextureDescriptor {
-                    label: Some("layer"),
-                    size: wgpu::Extent3d {
-                        width: w,
-                        height: h,
-                        depth_or_array_layers: 1,
-                    },
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format: wgpu::TextureFormat::R32Float,
-                    usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                    view_formats: &[],
-                },
-                wgpu::util::TextureDataOrder::LayerMajor,
-                bytemuck::cast_slice(&data),
-            )
-        })
-        .collect();
-    let views: Vec<wgpu::TextureView> = textures
-        .iter()
-        .map(|t| t.create_view(&Default::default()))
-        .collect();
+    let views = common::float_layers(&ctx, 3, [w, h], texel);
     let view_refs: Vec<&wgpu::TextureView> = views.iter().collect();
-    let sums = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("sums"),
-        size: (w * h * 4) as u64,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
+    let sums = common::output(&ctx, (w * h * 4) as u64);
     match pipeline.bind(
         &ctx.device,
         &layers::main::Resources {
@@ -514,44 +480,12 @@ fn unsized_binding_arrays_take_their_length_when_the_pipeline_is_made() {
     }
     let [w, h] = [9u32, 6];
     let texel = |k: u32, x: u32, y: u32| (k * 100 + y * w + x) as f32 * 0.5;
-    let views: Vec<wgpu::TextureView> = (0..4)
-        .map(|k| {
-            let data: Vec<f32> = (0..h)
-                .flat_map(|y| (0..w).map(move |x| texel(k, x, y)))
-                .collect();
-            ctx.device
-                .create_texture_with_data(
-                    &ctx.queue,
-                    &wgpu::TextureDescriptor {
-                        label: Some("layer"),
-                        size: wgpu::Extent3d {
-                            width: w,
-                            height: h,
-                            depth_or_array_layers: 1,
-                        },
-                        mip_level_count: 1,
-                        sample_count: 1,
-                        dimension: wgpu::TextureDimension::D2,
-                        format: wgpu::TextureFormat::R32Float,
-                        usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                        view_formats: &[],
-                    },
-                    wgpu::util::TextureDataOrder::LayerMajor,
-                    bytemuck::cast_slice(&data),
-                )
-                .create_view(&Default::default())
-        })
-        .collect();
+    let views = common::float_layers(&ctx, 4, [w, h], texel);
     let views: Vec<&wgpu::TextureView> = views.iter().collect();
     for n in [4u32, 2] {
         let pipeline =
             Pipeline::with_counts(&ctx.device, &ArrayCounts { layers: n }).expect("made");
-        let sums = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("sums"),
-            size: (w * h * 4) as u64,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        });
+        let sums = common::output(&ctx, (w * h * 4) as u64);
         let count = ctx
             .device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
