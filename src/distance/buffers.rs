@@ -68,17 +68,17 @@ impl Pool {
     /// values.
     ///
     /// ```
-    /// # fn f(ctx: &fieldkit::gpu::Context, volume: &wgpu::Texture) -> Result<(), fieldkit::Error> {
+    /// # fn f(device: &wgpu::Device, queue: &wgpu::Queue, volume: &wgpu::Texture) -> Result<(), fieldkit::Error> {
     /// use fieldkit::distance::{Distance3d, Settings3d};
-    /// let d3 = Distance3d::new(&ctx.device)?;
+    /// let d3 = Distance3d::new(device)?;
     /// let mut last = None;
     /// for _frame in 0..3 {
     ///     if let Some(field) = last.take() {
     ///         d3.recycle(field);
     ///     }
-    ///     let mut encoder = ctx.encoder("distance");
-    ///     last = Some(d3.encode(&ctx.device, &mut encoder, volume, &Settings3d::default())?);
-    ///     ctx.submit_and_wait("distance", encoder)?;
+    ///     let mut encoder = device.create_command_encoder(&Default::default());
+    ///     last = Some(d3.encode(device, &mut encoder, volume, &Settings3d::default())?);
+    ///     queue.submit([encoder.finish()]);
     /// }
     /// # Ok(()) }
     /// ```

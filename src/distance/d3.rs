@@ -6,23 +6,6 @@
 //! 2048 × 1024 with the bits their sides need, [`SeedPacking`]) or, for sub-voxel seeds, a key
 //! into a table of points. Distances are written to an `R32Float` 3D texture for sampling.
 //!
-//! ```no_run
-//! # fn main() -> Result<(), fieldkit::Error> {
-//! use fieldkit::distance::{Distance3d, Method, Settings3d, upload_volume};
-//! let ctx = fieldkit::gpu::Context::new()?;
-//! let distance = Distance3d::new(&ctx.device)?;
-//! // A 32×24×16 occupancy volume with one occupied voxel.
-//! let size = [32, 24, 16];
-//! let mut mask = vec![0u8; 32 * 24 * 16];
-//! mask[(8 * 24 + 12) * 32 + 5] = 255;
-//! let volume = upload_volume(&ctx.device, &ctx.queue, &mask, size)?;
-//! let mut encoder = ctx.encoder("distance");
-//! let options = Settings3d { method: Method::Exact, signed: true, ..Settings3d::default() };
-//! let field = distance.encode(&ctx.device, &mut encoder, &volume, &options)?;
-//! ctx.submit_and_wait("distance", encoder)?;
-//! let sdf: Vec<f32> = fieldkit::gpu::read_texture(&ctx, &field.distance)?;
-//! # Ok(()) }
-//! ```
 
 use std::sync::Arc;
 
@@ -323,17 +306,17 @@ impl Distance3d {
     /// values.
     ///
     /// ```
-    /// # fn f(ctx: &fieldkit::gpu::Context, volume: &wgpu::Texture) -> Result<(), fieldkit::Error> {
+    /// # fn f(device: &wgpu::Device, queue: &wgpu::Queue, volume: &wgpu::Texture) -> Result<(), fieldkit::Error> {
     /// use fieldkit::distance::{Distance3d, Settings3d};
-    /// let d3 = Distance3d::new(&ctx.device)?;
+    /// let d3 = Distance3d::new(device)?;
     /// let mut last = None;
     /// for _frame in 0..3 {
     ///     if let Some(field) = last.take() {
     ///         d3.recycle(field);
     ///     }
-    ///     let mut encoder = ctx.encoder("distance");
-    ///     last = Some(d3.encode(&ctx.device, &mut encoder, volume, &Settings3d::default())?);
-    ///     ctx.submit_and_wait("distance", encoder)?;
+    ///     let mut encoder = device.create_command_encoder(&Default::default());
+    ///     last = Some(d3.encode(device, &mut encoder, volume, &Settings3d::default())?);
+    ///     queue.submit([encoder.finish()]);
     /// }
     /// # Ok(()) }
     /// ```

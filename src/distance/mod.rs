@@ -7,23 +7,6 @@
 //! - **3D:** [`Distance3d`] computes distance fields of occupancy volumes (exact by default),
 //!   of sub-voxel points (JFA) and with narrow bands.
 //!
-//! ```no_run
-//! # fn main() -> Result<(), fieldkit::Error> {
-//! use fieldkit::distance::{Distance2d, Settings2d, upload_mask};
-//! let ctx = fieldkit::gpu::Context::new()?;
-//! let distance = Distance2d::new(&ctx.device)?;
-//! // A 64×32 mask with one seed; non-zero texels are seeds.
-//! let mut mask = vec![0u8; 64 * 32];
-//! mask[10 * 64 + 20] = 255;
-//! let seeds = upload_mask(&ctx.device, &ctx.queue, &mask, 64, 32)?;
-//! let mut encoder = ctx.encoder("distance");
-//! let field = distance.encode(&ctx.device, &mut encoder, &seeds, &Settings2d::default())?;
-//! ctx.submit_and_wait("distance", encoder)?;
-//! let distances: Vec<f32> = fieldkit::gpu::read_texture(&ctx, &field.distance)?;
-//! assert_eq!(distances[10 * 64 + 23], 3.0);
-//! # Ok(()) }
-//! ```
-//!
 #![doc = include_str!("../../docs/distance.md")]
 
 mod buffers;

@@ -1,21 +1,6 @@
 //! Metaball voxels: a voxel set (centres and scales) splatted into a density grid, iso-surface
 //! seeds, a signed distance field by JFA, and a raymarched surface (see [`Raymarcher`]).
 //!
-//! ```no_run
-//! # fn f(ctx: &fieldkit::gpu::Context) -> Result<(), fieldkit::Error> {
-//! use fieldkit::metaball::{Metaballs, Settings, packed_grid};
-//! let voxels = packed_grid([8, 8, 8], 1.0)?; // 512 voxels of edge 1, centred on the origin
-//! let balls = Metaballs::new(&ctx.device)?;
-//! let instances = balls.upload(&ctx.device, &ctx.queue, &voxels)?;
-//! let settings = Settings::default();
-//! let Some(grid) = settings.fit_grid(&voxels, 1.0)? else { return Ok(()) }; // empty set
-//! let mut encoder = ctx.encoder("metaballs");
-//! let field = balls.encode(&ctx.device, &mut encoder, &instances, &grid, 1.0, &settings)?;
-//! ctx.submit_and_wait("metaballs", encoder)?;
-//! // field.sdf and field.density feed render::Raymarcher.
-//! # Ok(()) }
-//! ```
-//!
 #![doc = include_str!("../../docs/metaball.md")]
 
 pub mod cpu;

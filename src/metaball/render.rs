@@ -1,32 +1,6 @@
 //! Drawing a metaball field: the full-screen SDF raymarch and the debug voxel cubes, both into a
 //! caller's colour and depth targets so they composite with the caller's scene.
 //!
-//! ```no_run
-//! # fn f(ctx: &fieldkit::gpu::Context, field: &fieldkit::metaball::MetaballField,
-//! #      colour: &wgpu::TextureView, depth: &wgpu::TextureView) -> Result<(), fieldkit::Error> {
-//! use fieldkit::metaball::{Raymarcher, RaymarchSettings};
-//! use fieldkit::view::View;
-//! use glam::{Mat4, Vec3};
-//! let proj = glam::camera::rh::proj::directx::perspective(0.8, 16.0 / 9.0, 0.1, 100.0);
-//! let view = View {
-//!     view_proj: proj * glam::camera::rh::view::look_at_mat4(Vec3::new(0.0, 2.0, 12.0), Vec3::ZERO, Vec3::Y),
-//!     viewport: [1920, 1080],
-//!     reversed_z: false,
-//!     origin: [0, 0],
-//! };
-//! let marcher = Raymarcher::new(
-//!     &ctx.device,
-//!     &ctx.queue,
-//!     wgpu::TextureFormat::Rgba8Unorm,
-//!     wgpu::TextureFormat::Depth32Float,
-//!     false,
-//! )?;
-//! let mut encoder = ctx.encoder("frame");
-//! let drawn = marcher.encode(&ctx.device, &mut encoder, colour, depth, field, Mat4::IDENTITY,
-//!     &view, &RaymarchSettings::default())?;
-//! ctx.submit_and_wait("frame", encoder)?;
-//! # Ok(()) }
-//! ```
 
 use glam::{Mat4, Vec3, Vec4};
 

@@ -15,23 +15,6 @@
 //! function of the voxels alone: two builds give the same bytes, and [`OctreeData::from_voxels`]
 //! builds the same tree on the CPU.
 //!
-//! ```
-//! # fn f(ctx: &fieldkit::gpu::Context) -> Result<(), fieldkit::Error> {
-//! use fieldkit::octree::OctreeBuilder;
-//! use fieldkit::voxelize::{Grid, Mesh, Separation, Voxelizer};
-//! use glam::DVec3;
-//! let mesh = Mesh::uv_sphere(DVec3::splat(20.0), 15.0, 32, 16);
-//! let grid = Grid { origin: DVec3::ZERO, voxel: 1.0, size: [40, 40, 40] };
-//! let voxelizer = Voxelizer::new(&ctx.device)?;
-//! let builder = OctreeBuilder::new(&ctx.device)?;
-//! let octree = ctx.block_on(builder.voxelize(
-//!     &ctx.device, &ctx.queue, &voxelizer, &mesh, &grid, Separation::Conservative,
-//! ))?;
-//! let tree = octree.read(&ctx.device, &ctx.queue).wait(ctx)?;
-//! assert!(tree.occupied([20, 20, 5]) && !tree.occupied([20, 20, 20]));
-//! # Ok(()) }
-//! ```
-//!
 #![doc = include_str!("../../docs/octree.md")]
 
 mod attributes;

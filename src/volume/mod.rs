@@ -4,38 +4,6 @@
 //! empty-space skipping over a min-max brick grid; depth-aware, premultiplied compositing over
 //! the caller's scene.
 //!
-//! ```no_run
-//! # fn f(ctx: &fieldkit::gpu::Context, colour: &wgpu::TextureView) -> Result<(), fieldkit::Error> {
-//! use fieldkit::view::View;
-//! use fieldkit::volume::{MarchSettings, TransferFunction, Volume, VolumeRenderer, fbm_cloud};
-//! use glam::{Mat4, Vec3};
-//! let dims = [64, 64, 64];
-//! let volume = Volume::upload(&ctx.device, &ctx.queue, &fbm_cloud(dims, 7), dims, wgpu::TextureFormat::R8Unorm,
-//!     Vec3::splat(1.0 / 64.0), Vec3::splat(-0.5))?;
-//! let renderer = VolumeRenderer::new(&ctx.device, &ctx.queue, wgpu::TextureFormat::Rgba8Unorm)?;
-//! let tf = TransferFunction::cloud();
-//! let proj = glam::camera::rh::proj::directx::perspective(0.8, 16.0 / 9.0, 0.05, 100.0);
-//! let view = View {
-//!     view_proj: proj * glam::camera::rh::view::look_at_mat4(Vec3::new(0.0, 0.3, 2.0), Vec3::ZERO, Vec3::Y),
-//!     viewport: [1920, 1080],
-//!     reversed_z: false,
-//!     origin: [0, 0],
-//! };
-//! let settings = MarchSettings::default();
-//! let mut encoder = ctx.encoder("frame");
-//! // Once per volume, and again when the volume, transfer function or light changes.
-//! let bricks = renderer.encode_bricks(&ctx.device, &mut encoder, &volume)?;
-//! let light = renderer.encode_light(&ctx.device, &mut encoder, &volume, &bricks, &tf,
-//!     Mat4::IDENTITY, &settings)?;
-//! // Every frame.
-//! if let Some(marched) = renderer.encode_march(&ctx.device, &mut encoder, &volume, &bricks,
-//!     Some(&light), &tf, Mat4::IDENTITY, &view, None, &settings)? {
-//!     renderer.encode_composite(&ctx.device, &mut encoder, colour, &marched)?;
-//! }
-//! ctx.submit_and_wait("frame", encoder)?;
-//! # Ok(()) }
-//! ```
-//!
 #![doc = include_str!("../../docs/volume.md")]
 
 mod cloud;

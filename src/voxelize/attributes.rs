@@ -288,15 +288,15 @@ impl Voxelizer {
     /// ([`Voxelizer::encode_attributes`], [`Voxelizer::encode_resolve_attributes`]).
     ///
     /// ```
-    /// # fn f(ctx: &fieldkit::gpu::Context) -> Result<(), fieldkit::Error> {
+    /// # async fn f(device: &wgpu::Device, queue: &wgpu::Queue) -> Result<(), fieldkit::Error> {
     /// use fieldkit::voxelize::{Grid, Mesh, Voxelizer};
-    /// use glam::DVec3;
+    /// use fieldkit::glam::DVec3;
     /// let mut mesh = Mesh::uv_sphere(DVec3::ZERO, 1.0, 24, 12);
     /// mesh.colors = vec![[200, 40, 90, 255]; mesh.positions.len()];
     /// let grid = Grid { origin: DVec3::splat(-1.25), voxel: 2.5 / 32.0, size: [32, 32, 32] };
-    /// let voxelizer = Voxelizer::new(&ctx.device)?;
-    /// let attributes = ctx.block_on(voxelizer.attributes(&ctx.device, &ctx.queue, &mesh, &grid))?;
-    /// let voxels = attributes.read(&ctx.device, &ctx.queue).wait(ctx)?;
+    /// let voxelizer = Voxelizer::new(device)?;
+    /// let attributes = voxelizer.attributes(device, queue, &mesh, &grid).await?;
+    /// let voxels = attributes.read(device, queue).await?;
     /// assert!(voxels.iter().all(|v| v.color == [200, 40, 90, 255]));
     /// # Ok(()) }
     /// ```

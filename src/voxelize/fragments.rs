@@ -143,17 +143,17 @@ impl Voxelizer {
     /// needs.
     ///
     /// ```
-    /// # fn f(ctx: &fieldkit::gpu::Context) -> Result<(), fieldkit::Error> {
+    /// # async fn f(device: &wgpu::Device, queue: &wgpu::Queue) -> Result<(), fieldkit::Error> {
     /// use fieldkit::voxelize::{Grid, Mesh, Separation, Voxelizer};
-    /// use glam::DVec3;
+    /// use fieldkit::glam::DVec3;
     /// let mesh = Mesh::uv_sphere(DVec3::splat(8.0), 5.0, 16, 8);
     /// let grid = Grid { origin: DVec3::ZERO, voxel: 1.0, size: [16, 16, 16] };
-    /// let v = Voxelizer::new(&ctx.device)?;
-    /// let mut encoder = ctx.encoder("fragments");
+    /// let v = Voxelizer::new(device)?;
+    /// let mut encoder = device.create_command_encoder(&Default::default());
     /// let fragments =
-    ///     v.encode_fragments(&ctx.device, &mut encoder, &mesh, &grid, Separation::Conservative, None)?;
-    /// ctx.submit_and_wait("fragments", encoder)?;
-    /// let voxels = fragments.read(&ctx.device, &ctx.queue).wait(ctx)?;
+    ///     v.encode_fragments(device, &mut encoder, &mesh, &grid, Separation::Conservative, None)?;
+    /// queue.submit([encoder.finish()]);
+    /// let voxels = fragments.read(device, queue).await?;
     /// assert!(voxels.iter().all(|v| v.iter().all(|&c| c < 16)));
     /// # Ok(()) }
     /// ```

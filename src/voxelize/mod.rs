@@ -5,20 +5,6 @@
 //! edge 1) on the CPU in f64 before they are rounded to f32, so a mesh 100 km from the origin
 //! voxelizes as well as one at it.
 //!
-//! ```
-//! # fn f(ctx: &fieldkit::gpu::Context) -> Result<(), fieldkit::Error> {
-//! use fieldkit::voxelize::{Grid, Mesh, Voxelizer};
-//! use glam::DVec3;
-//! let mesh = Mesh::uv_sphere(DVec3::new(0.1, 0.2, -0.3), 1.0, 24, 12);
-//! let grid = Grid { origin: DVec3::splat(-1.5), voxel: 3.0 / 32.0, size: [32, 32, 32] };
-//! let v = Voxelizer::new(&ctx.device)?;
-//! let mut encoder = ctx.encoder("voxelize");
-//! let surface = v.encode_surface(&ctx.device, &mut encoder, &mesh, &grid)?;
-//! ctx.submit_and_wait("voxelize", encoder)?;
-//! let occupied = surface.read(&ctx.device, &ctx.queue).wait(ctx)?; // one bool per voxel, x fastest
-//! # let _ = occupied; Ok(()) }
-//! ```
-//!
 #![doc = include_str!("../../docs/voxelize.md")]
 
 mod attributes;

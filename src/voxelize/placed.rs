@@ -22,21 +22,21 @@ const _: () = assert!(LIGHT == 16);
 /// them no area either).
 ///
 /// ```
-/// # fn f(ctx: &fieldkit::gpu::Context) -> Result<(), fieldkit::Error> {
+/// # fn f(device: &wgpu::Device, queue: &wgpu::Queue) -> Result<(), fieldkit::Error> {
 /// use fieldkit::voxelize::{GpuMesh, Grid, Mesh, Separation, Voxelizer};
-/// use glam::{DMat4, DVec3};
-/// let v = Voxelizer::new(&ctx.device)?;
-/// let ball = GpuMesh::upload(&ctx.device, &Mesh::uv_sphere(DVec3::ZERO, 0.5, 16, 8))?;
+/// use fieldkit::glam::{DMat4, DVec3};
+/// let v = Voxelizer::new(device)?;
+/// let ball = GpuMesh::upload(device, &Mesh::uv_sphere(DVec3::ZERO, 0.5, 16, 8))?;
 /// let grid = Grid { origin: DVec3::splat(-2.0), voxel: 0.125, size: [32, 32, 32] };
 /// for frame in 0..3 {
 ///     let t = frame as f64 * 0.1;
 ///     let left = DMat4::from_translation(DVec3::new(-1.0, t, 0.0));
 ///     let right = DMat4::from_translation(DVec3::new(1.0, -t, 0.0)) * DMat4::from_scale(DVec3::splat(0.8));
-///     let mut encoder = ctx.encoder("voxelize");
+///     let mut encoder = device.create_command_encoder(&Default::default());
 ///     let surface = v.encode_surface_placed(
-///         &ctx.device, &mut encoder, &[(&ball, left), (&ball, right)], &grid, Separation::Conservative,
+///         device, &mut encoder, &[(&ball, left), (&ball, right)], &grid, Separation::Conservative,
 ///     )?;
-///     ctx.submit_and_wait("voxelize", encoder)?;
+///     queue.submit([encoder.finish()]);
 ///     # let _ = surface;
 /// }
 /// # Ok(()) }
@@ -288,23 +288,23 @@ impl Voxelizer {
     /// whatever `encode_surface_placed` refuses. On an error `surface` is left as it was.
     ///
     /// ```
-    /// # fn f(ctx: &fieldkit::gpu::Context) -> Result<(), fieldkit::Error> {
+    /// # fn f(device: &wgpu::Device, queue: &wgpu::Queue) -> Result<(), fieldkit::Error> {
     /// use fieldkit::voxelize::{GpuMesh, Grid, Mesh, Separation, Voxelizer};
-    /// use glam::{DMat4, DVec3};
-    /// let v = Voxelizer::new(&ctx.device)?;
-    /// let ball = GpuMesh::upload(&ctx.device, &Mesh::uv_sphere(DVec3::ZERO, 0.5, 16, 8))?;
+    /// use fieldkit::glam::{DMat4, DVec3};
+    /// let v = Voxelizer::new(device)?;
+    /// let ball = GpuMesh::upload(device, &Mesh::uv_sphere(DVec3::ZERO, 0.5, 16, 8))?;
     /// let grid = Grid { origin: DVec3::splat(-2.0), voxel: 0.125, size: [32, 32, 32] };
     /// let mut surface = None;
     /// for frame in 0..3 {
     ///     let place = [(&ball, DMat4::from_translation(DVec3::new(frame as f64 * 0.1, 0.0, 0.0)))];
-    ///     let mut encoder = ctx.encoder("voxelize");
+    ///     let mut encoder = device.create_command_encoder(&Default::default());
     ///     match surface.as_mut() {
     ///         None => surface = Some(v.encode_surface_placed(
-    ///             &ctx.device, &mut encoder, &place, &grid, Separation::Conservative)?),
+    ///             device, &mut encoder, &place, &grid, Separation::Conservative)?),
     ///         Some(s) => v.encode_surface_placed_into(
-    ///             &ctx.device, &mut encoder, &place, &grid, Separation::Conservative, s)?,
+    ///             device, &mut encoder, &place, &grid, Separation::Conservative, s)?,
     ///     }
-    ///     ctx.submit_and_wait("voxelize", encoder)?;
+    ///     queue.submit([encoder.finish()]);
     /// }
     /// # Ok(()) }
     /// ```
