@@ -233,6 +233,29 @@ fn unsupported_bindings_are_errors_naming_the_binding() {
     std::fs::remove_dir_all(&root).ok();
 }
 
+/// A binding array beside a uniform buffer in one group is a layout wgpu refuses ("Bind groups
+/// may not contain both a binding array and a uniform buffer", found on the H200): a build error
+/// naming both, not a pipeline that fails at run time. In another group the uniform builds.
+#[test]
+fn a_binding_array_beside_a_uniform_is_an_error() {
+    let stage = |group: u32| {
+        format!(
+            "// Layers weighed by a uniform count.\nenable wgpu_binding_array;\n@group(0) @binding(0) var layers: binding_array<texture_2d<f32>>;\n@group(0) @binding(1) var<storage, read_write> out: array<f32>;\n@group({group}) @binding(2) var<uniform> count: u32;\n@compute @workgroup_size(1)\nfn main() {{\n    out[0] = textureLoad(layers[count], vec2<i32>(0, 0), 0).x;\n}}\n"
+        )
+    };
+    let root = tree(&[("same", &stage(0)), ("apart", &stage(1))]);
+    let errors = build_all(&root).err().expect("the shared group fails");
+    assert_eq!(errors.len(), 1, "{errors:#?}");
+    assert!(
+        errors[0].contains("shaders/room/same.wgsl:")
+            && errors[0].contains(
+                "@group(0) holds the binding array `layers` and the uniform buffer `count`"
+            ),
+        "{errors:#?}"
+    );
+    std::fs::remove_dir_all(&root).ok();
+}
+
 /// With `check_portability`, a stage that does not translate to a backend language is a
 /// `[portability]` finding (here naga's HLSL writer panics on a binding array of buffers):
 /// a warning, or an error with `deny_lints`.

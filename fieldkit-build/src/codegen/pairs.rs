@@ -273,6 +273,7 @@ pub fn slot_conflicts(stage: &Stage, externals: &[External]) -> Vec<(String, Str
     let r = reflect(stage);
     let mut out = Vec::new();
     for p in pipelines(&r, externals) {
+        let pr = p.reflection(&r);
         let used: Vec<&super::super::reflect::BindingUse> =
             p.entries.iter().flat_map(|e| &e.uses).collect();
         let entry = || p.entries.last().map_or(String::new(), |e| e.name.clone());
@@ -287,6 +288,31 @@ pub fn slot_conflicts(stage: &Stage, externals: &[External]) -> Vec<(String, Str
                         "its pipeline `{}` would bind both `{}` and `{}` at @group({}) @binding({}): \
                          give one another slot",
                         p.module, b.name, a.name, a.group, a.binding
+                    ),
+                ));
+            }
+        }
+        // wgpu refuses a bind group layout holding a binding array beside a uniform buffer.
+        let in_use = |b: &&Binding| {
+            used.iter().any(|u| {
+                (u.group, u.binding, u.name.as_str()) == (b.group, b.binding, b.name.as_str())
+            })
+        };
+        let bound: Vec<&Binding> = pr.bindings.iter().filter(in_use).collect();
+        for array in bound
+            .iter()
+            .filter(|b| b.count.is_some() || b.unsized_array)
+        {
+            if let Some(uniform) = bound.iter().find(|b| {
+                b.group == array.group
+                    && matches!(b.kind, super::super::reflect::BindingKind::Uniform { .. })
+            }) {
+                out.push((
+                    entry(),
+                    format!(
+                        "@group({}) holds the binding array `{}` and the uniform buffer `{}`, a \
+                         bind group layout wgpu refuses: give the uniform another group",
+                        array.group, array.name, uniform.name
                     ),
                 ));
             }

@@ -6,7 +6,8 @@ enable wgpu_binding_array;
 
 @group(0) @binding(0) var layers: binding_array<texture_2d<f32>>;
 @group(0) @binding(1) var<storage, read_write> sums: array<f32>;
-@group(0) @binding(2) var<uniform> count: u32;
+// wgpu refuses a uniform buffer in the group of a binding array: the count has its own.
+@group(1) @binding(0) var<uniform> count: u32;
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
