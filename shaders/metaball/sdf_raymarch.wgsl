@@ -184,13 +184,16 @@ fn trace(pixel: vec2<f32>) -> Shaded {
         }
         steps += 1u;
         let tolerance = max(params.epsilon * params.cell, t * params.pixel_angle);
+        // The density comes with the distance: a sample at or above the threshold has crossed
+        // (or started inside), whatever the approximate distance says there, so a step past a
+        // grazing stretch of surface is caught where it lands; the root lies between the last
+        // two samples.
+        if sample.y >= params.threshold {
+            t = select(bisect(o, dir, prev_t, t), t, t == prev_t);
+            found = true;
+            break;
+        }
         if d < tolerance {
-            if sample.y >= params.threshold {
-                // Crossed (or started inside): the root lies between the last two samples.
-                t = select(bisect(o, dir, prev_t, t), t, t == prev_t);
-                found = true;
-                break;
-            }
             // Close but outside: look a little further for the crossing.
             let ahead = t + 2.0 * tolerance + 0.5 * params.cell;
             if density_at(o + ahead * dir) >= params.threshold {
