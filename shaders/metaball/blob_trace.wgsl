@@ -42,7 +42,7 @@ struct TraceParams {
     far_z: f32,
     rect_origin: vec2<u32>,
     rect_size: vec2<u32>,
-    // 0 shaded, 1 normal and 1 + distance, 2 step count, 3 density (as the SDF march).
+    // 0 shaded, 1 normal and 1 + distance, 2 step count, 3 density, 6 numbers (as the SDF march).
     mode: u32,
     ambient: f32,
     // How far inside the surface the shading samples the density, local units.
@@ -52,6 +52,9 @@ struct TraceParams {
     // Top-left pixel of the view's viewport in the target: pixels are traced in viewport
     // coordinates and stored at + view_origin.
     view_origin: vec2<u32>,
+    // 1: a ray out of steps inside the box is a hit at its last point (0: a miss); both are
+    // marked in mode 6.
+    cap_is_hit: u32,
 }
 
 struct Shaded {
@@ -222,6 +225,23 @@ fn trace(pixel: vec2<f32>) -> Shaded {
     }
 
     let entry_world = (params.local_to_world * vec4<f32>(o + t_enter * dir, 1.0)).xyz;
+    // Out of steps inside the box with nothing met: marked, and a hit at its last point where
+    // the caller asks.
+    let ran_out = !found && steps >= params.max_steps && t <= t_exit;
+    if ran_out && params.cap_is_hit != 0u {
+        found = true;
+    }
+    if params.mode == 6u {
+        // Numbers: distance from the near plane (−1: none), steps, how the ray ended.
+        var end = select(0.0, 1.0, found);
+        if ran_out {
+            end = select(2.0, 3.0, params.cap_is_hit != 0u);
+        }
+        let at = (params.local_to_world * vec4<f32>(o + t * dir, 1.0)).xyz;
+        out.colour = vec4<f32>(select(-1.0, length(at - near_w), found), f32(steps), end, 1.0);
+        out.depth = ndc_depth(params.view_proj, select(entry_world, at, found));
+        return out;
+    }
     if params.mode == 2u {
         out.colour = vec4<f32>(heat(f32(steps) / f32(max(params.max_steps, 1u))), 1.0);
         out.depth = ndc_depth(params.view_proj, entry_world);

@@ -11,7 +11,7 @@ mod render;
 
 pub use cubes::{CubeStyle, Cubes};
 pub use layout::{Animation, MAX_PACKED, animate, extent_grid, packed_grid, region_for_extent};
-pub use render::{Direct, Filter, Marched, Material, Output, RaymarchSettings, Raymarcher};
+pub use render::{Direct, Filter, Marched, Material, Output, RayEnd, RaymarchSettings, Raymarcher};
 
 use glam::{Vec3, Vec4};
 

@@ -21,12 +21,68 @@ pub enum Output {
     /// World normal in rgb, 1 + distance from the near plane to the hit (world units) in alpha,
     /// so alpha 0 is "not drawn"; for float targets.
     Normal,
-    /// Step count per pixel as a heat map, over the whole box.
+    /// Step count per pixel as a heat map over the whole box: `heat(steps / max_steps)`, blue
+    /// (few) through green to red (the cap). For the numbers, [`Output::Distance`].
     Steps,
     /// Density just inside the surface as a heat map.
     Density,
     /// Signed distance where the ray enters the box (red outside, blue inside).
     Sdf,
+    /// What each ray through the box found, as numbers, for float targets (`Rgba32Float`): red
+    /// the distance from the near plane to the hit in world units (−1 where none), green the
+    /// steps taken, blue how the ray ended ([`RayEnd`]: 0 left the box, 1 hit, 2 ran out of
+    /// steps, 3 ran out and was taken as a hit, see [`RaymarchSettings::cap_is_hit`]), alpha 1.
+    /// Depth is the hit's, or where the ray entered the box; [`RayEnd::of`] reads a texel.
+    Distance = 6,
+}
+
+/// The direct tracers' step cap: `max_steps` at the default grid (4 cells per blob radius),
+/// scaled with the cells per radius above it. Their hit tolerance is a fraction of a cell, so a
+/// finer grid takes more steps to close in on a grazing surface: at 12 cells per edge and a
+/// fixed cap of 64, 1 386 rays of the global bound ran out of steps along a row of six blobs
+/// (llvmpipe, `tests/metaball_grazing.rs`); scaled to 192, none.
+fn direct_step_cap(max_steps: u32, bins: &super::BlobBins) -> u32 {
+    let scale = (bins.bin_size / bins.cell / 4.0).max(1.0);
+    (max_steps as f32 * scale).ceil().min(u32::MAX as f32) as u32
+}
+
+/// How a ray of the march ended, as [`Output::Distance`] writes it in blue.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RayEnd {
+    /// It left the box (or reached the far plane) without meeting the surface.
+    Left,
+    /// It met the surface.
+    Hit,
+    /// It used `max_steps` inside the box without meeting the surface: a miss, not a
+    /// finding that nothing is there.
+    RanOut,
+    /// It ran out of steps and, with [`RaymarchSettings::cap_is_hit`], was drawn as a hit at
+    /// its last point.
+    RanOutTakenAsHit,
+}
+
+impl RayEnd {
+    /// How the ray of an [`Output::Distance`] texel ended (`None`: no ray through the box was
+    /// marched there, alpha 0).
+    pub fn of(texel: [f32; 4]) -> Option<Self> {
+        if texel[3] == 0.0 {
+            return None;
+        }
+        Some(match texel[2].round() as u32 {
+            1 => Self::Hit,
+            2 => Self::RanOut,
+            3 => Self::RanOutTakenAsHit,
+            _ => Self::Left,
+        })
+    }
+
+    /// How many rays of an [`Output::Distance`] image ran out of steps (taken as hits or not).
+    pub fn count_ran_out(texels: &[[f32; 4]]) -> usize {
+        texels
+            .iter()
+            .filter(|t| matches!(Self::of(**t), Some(Self::RanOut | Self::RanOutTakenAsHit)))
+            .count()
+    }
 }
 
 /// How the march reads the packed field (distance and density) between voxel centres.
@@ -83,6 +139,10 @@ pub struct RaymarchSettings {
     pub ambient: f32,
     /// What the pass writes: shaded colour or a debug view.
     pub output: Output,
+    /// A ray that uses `max_steps` inside the box without meeting the surface is drawn as a hit
+    /// at its last point (off: left undrawn). Either way [`Output::Distance`] marks it
+    /// ([`RayEnd::RanOut`], [`RayEnd::RanOutTakenAsHit`]), so it is never a silent miss.
+    pub cap_is_hit: bool,
 }
 
 impl Default for RaymarchSettings {
@@ -102,6 +162,7 @@ impl Default for RaymarchSettings {
             pile_colour: None,
             ambient: 0.2,
             output: Output::Shaded,
+            cap_is_hit: false,
         }
     }
 }
@@ -606,7 +667,7 @@ impl Raymarcher {
                 box_max: hi,
                 threshold: bins.threshold,
                 light_dir: settings.light_dir.normalize(),
-                max_steps: settings.max_steps,
+                max_steps: direct_step_cap(settings.max_steps, bins),
                 base_colour: settings.base_colour,
                 epsilon: settings.epsilon * bins.cell,
                 rim_colour: settings.rim_colour,
@@ -623,6 +684,7 @@ impl Raymarcher {
                 inner_offset: bins.cell,
                 pile_colour: pile(settings),
                 view_origin: glam::UVec2::from_array(view.origin),
+                cap_is_hit: settings.cap_is_hit as u32,
             },
         );
         let scratch = self.scratch(device, view.target_size());
@@ -732,6 +794,7 @@ impl Raymarcher {
                 hermite: (settings.filter == Filter::Hermite) as u32,
                 edge_falloff: settings.edge_falloff as u32,
                 view_origin: glam::UVec2::from_array(view.origin),
+                cap_is_hit: settings.cap_is_hit as u32,
             },
         );
         let scratch = self.scratch(device, view.target_size());
