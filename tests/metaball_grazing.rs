@@ -198,7 +198,7 @@ fn the_default_march_keeps_grazing_hits() {
     // density with every distance and takes any sample at or above the threshold as a
     // crossing: before it did, it stepped past grazing stretches the approximate distance
     // overestimated, 5 / 3 / 2 false misses off the rim in these scenes (41 above 10°); now
-    // 0 / 1 / 0 (9 above 10°). The one left crosses the analytic surface 0.115 cells deep,
+    // 0 / 1 / 0 (10 above 10°). The one left crosses the analytic surface 0.115 cells deep,
     // about what the default grid (4 cells per blob edge) moves the trilinear density's
     // iso-surface: the rest are rim pixels, where one pixel either way is sampling. No ray
     // runs out of its 128 steps.
