@@ -15,7 +15,7 @@
 // and refine the crossing by bisection on f, and shade with the analytic gradient.
 
 import fieldkit::field::{ndc_depth, pixel_ray, ray_box};
-import package::shared::shading::{heat, surface_colour};
+import package::shared::shading::{heat, ray_numbers, surface_colour};
 
 struct TraceParams {
     inv_view_proj: mat4x4<f32>,
@@ -232,13 +232,8 @@ fn trace(pixel: vec2<f32>) -> Shaded {
         found = true;
     }
     if params.mode == 6u {
-        // Numbers: distance from the near plane (−1: none), steps, how the ray ended.
-        var end = select(0.0, 1.0, found);
-        if ran_out {
-            end = select(2.0, 3.0, params.cap_is_hit != 0u);
-        }
         let at = (params.local_to_world * vec4<f32>(o + t * dir, 1.0)).xyz;
-        out.colour = vec4<f32>(select(-1.0, length(at - near_w), found), f32(steps), end, 1.0);
+        out.colour = ray_numbers(found, ran_out, params.cap_is_hit != 0u, steps, at, near_w);
         out.depth = ndc_depth(params.view_proj, select(entry_world, at, found));
         return out;
     }
