@@ -290,3 +290,61 @@ fn full_mask_signed_is_minus_far() {
     );
     assert!(dist.iter().all(|&d| d == -FAR));
 }
+
+/// A field handed back with `Distance2d::recycle` is taken by the next call of its size (its
+/// nearest-seed buffer is the one given), and the field made into it equals a new object's,
+/// signed, bit for bit; a field of another size takes nothing.
+#[test]
+fn a_recycled_2d_field_is_taken_and_equals_a_new_one() {
+    use fieldkit::distance::{Distance2d, Field2d, Nearest2d, Settings2d, upload_mask};
+    let ctx = Context::shared();
+    let (w, h) = (97usize, 61usize);
+    let upload = |w: usize, h: usize, density, seed| {
+        let m = random_mask(w, h, density, seed);
+        upload_mask(&ctx.device, &ctx.queue, &to_bytes(&m), w as u32, h as u32).unwrap()
+    };
+    let (a, b, small) = (
+        upload(w, h, 0.002, 41),
+        upload(w, h, 0.05, 42),
+        upload(40, 30, 0.05, 43),
+    );
+    let signed = Settings2d {
+        signed: true,
+        ..Settings2d::default()
+    };
+    let (pooled, fresh) = (
+        Distance2d::new(&ctx.device).unwrap(),
+        Distance2d::new(&ctx.device).unwrap(),
+    );
+    let buffer = |n: &Nearest2d| match n {
+        Nearest2d::Buffer(b) => b.clone(),
+        Nearest2d::Texture(_) => panic!("the exact transform writes buffers"),
+    };
+    let bits = |f: &Field2d| {
+        let n = f.read_nearest(&ctx.device, &ctx.queue).wait(&ctx).unwrap();
+        let d: Vec<u32> = fieldkit::gpu::read_texture(&ctx, &f.distance).unwrap();
+        (n, d)
+    };
+    let mut enc = ctx.encoder("recycle 2d");
+    let old = pooled.encode(&ctx.device, &mut enc, &a, &signed).unwrap();
+    ctx.submit_and_wait("recycle 2d", enc).unwrap();
+    let given = buffer(&old.nearest);
+    pooled.recycle(old);
+    let mut enc = ctx.encoder("recycle 2d");
+    let other = pooled
+        .encode(&ctx.device, &mut enc, &small, &signed)
+        .unwrap();
+    let got = pooled.encode(&ctx.device, &mut enc, &b, &signed).unwrap();
+    let want = fresh.encode(&ctx.device, &mut enc, &b, &signed).unwrap();
+    ctx.submit_and_wait("recycle 2d", enc).unwrap();
+    let taken = [Some(&got.nearest), got.nearest_outside.as_ref()]
+        .into_iter()
+        .flatten()
+        .any(|n| buffer(n) == given);
+    assert!(taken, "the recycled buffer was not taken");
+    assert!(
+        buffer(&other.nearest) != given,
+        "a field of another size took it"
+    );
+    assert!(bits(&got) == bits(&want), "the fields differ");
+}
