@@ -18,6 +18,8 @@ pub mod harness;
 #[cfg(feature = "hot-reload")]
 mod hot;
 #[cfg(feature = "techniques")]
+pub mod mesh_sdf;
+#[cfg(feature = "techniques")]
 pub mod metaball;
 #[cfg(feature = "techniques")]
 pub mod ocean;

@@ -4,10 +4,9 @@
 // triangles lie before it along its row, which for a closed mesh means inside. The host ORs the
 // surface voxels in afterwards, so parts thinner than a voxel survive.
 //
-// Rows that pass exactly through an edge or a vertex must be counted once: the yz edge
-// functions are evaluated from each edge's endpoints in a fixed (lexicographic) order, so the
-// two triangles sharing an edge get exactly opposite values, and a zero goes to the side given
-// by a top-left rule on the canonical edge.
+// Rows that pass exactly through an edge or a vertex are counted once (`shared::row_crossing`).
+
+import package::shared::row_crossing::row_inside;
 
 struct SolidParams {
     grid: vec3<u32>,
@@ -20,25 +19,6 @@ struct SolidParams {
 // Same layout as the surface bitset: voxel (x, y, z) is bit i % 32 of word i / 32 with
 // i = (z · ny + y) · nx + x.
 @group(0) @binding(2) var<storage, read_write> occupancy: array<atomic<u32>>;
-
-// Edge function of the edge a→b at point p in the yz plane (p.x = y, p.y = z), computed from the
-// endpoints in lexicographic order and negated back, so (a, b) and (b, a) give exact negatives.
-// Positive: p is left of a→b. A zero counts as left only for "top-left" canonical edges.
-fn edge_left(a: vec2<f32>, b: vec2<f32>, p: vec2<f32>) -> bool {
-    let swap = a.x > b.x || (a.x == b.x && a.y > b.y);
-    let lo = select(a, b, swap);
-    let hi = select(b, a, swap);
-    let e = (hi.x - lo.x) * (p.y - lo.y) - (hi.y - lo.y) * (p.x - lo.x);
-    let v = select(e, -e, swap);
-    if v != 0.0 {
-        return v > 0.0;
-    }
-    // On the edge: a fixed tie-break on the canonical edge, flipped with the orientation, so
-    // exactly one of the two triangles sharing it takes the point.
-    let d = hi - lo;
-    let top_left = d.x > 0.0 || (d.x == 0.0 && d.y > 0.0);
-    return top_left != swap;
-}
 
 fn flip_from(x_start: i32, y: i32, z: i32) {
     let g = vec3<i32>(params.grid);
@@ -90,7 +70,7 @@ fn solid(@builtin(global_invocation_id) id: vec3<u32>) {
     for (var z = lo.y; z <= hi.y; z++) {
         for (var y = lo.x; y <= hi.x; y++) {
             let p = vec2<f32>(f32(y) + 0.5, f32(z) + 0.5);
-            if edge_left(a.yz, b.yz, p) && edge_left(b.yz, c.yz, p) && edge_left(c.yz, a.yz, p) {
+            if row_inside(a.yz, b.yz, c.yz, p) {
                 // Where the row meets the plane; centres beyond it flip.
                 let xc = (dot(n, v0) - n.y * p.x - n.z * p.y) / n.x;
                 flip_from(i32(ceil(xc - 0.5)), y, z);
