@@ -48,6 +48,10 @@ struct SdfParams {
 // crosses an odd number of triangles in all.
 @group(0) @binding(4) var<storage, read_write> parity: array<atomic<u32>>;
 @group(0) @binding(5) var field: texture_storage_3d<r32float, write>;
+// The finished field, read again for the march's copy.
+@group(0) @binding(6) var field_in: texture_3d<f32>;
+// The field as the SDF march reads it (`metaball::MarchField`).
+@group(0) @binding(7) var march: texture_storage_3d<rgba16float, write>;
 
 const THREADS: u32 = 64u;
 const NO_KEY: u32 = 0u;
@@ -151,7 +155,11 @@ fn band_keys(
         let q = u32(min(d / band, 1.0) * quanta);
         let key = (q << params.id_bits) | t;
         let index = (u32(v.z) * params.grid.y + u32(v.y)) * params.grid.x + u32(v.x);
-        atomicMax(&keys[index], 0xffffffffu - key);
+        // Most offers lose to a nearer triangle's: a load turns them away without a write.
+        let offer = 0xffffffffu - key;
+        if offer > atomicLoad(&keys[index]) {
+            atomicMax(&keys[index], offer);
+        }
     }
 }
 
@@ -282,4 +290,15 @@ fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
         side = 1;
     }
     textureStore(field, id, vec4<f32>(f32(side) * distance * params.voxel, 0.0, 0.0, 0.0));
+}
+
+// The field in the SDF march's format: red the signed distance in voxels, green its negation,
+// a density whose level 0 is the surface (its gradient the outward normal's negation).
+@compute @workgroup_size(4, 4, 4)
+fn march_texture(@builtin(global_invocation_id) id: vec3<u32>) {
+    if any(id >= params.grid) {
+        return;
+    }
+    let d = textureLoad(field_in, id, 0).r / params.voxel;
+    textureStore(march, id, vec4<f32>(d, -d, 0.0, 0.0));
 }

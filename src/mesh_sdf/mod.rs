@@ -35,6 +35,9 @@ pub struct Settings {
     pub band: f32,
     /// Negative inside (default); `false` gives the unsigned distance and skips the sign's pass.
     pub signed: bool,
+    /// Also write [`MeshField::march`], the field as fieldkit's SDF march reads it (default
+    /// false: 8 more bytes a voxel and one more pass).
+    pub march: bool,
 }
 
 impl Default for Settings {
@@ -42,6 +45,7 @@ impl Default for Settings {
         Self {
             band: 4.0,
             signed: true,
+            march: false,
         }
     }
 }
@@ -70,6 +74,10 @@ pub struct MeshField {
     pub texture: wgpu::Texture,
     /// Where the voxels sit: voxel (i, j, k)'s centre is `grid.voxel_centre([i, j, k])`.
     pub grid: Grid,
+    /// With [`Settings::march`]: an `Rgba16Float` 3D texture of the same voxels, red the signed
+    /// distance in voxels and green its negation, which `metaball::Raymarcher::encode_march_field`
+    /// draws (as a `metaball::MarchField` with threshold 0 and `band` × `grid.voxel`).
+    pub march: Option<wgpu::Texture>,
     /// The settings it was made with.
     pub settings: Settings,
     /// Triangles left out for having no area once in the grid's frame.
@@ -82,6 +90,7 @@ pub struct MeshSdf {
     band_keys: ComputePipeline<stage::band_keys::Entry>,
     crossings: ComputePipeline<stage::crossings::Entry>,
     resolve: ComputePipeline<stage::resolve::Entry>,
+    march: ComputePipeline<stage::march_texture::Entry>,
     // Scratch kept for the next field of the same size: the keys and the parity rows.
     keys: std::sync::Mutex<Option<wgpu::Buffer>>,
     parity: std::sync::Mutex<Option<wgpu::Buffer>>,
@@ -125,6 +134,7 @@ impl MeshSdf {
             band_keys: ComputePipeline::new(device)?,
             crossings: ComputePipeline::new(device)?,
             resolve: ComputePipeline::new(device)?,
+            march: ComputePipeline::new(device)?,
             keys: Default::default(),
             parity: Default::default(),
         })
@@ -246,7 +256,25 @@ impl MeshSdf {
             ComputePipeline::<stage::resolve::Entry>::groups_for(size),
             "mesh sdf resolve",
         )?;
+        let march = if settings.march {
+            let march = volume_texture(device, "mesh sdf march", size, wgpu::TextureFormat::Rgba16Float);
+            self.march.record(
+                device,
+                &mut rec,
+                &stage::march_texture::Resources {
+                    params: (&params).into(),
+                    field_in: (&view).into(),
+                    march: (&march.create_view(&Default::default())).into(),
+                },
+                ComputePipeline::<stage::march_texture::Entry>::groups_for(size),
+                "mesh sdf march texture",
+            )?;
+            Some(march)
+        } else {
+            None
+        };
         Ok(MeshField {
+            march,
             texture: field,
             grid: *grid,
             settings: *settings,

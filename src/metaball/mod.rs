@@ -315,6 +315,35 @@ pub struct MetaballField {
     _lease: crate::gpu::Lease,
 }
 
+impl MetaballField {
+    /// What the SDF march reads of this field.
+    pub fn march_field(&self) -> MarchField<'_> {
+        MarchField {
+            march: &self.march,
+            grid: self.grid,
+            band: self.band,
+            threshold: self.threshold,
+        }
+    }
+}
+
+/// A signed distance field as [`Raymarcher::encode_march_field`] reads it: any field, not only
+/// a metaball one, in the march's own format.
+#[derive(Clone, Copy, Debug)]
+pub struct MarchField<'a> {
+    /// `Rgba16Float` 3D texture over `grid`, filterable: red the signed distance in cells
+    /// (negative inside), green a density that is at or above `threshold` exactly inside
+    /// (`-distance` with threshold 0 serves); the march steps by red and finds the surface,
+    /// its normal and its crossings from green.
+    pub march: &'a wgpu::Texture,
+    /// Where the texels sit (local units: the march's `local_to_world` places them).
+    pub grid: Grid,
+    /// The clamp of the distances, local units: where red reaches it the march may step that far.
+    pub band: f32,
+    /// The density of the surface.
+    pub threshold: f32,
+}
+
 /// Blobs sorted into a uniform grid of bins for tracing the field directly
 /// ([`render::Raymarcher::encode_direct`]): each bin lists every blob whose support overlaps it.
 #[derive(Debug)]

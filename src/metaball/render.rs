@@ -4,7 +4,7 @@
 
 use glam::{Mat4, Vec3, Vec4};
 
-use super::{BlobBins, MetaballField};
+use super::{BlobBins, MarchField, MetaballField};
 use crate::bind::{ComputePipeline, KeptBound, RenderPipeline, RenderTargets};
 use crate::error::Error;
 use crate::gpu::{KeptView, Record, Uploads};
@@ -742,6 +742,20 @@ impl Raymarcher {
         view: &View,
         settings: &RaymarchSettings,
     ) -> Result<Option<Marched>, Error> {
+        self.encode_march_field(device, rec, &field.march_field(), local_to_world, view, settings)
+    }
+
+    /// [`Self::encode_march`] of any signed distance field in the march's format
+    /// ([`MarchField`]): a mesh's (`mesh_sdf::MeshField::march`) as well as a metaball field's.
+    pub fn encode_march_field(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl crate::gpu::Record,
+        field: &MarchField<'_>,
+        local_to_world: Mat4,
+        view: &View,
+        settings: &RaymarchSettings,
+    ) -> Result<Option<Marched>, Error> {
         let g = &field.grid;
         let (lo, cell) = (g.origin.as_vec3(), g.voxel as f32);
         let hi = lo + Vec3::new(g.size[0] as f32, g.size[1] as f32, g.size[2] as f32) * cell;
@@ -801,7 +815,7 @@ impl Raymarcher {
         let fv = self
             .kept
             .field_view
-            .get(&field.march, |t| t.create_view(&Default::default()));
+            .get(field.march, |t| t.create_view(&Default::default()));
         let marched = self.march.bind_kept(
             device,
             &self.kept.march,

@@ -4,7 +4,7 @@
 
 use fieldkit::gpu::{Context, read_texture};
 use fieldkit::metaball::{BlobBins, Instances, MetaballField, Metaballs, Settings, cpu};
-use fieldkit::metaball::{Direct, Output, RaymarchSettings, Raymarcher};
+use fieldkit::metaball::{Direct, MarchField, Output, RaymarchSettings, Raymarcher};
 use fieldkit::view::{Targets, View};
 use glam::{DVec3, Mat4, Vec3, Vec4};
 
@@ -40,10 +40,12 @@ pub fn camera_near(eye: Vec3, target: Vec3, reversed: bool, near: f32) -> View {
     }
 }
 
-/// What draws the surface: the SDF-texture march, or a direct tracer over blob bins.
+/// What draws the surface: the SDF-texture march (of a metaball field or any field in the
+/// march's format), or a direct tracer over blob bins.
 #[derive(Clone, Copy)]
 pub enum Tracer<'a> {
     Sdf(&'a MetaballField),
+    Field(MarchField<'a>),
     Direct(&'a BlobBins, Direct),
 }
 
@@ -92,6 +94,12 @@ pub fn shoot<'a>(
             view,
             settings,
         ),
+        Tracer::Field(field) => marcher
+            .encode_march_field(device, &mut enc, &field, local_to_world, view, settings)
+            .and_then(|m| match m {
+                Some(m) => marcher.encode_composite(device, &mut enc, cv, dv, &m).map(|()| true),
+                None => Ok(false),
+            }),
         Tracer::Direct(bins, method) => marcher.encode_direct(
             device,
             &mut enc,

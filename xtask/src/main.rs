@@ -10,6 +10,7 @@ mod bench_metaball;
 mod bench_ocean;
 mod bench_octree;
 mod bench_volume;
+mod bench_mesh_sdf;
 mod bench_voxelize;
 mod chart;
 mod floor;
@@ -121,6 +122,9 @@ enum Technique {
     Volume,
     Ocean,
     Voxelize,
+    /// A mesh's signed distance field against an f64 reference, the voxel-centre path and
+    /// the CPU crate mesh_to_sdf: time against error.
+    MeshSdf,
     /// The sparse voxel octree against the dense grid: memory, build and render time.
     Octree,
     /// What a frame of every viewer scene costs the app: CPU record + submit, submit → done,
@@ -212,6 +216,7 @@ fn main() -> ExitCode {
                 Technique::Volume => bench_volume::run,
                 Technique::Ocean => bench_ocean::run,
                 Technique::Voxelize => bench_voxelize::run,
+                Technique::MeshSdf => bench_mesh_sdf::run,
                 Technique::Octree => bench_octree::run,
                 Technique::Frame => bench_frame::run,
             };
