@@ -773,6 +773,7 @@ fn voxelizer_panel(ui: &mut Ui, s: &mut VoxelizerSettings) {
                 VoxelMode::Surface(Separation::Six),
                 VoxelMode::Raster,
                 VoxelMode::Solid,
+                VoxelMode::DistanceField,
             ] {
                 ui.selectable_value(&mut s.mode, m, format!("{m:?}"));
             }
@@ -783,5 +784,6 @@ fn voxelizer_panel(ui: &mut Ui, s: &mut VoxelizerSettings) {
             ui.selectable_value(&mut s.colour_by, ColourBy::Normal, "normal");
             ui.selectable_value(&mut s.colour_by, ColourBy::Colour, "colour");
         });
-    ui.checkbox(&mut s.slice, "distance-field slice (middle z)");
+    ui.checkbox(&mut s.slice, "signed distance slice (middle z)");
+    ui.add(Slider::new(&mut s.band, 0.5..=16.0).text("distance band (voxels)"));
 }

@@ -11,7 +11,10 @@
 //!   band 4): distances to the nearest occupied voxel's centre, timed the same way;
 //! - the Rust crate `mesh_to_sdf` 0.4 (CPU, every core of this machine, `SignMethod::Raycast`
 //!   and `Normal`) up to 128³ (64³ with `--quick`): wall time of `generate_grid_sdf`, median of
-//!   up to 5 runs.
+//!   up to 5 runs;
+//! - with `--peer CMD` (`python3 scripts/peers/warp_mesh_sdf.py`, NVIDIA Warp's GPU mesh
+//!   queries), the command's bakes of the whole grid and of the band, timed by itself (CUDA
+//!   events around the BVH build and the query) and read back for the same comparison.
 //!
 //! Error against an f64 reference (brute-force nearest triangle; sign by the generalized
 //! winding number, inside above ½) on up to 1 500 voxels the field puts within the band and
@@ -45,8 +48,12 @@ struct Row {
 struct Error {
     max: f64,
     rms: f64,
-    wrong_sign: usize,
-    samples: usize,
+    /// Samples within the band by the reference, and those signed otherwise than it.
+    in_band: usize,
+    wrong_in_band: usize,
+    /// Samples beyond the band, and those signed otherwise.
+    beyond: usize,
+    wrong_beyond: usize,
 }
 
 /// The reference at the sampled voxels: unsigned distance (voxels) and inside by winding number.
@@ -68,7 +75,7 @@ pub fn run(args: &crate::measure::Args) -> Result<(), String> {
     };
     let peer_max = if args.quick { 64 } else { 128 };
     println!(
-        "| mesh | triangles | grid | method | ms (min–max) | max error, voxels | RMS | wrong signs / samples |\n|---|---|---|---|---|---|---|---|"
+        "| mesh | triangles | grid | method | ms (min–max) | max error, voxels | RMS | wrong signs in the band / samples | beyond / samples |\n|---|---|---|---|---|---|---|---|---|"
     );
     let mut rows = Vec::new();
     for (name, mesh, closed) in meshes(args)? {
@@ -81,6 +88,11 @@ pub fn run(args: &crate::measure::Args) -> Result<(), String> {
             let (t, field) = time_voxel_centres(&ctx, heater.as_ref(), args, &mesh, &grid, closed)?;
             let method = if closed { "voxel centres (solid)" } else { "voxel centres (surface, unsigned)" };
             rows.push(report(what, method, t, compare(&samples, &grid, &field)));
+            if let Some(peer) = &args.peer {
+                for (method, t, field) in run_peer(peer, args, &mesh, &grid)? {
+                    rows.push(report(what, &method, t, compare(&samples, &grid, &field)));
+                }
+            }
             if n <= peer_max {
                 for (method, sign) in [
                     ("mesh_to_sdf raycast", mesh_to_sdf::SignMethod::Raycast),
@@ -95,12 +107,12 @@ pub fn run(args: &crate::measure::Args) -> Result<(), String> {
     let csv = crate::measure::write_table(
         &args.out,
         "mesh_sdf.csv",
-        "adapter,mesh,triangles,grid,method,ms,ms_min,ms_max,max_error_voxels,rms_error_voxels,wrong_signs,samples",
+        "adapter,mesh,triangles,grid,method,ms,ms_min,ms_max,max_error_voxels,rms_error_voxels,wrong_signs_in_band,in_band,wrong_signs_beyond,beyond",
         rows.iter().map(|r| {
             format!(
-                "\"{adapter}\",\"{}\",{},{},\"{}\",{:.4},{:.4},{:.4},{:.3e},{:.3e},{},{}",
+                "\"{adapter}\",\"{}\",{},{},\"{}\",{:.4},{:.4},{:.4},{:.3e},{:.3e},{},{},{},{}",
                 r.mesh, r.triangles, r.n, r.method, r.ms, r.lo, r.hi, r.error.max, r.error.rms,
-                r.error.wrong_sign, r.error.samples
+                r.error.wrong_in_band, r.error.in_band, r.error.wrong_beyond, r.error.beyond
             )
         }),
     )?;
@@ -245,6 +257,64 @@ fn time_peer(
     ((crate::measure::median(times), lo, hi), field)
 }
 
+/// The `--peer` command on the same mesh and grid, the whole grid (band 0) and a band of
+/// BAND voxels: its rows (`ROW method|ms|min|max|query ms|field file`), each field read back.
+fn run_peer(
+    peer: &str,
+    args: &crate::measure::Args,
+    mesh: &Mesh,
+    grid: &Grid,
+) -> Result<Vec<(String, (f64, f64, f64), Vec<f32>)>, String> {
+    let dir = std::env::temp_dir();
+    let mesh_file = dir.join(format!("fieldkit_mesh_sdf_{}.bin", std::process::id()));
+    let mut bytes = Vec::new();
+    bytes.extend((mesh.positions.len() as u32).to_le_bytes());
+    bytes.extend((mesh.triangles.len() as u32).to_le_bytes());
+    for p in &mesh.positions {
+        bytes.extend(bytemuck::cast_slice(&p.as_vec3().to_array()));
+    }
+    for t in &mesh.triangles {
+        bytes.extend(bytemuck::cast_slice(t));
+    }
+    std::fs::write(&mesh_file, bytes).map_err(|e| e.to_string())?;
+    let mut rows = Vec::new();
+    for band in [0.0, BAND] {
+        let out = dir.join(format!("fieldkit_mesh_sdf_{}", std::process::id()));
+        let o = grid.origin;
+        let [nx, ny, nz] = grid.size;
+        let command = format!(
+            "{peer} --mesh {} --origin={},{},{} --voxel {} --size {nx},{ny},{nz} --band {band} --reps {} --out {}",
+            mesh_file.display(), o.x, o.y, o.z, grid.voxel, args.reps, out.display()
+        );
+        let output = std::process::Command::new("sh")
+            .args(["-c", &command])
+            .output()
+            .map_err(|e| format!("{command}: {e}"))?;
+        if !output.status.success() {
+            return Err(format!("{command}: {}", String::from_utf8_lossy(&output.stderr)));
+        }
+        for line in String::from_utf8_lossy(&output.stdout).lines() {
+            let Some(row) = line.strip_prefix("ROW ") else { continue };
+            let f: Vec<&str> = row.split('|').collect();
+            let [name, ms, lo, hi, query, path] = f[..] else {
+                return Err(format!("peer row {line:?}"));
+            };
+            let num = |s: &str| s.parse::<f64>().map_err(|e| format!("{line:?}: {e}"));
+            let field: Vec<f32> = std::fs::read(path)
+                .map_err(|e| format!("{path}: {e}"))?
+                .chunks_exact(4)
+                .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+                .collect();
+            std::fs::remove_file(path).ok();
+            let which = if band > 0.0 { format!("band {BAND}") } else { "whole grid".into() };
+            println!("  {name}, {which}: query alone {query} ms");
+            rows.push((format!("{name} ({which})"), (num(ms)?, num(lo)?, num(hi)?), field));
+        }
+    }
+    std::fs::remove_file(&mesh_file).ok();
+    Ok(rows)
+}
+
 /// Samples chosen from `field` (world units): up to IN_BAND_SAMPLES voxels it puts within the
 /// band and BEYOND_SAMPLES beyond, by a fixed stride, each measured against the f64 reference
 /// on every core.
@@ -301,22 +371,23 @@ fn compare(samples: &Samples, grid: &Grid, field: &[f32]) -> Error {
     let band = BAND as f64;
     let mut e = Error::default();
     let mut squares = 0.0;
-    let mut in_band = 0;
     for ((v, &d), &inside) in samples.voxels.iter().zip(&samples.distance).zip(&samples.inside) {
         let i = ((v[2] * ny + v[1]) * nx + v[0]) as usize;
         let value = field[i] as f64 / grid.voxel;
-        e.samples += 1;
-        if d > 1e-3 && (value < 0.0) != inside {
-            e.wrong_sign += 1;
-        }
+        // A centre on the surface has no side.
+        let wrong = d > 1e-3 && (value < 0.0) != inside;
         if d < band {
             let err = (value.abs() - d).abs();
             e.max = e.max.max(err);
             squares += err * err;
-            in_band += 1;
+            e.in_band += 1;
+            e.wrong_in_band += wrong as usize;
+        } else {
+            e.beyond += 1;
+            e.wrong_beyond += wrong as usize;
         }
     }
-    e.rms = (squares / in_band.max(1) as f64).sqrt();
+    e.rms = (squares / e.in_band.max(1) as f64).sqrt();
     e
 }
 
@@ -324,8 +395,8 @@ fn report(what: (&str, usize, u32), method: &str, t: (f64, f64, f64), error: Err
     let (mesh, triangles, n) = what;
     let (ms, lo, hi) = t;
     println!(
-        "| {mesh} | {triangles} | {n}³ | {method} | {ms:.4} ({lo:.4}–{hi:.4}) | {:.2e} | {:.2e} | {} / {} |",
-        error.max, error.rms, error.wrong_sign, error.samples
+        "| {mesh} | {triangles} | {n}³ | {method} | {ms:.4} ({lo:.4}–{hi:.4}) | {:.2e} | {:.2e} | {} / {} | {} / {} |",
+        error.max, error.rms, error.wrong_in_band, error.in_band, error.wrong_beyond, error.beyond
     );
     Row {
         mesh: mesh.to_string(),

@@ -1,5 +1,8 @@
 //! Seed 004: the voxelizer.
 
+use fieldkit::mesh_sdf::{MeshField, MeshSdf};
+use fieldkit::metaball::MarchField;
+
 use super::*;
 
 /// How the voxelizer scene voxelizes.
@@ -11,6 +14,8 @@ pub enum VoxelMode {
     Raster,
     /// Solid: inside by parity, ORed with the surface.
     Solid,
+    /// The mesh's signed distance field (`mesh_sdf`), its surface drawn by the SDF march.
+    DistanceField,
 }
 
 /// The voxelizer's settings.
@@ -25,9 +30,11 @@ pub struct VoxelizerSettings {
     pub mode: VoxelMode,
     /// Cube colours of the conservative surface (the other modes draw plain cubes).
     pub colour_by: ColourBy,
-    /// Show the mesh's distance field (exact, from the surface voxels) through the middle z
-    /// slice, in the frame's lower-right corner.
+    /// Show the mesh's signed distance field (`mesh_sdf`) through the middle z slice, in the
+    /// frame's lower-right corner.
     pub slice: bool,
+    /// Half-width of the distance field's exact band, voxels.
+    pub band: f32,
     /// Radians the mesh turns about the y axis through its bounds' centre before voxelizing
     /// (the soak turns it every frame, so the mesh is voxelized again and again).
     pub spin: f32,
@@ -52,6 +59,7 @@ impl Default for VoxelizerSettings {
             mode: VoxelMode::Surface(Separation::Conservative),
             colour_by: ColourBy::Normal,
             slice: true,
+            band: 4.0,
             spin: 0.0,
             point_light: false,
         }
@@ -91,7 +99,9 @@ pub(super) enum VoxelJob {
 /// frame until the next change.
 pub struct VoxelizerScene {
     pub(super) voxelizer: Voxelizer,
-    pub(super) distance: fieldkit::distance::Distance3d,
+    pub(super) mesh_sdf: MeshSdf,
+    /// The SDF march of the distance-field mode, made for the camera's depth direction.
+    pub(super) marcher: Option<(bool, Raymarcher)>,
     pub(super) blit: Blit,
     /// The distance field recorded with the job (read back once submitted), then its slice.
     pub(super) field: Option<wgpu::Texture>,
@@ -110,13 +120,15 @@ pub struct VoxelizerScene {
 pub(super) enum Shown {
     Attributes(Attributes),
     Cubes(Instances, usize),
+    Field(MeshField),
 }
 
 impl VoxelizerScene {
     pub(super) fn new(device: &wgpu::Device) -> Result<Self, Error> {
         Ok(Self {
             voxelizer: Voxelizer::new(device)?,
-            distance: fieldkit::distance::Distance3d::new(device)?,
+            mesh_sdf: MeshSdf::new(device)?,
+            marcher: None,
             blit: Blit::new(device, COLOUR),
             field: None,
             field_read: None,
@@ -183,7 +195,7 @@ impl VoxelizerScene {
         }
         self.take_slice(device, queue)?;
         let mut stats = Vec::new();
-        self.draw_shown(device, s, frame, &mut stats)?;
+        self.draw_shown(device, queue, s, frame, &mut stats)?;
         if s.slice {
             self.draw_slice(device, queue, frame, &mut stats);
         }
@@ -238,7 +250,31 @@ impl VoxelizerScene {
     ) -> Result<(), Error> {
         let mesh = spun(self.mesh(&s.mesh)?, s.spin)?;
         let grid = Grid::fit(&mesh, s.grid)?;
+        self.slice = None;
+        let sdf_settings = fieldkit::mesh_sdf::Settings {
+            band: s.band,
+            march: s.mode == VoxelMode::DistanceField,
+            ..Default::default()
+        };
+        let field = if s.slice || sdf_settings.march {
+            let field = self
+                .mesh_sdf
+                .encode(device, frame.rec, &mesh, &grid, &sdf_settings)?;
+            if s.slice {
+                self.field = Some(field.texture.clone());
+            }
+            Some(field)
+        } else {
+            None
+        };
         let job = match s.mode {
+            VoxelMode::DistanceField => {
+                // Nothing to read back: the field is drawn from the next frame on.
+                let field = field.expect("made for the march");
+                self.shown = Some((s.clone(), grid, Shown::Field(field)));
+                self.voxelized += 1;
+                return Ok(());
+            }
             VoxelMode::Surface(Separation::Conservative) => VoxelJob::RecordedAttributes(
                 self.voxelizer
                     .encode_attributes(device, frame.rec, &mesh, &grid)?,
@@ -258,21 +294,6 @@ impl VoxelizerScene {
                     .encode_solid(device, frame.rec, &mesh, &grid, true)?,
             ),
         };
-        self.slice = None;
-        if s.slice {
-            // The exact distance to the conservative surface voxels, in voxels.
-            let surface = self
-                .voxelizer
-                .encode_surface(device, frame.rec, &mesh, &grid)?;
-            let volume = self.voxelizer.encode_volume(device, frame.rec, &surface)?;
-            let field = self.distance.encode(
-                device,
-                frame.rec,
-                &volume,
-                &fieldkit::distance::Settings3d::default(),
-            )?;
-            self.field = Some(field.distance);
-        }
         self.job = Some((s.clone(), grid, job));
         Ok(())
     }
@@ -289,26 +310,15 @@ impl VoxelizerScene {
                 let [w, h, depth] = grid.size;
                 let z = depth / 2;
                 let plane = &d[(z * w * h) as usize..((z + 1) * w * h) as usize];
-                let max = plane.iter().copied().fold(1.0f32, f32::max);
+                // Signed voxels: outside warm, inside cool, fading out to the band; a dark
+                // line at every whole voxel of distance, the surface white.
+                let band = self.shown.as_ref().map_or(4.0, |x| x.0.band);
                 let px: Vec<u8> = plane
                     .iter()
-                    .flat_map(|&v| {
-                        let t = v / max;
-                        let line = if (v / 2.0).fract() < 0.15 { 0.6 } else { 1.0 };
-                        if v == 0.0 {
-                            [255, 255, 255, 255]
-                        } else {
-                            [
-                                (255.0 * t * line) as u8,
-                                (90.0 * line) as u8,
-                                (255.0 * (1.0 - t) * line) as u8,
-                                255,
-                            ]
-                        }
-                    })
+                    .flat_map(|&v| slice_colour(v / grid.voxel as f32, band))
                     .collect();
                 let texture = upload_rgba(device, queue, &px, w, h);
-                self.slice = Some((texture.create_view(&Default::default()), [w, h], max));
+                self.slice = Some((texture.create_view(&Default::default()), [w, h], band));
             }
         }
         Ok(())
@@ -318,6 +328,7 @@ impl VoxelizerScene {
     fn draw_shown(
         &mut self,
         device: &wgpu::Device,
+        queue: &wgpu::Queue,
         s: &VoxelizerSettings,
         frame: &mut Frame,
         stats: &mut Vec<String>,
@@ -372,6 +383,29 @@ impl VoxelizerScene {
                     )?;
                     stats.push(format!("occupied voxels: {}", attrs.count));
                 }
+                Shown::Field(field) => {
+                    if self.marcher.as_ref().map(|m| m.0) != Some(reversed) {
+                        let marcher = Raymarcher::new(device, queue, COLOUR, DEPTH, reversed)?;
+                        self.marcher = Some((reversed, marcher));
+                    }
+                    let marcher = &self.marcher.as_ref().expect("set above").1;
+                    let march = MarchField {
+                        march: field.march.as_ref().expect("made with its march copy"),
+                        grid: field.grid,
+                        band: field.settings.band * field.grid.voxel as f32,
+                        threshold: 0.0,
+                    };
+                    let settings = RaymarchSettings::default();
+                    let marched =
+                        marcher.encode_march_field(device, &mut *frame.rec, &march, model, &view, &settings)?;
+                    if let Some(m) = marched {
+                        marcher.encode_composite(device, &mut *frame.rec, cv, dv, &m)?;
+                    }
+                    stats.push(format!(
+                        "signed distance field, exact within ±{} voxels, drawn by the SDF march",
+                        field.settings.band
+                    ));
+                }
                 Shown::Cubes(instances, n) => {
                     if self.cubes.as_ref().map(|c| c.0) != Some(reversed) {
                         let mut style = CubeStyle {
@@ -423,10 +457,29 @@ impl VoxelizerScene {
                 [1.0 - fw - 0.01, 1.0 - fh - 0.01, 0.99, 0.99],
             );
             stats.push(format!(
-                "distance, middle z slice ({w}×{h}): 0 (white) to {max:.1} voxels, lines every 2"
+                "signed distance, middle z slice ({w}×{h}): surface white, outside orange, \
+                 inside blue, to ±{max:.1} voxels, a line every voxel"
             ));
         }
     }
+}
+
+/// The slice's colour of a signed distance `d` (voxels) in a field clamped to ±`band`.
+fn slice_colour(d: f32, band: f32) -> [u8; 4] {
+    if d.abs() < 0.25 {
+        return [255, 255, 255, 255];
+    }
+    let t = (d.abs() / band).min(1.0);
+    let line = if d.abs().fract() < 0.12 { 0.55 } else { 1.0 };
+    let near = 1.0 - 0.6 * t;
+    let [r, g, b] = if d > 0.0 { [1.0, 0.55, 0.2] } else { [0.25, 0.5, 1.0] };
+    [r, g, b]
+        .map(|c| (255.0 * c * near * line) as u8)
+        .into_iter()
+        .chain([255])
+        .collect::<Vec<_>>()
+        .try_into()
+        .expect("four channels")
 }
 
 /// World centres (scale 1) of the set bits of a surface voxelized in `grid`.
