@@ -116,6 +116,7 @@ def main():
     ap.add_argument("--size", required=True, help="nx,ny,nz")
     ap.add_argument("--band", type=float, default=0.0, help="voxels; 0: the whole grid")
     ap.add_argument("--reps", type=int, default=20)
+    ap.add_argument("--methods", default="winding,normal", help="winding, normal or both")
     ap.add_argument("--out", required=True, help="prefix of the field files")
     a = ap.parse_args()
     wp.init()
@@ -130,7 +131,10 @@ def main():
     indices_d = wp.array(indices.astype(np.int32), dtype=int, device=device)
     out = wp.zeros(n, dtype=float, device=device)
     stamps = Stamps(device)
-    for name, kernel in [("warp winding number", bake_winding), ("warp normal", bake_normal)]:
+    methods = [("winding", "warp winding number", bake_winding), ("normal", "warp normal", bake_normal)]
+    for key, name, kernel in methods:
+        if key not in a.methods.split(","):
+            continue
         bakes, queries = [], []
         for rep in range(a.reps + 3):
             t0 = stamps.mark()

@@ -1,9 +1,8 @@
-// A triangle mesh's signed distance field, exact inside a band around the surface. Three
-// passes: `band_keys` lets every triangle offer itself to each voxel whose centre lies within the
+// A triangle mesh's signed distance field, exact inside a band around the surface. Two passes:
+// in `per_triangle` every triangle offers itself to each voxel whose centre lies within the
 // band of it, as one key (its distance, coarsely, above its index) of which the voxel keeps the
-// least; `crossings` counts, along rows of voxel centres in x, y and z, the triangles each row
-// crosses before every voxel and in all (parity, as `voxelize/solid` does along x);
-// `resolve` measures each voxel's distance to the triangle its key names and signs it by the
+// least, and counts, along rows of voxel centres in x, y and z, the triangles each row crosses
+// before every voxel and in all (parity, as `voxelize/solid` does along x); `resolve` measures each voxel's distance to the triangle its key names and signs it by the
 // rows' vote: a row crossed an even number of times in all votes inside where an odd number of
 // crossings lie before the voxel, a row crossed an odd number of times (it passed through a
 // hole) does not vote, and where no majority stands the nearest feature's angle-weighted
@@ -111,33 +110,19 @@ fn vertex(t: u32, k: u32) -> vec3<f32> {
     return triangles[3u * t + k].xyz;
 }
 
-// Every voxel centre within the band of the triangle takes the least of its key and the ones
-// it holds. The key orders by distance first, quantized to the bits the index leaves, so among
-// triangles nearer than one quantum the least index wins; `resolve` measures the exact distance
-// to the one that won.
-@compute @workgroup_size(THREADS)
-fn band_keys(
-    @builtin(workgroup_id) wg: vec3<u32>,
-    @builtin(num_workgroups) groups: vec3<u32>,
-    @builtin(local_invocation_index) lane: u32,
-) {
-    let t = triangle_of(wg, groups);
-    if t >= params.count {
-        return;
-    }
-    let a = vertex(t, 0u);
-    let b = vertex(t, 1u);
-    let c = vertex(t, 2u);
+// Every voxel centre within the band of the triangle within `lo`..`hi` takes the least of its
+// key and the ones it holds. The key orders by distance first, quantized to the bits the index
+// leaves, so among triangles nearer than one quantum the least index wins; `resolve` measures
+// the exact distance to the one that won.
+fn offer_keys(t: u32, lane: u32, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, lo: vec3<i32>, hi: vec3<i32>) {
     let band = params.band;
-    let g = vec3<i32>(params.grid);
-    let lo = max(vec3<i32>(ceil(min(min(a, b), c) - band - 0.5)), vec3<i32>(0));
-    let hi = min(vec3<i32>(floor(max(max(a, b), c) + band - 0.5)), g - 1);
-    if any(lo > hi) {
-        return;
-    }
     let extent = vec3<u32>(hi - lo + 1);
     let n = cross(b - a, c - a);
     let unit = n / length(n);
+    // A sphere around the triangle: most of a small triangle's box lies farther from it than
+    // the band, which one length shows.
+    let centre = (a + b + c) / 3.0;
+    let reach = max(max(length(a - centre), length(b - centre)), length(c - centre)) + band;
     let quanta = f32((1u << (32u - params.id_bits)) - 2u);
     let cells = extent.x * extent.y * extent.z;
     for (var i = lane; i < cells; i += THREADS) {
@@ -145,7 +130,7 @@ fn band_keys(
         let v = vec3<i32>(cell) + lo;
         let p = vec3<f32>(v) + 0.5;
         // Most of a large triangle's box is farther from its plane than the band.
-        if abs(dot(unit, p - a)) > band {
+        if abs(dot(unit, p - a)) > band || length(p - centre) > reach {
             continue;
         }
         let d = length(nearest_on_triangle(a - p, b - p, c - p).offset);
@@ -163,34 +148,10 @@ fn band_keys(
     }
 }
 
-// Flip the bits of row `row` (along an axis of `length` voxels, section at word `base`) from
-// voxel `first` on.
-fn flip_from(base: u32, row: u32, length: u32, first: i32) {
-    if first >= i32(length) {
-        return;
-    }
-    let start = row * length;
-    var i = start + u32(max(first, 0));
-    let last = start + length - 1u;
-    while i <= last {
-        let word = i / 32u;
-        let top = min(last, word * 32u + 31u);
-        let lo_bit = i % 32u;
-        let width = top % 32u - lo_bit + 1u;
-        let mask = select(((1u << width) - 1u) << lo_bit, 0xffffffffu, width == 32u);
-        atomicXor(&parity[base + word], mask);
-        i = top + 1u;
-    }
-}
-
-fn rows_base(axis: u32) -> u32 {
-    return select(select(0u, params.rows_y, axis == 1u), params.rows_z, axis == 2u);
-}
-
-// Along each axis, every row of voxel centres that the triangle's projection covers: the
-// voxels beyond the crossing flip, and the row's total flips.
+// What one triangle does, one workgroup a triangle: offer its keys to the voxels within the
+// band of it and, for a signed field, flip the rows it crosses.
 @compute @workgroup_size(THREADS)
-fn crossings(
+fn per_triangle(
     @builtin(workgroup_id) wg: vec3<u32>,
     @builtin(num_workgroups) groups: vec3<u32>,
     @builtin(local_invocation_index) lane: u32,
@@ -199,6 +160,25 @@ fn crossings(
     if t >= params.count {
         return;
     }
+    let a = vertex(t, 0u);
+    let b = vertex(t, 1u);
+    let c = vertex(t, 2u);
+    let band = params.band;
+    let lo = max(vec3<i32>(ceil(min(min(a, b), c) - band - 0.5)), vec3<i32>(0));
+    let hi = min(vec3<i32>(floor(max(max(a, b), c) + band - 0.5)), vec3<i32>(params.grid) - 1);
+    if all(lo <= hi) {
+        offer_keys(t, lane, a, b, c, lo, hi);
+    }
+    // A triangle beyond the grid along a row still counts in the row's total.
+    if params.signed == 1u {
+        cross_rows(t, lane);
+    }
+}
+
+// Along each axis, every row of voxel centres that the triangle's projection covers: the
+// voxels beyond the crossing flip, and the row's total flips. The workgroup's threads share the
+// rows.
+fn cross_rows(t: u32, lane: u32) {
     let v0 = vertex(t, 0u);
     let n = cross(vertex(t, 1u) - v0, vertex(t, 2u) - v0);
     let g = vec3<i32>(params.grid);
@@ -239,6 +219,30 @@ fn crossings(
             atomicXor(&parity[params.totals[axis] + row / 32u], 1u << (row % 32u));
         }
     }
+}
+
+// Flip the bits of row `row` (along an axis of `length` voxels, section at word `base`) from
+// voxel `first` on.
+fn flip_from(base: u32, row: u32, length: u32, first: i32) {
+    if first >= i32(length) {
+        return;
+    }
+    let start = row * length;
+    var i = start + u32(max(first, 0));
+    let last = start + length - 1u;
+    while i <= last {
+        let word = i / 32u;
+        let top = min(last, word * 32u + 31u);
+        let lo_bit = i % 32u;
+        let width = top % 32u - lo_bit + 1u;
+        let mask = select(((1u << width) - 1u) << lo_bit, 0xffffffffu, width == 32u);
+        atomicXor(&parity[base + word], mask);
+        i = top + 1u;
+    }
+}
+
+fn rows_base(axis: u32) -> u32 {
+    return select(select(0u, params.rows_y, axis == 1u), params.rows_z, axis == 2u);
 }
 
 fn bit(word: u32, index: u32) -> bool {

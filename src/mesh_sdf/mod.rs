@@ -87,8 +87,7 @@ pub struct MeshField {
 /// Makes mesh distance fields: create once beside your renderer, then
 /// [`encode`](Self::encode) for each mesh or grid.
 pub struct MeshSdf {
-    band_keys: ComputePipeline<stage::band_keys::Entry>,
-    crossings: ComputePipeline<stage::crossings::Entry>,
+    per_triangle: ComputePipeline<stage::per_triangle::Entry>,
     resolve: ComputePipeline<stage::resolve::Entry>,
     march: ComputePipeline<stage::march_texture::Entry>,
     // Scratch kept for the next field of the same size: the keys and the parity rows.
@@ -128,11 +127,10 @@ impl ParityLayout {
 }
 
 impl MeshSdf {
-    /// Create the three pipelines.
+    /// Create the pipelines.
     pub fn new(device: &wgpu::Device) -> Result<Self, Error> {
         Ok(Self {
-            band_keys: ComputePipeline::new(device)?,
-            crossings: ComputePipeline::new(device)?,
+            per_triangle: ComputePipeline::new(device)?,
             resolve: ComputePipeline::new(device)?,
             march: ComputePipeline::new(device)?,
             keys: Default::default(),
@@ -218,30 +216,18 @@ impl MeshSdf {
         let mut rec = rec.recorder();
         rec.encoder.clear_buffer(&keys, 0, None);
         rec.encoder.clear_buffer(&parity, 0, None);
-        self.band_keys.record(
+        self.per_triangle.record(
             device,
             &mut rec,
-            &stage::band_keys::Resources {
+            &stage::per_triangle::Resources {
                 params: (&params).into(),
                 triangles: (&triangles).into(),
                 keys: (&keys).into(),
+                parity: (&parity).into(),
             },
             groups,
-            "mesh sdf band",
+            "mesh sdf per triangle",
         )?;
-        if settings.signed {
-            self.crossings.record(
-                device,
-                &mut rec,
-                &stage::crossings::Resources {
-                    params: (&params).into(),
-                    triangles: (&triangles).into(),
-                    parity: (&parity).into(),
-                },
-                groups,
-                "mesh sdf crossings",
-            )?;
-        }
         self.resolve.record(
             device,
             &mut rec,

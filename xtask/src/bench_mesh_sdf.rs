@@ -14,8 +14,9 @@
 //!   up to 5 runs;
 //! - with `--peer CMD` (`python3 scripts/peers/warp_mesh_sdf.py`, NVIDIA Warp's GPU mesh
 //!   queries), the command's bakes of the whole grid and of the band, timed by itself (CUDA
-//!   events around the BVH build and the query; `--reps` runs up to 128³, 5 past it) and read
-//!   back for the same comparison.
+//!   events around the BVH build and the query; `--reps` runs up to 128³, 5 past it; the
+//!   winding-number sign up to 64³, as it takes seconds a bake past it) and read back for the
+//!   same comparison.
 //!
 //! Error against an f64 reference (brute-force nearest triangle; sign by the generalized
 //! winding number, inside above ½) on up to 1 500 voxels the field puts within the band and
@@ -283,10 +284,13 @@ fn run_peer(
         let out = dir.join(format!("fieldkit_mesh_sdf_{}", std::process::id()));
         let o = grid.origin;
         let [nx, ny, nz] = grid.size;
-        // A whole-grid bake at 512³ takes the peer seconds: 5 runs past 128³.
-        let reps = if nx.max(ny).max(nz) > 128 { args.reps.min(5) } else { args.reps };
+        // A whole-grid bake at 512³ takes the peer seconds: 5 runs past 128³. Its winding
+        // number took 1.7 s at 64³ and 10 s at 128³ on the H200 (the bunny): 64³ and below.
+        let side = nx.max(ny).max(nz);
+        let reps = if side > 128 { args.reps.min(5) } else { args.reps };
+        let methods = if side > 64 { "normal" } else { "winding,normal" };
         let command = format!(
-            "{peer} --mesh {} --origin={},{},{} --voxel {} --size {nx},{ny},{nz} --band {band} --reps {reps} --out {}",
+            "{peer} --mesh {} --origin={},{},{} --voxel {} --size {nx},{ny},{nz} --band {band} --reps {reps} --methods {methods} --out {}",
             mesh_file.display(), o.x, o.y, o.z, grid.voxel, out.display()
         );
         let output = std::process::Command::new("sh")
@@ -324,7 +328,9 @@ fn run_peer(
 fn reference(mesh: &Mesh, grid: &Grid, field: &[f32]) -> Result<Samples, String> {
     let local = mesh.to_grid(grid).map_err(|e| e.to_string())?;
     let triangles = cpu::triangles(&local);
-    let band = BAND as f64 * grid.voxel;
+    // Beyond the band a field holds ±band rounded to f32, which may lie a rounding below the
+    // f64 band: a thousandth of it apart tells them from the band's own voxels.
+    let band = BAND as f64 * grid.voxel * 0.999;
     let near: Vec<usize> = (0..field.len()).filter(|&i| (field[i] as f64).abs() < band).collect();
     let far: Vec<usize> = (0..field.len()).filter(|&i| (field[i] as f64).abs() >= band).collect();
     let pick = |from: &[usize], k: usize| -> Vec<usize> {
