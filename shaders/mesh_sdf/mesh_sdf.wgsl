@@ -101,9 +101,12 @@ fn nearest_on_triangle(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> Nearest {
     return Nearest(a + ab * (vb * inv) + ac * (vc * inv), 0u);
 }
 
-// The triangle a workgroup serves: dispatches are two-dimensional past 65 535 triangles.
+// The triangle a workgroup serves, past `params.count` none: workgroups in bit-reversed order
+// of 2^id_bits, so those running together serve triangles far apart in the list (and, the list
+// being in the order a scan or a mesher wrote it, mostly far apart on the surface) and seldom
+// offer keys to the same voxels at once. Dispatches are two-dimensional past 65 535 workgroups.
 fn triangle_of(wg: vec3<u32>, groups: vec3<u32>) -> u32 {
-    return wg.y * groups.x + wg.x;
+    return reverseBits(wg.y * groups.x + wg.x) >> (32u - params.id_bits);
 }
 
 fn vertex(t: u32, k: u32) -> vec3<f32> {

@@ -175,7 +175,9 @@ impl MeshSdf {
         let limit = device.limits().max_storage_buffer_binding_size;
         check_count("key buffer bytes", voxels * 4, limit)?;
         check_count("parity buffer bytes", layout.words * 4, limit)?;
-        let groups = triangle_groups(device, count)?;
+        let id_bits = (u64::BITS - (count - 1).leading_zeros()).max(1);
+        // Workgroups in bit-reversed order of 2^id_bits (the shader's `triangle_of`).
+        let groups = triangle_groups(device, 1 << id_bits)?;
 
         let triangles = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("mesh sdf triangles"),
@@ -205,7 +207,7 @@ impl MeshSdf {
                 grid: size.into(),
                 count: count as u32,
                 band: settings.band,
-                id_bits: (u64::BITS - (count - 1).leading_zeros()).max(1),
+                id_bits,
                 voxel: grid.voxel as f32,
                 signed: settings.signed as u32,
                 rows_y: layout.rows[1],
@@ -282,7 +284,8 @@ fn check_count(what: &'static str, got: u64, max: u64) -> Result<(), Error> {
     Ok(())
 }
 
-/// One workgroup per triangle, in rows of the device's widest dispatch.
+/// `count` workgroups (one a triangle, and those past the last that serve none), in rows of the
+/// device's widest dispatch.
 fn triangle_groups(device: &wgpu::Device, count: u64) -> Result<[u32; 3], Error> {
     let wide = device.limits().max_compute_workgroups_per_dimension as u64;
     let rows = count.div_ceil(wide);

@@ -80,13 +80,23 @@ pub fn run(args: &crate::measure::Args) -> Result<(), String> {
         "| mesh | triangles | grid | method | ms (min–max) | max error, voxels | RMS | wrong signs in the band / samples | beyond / samples |\n|---|---|---|---|---|---|---|---|---|"
     );
     let mut rows = Vec::new();
-    for (name, mesh, closed) in meshes(args)? {
+    // `FIELDKIT_BENCH_OURS_ONLY`: the given mesh's `mesh sdf` rows alone (a quick look at a
+    // change): no analytic meshes, no voxel-centre path, no peers.
+    let ours_only = std::env::var_os("FIELDKIT_BENCH_OURS_ONLY").is_some();
+    let mut meshes = meshes(args)?;
+    if ours_only {
+        meshes.truncate(1);
+    }
+    for (name, mesh, closed) in meshes {
         for &n in &sizes {
             let grid = Grid::fit(&mesh, n).map_err(|e| e.to_string())?;
             let what = (name.as_str(), mesh.triangles.len(), n);
             let (t, field) = time_mesh_sdf(&ctx, heater.as_ref(), args, &mesh, &grid)?;
             let samples = reference(&mesh, &grid, &field)?;
             rows.push(report(what, "mesh sdf", t, compare(&samples, &grid, &field)));
+            if ours_only {
+                continue;
+            }
             let (t, field) = time_voxel_centres(&ctx, heater.as_ref(), args, &mesh, &grid, closed)?;
             let method = if closed { "voxel centres (solid)" } else { "voxel centres (surface, unsigned)" };
             rows.push(report(what, method, t, compare(&samples, &grid, &field)));
