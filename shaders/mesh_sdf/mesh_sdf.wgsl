@@ -54,6 +54,8 @@ struct SdfParams {
 
 const THREADS: u32 = 64u;
 const NO_KEY: u32 = 0u;
+// Voxels by which the stretches of a column worth measuring are widened against rounding.
+const SLACK: f32 = 1e-3;
 
 // The feature of a triangle nearest a point: 0 the face, 1–3 the edges ab, bc, ca, 4–6 the
 // vertices a, b, c (the index of its pseudo-normal), and the nearest point relative to p.
@@ -101,12 +103,9 @@ fn nearest_on_triangle(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> Nearest {
     return Nearest(a + ab * (vb * inv) + ac * (vc * inv), 0u);
 }
 
-// The triangle a workgroup serves, past `params.count` none: workgroups in bit-reversed order
-// of 2^id_bits, so those running together serve triangles far apart in the list (and, the list
-// being in the order a scan or a mesher wrote it, mostly far apart on the surface) and seldom
-// offer keys to the same voxels at once. Dispatches are two-dimensional past 65 535 workgroups.
+// The triangle a workgroup serves: dispatches are two-dimensional past 65 535 triangles.
 fn triangle_of(wg: vec3<u32>, groups: vec3<u32>) -> u32 {
-    return reverseBits(wg.y * groups.x + wg.x) >> (32u - params.id_bits);
+    return wg.y * groups.x + wg.x;
 }
 
 fn vertex(t: u32, k: u32) -> vec3<f32> {
@@ -116,37 +115,55 @@ fn vertex(t: u32, k: u32) -> vec3<f32> {
 // Every voxel centre within the band of the triangle within `lo`..`hi` takes the least of its
 // key and the ones it holds. The key orders by distance first, quantized to the bits the index
 // leaves, so among triangles nearer than one quantum the least index wins; `resolve` measures
-// the exact distance to the one that won.
+// the exact distance to the one that won. The workgroup's threads share the box's columns
+// along z; each measures only the stretch of its column that lies both within a sphere around
+// the triangle and within the band of its plane (most of a small triangle's box lies outside
+// the one, most of a large one's outside the other), found without a division per voxel.
 fn offer_keys(t: u32, lane: u32, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, lo: vec3<i32>, hi: vec3<i32>) {
     let band = params.band;
-    let extent = vec3<u32>(hi - lo + 1);
+    let extent = vec2<u32>(hi.xy - lo.xy + 1);
     let n = cross(b - a, c - a);
     let unit = n / length(n);
-    // A sphere around the triangle: most of a small triangle's box lies farther from it than
-    // the band, which one length shows.
     let centre = (a + b + c) / 3.0;
     let reach = max(max(length(a - centre), length(b - centre)), length(c - centre)) + band;
     let quanta = f32((1u << (32u - params.id_bits)) - 2u);
-    let cells = extent.x * extent.y * extent.z;
-    for (var i = lane; i < cells; i += THREADS) {
-        let cell = vec3<u32>(i % extent.x, (i / extent.x) % extent.y, i / (extent.x * extent.y));
-        let v = vec3<i32>(cell) + lo;
-        let p = vec3<f32>(v) + 0.5;
-        // Most of a large triangle's box is farther from its plane than the band.
-        if abs(dot(unit, p - a)) > band || length(p - centre) > reach {
+    for (var k = lane; k < extent.x * extent.y; k += THREADS) {
+        let column = vec2<i32>(vec2<u32>(k % extent.x, k / extent.x)) + lo.xy;
+        let p = vec2<f32>(column) + 0.5;
+        let off = p - centre.xy;
+        let across = reach * reach - dot(off, off);
+        if across < 0.0 {
             continue;
         }
-        let d = length(nearest_on_triangle(a - p, b - p, c - p).offset);
-        if d > band {
+        // Widened by a thousandth of a voxel against rounding: the distance decides below.
+        let half = sqrt(across) + SLACK;
+        var z0 = centre.z - half;
+        var z1 = centre.z + half;
+        let plane = dot(unit.xy, p - a.xy);
+        if abs(unit.z) > 1e-6 {
+            let za = a.z + (-band - SLACK - plane) / unit.z;
+            let zb = a.z + (band + SLACK - plane) / unit.z;
+            z0 = max(z0, min(za, zb));
+            z1 = min(z1, max(za, zb));
+        } else if abs(plane) > band + SLACK {
             continue;
         }
-        let q = u32(min(d / band, 1.0) * quanta);
-        let key = (q << params.id_bits) | t;
-        let index = (u32(v.z) * params.grid.y + u32(v.y)) * params.grid.x + u32(v.x);
-        // Most offers lose to a nearer triangle's: a load turns them away without a write.
-        let offer = 0xffffffffu - key;
-        if offer > atomicLoad(&keys[index]) {
-            atomicMax(&keys[index], offer);
+        let first = max(i32(ceil(z0 - 0.5)), lo.z);
+        let last = min(i32(floor(z1 - 0.5)), hi.z);
+        for (var z = first; z <= last; z++) {
+            let q3 = vec3<f32>(p, f32(z) + 0.5);
+            let d = length(nearest_on_triangle(a - q3, b - q3, c - q3).offset);
+            if d > band {
+                continue;
+            }
+            let q = u32(min(d / band, 1.0) * quanta);
+            let key = (q << params.id_bits) | t;
+            let index = (u32(z) * params.grid.y + u32(column.y)) * params.grid.x + u32(column.x);
+            // Most offers lose to a nearer triangle's: a load turns them away without a write.
+            let offer = 0xffffffffu - key;
+            if offer > atomicLoad(&keys[index]) {
+                atomicMax(&keys[index], offer);
+            }
         }
     }
 }

@@ -175,9 +175,7 @@ impl MeshSdf {
         let limit = device.limits().max_storage_buffer_binding_size;
         check_count("key buffer bytes", voxels * 4, limit)?;
         check_count("parity buffer bytes", layout.words * 4, limit)?;
-        let id_bits = (u64::BITS - (count - 1).leading_zeros()).max(1);
-        // Workgroups in bit-reversed order of 2^id_bits (the shader's `triangle_of`).
-        let groups = triangle_groups(device, 1 << id_bits)?;
+        let groups = triangle_groups(device, count)?;
 
         let triangles = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("mesh sdf triangles"),
@@ -207,7 +205,7 @@ impl MeshSdf {
                 grid: size.into(),
                 count: count as u32,
                 band: settings.band,
-                id_bits,
+                id_bits: (u64::BITS - (count - 1).leading_zeros()).max(1),
                 voxel: grid.voxel as f32,
                 signed: settings.signed as u32,
                 rows_y: layout.rows[1],
@@ -284,8 +282,7 @@ fn check_count(what: &'static str, got: u64, max: u64) -> Result<(), Error> {
     Ok(())
 }
 
-/// `count` workgroups (one a triangle, and those past the last that serve none), in rows of the
-/// device's widest dispatch.
+/// One workgroup per triangle, in rows of the device's widest dispatch.
 fn triangle_groups(device: &wgpu::Device, count: u64) -> Result<[u32; 3], Error> {
     let wide = device.limits().max_compute_workgroups_per_dimension as u64;
     let rows = count.div_ceil(wide);
