@@ -26,13 +26,14 @@ import warp as wp
 
 
 @wp.kernel
-def bake_winding(
+def bake(
     mesh: wp.uint64,
     origin: wp.vec3,
     voxel: float,
     nx: int,
     ny: int,
     max_dist: float,
+    winding: int,
     out: wp.array(dtype=float),
 ):
     tid = wp.tid()
@@ -40,33 +41,28 @@ def bake_winding(
     y = (tid // nx) % ny
     z = tid // (nx * ny)
     p = origin + wp.vec3(float(x) + 0.5, float(y) + 0.5, float(z) + 0.5) * voxel
-    q = wp.mesh_query_point_sign_winding_number(mesh, p, max_dist, 2.0, 0.5)
-    if q.result:
-        c = wp.mesh_eval_position(mesh, q.face, q.u, q.v)
-        out[tid] = q.sign * wp.length(c - p)
+    found = bool(False)
+    sign = float(0.0)
+    face = int(0)
+    u = float(0.0)
+    v = float(0.0)
+    if winding == 1:
+        q = wp.mesh_query_point_sign_winding_number(mesh, p, max_dist, 2.0, 0.5)
+        found = q.result
+        sign = q.sign
+        face = q.face
+        u = q.u
+        v = q.v
     else:
-        out[tid] = max_dist
-
-
-@wp.kernel
-def bake_normal(
-    mesh: wp.uint64,
-    origin: wp.vec3,
-    voxel: float,
-    nx: int,
-    ny: int,
-    max_dist: float,
-    out: wp.array(dtype=float),
-):
-    tid = wp.tid()
-    x = tid % nx
-    y = (tid // nx) % ny
-    z = tid // (nx * ny)
-    p = origin + wp.vec3(float(x) + 0.5, float(y) + 0.5, float(z) + 0.5) * voxel
-    q = wp.mesh_query_point_sign_normal(mesh, p, max_dist, 1.0e-3)
-    if q.result:
-        c = wp.mesh_eval_position(mesh, q.face, q.u, q.v)
-        out[tid] = q.sign * wp.length(c - p)
+        r = wp.mesh_query_point_sign_normal(mesh, p, max_dist, 1.0e-3)
+        found = r.result
+        sign = r.sign
+        face = r.face
+        u = r.u
+        v = r.v
+    if found:
+        c = wp.mesh_eval_position(mesh, face, u, v)
+        out[tid] = sign * wp.length(c - p)
     else:
         out[tid] = max_dist
 
@@ -131,16 +127,16 @@ def main():
     indices_d = wp.array(indices.astype(np.int32), dtype=int, device=device)
     out = wp.zeros(n, dtype=float, device=device)
     stamps = Stamps(device)
-    methods = [("winding", "warp winding number", bake_winding), ("normal", "warp normal", bake_normal)]
-    for key, name, kernel in methods:
+    methods = [("winding", "warp winding number", 1), ("normal", "warp normal", 0)]
+    for key, name, winding in methods:
         if key not in a.methods.split(","):
             continue
         bakes, queries = [], []
         for rep in range(a.reps + 3):
             t0 = stamps.mark()
-            mesh = wp.Mesh(points_d, indices_d, support_winding_number=kernel is bake_winding)
+            mesh = wp.Mesh(points_d, indices_d, support_winding_number=winding == 1)
             t1 = stamps.mark()
-            wp.launch(kernel, dim=n, inputs=[mesh.id, origin, a.voxel, nx, ny, max_dist, out],
+            wp.launch(bake, dim=n, inputs=[mesh.id, origin, a.voxel, nx, ny, max_dist, winding, out],
                       device=device)
             t2 = stamps.mark()
             if rep >= 3:
