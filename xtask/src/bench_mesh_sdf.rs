@@ -22,7 +22,8 @@
 //! winding number, inside above ½) on up to 1 500 voxels the field puts within the band and
 //! 500 it puts beyond, chosen by a fixed stride: max and RMS distance error inside the band,
 //! in voxels, and the voxels signed otherwise than the winding number (beyond the band the
-//! sign alone is compared). Writes `mesh_sdf.csv` and `mesh_sdf.png` (time against max error).
+//! sign alone is compared). Writes `mesh_sdf.csv` (every mesh) and `mesh_sdf.png` (time against
+//! max error for the first mesh).
 
 use fieldkit::distance::{Distance3d, Settings3d};
 use fieldkit::gpu::{Context, read_texture};
@@ -429,18 +430,24 @@ fn report(what: (&str, usize, u32), method: &str, t: (f64, f64, f64), error: Err
     }
 }
 
+/// Time against max error, one colour a method, for the first mesh (the `--mesh` given, the
+/// peers' bunny; every mesh's rows are in the table).
 fn chart(out: &std::path::Path, adapter: &str, rows: &[Row]) -> Result<(), String> {
+    let Some(first) = rows.first().map(|r| r.mesh.clone()) else {
+        return Ok(());
+    };
     let points: Vec<crate::chart::Point> = rows
         .iter()
+        .filter(|r| r.mesh == first)
         .map(|r| crate::chart::Point {
-            group: format!("{}, {}", r.mesh, r.method),
+            group: r.method.clone(),
             ms: r.ms,
             err: r.error.max,
             label: format!("{}³", r.n),
         })
         .collect();
     let axes = crate::chart::Axes {
-        caption: format!("mesh distance fields: time vs max error in the ±4-voxel band, {adapter}"),
+        caption: format!("{first}: distance field, time vs max error in the ±4-voxel band, {adapter}"),
         x: "time, ms (median, log; GPU timestamps, mesh_to_sdf CPU wall)",
         y: "max |error|, voxels (log)",
         floor: 1e-6,
