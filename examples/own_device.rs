@@ -63,6 +63,9 @@ pub struct Report {
     pub grid: Grid,
     /// Solid voxels of the torus, x fastest.
     pub solid: Vec<bool>,
+    /// The torus's own signed distance field on the same grid (`mesh_sdf`: each voxel's
+    /// distance to its nearest triangle, exact within 4 voxels), world units.
+    pub mesh_sdf: Vec<f32>,
     /// Their signed distance in world units, negative inside.
     pub sdf: Vec<f32>,
     /// The frame's colour (RGBA8) and depth.
@@ -179,6 +182,18 @@ pub fn run(device: &wgpu::Device, queue: &wgpu::Queue, adapter: String) -> Resul
         readback_texture::<f32>(device, queue, &sdf.distance),
     )?;
 
+    // The torus's own distance field: to its triangles, not to the voxels.
+    let mut enc = encoder(device, "mesh sdf");
+    let field = fieldkit::mesh_sdf::MeshSdf::new(device)?.encode(
+        device,
+        &mut enc,
+        &torus,
+        &grid,
+        &fieldkit::mesh_sdf::Settings::default(),
+    )?;
+    queue.submit([enc.finish()]);
+    let mesh_sdf = wait(device, readback_texture::<f32>(device, queue, &field.texture))?;
+
     // One frame: island, sea and cloud against one depth buffer.
     let (colour, depth) = frame(device, queue, true)?;
     let (colour_without_cloud, _) = frame(device, queue, false)?;
@@ -187,6 +202,7 @@ pub fn run(device: &wgpu::Device, queue: &wgpu::Queue, adapter: String) -> Resul
         mask,
         distance_2d,
         grid,
+        mesh_sdf,
         solid: solid_bits,
         sdf,
         colour,

@@ -52,6 +52,7 @@ const PAGES: &[&str] = &[
     "README.md",
     "docs/distance.md",
     "docs/metaball.md",
+    "docs/mesh_sdf.md",
     "docs/voxelize.md",
     "docs/octree.md",
     "docs/volume.md",

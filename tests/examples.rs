@@ -74,6 +74,31 @@ fn own_device_runs_every_technique_and_matches_the_references() {
         "the hole's centre is 0.6 from the surface: got {hole}, want {lo:.3}..{hi:.3}"
     );
 
+    // The mesh's own field is the distance to the torus's triangles: against the analytic
+    // torus (about the y axis, ring radius 1, tube 0.4; its 48 × 24 facets lie within
+    // 1.4 · (1 − cos 3.75°) + 0.4 · (1 − cos 7.5°) ≈ 0.007 of it) within the band, where the
+    // voxel-centre field above is off by up to a voxel.
+    let band = 4.0 * voxel;
+    let mut in_band = 0;
+    for (i, &got) in r.mesh_sdf.iter().enumerate() {
+        let v = [i % size[0], (i / size[0]) % size[1], i / (size[0] * size[1])];
+        let p = r.grid.voxel_centre(v.map(|c| c as u32));
+        let ring = (glam::DVec2::new(p.x, p.z).length() - 1.0).hypot(p.y);
+        let analytic = ring - 0.4;
+        if analytic.abs() < band - 0.05 {
+            in_band += 1;
+            assert!(
+                (got as f64 - analytic).abs() < 0.02,
+                "voxel {v:?}: mesh field {got} against the torus's {analytic}"
+            );
+        } else if analytic.abs() > band + 0.05 {
+            // ±band, as the shader rounds it to f32.
+            let want = band.copysign(analytic);
+            assert!((got as f64 - want).abs() < 1e-6, "voxel {v:?} beyond the band: {got}");
+        }
+    }
+    assert!(in_band > 1000, "{in_band} voxels in the band");
+
     // The frame: the island and the sea wrote depth (the sea covers the lower half of the
     // frame, the sky stays at the clear depth in the top rows), and the cloud changed pixels
     // above the island without touching the depth buffer.

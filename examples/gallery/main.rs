@@ -11,6 +11,7 @@
 
 mod cloud;
 mod distance;
+mod mesh_sdf;
 mod metaball;
 mod ocean;
 mod octree;
@@ -21,6 +22,7 @@ pub use distance::*;
 pub use metaball::*;
 pub use ocean::*;
 pub use octree::*;
+pub use mesh_sdf::*;
 pub use voxelize::*;
 
 use std::path::{Path, PathBuf};
@@ -276,6 +278,11 @@ fn run(
     })?;
     let (rgba, sw, sh) = voxelize_distance_slice(ctx, mesh, 128, 4)?;
     save("voxelize_distance_slice.png", &rgba, sw, sh, &mut written)?;
+    progress(&format!(
+        "mesh_sdf: {what}'s signed distance field, 128 voxels a side, drawn by the SDF march"
+    ));
+    let rgba = mesh_sdf_scene(ctx, mesh, 128, w, h)?;
+    save("mesh_sdf_surface.png", &rgba, w, h, &mut written)?;
 
     // The sparse voxel octree: 2048³ with attributes where the device's buffers hold the
     // build, else 2048³ shaded by the hit faces, else the largest grid that fits; by footprint
