@@ -169,6 +169,9 @@ fn meshes(args: &crate::measure::Args) -> Result<Vec<(String, Mesh, bool)>, Stri
 
 type Timed = ((f64, f64, f64), Vec<f32>);
 
+/// A peer's row: its method, its time (median, min, max) and its field.
+type PeerRow = (String, (f64, f64, f64), Vec<f32>);
+
 fn time_mesh_sdf(
     ctx: &Context,
     heater: Option<&crate::heater::Heater>,
@@ -277,7 +280,7 @@ fn run_peer(
     args: &crate::measure::Args,
     mesh: &Mesh,
     grid: &Grid,
-) -> Result<Vec<(String, (f64, f64, f64), Vec<f32>)>, String> {
+) -> Result<Vec<PeerRow>, String> {
     let dir = std::env::temp_dir();
     let mesh_file = dir.join(format!("fieldkit_mesh_sdf_{}.bin", std::process::id()));
     let mut bytes = Vec::new();
