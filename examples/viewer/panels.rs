@@ -34,8 +34,11 @@ struct Viewer {
     passes: PassTimes,
     stats: Vec<String>,
     error: Option<String>,
-    note: Option<String>,
+    /// The last Save/Load's outcome (or the pipeline cache's), and whether it failed.
+    note: Option<(String, bool)>,
     settings_path: String,
+    /// "Defaults" was clicked: asking whether to reset the scene.
+    confirm_defaults: bool,
     start: Instant,
     last: Instant,
     frame_ms: f64,
@@ -120,8 +123,9 @@ pub fn run_window(args: Args, saved: Saved, load_error: Option<String>) -> Resul
                 passes: (Vec::new(), 0.0),
                 stats: Vec::new(),
                 error: load_error.map(|e| format!("settings: {e}")),
-                note: cache_note,
+                note: cache_note.map(|n| (n, true)),
                 settings_path,
+                confirm_defaults: false,
                 start: Instant::now(),
                 last: Instant::now(),
                 frame_ms: 0.0,
@@ -156,7 +160,14 @@ impl eframe::App for Viewer {
             .resizable(true)
             .default_size(330.0)
             .show(ui, |ui| {
-                egui::ScrollArea::vertical().show(ui, |ui| self.side_panel(ui, frame));
+                let scene = self.scene_name();
+                let this = std::cell::RefCell::new(&mut *self);
+                side_panel(
+                    ui,
+                    scene,
+                    |ui| this.borrow_mut().pinned(ui),
+                    |ui| this.borrow_mut().scene_settings(ui, frame),
+                );
             });
         egui::CentralPanel::default().show(ui, |ui| self.central(ui, &rs));
         ui.ctx().request_repaint();
@@ -168,7 +179,8 @@ impl Viewer {
         NAMES[self.scene]
     }
 
-    fn side_panel(&mut self, ui: &mut Ui, frame: &mut eframe::Frame) {
+    /// The top of the side panel, the same height whatever it shows.
+    fn pinned(&mut self, ui: &mut Ui) {
         ui.heading("fieldkit viewer");
         ComboBox::from_label("scene")
             .selected_text(self.scene_name())
@@ -184,8 +196,8 @@ impl Viewer {
             if ui.button("Save").clicked() {
                 self.note = Some(
                     match save_settings(self.settings_path.as_ref(), &self.saved) {
-                        Ok(()) => format!("saved {}", self.settings_path),
-                        Err(e) => e,
+                        Ok(()) => (format!("saved {}", self.settings_path), false),
+                        Err(e) => (e, true),
                     },
                 );
             }
@@ -193,18 +205,37 @@ impl Viewer {
                 match load_settings(self.settings_path.as_ref()) {
                     Ok(s) => {
                         self.saved = s;
-                        self.note = Some(format!("loaded {}", self.settings_path));
+                        self.note = Some((format!("loaded {}", self.settings_path), false));
                     }
-                    Err(e) => self.note = Some(e),
+                    Err(e) => self.note = Some((e, true)),
                 }
             }
-            if ui.button("Defaults").clicked() {
-                self.saved = Saved::default();
+            if self.confirm_defaults {
+                let scene = self.scene_name();
+                ui.label(format!("reset {scene}?"));
+                if ui.button("yes").clicked() {
+                    self.saved.reset_scene(scene);
+                    self.confirm_defaults = false;
+                }
+                if ui.button("no").clicked() {
+                    self.confirm_defaults = false;
+                }
+            } else if ui
+                .button("Defaults")
+                .on_hover_text("this scene's settings and camera back to their defaults")
+                .clicked()
+            {
+                self.confirm_defaults = true;
             }
         });
-        if let Some(n) = &self.note {
-            ui.label(n);
-        }
+        // A note (saved, loaded) in grey, a failed load in red: one line, always there.
+        let (note, failed) = self.note.as_ref().map_or(("", false), |(n, f)| (n.as_str(), *f));
+        let colour = if failed {
+            ERROR_RED
+        } else {
+            ui.visuals().weak_text_color()
+        };
+        one_line(ui, note, colour);
         ui.separator();
         // Cost and accuracy: the scene's CPU and GPU time a frame side by side, each number of
         // fixed width so that nothing below moves as they change.
@@ -233,13 +264,17 @@ impl Viewer {
         } else {
             ui.label("no timestamp queries on this adapter: CPU frame time only");
         }
-        for s in &self.stats {
-            ui.label(s);
+        // The scene's numbers in STAT_LINES lines, blank ones kept, so the panel keeps its
+        // height as they come and go.
+        for i in 0..STAT_LINES {
+            let line = self.stats.get(i).map_or("", String::as_str);
+            one_line(ui, line, ui.visuals().text_color());
         }
-        if let Some(e) = &self.error {
-            ui.colored_label(egui::Color32::from_rgb(255, 110, 90), e);
-        }
-        ui.separator();
+        one_line(ui, self.error.as_deref().unwrap_or(""), ERROR_RED);
+    }
+
+    /// The camera and the scene's own settings, beneath the pinned top.
+    fn scene_settings(&mut self, ui: &mut Ui, frame: &mut eframe::Frame) {
         self.camera_panel(ui, frame);
         ui.separator();
         let s = &mut self.saved;
@@ -435,16 +470,48 @@ impl Viewer {
     }
 }
 
+/// The side panel's layout. Pinned at the top, `pinned`: the scene, the file, the timings and
+/// the messages, each in a slot of its own that keeps its height. Beneath, `settings` scroll;
+/// their widgets' ids hang off the scroll area's own id and the scene's name, so nothing above
+/// (an error appearing, a note) moves them or ends an edit.
+pub fn side_panel(
+    ui: &mut Ui,
+    scene: &str,
+    pinned: impl FnOnce(&mut Ui),
+    settings: impl FnOnce(&mut Ui),
+) {
+    pinned(ui);
+    ui.separator();
+    egui::ScrollArea::vertical()
+        .id_salt("scene settings")
+        .show(ui, |ui| {
+            ui.push_id(scene, settings);
+        });
+}
+
+/// Lines of scene numbers the pinned panel keeps room for.
+const STAT_LINES: usize = 4;
+
+pub const ERROR_RED: egui::Color32 = egui::Color32::from_rgb(255, 110, 90);
+
+/// `text` on one line of fixed height, cut short to the panel's width (the whole text on
+/// hover); an empty line where there is none.
+pub fn one_line(ui: &mut Ui, text: &str, colour: egui::Color32) {
+    let label = egui::Label::new(egui::RichText::new(text).color(colour)).truncate();
+    ui.add(label);
+}
+
 fn vec3_row(ui: &mut Ui, label: &str, v: &mut Vec3, speed: f32) {
     ui.horizontal(|ui| {
         ui.label(label);
-        ui.add(DragValue::new(&mut v.x).speed(speed));
-        ui.add(DragValue::new(&mut v.y).speed(speed));
-        ui.add(DragValue::new(&mut v.z).speed(speed));
+        for (c, axis) in [(&mut v.x, "x"), (&mut v.y, "y"), (&mut v.z, "z")] {
+            let id = ui.label(axis).id;
+            ui.add(DragValue::new(c).speed(speed)).labelled_by(id);
+        }
     });
 }
 
-fn actor_panel(ui: &mut Ui, s: &mut ActorSettings) {
+pub fn actor_panel(ui: &mut Ui, s: &mut ActorSettings) {
     ui.heading("voxel actor (seed 000)");
     ui.horizontal(|ui| {
         ui.label("preset");
@@ -461,11 +528,23 @@ fn actor_panel(ui: &mut Ui, s: &mut ActorSettings) {
     });
     ui.horizontal(|ui| {
         ui.label("Extent");
-        for e in &mut s.extent {
-            ui.add(DragValue::new(e).speed(0.1).range(0.0..=1000.0));
+        for (e, axis) in s.extent.iter_mut().zip(["x", "y", "z"]) {
+            // Rebuilds the instances: taken on Enter, not per keystroke.
+            let label = ui.label(axis).id;
+            ui.add(
+                DragValue::new(e)
+                    .speed(0.1)
+                    .range(0.0..=1000.0)
+                    .update_while_editing(false),
+            )
+            .labelled_by(label);
         }
     });
-    ui.add(Slider::new(&mut s.block, 0.1..=4.0).text("BlockSize"));
+    ui.add(
+        Slider::new(&mut s.block, 0.1..=4.0)
+            .text("BlockSize")
+            .update_while_editing(false),
+    );
     ui.label(match s.counts() {
         Ok(n) => format!("{} × {} × {} blocks", n[0], n[1], n[2]),
         Err(e) => e.to_string(),
@@ -549,7 +628,7 @@ fn actor_panel(ui: &mut Ui, s: &mut ActorSettings) {
     });
 }
 
-fn ocean_panel(ui: &mut Ui, s: &mut OceanSettings) {
+pub fn ocean_panel(ui: &mut Ui, s: &mut OceanSettings) {
     ui.heading("ocean (seed 001)");
     ui.horizontal(|ui| {
         ui.label("preset");
@@ -564,20 +643,32 @@ fn ocean_panel(ui: &mut Ui, s: &mut OceanSettings) {
             *s = OceanSettings::seed();
         }
     });
-    ui.label("waves: direction x, z · amplitude · wavelength · speed");
+    // One row a wave under a header whose labels name each column's fields (for the eye and
+    // for the accessibility tree).
     let mut remove = None;
-    for (i, w) in s.waves.iter_mut().enumerate() {
-        ui.horizontal(|ui| {
-            ui.add(DragValue::new(&mut w.direction.x).speed(0.02));
-            ui.add(DragValue::new(&mut w.direction.y).speed(0.02));
-            ui.add(DragValue::new(&mut w.amplitude).speed(0.01));
-            ui.add(DragValue::new(&mut w.wavelength).speed(0.1));
-            ui.add(DragValue::new(&mut w.speed).speed(0.05));
-            if ui.small_button("✕").clicked() {
+    egui::Grid::new("waves").num_columns(6).show(ui, |ui| {
+        let header = ["dir x", "dir z", "amp (m)", "λ (m)", "speed (m/s)"].map(|h| ui.label(h).id);
+        ui.end_row();
+        for (i, w) in s.waves.iter_mut().enumerate() {
+            for (value, speed, label) in [
+                (&mut w.direction.x, 0.02, header[0]),
+                (&mut w.direction.y, 0.02, header[1]),
+                (&mut w.amplitude, 0.01, header[2]),
+                (&mut w.wavelength, 0.1, header[3]),
+                (&mut w.speed, 0.05, header[4]),
+            ] {
+                ui.add(DragValue::new(value).speed(speed)).labelled_by(label);
+            }
+            if ui
+                .small_button("remove")
+                .on_hover_text(format!("remove wave {i}"))
+                .clicked()
+            {
                 remove = Some(i);
             }
-        });
-    }
+            ui.end_row();
+        }
+    });
     if let Some(i) = remove {
         s.waves.remove(i);
     }
@@ -606,10 +697,10 @@ fn ocean_panel(ui: &mut Ui, s: &mut OceanSettings) {
     ] {
         for (i, l) in layers.iter_mut().enumerate() {
             ui.horizontal(|ui| {
-                ui.label(format!("{name} {i}: tile"));
-                ui.add(DragValue::new(&mut l.tile).speed(0.1));
-                ui.label("strength");
-                ui.add(DragValue::new(&mut l.strength).speed(0.01));
+                let id = ui.label(format!("{name} {i}: tile (m)")).id;
+                ui.add(DragValue::new(&mut l.tile).speed(0.1)).labelled_by(id);
+                let id = ui.label("strength").id;
+                ui.add(DragValue::new(&mut l.strength).speed(0.01)).labelled_by(id);
             });
         }
     }
@@ -629,7 +720,7 @@ fn ocean_panel(ui: &mut Ui, s: &mut OceanSettings) {
         });
 }
 
-fn volume_panel(ui: &mut Ui, s: &mut VolumeSettings) {
+pub fn volume_panel(ui: &mut Ui, s: &mut VolumeSettings) {
     ui.heading("volume (seed 002)");
     ui.horizontal(|ui| {
         ui.checkbox(
@@ -644,8 +735,15 @@ fn volume_panel(ui: &mut Ui, s: &mut VolumeSettings) {
             *s = VolumeSettings::seed();
         }
     });
-    ui.add(Slider::new(&mut s.size, 16..=256).text("cloud voxels per side"));
-    ui.add(DragValue::new(&mut s.seed).prefix("seed "));
+    ui.add(
+        Slider::new(&mut s.size, 16..=256)
+            .text("cloud voxels per side")
+            .update_while_editing(false),
+    );
+    ui.horizontal(|ui| {
+        let id = ui.label("noise seed").id;
+        ui.add(DragValue::new(&mut s.seed)).labelled_by(id);
+    });
     ui.add(
         Slider::new(&mut s.march.step, 0.001..=0.05)
             .logarithmic(true)
@@ -688,12 +786,14 @@ fn volume_panel(ui: &mut Ui, s: &mut VolumeSettings) {
     });
     ui.horizontal(|ui| {
         ui.label("density range");
-        ui.add(DragValue::new(&mut s.tf.range[0]).speed(0.01));
-        ui.add(DragValue::new(&mut s.tf.range[1]).speed(0.01));
+        for (end, name) in s.tf.range.iter_mut().zip(["from", "to"]) {
+            let id = ui.label(name).id;
+            ui.add(DragValue::new(end).speed(0.01)).labelled_by(id);
+        }
     });
 }
 
-fn distance_panel(ui: &mut Ui, s: &mut DistanceSettings) {
+pub fn distance_panel(ui: &mut Ui, s: &mut DistanceSettings) {
     ui.heading("2D distance (seed 003)");
     ui.label("left button: draw seeds, right: erase");
     ComboBox::from_label("method")
@@ -730,8 +830,15 @@ fn distance_panel(ui: &mut Ui, s: &mut DistanceSettings) {
     ui.add(Slider::new(&mut s.iso_period, 1.0..=32.0).text("iso-line period"));
     ui.horizontal(|ui| {
         ui.label("size");
-        ui.add(DragValue::new(&mut s.size[0]).range(1..=4096));
-        ui.add(DragValue::new(&mut s.size[1]).range(1..=4096));
+        for (side, axis) in s.size.iter_mut().zip(["w", "h"]) {
+            let id = ui.label(axis).id;
+            ui.add(
+                DragValue::new(side)
+                    .range(1..=4096)
+                    .update_while_editing(false),
+            )
+            .labelled_by(id);
+        }
     });
     ui.horizontal(|ui| {
         if ui.button("clear seeds").clicked() {
@@ -746,7 +853,7 @@ fn distance_panel(ui: &mut Ui, s: &mut DistanceSettings) {
     }
 }
 
-fn voxelizer_panel(ui: &mut Ui, s: &mut VoxelizerSettings) {
+pub fn voxelizer_panel(ui: &mut Ui, s: &mut VoxelizerSettings) {
     ui.heading("voxelizer (seed 004)");
     ui.checkbox(&mut s.point_light, "point light (the source's demo scene)");
     ui.horizontal(|ui| {
@@ -760,7 +867,11 @@ fn voxelizer_panel(ui: &mut Ui, s: &mut VoxelizerSettings) {
             }
         }
     });
-    ui.add(Slider::new(&mut s.grid, 4..=512).text("grid (longest side)"));
+    ui.add(
+        Slider::new(&mut s.grid, 4..=512)
+            .text("grid (longest side)")
+            .update_while_editing(false),
+    );
     ui.add(
         Slider::new(&mut s.spin, -std::f32::consts::PI..=std::f32::consts::PI)
             .text("spin (about y)"),

@@ -81,6 +81,34 @@ impl Default for Saved {
 }
 
 impl Saved {
+    /// `scene`'s settings and camera back to their defaults, the other scenes' kept; the
+    /// voxelizer keeps its mesh (a `--mesh` given stays). The composite resets the ocean and
+    /// volume settings it shows.
+    pub fn reset_scene(&mut self, scene: &str) {
+        let defaults = Saved::default();
+        match scene {
+            "actor" => self.actor = defaults.actor,
+            "ocean" => self.ocean = defaults.ocean,
+            "volume" => self.volume = defaults.volume,
+            "distance2d" => self.distance = defaults.distance,
+            "voxelizer" => {
+                self.voxelizer = VoxelizerSettings {
+                    mesh: std::mem::take(&mut self.voxelizer.mesh),
+                    ..defaults.voxelizer
+                }
+            }
+            _ => {
+                self.ocean = defaults.ocean;
+                self.volume = defaults.volume;
+            }
+        }
+        if let Some(i) = NAMES.iter().position(|n| *n == scene)
+            && let Some(c) = self.cameras.get_mut(i)
+        {
+            *c = default_camera(scene);
+        }
+    }
+
     /// Every scene's seed preset where it has one (the sources' settings), default cameras.
     pub fn seed() -> Self {
         Self {

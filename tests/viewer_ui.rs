@@ -1,0 +1,89 @@
+//! The viewer's panels driven as a user drives them, through egui's test harness (egui_kittest:
+//! pointer and keyboard events, the accessibility tree read back), without a window or a GPU:
+//! a number typed while an error shows keeps every keystroke, an expensive field takes what is
+//! typed on Enter and not per keystroke, and "Defaults" resets one scene.
+
+#[path = "../examples/viewer/main.rs"]
+#[allow(dead_code)]
+mod viewer;
+
+use eframe::egui;
+use egui::accesskit::Role;
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable;
+use viewer::panels::{ERROR_RED, actor_panel, ocean_panel, one_line, side_panel};
+use viewer::scenes::{ActorSettings, OceanSettings, Saved};
+
+/// The ocean panel beneath a pinned error line, laid out as the viewer lays out its side
+/// panel: the error ("wave 0 wavelength …") shows while the first wave's wavelength is not
+/// positive.
+fn ocean_with_error(ui: &mut egui::Ui, s: &mut OceanSettings) {
+    let wavelength = s.waves[0].wavelength;
+    let error = (wavelength <= 0.0).then(|| format!("wave 0 wavelength {wavelength} must be > 0"));
+    side_panel(
+        ui,
+        "ocean",
+        |ui| one_line(ui, error.as_deref().unwrap_or(""), ERROR_RED),
+        |ui| ocean_panel(ui, s),
+    );
+}
+
+/// Type `text` into the `index`-th number field (a click enters its text edit), then Enter.
+fn type_into<S>(harness: &mut Harness<'_, S>, index: usize, text: &str) {
+    harness.get_all_by_role(Role::SpinButton).nth(index).expect("a number field").click();
+    harness.run();
+    for c in text.chars() {
+        harness.event(egui::Event::Text(c.to_string()));
+        harness.run();
+    }
+    harness.key_press(egui::Key::Enter);
+    harness.run();
+}
+
+#[test]
+fn a_number_typed_while_an_error_shows_keeps_every_keystroke() {
+    let mut s = OceanSettings::default();
+    s.waves[0].wavelength = 0.0;
+    let mut harness = Harness::new_ui_state(ocean_with_error, s);
+    harness.run();
+    assert!(harness.query_by_label_contains("must be > 0").is_some(), "the error shows");
+    // Direction x, z, amplitude, wavelength, speed: the wavelength is the fourth field. The
+    // error goes with the first digit; the second must still land in the same field.
+    type_into(&mut harness, 3, "21");
+    assert_eq!(harness.state().waves[0].wavelength, 21.0);
+    assert!(harness.query_by_label_contains("must be > 0").is_none(), "the error went");
+}
+
+#[test]
+fn an_expensive_field_takes_what_is_typed_on_enter() {
+    let mut harness = Harness::new_ui_state(|ui, s: &mut ActorSettings| actor_panel(ui, s), ActorSettings::default());
+    harness.run();
+    let before = harness.state().extent[0];
+    harness.get_all_by_role(Role::SpinButton).next().expect("Extent x").click();
+    harness.run();
+    for c in ['0', '.', '5'] {
+        harness.event(egui::Event::Text(c.to_string()));
+        harness.run();
+        // Not one keystroke rebuilds the blocks (a lone "0" would have made zero of them).
+        assert_eq!(harness.state().extent[0], before, "applied at {c:?}");
+    }
+    harness.key_press(egui::Key::Enter);
+    harness.run();
+    assert_eq!(harness.state().extent[0], 0.5);
+}
+
+#[test]
+fn defaults_reset_one_scene_and_keep_the_mesh() {
+    let mut s = Saved::default();
+    s.ocean.steepness = 0.123;
+    s.actor.block = 2.5;
+    s.voxelizer.mesh = "my/mesh.obj".into();
+    s.voxelizer.grid = 200;
+    s.reset_scene("voxelizer");
+    assert_eq!(s.voxelizer.grid, Saved::default().voxelizer.grid);
+    assert_eq!(s.voxelizer.mesh, "my/mesh.obj", "the mesh chosen stays");
+    assert_eq!((s.ocean.steepness, s.actor.block), (0.123, 2.5), "the other scenes stay");
+    s.reset_scene("ocean");
+    assert_eq!(s.ocean, Saved::default().ocean);
+    assert_eq!(s.actor.block, 2.5);
+}
