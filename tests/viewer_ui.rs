@@ -87,3 +87,35 @@ fn defaults_reset_one_scene_and_keep_the_mesh() {
     assert_eq!(s.ocean, Saved::default().ocean);
     assert_eq!(s.actor.block, 2.5);
 }
+
+/// Drop-downs show readable names, never a Rust debug name: the voxelizer's, the volume's (a
+/// kind's own number shown beside it) and the actor's.
+#[test]
+fn choices_have_readable_names() {
+    use viewer::panels::{volume_panel, voxelizer_panel};
+    use viewer::scenes::{VolumeSettings, VoxelizerSettings};
+    let mut harness = Harness::new_ui_state(
+        |ui, s: &mut (VoxelizerSettings, VolumeSettings, ActorSettings)| {
+            voxelizer_panel(ui, &mut s.0);
+            volume_panel(ui, &mut s.1);
+            actor_panel(ui, &mut s.2);
+        },
+        Default::default(),
+    );
+    harness.run();
+    // What each drop-down shows is its value in the accessibility tree.
+    for shown in [
+        "surface, conservative (26-separating)",
+        "emission-absorption",
+        "light volume",
+        "surface (SDF march)",
+    ] {
+        assert!(harness.query_by_value(shown).is_some(), "{shown:?} is not shown");
+    }
+    for debug in ["Surface(", "Direct(", "LightVolume {", "Rays {", "Conservative)"] {
+        assert!(
+            harness.query_by_label_contains(debug).is_none(),
+            "a debug name shows: {debug}"
+        );
+    }
+}

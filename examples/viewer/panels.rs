@@ -7,7 +7,6 @@ use std::time::Instant;
 
 use eframe::egui;
 use egui::{ComboBox, DragValue, Slider, Ui};
-use fieldkit::distance::Method2d;
 use fieldkit::gpu::{PipelineCache, Profiler, Readback};
 use fieldkit::metaball::{Direct, Output as MarchOutput};
 use fieldkit::view::Targets;
@@ -275,7 +274,10 @@ impl Viewer {
 
     /// The camera and the scene's own settings, beneath the pinned top.
     fn scene_settings(&mut self, ui: &mut Ui, frame: &mut eframe::Frame) {
-        self.camera_panel(ui, frame);
+        // The 2D tool has no camera to turn.
+        if self.scene_name() != "distance2d" {
+            self.camera_panel(ui, frame);
+        }
         ui.separator();
         let s = &mut self.saved;
         match NAMES[self.scene] {
@@ -285,7 +287,10 @@ impl Viewer {
             "distance2d" => distance_panel(ui, &mut s.distance),
             "voxelizer" => voxelizer_panel(ui, &mut s.voxelizer),
             _ => {
-                ui.label("The ocean's, the actor's field and march, and the volume's settings.");
+                ui.label(
+                    "The island is the actor scene's field and march: its settings are \
+                     edited there. The sea and the cloud:",
+                );
                 ocean_panel(ui, &mut s.ocean);
                 volume_panel(ui, &mut s.volume);
             }
@@ -489,6 +494,31 @@ pub fn side_panel(
         });
 }
 
+/// A drop-down named `label` of `options` (a value, its readable name) for `value`, the one
+/// shown being the first option `same` holds equal to it (its name, else "other").
+pub fn choice<T: Clone>(
+    ui: &mut Ui,
+    label: &str,
+    value: &mut T,
+    options: &[(T, &str)],
+    same: impl Fn(&T, &T) -> bool,
+) {
+    let shown = options
+        .iter()
+        .find(|(o, _)| same(value, o))
+        .map_or("other", |(_, name)| name);
+    ComboBox::from_label(label)
+        .selected_text(shown)
+        .show_ui(ui, |ui| {
+            for (option, name) in options {
+                let selected = same(value, option);
+                if ui.selectable_label(selected, *name).clicked() && !selected {
+                    *value = option.clone();
+                }
+            }
+        });
+}
+
 /// Lines of scene numbers the pinned panel keeps room for.
 const STAT_LINES: usize = 4;
 
@@ -549,19 +579,19 @@ pub fn actor_panel(ui: &mut Ui, s: &mut ActorSettings) {
         Ok(n) => format!("{} × {} × {} blocks", n[0], n[1], n[2]),
         Err(e) => e.to_string(),
     });
-    ComboBox::from_label("draw")
-        .selected_text(format!("{:?}", s.draw))
-        .show_ui(ui, |ui| {
-            for d in [
-                ActorDraw::Surface,
-                ActorDraw::Cubes,
-                ActorDraw::Both,
-                ActorDraw::Direct(Direct::SphereGlobal),
-                ActorDraw::Direct(Direct::Segment),
-            ] {
-                ui.selectable_value(&mut s.draw, d, format!("{d:?}"));
-            }
-        });
+    choice(
+        ui,
+        "draw",
+        &mut s.draw,
+        &[
+            (ActorDraw::Surface, "surface (SDF march)"),
+            (ActorDraw::Cubes, "debug cubes"),
+            (ActorDraw::Both, "surface and cubes"),
+            (ActorDraw::Direct(Direct::SphereGlobal), "direct: global Lipschitz bound"),
+            (ActorDraw::Direct(Direct::Segment), "direct: segment tracing"),
+        ],
+        PartialEq::eq,
+    );
     ComboBox::from_label("SDF method")
         .selected_text(s.field.method.name())
         .show_ui(ui, |ui| {
@@ -576,18 +606,18 @@ pub fn actor_panel(ui: &mut Ui, s: &mut ActorSettings) {
                 ui.selectable_value(&mut s.field.method, m, m.name());
             }
         });
-    ComboBox::from_label("view")
-        .selected_text(format!("{:?}", s.raymarch.output))
-        .show_ui(ui, |ui| {
-            for o in [
-                MarchOutput::Shaded,
-                MarchOutput::Sdf,
-                MarchOutput::Density,
-                MarchOutput::Steps,
-            ] {
-                ui.selectable_value(&mut s.raymarch.output, o, format!("{o:?}"));
-            }
-        });
+    choice(
+        ui,
+        "view",
+        &mut s.raymarch.output,
+        &[
+            (MarchOutput::Shaded, "shaded"),
+            (MarchOutput::Sdf, "distance at entry (red out, blue in)"),
+            (MarchOutput::Density, "density"),
+            (MarchOutput::Steps, "steps (heat: blue few, red the cap)"),
+        ],
+        PartialEq::eq,
+    );
     ui.add(Slider::new(&mut s.field.threshold, 0.05..=0.95).text("threshold"));
     ui.add(Slider::new(&mut s.field.overlap, 1.0..=4.0).text("overlap"));
     ui.add(Slider::new(&mut s.field.cells_per_edge, 1.0..=8.0).text("cells per edge"));
@@ -603,24 +633,28 @@ pub fn actor_panel(ui: &mut Ui, s: &mut ActorSettings) {
     ui.checkbox(&mut s.field.full_volume, "full-volume field (JFA)");
     ui.add(Slider::new(&mut s.field.falloff_extend, 1.0..=2.0).text("falloff extend"));
     ui.collapsing("debug cubes", |ui| {
-        ComboBox::from_label("cull")
-            .selected_text(format!("{:?}", s.cubes.cull))
-            .show_ui(ui, |ui| {
-                for c in [None, Some(wgpu::Face::Back), Some(wgpu::Face::Front)] {
-                    ui.selectable_value(&mut s.cubes.cull, c, format!("{c:?}"));
-                }
-            });
-        ComboBox::from_label("depth compare")
-            .selected_text(format!("{:?}", s.cubes.depth_compare))
-            .show_ui(ui, |ui| {
-                for c in [
-                    wgpu::CompareFunction::Always,
-                    wgpu::CompareFunction::Less,
-                    wgpu::CompareFunction::LessEqual,
-                ] {
-                    ui.selectable_value(&mut s.cubes.depth_compare, c, format!("{c:?}"));
-                }
-            });
+        choice(
+            ui,
+            "cull",
+            &mut s.cubes.cull,
+            &[
+                (None, "none"),
+                (Some(wgpu::Face::Back), "back faces"),
+                (Some(wgpu::Face::Front), "front faces"),
+            ],
+            PartialEq::eq,
+        );
+        choice(
+            ui,
+            "depth test",
+            &mut s.cubes.depth_compare,
+            &[
+                (wgpu::CompareFunction::Always, "always pass"),
+                (wgpu::CompareFunction::Less, "nearer"),
+                (wgpu::CompareFunction::LessEqual, "nearer or equal"),
+            ],
+            PartialEq::eq,
+        );
         ui.checkbox(&mut s.cubes.wireframe, "wireframe");
         ui.checkbox(&mut s.cubes.depth_write, "depth write");
         ui.checkbox(&mut s.cubes.frustum_cull, "frustum cull");
@@ -749,28 +783,37 @@ pub fn volume_panel(ui: &mut Ui, s: &mut VolumeSettings) {
             .logarithmic(true)
             .text("step"),
     );
-    ComboBox::from_label("mode")
-        .selected_text(format!("{:?}", s.march.mode))
-        .show_ui(ui, |ui| {
-            for m in [
-                Mode::EmissionAbsorption,
-                Mode::MaximumIntensity,
-                Mode::IsoSurface { iso: 0.3 },
-            ] {
-                ui.selectable_value(&mut s.march.mode, m, format!("{m:?}"));
-            }
-        });
-    ComboBox::from_label("shadow")
-        .selected_text(format!("{:?}", s.march.shadow))
-        .show_ui(ui, |ui| {
-            for m in [
-                Shadow::None,
-                Shadow::Rays { step: 0.02 },
-                Shadow::LightVolume { step: 0.02 },
-            ] {
-                ui.selectable_value(&mut s.march.shadow, m, format!("{m:?}"));
-            }
-        });
+    // A kind's own numbers (the iso-level, the shadow step) stay as they are while its kind
+    // is kept; choosing another kind takes the value listed here.
+    let kind = |a: &_, b: &_| std::mem::discriminant(a) == std::mem::discriminant(b);
+    choice(
+        ui,
+        "mode",
+        &mut s.march.mode,
+        &[
+            (Mode::EmissionAbsorption, "emission-absorption"),
+            (Mode::MaximumIntensity, "maximum intensity"),
+            (Mode::IsoSurface { iso: 0.3 }, "iso-surface"),
+        ],
+        kind,
+    );
+    if let Mode::IsoSurface { iso } = &mut s.march.mode {
+        ui.add(Slider::new(iso, 0.0..=1.0).text("iso-level (density)"));
+    }
+    choice(
+        ui,
+        "shadow",
+        &mut s.march.shadow,
+        &[
+            (Shadow::None, "none"),
+            (Shadow::Rays { step: 0.02 }, "rays to the light"),
+            (Shadow::LightVolume { step: 0.02 }, "light volume"),
+        ],
+        |a, b| std::mem::discriminant(a) == std::mem::discriminant(b),
+    );
+    if let Shadow::Rays { step } | Shadow::LightVolume { step } = &mut s.march.shadow {
+        ui.add(Slider::new(step, 0.002..=0.1).logarithmic(true).text("shadow step (volume units)"));
+    }
     ui.checkbox(&mut s.march.skip, "empty-space skipping");
     ui.checkbox(&mut s.march.jitter, "jitter");
     ui.add(Slider::new(&mut s.march.ambient, 0.0..=1.0).text("ambient"));
@@ -804,14 +847,18 @@ pub fn distance_panel(ui: &mut Ui, s: &mut DistanceSettings) {
             }
         });
     ui.checkbox(&mut s.options.signed, "signed");
-    ComboBox::from_label("seed rule")
-        .selected_text(format!("{:?}", s.options.seeds.channels))
-        .show_ui(ui, |ui| {
-            use fieldkit::distance::Channels;
-            for c in [Channels::Red, Channels::AnyColour, Channels::Alpha] {
-                ui.selectable_value(&mut s.options.seeds.channels, c, format!("{c:?}"));
-            }
-        });
+    use fieldkit::distance::Channels;
+    choice(
+        ui,
+        "seed rule",
+        &mut s.options.seeds.channels,
+        &[
+            (Channels::Red, "red channel"),
+            (Channels::AnyColour, "any colour channel"),
+            (Channels::Alpha, "alpha"),
+        ],
+        PartialEq::eq,
+    );
     ui.add(Slider::new(&mut s.options.seeds.above, 0.0..=1.0).text("seed above"));
     ui.horizontal(|ui| {
         ui.label("preset");
@@ -848,17 +895,14 @@ pub fn distance_panel(ui: &mut Ui, s: &mut DistanceSettings) {
             s.seeds = DistanceSettings::default().seeds;
         }
     });
-    if matches!(s.options.method, Method2d::Exact) {
-        ui.label("exact: 0 wrong texels by construction");
-    }
 }
 
 pub fn voxelizer_panel(ui: &mut Ui, s: &mut VoxelizerSettings) {
     ui.heading("voxelizer (seed 004)");
     ui.checkbox(&mut s.point_light, "point light (the source's demo scene)");
     ui.horizontal(|ui| {
-        ui.label("mesh");
-        ui.text_edit_singleline(&mut s.mesh);
+        let id = ui.label("mesh").id;
+        ui.text_edit_singleline(&mut s.mesh).labelled_by(id);
     });
     ui.horizontal(|ui| {
         for m in ["torus", "sphere", scenes::BUNNY] {
@@ -876,25 +920,26 @@ pub fn voxelizer_panel(ui: &mut Ui, s: &mut VoxelizerSettings) {
         Slider::new(&mut s.spin, -std::f32::consts::PI..=std::f32::consts::PI)
             .text("spin (about y)"),
     );
-    ComboBox::from_label("voxelization")
-        .selected_text(format!("{:?}", s.mode))
-        .show_ui(ui, |ui| {
-            for m in [
-                VoxelMode::Surface(Separation::Conservative),
-                VoxelMode::Surface(Separation::Six),
-                VoxelMode::Raster,
-                VoxelMode::Solid,
-                VoxelMode::DistanceField,
-            ] {
-                ui.selectable_value(&mut s.mode, m, format!("{m:?}"));
-            }
-        });
-    ComboBox::from_label("colour by")
-        .selected_text(format!("{:?}", s.colour_by))
-        .show_ui(ui, |ui| {
-            ui.selectable_value(&mut s.colour_by, ColourBy::Normal, "normal");
-            ui.selectable_value(&mut s.colour_by, ColourBy::Colour, "colour");
-        });
+    choice(
+        ui,
+        "voxelization",
+        &mut s.mode,
+        &[
+            (VoxelMode::Surface(Separation::Conservative), "surface, conservative (26-separating)"),
+            (VoxelMode::Surface(Separation::Six), "surface, 6-separating"),
+            (VoxelMode::Raster, "surface through the rasterizer"),
+            (VoxelMode::Solid, "solid (parity along x)"),
+            (VoxelMode::DistanceField, "signed distance field, raymarched"),
+        ],
+        PartialEq::eq,
+    );
+    choice(
+        ui,
+        "colour by",
+        &mut s.colour_by,
+        &[(ColourBy::Normal, "normal"), (ColourBy::Colour, "colour")],
+        PartialEq::eq,
+    );
     ui.checkbox(&mut s.slice, "signed distance slice (middle z)");
     ui.add(Slider::new(&mut s.band, 0.5..=16.0).text("distance band (voxels)"));
 }
