@@ -525,21 +525,14 @@ fn frame_cost_measures_every_part_of_a_frame() {
             col(row, "resize_wall_ms") >= col(row, "resize_cpu_ms"),
             "{row:?}"
         );
-        // The whole frame on the GPU holds its compute passes (llvmpipe has timestamps inside
-        // encoders; a frame with only render passes still takes time). Both are medians of
-        // frames of their own: where the timed passes are most of the frame (the ocean's render
-        // pass is timed too), the two medians may come out either way.
+        // The whole frame on the GPU holds its timed passes (llvmpipe has timestamps inside
+        // encoders; the viewer's blit and lines are timed as the techniques' passes are). Both
+        // are medians of frames of their own: where the timed passes are most of the frame (the
+        // ocean's surface, the 2D tool's blit), the two medians may come out either way.
         let gpu_frame = col(row, "gpu_frame_ms_median");
         assert!(gpu_frame > 0.0, "{row:?}");
-        if row.contains(&"ocean") {
-            assert!(col(row, "gpu_compute_ms_median") > 0.0, "{row:?}");
-        } else {
-            assert!(gpu_frame >= col(row, "gpu_compute_ms_median"), "{row:?}");
-        }
+        assert!(col(row, "gpu_compute_ms_median") > 0.0, "{row:?}");
     }
-    // The actor's field is made by compute passes; the 2D tool only draws.
-    assert!(col(&rows[1], "gpu_compute_ms_median") > 0.0, "{csv}");
-    assert_eq!(col(&rows[0], "gpu_compute_ms_median"), 0.0, "{csv}");
     const MADE: [&str; 4] = [
         "made_buffers",
         "made_textures",

@@ -119,3 +119,22 @@ fn choices_have_readable_names() {
         );
     }
 }
+
+/// The per-pass list keeps a pass that ran in an earlier frame (the 2D tool's methods run only
+/// when the seeds change) with the time it took there, and sums a name's passes in one frame.
+#[test]
+fn passes_stay_listed_with_their_last_time() {
+    use viewer::panels::remember;
+    let mut seen = Vec::new();
+    let frame = |p: &[(&str, f64)]| p.iter().map(|(n, ms)| (n.to_string(), *ms)).collect::<Vec<_>>();
+    remember(&mut seen, &frame(&[("exact", 0.25), ("jfa", 0.5), ("jfa", 0.25), ("blit", 0.01)]), 1);
+    remember(&mut seen, &frame(&[("blit", 0.02)]), 2);
+    assert_eq!(
+        seen,
+        vec![
+            ("exact".to_string(), 0.25, 1),
+            ("jfa".to_string(), 0.75, 1),
+            ("blit".to_string(), 0.02, 2),
+        ]
+    );
+}

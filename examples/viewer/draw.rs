@@ -1,6 +1,7 @@
 //! The viewer's own drawing, beside fieldkit's: a textured rectangle (the 2D field) and
 //! coloured lines (the ocean's patch quadtree). Plain wgpu, as an application writes it.
 
+use fieldkit::gpu::Recorder;
 use glam::{Mat4, Vec3, Vec4};
 
 const BLIT_WGSL: &str = r#"
@@ -108,7 +109,7 @@ impl Blit {
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut Recorder<'_>,
         target: &wgpu::TextureView,
         size: [u32; 2],
         image: &wgpu::TextureView,
@@ -151,7 +152,7 @@ impl Blit {
             });
             *group = Some((image.clone(), made));
         }
-        let mut pass = colour_pass(encoder, "viewer blit", target);
+        let mut pass = colour_pass(rec, "viewer blit", target);
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &group.as_ref().expect("made above").1, &[]);
         pass.draw(0..6, 0..1);
@@ -221,7 +222,7 @@ impl Lines {
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
-        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut Recorder<'_>,
         target: &wgpu::TextureView,
         view_proj: Mat4,
         segments: &[[Vec3; 2]],
@@ -253,7 +254,7 @@ impl Lines {
                 resource: self.camera.as_entire_binding(),
             }],
         });
-        let mut pass = colour_pass(encoder, "viewer lines", target);
+        let mut pass = colour_pass(rec, "viewer lines", target);
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &group, &[]);
         pass.set_vertex_buffer(0, buffer.slice(..));
@@ -262,12 +263,14 @@ impl Lines {
 }
 
 /// A render pass over `target` alone that keeps what it holds.
+/// Timed under `label` when the frame is profiled.
 fn colour_pass<'e>(
-    encoder: &'e mut wgpu::CommandEncoder,
+    rec: &'e mut Recorder<'_>,
     label: &str,
     target: &wgpu::TextureView,
 ) -> wgpu::RenderPass<'e> {
-    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+    rec.render_pass(
+        &wgpu::RenderPassDescriptor {
         label: Some(label),
         color_attachments: &[Some(wgpu::RenderPassColorAttachment {
             view: target,
@@ -279,5 +282,7 @@ fn colour_pass<'e>(
             },
         })],
         ..Default::default()
-    })
+        },
+        label,
+    )
 }

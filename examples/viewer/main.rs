@@ -295,7 +295,7 @@ pub struct Shot {
     pub report: FrameReport,
     /// Milliseconds per frame, submit to finished, each frame.
     pub frame_ms: Vec<f64>,
-    /// The compute passes of the last frame with their GPU milliseconds (adapters with
+    /// The passes of the last frame (compute and render) with their GPU milliseconds (adapters with
     /// timestamp queries).
     pub passes: Vec<(String, f64)>,
 }
@@ -407,7 +407,7 @@ fn headless(args: &Args, saved: &Saved) -> Result<(), String> {
     );
     if !shot.passes.is_empty() {
         let total: f64 = shot.passes.iter().map(|p| p.1).sum();
-        println!("  compute passes of the last frame: {total:.3} ms");
+        println!("  passes of the last frame (compute and render): {total:.3} ms");
         for (name, t) in &shot.passes {
             println!("    {name}: {t:.3} ms");
         }

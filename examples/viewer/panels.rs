@@ -31,6 +31,12 @@ struct Viewer {
     profiler: Option<Profiler>,
     reading: Option<Readback<PassTimes>>,
     passes: PassTimes,
+    /// Every pass read back so far, its time in the last frame it ran in and that frame's
+    /// count of passes read: passes that run only on a change (the 2D tool's methods, a new
+    /// voxelization) stay listed with their cost.
+    seen: Vec<(String, f64, u64)>,
+    /// Pass reads so far.
+    reads: u64,
     stats: Vec<String>,
     error: Option<String>,
     /// The last Save/Load's outcome (or the pipeline cache's), and whether it failed.
@@ -120,6 +126,8 @@ pub fn run_window(args: Args, saved: Saved, load_error: Option<String>) -> Resul
                 profiler,
                 reading: None,
                 passes: (Vec::new(), 0.0),
+                seen: Vec::new(),
+                reads: 0,
                 stats: Vec::new(),
                 error: load_error.map(|e| format!("settings: {e}")),
                 note: cache_note.map(|n| (n, true)),
@@ -238,15 +246,15 @@ impl Viewer {
         ui.separator();
         // Cost and accuracy: the scene's CPU and GPU time a frame side by side, each number of
         // fixed width so that nothing below moves as they change.
-        let gpu = self.passes.0.iter().map(|p| p.1).sum::<f64>();
+        // The passes' sum beside the frame's GPU time first to last (the gaps between passes
+        // are the difference).
+        let sum = self.passes.0.iter().map(|p| p.1).sum::<f64>();
         let gpu = match self.profiler {
-            Some(_) => format!("{gpu:7.3} ms"),
+            Some(_) => format!("Σ {sum:7.3} of {:7.3} ms", self.passes.1),
             None => "     — ms".into(),
         };
-        ui.monospace(format!(
-            "CPU record+submit {:7.3} ms | GPU passes {gpu}",
-            self.record_ms
-        ));
+        ui.monospace(format!("CPU record+submit {:7.3} ms", self.record_ms));
+        ui.monospace(format!("GPU passes {gpu}"));
         ui.monospace(format!(
             "frame interval    {:7.2} ms | {:5.0} fps",
             self.frame_ms,
@@ -256,8 +264,9 @@ impl Viewer {
             egui::CollapsingHeader::new("per pass")
                 .default_open(false)
                 .show(ui, |ui| {
-                    for (name, ms) in &self.passes.0 {
-                        ui.label(format!("{name}: {ms:.3} ms"));
+                    for (name, ms, read) in &self.seen {
+                        let when = if *read == self.reads { "" } else { " (an earlier frame)" };
+                        ui.label(format!("{name}: {ms:.3} ms{when}"));
                     }
                 });
         } else {
@@ -365,6 +374,8 @@ impl Viewer {
         {
             self.reading = None;
             if let Ok(t) = t {
+                self.reads += 1;
+                remember(&mut self.seen, &t.0, self.reads);
                 self.passes = t;
             }
         }
@@ -517,6 +528,18 @@ pub fn choice<T: Clone>(
                 }
             }
         });
+}
+
+/// Fold a frame's `passes` (read number `read`) into `seen`: a name's time is its passes'
+/// sum in the latest frame that ran it.
+pub fn remember(seen: &mut Vec<(String, f64, u64)>, passes: &[(String, f64)], read: u64) {
+    for (name, ms) in passes {
+        match seen.iter_mut().find(|s| s.0 == *name) {
+            Some(s) if s.2 == read => s.1 += ms,
+            Some(s) => *s = (name.clone(), *ms, read),
+            None => seen.push((name.clone(), *ms, read)),
+        }
+    }
 }
 
 /// Lines of scene numbers the pinned panel keeps room for.

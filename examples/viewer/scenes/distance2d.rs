@@ -213,7 +213,7 @@ impl Distance2dScene {
             self.blit.encode(
                 device,
                 queue,
-                frame.rec.encoder,
+                &mut *frame.rec,
                 &frame.targets.colour_view,
                 frame.size,
                 view,

@@ -191,7 +191,7 @@ impl Ocean {
             self.lines.encode(
                 device,
                 queue,
-                frame.rec.encoder,
+                &mut *frame.rec,
                 &frame.targets.colour_view,
                 view.view_proj,
                 &segments,

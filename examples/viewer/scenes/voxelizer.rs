@@ -450,7 +450,7 @@ impl VoxelizerScene {
             self.blit.encode(
                 device,
                 queue,
-                frame.rec.encoder,
+                &mut *frame.rec,
                 &frame.targets.colour_view,
                 frame.size,
                 view,
