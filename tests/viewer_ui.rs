@@ -138,3 +138,22 @@ fn passes_stay_listed_with_their_last_time() {
         ]
     );
 }
+
+/// A drag in the 2D tool paints a stroke: every texel on the line between two frames' pointer
+/// positions, not two separate stamps.
+#[test]
+fn a_drag_paints_a_stroke() {
+    use viewer::scenes::{DistanceSettings, line};
+    assert_eq!(line([0, 0], [3, 1]), vec![[0, 0], [1, 0], [2, 1], [3, 1]]);
+    assert_eq!(line([5, 9], [5, 6]), vec![[5, 9], [5, 8], [5, 7], [5, 6]]);
+    assert_eq!(line([2, 2], [2, 2]), vec![[2, 2]]);
+    let mut d = DistanceSettings {
+        brush: 0,
+        ..DistanceSettings::default()
+    };
+    d.seeds.clear();
+    d.paint_stroke([10, 10], [20, 10], false);
+    assert_eq!(d.seeds.len(), 11, "{:?}", d.seeds);
+    d.paint_stroke([12, 10], [14, 10], true);
+    assert_eq!(d.seeds.len(), 8, "erased along its own stroke");
+}

@@ -42,6 +42,8 @@ struct Viewer {
     /// The last Save/Load's outcome (or the pipeline cache's), and whether it failed.
     note: Option<(String, bool)>,
     settings_path: String,
+    /// Where the 2D tool's stroke was last frame (texels), while a button is held over it.
+    stroke_from: Option<[u32; 2]>,
     /// "Defaults" was clicked: asking whether to reset the scene.
     confirm_defaults: bool,
     start: Instant,
@@ -132,6 +134,7 @@ pub fn run_window(args: Args, saved: Saved, load_error: Option<String>) -> Resul
                 error: load_error.map(|e| format!("settings: {e}")),
                 note: cache_note.map(|n| (n, true)),
                 settings_path,
+                stroke_from: None,
                 confirm_defaults: false,
                 start: Instant::now(),
                 last: Instant::now(),
@@ -435,22 +438,30 @@ impl Viewer {
     fn input(&mut self, ui: &Ui, response: &egui::Response, size: [u32; 2]) {
         let i = self.scene;
         if NAMES[i] == "distance2d" {
-            // Left button draws seeds, right erases.
+            // Left button draws seeds, right erases (a click or a drag): a drag is a stroke,
+            // joined to where the pointer was last frame.
             let d = &mut self.saved.distance;
-            if let Some(pos) = response.interact_pointer_pos() {
-                let erase = response.dragged_by(egui::PointerButton::Secondary);
+            let erase = ui.input(|inp| inp.pointer.button_down(egui::PointerButton::Secondary))
+                || response.secondary_clicked();
+            let at = response.interact_pointer_pos().and_then(|pos| {
                 let r = response.rect;
                 let uv = (pos - r.min) / r.size();
                 let [x0, y0, x1, y1] = scenes::field_rect(size, d.size);
                 let fx = (uv.x - x0) / (x1 - x0);
                 let fy = (uv.y - y0) / (y1 - y0);
-                if (0.0..1.0).contains(&fx) && (0.0..1.0).contains(&fy) {
-                    let at = [
+                ((0.0..1.0).contains(&fx) && (0.0..1.0).contains(&fy)).then(|| {
+                    [
                         (fx * d.size[0] as f32) as u32,
                         (fy * d.size[1] as f32) as u32,
-                    ];
-                    d.paint(at, erase);
+                    ]
+                })
+            });
+            match at {
+                Some(at) => {
+                    d.paint_stroke(self.stroke_from.unwrap_or(at), at, erase);
+                    self.stroke_from = Some(at);
                 }
+                None => self.stroke_from = None,
             }
             return;
         }

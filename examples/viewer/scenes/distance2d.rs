@@ -63,6 +63,14 @@ impl DistanceSettings {
     }
 
     /// Add (or, `erase`, remove) seeds in a disc of the brush radius around texel `at`.
+    /// The brush along the stroke from `from` to `to` (texels), every texel of the line
+    /// stamped, so a fast drag leaves a line and not separate dots.
+    pub fn paint_stroke(&mut self, from: [u32; 2], to: [u32; 2], erase: bool) {
+        for at in line(from, to) {
+            self.paint(at, erase);
+        }
+    }
+
     pub fn paint(&mut self, at: [u32; 2], erase: bool) {
         let r = self.brush as i64;
         let inside = |p: [u32; 2]| {
@@ -85,6 +93,22 @@ impl DistanceSettings {
             }
         }
     }
+}
+
+/// The texels of the line from `a` to `b`, both included, each a step of one texel along the
+/// longer axis (a DDA).
+pub fn line(a: [u32; 2], b: [u32; 2]) -> Vec<[u32; 2]> {
+    let (dx, dy) = (b[0] as f64 - a[0] as f64, b[1] as f64 - a[1] as f64);
+    let steps = dx.abs().max(dy.abs()) as u32;
+    (0..=steps)
+        .map(|i| {
+            let t = if steps == 0 { 0.0 } else { i as f64 / steps as f64 };
+            [
+                (a[0] as f64 + dx * t).round() as u32,
+                (a[1] as f64 + dy * t).round() as u32,
+            ]
+        })
+        .collect()
 }
 
 pub(super) struct Pending2d {

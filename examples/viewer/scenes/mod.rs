@@ -27,7 +27,7 @@ mod volume;
 mod voxelizer;
 
 pub use actor::{Actor, ActorDraw, ActorSettings};
-pub use distance2d::{Distance2dScene, DistanceSettings, field_rect, method_name, methods_2d};
+pub use distance2d::{Distance2dScene, DistanceSettings, field_rect, line, method_name, methods_2d};
 pub use ocean::{Ocean, OceanSettings};
 pub use volume::{VolumeScene, VolumeSettings};
 pub use voxelizer::{BUNNY, VoxelMode, VoxelizerScene, VoxelizerSettings};
@@ -137,7 +137,8 @@ pub fn default_camera(scene: &str) -> Camera {
         "actor" => Camera::orbit(Vec3::ZERO, 0.55, 0.4, 11.0, 200.0),
         "ocean" => Camera::orbit(Vec3::new(0.0, 0.0, 0.0), 0.3, 0.25, 40.0, 3000.0),
         "volume" => Camera::orbit(Vec3::ZERO, 0.6, 0.3, 1.8, 50.0),
-        "voxelizer" => Camera::orbit(Vec3::ZERO, 0.5, 0.35, 2.6, 100.0),
+        // The mesh is drawn with its longest side 2: its bounding sphere (up to √3) in view.
+        "voxelizer" => Camera::orbit(Vec3::ZERO, 0.5, 0.35, 3.4, 100.0),
         "composite" => Camera::orbit(Vec3::new(0.0, -1.0, 0.0), -0.165, 0.29, 31.5, 3000.0),
         _ => Camera::orbit(Vec3::ZERO, 0.0, 0.0, 1.0, 10.0),
     }
