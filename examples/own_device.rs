@@ -192,7 +192,10 @@ pub fn run(device: &wgpu::Device, queue: &wgpu::Queue, adapter: String) -> Resul
         &fieldkit::mesh_sdf::Settings::default(),
     )?;
     queue.submit([enc.finish()]);
-    let mesh_sdf = wait(device, readback_texture::<f32>(device, queue, &field.texture))?;
+    let mesh_sdf = wait(
+        device,
+        readback_texture::<f32>(device, queue, &field.texture),
+    )?;
 
     // One frame: island, sea and cloud against one depth buffer.
     let (colour, depth) = frame(device, queue, true)?;

@@ -216,14 +216,16 @@ pub struct Targets {
 }
 
 impl Targets {
-    /// Targets of `size` in the given formats.
+    /// Targets of `size` in the given formats: render attachments that can also be sampled,
+    /// copied from and copied to.
     pub fn new(
         device: &wgpu::Device,
         [width, height]: [u32; 2],
         colour: wgpu::TextureFormat,
         depth: wgpu::TextureFormat,
     ) -> Self {
-        // Read back by tests, sampled by later stages (the ocean's fade reads the depth).
+        // Read back by tests, sampled by later stages (the ocean's fade reads the depth), and
+        // written by copies (an app putting back a frame it kept: the viewer's last good one).
         let make = |format, label| {
             crate::gpu::texture(
                 device,
@@ -233,6 +235,7 @@ impl Targets {
                 format,
                 wgpu::TextureUsages::RENDER_ATTACHMENT
                     | wgpu::TextureUsages::COPY_SRC
+                    | wgpu::TextureUsages::COPY_DST
                     | wgpu::TextureUsages::TEXTURE_BINDING,
             )
         };

@@ -81,7 +81,11 @@ fn own_device_runs_every_technique_and_matches_the_references() {
     let band = 4.0 * voxel;
     let mut in_band = 0;
     for (i, &got) in r.mesh_sdf.iter().enumerate() {
-        let v = [i % size[0], (i / size[0]) % size[1], i / (size[0] * size[1])];
+        let v = [
+            i % size[0],
+            (i / size[0]) % size[1],
+            i / (size[0] * size[1]),
+        ];
         let p = r.grid.voxel_centre(v.map(|c| c as u32));
         let ring = (glam::DVec2::new(p.x, p.z).length() - 1.0).hypot(p.y);
         let analytic = ring - 0.4;
@@ -94,7 +98,10 @@ fn own_device_runs_every_technique_and_matches_the_references() {
         } else if analytic.abs() > band + 0.05 {
             // ±band, as the shader rounds it to f32.
             let want = band.copysign(analytic);
-            assert!((got as f64 - want).abs() < 1e-6, "voxel {v:?} beyond the band: {got}");
+            assert!(
+                (got as f64 - want).abs() < 1e-6,
+                "voxel {v:?} beyond the band: {got}"
+            );
         }
     }
     assert!(in_band > 1000, "{in_band} voxels in the band");

@@ -76,7 +76,11 @@ fn check_closed(ctx: &Context, name: &str, mesh: &Mesh, grid: &Grid) {
     let got = field(ctx, mesh, grid, settings);
     let c = compare(mesh, grid, settings, &got);
     println!("{name}: {c:?}");
-    assert!(c.in_band > 500, "{name}: only {} voxels in the band", c.in_band);
+    assert!(
+        c.in_band > 500,
+        "{name}: only {} voxels in the band",
+        c.in_band
+    );
     assert!(c.max_error <= MAX_ERROR, "{name}: {c:?}");
     assert_eq!(c.wrong_sign, Vec::<[u32; 3]>::new(), "{name}: signs");
     assert_eq!(c.beyond_not_clamped, 0, "{name}");
@@ -92,7 +96,10 @@ fn closed_meshes_match_the_reference() {
     // A box far from the origin on a grid of 0.25-unit voxels that cuts through it: the box's
     // faces leave the grid, so rows meet triangles outside it.
     let origin = DVec3::new(1000.0, -2000.0, 30.0);
-    let cuboid = Mesh::cuboid(origin + DVec3::new(1.1, 0.9, 0.6), origin + DVec3::new(4.2, 3.1, 6.0));
+    let cuboid = Mesh::cuboid(
+        origin + DVec3::new(1.1, 0.9, 0.6),
+        origin + DVec3::new(4.2, 3.1, 6.0),
+    );
     let grid = Grid {
         origin,
         voxel: 0.25,
@@ -112,7 +119,10 @@ fn unsigned_fields_are_the_distance() {
         ..Default::default()
     };
     let got = field(&ctx, &torus, &grid, settings);
-    assert!(got.iter().all(|&v| v >= 0.0), "an unsigned field has no negative value");
+    assert!(
+        got.iter().all(|&v| v >= 0.0),
+        "an unsigned field has no negative value"
+    );
     let c = compare(&torus, &grid, settings, &got);
     assert!(c.in_band > 300 && c.max_error <= MAX_ERROR, "{c:?}");
     assert_eq!(c.beyond_not_clamped, 0);
@@ -127,24 +137,43 @@ fn unsigned_fields_are_the_distance() {
 fn open_meshes_take_the_rows_that_close() {
     let ctx = Context::shared();
     let mut sphere = Mesh::uv_sphere(DVec3::splat(8.0), 6.0, 24, 12);
-    let top = |t: &[u32; 3]| t.iter().all(|&i| sphere.positions[i as usize].z > 8.0 + 6.0 * 0.8);
+    let top = |t: &[u32; 3]| {
+        t.iter()
+            .all(|&i| sphere.positions[i as usize].z > 8.0 + 6.0 * 0.8)
+    };
     let before = sphere.triangles.len();
-    let kept: Vec<[u32; 3]> = sphere.triangles.iter().filter(|t| !top(t)).copied().collect();
+    let kept: Vec<[u32; 3]> = sphere
+        .triangles
+        .iter()
+        .filter(|t| !top(t))
+        .copied()
+        .collect();
     sphere.triangles = kept;
     assert!(sphere.triangles.len() < before && sphere.open_edge().is_some());
     let grid = Grid::new([16, 16, 16]);
     let settings = Settings::default();
     let got = field(&ctx, &sphere, &grid, settings);
     let c = compare(&sphere, &grid, settings, &got);
-    println!("open sphere: {} wrong signs at {:?}", c.wrong_sign.len(), c.wrong_sign);
+    println!(
+        "open sphere: {} wrong signs at {:?}",
+        c.wrong_sign.len(),
+        c.wrong_sign
+    );
     assert!(c.max_error <= MAX_ERROR, "{c:?}");
     // Every centre the rule signs otherwise than the winding number lies within a voxel and a
     // half of the hole's rim plane (z = 8 + 4.8 = 12.8, centres at 11.5 to 13.5).
     for v in &c.wrong_sign {
-        assert!((v[2] as f64 + 0.5 - 12.8).abs() <= 1.5, "{v:?} is far from the hole");
+        assert!(
+            (v[2] as f64 + 0.5 - 12.8).abs() <= 1.5,
+            "{v:?} is far from the hole"
+        );
     }
     // Measured on llvmpipe: 2 of 4 096 centres, both at the rim's height.
-    assert!(c.wrong_sign.len() <= 8, "{} wrong signs", c.wrong_sign.len());
+    assert!(
+        c.wrong_sign.len() <= 8,
+        "{} wrong signs",
+        c.wrong_sign.len()
+    );
     // Deep inside and far outside the sign holds.
     let at = |v: [u32; 3]| got[((v[2] * 16 + v[1]) * 16 + v[0]) as usize];
     assert!(at([8, 8, 8]) < 0.0 && at([8, 8, 5]) < 0.0);
@@ -169,20 +198,41 @@ fn bad_input_is_a_typed_error() {
     let empty = Mesh::default();
     assert!(matches!(
         run(&empty, &grid, Settings::default()),
-        Err(Error::Size { what: "number of triangles", .. })
+        Err(Error::Size {
+            what: "number of triangles",
+            ..
+        })
     ));
     let mut nan = sphere.clone();
     nan.positions[3].y = f64::NAN;
-    invalid(run(&nan, &grid, Settings::default()), "vertex 3 is not finite");
+    invalid(
+        run(&nan, &grid, Settings::default()),
+        "vertex 3 is not finite",
+    );
     let mut flat = sphere.clone();
     // Every vertex on one line: no triangle has area.
-    flat.positions.iter_mut().for_each(|p| *p = DVec3::splat(p.x));
+    flat.positions
+        .iter_mut()
+        .for_each(|p| *p = DVec3::splat(p.x));
     invalid(run(&flat, &grid, Settings::default()), "has no area");
     let mut out_of_range = sphere.clone();
     out_of_range.triangles[0][1] = 9999;
-    invalid(run(&out_of_range, &grid, Settings::default()), "names vertex 9999");
+    invalid(
+        run(&out_of_range, &grid, Settings::default()),
+        "names vertex 9999",
+    );
     for band in [0.0, -1.0, f32::NAN, f32::INFINITY] {
-        invalid(run(&sphere, &grid, Settings { band, ..Default::default() }), "band");
+        invalid(
+            run(
+                &sphere,
+                &grid,
+                Settings {
+                    band,
+                    ..Default::default()
+                },
+            ),
+            "band",
+        );
     }
     assert!(matches!(
         run(&sphere, &Grid::new([5000, 4, 4]), Settings::default()),
@@ -198,7 +248,13 @@ fn bad_input_is_a_typed_error() {
     some_flat.triangles.push([0, 0, 1]);
     let mut enc = ctx.encoder("degenerate");
     let f = sdf
-        .encode(&ctx.device, &mut enc, &some_flat, &grid, &Settings::default())
+        .encode(
+            &ctx.device,
+            &mut enc,
+            &some_flat,
+            &grid,
+            &Settings::default(),
+        )
         .unwrap();
     assert_eq!(f.degenerate, 1);
 }
@@ -241,7 +297,9 @@ fn the_march_draws_the_mesh() {
     };
     let sdf = MeshSdf::new(&ctx.device).unwrap();
     let mut enc = ctx.encoder("mesh sdf");
-    let f = sdf.encode(&ctx.device, &mut enc, &sphere, &grid, &settings).unwrap();
+    let f = sdf
+        .encode(&ctx.device, &mut enc, &sphere, &grid, &settings)
+        .unwrap();
     ctx.submit_and_wait("mesh sdf", enc).unwrap();
     let march = f.march.as_ref().expect("asked for");
     // The copy is the field in voxels and its negation (f16).
@@ -259,7 +317,14 @@ fn the_march_draws_the_mesh() {
         band: settings.band * grid.voxel as f32,
         threshold: 0.0,
     };
-    let shot = shoot(&ctx, Tracer::Field(field), &view, Mat4::IDENTITY, &normals(), 1.0);
+    let shot = shoot(
+        &ctx,
+        Tracer::Field(field),
+        &view,
+        Mat4::IDENTITY,
+        &normals(),
+        1.0,
+    );
     let (mut hits, mut differ, mut depth_err, mut normal_deg) = (0, 0, 0.0f64, 0.0f64);
     for y in 0..H {
         for x in 0..W {
@@ -285,7 +350,9 @@ fn the_march_draws_the_mesh() {
             }
         }
     }
-    println!("march: {hits} hits, {differ} silhouette pixels differ, depth ≤ {depth_err:.4} voxels, normal ≤ {normal_deg:.2}°");
+    println!(
+        "march: {hits} hits, {differ} silhouette pixels differ, depth ≤ {depth_err:.4} voxels, normal ≤ {normal_deg:.2}°"
+    );
     // llvmpipe: depth along the ray within 0.093 voxels of the mesh at incidences up to 60°:
     // trilinear interpolation of a distance that curves with the sphere (radius R = 6 voxels)
     // is off by up to h²/8 · 2/R ≈ 0.042 voxels across the surface, twice that along a ray at
@@ -303,7 +370,11 @@ fn the_march_draws_the_mesh() {
 fn many_triangles_run_in_rows_of_workgroups() {
     let ctx = Context::shared();
     let sphere = Mesh::uv_sphere(DVec3::splat(5.0), 3.3, 360, 190);
-    assert!(sphere.triangles.len() > 2 * 65_535, "{}", sphere.triangles.len());
+    assert!(
+        sphere.triangles.len() > 2 * 65_535,
+        "{}",
+        sphere.triangles.len()
+    );
     let grid = Grid::new([10, 10, 10]);
     let got = field(&ctx, &sphere, &grid, Settings::default());
     let triangles = cpu::triangles(&sphere.to_grid(&grid).unwrap());
@@ -313,6 +384,10 @@ fn many_triangles_run_in_rows_of_workgroups() {
         let d = cpu::distance(p, &triangles).min(4.0);
         let inside = cpu::winding_number(p, &triangles) > 0.5;
         let want = if inside { -d } else { d };
-        assert!((got[i] as f64 - want).abs() <= MAX_ERROR, "voxel {v:?}: {} against {want}", got[i]);
+        assert!(
+            (got[i] as f64 - want).abs() <= MAX_ERROR,
+            "voxel {v:?}: {} against {want}",
+            got[i]
+        );
     }
 }

@@ -159,7 +159,11 @@ fn the_voxelizer_draws_the_mesh_distance_field() {
     let field = viewer::render_offscreen(&device, &queue, "voxelizer", &s, SIZE, 2).unwrap();
     assert!(field.report.error.is_none(), "{:?}", field.report.error);
     assert!(
-        field.report.stats.iter().any(|l| l.contains("signed distance field")),
+        field
+            .report
+            .stats
+            .iter()
+            .any(|l| l.contains("signed distance field")),
         "{:?}",
         field.report.stats
     );
@@ -176,14 +180,26 @@ fn the_voxelizer_draws_the_mesh_distance_field() {
         !(x > SIZE[0] / 2 && y > SIZE[1] * 6 / 10)
     };
     let both = (0..a.len()).filter(|&i| in_view(i) && a[i] && b[i]).count();
-    let either = (0..a.len()).filter(|&i| in_view(i) && (a[i] || b[i])).count();
-    let only_field = (0..a.len()).filter(|&i| in_view(i) && b[i] && !a[i]).count();
-    eprintln!("distance field: {both} of {either} covered pixels in both, {only_field} by the field alone");
+    let either = (0..a.len())
+        .filter(|&i| in_view(i) && (a[i] || b[i]))
+        .count();
+    let only_field = (0..a.len())
+        .filter(|&i| in_view(i) && b[i] && !a[i])
+        .count();
+    eprintln!(
+        "distance field: {both} of {either} covered pixels in both, {only_field} by the field alone"
+    );
     // llvmpipe: 0.74 of the union in both, the rest the cubes' corners past the surface (at 24
     // voxels a side a cube reaches up to 0.87 voxels out); the field draws within the voxels
     // but for a few edge pixels.
-    assert!(both > 500 && both as f64 > 0.6 * either as f64, "{both} of {either}");
-    assert!(only_field * 50 < both, "{only_field} pixels drawn by the field alone");
+    assert!(
+        both > 500 && both as f64 > 0.6 * either as f64,
+        "{both} of {either}"
+    );
+    assert!(
+        only_field * 50 < both,
+        "{only_field} pixels drawn by the field alone"
+    );
 }
 
 fn temp(name: &str) -> PathBuf {

@@ -30,7 +30,11 @@ fn ocean_with_error(ui: &mut egui::Ui, s: &mut OceanSettings) {
 
 /// Type `text` into the `index`-th number field (a click enters its text edit), then Enter.
 fn type_into<S>(harness: &mut Harness<'_, S>, index: usize, text: &str) {
-    harness.get_all_by_role(Role::SpinButton).nth(index).expect("a number field").click();
+    harness
+        .get_all_by_role(Role::SpinButton)
+        .nth(index)
+        .expect("a number field")
+        .click();
     harness.run();
     for c in text.chars() {
         harness.event(egui::Event::Text(c.to_string()));
@@ -46,20 +50,33 @@ fn a_number_typed_while_an_error_shows_keeps_every_keystroke() {
     s.waves[0].wavelength = 0.0;
     let mut harness = Harness::new_ui_state(ocean_with_error, s);
     harness.run();
-    assert!(harness.query_by_label_contains("must be > 0").is_some(), "the error shows");
+    assert!(
+        harness.query_by_label_contains("must be > 0").is_some(),
+        "the error shows"
+    );
     // Direction x, z, amplitude, wavelength, speed: the wavelength is the fourth field. The
     // error goes with the first digit; the second must still land in the same field.
     type_into(&mut harness, 3, "21");
     assert_eq!(harness.state().waves[0].wavelength, 21.0);
-    assert!(harness.query_by_label_contains("must be > 0").is_none(), "the error went");
+    assert!(
+        harness.query_by_label_contains("must be > 0").is_none(),
+        "the error went"
+    );
 }
 
 #[test]
 fn an_expensive_field_takes_what_is_typed_on_enter() {
-    let mut harness = Harness::new_ui_state(|ui, s: &mut ActorSettings| actor_panel(ui, s), ActorSettings::default());
+    let mut harness = Harness::new_ui_state(
+        |ui, s: &mut ActorSettings| actor_panel(ui, s),
+        ActorSettings::default(),
+    );
     harness.run();
     let before = harness.state().extent[0];
-    harness.get_all_by_role(Role::SpinButton).next().expect("Extent x").click();
+    harness
+        .get_all_by_role(Role::SpinButton)
+        .next()
+        .expect("Extent x")
+        .click();
     harness.run();
     for c in ['0', '.', '5'] {
         harness.event(egui::Event::Text(c.to_string()));
@@ -82,7 +99,11 @@ fn defaults_reset_one_scene_and_keep_the_mesh() {
     s.reset_scene("voxelizer");
     assert_eq!(s.voxelizer.grid, Saved::default().voxelizer.grid);
     assert_eq!(s.voxelizer.mesh, "my/mesh.obj", "the mesh chosen stays");
-    assert_eq!((s.ocean.steepness, s.actor.block), (0.123, 2.5), "the other scenes stay");
+    assert_eq!(
+        (s.ocean.steepness, s.actor.block),
+        (0.123, 2.5),
+        "the other scenes stay"
+    );
     s.reset_scene("ocean");
     assert_eq!(s.ocean, Saved::default().ocean);
     assert_eq!(s.actor.block, 2.5);
@@ -110,9 +131,18 @@ fn choices_have_readable_names() {
         "light volume",
         "surface (SDF march)",
     ] {
-        assert!(harness.query_by_value(shown).is_some(), "{shown:?} is not shown");
+        assert!(
+            harness.query_by_value(shown).is_some(),
+            "{shown:?} is not shown"
+        );
     }
-    for debug in ["Surface(", "Direct(", "LightVolume {", "Rays {", "Conservative)"] {
+    for debug in [
+        "Surface(",
+        "Direct(",
+        "LightVolume {",
+        "Rays {",
+        "Conservative)",
+    ] {
         assert!(
             harness.query_by_label_contains(debug).is_none(),
             "a debug name shows: {debug}"
@@ -126,8 +156,16 @@ fn choices_have_readable_names() {
 fn passes_stay_listed_with_their_last_time() {
     use viewer::panels::remember;
     let mut seen = Vec::new();
-    let frame = |p: &[(&str, f64)]| p.iter().map(|(n, ms)| (n.to_string(), *ms)).collect::<Vec<_>>();
-    remember(&mut seen, &frame(&[("exact", 0.25), ("jfa", 0.5), ("jfa", 0.25), ("blit", 0.01)]), 1);
+    let frame = |p: &[(&str, f64)]| {
+        p.iter()
+            .map(|(n, ms)| (n.to_string(), *ms))
+            .collect::<Vec<_>>()
+    };
+    remember(
+        &mut seen,
+        &frame(&[("exact", 0.25), ("jfa", 0.5), ("jfa", 0.25), ("blit", 0.01)]),
+        1,
+    );
     remember(&mut seen, &frame(&[("blit", 0.02)]), 2);
     assert_eq!(
         seen,
@@ -156,4 +194,53 @@ fn a_drag_paints_a_stroke() {
     assert_eq!(d.seeds.len(), 11, "{:?}", d.seeds);
     d.paint_stroke([12, 10], [14, 10], true);
     assert_eq!(d.seeds.len(), 8, "erased along its own stroke");
+}
+
+/// Undo takes back the last finished change, not each frame of a drag, and leaves the camera
+/// where it is.
+#[test]
+fn undo_takes_back_the_last_finished_change() {
+    use viewer::panels::History;
+    let start = Saved::default();
+    let mut history = History::new(&start);
+    let mut now = start.clone();
+    // A drag of the steepness over three frames, then released.
+    for k in 1..=3 {
+        now.ocean.steepness = 0.1 * k as f32;
+        history.settle(&now, true);
+    }
+    history.settle(&now, false);
+    // A camera move alone is no step.
+    now.cameras[0].distance += 5.0;
+    history.settle(&now, false);
+    now.actor.block = 3.0;
+    history.settle(&now, false);
+    let back = history.undo(&now).expect("a step");
+    assert_eq!(
+        (back.actor.block, back.ocean.steepness),
+        (start.actor.block, 0.3)
+    );
+    assert_eq!(
+        back.cameras[0].distance, now.cameras[0].distance,
+        "the camera stays"
+    );
+    let back = history.undo(&back).expect("the drag, one step");
+    assert_eq!(back.ocean.steepness, start.ocean.steepness);
+    assert!(history.undo(&back).is_none(), "{} steps", 2);
+}
+
+/// An Extent too large for the actor is said so in red beside it, not clamped to another value.
+#[test]
+fn a_value_too_large_is_said_not_clamped() {
+    let mut harness = Harness::new_ui_state(
+        |ui, s: &mut ActorSettings| actor_panel(ui, s),
+        ActorSettings::default(),
+    );
+    harness.run();
+    type_into(&mut harness, 0, "99999");
+    assert_eq!(harness.state().extent[0], 99999.0, "taken as typed");
+    assert!(
+        harness.query_by_label_contains("instances").is_some(),
+        "the count's error names the instances"
+    );
 }

@@ -19,10 +19,10 @@ mod voxelize;
 
 pub use cloud::*;
 pub use distance::*;
+pub use mesh_sdf::*;
 pub use metaball::*;
 pub use ocean::*;
 pub use octree::*;
-pub use mesh_sdf::*;
 pub use voxelize::*;
 
 use std::path::{Path, PathBuf};

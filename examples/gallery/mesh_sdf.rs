@@ -69,7 +69,13 @@ pub fn mesh_sdf_scene(
         &RaymarchSettings::default(),
     )?;
     if let Some(m) = marched {
-        marcher.encode_composite(device, &mut enc, &targets.colour_view, &targets.depth_view, &m)?;
+        marcher.encode_composite(
+            device,
+            &mut enc,
+            &targets.colour_view,
+            &targets.depth_view,
+            &m,
+        )?;
     }
     ctx.submit_and_wait("gallery mesh sdf", enc)?;
     let px: Vec<[u8; 4]> = read_texture(ctx, &targets.colour)?;

@@ -42,6 +42,10 @@ struct Viewer {
     /// The last Save/Load's outcome (or the pipeline cache's), and whether it failed.
     note: Option<(String, bool)>,
     settings_path: String,
+    /// The settings as they were after each finished change, for Undo.
+    history: History,
+    /// The last frame drawn without an error, shown under the error's overlay while one stands.
+    good: Option<wgpu::Texture>,
     /// Where the 2D tool's stroke was last frame (texels), while a button is held over it.
     stroke_from: Option<[u32; 2]>,
     /// "Defaults" was clicked: asking whether to reset the scene.
@@ -120,6 +124,7 @@ pub fn run_window(args: Args, saved: Saved, load_error: Option<String>) -> Resul
                 },
                 None => (None, None),
             };
+            let saved_for_history = saved.clone();
             Ok(Box::new(Viewer {
                 saved,
                 scene,
@@ -134,6 +139,8 @@ pub fn run_window(args: Args, saved: Saved, load_error: Option<String>) -> Resul
                 error: load_error.map(|e| format!("settings: {e}")),
                 note: cache_note.map(|n| (n, true)),
                 settings_path,
+                history: History::new(&saved_for_history),
+                good: None,
                 stroke_from: None,
                 confirm_defaults: false,
                 start: Instant::now(),
@@ -180,7 +187,16 @@ impl eframe::App for Viewer {
                 );
             });
         egui::CentralPanel::default().show(ui, |ui| self.central(ui, &rs));
-        ui.ctx().request_repaint();
+        // A change is one undo step once it is finished: no drag, no field being typed in.
+        let ctx = ui.ctx().clone();
+        let interacting = ctx.egui_is_using_pointer() || ctx.memory(|m| m.focused().is_some());
+        self.history.settle(&self.saved, interacting);
+        if ctx.input_mut(|i| i.consume_key(egui::Modifiers::COMMAND, egui::Key::Z))
+            && let Some(s) = self.history.undo(&self.saved)
+        {
+            self.saved = s;
+        }
+        ctx.request_repaint();
     }
 }
 
@@ -220,6 +236,14 @@ impl Viewer {
                     Err(e) => self.note = Some((e, true)),
                 }
             }
+            if ui
+                .add_enabled(self.history.can_undo(), egui::Button::new("Undo"))
+                .on_hover_text("the last change (Ctrl+Z)")
+                .clicked()
+                && let Some(s) = self.history.undo(&self.saved)
+            {
+                self.saved = s;
+            }
             if self.confirm_defaults {
                 let scene = self.scene_name();
                 ui.label(format!("reset {scene}?"));
@@ -239,7 +263,10 @@ impl Viewer {
             }
         });
         // A note (saved, loaded) in grey, a failed load in red: one line, always there.
-        let (note, failed) = self.note.as_ref().map_or(("", false), |(n, f)| (n.as_str(), *f));
+        let (note, failed) = self
+            .note
+            .as_ref()
+            .map_or(("", false), |(n, f)| (n.as_str(), *f));
         let colour = if failed {
             ERROR_RED
         } else {
@@ -268,7 +295,11 @@ impl Viewer {
                 .default_open(false)
                 .show(ui, |ui| {
                     for (name, ms, read) in &self.seen {
-                        let when = if *read == self.reads { "" } else { " (an earlier frame)" };
+                        let when = if *read == self.reads {
+                            ""
+                        } else {
+                            " (an earlier frame)"
+                        };
                         ui.label(format!("{name}: {ms:.3} ms{when}"));
                     }
                 });
@@ -407,6 +438,7 @@ impl Viewer {
         }
         self.stats = report.stats;
         self.error = report.error.map(|e| e.to_string());
+        self.keep_or_restore_good_frame(device, queue, size);
         self.drawn += 1;
         let image = egui::Image::new(egui::load::SizedTexture::new(
             id,
@@ -414,6 +446,21 @@ impl Viewer {
         ))
         .sense(egui::Sense::click_and_drag());
         let response = ui.add(image);
+        if let Some(e) = &self.error {
+            // The last good frame stays beneath; the error over its top, where it is read.
+            let font = egui::FontId::proportional(14.0);
+            let galley = ui.painter().layout(
+                format!("{e}\n(the last frame drawn without an error)"),
+                font,
+                ERROR_RED,
+                response.rect.width() - 24.0,
+            );
+            let at = response.rect.left_top() + egui::vec2(12.0, 12.0);
+            let back = egui::Rect::from_min_size(at, galley.size()).expand(6.0);
+            ui.painter()
+                .rect_filled(back, 4.0, egui::Color32::from_black_alpha(200));
+            ui.painter().galley(at, galley, ERROR_RED);
+        }
         self.input(ui, &response, size);
         if let Some((n, path)) = &self.shot
             && self.drawn >= *n
@@ -433,6 +480,36 @@ impl Viewer {
             ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
             self.shot = None;
         }
+    }
+
+    /// After a frame without an error, keep a copy of it; after one with an error, put the
+    /// last kept frame back into the target the panel shows.
+    fn keep_or_restore_good_frame(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        size: [u32; 2],
+    ) {
+        let colour = &self.targets.as_ref().expect("made before drawing").1.colour;
+        let extent = colour.size();
+        let mut enc = device.create_command_encoder(&Default::default());
+        if self.error.is_none() {
+            if self.good.as_ref().map(|g| g.size()) != Some(extent) {
+                self.good = Some(fieldkit::gpu::texture(
+                    device,
+                    "viewer last good frame",
+                    [size[0], size[1], 1],
+                    wgpu::TextureDimension::D2,
+                    COLOUR,
+                    wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::COPY_SRC,
+                ));
+            }
+            let good = self.good.as_ref().expect("made above");
+            enc.copy_texture_to_texture(colour.as_image_copy(), good.as_image_copy(), extent);
+        } else if let Some(good) = self.good.as_ref().filter(|g| g.size() == extent) {
+            enc.copy_texture_to_texture(good.as_image_copy(), colour.as_image_copy(), extent);
+        }
+        queue.submit([enc.finish()]);
     }
 
     fn input(&mut self, ui: &Ui, response: &egui::Response, size: [u32; 2]) {
@@ -541,6 +618,59 @@ pub fn choice<T: Clone>(
         });
 }
 
+/// The settings after each finished change, for Undo: a change is taken in once it is over
+/// (a drag released, a typed number entered), so one drag is one step.
+pub struct History {
+    committed: Saved,
+    undo: Vec<Saved>,
+}
+
+impl History {
+    /// Steps kept.
+    const STEPS: usize = 64;
+
+    pub fn new(saved: &Saved) -> Self {
+        Self {
+            committed: saved.clone(),
+            undo: Vec::new(),
+        }
+    }
+
+    /// Take in `now` where it differs from the last settled settings and no change is under
+    /// way.
+    pub fn settle(&mut self, now: &Saved, interacting: bool) {
+        if !interacting && !same_settings(now, &self.committed) {
+            let before = std::mem::replace(&mut self.committed, now.clone());
+            self.undo.push(before);
+            if self.undo.len() > Self::STEPS {
+                self.undo.remove(0);
+            }
+        }
+    }
+
+    pub fn can_undo(&self) -> bool {
+        !self.undo.is_empty()
+    }
+
+    /// The settings before the last change, which become the settled ones, with `now`'s
+    /// cameras (a camera's moves are not steps).
+    pub fn undo(&mut self, now: &Saved) -> Option<Saved> {
+        let mut s = self.undo.pop()?;
+        s.cameras.clone_from(&now.cameras);
+        self.committed = s.clone();
+        Some(s)
+    }
+}
+
+/// Whether `a` and `b` hold the same settings, cameras aside.
+fn same_settings(a: &Saved, b: &Saved) -> bool {
+    a.actor == b.actor
+        && a.ocean == b.ocean
+        && a.volume == b.volume
+        && a.distance == b.distance
+        && a.voxelizer == b.voxelizer
+}
+
 /// Fold a frame's `passes` (read number `read`) into `seen`: a name's time is its passes'
 /// sum in the latest frame that ran it.
 pub fn remember(seen: &mut Vec<(String, f64, u64)>, passes: &[(String, f64)], read: u64) {
@@ -593,12 +723,13 @@ pub fn actor_panel(ui: &mut Ui, s: &mut ActorSettings) {
     ui.horizontal(|ui| {
         ui.label("Extent");
         for (e, axis) in s.extent.iter_mut().zip(["x", "y", "z"]) {
-            // Rebuilds the instances: taken on Enter, not per keystroke.
+            // Rebuilds the instances: taken on Enter, not per keystroke; not clamped, so too
+            // large a value is the count's error below, not silently another value.
             let label = ui.label(axis).id;
             ui.add(
                 DragValue::new(e)
                     .speed(0.1)
-                    .range(0.0..=1000.0)
+                    .range(0.0..=f32::MAX)
                     .update_while_editing(false),
             )
             .labelled_by(label);
@@ -609,10 +740,10 @@ pub fn actor_panel(ui: &mut Ui, s: &mut ActorSettings) {
             .text("BlockSize")
             .update_while_editing(false),
     );
-    ui.label(match s.counts() {
-        Ok(n) => format!("{} × {} × {} blocks", n[0], n[1], n[2]),
-        Err(e) => e.to_string(),
-    });
+    match s.counts() {
+        Ok(n) => ui.label(format!("{} × {} × {} blocks", n[0], n[1], n[2])),
+        Err(e) => ui.colored_label(ERROR_RED, e.to_string()),
+    };
     choice(
         ui,
         "draw",
@@ -621,8 +752,14 @@ pub fn actor_panel(ui: &mut Ui, s: &mut ActorSettings) {
             (ActorDraw::Surface, "surface (SDF march)"),
             (ActorDraw::Cubes, "debug cubes"),
             (ActorDraw::Both, "surface and cubes"),
-            (ActorDraw::Direct(Direct::SphereGlobal), "direct: global Lipschitz bound"),
-            (ActorDraw::Direct(Direct::Segment), "direct: segment tracing"),
+            (
+                ActorDraw::Direct(Direct::SphereGlobal),
+                "direct: global Lipschitz bound",
+            ),
+            (
+                ActorDraw::Direct(Direct::Segment),
+                "direct: segment tracing",
+            ),
         ],
         PartialEq::eq,
     );
@@ -725,7 +862,8 @@ pub fn ocean_panel(ui: &mut Ui, s: &mut OceanSettings) {
                 (&mut w.wavelength, 0.1, header[3]),
                 (&mut w.speed, 0.05, header[4]),
             ] {
-                ui.add(DragValue::new(value).speed(speed)).labelled_by(label);
+                ui.add(DragValue::new(value).speed(speed))
+                    .labelled_by(label);
             }
             if ui
                 .small_button("remove")
@@ -766,9 +904,11 @@ pub fn ocean_panel(ui: &mut Ui, s: &mut OceanSettings) {
         for (i, l) in layers.iter_mut().enumerate() {
             ui.horizontal(|ui| {
                 let id = ui.label(format!("{name} {i}: tile (m)")).id;
-                ui.add(DragValue::new(&mut l.tile).speed(0.1)).labelled_by(id);
+                ui.add(DragValue::new(&mut l.tile).speed(0.1))
+                    .labelled_by(id);
                 let id = ui.label("strength").id;
-                ui.add(DragValue::new(&mut l.strength).speed(0.01)).labelled_by(id);
+                ui.add(DragValue::new(&mut l.strength).speed(0.01))
+                    .labelled_by(id);
             });
         }
     }
@@ -846,7 +986,11 @@ pub fn volume_panel(ui: &mut Ui, s: &mut VolumeSettings) {
         |a, b| std::mem::discriminant(a) == std::mem::discriminant(b),
     );
     if let Shadow::Rays { step } | Shadow::LightVolume { step } = &mut s.march.shadow {
-        ui.add(Slider::new(step, 0.002..=0.1).logarithmic(true).text("shadow step (volume units)"));
+        ui.add(
+            Slider::new(step, 0.002..=0.1)
+                .logarithmic(true)
+                .text("shadow step (volume units)"),
+        );
     }
     ui.checkbox(&mut s.march.skip, "empty-space skipping");
     ui.checkbox(&mut s.march.jitter, "jitter");
@@ -959,11 +1103,17 @@ pub fn voxelizer_panel(ui: &mut Ui, s: &mut VoxelizerSettings) {
         "voxelization",
         &mut s.mode,
         &[
-            (VoxelMode::Surface(Separation::Conservative), "surface, conservative (26-separating)"),
+            (
+                VoxelMode::Surface(Separation::Conservative),
+                "surface, conservative (26-separating)",
+            ),
             (VoxelMode::Surface(Separation::Six), "surface, 6-separating"),
             (VoxelMode::Raster, "surface through the rasterizer"),
             (VoxelMode::Solid, "solid (parity along x)"),
-            (VoxelMode::DistanceField, "signed distance field, raymarched"),
+            (
+                VoxelMode::DistanceField,
+                "signed distance field, raymarched",
+            ),
         ],
         PartialEq::eq,
     );

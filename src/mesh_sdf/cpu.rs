@@ -77,7 +77,11 @@ pub fn winding_number(p: DVec3, triangles: &[[DVec3; 3]]) -> f64 {
 /// Signed distance (negative inside, by the winding number) from `p` to `triangles`, voxels.
 pub fn signed_distance(p: DVec3, triangles: &[[DVec3; 3]]) -> f64 {
     let d = distance(p, triangles);
-    if winding_number(p, triangles) > 0.5 { -d } else { d }
+    if winding_number(p, triangles) > 0.5 {
+        -d
+    } else {
+        d
+    }
 }
 
 /// The centre of voxel `v` in grid-local coordinates.

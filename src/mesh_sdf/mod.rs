@@ -12,8 +12,8 @@ use wgpu::util::DeviceExt;
 use crate::bind::ComputePipeline;
 use crate::error::Error;
 use crate::gpu::{Record, kept_buffer, storage_buffer, uniform_buffer, volume_texture};
-use crate::shaders::mesh_sdf::mesh_sdf::{self as stage, SdfParams};
 pub use crate::grid::Grid;
+use crate::shaders::mesh_sdf::mesh_sdf::{self as stage, SdfParams};
 pub use crate::voxelize::Mesh;
 
 const STAGE: &str = stage::STAGE;
@@ -160,7 +160,10 @@ impl MeshSdf {
         if count == 0 {
             return Err(Error::invalid(
                 STAGE,
-                format!("every one of the mesh's {} triangles has no area", mesh.triangles.len()),
+                format!(
+                    "every one of the mesh's {} triangles has no area",
+                    mesh.triangles.len()
+                ),
             ));
         }
         check_count("triangles", count, MAX_TRIANGLES)?;
@@ -243,7 +246,12 @@ impl MeshSdf {
             "mesh sdf resolve",
         )?;
         let march = if settings.march {
-            let march = volume_texture(device, "mesh sdf march", size, wgpu::TextureFormat::Rgba16Float);
+            let march = volume_texture(
+                device,
+                "mesh sdf march",
+                size,
+                wgpu::TextureFormat::Rgba16Float,
+            );
             self.march.record(
                 device,
                 &mut rec,

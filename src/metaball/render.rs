@@ -742,7 +742,14 @@ impl Raymarcher {
         view: &View,
         settings: &RaymarchSettings,
     ) -> Result<Option<Marched>, Error> {
-        self.encode_march_field(device, rec, &field.march_field(), local_to_world, view, settings)
+        self.encode_march_field(
+            device,
+            rec,
+            &field.march_field(),
+            local_to_world,
+            view,
+            settings,
+        )
     }
 
     /// [`Self::encode_march`] of any signed distance field in the march's format

@@ -97,7 +97,9 @@ pub fn shoot<'a>(
         Tracer::Field(field) => marcher
             .encode_march_field(device, &mut enc, &field, local_to_world, view, settings)
             .and_then(|m| match m {
-                Some(m) => marcher.encode_composite(device, &mut enc, cv, dv, &m).map(|()| true),
+                Some(m) => marcher
+                    .encode_composite(device, &mut enc, cv, dv, &m)
+                    .map(|()| true),
                 None => Ok(false),
             }),
         Tracer::Direct(bins, method) => marcher.encode_direct(

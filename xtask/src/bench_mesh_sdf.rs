@@ -94,12 +94,21 @@ pub fn run(args: &crate::measure::Args) -> Result<(), String> {
             let what = (name.as_str(), mesh.triangles.len(), n);
             let (t, field) = time_mesh_sdf(&ctx, heater.as_ref(), args, &mesh, &grid)?;
             let samples = reference(&mesh, &grid, &field)?;
-            rows.push(report(what, "mesh sdf", t, compare(&samples, &grid, &field)));
+            rows.push(report(
+                what,
+                "mesh sdf",
+                t,
+                compare(&samples, &grid, &field),
+            ));
             if ours_only {
                 continue;
             }
             let (t, field) = time_voxel_centres(&ctx, heater.as_ref(), args, &mesh, &grid, closed)?;
-            let method = if closed { "voxel centres (solid)" } else { "voxel centres (surface, unsigned)" };
+            let method = if closed {
+                "voxel centres (solid)"
+            } else {
+                "voxel centres (surface, unsigned)"
+            };
             rows.push(report(what, method, t, compare(&samples, &grid, &field)));
             if let Some(peer) = &args.peer {
                 for (method, t, field) in run_peer(peer, args, &mesh, &grid)? {
@@ -124,8 +133,19 @@ pub fn run(args: &crate::measure::Args) -> Result<(), String> {
         rows.iter().map(|r| {
             format!(
                 "\"{adapter}\",\"{}\",{},{},\"{}\",{:.4},{:.4},{:.4},{:.3e},{:.3e},{},{},{},{}",
-                r.mesh, r.triangles, r.n, r.method, r.ms, r.lo, r.hi, r.error.max, r.error.rms,
-                r.error.wrong_in_band, r.error.in_band, r.error.wrong_beyond, r.error.beyond
+                r.mesh,
+                r.triangles,
+                r.n,
+                r.method,
+                r.ms,
+                r.lo,
+                r.hi,
+                r.error.max,
+                r.error.rms,
+                r.error.wrong_in_band,
+                r.error.in_band,
+                r.error.wrong_beyond,
+                r.error.beyond
             )
         }),
     )?;
@@ -189,14 +209,21 @@ fn time_mesh_sdf(
             sdf.encode(&ctx.device, &mut prof.record(enc), mesh, grid, &settings)
                 .expect("mesh sdf");
         })?;
-    let list: Vec<String> = passes.iter().map(|(n, ms)| format!("{n} {ms:.4}")).collect();
+    let list: Vec<String> = passes
+        .iter()
+        .map(|(n, ms)| format!("{n} {ms:.4}"))
+        .collect();
     println!("  passes: {}", list.join(", "));
     let mut enc = ctx.encoder("mesh sdf");
     let field = sdf
         .encode(&ctx.device, &mut enc, mesh, grid, &settings)
         .map_err(|e| e.to_string())?;
-    ctx.submit_and_wait("mesh sdf", enc).map_err(|e| e.to_string())?;
-    Ok(((ms, lo, hi), read_texture(ctx, &field.texture).map_err(|e| e.to_string())?))
+    ctx.submit_and_wait("mesh sdf", enc)
+        .map_err(|e| e.to_string())?;
+    Ok((
+        (ms, lo, hi),
+        read_texture(ctx, &field.texture).map_err(|e| e.to_string())?,
+    ))
 }
 
 fn time_voxel_centres(
@@ -222,16 +249,23 @@ fn time_voxel_centres(
             voxelizer.encode_surface(&ctx.device, rec, mesh, grid)?
         };
         let volume = voxelizer.encode_volume(&ctx.device, rec, &surface)?;
-        Ok(distance.encode(&ctx.device, rec, &volume, &settings)?.distance)
+        Ok(distance
+            .encode(&ctx.device, rec, &volume, &settings)?
+            .distance)
     };
     let (ms, lo, hi, _) =
         crate::measure::time_runs(ctx, args.warmup, args.reps, heater, |enc, prof| {
             encode(&mut prof.record(enc)).expect("voxel centres");
         })?;
     let mut enc = ctx.encoder("voxel centres");
-    let field = encode(&mut fieldkit::gpu::Record::recorder(&mut enc)).map_err(|e| e.to_string())?;
-    ctx.submit_and_wait("voxel centres", enc).map_err(|e| e.to_string())?;
-    Ok(((ms, lo, hi), read_texture(ctx, &field).map_err(|e| e.to_string())?))
+    let field =
+        encode(&mut fieldkit::gpu::Record::recorder(&mut enc)).map_err(|e| e.to_string())?;
+    ctx.submit_and_wait("voxel centres", enc)
+        .map_err(|e| e.to_string())?;
+    Ok((
+        (ms, lo, hi),
+        read_texture(ctx, &field).map_err(|e| e.to_string())?,
+    ))
 }
 
 /// `mesh_to_sdf::generate_grid_sdf` on the same voxel centres, in fieldkit's voxel order.
@@ -241,7 +275,11 @@ fn time_peer(
     grid: &Grid,
     sign: mesh_to_sdf::SignMethod,
 ) -> ((f64, f64, f64), Vec<f32>) {
-    let vertices: Vec<[f32; 3]> = mesh.positions.iter().map(|p| p.as_vec3().to_array()).collect();
+    let vertices: Vec<[f32; 3]> = mesh
+        .positions
+        .iter()
+        .map(|p| p.as_vec3().to_array())
+        .collect();
     let indices: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
     let first = grid.voxel_centre([0, 0, 0]).as_vec3().to_array();
     let size = grid.size.map(|s| s as usize);
@@ -261,7 +299,9 @@ fn time_peer(
         out = run();
         times.push(start.elapsed().as_secs_f64() * 1e3);
     }
-    let (lo, hi) = times.iter().fold((f64::MAX, 0f64), |(l, h), &t| (l.min(t), h.max(t)));
+    let (lo, hi) = times
+        .iter()
+        .fold((f64::MAX, 0f64), |(l, h), &t| (l.min(t), h.max(t)));
     let mut field = vec![0f32; out.len()];
     for z in 0..size[2] {
         for y in 0..size[1] {
@@ -301,21 +341,39 @@ fn run_peer(
         // A whole-grid bake at 512³ takes the peer seconds: 5 runs past 128³. Its winding
         // number took 1.7 s at 64³ and 10 s at 128³ on the H200 (the bunny): 64³ and below.
         let side = nx.max(ny).max(nz);
-        let reps = if side > 128 { args.reps.min(5) } else { args.reps };
-        let methods = if side > 64 { "normal" } else { "winding,normal" };
+        let reps = if side > 128 {
+            args.reps.min(5)
+        } else {
+            args.reps
+        };
+        let methods = if side > 64 {
+            "normal"
+        } else {
+            "winding,normal"
+        };
         let command = format!(
             "{peer} --mesh {} --origin={},{},{} --voxel {} --size {nx},{ny},{nz} --band {band} --reps {reps} --methods {methods} --out {}",
-            mesh_file.display(), o.x, o.y, o.z, grid.voxel, out.display()
+            mesh_file.display(),
+            o.x,
+            o.y,
+            o.z,
+            grid.voxel,
+            out.display()
         );
         let output = std::process::Command::new("sh")
             .args(["-c", &command])
             .output()
             .map_err(|e| format!("{command}: {e}"))?;
         if !output.status.success() {
-            return Err(format!("{command}: {}", String::from_utf8_lossy(&output.stderr)));
+            return Err(format!(
+                "{command}: {}",
+                String::from_utf8_lossy(&output.stderr)
+            ));
         }
         for line in String::from_utf8_lossy(&output.stdout).lines() {
-            let Some(row) = line.strip_prefix("ROW ") else { continue };
+            let Some(row) = line.strip_prefix("ROW ") else {
+                continue;
+            };
             let f: Vec<&str> = row.split('|').collect();
             let [name, ms, lo, hi, query, path] = f[..] else {
                 return Err(format!("peer row {line:?}"));
@@ -327,9 +385,17 @@ fn run_peer(
                 .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
                 .collect();
             std::fs::remove_file(path).ok();
-            let which = if band > 0.0 { format!("band {BAND}") } else { "whole grid".into() };
+            let which = if band > 0.0 {
+                format!("band {BAND}")
+            } else {
+                "whole grid".into()
+            };
             println!("  {name}, {which}: query alone {query} ms");
-            rows.push((format!("{name} ({which})"), (num(ms)?, num(lo)?, num(hi)?), field));
+            rows.push((
+                format!("{name} ({which})"),
+                (num(ms)?, num(lo)?, num(hi)?),
+                field,
+            ));
         }
     }
     std::fs::remove_file(&mesh_file).ok();
@@ -345,8 +411,12 @@ fn reference(mesh: &Mesh, grid: &Grid, field: &[f32]) -> Result<Samples, String>
     // Beyond the band a field holds ±band rounded to f32, which may lie a rounding below the
     // f64 band: a thousandth of it apart tells them from the band's own voxels.
     let band = BAND as f64 * grid.voxel * 0.999;
-    let near: Vec<usize> = (0..field.len()).filter(|&i| (field[i] as f64).abs() < band).collect();
-    let far: Vec<usize> = (0..field.len()).filter(|&i| (field[i] as f64).abs() >= band).collect();
+    let near: Vec<usize> = (0..field.len())
+        .filter(|&i| (field[i] as f64).abs() < band)
+        .collect();
+    let far: Vec<usize> = (0..field.len())
+        .filter(|&i| (field[i] as f64).abs() >= band)
+        .collect();
     let pick = |from: &[usize], k: usize| -> Vec<usize> {
         let step = (from.len() / k.max(1)).max(1);
         from.iter().step_by(step).take(k).copied().collect()
@@ -372,13 +442,19 @@ fn reference(mesh: &Mesh, grid: &Grid, field: &[f32]) -> Result<Samples, String>
                     part.iter()
                         .map(|&v| {
                             let p = cpu::centre(v);
-                            (cpu::distance(p, triangles), cpu::winding_number(p, triangles) > 0.5)
+                            (
+                                cpu::distance(p, triangles),
+                                cpu::winding_number(p, triangles) > 0.5,
+                            )
                         })
                         .collect::<Vec<_>>()
                 })
             })
             .collect();
-        handles.into_iter().flat_map(|h| h.join().expect("reference thread")).collect()
+        handles
+            .into_iter()
+            .flat_map(|h| h.join().expect("reference thread"))
+            .collect()
     });
     Ok(Samples {
         voxels,
@@ -394,7 +470,12 @@ fn compare(samples: &Samples, grid: &Grid, field: &[f32]) -> Error {
     let band = BAND as f64;
     let mut e = Error::default();
     let mut squares = 0.0;
-    for ((v, &d), &inside) in samples.voxels.iter().zip(&samples.distance).zip(&samples.inside) {
+    for ((v, &d), &inside) in samples
+        .voxels
+        .iter()
+        .zip(&samples.distance)
+        .zip(&samples.inside)
+    {
         let i = ((v[2] * ny + v[1]) * nx + v[0]) as usize;
         let value = field[i] as f64 / grid.voxel;
         // A centre on the surface has no side.
@@ -450,7 +531,9 @@ fn chart(out: &std::path::Path, adapter: &str, rows: &[Row]) -> Result<(), Strin
         })
         .collect();
     let axes = crate::chart::Axes {
-        caption: format!("{first}: distance field, time vs max error in the ±4-voxel band, {adapter}"),
+        caption: format!(
+            "{first}: distance field, time vs max error in the ±4-voxel band, {adapter}"
+        ),
         x: "time, ms (median, log; GPU timestamps, mesh_to_sdf CPU wall)",
         y: "max |error|, voxels (log)",
         floor: 1e-6,

@@ -102,7 +102,11 @@ pub fn line(a: [u32; 2], b: [u32; 2]) -> Vec<[u32; 2]> {
     let steps = dx.abs().max(dy.abs()) as u32;
     (0..=steps)
         .map(|i| {
-            let t = if steps == 0 { 0.0 } else { i as f64 / steps as f64 };
+            let t = if steps == 0 {
+                0.0
+            } else {
+                i as f64 / steps as f64
+            };
             [
                 (a[0] as f64 + dx * t).round() as u32,
                 (a[1] as f64 + dy * t).round() as u32,

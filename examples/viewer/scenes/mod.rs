@@ -27,7 +27,9 @@ mod volume;
 mod voxelizer;
 
 pub use actor::{Actor, ActorDraw, ActorSettings};
-pub use distance2d::{Distance2dScene, DistanceSettings, field_rect, line, method_name, methods_2d};
+pub use distance2d::{
+    Distance2dScene, DistanceSettings, field_rect, line, method_name, methods_2d,
+};
 pub use ocean::{Ocean, OceanSettings};
 pub use volume::{VolumeScene, VolumeSettings};
 pub use voxelizer::{BUNNY, VoxelMode, VoxelizerScene, VoxelizerSettings};

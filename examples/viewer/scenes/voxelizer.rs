@@ -396,8 +396,14 @@ impl VoxelizerScene {
                         threshold: 0.0,
                     };
                     let settings = RaymarchSettings::default();
-                    let marched =
-                        marcher.encode_march_field(device, &mut *frame.rec, &march, model, &view, &settings)?;
+                    let marched = marcher.encode_march_field(
+                        device,
+                        &mut *frame.rec,
+                        &march,
+                        model,
+                        &view,
+                        &settings,
+                    )?;
                     if let Some(m) = marched {
                         marcher.encode_composite(device, &mut *frame.rec, cv, dv, &m)?;
                     }
@@ -472,7 +478,11 @@ fn slice_colour(d: f32, band: f32) -> [u8; 4] {
     let t = (d.abs() / band).min(1.0);
     let line = if d.abs().fract() < 0.12 { 0.55 } else { 1.0 };
     let near = 1.0 - 0.6 * t;
-    let [r, g, b] = if d > 0.0 { [1.0, 0.55, 0.2] } else { [0.25, 0.5, 1.0] };
+    let [r, g, b] = if d > 0.0 {
+        [1.0, 0.55, 0.2]
+    } else {
+        [0.25, 0.5, 1.0]
+    };
     [r, g, b]
         .map(|c| (255.0 * c * near * line) as u8)
         .into_iter()
