@@ -659,3 +659,50 @@ fn no_scene_makes_a_gpu_object_a_frame() {
         );
     }
 }
+
+/// The 2D tool draws the texels a JFA variant got wrong in magenta on the image, as many as it
+/// counts (none for the exact transform).
+#[test]
+fn the_2d_tool_draws_its_wrong_texels() {
+    use fieldkit::distance::{Method2d, Variant};
+    let _gpu = gpu_shared();
+    let (device, queue) = device();
+    let mut s = settings();
+    // Scattered single-texel seeds, where plain JFA loses a few texels.
+    let mut r = 12345u64;
+    let [w, h] = s.distance.size;
+    s.distance.seeds = (0..400)
+        .map(|_| {
+            r = r.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            [((r >> 33) % w as u64) as u32, ((r >> 13) % h as u64) as u32]
+        })
+        .collect();
+    s.distance.brush = 0;
+    let magenta = |px: &[u8]| px.chunks(4).filter(|p| p[..3] == [255, 0, 255]).count();
+    let mut counts = Vec::new();
+    for method in [Method2d::Jfa(Variant::Jfa), Method2d::Exact] {
+        s.distance.options.method = method;
+        let size = [s.distance.size[0] * 2, s.distance.size[1] * 2];
+        let shot = viewer::render_offscreen(&device, &queue, "distance2d", &s, size, 3).unwrap();
+        let line = shot
+            .report
+            .stats
+            .iter()
+            .find(|l| l.contains("wrong texels"))
+            .unwrap_or_else(|| panic!("{:?}", shot.report.stats))
+            .clone();
+        let wrong: usize = line
+            .split(": ")
+            .nth(1)
+            .and_then(|r| r.split(' ').next())
+            .and_then(|n| n.parse().ok())
+            .unwrap_or_else(|| panic!("{line}"));
+        eprintln!("{line}; {} magenta pixels", magenta(&shot.pixels));
+        counts.push((wrong, magenta(&shot.pixels)));
+    }
+    let (jfa, exact) = (counts[0], counts[1]);
+    assert!(jfa.0 > 0, "plain JFA on scattered seeds gets some texels wrong: {jfa:?}");
+    // Drawn at twice the field's size: each wrong texel covers about four pixels.
+    assert!(jfa.1 >= jfa.0, "{jfa:?}");
+    assert_eq!(exact, (0, 0));
+}

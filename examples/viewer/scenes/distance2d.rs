@@ -198,18 +198,21 @@ impl Distance2dScene {
             let (mut field, mut exact) = (p.field, p.exact);
             let field = field.try_take().expect("ready")?;
             let exact = exact.try_take().expect("ready")?;
-            let wrong = field
-                .iter()
-                .zip(&exact)
-                .filter(|(a, b)| (*a - *b).abs() > 1e-3 * b.abs().max(1.0))
-                .count();
+            let is_wrong = |(a, b): (&f32, &f32)| (a - b).abs() > 1e-3 * b.abs().max(1.0);
+            let wrong = field.iter().zip(&exact).filter(|&p| is_wrong(p)).count();
             let worst = field
                 .iter()
                 .zip(&exact)
                 .map(|(a, b)| (a - b).abs())
                 .fold(0.0f32, f32::max);
             let [w, h] = p.key.size;
-            let pixels = colour_field(&field, &p.key);
+            let mut pixels = colour_field(&field, &p.key);
+            // The texels the method got wrong, in magenta on the image itself.
+            for (px, pair) in pixels.chunks_mut(4).zip(field.iter().zip(&exact)) {
+                if is_wrong(pair) {
+                    px.copy_from_slice(&WRONG);
+                }
+            }
             let texture = upload_rgba(device, queue, &pixels, w, h);
             let view = texture.create_view(&Default::default());
             self.shown = Some((p.key, view, wrong, worst));
@@ -248,13 +251,16 @@ impl Distance2dScene {
                 rect,
             );
             stats.push(format!(
-                "{}: {wrong} wrong texels against the exact transform (worst {worst:.2} texels)",
+                "{}: {wrong} wrong texels against the exact transform, in magenta (worst {worst:.2} texels)",
                 method_name(key.options.method)
             ));
         }
         Ok(stats)
     }
 }
+
+/// The colour of a texel the compared method got wrong.
+pub const WRONG: [u8; 4] = [255, 0, 255, 255];
 
 /// A method's name for the panel.
 pub fn method_name(m: Method2d) -> String {
