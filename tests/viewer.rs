@@ -673,7 +673,9 @@ fn the_2d_tool_draws_its_wrong_texels() {
     let [w, h] = s.distance.size;
     s.distance.seeds = (0..400)
         .map(|_| {
-            r = r.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            r = r
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             [((r >> 33) % w as u64) as u32, ((r >> 13) % h as u64) as u32]
         })
         .collect();
@@ -701,7 +703,10 @@ fn the_2d_tool_draws_its_wrong_texels() {
         counts.push((wrong, magenta(&shot.pixels)));
     }
     let (jfa, exact) = (counts[0], counts[1]);
-    assert!(jfa.0 > 0, "plain JFA on scattered seeds gets some texels wrong: {jfa:?}");
+    assert!(
+        jfa.0 > 0,
+        "plain JFA on scattered seeds gets some texels wrong: {jfa:?}"
+    );
     // Drawn at twice the field's size: each wrong texel covers about four pixels.
     assert!(jfa.1 >= jfa.0, "{jfa:?}");
     assert_eq!(exact, (0, 0));

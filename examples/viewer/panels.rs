@@ -851,19 +851,43 @@ pub fn ocean_panel(ui: &mut Ui, s: &mut OceanSettings) {
     // One row a wave under a header whose labels name each column's fields (for the eye and
     // for the accessibility tree).
     let mut remove = None;
-    egui::Grid::new("waves").num_columns(6).show(ui, |ui| {
+    egui::Grid::new("waves").num_columns(7).show(ui, |ui| {
         let header = ["dir x", "dir z", "amp (m)", "λ (m)", "speed (m/s)"].map(|h| ui.label(h).id);
         ui.end_row();
         for (i, w) in s.waves.iter_mut().enumerate() {
-            for (value, speed, label) in [
+            // A wave the ocean refuses: the field its reason names framed in red, the reason
+            // on the row.
+            let why = w.check().err();
+            let field = |name: &str| why.as_deref().is_some_and(|y| y.starts_with(name));
+            let bad = [
+                field("direction"),
+                field("direction"),
+                field("amplitude"),
+                field("wavelength"),
+                field("speed"),
+            ];
+            for ((value, speed, label), bad) in [
                 (&mut w.direction.x, 0.02, header[0]),
                 (&mut w.direction.y, 0.02, header[1]),
                 (&mut w.amplitude, 0.01, header[2]),
                 (&mut w.wavelength, 0.1, header[3]),
                 (&mut w.speed, 0.05, header[4]),
-            ] {
-                ui.add(DragValue::new(value).speed(speed))
+            ]
+            .into_iter()
+            .zip(bad)
+            {
+                let r = ui
+                    .add(DragValue::new(value).speed(speed))
                     .labelled_by(label);
+                if bad {
+                    let stroke = egui::Stroke::new(1.5, ERROR_RED);
+                    ui.painter().rect_stroke(
+                        r.rect.expand(1.0),
+                        2.0,
+                        stroke,
+                        egui::StrokeKind::Outside,
+                    );
+                }
             }
             if ui
                 .small_button("remove")
@@ -871,6 +895,9 @@ pub fn ocean_panel(ui: &mut Ui, s: &mut OceanSettings) {
                 .clicked()
             {
                 remove = Some(i);
+            }
+            if let Some(why) = &why {
+                ui.colored_label(ERROR_RED, why);
             }
             ui.end_row();
         }

@@ -76,6 +76,43 @@ pub struct Wave {
     pub speed: f32,
 }
 
+impl Wave {
+    /// Why this wave cannot be drawn, naming the field (`direction`, `amplitude`,
+    /// `wavelength` or `speed`) and the value: a direction not finite or zero, an amplitude or
+    /// wavelength not finite or not above 0, a speed not finite. [`Waves::new`] refuses a set
+    /// with such a wave as [`Error::Invalid`], "wave i: " before this text.
+    ///
+    /// ```
+    /// use fieldkit::{glam::Vec2, ocean::Wave};
+    /// let wave = Wave { direction: Vec2::X, amplitude: 0.1, wavelength: 0.0, speed: 1.0 };
+    /// assert!(wave.check().unwrap_err().starts_with("wavelength"));
+    /// ```
+    pub fn check(&self) -> Result<(), String> {
+        if !(self.direction.is_finite() && self.direction.length_squared() > 0.0) {
+            return Err(format!(
+                "direction must be finite and not zero, got {}",
+                self.direction
+            ));
+        }
+        if !(self.amplitude.is_finite() && self.amplitude > 0.0) {
+            return Err(format!(
+                "amplitude must be finite and > 0, got {}",
+                self.amplitude
+            ));
+        }
+        if !(self.wavelength.is_finite() && self.wavelength > 0.0) {
+            return Err(format!(
+                "wavelength must be finite and > 0, got {}",
+                self.wavelength
+            ));
+        }
+        if !self.speed.is_finite() {
+            return Err(format!("speed must be finite, got {}", self.speed));
+        }
+        Ok(())
+    }
+}
+
 /// The steepness a set asked for and the one it got (see [`Waves::new_clamped`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SteepnessClamped {
@@ -300,39 +337,8 @@ fn check_waves(waves: &[Wave]) -> Result<(), Error> {
         });
     }
     for (i, w) in waves.iter().enumerate() {
-        if !(w.direction.is_finite() && w.direction.length_squared() > 0.0) {
-            return Err(Error::invalid(
-                STAGE,
-                format!(
-                    "wave {i}: direction must be finite and not zero, got {}",
-                    w.direction
-                ),
-            ));
-        }
-        if !(w.amplitude.is_finite() && w.amplitude > 0.0) {
-            return Err(Error::invalid(
-                STAGE,
-                format!(
-                    "wave {i}: amplitude must be finite and > 0, got {}",
-                    w.amplitude
-                ),
-            ));
-        }
-        if !(w.wavelength.is_finite() && w.wavelength > 0.0) {
-            return Err(Error::invalid(
-                STAGE,
-                format!(
-                    "wave {i}: wavelength must be finite and > 0, got {}",
-                    w.wavelength
-                ),
-            ));
-        }
-        if !w.speed.is_finite() {
-            return Err(Error::invalid(
-                STAGE,
-                format!("wave {i}: speed must be finite, got {}", w.speed),
-            ));
-        }
+        w.check()
+            .map_err(|what| Error::invalid(STAGE, format!("wave {i}: {what}")))?;
     }
     Ok(())
 }
