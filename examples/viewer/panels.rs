@@ -48,6 +48,8 @@ struct Viewer {
     good: Option<wgpu::Texture>,
     /// Where the 2D tool's stroke was last frame (texels), while a button is held over it.
     stroke_from: Option<[u32; 2]>,
+    /// The side panel is shown (F2 toggles it).
+    panel_open: bool,
     /// "Defaults" was clicked: asking whether to reset the scene.
     confirm_defaults: bool,
     start: Instant,
@@ -142,6 +144,7 @@ pub fn run_window(args: Args, saved: Saved, load_error: Option<String>) -> Resul
                 history: History::new(&saved_for_history),
                 good: None,
                 stroke_from: None,
+                panel_open: true,
                 confirm_defaults: false,
                 start: Instant::now(),
                 last: Instant::now(),
@@ -173,10 +176,19 @@ impl eframe::App for Viewer {
         let now = Instant::now();
         self.frame_ms = 0.9 * self.frame_ms + 0.1 * (now - self.last).as_secs_f64() * 1e3;
         self.last = now;
+        // F2, the panel's own "hide" button or dragging its edge closed hides it; F2, the
+        // "settings" button or dragging the edge back shows it.
+        if ui
+            .ctx()
+            .input_mut(|i| i.consume_key(egui::Modifiers::NONE, egui::Key::F2))
+        {
+            self.panel_open = !self.panel_open;
+        }
+        let mut open = self.panel_open;
         egui::Panel::left("settings")
             .resizable(true)
             .default_size(330.0)
-            .show(ui, |ui| {
+            .show_collapsible(ui, &mut open, |ui| {
                 let scene = self.scene_name();
                 let this = std::cell::RefCell::new(&mut *self);
                 side_panel(
@@ -186,6 +198,16 @@ impl eframe::App for Viewer {
                     |ui| this.borrow_mut().scene_settings(ui, frame),
                 );
             });
+        self.panel_open &= open;
+        if !self.panel_open {
+            egui::Area::new(egui::Id::unique("show settings"))
+                .fixed_pos(egui::pos2(8.0, 8.0))
+                .show(ui.ctx(), |ui| {
+                    if ui.button("show settings").on_hover_text("F2").clicked() {
+                        self.panel_open = true;
+                    }
+                });
+        }
         egui::CentralPanel::default().show(ui, |ui| self.central(ui, &rs));
         // A change is one undo step once it is finished: no drag, no field being typed in.
         let ctx = ui.ctx().clone();
@@ -207,7 +229,16 @@ impl Viewer {
 
     /// The top of the side panel, the same height whatever it shows.
     fn pinned(&mut self, ui: &mut Ui) {
-        ui.heading("fieldkit viewer");
+        ui.horizontal(|ui| {
+            ui.heading("fieldkit viewer");
+            if ui
+                .small_button("hide")
+                .on_hover_text("F2: hide and show the panel")
+                .clicked()
+            {
+                self.panel_open = false;
+            }
+        });
         ComboBox::from_label("scene")
             .selected_text(self.scene_name())
             .show_ui(ui, |ui| {
