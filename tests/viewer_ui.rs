@@ -244,3 +244,102 @@ fn a_value_too_large_is_said_not_clamped() {
         "the count's error names the instances"
     );
 }
+
+/// Save writes the settings where the path says, Load brings them back, a file that is not
+/// there is a note in red (failed), and the scene drop-down switches the scene.
+#[test]
+fn save_load_round_trip_and_scene_switch() {
+    use viewer::panels::{file_row, scene_row};
+    let path = std::env::temp_dir().join(format!("fieldkit_viewer_ui_{}.ron", std::process::id()));
+    struct State {
+        path: String,
+        saved: Saved,
+        note: Option<(String, bool)>,
+        scene: usize,
+    }
+    let state = State {
+        path: path.display().to_string(),
+        saved: Saved::default(),
+        note: None,
+        scene: 0,
+    };
+    let mut harness = Harness::new_ui_state(
+        |ui, s: &mut State| {
+            scene_row(ui, &mut s.scene);
+            ui.horizontal(|ui| file_row(ui, &mut s.path, &mut s.saved, &mut s.note));
+        },
+        state,
+    );
+    harness.state_mut().saved.ocean.steepness = 0.42;
+    harness.run();
+    harness.get_by_label("Save").click();
+    harness.run();
+    assert!(path.exists(), "{:?}", harness.state().note);
+    assert_eq!(harness.state().note.as_ref().map(|n| n.1), Some(false));
+    harness.state_mut().saved.ocean.steepness = 0.9;
+    harness.get_by_label("Load").click();
+    harness.run();
+    assert_eq!(harness.state().saved.ocean.steepness, 0.42, "loaded back");
+    std::fs::remove_file(&path).ok();
+    harness.get_by_label("Load").click();
+    harness.run();
+    let note = harness.state().note.clone().expect("a note");
+    assert!(note.1, "a missing file is a failure: {note:?}");
+    assert_eq!(
+        harness.state().saved.ocean.steepness,
+        0.42,
+        "nothing loaded"
+    );
+    // The scene drop-down: open it, pick the ocean.
+    harness.get_by_value("actor").click();
+    harness.run();
+    harness.get_by_label("ocean").click();
+    harness.run();
+    assert_eq!(viewer::scenes::NAMES[harness.state().scene], "ocean");
+}
+
+/// A costly slider (the actor's BlockSize) moves its knob while dragged and takes the value
+/// when the drag ends: one rebuild, not one a frame.
+#[test]
+fn a_costly_slider_applies_on_release() {
+    let mut harness = Harness::new_ui_state(
+        |ui, s: &mut ActorSettings| actor_panel(ui, s),
+        ActorSettings::default(),
+    );
+    harness.run();
+    let before = harness.state().block;
+    let rect = harness
+        .get_by_role_and_label(Role::Slider, "BlockSize")
+        .rect();
+    let (y, from, to) = (
+        rect.center().y,
+        rect.left() + 4.0,
+        rect.left() + rect.width() * 0.8,
+    );
+    let button = |pos: egui::Pos2, pressed| egui::Event::PointerButton {
+        pos,
+        button: egui::PointerButton::Primary,
+        pressed,
+        modifiers: egui::Modifiers::NONE,
+    };
+    harness.event(egui::Event::PointerMoved(egui::pos2(from, y)));
+    harness.event(button(egui::pos2(from, y), true));
+    harness.run();
+    for k in 1..=4 {
+        let x = from + (to - from) * k as f32 / 4.0;
+        harness.event(egui::Event::PointerMoved(egui::pos2(x, y)));
+        harness.run();
+        assert_eq!(
+            harness.state().block,
+            before,
+            "applied while dragging, step {k}"
+        );
+    }
+    harness.event(button(egui::pos2(to, y), false));
+    harness.run();
+    let after = harness.state().block;
+    assert!(
+        after > before + 1.0,
+        "taken on release: {before} -> {after}"
+    );
+}

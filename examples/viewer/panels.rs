@@ -239,34 +239,9 @@ impl Viewer {
                 self.panel_open = false;
             }
         });
-        ComboBox::from_label("scene")
-            .selected_text(self.scene_name())
-            .show_ui(ui, |ui| {
-                for (i, n) in NAMES.iter().enumerate() {
-                    ui.selectable_value(&mut self.scene, i, *n);
-                }
-            });
+        scene_row(ui, &mut self.scene);
+        ui.horizontal(|ui| file_row(ui, &mut self.settings_path, &mut self.saved, &mut self.note));
         ui.horizontal(|ui| {
-            ui.text_edit_singleline(&mut self.settings_path);
-        });
-        ui.horizontal(|ui| {
-            if ui.button("Save").clicked() {
-                self.note = Some(
-                    match save_settings(self.settings_path.as_ref(), &self.saved) {
-                        Ok(()) => (format!("saved {}", self.settings_path), false),
-                        Err(e) => (e, true),
-                    },
-                );
-            }
-            if ui.button("Load").clicked() {
-                match load_settings(self.settings_path.as_ref()) {
-                    Ok(s) => {
-                        self.saved = s;
-                        self.note = Some((format!("loaded {}", self.settings_path), false));
-                    }
-                    Err(e) => self.note = Some((e, true)),
-                }
-            }
             if ui
                 .add_enabled(self.history.can_undo(), egui::Button::new("Undo"))
                 .on_hover_text("the last change (Ctrl+Z)")
@@ -649,6 +624,73 @@ pub fn choice<T: Clone>(
         });
 }
 
+/// A slider whose value is taken when its drag ends (or a number typed into it is entered):
+/// while it is dragged the knob moves and `value` stays, so a setting that costs a rebuild is
+/// rebuilt once.
+pub fn slider_on_release<N>(
+    ui: &mut Ui,
+    value: &mut N,
+    range: std::ops::RangeInclusive<N>,
+    text: &str,
+) -> egui::Response
+where
+    N: egui::emath::Numeric + Send + Sync + 'static,
+{
+    let key = ui.scope_id().with(("dragged value", text));
+    let mut v = ui.data(|d| d.get_temp::<N>(key)).unwrap_or(*value);
+    let r = ui.add(
+        Slider::new(&mut v, range)
+            .text(text)
+            .update_while_editing(false),
+    );
+    if r.dragged() {
+        ui.data_mut(|d| d.insert_temp(key, v));
+    } else {
+        *value = v;
+        ui.data_mut(|d| d.remove::<N>(key));
+    }
+    r
+}
+
+/// The scene drop-down: `scene` indexes [`NAMES`].
+pub fn scene_row(ui: &mut Ui, scene: &mut usize) {
+    ComboBox::from_label("scene")
+        .selected_text(NAMES[*scene])
+        .show_ui(ui, |ui| {
+            for (i, n) in NAMES.iter().enumerate() {
+                ui.selectable_value(scene, i, *n);
+            }
+        });
+}
+
+/// The settings file's path and its Save and Load buttons; `note` the outcome, and whether
+/// it failed.
+pub fn file_row(
+    ui: &mut Ui,
+    path: &mut String,
+    saved: &mut Saved,
+    note: &mut Option<(String, bool)>,
+) {
+    let id = ui.label("file").id;
+    ui.add(egui::TextEdit::singleline(path).desired_width(120.0))
+        .labelled_by(id);
+    if ui.button("Save").clicked() {
+        *note = Some(match save_settings(path.as_ref(), saved) {
+            Ok(()) => (format!("saved {path}"), false),
+            Err(e) => (e, true),
+        });
+    }
+    if ui.button("Load").clicked() {
+        match load_settings(path.as_ref()) {
+            Ok(s) => {
+                *saved = s;
+                *note = Some((format!("loaded {path}"), false));
+            }
+            Err(e) => *note = Some((e, true)),
+        }
+    }
+}
+
 /// The settings after each finished change, for Undo: a change is taken in once it is over
 /// (a drag released, a typed number entered), so one drag is one step.
 pub struct History {
@@ -766,11 +808,8 @@ pub fn actor_panel(ui: &mut Ui, s: &mut ActorSettings) {
             .labelled_by(label);
         }
     });
-    ui.add(
-        Slider::new(&mut s.block, 0.1..=4.0)
-            .text("BlockSize")
-            .update_while_editing(false),
-    );
+    // Costly to apply: taken when the drag ends or the number typed is entered.
+    slider_on_release(ui, &mut s.block, 0.1..=4.0, "BlockSize");
     match s.counts() {
         Ok(n) => ui.label(format!("{} × {} × {} blocks", n[0], n[1], n[2])),
         Err(e) => ui.colored_label(ERROR_RED, e.to_string()),
@@ -1001,11 +1040,8 @@ pub fn volume_panel(ui: &mut Ui, s: &mut VolumeSettings) {
             *s = VolumeSettings::seed();
         }
     });
-    ui.add(
-        Slider::new(&mut s.size, 16..=256)
-            .text("cloud voxels per side")
-            .update_while_editing(false),
-    );
+    // Costly to apply: taken when the drag ends or the number typed is entered.
+    slider_on_release(ui, &mut s.size, 16..=256, "cloud voxels per side");
     ui.horizontal(|ui| {
         let id = ui.label("noise seed").id;
         ui.add(DragValue::new(&mut s.seed)).labelled_by(id);
@@ -1147,11 +1183,8 @@ pub fn voxelizer_panel(ui: &mut Ui, s: &mut VoxelizerSettings) {
             }
         }
     });
-    ui.add(
-        Slider::new(&mut s.grid, 4..=512)
-            .text("grid (longest side)")
-            .update_while_editing(false),
-    );
+    // Costly to apply: taken when the drag ends or the number typed is entered.
+    slider_on_release(ui, &mut s.grid, 4..=512, "grid (longest side)");
     ui.add(
         Slider::new(&mut s.spin, -std::f32::consts::PI..=std::f32::consts::PI)
             .text("spin (about y)"),
