@@ -7,7 +7,7 @@
 //! rewrites them (look at them before committing).
 
 #[path = "../examples/viewer/main.rs"]
-#[allow(dead_code)]
+#[allow(dead_code, unused_imports)]
 mod viewer;
 
 use std::path::{Path, PathBuf};

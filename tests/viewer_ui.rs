@@ -4,7 +4,7 @@
 //! typed on Enter and not per keystroke, and "Defaults" resets one scene.
 
 #[path = "../examples/viewer/main.rs"]
-#[allow(dead_code)]
+#[allow(dead_code, unused_imports)]
 mod viewer;
 
 use eframe::egui;
