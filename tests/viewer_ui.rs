@@ -11,8 +11,9 @@ use eframe::egui;
 use egui::accesskit::Role;
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
-use viewer::panels::{ERROR_RED, actor_panel, ocean_panel, one_line, side_panel};
+use viewer::scene_panels::{actor_panel, ocean_panel};
 use viewer::scenes::{ActorSettings, OceanSettings, Saved};
+use viewer::widgets::{ERROR_RED, one_line, side_panel};
 
 /// The ocean panel beneath a pinned error line, laid out as the viewer lays out its side
 /// panel: the error ("wave 0 wavelength …") shows while the first wave's wavelength is not
@@ -113,7 +114,7 @@ fn defaults_reset_one_scene_and_keep_the_mesh() {
 /// kind's own number shown beside it) and the actor's.
 #[test]
 fn choices_have_readable_names() {
-    use viewer::panels::{volume_panel, voxelizer_panel};
+    use viewer::scene_panels::{volume_panel, voxelizer_panel};
     use viewer::scenes::{VolumeSettings, VoxelizerSettings};
     let mut harness = Harness::new_ui_state(
         |ui, s: &mut (VoxelizerSettings, VolumeSettings, ActorSettings)| {
@@ -154,7 +155,7 @@ fn choices_have_readable_names() {
 /// when the seeds change) with the time it took there, and sums a name's passes in one frame.
 #[test]
 fn passes_stay_listed_with_their_last_time() {
-    use viewer::panels::remember;
+    use viewer::widgets::remember;
     let mut seen = Vec::new();
     let frame = |p: &[(&str, f64)]| {
         p.iter()
@@ -200,7 +201,7 @@ fn a_drag_paints_a_stroke() {
 /// where it is.
 #[test]
 fn undo_takes_back_the_last_finished_change() {
-    use viewer::panels::History;
+    use viewer::widgets::History;
     let start = Saved::default();
     let mut history = History::new(&start);
     let mut now = start.clone();
@@ -249,7 +250,7 @@ fn a_value_too_large_is_said_not_clamped() {
 /// there is a note in red (failed), and the scene drop-down switches the scene.
 #[test]
 fn save_load_round_trip_and_scene_switch() {
-    use viewer::panels::{file_row, scene_row};
+    use viewer::widgets::{file_row, scene_row};
     let path = std::env::temp_dir().join(format!("fieldkit_viewer_ui_{}.ron", std::process::id()));
     struct State {
         path: String,

@@ -35,8 +35,10 @@ pub mod draw;
 pub mod frame;
 pub mod made;
 pub mod panels;
+pub mod scene_panels;
 pub mod scenes;
 pub mod soak;
+pub mod widgets;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
