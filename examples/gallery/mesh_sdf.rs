@@ -15,7 +15,7 @@ pub fn mesh_sdf_scene(
     use fieldkit::mesh_sdf::{MeshSdf, Settings};
     use fieldkit::metaball::{MarchField, RaymarchSettings, Raymarcher};
     use fieldkit::view::{Targets, View};
-    use glam::{Mat4, Vec3};
+    use glam::Mat4;
     let device = &ctx.device;
     let grid = fieldkit::mesh_sdf::Grid::fit(mesh, n)?;
     let settings = Settings {
@@ -28,32 +28,14 @@ pub fn mesh_sdf_scene(
     let marcher = Raymarcher::new(device, &ctx.queue, colour_format, depth_format, false)?;
     let mut enc = ctx.encoder("gallery mesh sdf");
     let field = MeshSdf::new(device)?.encode(device, &mut enc, mesh, &grid, &settings)?;
-    let centre =
-        (grid.origin + glam::DVec3::from(grid.size.map(f64::from)) * grid.voxel * 0.5).as_vec3();
-    let radius = grid.size.into_iter().max().unwrap_or(1) as f32 * grid.voxel as f32 * 0.5;
-    let eye = centre + Vec3::new(0.75, 0.45, 1.0).normalize() * radius * 3.2;
-    let proj = glam::camera::rh::proj::directx::perspective(
-        0.7,
-        w as f32 / h as f32,
-        radius * 0.1,
-        radius * 10.0,
-    );
+    let (view_proj, _, _) = grid_camera(&grid, w, h);
     let view = View {
-        view_proj: proj * glam::camera::rh::view::look_at_mat4(eye, centre, Vec3::Y),
+        view_proj,
         viewport: [w, h],
         reversed_z: false,
         origin: [0, 0],
     };
-    targets.clear(
-        &mut enc,
-        wgpu::Color {
-            r: 0.16,
-            g: 0.17,
-            b: 0.2,
-            a: 1.0,
-        },
-        1.0,
-    );
+    targets.clear(&mut enc, BACKGROUND, 1.0);
     let march = MarchField {
         march: field.march.as_ref().expect("asked for"),
         grid,

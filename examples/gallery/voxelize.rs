@@ -14,6 +14,36 @@ pub fn voxelize_scene(
     voxelize_scene_with(ctx, mesh, n, w, h, Preset::Fieldkit)
 }
 
+/// The mesh scenes' background.
+pub const BACKGROUND: wgpu::Color = wgpu::Color {
+    r: 0.16,
+    g: 0.17,
+    b: 0.2,
+    a: 1.0,
+};
+
+/// A camera over `grid` from the front, above and to the right, its box in view of a `w` × `h`
+/// frame: the view-projection matrix, the box's centre and its half longest side.
+pub fn grid_camera(
+    grid: &fieldkit::Grid,
+    w: u32,
+    h: u32,
+) -> (glam::Mat4, glam::Vec3, f32) {
+    use glam::Vec3;
+    let centre =
+        (grid.origin + glam::DVec3::from(grid.size.map(f64::from)) * grid.voxel * 0.5).as_vec3();
+    let radius = grid.size.into_iter().max().unwrap_or(1) as f32 * grid.voxel as f32 * 0.5;
+    let eye = centre + Vec3::new(0.75, 0.45, 1.0).normalize() * radius * 3.2;
+    let proj = glam::camera::rh::proj::directx::perspective(
+        0.7,
+        w as f32 / h as f32,
+        radius * 0.1,
+        radius * 10.0,
+    );
+    let view_proj = proj * glam::camera::rh::view::look_at_mat4(eye, centre, Vec3::Y);
+    (view_proj, centre, radius)
+}
+
 /// [`voxelize_scene`] with `preset`'s light: the seed preset is the source's demo scene, a
 /// point light near the mesh's top front corner.
 pub fn voxelize_scene_with(
@@ -35,29 +65,10 @@ pub fn voxelize_scene_with(
     let colour_format = wgpu::TextureFormat::Rgba8Unorm;
     let depth_format = wgpu::TextureFormat::Depth32Float;
     let targets = Targets::new(device, [w, h], colour_format, depth_format);
-    let centre =
-        (grid.origin + glam::DVec3::from(grid.size.map(f64::from)) * grid.voxel * 0.5).as_vec3();
-    let radius = grid.size.into_iter().max().unwrap_or(1) as f32 * grid.voxel as f32 * 0.5;
-    let eye = centre + Vec3::new(0.75, 0.45, 1.0).normalize() * radius * 3.2;
-    let proj = glam::camera::rh::proj::directx::perspective(
-        0.7,
-        w as f32 / h as f32,
-        radius * 0.1,
-        radius * 10.0,
-    );
-    let view_proj = proj * glam::camera::rh::view::look_at_mat4(eye, centre, Vec3::Y);
+    let (view_proj, centre, radius) = grid_camera(&grid, w, h);
     let view = VoxelView::new(device, colour_format, depth_format)?;
     let mut enc = ctx.encoder("gallery voxelize");
-    targets.clear(
-        &mut enc,
-        wgpu::Color {
-            r: 0.16,
-            g: 0.17,
-            b: 0.2,
-            a: 1.0,
-        },
-        1.0,
-    );
+    targets.clear(&mut enc, BACKGROUND, 1.0);
     let light = match preset {
         Preset::Fieldkit => Light::Directional(Vec3::new(0.4, 0.8, 0.5)),
         Preset::Seed => Light::Point {

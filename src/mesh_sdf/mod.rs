@@ -143,6 +143,11 @@ impl MeshSdf {
     /// on grid-local coordinates: within about 10⁻⁴ voxels of the f64 answer); the sign comes
     /// from rows of voxel centres along x, y and z (see the module's page for where it fails).
     ///
+    /// A bake, made when the mesh or the grid changes and sampled for many frames after: the
+    /// mesh is moved into the grid's frame on the CPU in f64 and uploaded (its triangles and
+    /// pseudo-normals), and the field is a new texture the caller keeps; the keys and parity
+    /// scratch are kept here for the next field of the same size.
+    ///
     /// Errors: an empty mesh, a non-finite vertex or index out of range, a mesh of no area, a
     /// grid over [`crate::voxelize::MAX_SIDE`] or the device's 3D texture and buffer limits,
     /// more than [`MAX_TRIANGLES`], a band that is not finite or not above 0.
