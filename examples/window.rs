@@ -71,37 +71,21 @@ impl Scene {
         queue: &wgpu::Queue,
         format: wgpu::TextureFormat,
     ) -> Result<Self, Error> {
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("floor"),
-            source: wgpu::ShaderSource::Wgsl(FLOOR_WGSL.into()),
-        });
-        let floor = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("floor"),
-            layout: None,
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs"),
-                compilation_options: Default::default(),
-                targets: &[Some(format.into())],
-            }),
-            primitive: Default::default(),
-            depth_stencil: Some(wgpu::DepthStencilState {
+        let floor = fieldkit::harness::wgsl_pipeline(
+            device,
+            "floor",
+            FLOOR_WGSL,
+            format,
+            Some(wgpu::DepthStencilState {
                 format: DEPTH,
                 depth_write_enabled: Some(true),
                 depth_compare: Some(wgpu::CompareFunction::Less),
                 stencil: Default::default(),
                 bias: Default::default(),
             }),
-            multisample: Default::default(),
-            multiview_mask: None,
-            cache: None,
-        });
+            &[],
+            Default::default(),
+        );
         let camera = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("floor camera"),
             size: 64,

@@ -4,6 +4,64 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+/// A render pipeline from WGSL written in place, for a demo's or a test's own drawing (a blit,
+/// a floor, debug lines) rather than a stage of the crate's: vertex entry `vs`, fragment entry
+/// `fs`, one colour target of `colour`, the depth state `depth` where given, the vertex
+/// `buffers` and `primitive` the drawing needs, the layout derived from the shader. wgpu
+/// compiles the WGSL here, so a mistake in it shows as wgpu's validation error.
+///
+/// ```no_run
+/// # fn f(device: &wgpu::Device) {
+/// let pipeline = fieldkit::harness::wgsl_pipeline(
+///     device,
+///     "my overlay",
+///     "@vertex fn vs(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+///          return vec4<f32>(f32(i % 2u), f32(i / 2u), 0.0, 1.0);
+///      }
+///      @fragment fn fs() -> @location(0) vec4<f32> { return vec4<f32>(1.0); }",
+///     wgpu::TextureFormat::Rgba8Unorm,
+///     None,
+///     &[],
+///     wgpu::PrimitiveState::default(),
+/// );
+/// # }
+/// ```
+pub fn wgsl_pipeline(
+    device: &wgpu::Device,
+    label: &str,
+    wgsl: &str,
+    colour: wgpu::TextureFormat,
+    depth: Option<wgpu::DepthStencilState>,
+    buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
+    primitive: wgpu::PrimitiveState,
+) -> wgpu::RenderPipeline {
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(label),
+        source: wgpu::ShaderSource::Wgsl(wgsl.into()),
+    });
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(label),
+        layout: None,
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs"),
+            compilation_options: Default::default(),
+            buffers,
+        },
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some("fs"),
+            compilation_options: Default::default(),
+            targets: &[Some(colour.into())],
+        }),
+        primitive,
+        depth_stencil: depth,
+        multisample: Default::default(),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
 /// FNV-1a, 64-bit: a stable hash for summaries (std's hasher may change between releases).
 pub fn fnv1a(bytes: impl IntoIterator<Item = u8>) -> u64 {
     let mut h: u64 = 0xcbf29ce484222325;

@@ -24,11 +24,7 @@ pub const BACKGROUND: wgpu::Color = wgpu::Color {
 
 /// A camera over `grid` from the front, above and to the right, its box in view of a `w` × `h`
 /// frame: the view-projection matrix, the box's centre and its half longest side.
-pub fn grid_camera(
-    grid: &fieldkit::Grid,
-    w: u32,
-    h: u32,
-) -> (glam::Mat4, glam::Vec3, f32) {
+pub fn grid_camera(grid: &fieldkit::Grid, w: u32, h: u32) -> (glam::Mat4, glam::Vec3, f32) {
     use glam::Vec3;
     let centre =
         (grid.origin + glam::DVec3::from(grid.size.map(f64::from)) * grid.voxel * 0.5).as_vec3();

@@ -453,37 +453,21 @@ struct P { n: u32 }
 @fragment fn fs() -> @location(0) vec4<f32> { return vec4<f32>(0.1, 0.3, 0.5, 1.0); }
 ";
     let device = &ctx.device;
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("ocean bench floor probe"),
-        source: wgpu::ShaderSource::Wgsl(PROBE.into()),
-    });
-    let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some("ocean bench floor probe"),
-        layout: None,
-        vertex: wgpu::VertexState {
-            module: &module,
-            entry_point: Some("vs"),
-            compilation_options: Default::default(),
-            buffers: &[],
-        },
-        primitive: Default::default(),
-        depth_stencil: Some(wgpu::DepthStencilState {
+    let pipeline = fieldkit::harness::wgsl_pipeline(
+        device,
+        "ocean bench floor probe",
+        PROBE,
+        format,
+        Some(wgpu::DepthStencilState {
             format: wgpu::TextureFormat::Depth32Float,
             depth_write_enabled: Some(true),
             depth_compare: Some(wgpu::CompareFunction::LessEqual),
             stencil: Default::default(),
             bias: Default::default(),
         }),
-        multisample: Default::default(),
-        fragment: Some(wgpu::FragmentState {
-            module: &module,
-            entry_point: Some("fs"),
-            compilation_options: Default::default(),
-            targets: &[Some(format.into())],
-        }),
-        multiview_mask: None,
-        cache: None,
-    });
+        &[],
+        Default::default(),
+    );
     let depth_view = depth.create_view(&Default::default());
     let mut rows = Vec::new();
     println!("| probe: triangles | px each | frame ms | ns per triangle |\n|---|---|---|---|");
