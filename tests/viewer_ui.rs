@@ -344,3 +344,22 @@ fn a_costly_slider_applies_on_release() {
         "taken on release: {before} -> {after}"
     );
 }
+
+/// A number typed into a costly slider past its rail is taken as typed and refused by the
+/// scene's own check (BlockSize 0: the blocks' count says why in red), not clamped into range.
+#[test]
+fn a_number_typed_past_a_slider_is_kept_and_refused() {
+    let mut harness = Harness::new_ui_state(
+        |ui, s: &mut ActorSettings| actor_panel(ui, s),
+        ActorSettings::default(),
+    );
+    harness.run();
+    // The slider's number is the spin button after Extent's three.
+    type_into(&mut harness, 3, "0");
+    assert_eq!(harness.state().block, 0.0, "taken as typed");
+    assert!(
+        harness
+            .query_by_label_contains("BlockSize must be finite and > 0")
+            .is_some()
+    );
+}

@@ -55,7 +55,7 @@ pub fn choice<T: Clone>(
 
 /// A slider whose value is taken when its drag ends (or a number typed into it is entered):
 /// while it is dragged the knob moves and `value` stays, so a setting that costs a rebuild is
-/// rebuilt once.
+/// rebuilt once. A typed number outside the rail is kept as typed.
 pub fn slider_on_release<N>(
     ui: &mut Ui,
     value: &mut N,
@@ -67,10 +67,13 @@ where
 {
     let key = ui.scope_id().with(("dragged value", text));
     let mut v = ui.data(|d| d.get_temp::<N>(key)).unwrap_or(*value);
+    // A number typed past the rail is taken as typed (and refused with the scene's own
+    // error where it is wrong), never quietly changed into another.
     let r = ui.add(
         Slider::new(&mut v, range)
             .text(text)
-            .update_while_editing(false),
+            .update_while_editing(false)
+            .clamping(egui::SliderClamping::Never),
     );
     if r.dragged() {
         ui.data_mut(|d| d.insert_temp(key, v));
