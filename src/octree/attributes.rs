@@ -263,14 +263,8 @@ fn attribute_buffers(
             max: limit,
         });
     }
-    let buffer = |label, size: u64, usage| {
-        device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some(label),
-            size: size.max(16),
-            usage: wgpu::BufferUsages::STORAGE | usage,
-            mapped_at_creation: false,
-        })
-    };
+    let buffer =
+        |label, size: u64, usage| crate::gpu::storage_buffer(device, label, size.max(16), usage);
     let sums = buffer(
         "octree attribute sums",
         batch as u64 * SUMS * 4,

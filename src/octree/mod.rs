@@ -784,14 +784,8 @@ impl BuildPlan {
             with_attributes,
             ..
         } = *self;
-        let buffer = |label, size: u64, usage| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: size.max(4),
-                usage: wgpu::BufferUsages::STORAGE | usage,
-                mapped_at_creation: false,
-            })
-        };
+        let buffer =
+            |label, size: u64, usage| crate::gpu::storage_buffer(device, label, size.max(4), usage);
         let none = wgpu::BufferUsages::empty();
         let pool = buffer(
             "octree pool",

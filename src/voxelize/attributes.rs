@@ -526,12 +526,7 @@ impl Voxelizer {
             });
         }
         let buffer = |label, size: u64, usage| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: size.max(16),
-                usage: wgpu::BufferUsages::STORAGE | usage,
-                mapped_at_creation: false,
-            })
+            crate::gpu::storage_buffer(device, label, size.max(16), usage)
         };
         let sums = buffer(
             "voxel attribute sums",

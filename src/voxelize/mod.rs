@@ -362,14 +362,8 @@ impl HeavyWork {
     /// dispatches' arguments (0, 1, 1) (`surface` raises the count, and the rows of 65535, as
     /// it lists chunks), the giants' counts zero.
     fn new(device: &wgpu::Device, capacity: u32, giant_blocks: u64) -> Self {
-        let buffer = |label, size: u64, usage| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size,
-                usage: wgpu::BufferUsages::STORAGE | usage,
-                mapped_at_creation: false,
-            })
-        };
+        let buffer =
+            |label, size: u64, usage| crate::gpu::storage_buffer(device, label, size, usage);
         let arguments = |label, bytes: u64| {
             wgpu::util::DeviceExt::create_buffer_init(
                 device,
