@@ -29,6 +29,16 @@ fn ocean_with_error(ui: &mut egui::Ui, s: &mut OceanSettings) {
     );
 }
 
+/// The actor's panel on its default settings, laid out once.
+fn actor_harness() -> Harness<'static, ActorSettings> {
+    let mut harness = Harness::new_ui_state(
+        |ui, s: &mut ActorSettings| actor_panel(ui, s),
+        ActorSettings::default(),
+    );
+    harness.run();
+    harness
+}
+
 /// Type `text` into the `index`-th number field (a click enters its text edit), then Enter.
 fn type_into<S>(harness: &mut Harness<'_, S>, index: usize, text: &str) {
     harness
@@ -67,11 +77,7 @@ fn a_number_typed_while_an_error_shows_keeps_every_keystroke() {
 
 #[test]
 fn an_expensive_field_takes_what_is_typed_on_enter() {
-    let mut harness = Harness::new_ui_state(
-        |ui, s: &mut ActorSettings| actor_panel(ui, s),
-        ActorSettings::default(),
-    );
-    harness.run();
+    let mut harness = actor_harness();
     let before = harness.state().extent[0];
     harness
         .get_all_by_role(Role::SpinButton)
@@ -233,11 +239,7 @@ fn undo_takes_back_the_last_finished_change() {
 /// An Extent too large for the actor is said so in red beside it, not clamped to another value.
 #[test]
 fn a_value_too_large_is_said_not_clamped() {
-    let mut harness = Harness::new_ui_state(
-        |ui, s: &mut ActorSettings| actor_panel(ui, s),
-        ActorSettings::default(),
-    );
-    harness.run();
+    let mut harness = actor_harness();
     type_into(&mut harness, 0, "99999");
     assert_eq!(harness.state().extent[0], 99999.0, "taken as typed");
     assert!(
@@ -303,11 +305,7 @@ fn save_load_round_trip_and_scene_switch() {
 /// when the drag ends: one rebuild, not one a frame.
 #[test]
 fn a_costly_slider_applies_on_release() {
-    let mut harness = Harness::new_ui_state(
-        |ui, s: &mut ActorSettings| actor_panel(ui, s),
-        ActorSettings::default(),
-    );
-    harness.run();
+    let mut harness = actor_harness();
     let before = harness.state().block;
     let rect = harness
         .get_by_role_and_label(Role::Slider, "BlockSize")
@@ -349,11 +347,7 @@ fn a_costly_slider_applies_on_release() {
 /// scene's own check (BlockSize 0: the blocks' count says why in red), not clamped into range.
 #[test]
 fn a_number_typed_past_a_slider_is_kept_and_refused() {
-    let mut harness = Harness::new_ui_state(
-        |ui, s: &mut ActorSettings| actor_panel(ui, s),
-        ActorSettings::default(),
-    );
-    harness.run();
+    let mut harness = actor_harness();
     // The slider's number is the spin button after Extent's three.
     type_into(&mut harness, 3, "0");
     assert_eq!(harness.state().block, 0.0, "taken as typed");

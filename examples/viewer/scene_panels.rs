@@ -12,23 +12,17 @@ use super::scenes::{
     self, ActorDraw, ActorSettings, DistanceSettings, OceanSettings, VolumeSettings, VoxelMode,
     VoxelizerSettings,
 };
-use super::widgets::{ERROR_RED, choice, slider_on_release, vec3_row};
+use super::widgets::{ERROR_RED, choice, preset_row, slider_on_release, vec3_row};
 
 pub fn actor_panel(ui: &mut Ui, s: &mut ActorSettings) {
     ui.heading("voxel actor (seed 000)");
-    ui.horizontal(|ui| {
-        ui.label("preset");
-        if ui.button("fieldkit").clicked() {
-            *s = ActorSettings::default();
-        }
-        if ui
-            .button("seed")
-            .on_hover_text("the source's settings: falloffExtend 1.5, full-volume JFA, its march, cubes and animation")
-            .clicked()
-        {
-            *s = ActorSettings::seed();
-        }
-    });
+    preset_row(
+        ui,
+        s,
+        ActorSettings::default(),
+        ActorSettings::seed(),
+        "the source's settings: falloffExtend 1.5, full-volume JFA, its march, cubes and animation",
+    );
     ui.horizontal(|ui| {
         ui.label("Extent");
         for (e, axis) in s.extent.iter_mut().zip(["x", "y", "z"]) {
@@ -141,19 +135,13 @@ pub fn actor_panel(ui: &mut Ui, s: &mut ActorSettings) {
 
 pub fn ocean_panel(ui: &mut Ui, s: &mut OceanSettings) {
     ui.heading("ocean (seed 001)");
-    ui.horizontal(|ui| {
-        ui.label("preset");
-        if ui.button("fieldkit").clicked() {
-            *s = OceanSettings::default();
-        }
-        if ui
-            .button("seed")
-            .on_hover_text("the source's sea: a 30 cm fade, depth read only, no skirts")
-            .clicked()
-        {
-            *s = OceanSettings::seed();
-        }
-    });
+    preset_row(
+        ui,
+        s,
+        OceanSettings::default(),
+        OceanSettings::seed(),
+        "the source's sea: a 30 cm fade, depth read only, no skirts",
+    );
     // One row a wave under a header whose labels name each column's fields (for the eye and
     // for the accessibility tree).
     let mut remove = None;
@@ -368,19 +356,13 @@ pub fn distance_panel(ui: &mut Ui, s: &mut DistanceSettings) {
         PartialEq::eq,
     );
     ui.add(Slider::new(&mut s.options.seeds.above, 0.0..=1.0).text("seed above"));
-    ui.horizontal(|ui| {
-        ui.label("preset");
-        if ui.button("fieldkit").clicked() {
-            s.options.seeds = fieldkit::distance::SeedRule::default();
-        }
-        if ui
-            .button("seed")
-            .on_hover_text("the source's rule: every non-black texel is a seed")
-            .clicked()
-        {
-            s.options.seeds = fieldkit::distance::SeedRule::seed();
-        }
-    });
+    preset_row(
+        ui,
+        &mut s.options.seeds,
+        fieldkit::distance::SeedRule::default(),
+        fieldkit::distance::SeedRule::seed(),
+        "the source's rule: every non-black texel is a seed",
+    );
     ui.add(Slider::new(&mut s.brush, 0..=12).text("brush radius"));
     ui.add(Slider::new(&mut s.iso_period, 1.0..=32.0).text("iso-line period"));
     ui.horizontal(|ui| {

@@ -84,6 +84,20 @@ where
     r
 }
 
+/// A scene's presets: fieldkit's `default` and the source's `seed` (`hover` says what the seed
+/// changes), each replacing `value` when clicked.
+pub fn preset_row<T>(ui: &mut Ui, value: &mut T, default: T, seed: T, hover: &str) {
+    ui.horizontal(|ui| {
+        ui.label("preset");
+        if ui.button("fieldkit").clicked() {
+            *value = default;
+        }
+        if ui.button("seed").on_hover_text(hover).clicked() {
+            *value = seed;
+        }
+    });
+}
+
 /// The scene drop-down: `scene` indexes [`NAMES`].
 pub fn scene_row(ui: &mut Ui, scene: &mut usize) {
     ComboBox::from_label("scene")
