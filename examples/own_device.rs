@@ -11,7 +11,7 @@
 //! cargo run --release --example own_device [-- OUT.png]
 //! ```
 //!
-//! Writes one PNG (the frame on top; the 2D field and the SDF slice below). `tests/examples.rs`
+//! Writes one PNG (the frame on top; the 2D field and the SDF slice below). `tests/api/examples.rs`
 //! runs the same code on lavapipe and checks the numbers against CPU references.
 
 use fieldkit::Error;

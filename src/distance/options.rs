@@ -38,7 +38,7 @@ pub enum Method {
     /// point within one voxel of the voxel its key is held in (as surface seeds and
     /// [`Distance3d::encode_points`](super::Distance3d::encode_points) without homes place them). Integer seeds take
     /// [`Method::Exact`]. Not exact for sub-voxel seeds: it can keep one up to about half a voxel
-    /// farther than the nearest, where JFA+2 keeps one at most a tenth farther (`tests/distance_3d_points.rs` measures
+    /// farther than the nearest, where JFA+2 keeps one at most a tenth farther (`tests/distance/points_3d.rs` measures
     /// it against brute force and JFA+2).
     Lines,
 }

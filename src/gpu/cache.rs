@@ -30,7 +30,7 @@ const MAGIC: &[u8; 8] = b"fkpipes1";
 /// in a process with several instances (tests that each open their own), a cache installed for
 /// a device of one instance is found for the device of the same id in another, whose pipelines
 /// then fail. Keep to one instance where a cache is installed, or keep such devices apart in
-/// time (as `tests/viewer.rs` does).
+/// time (as `tests/viewer/scenes.rs` does).
 ///
 /// Where the device cannot keep a pipeline cache ([`wgpu::Features::PIPELINE_CACHE`] not
 /// enabled, or a backend without one: wgpu has them on Vulkan), [`PipelineCache::open`]

@@ -40,7 +40,7 @@ pub enum Output {
 /// scaled with the cells per radius above it. Their hit tolerance is a fraction of a cell, so a
 /// finer grid takes more steps to close in on a grazing surface: at 12 cells per edge and a
 /// fixed cap of 64, 1 386 rays of the global bound ran out of steps along a row of six blobs
-/// (llvmpipe, `tests/metaball_grazing.rs`); scaled to 192, none.
+/// (llvmpipe, `tests/metaball/grazing.rs`); scaled to 192, none.
 fn direct_step_cap(max_steps: u32, bins: &super::BlobBins) -> u32 {
     let scale = (bins.bin_size / bins.cell / 4.0).max(1.0);
     (max_steps as f32 * scale).ceil().min(u32::MAX as f32) as u32
@@ -175,7 +175,7 @@ impl RaymarchSettings {
     /// (the source lights with its scene's light, whose direction is not written down).
     ///
     /// fieldkit's default keeps two of its own choices, measured on one blob against the
-    /// analytic surface (`tests/metaball_render.rs`, llvmpipe): steps of 0.9 × d take 5.3 steps
+    /// analytic surface (`tests/metaball/render.rs`, llvmpipe): steps of 0.9 × d take 5.3 steps
     /// per pixel where the source's rule takes 9.2, for the same surface; and hardware
     /// trilinear reads put hits at most 0.09 cells off the surface (normals 5.7°) where the
     /// Hermite weights, flat at voxel centres and steep between them, ripple the iso-surface

@@ -334,7 +334,7 @@ pub fn select(
         }
         // The fewest quads, down to half, that keep the error: a patch's error falls off with
         // its distance, so leaves far from where their parent was split need fewer. (Choosing
-        // among q, ¾q and ½q only took 17% more triangles in `tests/ocean_lod.rs`'s view.) The
+        // among q, ¾q and ½q only took 17% more triangles in `tests/ocean/lod.rs`'s view.) The
         // error grows as the quads fall: bisect for the fewest that keep it.
         let (mut quads, mut error_px) = (s.patch_quads, error_px);
         let mut fewest_missing = s.patch_quads.div_ceil(2) - 1;
@@ -373,7 +373,7 @@ pub fn select(
 /// The write-up's layout, for comparison: the square split where the camera is nearer a node
 /// than its side, down to an eighth of the square, each patch `quads` per side (255: 256
 /// vertices per row). The write-up had 20–30 such patches and about 4 million triangles; this
-/// rule gives 43 patches and 5.6 million for the camera of `tests/ocean_lod.rs`, 15 of them in
+/// rule gives 43 patches and 5.6 million for the camera of `tests/ocean/lod.rs`, 15 of them in
 /// view.
 #[derive(Clone, Debug, PartialEq)]
 pub struct WriteupLayout {

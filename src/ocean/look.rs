@@ -110,7 +110,7 @@ impl Default for Look {
 
 /// The detail texture's octaves: value-noise cells per repeat, and amplitude. It is band-limited
 /// to 32 cells a repeat: the vertex stage displaces by it, and detail finer than the vertices
-/// can hold would only force finer patches: in `tests/ocean_lod.rs`'s view 1 px of error took
+/// can hold would only force finer patches: in `tests/ocean/lod.rs`'s view 1 px of error took
 /// 1.25 M triangles with 128 cells, 0.86 M with 32 (0.36 M with no height layers at all). The
 /// normal layers, with small repeats, carry the fine detail.
 pub const DETAIL_OCTAVES: [(u32, f32); 3] = [(8, 0.5), (16, 0.25), (32, 0.125)];

@@ -260,7 +260,7 @@ fn bench(quick: bool, reps: usize, warmup: usize, out: &std::path::Path) -> Resu
         &look,
         true,
     )?;
-    // The default error with the patches chosen on the GPU (the same patches: `tests/ocean_gpu_lod.rs`),
+    // The default error with the patches chosen on the GPU (the same patches: `tests/ocean/gpu_lod.rs`),
     // its selection pass included.
     let on_gpu_with = |enc: &mut wgpu::CommandEncoder, lod: &LodSettings| {
         let targets = [&colour_view];
