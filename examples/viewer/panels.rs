@@ -15,7 +15,10 @@ use super::scene_panels::{
     actor_panel, distance_panel, ocean_panel, volume_panel, voxelizer_panel,
 };
 use super::scenes::{self, COLOUR, DEPTH, NAMES, Saved, Scenes};
-use super::widgets::{ERROR_RED, History, file_row, one_line, remember, scene_row, side_panel};
+use super::widgets::{
+    ERROR_RED, History, draw_legends, file_row, group_totals, one_line, remember, scene_row,
+    side_panel,
+};
 use super::{Args, draw_frame, frame_time, read_colour, save_png};
 
 type PassTimes = (Vec<(String, f64)>, f64);
@@ -281,7 +284,7 @@ impl Viewer {
         // fixed width so that nothing below moves as they change.
         // The passes' sum beside the frame's GPU time first to last (the gaps between passes
         // are the difference).
-        let sum = self.passes.0.iter().map(|p| p.1).sum::<f64>();
+        let sum = self.passes.0.iter().map(|p| p.1).sum::<f64>() + 0.0; // an empty sum is −0
         let gpu = match self.profiler {
             Some(_) => format!("Σ {sum:7.3} of {:7.3} ms", self.passes.1),
             None => "     — ms".into(),
@@ -293,6 +296,21 @@ impl Viewer {
             self.frame_ms,
             1e3 / self.frame_ms.max(1e-3)
         ));
+        if self.scene_name() == "distance2d" {
+            // What each compared method cost, the last time it ran (the field is computed
+            // when the settings change, not every frame).
+            let line = group_totals(&self.seen)
+                .iter()
+                .map(|(g, ms)| format!("{g} {ms:.3}"))
+                .collect::<Vec<_>>()
+                .join(" | ");
+            let line = if line.is_empty() {
+                String::new()
+            } else {
+                format!("GPU ms by method: {line}")
+            };
+            one_line(ui, &line, ui.visuals().text_color());
+        }
         if self.profiler.is_some() {
             egui::CollapsingHeader::new("per pass")
                 .default_open(false)
@@ -325,20 +343,26 @@ impl Viewer {
             self.camera_panel(ui, frame);
         }
         ui.separator();
+        // The control the frame's error came from, marked in red.
+        let name = NAMES[self.scene];
+        let bad = self
+            .error
+            .as_ref()
+            .and_then(|_| self.scenes.culprit(name, &self.saved));
         let s = &mut self.saved;
-        match NAMES[self.scene] {
-            "actor" => actor_panel(ui, &mut s.actor),
-            "ocean" => ocean_panel(ui, &mut s.ocean),
-            "volume" => volume_panel(ui, &mut s.volume),
-            "distance2d" => distance_panel(ui, &mut s.distance),
-            "voxelizer" => voxelizer_panel(ui, &mut s.voxelizer),
+        match name {
+            "actor" => actor_panel(ui, &mut s.actor, bad),
+            "ocean" => ocean_panel(ui, &mut s.ocean, bad),
+            "volume" => volume_panel(ui, &mut s.volume, bad),
+            "distance2d" => distance_panel(ui, &mut s.distance, bad),
+            "voxelizer" => voxelizer_panel(ui, &mut s.voxelizer, bad),
             _ => {
                 ui.label(
                     "The island is the actor scene's field and march: its settings are \
                      edited there. The sea and the cloud:",
                 );
-                ocean_panel(ui, &mut s.ocean);
-                volume_panel(ui, &mut s.volume);
+                ocean_panel(ui, &mut s.ocean, bad);
+                volume_panel(ui, &mut s.volume, bad);
             }
         }
     }
@@ -365,7 +389,7 @@ impl Viewer {
                 *c = scenes::default_camera(NAMES[i]);
             }
         });
-        ui.add(Slider::new(&mut c.fov, 0.2..=2.0).text("field of view"));
+        ui.add(Slider::new(&mut c.fov, 0.2..=2.0).text("vertical field of view (rad)"));
     }
 
     fn central(&mut self, ui: &mut Ui, rs: &eframe::egui_wgpu::RenderState) {
@@ -464,6 +488,11 @@ impl Viewer {
                 .rect_filled(back, 4.0, egui::Color32::from_black_alpha(200));
             ui.painter().galley(at, galley, ERROR_RED);
         }
+        draw_legends(
+            ui.ctx(),
+            response.rect,
+            &self.saved.legends(NAMES[self.scene]),
+        );
         self.input(ui, &response, size);
         if let Some((n, path)) = &self.shot
             && self.drawn >= *n

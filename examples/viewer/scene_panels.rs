@@ -8,13 +8,16 @@ use fieldkit::voxelize::ColourBy;
 use fieldkit::voxelize::Separation;
 use glam::Vec3;
 
+use super::scenes::Control;
 use super::scenes::{
     self, ActorDraw, ActorSettings, DistanceSettings, OceanSettings, VolumeSettings, VoxelMode,
     VoxelizerSettings,
 };
-use super::widgets::{ERROR_RED, choice, preset_row, slider_on_release, vec3_row};
+use super::widgets::{
+    ERROR_RED, choice, control_label, mark, preset_row, slider_on_release, vec3_row,
+};
 
-pub fn actor_panel(ui: &mut Ui, s: &mut ActorSettings) {
+pub fn actor_panel(ui: &mut Ui, s: &mut ActorSettings, bad: Option<Control>) {
     ui.heading("voxel actor (seed 000)");
     preset_row(
         ui,
@@ -24,22 +27,35 @@ pub fn actor_panel(ui: &mut Ui, s: &mut ActorSettings) {
         "the source's settings: falloffExtend 1.5, full-volume JFA, its march, cubes and animation",
     );
     ui.horizontal(|ui| {
-        ui.label("Extent");
+        let extent_bad = bad == Some(Control::Extent);
+        control_label(ui, "Extent (units)", extent_bad).on_hover_text(
+            "the region the blocks fill, per axis, in the source's units; blocks per axis = \
+             max(1, ⌊Extent / BlockSize⌋)",
+        );
         for (e, axis) in s.extent.iter_mut().zip(["x", "y", "z"]) {
             // Rebuilds the instances: taken on Enter, not per keystroke; not clamped, so too
             // large a value is the count's error below, not silently another value.
             let label = ui.label(axis).id;
-            ui.add(
-                DragValue::new(e)
-                    .speed(0.1)
-                    .range(0.0..=f32::MAX)
-                    .update_while_editing(false),
-            )
-            .labelled_by(label);
+            let r = ui
+                .add(
+                    DragValue::new(e)
+                        .speed(0.1)
+                        .range(0.0..=f32::MAX)
+                        .update_while_editing(false),
+                )
+                .labelled_by(label);
+            mark(ui, &r, extent_bad);
         }
     });
     // Costly to apply: taken when the drag ends or the number typed is entered.
-    slider_on_release(ui, &mut s.block, 0.1..=4.0, "BlockSize");
+    slider_on_release(
+        ui,
+        &mut s.block,
+        0.1..=4.0,
+        "BlockSize (units)",
+        bad == Some(Control::BlockSize),
+    )
+    .on_hover_text("the edge of one block (one metaball), in Extent's units");
     match s.counts() {
         Ok(n) => ui.label(format!("{} × {} × {} blocks", n[0], n[1], n[2])),
         Err(e) => ui.colored_label(ERROR_RED, e.to_string()),
@@ -83,26 +99,37 @@ pub fn actor_panel(ui: &mut Ui, s: &mut ActorSettings) {
         &mut s.raymarch.output,
         &[
             (MarchOutput::Shaded, "shaded"),
-            (MarchOutput::Sdf, "distance at entry (red out, blue in)"),
-            (MarchOutput::Density, "density"),
-            (MarchOutput::Steps, "steps (heat: blue few, red the cap)"),
+            (MarchOutput::Sdf, "distance where the ray enters the box"),
+            (MarchOutput::Density, "density just inside the surface"),
+            (MarchOutput::Steps, "steps per ray"),
         ],
         PartialEq::eq,
     );
-    ui.add(Slider::new(&mut s.field.threshold, 0.05..=0.95).text("threshold"));
-    ui.add(Slider::new(&mut s.field.overlap, 1.0..=4.0).text("overlap"));
-    ui.add(Slider::new(&mut s.field.cells_per_edge, 1.0..=8.0).text("cells per edge"));
-    ui.add(Slider::new(&mut s.field.band, 2.0..=16.0).text("band (cells)"));
-    ui.add(Slider::new(&mut s.raymarch.max_steps, 8..=512).text("max steps"));
-    ui.add(Slider::new(&mut s.raymarch.safety, 0.3..=1.0).text("step safety"));
+    ui.add(Slider::new(&mut s.field.threshold, 0.05..=0.95).text("threshold (density)"))
+        .on_hover_text("the iso-level of the surface: the summed (1 − d²/R²)³ falloffs");
+    ui.add(Slider::new(&mut s.field.overlap, 1.0..=4.0).text("overlap (× half a block)"))
+        .on_hover_text("a blob's support radius = block × scale × ½ × overlap × falloff extend");
+    ui.add(Slider::new(&mut s.field.cells_per_edge, 1.0..=8.0).text("grid cells per block"))
+        .on_hover_text("the SDF texture's resolution: cells per block edge");
+    ui.add(Slider::new(&mut s.field.band, 2.0..=16.0).text("band (cells)"))
+        .on_hover_text("distances the SDF holds exactly; clamped to ± this beyond");
+    ui.add(Slider::new(&mut s.raymarch.max_steps, 8..=512).text("max steps per ray"))
+        .on_hover_text("a ray that uses them all is marked, never a silent miss");
+    ui.add(Slider::new(&mut s.raymarch.safety, 0.3..=1.0).text("step (× distance)"))
+        .on_hover_text("each step is this fraction of the distance the SDF gives");
     ui.checkbox(&mut s.animate, "animate");
-    ui.add(Slider::new(&mut s.animation.scale_frequency, 0.0..=3.0).text("scale frequency"));
-    ui.add(Slider::new(&mut s.animation.scale_amplitude, 0.0..=1.0).text("scale amplitude"));
-    ui.add(Slider::new(&mut s.animation.offset_frequency, 0.0..=3.0).text("offset frequency"));
-    ui.add(Slider::new(&mut s.animation.offset_amplitude, 0.0..=0.5).text("offset amplitude"));
-    ui.add(Slider::new(&mut s.animation.phase_step, 0.0..=1.0).text("phase step"));
-    ui.checkbox(&mut s.field.full_volume, "full-volume field (JFA)");
-    ui.add(Slider::new(&mut s.field.falloff_extend, 1.0..=2.0).text("falloff extend"));
+    ui.add(Slider::new(&mut s.animation.scale_frequency, 0.0..=3.0).text("scale pulses (per s)"));
+    ui.add(Slider::new(&mut s.animation.scale_amplitude, 0.0..=1.0).text("scale pulse (fraction)"))
+        .on_hover_text("0: none; 0.5: between 0 and the full scale");
+    ui.add(Slider::new(&mut s.animation.offset_frequency, 0.0..=3.0).text("offset cycles (per s)"));
+    ui.add(Slider::new(&mut s.animation.offset_amplitude, 0.0..=0.5).text("offset (block edges)"))
+        .on_hover_text("the largest move of a blob's centre");
+    ui.add(Slider::new(&mut s.animation.phase_step, 0.0..=1.0).text("phase step (rad)"))
+        .on_hover_text("the phase between one block and the next");
+    ui.checkbox(&mut s.field.full_volume, "full-volume field (JFA)")
+        .on_hover_text("a field over the whole box, not only the band the march needs");
+    ui.add(Slider::new(&mut s.field.falloff_extend, 1.0..=2.0).text("falloff extend (×)"))
+        .on_hover_text("a further factor on the support radius (the source: 1.5)");
     ui.collapsing("debug cubes", |ui| {
         choice(
             ui,
@@ -133,7 +160,7 @@ pub fn actor_panel(ui: &mut Ui, s: &mut ActorSettings) {
     });
 }
 
-pub fn ocean_panel(ui: &mut Ui, s: &mut OceanSettings) {
+pub fn ocean_panel(ui: &mut Ui, s: &mut OceanSettings, bad: Option<Control>) {
     ui.heading("ocean (seed 001)");
     preset_row(
         ui,
@@ -173,15 +200,7 @@ pub fn ocean_panel(ui: &mut Ui, s: &mut OceanSettings) {
                 let r = ui
                     .add(DragValue::new(value).speed(speed))
                     .labelled_by(label);
-                if bad {
-                    let stroke = egui::Stroke::new(1.5, ERROR_RED);
-                    ui.painter().rect_stroke(
-                        r.rect.expand(1.0),
-                        2.0,
-                        stroke,
-                        egui::StrokeKind::Outside,
-                    );
-                }
+                mark(ui, &r, bad);
             }
             if ui
                 .small_button("remove")
@@ -207,30 +226,61 @@ pub fn ocean_panel(ui: &mut Ui, s: &mut OceanSettings) {
             speed: 3.0,
         });
     }
-    ui.add(Slider::new(&mut s.steepness, 0.0..=1.0).text("steepness"));
-    ui.add(Slider::new(&mut s.lod.max_error_px, 0.25..=16.0).text("LOD error (px)"));
-    ui.checkbox(&mut s.overlay, "draw the patch quadtree");
-    ui.checkbox(&mut s.fade, "depth fade");
+    ui.add(Slider::new(&mut s.steepness, 0.0..=1.0).text("steepness (Gerstner Q)"))
+        .on_hover_text("0: sine waves; 1: crests just short of looping");
+    ui.add(Slider::new(&mut s.lod.max_error_px, 0.25..=16.0).text("LOD error (px)"))
+        .on_hover_text("the largest height error on screen the patch quadtree allows");
+    ui.checkbox(&mut s.overlay, "draw the patch quadtree")
+        .on_hover_text("each patch's outline over the water");
+    ui.checkbox(&mut s.fade, "depth fade")
+        .on_hover_text("shallow colour where the water is near the scene behind it");
     ui.add(Slider::new(&mut s.look.fade_distance, 0.1..=20.0).text("fade distance (m)"));
-    ui.add(Slider::new(&mut s.look.roughness, 0.0..=1.0).text("roughness"));
+    ui.add(Slider::new(&mut s.look.roughness, 0.0..=1.0).text("roughness (0–1)"))
+        .on_hover_text("the sun's highlight: 0 a point, 1 spread over the water");
     ui.label(format!(
         "detail layers: {} height, {} normal",
         s.look.height_layers.len(),
         s.look.normal_layers.len()
     ));
-    for (name, layers) in [
-        ("height", &mut s.look.height_layers),
-        ("normal", &mut s.look.normal_layers),
+    for (name, layers, kind) in [
+        (
+            "height",
+            &mut s.look.height_layers,
+            Control::HeightLayer as fn(usize) -> Control,
+        ),
+        ("normal", &mut s.look.normal_layers, Control::NormalLayer),
     ] {
         for (i, l) in layers.iter_mut().enumerate() {
+            let why = l.check().err();
             ui.horizontal(|ui| {
-                let id = ui.label(format!("{name} {i}: tile (m)")).id;
-                ui.add(DragValue::new(&mut l.tile).speed(0.1))
+                let layer_bad = bad == Some(kind(i));
+                let id = control_label(ui, &format!("{name} {i}: tile (m)"), layer_bad).id;
+                let r = ui
+                    .add(DragValue::new(&mut l.tile).speed(0.1))
                     .labelled_by(id);
-                let id = ui.label("strength").id;
-                ui.add(DragValue::new(&mut l.strength).speed(0.01))
+                mark(
+                    ui,
+                    &r,
+                    why.as_deref().is_some_and(|y| y.starts_with("tile")),
+                );
+                let unit = if name == "height" {
+                    "strength (m)"
+                } else {
+                    "strength (slope ×)"
+                };
+                let id = ui.label(unit).id;
+                let r = ui
+                    .add(DragValue::new(&mut l.strength).speed(0.01))
                     .labelled_by(id);
+                mark(
+                    ui,
+                    &r,
+                    why.as_deref().is_some_and(|y| y.starts_with("strength")),
+                );
             });
+            if let Some(why) = &why {
+                ui.colored_label(ERROR_RED, why);
+            }
         }
     }
     ComboBox::from_label("target")
@@ -249,7 +299,7 @@ pub fn ocean_panel(ui: &mut Ui, s: &mut OceanSettings) {
         });
 }
 
-pub fn volume_panel(ui: &mut Ui, s: &mut VolumeSettings) {
+pub fn volume_panel(ui: &mut Ui, s: &mut VolumeSettings, bad: Option<Control>) {
     ui.heading("volume (seed 002)");
     ui.horizontal(|ui| {
         ui.checkbox(
@@ -265,16 +315,26 @@ pub fn volume_panel(ui: &mut Ui, s: &mut VolumeSettings) {
         }
     });
     // Costly to apply: taken when the drag ends or the number typed is entered.
-    slider_on_release(ui, &mut s.size, 16..=256, "cloud voxels per side");
+    slider_on_release(
+        ui,
+        &mut s.size,
+        16..=256,
+        "cloud voxels per side",
+        bad == Some(Control::CloudSize),
+    )
+    .on_hover_text("the baked cloud's resolution (4 to 512); its bricks' with the function");
     ui.horizontal(|ui| {
         let id = ui.label("noise seed").id;
-        ui.add(DragValue::new(&mut s.seed)).labelled_by(id);
+        ui.add(DragValue::new(&mut s.seed))
+            .labelled_by(id)
+            .on_hover_text("the fBm's seed: another cloud");
     });
     ui.add(
         Slider::new(&mut s.march.step, 0.001..=0.05)
             .logarithmic(true)
-            .text("step"),
-    );
+            .text("step (volume units)"),
+    )
+    .on_hover_text("the march's step; the volume is 1 unit across");
     // A kind's own numbers (the iso-level, the shadow step) stay as they are while its kind
     // is kept; choosing another kind takes the value listed here.
     let kind = |a: &_, b: &_| std::mem::discriminant(a) == std::mem::discriminant(b);
@@ -310,10 +370,12 @@ pub fn volume_panel(ui: &mut Ui, s: &mut VolumeSettings) {
                 .text("shadow step (volume units)"),
         );
     }
-    ui.checkbox(&mut s.march.skip, "empty-space skipping");
-    ui.checkbox(&mut s.march.jitter, "jitter");
-    ui.add(Slider::new(&mut s.march.ambient, 0.0..=1.0).text("ambient"));
-    vec3_row(ui, "light", &mut s.march.light_dir, 0.02);
+    ui.checkbox(&mut s.march.skip, "empty-space skipping")
+        .on_hover_text("rays jump over bricks the transfer function leaves clear");
+    ui.checkbox(&mut s.march.jitter, "jitter")
+        .on_hover_text("each ray starts a random fraction of a step in: noise instead of bands");
+    ui.add(Slider::new(&mut s.march.ambient, 0.0..=1.0).text("ambient (0–1)"));
+    vec3_row(ui, "light (direction)", &mut s.march.light_dir, 0.02);
     ui.horizontal(|ui| {
         ui.label("transfer function");
         if ui.button("cloud").clicked() {
@@ -324,7 +386,8 @@ pub fn volume_panel(ui: &mut Ui, s: &mut VolumeSettings) {
         }
     });
     ui.horizontal(|ui| {
-        ui.label("density range");
+        ui.label("density range (0–1)")
+            .on_hover_text("the densities the transfer function spreads its colours over");
         for (end, name) in s.tf.range.iter_mut().zip(["from", "to"]) {
             let id = ui.label(name).id;
             ui.add(DragValue::new(end).speed(0.01)).labelled_by(id);
@@ -332,7 +395,7 @@ pub fn volume_panel(ui: &mut Ui, s: &mut VolumeSettings) {
     });
 }
 
-pub fn distance_panel(ui: &mut Ui, s: &mut DistanceSettings) {
+pub fn distance_panel(ui: &mut Ui, s: &mut DistanceSettings, bad: Option<Control>) {
     ui.heading("2D distance (seed 003)");
     ui.label("left button: draw seeds, right: erase");
     ComboBox::from_label("method")
@@ -342,7 +405,8 @@ pub fn distance_panel(ui: &mut Ui, s: &mut DistanceSettings) {
                 ui.selectable_value(&mut s.options.method, m, scenes::method_name(m));
             }
         });
-    ui.checkbox(&mut s.options.signed, "signed");
+    ui.checkbox(&mut s.options.signed, "signed")
+        .on_hover_text("negative inside the seeds, each side measured to the other's edge");
     use fieldkit::distance::Channels;
     choice(
         ui,
@@ -355,7 +419,8 @@ pub fn distance_panel(ui: &mut Ui, s: &mut DistanceSettings) {
         ],
         PartialEq::eq,
     );
-    ui.add(Slider::new(&mut s.options.seeds.above, 0.0..=1.0).text("seed above"));
+    ui.add(Slider::new(&mut s.options.seeds.above, 0.0..=1.0).text("seed above (0–1)"))
+        .on_hover_text("a texel is a seed where its channel is above this");
     preset_row(
         ui,
         &mut s.options.seeds,
@@ -363,18 +428,23 @@ pub fn distance_panel(ui: &mut Ui, s: &mut DistanceSettings) {
         fieldkit::distance::SeedRule::seed(),
         "the source's rule: every non-black texel is a seed",
     );
-    ui.add(Slider::new(&mut s.brush, 0..=12).text("brush radius"));
-    ui.add(Slider::new(&mut s.iso_period, 1.0..=32.0).text("iso-line period"));
+    ui.add(Slider::new(&mut s.brush, 0..=12).text("brush radius (texels)"));
+    ui.add(Slider::new(&mut s.iso_period, 1.0..=32.0).text("iso-lines every (texels)"));
     ui.horizontal(|ui| {
-        ui.label("size");
+        let size_bad = bad == Some(Control::MaskSize);
+        control_label(ui, "size (texels)", size_bad)
+            .on_hover_text("the mask's width and height: each ≥ 1, at most 4096² texels");
         for (side, axis) in s.size.iter_mut().zip(["w", "h"]) {
             let id = ui.label(axis).id;
-            ui.add(
-                DragValue::new(side)
-                    .range(1..=4096)
-                    .update_while_editing(false),
-            )
-            .labelled_by(id);
+            // Not clamped: a size out of range is the scene's error, not another size.
+            let r = ui
+                .add(
+                    DragValue::new(side)
+                        .range(0..=u32::MAX)
+                        .update_while_editing(false),
+                )
+                .labelled_by(id);
+            mark(ui, &r, size_bad);
         }
     });
     ui.horizontal(|ui| {
@@ -387,12 +457,17 @@ pub fn distance_panel(ui: &mut Ui, s: &mut DistanceSettings) {
     });
 }
 
-pub fn voxelizer_panel(ui: &mut Ui, s: &mut VoxelizerSettings) {
+pub fn voxelizer_panel(ui: &mut Ui, s: &mut VoxelizerSettings, bad: Option<Control>) {
     ui.heading("voxelizer (seed 004)");
     ui.checkbox(&mut s.point_light, "point light (the source's demo scene)");
     ui.horizontal(|ui| {
-        let id = ui.label("mesh").id;
-        ui.text_edit_singleline(&mut s.mesh).labelled_by(id);
+        let mesh_bad = bad == Some(Control::Mesh);
+        let id = control_label(ui, "mesh", mesh_bad).id;
+        let r = ui
+            .text_edit_singleline(&mut s.mesh)
+            .labelled_by(id)
+            .on_hover_text("an OBJ file's path, or torus or sphere");
+        mark(ui, &r, mesh_bad);
     });
     ui.horizontal(|ui| {
         for m in ["torus", "sphere", scenes::BUNNY] {
@@ -402,11 +477,19 @@ pub fn voxelizer_panel(ui: &mut Ui, s: &mut VoxelizerSettings) {
         }
     });
     // Costly to apply: taken when the drag ends or the number typed is entered.
-    slider_on_release(ui, &mut s.grid, 4..=512, "grid (longest side)");
-    ui.add(
+    slider_on_release(
+        ui,
+        &mut s.grid,
+        4..=512,
+        "grid (voxels, longest side)",
+        false,
+    )
+    .on_hover_text("voxels along the mesh's longest side; the others in proportion");
+    let spin = ui.add(
         Slider::new(&mut s.spin, -std::f32::consts::PI..=std::f32::consts::PI)
-            .text("spin (about y)"),
+            .text("spin about y (rad)"),
     );
+    mark(ui, &spin, bad == Some(Control::Spin));
     choice(
         ui,
         "voxelization",
@@ -433,6 +516,10 @@ pub fn voxelizer_panel(ui: &mut Ui, s: &mut VoxelizerSettings) {
         &[(ColourBy::Normal, "normal"), (ColourBy::Colour, "colour")],
         PartialEq::eq,
     );
-    ui.checkbox(&mut s.slice, "signed distance slice (middle z)");
-    ui.add(Slider::new(&mut s.band, 0.5..=16.0).text("distance band (voxels)"));
+    ui.checkbox(&mut s.slice, "signed distance slice (middle z)")
+        .on_hover_text(
+            "the mesh's signed distance on the grid's middle z plane, drawn over the view",
+        );
+    ui.add(Slider::new(&mut s.band, 0.5..=16.0).text("distance band (voxels)"))
+        .on_hover_text("the mesh distance field is exact within this many voxels of the surface");
 }

@@ -6,7 +6,7 @@ use eframe::egui;
 use egui::{ComboBox, DragValue, Slider, Ui};
 use glam::Vec3;
 
-use super::scenes::{NAMES, Saved};
+use super::scenes::{Legend, NAMES, Saved};
 use super::{load_settings, save_settings};
 
 /// The side panel's layout. Pinned at the top, `pinned`: the scene, the file, the timings and
@@ -61,6 +61,7 @@ pub fn slider_on_release<N>(
     value: &mut N,
     range: std::ops::RangeInclusive<N>,
     text: &str,
+    bad: bool,
 ) -> egui::Response
 where
     N: egui::emath::Numeric + Send + Sync + 'static,
@@ -69,12 +70,18 @@ where
     let mut v = ui.data(|d| d.get_temp::<N>(key)).unwrap_or(*value);
     // A number typed past the rail is taken as typed (and refused with the scene's own
     // error where it is wrong), never quietly changed into another.
+    let shown = if bad {
+        egui::RichText::new(format!("{text}{REFUSED}")).color(ERROR_RED)
+    } else {
+        egui::RichText::new(text)
+    };
     let r = ui.add(
         Slider::new(&mut v, range)
-            .text(text)
+            .text(shown)
             .update_while_editing(false)
             .clamping(egui::SliderClamping::Never),
     );
+    mark(ui, &r, bad);
     if r.dragged() {
         ui.data_mut(|d| d.insert_temp(key, v));
     } else {
@@ -202,7 +209,51 @@ pub fn remember(seen: &mut Vec<(String, f64, u64)>, passes: &[(String, f64)], re
     }
 }
 
+/// The GPU time of each group of passes (a pass named `group / pass`; see
+/// `Profiler::group`) in the latest frame of `seen` that had any, in the order the groups
+/// first appear.
+pub fn group_totals(seen: &[(String, f64, u64)]) -> Vec<(String, f64)> {
+    let grouped = |name: &str| name.split_once(" / ").map(|(g, _)| g.to_string());
+    let latest = seen
+        .iter()
+        .filter(|s| grouped(&s.0).is_some())
+        .map(|s| s.2)
+        .max();
+    let mut totals: Vec<(String, f64)> = Vec::new();
+    for (name, ms, read) in seen {
+        let Some(group) = grouped(name).filter(|_| Some(*read) == latest) else {
+            continue;
+        };
+        match totals.iter_mut().find(|(g, _)| *g == group) {
+            Some((_, sum)) => *sum += ms,
+            None => totals.push((group, *ms)),
+        }
+    }
+    totals
+}
+
 pub const ERROR_RED: egui::Color32 = egui::Color32::from_rgb(255, 110, 90);
+
+/// What a control's label says after it while the scene's error comes from it.
+pub const REFUSED: &str = " (refused)";
+
+/// Frame `r`'s widget in red when `bad`: the control the scene's error came from.
+pub fn mark(ui: &Ui, r: &egui::Response, bad: bool) {
+    if bad {
+        let stroke = egui::Stroke::new(1.5, ERROR_RED);
+        ui.painter()
+            .rect_stroke(r.rect.expand(1.0), 2.0, stroke, egui::StrokeKind::Outside);
+    }
+}
+
+/// A control's label: red and followed by [`REFUSED`] when `bad`.
+pub fn control_label(ui: &mut Ui, text: &str, bad: bool) -> egui::Response {
+    if bad {
+        ui.colored_label(ERROR_RED, format!("{text}{REFUSED}"))
+    } else {
+        ui.label(text)
+    }
+}
 
 /// `text` on one line of fixed height, cut short to the panel's width (the whole text on
 /// hover); an empty line where there is none.
@@ -219,4 +270,57 @@ pub fn vec3_row(ui: &mut Ui, label: &str, v: &mut Vec3, speed: f32) {
             ui.add(DragValue::new(c).speed(speed)).labelled_by(id);
         }
     });
+}
+
+/// The legends of the debug views shown, in the lower-left corner of `rect` (the view), each
+/// a title, its ramp between the values at its ends, and its single colours with what each
+/// means. The texts are labels, so the accessibility tree (and the tests) read them.
+pub fn draw_legends(ctx: &egui::Context, rect: egui::Rect, legends: &[Legend]) {
+    if legends.is_empty() {
+        return;
+    }
+    egui::Area::new(egui::Id::unique("debug view legends"))
+        .order(egui::Order::Foreground)
+        .pivot(egui::Align2::LEFT_BOTTOM)
+        .fixed_pos(rect.left_bottom() + egui::vec2(8.0, -8.0))
+        .interactable(false)
+        .show(ctx, |ui| {
+            egui::Frame::new()
+                .fill(egui::Color32::from_black_alpha(190))
+                .inner_margin(6.0)
+                .corner_radius(4.0)
+                .show(ui, |ui| {
+                    for legend in legends {
+                        legend_block(ui, legend);
+                    }
+                });
+        });
+}
+
+fn legend_block(ui: &mut Ui, legend: &Legend) {
+    let rgb = |c: [u8; 3]| egui::Color32::from_rgb(c[0], c[1], c[2]);
+    ui.label(egui::RichText::new(&legend.title).strong());
+    if !legend.ramp.is_empty() {
+        ui.horizontal(|ui| {
+            ui.label(&legend.ends[0]);
+            let (r, _) = ui.allocate_exact_size(egui::vec2(120.0, 12.0), egui::Sense::hover());
+            let w = r.width() / legend.ramp.len() as f32;
+            for (i, c) in legend.ramp.iter().enumerate() {
+                let x = r.left() + i as f32 * w;
+                let cell = egui::Rect::from_min_max(
+                    egui::pos2(x, r.top()),
+                    egui::pos2(x + w + 0.5, r.bottom()),
+                );
+                ui.painter().rect_filled(cell, 0.0, rgb(*c));
+            }
+            ui.label(&legend.ends[1]);
+        });
+    }
+    for (c, what) in &legend.keys {
+        ui.horizontal(|ui| {
+            let (r, _) = ui.allocate_exact_size(egui::vec2(12.0, 12.0), egui::Sense::hover());
+            ui.painter().rect_filled(r, 2.0, rgb(*c));
+            ui.label(what);
+        });
+    }
 }

@@ -140,6 +140,14 @@ impl Recorder<'_> {
         })
     }
 
+    /// Name the passes recorded from now on `group / pass` when profiling
+    /// ([`Profiler::group`]).
+    pub fn group(&mut self, group: Option<&str>) {
+        if let Some(p) = self.profiler.as_mut() {
+            p.group(group);
+        }
+    }
+
     /// Begin a compute pass labelled `label`, timed under `name` when profiling.
     pub fn compute_pass(&mut self, label: &str, name: &str) -> wgpu::ComputePass<'_> {
         let timestamp_writes = self.profiler.as_mut().and_then(|p| p.next(name));
@@ -158,6 +166,7 @@ pub struct Profiler {
     timer: Timer,
     capacity: u32,
     names: Vec<String>,
+    group: Option<String>,
 }
 
 impl Profiler {
@@ -167,6 +176,7 @@ impl Profiler {
             timer: Timer::new(device, queue, capacity)?,
             capacity,
             names: Vec::new(),
+            group: None,
         })
     }
 
@@ -175,6 +185,20 @@ impl Profiler {
         Recorder {
             encoder,
             profiler: Some(self),
+        }
+    }
+
+    /// Name the passes recorded from now on `group / pass` (`None`: their own names again), so
+    /// that the passes of one call add up to its cost: an app comparing two methods in one
+    /// frame groups each method's passes under its name.
+    pub fn group(&mut self, group: Option<&str>) {
+        self.group = group.map(str::to_owned);
+    }
+
+    fn named(&self, name: String) -> String {
+        match &self.group {
+            Some(g) => format!("{g} / {name}"),
+            None => name,
         }
     }
 
@@ -187,7 +211,8 @@ impl Profiler {
         if i >= self.capacity {
             return None;
         }
-        self.names.push(name.into());
+        let name = self.named(name.into());
+        self.names.push(name);
         Some(self.timer.compute_pass_writes(i))
     }
 
@@ -200,7 +225,8 @@ impl Profiler {
         if i >= self.capacity {
             return None;
         }
-        self.names.push(name.into());
+        let name = self.named(name.into());
+        self.names.push(name);
         Some(self.timer.render_pass_writes(i))
     }
 

@@ -21,8 +21,8 @@ pub enum Output {
     /// World normal in rgb, 1 + distance from the near plane to the hit (world units) in alpha,
     /// so alpha 0 is "not drawn"; for float targets.
     Normal,
-    /// Step count per pixel as a heat map over the whole box: `heat(steps / max_steps)`, blue
-    /// (few) through green to red (the cap). For the numbers, [`Output::Distance`].
+    /// Step count per pixel as a heat map over the whole box: `heat(steps / max_steps)`, black
+    /// (none) through red and yellow to white (the cap). For the numbers, [`Output::Distance`].
     Steps,
     /// Density just inside the surface as a heat map.
     Density,

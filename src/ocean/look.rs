@@ -24,6 +24,29 @@ pub struct Layer {
     pub map: Option<u32>,
 }
 
+impl Layer {
+    /// Why the ocean would refuse this layer, the field's name first (`tile`, `velocity`,
+    /// `strength`), so an editor can mark the field; `Ok` where it takes it.
+    ///
+    /// ```
+    /// use fieldkit::{glam::Vec2, ocean::Layer};
+    /// let layer = Layer { tile: 0.0, velocity: Vec2::ZERO, strength: 1.0, map: None };
+    /// assert!(layer.check().unwrap_err().starts_with("tile"));
+    /// ```
+    pub fn check(&self) -> Result<(), String> {
+        if !(self.tile.is_finite() && self.tile > 0.0) {
+            return Err(format!("tile must be > 0 metres, got {}", self.tile));
+        }
+        if !self.velocity.is_finite() {
+            return Err(format!("velocity must be finite, got {}", self.velocity));
+        }
+        if !self.strength.is_finite() {
+            return Err(format!("strength must be finite, got {}", self.strength));
+        }
+        Ok(())
+    }
+}
+
 /// Colours, light and the detail layers.
 ///
 /// [`Look::default`] is fieldkit's; [`Look::seed`] the source's (a 30 cm fade).
@@ -209,18 +232,8 @@ impl Look {
                 });
             }
             for (i, l) in layers.iter().enumerate() {
-                if !(l.tile.is_finite() && l.tile > 0.0) {
-                    return Err(Error::invalid(
-                        STAGE,
-                        format!("{kind} layer {i}: tile must be > 0, got {}", l.tile),
-                    ));
-                }
-                if !(l.velocity.is_finite() && l.strength.is_finite()) {
-                    return Err(Error::invalid(
-                        STAGE,
-                        format!("{kind} layer {i}: velocity and strength must be finite"),
-                    ));
-                }
+                l.check()
+                    .map_err(|why| Error::invalid(STAGE, format!("{kind} layer {i}: {why}")))?;
             }
         }
         let colours = [

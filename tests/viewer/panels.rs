@@ -23,14 +23,14 @@ fn ocean_with_error(ui: &mut egui::Ui, s: &mut OceanSettings) {
         ui,
         "ocean",
         |ui| one_line(ui, error.as_deref().unwrap_or(""), ERROR_RED),
-        |ui| ocean_panel(ui, s),
+        |ui| ocean_panel(ui, s, None),
     );
 }
 
 /// The actor's panel on its default settings, laid out once.
 fn actor_harness() -> Harness<'static, ActorSettings> {
     let mut harness = Harness::new_ui_state(
-        |ui, s: &mut ActorSettings| actor_panel(ui, s),
+        |ui, s: &mut ActorSettings| actor_panel(ui, s, None),
         ActorSettings::default(),
     );
     harness.run();
@@ -122,9 +122,9 @@ fn choices_have_readable_names() {
     use viewer::scenes::{VolumeSettings, VoxelizerSettings};
     let mut harness = Harness::new_ui_state(
         |ui, s: &mut (VoxelizerSettings, VolumeSettings, ActorSettings)| {
-            voxelizer_panel(ui, &mut s.0);
-            volume_panel(ui, &mut s.1);
-            actor_panel(ui, &mut s.2);
+            voxelizer_panel(ui, &mut s.0, None);
+            volume_panel(ui, &mut s.1, None);
+            actor_panel(ui, &mut s.2, None);
         },
         Default::default(),
     );
@@ -306,7 +306,7 @@ fn a_costly_slider_applies_on_release() {
     let mut harness = actor_harness();
     let before = harness.state().block;
     let rect = harness
-        .get_by_role_and_label(Role::Slider, "BlockSize")
+        .get_by_role_and_label(Role::Slider, "BlockSize (units)")
         .rect();
     let (y, from, to) = (
         rect.center().y,
@@ -354,4 +354,165 @@ fn a_number_typed_past_a_slider_is_kept_and_refused() {
             .query_by_label_contains("BlockSize must be finite and > 0")
             .is_some()
     );
+}
+
+/// The control a scene's error came from is found from the settings (each scene's own checks
+/// run again), and its panel marks it: red, its label followed by "(refused)".
+#[test]
+fn a_refused_setting_marks_its_control() {
+    use viewer::scenes::{Control, Scenes};
+    let scenes = Scenes::new();
+    let culprit = |scene: &str, change: &dyn Fn(&mut Saved)| {
+        let mut s = Saved::default();
+        s.voxelizer.mesh = "torus".into();
+        change(&mut s);
+        scenes.culprit(scene, &s)
+    };
+    assert_eq!(culprit("actor", &|_| ()), None, "nothing refused");
+    assert_eq!(
+        culprit("actor", &|s| s.actor.extent = [99999.0; 3]),
+        Some(Control::Extent)
+    );
+    assert_eq!(
+        culprit("actor", &|s| s.actor.block = 0.0),
+        Some(Control::BlockSize)
+    );
+    assert_eq!(
+        culprit("distance2d", &|s| s.distance.size = [0, 40]),
+        Some(Control::MaskSize)
+    );
+    assert_eq!(
+        culprit("volume", &|s| s.volume.size = 3),
+        Some(Control::CloudSize)
+    );
+    assert_eq!(
+        culprit("ocean", &|s| s.ocean.waves[1].amplitude = f32::NAN),
+        Some(Control::Wave(1))
+    );
+    assert_eq!(
+        culprit("composite", &|s| s.ocean.look.height_layers[0].tile = 0.0),
+        Some(Control::HeightLayer(0)),
+        "the composite edits the sea"
+    );
+    assert_eq!(
+        culprit("voxelizer", &|s| s.voxelizer.spin = f32::INFINITY),
+        Some(Control::Spin)
+    );
+    // No mesh loaded under the name asked for: the one it could not load.
+    assert_eq!(
+        culprit("voxelizer", &|s| s.voxelizer.mesh = "no/such.obj".into()),
+        Some(Control::Mesh)
+    );
+
+    let mut harness = Harness::new_ui_state(
+        |ui, s: &mut (ActorSettings, Option<Control>)| actor_panel(ui, &mut s.0, s.1),
+        (ActorSettings::default(), None),
+    );
+    harness.run();
+    assert!(
+        harness
+            .query_all_by_label_contains("(refused)")
+            .next()
+            .is_none()
+    );
+    harness.state_mut().1 = Some(Control::Extent);
+    harness.run();
+    assert!(
+        harness
+            .query_all_by_label_contains("Extent (units) (refused)")
+            .next()
+            .is_some()
+    );
+    harness.state_mut().1 = Some(Control::BlockSize);
+    harness.run();
+    assert!(
+        harness
+            .query_all_by_label_contains("BlockSize (units) (refused)")
+            .next()
+            .is_some()
+    );
+    assert!(
+        harness
+            .query_by_label_contains("Extent (units) (refused)")
+            .is_none()
+    );
+}
+
+/// Every debug view has a legend and a lit picture has none; the legend is drawn, its texts
+/// readable.
+#[test]
+fn every_debug_view_has_a_legend() {
+    use fieldkit::metaball::Output;
+    use viewer::widgets::draw_legends;
+    let mut s = Saved::default();
+    assert!(s.legends("actor").is_empty(), "the lit surface");
+    for (output, title) in [
+        (Output::Steps, "steps per ray"),
+        (Output::Density, "density just inside the surface"),
+        (Output::Sdf, "signed distance where the ray enters the box"),
+    ] {
+        s.actor.raymarch.output = output;
+        let legends = s.legends("actor");
+        assert_eq!(legends.len(), 1, "{output:?}");
+        assert_eq!(legends[0].title, title);
+        assert_eq!(legends[0].ramp.len(), viewer::scenes::RAMP_SAMPLES);
+    }
+    for i in 0..4 {
+        s.ocean.gbuffer = Some(i);
+        assert!(
+            s.legends("ocean")[0]
+                .title
+                .starts_with(&format!("G-buffer {i}"))
+        );
+    }
+    s.ocean.gbuffer = None;
+    assert!(s.legends("ocean").is_empty(), "the lit sea");
+    s.ocean.overlay = true;
+    assert_eq!(s.legends("ocean").len(), 1, "the patch outlines");
+    let d = &s.legends("distance2d")[0];
+    assert!(d.keys.iter().any(|k| k.0 == [255, 0, 255]), "wrong texels");
+    s.voxelizer.slice = true;
+    assert!(
+        s.legends("voxelizer")
+            .iter()
+            .any(|l| l.title.starts_with("signed distance"))
+    );
+
+    s.actor.raymarch.output = Output::Steps;
+    let legends = s.legends("actor");
+    let mut harness = Harness::new_ui(|ui| {
+        draw_legends(
+            ui.ctx(),
+            egui::Rect::from_min_size(egui::Pos2::ZERO, egui::vec2(400.0, 300.0)),
+            &legends,
+        )
+    });
+    harness.run();
+    for text in ["steps per ray", "0"] {
+        assert!(harness.query_by_label(text).is_some(), "{text}");
+    }
+    assert!(harness.query_by_label_contains("the cap").is_some());
+}
+
+/// The 2D tool's passes, grouped by method, add up per method, from the latest frame that ran
+/// them (the field is computed when the settings change, not every frame).
+#[test]
+fn passes_add_up_by_method() {
+    use viewer::widgets::group_totals;
+    let seen = vec![
+        ("JFA / seed".to_string(), 0.5, 3),
+        ("JFA / jump".to_string(), 1.0, 3),
+        ("exact (reference) / rows".to_string(), 0.25, 3),
+        ("exact (reference) / columns".to_string(), 0.5, 3),
+        ("JFA+1 / jump".to_string(), 9.0, 2),
+        ("blit".to_string(), 0.1, 4),
+    ];
+    assert_eq!(
+        group_totals(&seen),
+        vec![
+            ("JFA".to_string(), 1.5),
+            ("exact (reference)".to_string(), 0.75)
+        ]
+    );
+    assert!(group_totals(&seen[5..]).is_empty());
 }

@@ -709,3 +709,95 @@ fn the_2d_tool_draws_its_wrong_texels() {
     assert!(jfa.1 >= jfa.0, "{jfa:?}");
     assert_eq!(exact, (0, 0));
 }
+
+/// Distance of the colour `p` to the polyline through `ramp` (RGB levels).
+fn off_ramp(p: [u8; 3], ramp: &[[u8; 3]]) -> f32 {
+    let v = |c: [u8; 3]| glam::Vec3::from_array(c.map(f32::from));
+    let p = v(p);
+    ramp.windows(2)
+        .map(|w| {
+            let (a, b) = (v(w[0]), v(w[1]));
+            let t = ((p - a).dot(b - a) / (b - a).length_squared().max(1e-6)).clamp(0.0, 1.0);
+            (p - (a + t * (b - a))).length()
+        })
+        .fold(f32::INFINITY, f32::min)
+}
+
+/// The debug views draw the colours their legends show: every pixel of the actor's step and
+/// SDF views is the background or lies on the legend's ramp.
+#[test]
+fn debug_views_draw_the_colours_of_their_legends() {
+    use fieldkit::metaball::Output;
+    let _gpu = gpu_shared();
+    let (device, queue) = device();
+    let mut s = settings();
+    s.actor.animate = false;
+    // The actor's background, [0.09, 0.1, 0.12] in Rgba8Unorm.
+    let background = [23u8, 26, 31];
+    for output in [Output::Steps, Output::Sdf] {
+        s.actor.raymarch.output = output;
+        let legend = &s.legends("actor")[0];
+        let shot = viewer::render_offscreen(&device, &queue, "actor", &s, SIZE, 1).unwrap();
+        assert!(shot.report.error.is_none(), "{:?}", shot.report.error);
+        let (mut on, mut off) = (0, Vec::new());
+        for p in shot.pixels.chunks(4) {
+            let rgb = [p[0], p[1], p[2]];
+            if (0..3).all(|c| rgb[c].abs_diff(background[c]) <= 2) {
+                continue;
+            }
+            // Within 3 levels of the ramp: the shader's f32 colour rounded to 8 bits (llvmpipe;
+            // every adapter rounds or truncates within one level).
+            match off_ramp(rgb, &legend.ramp) {
+                d if d <= 3.0 => on += 1,
+                _ => off.push(rgb),
+            }
+        }
+        eprintln!("{output:?}: {on} pixels on the ramp, {} off", off.len());
+        assert!(on > 2000, "{output:?}: {on} pixels drawn");
+        assert!(
+            off.is_empty(),
+            "{output:?}: off the legend's ramp: {:?}",
+            &off[..off.len().min(8)]
+        );
+    }
+}
+
+/// The 2D tool times each method it compares under the method's name, so that the panel adds
+/// up what each costs.
+#[test]
+fn the_2d_tool_times_each_method_it_compares() {
+    use fieldkit::distance::{Method2d, Variant};
+    use viewer::scenes::{COLOUR, DEPTH, EXACT_GROUP, Scenes};
+    let _gpu = gpu_shared();
+    let (device, queue) = device();
+    let Some(mut profiler) = fieldkit::gpu::Profiler::new(&device, &queue, 256) else {
+        panic!("this adapter has no timestamp queries; lavapipe (mesa-vulkan-drivers) has them");
+    };
+    let mut s = settings();
+    s.distance.options.method = Method2d::Jfa(Variant::JfaPlus1);
+    let targets = fieldkit::view::Targets::new(&device, [64, 48], COLOUR, DEPTH);
+    let mut scenes = Scenes::new();
+    let (report, _) = viewer::draw_frame(
+        &device,
+        &queue,
+        &mut scenes,
+        &s,
+        "distance2d",
+        &targets,
+        [64, 48],
+        0.0,
+        0,
+        Some(&mut profiler),
+    );
+    assert!(report.error.is_none(), "{:?}", report.error);
+    let mut enc = device.create_command_encoder(&Default::default());
+    profiler.resolve(&mut enc);
+    queue.submit([enc.finish()]);
+    let (passes, _) = viewer::wait(&device, profiler.read(&device, &queue)).unwrap();
+    let seen: Vec<(String, f64, u64)> = passes.into_iter().map(|(n, ms)| (n, ms, 1)).collect();
+    let groups: Vec<String> = viewer::widgets::group_totals(&seen)
+        .into_iter()
+        .map(|g| g.0)
+        .collect();
+    assert_eq!(groups, ["JFA+1", EXACT_GROUP], "{seen:?}");
+}

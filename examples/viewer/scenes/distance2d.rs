@@ -44,6 +44,19 @@ impl Default for DistanceSettings {
 impl DistanceSettings {
     /// The mask: 255 at every seed texel inside the size.
     pub fn mask(&self) -> Result<Vec<u8>, Error> {
+        self.check_size()?;
+        let [w, h] = self.size;
+        let mut mask = vec![0u8; (w * h) as usize];
+        for &[x, y] in &self.seeds {
+            if x < w && y < h {
+                mask[(y * w + x) as usize] = 255;
+            }
+        }
+        Ok(mask)
+    }
+
+    /// The mask's size, refused when a side is 0 or it holds more than 4096² texels.
+    pub fn check_size(&self) -> Result<(), Error> {
         let [w, h] = self.size;
         if w == 0 || h == 0 || w as u64 * h as u64 > 4096 * 4096 {
             return Err(Error::Size {
@@ -53,13 +66,7 @@ impl DistanceSettings {
                 max: 4096 * 4096,
             });
         }
-        let mut mask = vec![0u8; (w * h) as usize];
-        for &[x, y] in &self.seeds {
-            if x < w && y < h {
-                mask[(y * w + x) as usize] = 255;
-            }
-        }
-        Ok(mask)
+        Ok(())
     }
 
     /// Add (or, `erase`, remove) seeds in a disc of the brush radius around texel `at`.
@@ -224,14 +231,19 @@ impl Distance2dScene {
         {
             let [w, h] = s.size;
             let mask = upload_mask(device, queue, &s.mask()?, w, h)?;
-            let field = self.distance.encode(device, frame.rec, &mask, &s.options)?;
+            // Each method's passes grouped under its name: the panel adds up what each costs.
+            frame.rec.group(Some(&method_name(s.options.method)));
+            let field = self.distance.encode(device, frame.rec, &mask, &s.options);
             let exact_options = Settings2d {
                 method: Method2d::Exact,
                 ..s.options
             };
+            frame.rec.group(Some(EXACT_GROUP));
             let exact = self
                 .distance
-                .encode(device, frame.rec, &mask, &exact_options)?;
+                .encode(device, frame.rec, &mask, &exact_options);
+            frame.rec.group(None);
+            let (field, exact) = (field?, exact?);
             self.recorded = Some(Recorded2d {
                 key: s.clone(),
                 field: field.distance,
@@ -258,6 +270,10 @@ impl Distance2dScene {
         Ok(stats)
     }
 }
+
+/// The group the exact transform's passes are timed under (the compared method's are under its
+/// own name; when it is exact too, both are).
+pub const EXACT_GROUP: &str = "exact (reference)";
 
 /// The colour of a texel the compared method got wrong.
 pub const WRONG: [u8; 4] = [255, 0, 255, 255];
@@ -286,6 +302,17 @@ pub fn methods_2d() -> Vec<Method2d> {
     v
 }
 
+/// The colour of a distance of `t` texels, before iso-lines: blue inside (negative), orange
+/// outside, each darker toward 64 texels and alike beyond.
+pub fn field_base(t: f32) -> [f32; 3] {
+    let k = (t.abs() / 64.0).min(1.0);
+    if t < 0.0 {
+        [40.0 + 60.0 * k, 90.0 + 80.0 * k, 200.0]
+    } else {
+        [230.0 - 90.0 * k, 140.0 - 60.0 * k, 60.0]
+    }
+}
+
 /// Distance as colour: blue inside (signed), orange outside, dark iso-lines every
 /// `iso_period` texels, white seeds.
 pub(super) fn colour_field(d: &[f32], s: &DistanceSettings) -> Vec<u8> {
@@ -296,12 +323,7 @@ pub(super) fn colour_field(d: &[f32], s: &DistanceSettings) -> Vec<u8> {
             if t == 0.0 {
                 return [255, 255, 255, 255];
             }
-            let k = (t.abs() / 64.0).min(1.0);
-            let base = if t < 0.0 {
-                [40.0 + 60.0 * k, 90.0 + 80.0 * k, 200.0]
-            } else {
-                [230.0 - 90.0 * k, 140.0 - 60.0 * k, 60.0]
-            };
+            let base = field_base(t);
             let phase = (t.abs() / s.iso_period.max(0.5)).fract();
             let line = if !(0.08..=0.92).contains(&phase) {
                 0.45

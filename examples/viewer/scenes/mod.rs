@@ -21,15 +21,19 @@ use super::camera::Camera;
 use super::draw::{Blit, Lines};
 
 mod actor;
+mod culprit;
 mod distance2d;
+mod legend;
 mod ocean;
 mod volume;
 mod voxelizer;
 
 pub use actor::{Actor, ActorDraw, ActorSettings};
+pub use culprit::Control;
 pub use distance2d::{
-    Distance2dScene, DistanceSettings, field_rect, line, method_name, methods_2d,
+    Distance2dScene, DistanceSettings, EXACT_GROUP, field_rect, line, method_name, methods_2d,
 };
+pub use legend::{Legend, RAMP_SAMPLES, heat, sdf_colour};
 pub use ocean::{Ocean, OceanSettings};
 pub use volume::{VolumeScene, VolumeSettings};
 pub use voxelizer::{BUNNY, VoxelMode, VoxelizerScene, VoxelizerSettings};

@@ -470,21 +470,26 @@ impl VoxelizerScene {
     }
 }
 
+/// The slice's colour of a signed distance `d` (voxels) away from the surface and its lines:
+/// orange outside, blue inside, darker toward ±`band`.
+pub fn slice_base(d: f32, band: f32) -> [u8; 3] {
+    let near = 1.0 - 0.6 * (d.abs() / band).min(1.0);
+    let rgb = if d > 0.0 {
+        [1.0, 0.55, 0.2]
+    } else {
+        [0.25, 0.5, 1.0]
+    };
+    rgb.map(|c: f32| (255.0 * c * near) as u8)
+}
+
 /// The slice's colour of a signed distance `d` (voxels) in a field clamped to ±`band`.
 fn slice_colour(d: f32, band: f32) -> [u8; 4] {
     if d.abs() < 0.25 {
         return [255, 255, 255, 255];
     }
-    let t = (d.abs() / band).min(1.0);
     let line = if d.abs().fract() < 0.12 { 0.55 } else { 1.0 };
-    let near = 1.0 - 0.6 * t;
-    let [r, g, b] = if d > 0.0 {
-        [1.0, 0.55, 0.2]
-    } else {
-        [0.25, 0.5, 1.0]
-    };
-    [r, g, b]
-        .map(|c| (255.0 * c * near * line) as u8)
+    slice_base(d, band)
+        .map(|c| (c as f32 * line) as u8)
         .into_iter()
         .chain([255])
         .collect::<Vec<_>>()
