@@ -105,6 +105,12 @@ pub fn actor_panel(ui: &mut Ui, s: &mut ActorSettings, bad: Option<Control>) {
         ],
         PartialEq::eq,
     );
+    field_and_march_rows(ui, s);
+    cubes_rows(ui, s);
+}
+
+/// The actor's field, march and animation numbers.
+fn field_and_march_rows(ui: &mut Ui, s: &mut ActorSettings) {
     ui.add(Slider::new(&mut s.field.threshold, 0.05..=0.95).text("threshold (density)"))
         .on_hover_text("the iso-level of the surface: the summed (1 − d²/R²)³ falloffs");
     ui.add(Slider::new(&mut s.field.overlap, 1.0..=4.0).text("overlap (× half a block)"))
@@ -130,6 +136,10 @@ pub fn actor_panel(ui: &mut Ui, s: &mut ActorSettings, bad: Option<Control>) {
         .on_hover_text("a field over the whole box, not only the band the march needs");
     ui.add(Slider::new(&mut s.field.falloff_extend, 1.0..=2.0).text("falloff extend (×)"))
         .on_hover_text("a further factor on the support radius (the source: 1.5)");
+}
+
+/// The actor's debug cubes.
+fn cubes_rows(ui: &mut Ui, s: &mut ActorSettings) {
     ui.collapsing("debug cubes", |ui| {
         choice(
             ui,
@@ -169,13 +179,45 @@ pub fn ocean_panel(ui: &mut Ui, s: &mut OceanSettings, bad: Option<Control>) {
         OceanSettings::seed(),
         "the source's sea: a 30 cm fade, depth read only, no skirts",
     );
+    waves_table(ui, &mut s.waves);
+    ui.add(Slider::new(&mut s.steepness, 0.0..=1.0).text("steepness (Gerstner Q)"))
+        .on_hover_text("0: sine waves; 1: crests just short of looping");
+    ui.add(Slider::new(&mut s.lod.max_error_px, 0.25..=16.0).text("LOD error (px)"))
+        .on_hover_text("the largest height error on screen the patch quadtree allows");
+    ui.checkbox(&mut s.overlay, "draw the patch quadtree")
+        .on_hover_text("each patch's outline over the water");
+    ui.checkbox(&mut s.fade, "depth fade")
+        .on_hover_text("shallow colour where the water is near the scene behind it");
+    ui.add(Slider::new(&mut s.look.fade_distance, 0.1..=20.0).text("fade distance (m)"));
+    ui.add(Slider::new(&mut s.look.roughness, 0.0..=1.0).text("roughness (0–1)"))
+        .on_hover_text("the sun's highlight: 0 a point, 1 spread over the water");
+    detail_layer_rows(ui, &mut s.look, bad);
+    ComboBox::from_label("target")
+        .selected_text(match s.gbuffer {
+            None => "forward".to_string(),
+            Some(i) => format!("G-buffer {i}"),
+        })
+        .show_ui(ui, |ui| {
+            ui.selectable_value(&mut s.gbuffer, None, "forward");
+            for (i, n) in ["scene colour", "normal", "material", "base colour"]
+                .iter()
+                .enumerate()
+            {
+                ui.selectable_value(&mut s.gbuffer, Some(i), format!("G-buffer {i}: {n}"));
+            }
+        });
+}
+
+/// The ocean's waves, one row each under a header, each with its remove button; a wave the
+/// ocean refuses has the field its reason names framed in red and the reason on its row.
+fn waves_table(ui: &mut Ui, waves: &mut Vec<fieldkit::ocean::Wave>) {
     // One row a wave under a header whose labels name each column's fields (for the eye and
     // for the accessibility tree).
     let mut remove = None;
     egui::Grid::new("waves").num_columns(7).show(ui, |ui| {
         let header = ["dir x", "dir z", "amp (m)", "λ (m)", "speed (m/s)"].map(|h| ui.label(h).id);
         ui.end_row();
-        for (i, w) in s.waves.iter_mut().enumerate() {
+        for (i, w) in waves.iter_mut().enumerate() {
             // A wave the ocean refuses: the field its reason names framed in red, the reason
             // on the row.
             let why = w.check().err();
@@ -216,39 +258,32 @@ pub fn ocean_panel(ui: &mut Ui, s: &mut OceanSettings, bad: Option<Control>) {
         }
     });
     if let Some(i) = remove {
-        s.waves.remove(i);
+        waves.remove(i);
     }
     if ui.button("add a wave").clicked() {
-        s.waves.push(fieldkit::ocean::Wave {
+        waves.push(fieldkit::ocean::Wave {
             direction: glam::Vec2::new(0.5, 0.5),
             amplitude: 0.05,
             wavelength: 6.0,
             speed: 3.0,
         });
     }
-    ui.add(Slider::new(&mut s.steepness, 0.0..=1.0).text("steepness (Gerstner Q)"))
-        .on_hover_text("0: sine waves; 1: crests just short of looping");
-    ui.add(Slider::new(&mut s.lod.max_error_px, 0.25..=16.0).text("LOD error (px)"))
-        .on_hover_text("the largest height error on screen the patch quadtree allows");
-    ui.checkbox(&mut s.overlay, "draw the patch quadtree")
-        .on_hover_text("each patch's outline over the water");
-    ui.checkbox(&mut s.fade, "depth fade")
-        .on_hover_text("shallow colour where the water is near the scene behind it");
-    ui.add(Slider::new(&mut s.look.fade_distance, 0.1..=20.0).text("fade distance (m)"));
-    ui.add(Slider::new(&mut s.look.roughness, 0.0..=1.0).text("roughness (0–1)"))
-        .on_hover_text("the sun's highlight: 0 a point, 1 spread over the water");
+}
+
+/// The ocean's detail layers: each tile and strength, a refused one marked.
+fn detail_layer_rows(ui: &mut Ui, look: &mut fieldkit::ocean::Look, bad: Option<Control>) {
     ui.label(format!(
         "detail layers: {} height, {} normal",
-        s.look.height_layers.len(),
-        s.look.normal_layers.len()
+        look.height_layers.len(),
+        look.normal_layers.len()
     ));
     for (name, layers, kind) in [
         (
             "height",
-            &mut s.look.height_layers,
+            &mut look.height_layers,
             Control::HeightLayer as fn(usize) -> Control,
         ),
-        ("normal", &mut s.look.normal_layers, Control::NormalLayer),
+        ("normal", &mut look.normal_layers, Control::NormalLayer),
     ] {
         for (i, l) in layers.iter_mut().enumerate() {
             let why = l.check().err();
@@ -283,20 +318,6 @@ pub fn ocean_panel(ui: &mut Ui, s: &mut OceanSettings, bad: Option<Control>) {
             }
         }
     }
-    ComboBox::from_label("target")
-        .selected_text(match s.gbuffer {
-            None => "forward".to_string(),
-            Some(i) => format!("G-buffer {i}"),
-        })
-        .show_ui(ui, |ui| {
-            ui.selectable_value(&mut s.gbuffer, None, "forward");
-            for (i, n) in ["scene colour", "normal", "material", "base colour"]
-                .iter()
-                .enumerate()
-            {
-                ui.selectable_value(&mut s.gbuffer, Some(i), format!("G-buffer {i}: {n}"));
-            }
-        });
 }
 
 pub fn volume_panel(ui: &mut Ui, s: &mut VolumeSettings, bad: Option<Control>) {

@@ -159,31 +159,10 @@ impl MeshSdf {
         grid: &Grid,
         settings: &Settings,
     ) -> Result<MeshField, Error> {
-        settings.check()?;
-        let local = mesh.to_grid(grid)?;
+        let (local, layout, groups) = checked(device, mesh, grid, settings)?;
         let count = local.source.len() as u64;
-        if count == 0 {
-            return Err(Error::invalid(
-                STAGE,
-                format!(
-                    "every one of the mesh's {} triangles has no area",
-                    mesh.triangles.len()
-                ),
-            ));
-        }
-        check_count("triangles", count, MAX_TRIANGLES)?;
         let size = grid.size;
-        check_count(
-            "grid side for a 3D texture",
-            size.into_iter().max().unwrap_or(0) as u64,
-            device.limits().max_texture_dimension_3d as u64,
-        )?;
-        let layout = ParityLayout::new(size);
         let voxels = grid.voxels();
-        let limit = device.limits().max_storage_buffer_binding_size;
-        check_count("key buffer bytes", voxels * 4, limit)?;
-        check_count("parity buffer bytes", layout.words * 4, limit)?;
-        let groups = triangle_groups(device, count)?;
 
         let triangles = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("mesh sdf triangles"),
@@ -280,6 +259,42 @@ impl MeshSdf {
             degenerate: local.degenerate,
         })
     }
+}
+
+/// The mesh in the grid's frame, the parity rows' layout and the triangle workgroups, once
+/// every limit holds (see [`MeshSdf::encode`]'s errors).
+fn checked(
+    device: &wgpu::Device,
+    mesh: &Mesh,
+    grid: &Grid,
+    settings: &Settings,
+) -> Result<(crate::voxelize::GridMesh, ParityLayout, [u32; 3]), Error> {
+    settings.check()?;
+    let local = mesh.to_grid(grid)?;
+    let count = local.source.len() as u64;
+    if count == 0 {
+        return Err(Error::invalid(
+            STAGE,
+            format!(
+                "every one of the mesh's {} triangles has no area",
+                mesh.triangles.len()
+            ),
+        ));
+    }
+    check_count("triangles", count, MAX_TRIANGLES)?;
+    let size = grid.size;
+    check_count(
+        "grid side for a 3D texture",
+        size.into_iter().max().unwrap_or(0) as u64,
+        device.limits().max_texture_dimension_3d as u64,
+    )?;
+    let layout = ParityLayout::new(size);
+    let voxels = grid.voxels();
+    let limit = device.limits().max_storage_buffer_binding_size;
+    check_count("key buffer bytes", voxels * 4, limit)?;
+    check_count("parity buffer bytes", layout.words * 4, limit)?;
+    let groups = triangle_groups(device, count)?;
+    Ok((local, layout, groups))
 }
 
 /// [`Error::Size`] where `got` is over `max`.

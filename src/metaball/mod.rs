@@ -7,6 +7,7 @@ pub mod cpu;
 mod cubes;
 mod field;
 mod layout;
+mod ray_settings;
 mod render;
 
 pub use cubes::{CubeStyle, Cubes};
