@@ -316,6 +316,7 @@ fn the_march_draws_the_mesh() {
         grid,
         band: settings.band * grid.voxel as f32,
         threshold: 0.0,
+        blobs: None,
     };
     let shot = shoot(
         &ctx,

@@ -41,6 +41,7 @@ pub fn mesh_sdf_scene(
         grid,
         band: settings.band * grid.voxel as f32,
         threshold: 0.0,
+        blobs: None,
     };
     let marched = marcher.encode_march_field(
         device,

@@ -2,7 +2,7 @@
 
 use eframe::egui;
 use egui::{ComboBox, DragValue, Slider, Ui};
-use fieldkit::metaball::{Direct, Output as MarchOutput};
+use fieldkit::metaball::{Direct, ExactSurface, Output as MarchOutput};
 use fieldkit::volume::{Mode, Shadow, TransferFunction};
 use fieldkit::voxelize::ColourBy;
 use fieldkit::voxelize::Separation;
@@ -132,6 +132,22 @@ fn field_and_march_rows(ui: &mut Ui, s: &mut ActorSettings) {
         .on_hover_text("the largest move of a blob's centre");
     ui.add(Slider::new(&mut s.animation.phase_step, 0.0..=1.0).text("phase step (rad)"))
         .on_hover_text("the phase between one block and the next");
+    let mut exact = s.field.exact_surface != ExactSurface::Off;
+    let when = s.field.exact_surface;
+    if ui
+        .checkbox(&mut exact, "exact surface (blobs near it)")
+        .on_hover_text(format!(
+            "within two cells of the surface the march steps on the blobs' own field, so no \
+             grazing hit is lost to the texture's trilinear density (now: {when:?})"
+        ))
+        .changed()
+    {
+        s.field.exact_surface = if exact {
+            ExactSurface::On
+        } else {
+            ExactSurface::Off
+        };
+    }
     ui.checkbox(&mut s.field.full_volume, "full-volume field (JFA)")
         .on_hover_text("a field over the whole box, not only the band the march needs");
     ui.add(Slider::new(&mut s.field.falloff_extend, 1.0..=2.0).text("falloff extend (×)"))

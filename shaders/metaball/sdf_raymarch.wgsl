@@ -13,8 +13,20 @@
 // measures t in local units, as the SDF holds them) and clipped to its box. The step is the sampled distance × `safety`, and the hit
 // tolerance grows with distance (a pixel's footprint). A sample below the tolerance, or a sign
 // change, is refined by bisection on density − threshold, whose zero set the seeds came from.
+//
+// Where the blobs themselves are bound (`shared/blobs`, a metaball field built with
+// `Settings::exact_surface`), the texture only brings the ray near the surface: within
+// `exact_shell` of the texture's surface the march steps by segment tracing on the blobs' own field,
+// finds the crossing and the normal on it, and so loses no grazing hit to the trilinear density
+// (which moves the iso-surface by up to about a tenth of a cell at 4 cells per blob edge, and
+// at a grazing angle a ray may cross the true surface only that deep). Outside the shell a
+// step of the texture's distance less `exact_margin` cannot reach the true surface (inside it
+// too, where that step is the longer). The source's
+// Hermite filter and edge falloff shape the texture's density itself, so with either the
+// texture decides.
 
 import fieldkit::field::{ndc_depth, pixel_ray, ray_box};
+import package::shared::blobs::{BlobMarch, blob_field, blob_march, blob_normal, blobs_present};
 import package::shared::shading::{heat, ray_numbers, surface_colour};
 
 struct RaymarchParams {
@@ -68,6 +80,10 @@ struct RaymarchParams {
     // 1: a ray out of steps inside the box is a hit at its last point (0: a miss); both are
     // marked in mode 6.
     cap_is_hit: u32,
+    // Where the blobs are bound: the shell around the texture's surface in which they decide,
+    // and how much nearer than the texture says the true surface may be (local units).
+    exact_shell: f32,
+    exact_margin: f32,
 }
 
 struct Shaded {
@@ -175,6 +191,11 @@ fn trace(pixel: vec2<f32>) -> Shaded {
     var steps = 0u;
     var found = false;
     var first_d = 0.0;
+    // The source's Hermite filter and edge falloff shape the texture's density: where either is
+    // asked for, the texture decides.
+    let exact = blobs_present() && params.hermite == 0u && params.edge_falloff == 0u;
+    // Segment tracing's next segment inside the shell.
+    var seg = params.cell;
     loop {
         if steps >= params.max_steps || t > t_exit {
             break;
@@ -187,6 +208,25 @@ fn trace(pixel: vec2<f32>) -> Shaded {
         }
         steps += 1u;
         let tolerance = max(params.epsilon * params.cell, t * params.pixel_angle);
+        if exact {
+            if d < params.exact_shell {
+                // Near the surface the blobs decide.
+                let m = blob_march(o, dir, BlobMarch(t, prev_t, seg, false), tolerance, params.threshold, true);
+                if m.hit {
+                    t = m.t;
+                    found = true;
+                    break;
+                }
+                t = max(m.t, t + d - params.exact_margin);
+                prev_t = m.prev_t;
+                seg = m.seg;
+            } else {
+                seg = params.cell;
+                prev_t = t;
+                t += max(d - params.exact_margin, tolerance);
+            }
+            continue;
+        }
         // The density comes with the distance: a sample at or above the threshold has crossed
         // (or started inside), whatever the approximate distance says there, so a step past a
         // grazing stretch of surface is caught where it lands; the root lies between the last
@@ -241,11 +281,18 @@ fn trace(pixel: vec2<f32>) -> Shaded {
     let p = o + t * dir;
     let hit_world = (params.local_to_world * vec4<f32>(p, 1.0)).xyz;
     out.depth = ndc_depth(params.view_proj, hit_world);
-    let n_local = normal_at(p);
+    var n_local: vec3<f32>;
+    var inner: f32;
+    // Density just inside the surface: how deep the blobs pile up here.
+    if exact {
+        n_local = blob_normal(p);
+        inner = blob_field(p - n_local * params.cell);
+    } else {
+        n_local = normal_at(p);
+        inner = density_at(p - n_local * params.cell);
+    }
     // Normals go to world through the inverse transpose (v * M is transpose(M) * v).
     let n = normalize((vec4<f32>(n_local, 0.0) * params.world_to_local).xyz);
-    // Density just inside the surface: how deep the blobs pile up here.
-    let inner = density_at(p - n_local * params.cell);
     out.colour = surface_colour(params.mode, n, inner, hit_world, near_w, params.light_dir, params.threshold, params.base_colour, params.rim_colour, params.ambient, params.pile_colour);
     return out;
 }

@@ -452,6 +452,23 @@ pub struct Group<G> {
     _g: PhantomData<G>,
 }
 
+impl<G> Clone for Group<G> {
+    fn clone(&self) -> Self {
+        Self {
+            bind_group: self.bind_group.clone(),
+            _g: PhantomData,
+        }
+    }
+}
+
+impl<G> std::fmt::Debug for Group<G> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Group")
+            .field("bind_group", &self.bind_group)
+            .finish()
+    }
+}
+
 impl<G: SharedGroup> Group<G> {
     /// The group's layout (equal, entry for entry, to the one each pipeline that uses it makes).
     pub fn layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {

@@ -113,3 +113,46 @@ pub fn ray_hit(
     }
     None
 }
+
+/// [`ray_hit`] for many blobs: the same first crossing (`dir` a unit vector), summing at each
+/// sample only the blobs whose support the ray passes through, and sampling only the stretch
+/// of the ray those supports cover (up to `t_max`). `Some(0)` when the ray starts inside.
+pub fn ray_hit_near(
+    voxels: &[Vec4],
+    edge: f32,
+    settings: &Settings,
+    origin: DVec3,
+    dir: DVec3,
+    t_max: f64,
+    step: f64,
+) -> Option<f64> {
+    let near: Vec<Vec4> = voxels
+        .iter()
+        .copied()
+        .filter(|v| {
+            let (c, r) = (v.truncate().as_dvec3(), settings.radius(edge, v.w) as f64);
+            let along = (c - origin).dot(dir);
+            v.w > 0.0 && (origin + dir * along - c).length() < r && along + r > 0.0
+        })
+        .collect();
+    let reach = |sign: f64| {
+        near.iter().map(move |v| {
+            (v.truncate().as_dvec3() - origin).dot(dir) + sign * settings.radius(edge, v.w) as f64
+        })
+    };
+    let start = reach(-1.0).fold(f64::INFINITY, f64::min).max(0.0);
+    let end = reach(1.0).fold(0.0, f64::max).min(t_max);
+    if near.is_empty() || start >= end {
+        return None;
+    }
+    ray_hit(
+        &near,
+        edge,
+        settings,
+        origin + dir * start,
+        dir,
+        end - start,
+        step,
+    )
+    .map(|t| t + start)
+}

@@ -130,6 +130,11 @@ impl Metaballs {
             kept.sets.update(&lease, |s| s.distance = Some(built));
         }
         self.encode_pack(device, rec, grid, &field.distance, &set)?;
+        let bins = if settings.exact_surface.applies(instances.count) {
+            Some(self.encode_bins(device, rec, instances, grid, edge, settings)?)
+        } else {
+            None
+        };
         Ok(MetaballField {
             march: set.march,
             grid: *grid,
@@ -145,6 +150,7 @@ impl Metaballs {
                 settings.band * (grid.voxel as f32)
             },
             threshold: settings.threshold,
+            bins,
             _lease: lease,
         })
     }

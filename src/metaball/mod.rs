@@ -3,6 +3,7 @@
 //!
 #![doc = include_str!("../../docs/metaball.md")]
 
+mod bins;
 pub mod cpu;
 mod cubes;
 mod field;
@@ -10,6 +11,7 @@ mod layout;
 mod ray_settings;
 mod render;
 
+pub use bins::{BlobBins, MAX_BINS};
 pub use cubes::{CubeStyle, Cubes};
 pub use layout::{Animation, MAX_PACKED, animate, extent_grid, packed_grid, region_for_extent};
 pub use render::{Direct, Filter, Marched, Material, Output, RayEnd, RaymarchSettings, Raymarcher};
@@ -19,7 +21,6 @@ use glam::{Vec3, Vec4};
 use crate::bind::ComputePipeline;
 use crate::distance::{Distance3d, Grid, MAX_POINTS, Method, Variant};
 use crate::error::Error;
-use crate::gpu::{Record, uniform_buffer as uniform};
 use crate::shaders::metaball::{bin_blobs, march_field, splat, surface_seeds};
 
 const STAGE: &str = "metaball";
@@ -66,6 +67,48 @@ pub struct Settings {
     /// as the source writes them. For users who read the SDF elsewhere; the raymarch needs only
     /// the band. Needs [`Method::Jfa`] (the line passes scan a band).
     pub full_volume: bool,
+    /// When to bin the blobs with the field ([`MetaballField::bins`]) so that the SDF march
+    /// decides crossings on the blobs' own field within two cells of the surface: the
+    /// texture's trilinear density moves the surface by up to about a tenth of a cell at 4
+    /// cells per blob edge, and a ray at a grazing angle may cross the true surface only that
+    /// deep (`tests/metaball/grazing.rs`). It costs what tracing the blobs near the surface
+    /// costs (`docs/metaball.md`), so by default only up to [`EXACT_SURFACE_UP_TO`] blobs;
+    /// off in [`Settings::seed`] (the source marches the texture alone).
+    pub exact_surface: ExactSurface,
+}
+
+/// When a metaball field keeps its blobs for an exact surface ([`Settings::exact_surface`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum ExactSurface {
+    /// The texture alone.
+    Off,
+    /// Always.
+    On,
+    /// For sets of at most this many blobs.
+    UpTo(u32),
+}
+
+/// The blob count up to which a default field keeps its blobs for an exact surface: on the
+/// H200 at 1080p the exact surface of 100 blobs seen low over the set costs 1.4 ms a frame
+/// against 0.18 for the texture alone; beyond a few hundred blobs each is a few pixels across.
+pub const EXACT_SURFACE_UP_TO: u32 = 256;
+
+impl ExactSurface {
+    /// Whether a set of `count` blobs keeps its blobs.
+    pub fn applies(self, count: u32) -> bool {
+        match self {
+            Self::Off => false,
+            Self::On => true,
+            Self::UpTo(n) => count <= n,
+        }
+    }
+}
+
+impl Default for ExactSurface {
+    fn default() -> Self {
+        Self::UpTo(EXACT_SURFACE_UP_TO)
+    }
 }
 
 /// The distance the full-volume field gives a voxel outside that no seed reached (the source's
@@ -82,6 +125,7 @@ impl Default for Settings {
             method: Method::Lines,
             falloff_extend: 1.0,
             full_volume: false,
+            exact_surface: ExactSurface::default(),
         }
     }
 }
@@ -98,6 +142,7 @@ impl Settings {
             falloff_extend: 1.5,
             method: Method::Jfa(Variant::Jfa),
             full_volume: true,
+            exact_surface: ExactSurface::Off,
             ..Self::default()
         }
     }
@@ -312,6 +357,9 @@ pub struct MetaballField {
     /// What the raymarch reads: distance in cells (r) and density (g) as `Rgba16Float`, one
     /// filtered fetch for both.
     pub march: wgpu::Texture,
+    /// The blobs in bins, which the SDF march reads near the surface
+    /// ([`Settings::exact_surface`]); `None` when the setting is off.
+    pub bins: Option<BlobBins>,
     /// The hold on these: [`Metaballs`] takes them back for a later field once dropped.
     _lease: crate::gpu::Lease,
 }
@@ -324,6 +372,7 @@ impl MetaballField {
             grid: self.grid,
             band: self.band,
             threshold: self.threshold,
+            blobs: self.bins.as_ref(),
         }
     }
 }
@@ -343,40 +392,11 @@ pub struct MarchField<'a> {
     pub band: f32,
     /// The density of the surface.
     pub threshold: f32,
+    /// The blobs whose field `march` samples, for an exact surface: within two cells of the
+    /// texture's surface the march steps through their own field (segment tracing) and finds
+    /// the crossing and the normal on it. `None` marches the texture alone.
+    pub blobs: Option<&'a BlobBins>,
 }
-
-/// Blobs sorted into a uniform grid of bins for tracing the field directly
-/// ([`render::Raymarcher::encode_direct`]): each bin lists every blob whose support overlaps it.
-#[derive(Debug)]
-pub struct BlobBins {
-    /// Local-space corner of the bins' box, and the bin edge (at least the largest support
-    /// radius).
-    pub origin: Vec3,
-    /// Edge of a bin, local units.
-    pub bin_size: f32,
-    /// Bins per axis.
-    pub bins: [u32; 3],
-    /// Per bin, its first entry in `items`, and the total at the end (`u32`).
-    pub starts: wgpu::Buffer,
-    /// Blobs in bin order: centre, support radius (`vec4<f32>`).
-    pub items: wgpu::Buffer,
-    /// The most blobs in a bin (`u32`), then the global Lipschitz bound (`f32`).
-    pub stats: wgpu::Buffer,
-    /// The cell of the grid the bins were fitted to: tolerances are in these units.
-    pub cell: f32,
-    /// The iso-level of the surface.
-    pub threshold: f32,
-}
-
-impl BlobBins {
-    /// The box's far corner.
-    pub fn box_max(&self) -> Vec3 {
-        self.origin + Vec3::from_array(self.bins.map(|b| b as f32)) * self.bin_size
-    }
-}
-
-/// Most bins a [`BlobBins`] holds; beyond it bins grow wider.
-pub const MAX_BINS: u32 = 1 << 21;
 
 /// Output of the splat and surface-seed stages.
 #[derive(Debug)]
@@ -421,6 +441,8 @@ pub struct Metaballs {
     distance: Distance3d,
     /// What `encode` keeps from call to call.
     field: field::FieldKept,
+    /// What `encode_bins` keeps from call to call.
+    bins: bins::BinsKept,
 }
 
 impl Metaballs {
@@ -436,6 +458,7 @@ impl Metaballs {
             bin_bound: ComputePipeline::new(device)?,
             distance: Distance3d::new(device)?,
             field: Default::default(),
+            bins: Default::default(),
         })
     }
 
@@ -502,124 +525,5 @@ impl Metaballs {
         instances.max_scale = max_scale(voxels);
         instances.centres = centre_bounds(voxels);
         Ok(())
-    }
-
-    /// Sort `instances` into bins over `grid`'s box for direct tracing: count, scan, fill, and
-    /// the global Lipschitz bound. Bins are one largest support radius wide (wider if there would
-    /// be more than [`MAX_BINS`]), so a blob lands in at most 27.
-    pub fn encode_bins(
-        &self,
-        device: &wgpu::Device,
-        rec: &mut impl Record,
-        instances: &Instances,
-        grid: &Grid,
-        edge: f32,
-        settings: &Settings,
-    ) -> Result<BlobBins, Error> {
-        check_inputs(settings, edge, grid, bin_blobs::STAGE)?;
-        let extent = Vec3::from_array(grid.size.map(|s| s as f32)) * (grid.voxel as f32);
-        let r_max = settings.radius(edge, instances.max_scale);
-        let mut bin_size = if r_max > 0.0 {
-            r_max
-        } else {
-            extent.max_element()
-        };
-        let count_bins = |size: f32| (extent / size).ceil().max(Vec3::ONE);
-        let n = count_bins(bin_size);
-        let total = n.x as f64 * n.y as f64 * n.z as f64;
-        if total > MAX_BINS as f64 {
-            bin_size *= ((total / MAX_BINS as f64).cbrt() * 1.001) as f32;
-        }
-        let n = count_bins(bin_size);
-        let bins = [n.x as u32, n.y as u32, n.z as u32];
-        let bin_total = bins.iter().product::<u32>();
-        let capacity = instances.count as u64 * 27;
-        let max_binding = device.limits().max_storage_buffer_binding_size;
-        if capacity.max(1) * 16 > max_binding {
-            return Err(Error::Size {
-                stage: bin_blobs::STAGE,
-                what: "bin entries (27 per instance, 16 bytes each)",
-                got: capacity,
-                max: max_binding / 16,
-            });
-        }
-        let storage = |label: &str, bytes: u64| storage_buffer(device, label, bytes);
-        let counts = storage("blob bin counts", bin_total as u64 * 4);
-        let starts = storage("blob bin starts", (bin_total as u64 + 1) * 4);
-        let items = storage("blob bin items", capacity.max(1) * 16);
-        let stats = storage("blob bin stats", 8);
-        let mut rec = rec.recorder();
-        rec.encoder.clear_buffer(&counts, 0, None);
-        rec.encoder.clear_buffer(&stats, 0, None);
-        let params = uniform(
-            device,
-            "blob bin params",
-            &bin_blobs::BinParams {
-                bins: bins.into(),
-                count: instances.count,
-                origin: grid.origin.as_vec3(),
-                bin_size,
-                radius_per_scale: settings.radius(edge, 1.0),
-                capacity: capacity as u32,
-            },
-        );
-        let per_instance = [instances.count.div_ceil(64).max(1), 1, 1];
-        let mut pass = rec.compute_pass(bin_blobs::STAGE, "bins");
-        if instances.count > 0 {
-            let bound = self.bin_count.bind(
-                device,
-                &bin_blobs::bin_count::Resources {
-                    params: (&params).into(),
-                    instances: (&instances.buffer).into(),
-                    counts: (&counts).into(),
-                },
-            )?;
-            self.bin_count.dispatch(&mut pass, &bound, per_instance);
-        }
-        let bound = self.bin_scan.bind(
-            device,
-            &bin_blobs::bin_scan::Resources {
-                params: (&params).into(),
-                counts: (&counts).into(),
-                starts: (&starts).into(),
-                stats: (&stats).into(),
-            },
-        )?;
-        self.bin_scan.dispatch(&mut pass, &bound, [1, 1, 1]);
-        if instances.count > 0 {
-            let bound = self.bin_fill.bind(
-                device,
-                &bin_blobs::bin_fill::Resources {
-                    params: (&params).into(),
-                    instances: (&instances.buffer).into(),
-                    counts: (&counts).into(),
-                    starts: (&starts).into(),
-                    items: (&items).into(),
-                },
-            )?;
-            self.bin_fill.dispatch(&mut pass, &bound, per_instance);
-        }
-        let bound = self.bin_bound.bind(
-            device,
-            &bin_blobs::bin_bound::Resources {
-                params: (&params).into(),
-                starts: (&starts).into(),
-                items: (&items).into(),
-                stats: (&stats).into(),
-            },
-        )?;
-        self.bin_bound
-            .dispatch(&mut pass, &bound, [bin_total.div_ceil(64), 1, 1]);
-        drop(pass);
-        Ok(BlobBins {
-            origin: grid.origin.as_vec3(),
-            bin_size,
-            bins,
-            starts,
-            items,
-            stats,
-            cell: (grid.voxel as f32),
-            threshold: settings.threshold,
-        })
     }
 }

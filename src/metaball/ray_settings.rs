@@ -115,11 +115,13 @@ pub struct RaymarchSettings {
     pub min_step_cells: f32,
     /// Shortest step in local units; see `min_step_cells`.
     pub min_step_local: f32,
-    /// How the field is read between voxel centres.
+    /// How the field is read between voxel centres. [`Filter::Hermite`] shapes the texture's
+    /// density, so a field's blobs ([`super::MarchField::blobs`]) are not read with it.
     pub filter: Filter,
     /// The source's edge falloff: density × saturate(10 × the distance to the box's faces in
     /// uvw + 0.05), so it fades to 0 at 0.05 (in uvw) outside the box and is halved on its
-    /// faces.
+    /// faces. It shapes the texture's density, so a field's blobs
+    /// ([`super::MarchField::blobs`]) are not read with it.
     pub edge_falloff: bool,
     /// World-space direction towards the light.
     pub light_dir: Vec3,
@@ -138,6 +140,15 @@ pub struct RaymarchSettings {
     /// at its last point (off: left undrawn). Either way [`Output::Distance`] marks it
     /// ([`RayEnd::RanOut`], [`RayEnd::RanOutTakenAsHit`]), so it is never a silent miss.
     pub cap_is_hit: bool,
+    /// Where a field has its blobs ([`super::MarchField::blobs`]): within this many cells of
+    /// the texture's surface the march steps on the blobs' own field (segment tracing).
+    pub exact_shell: f32,
+    /// How much nearer than the texture says the true surface may be, in cells: outside the
+    /// shell (and inside it, where that is the longer step) the march steps by the texture's
+    /// distance less this. The texture's distance is to the nearest seed point of the trilinear
+    /// density's surface: seeds about a cell apart, the line passes' up to half a cell farther
+    /// than the nearest seed, and the trilinear surface's own offset.
+    pub exact_margin: f32,
 }
 
 impl Default for RaymarchSettings {
@@ -158,6 +169,8 @@ impl Default for RaymarchSettings {
             ambient: 0.2,
             output: Output::Shaded,
             cap_is_hit: false,
+            exact_shell: 2.0,
+            exact_margin: 1.5,
         }
     }
 }
@@ -235,6 +248,8 @@ impl RaymarchSettings {
         for (what, v) in [
             ("min_step_cells", self.min_step_cells),
             ("min_step_local", self.min_step_local),
+            ("exact_shell", self.exact_shell),
+            ("exact_margin", self.exact_margin),
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(Error::Invalid {

@@ -153,6 +153,8 @@ pub struct Raymarcher {
     composite: Composite,
     reversed_z: bool,
     sampler: wgpu::Sampler,
+    /// The `shared/blobs` group bound where a field has no blobs.
+    no_blobs: crate::bind::Group<crate::shaders::groups::blobs::Entry>,
     scratch: std::sync::Mutex<Option<std::sync::Arc<Scratch>>>,
     /// What a frame draws with, kept from frame to frame: no object made a frame.
     kept: Kept,
@@ -278,6 +280,7 @@ impl Raymarcher {
                 min_filter: wgpu::FilterMode::Linear,
                 ..Default::default()
             }),
+            no_blobs: super::bins::absent_group(device)?,
             scratch: std::sync::Mutex::new(None),
             kept: Kept::new(queue),
         })
@@ -424,7 +427,6 @@ impl Raymarcher {
                 epsilon: settings.epsilon * bins.cell,
                 rim_colour: settings.rim_colour,
                 pixel_angle,
-                bins: bins.bins.into(),
                 method: method as u32,
                 viewport: glam::Vec2::new(view.viewport[0] as f32, view.viewport[1] as f32),
                 near_z,
@@ -445,9 +447,7 @@ impl Raymarcher {
             &self.kept.trace,
             &blob_trace::trace_blobs::Resources {
                 params: (&params).into(),
-                starts: (&bins.starts).into(),
-                items: (&bins.items).into(),
-                stats: (&bins.stats).into(),
+                blobs: &bins.group,
                 colour_out: (&scratch.colour).into(),
                 depth_out: (&scratch.depth).into(),
             },
@@ -568,6 +568,8 @@ impl Raymarcher {
                 edge_falloff: settings.edge_falloff as u32,
                 view_origin: glam::UVec2::from_array(view.origin),
                 cap_is_hit: settings.cap_is_hit as u32,
+                exact_shell: settings.exact_shell * cell,
+                exact_margin: settings.exact_margin * cell,
             },
         );
         let scratch = self.scratch(device, view.target_size());
@@ -582,6 +584,7 @@ impl Raymarcher {
                 params: (&params).into(),
                 field: (&fv).into(),
                 field_sampler: (&self.sampler).into(),
+                blobs: field.blobs.map_or(&self.no_blobs, |b| &b.group),
                 colour_out: (&scratch.colour).into(),
                 depth_out: (&scratch.depth).into(),
             },

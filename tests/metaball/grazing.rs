@@ -10,7 +10,7 @@ use crate::common;
 use common::metaball::*;
 use common::*;
 use fieldkit::gpu::Context;
-use fieldkit::metaball::{Direct, Output, RayEnd, RaymarchSettings, Settings, cpu};
+use fieldkit::metaball::{Direct, ExactSurface, Output, RayEnd, RaymarchSettings, Settings, cpu};
 use fieldkit::view::View;
 
 use glam::{Mat4, Vec3, Vec4};
@@ -175,47 +175,173 @@ fn scenes() -> Vec<(&'static str, Vec<Vec4>, Vec3, Vec3)> {
     ]
 }
 
+/// The SDF march of `settings`' field over `scenes`, graded against the f64 reference.
+fn grade_march(
+    ctx: &Context,
+    s: &Settings,
+    scenes: Vec<(String, Vec<Vec4>, Vec3, Vec3)>,
+    exact: impl Fn(&View, &[Vec4], &Settings) -> Vec<Option<f64>>,
+) -> Vec<(String, Wrong)> {
+    let mut table = Vec::new();
+    for (name, voxels, eye, target) in scenes {
+        let field = metaball_field(ctx, &voxels, 1.0, s);
+        let view = camera(eye, target, false);
+        let (shot, ran_out) = numbers(ctx, &field, &view, &RaymarchSettings::default());
+        let exact = exact(&view, &voxels, s);
+        let w = Wrong {
+            ran_out,
+            ..grade(&shot, &exact, &view, &voxels, s, field.grid.voxel)
+        };
+        eprintln!("{name}: {w:?}");
+        table.push((name, w));
+    }
+    table
+}
+
+fn named(
+    scenes: Vec<(&'static str, Vec<Vec4>, Vec3, Vec3)>,
+) -> Vec<(String, Vec<Vec4>, Vec3, Vec3)> {
+    scenes
+        .into_iter()
+        .map(|(n, v, e, t)| (n.to_string(), v, e, t))
+        .collect()
+}
+
 #[test]
 fn the_default_march_keeps_grazing_hits() {
     let ctx = Context::shared();
-    let s = Settings::default();
-    let mut table = Vec::new();
-    for (name, voxels, eye, target) in scenes() {
-        let field = metaball_field(&ctx, &voxels, 1.0, &s);
-        let view = camera(eye, target, false);
-        let (shot, ran_out) = numbers(&ctx, &field, &view, &RaymarchSettings::default());
-        let exact = exact_hits(&view, &voxels, &s);
-        let w = Wrong {
-            ran_out,
-            ..grade(&shot, &exact, &view, &voxels, &s, field.grid.voxel)
-        };
-        table.push((name, w));
-    }
+    let table = grade_march(&ctx, &Settings::default(), named(scenes()), exact_hits);
+    // Measured on llvmpipe (lavapipe, LLVM 15), which set the bounds. Within two cells of the
+    // texture's surface the default march steps on the blobs' own field (segment tracing), so
+    // what the trilinear density moves the surface by no longer hides a crossing: 0 false
+    // misses off the rim (the texture alone: 1, below), 2 on it (13 / 32 / 10 by the texture
+    // alone), no false hit. No ray runs out of its 128 steps.
     for (name, w) in &table {
-        eprintln!("{name}: {w:?}");
-    }
-    // Measured on llvmpipe (lavapipe, LLVM 15), which set the bounds. The march reads the
-    // density with every distance and takes any sample at or above the threshold as a
-    // crossing: before it did, it stepped past grazing stretches the approximate distance
-    // overestimated, 5 / 3 / 2 false misses off the rim in these scenes (41 above 10°); now
-    // 0 / 1 / 0 (10 above 10°). The one left crosses the analytic surface 0.115 cells deep,
-    // about what the default grid (4 cells per blob edge) moves the trilinear density's
-    // iso-surface: the rest are rim pixels, where one pixel either way is sampling. No ray
-    // runs out of its 128 steps.
-    for (name, w) in &table {
-        assert_eq!(w.off_rim_hits, 0, "{name}: {w:?}");
-        assert!(w.off_rim_misses <= 1, "{name}: {w:?}");
+        assert_eq!(w.off_rim_hits + w.off_rim_misses, 0, "{name}: {w:?}");
         assert_eq!(w.ran_out, 0, "{name}: {w:?}");
         assert!(
             w.hits > 300,
             "{name}: too few surface pixels to say anything: {w:?}"
         );
     }
-    let above_10: usize = table.iter().map(|(_, w)| w.false_misses[2]).sum();
+    let misses: usize = table
+        .iter()
+        .map(|(_, w)| w.false_misses.iter().sum::<usize>())
+        .sum();
+    let false_hits: usize = table.iter().map(|(_, w)| w.false_hits).sum();
+    assert!(misses <= 4, "false misses on the rim: {misses}, {table:?}");
     assert!(
-        above_10 <= 12,
-        "false misses above 10°: {above_10}, {table:?}"
+        false_hits <= 4,
+        "false hits on the rim: {false_hits}, {table:?}"
     );
+}
+
+/// What the texture alone does (`ExactSurface::Off`, as `Settings::seed()` marches): it
+/// takes any sample at or above the threshold as a crossing, but where the analytic surface
+/// dips below a trilinear density that stays under the threshold all along the ray, no rule on
+/// the texture finds it.
+#[test]
+fn the_texture_alone_loses_a_grazing_hit_the_blobs_keep() {
+    let ctx = Context::shared();
+    let s = Settings {
+        exact_surface: ExactSurface::Off,
+        ..Settings::default()
+    };
+    let table = grade_march(&ctx, &s, named(scenes()), exact_hits);
+    // Measured on llvmpipe: false misses off the rim 0 / 1 / 0, the one left crossing the
+    // analytic surface 0.115 cells deep; 13 / 32 / 10 false misses in all.
+    let off_rim: usize = table.iter().map(|(_, w)| w.off_rim_misses).sum();
+    assert!((1..=2).contains(&off_rim), "{table:?}");
+    for (name, w) in &table {
+        assert_eq!(w.off_rim_hits, 0, "{name}: {w:?}");
+        assert!(w.deepest_off_rim_miss < 0.2, "{name}: {w:?}");
+    }
+    let misses: usize = table
+        .iter()
+        .map(|(_, w)| w.false_misses.iter().sum::<usize>())
+        .sum();
+    assert!(
+        misses > 20,
+        "the texture alone kept more than measured: {table:?}"
+    );
+}
+
+/// Each pixel's exact answer for many blobs, quickly: `cpu::ray_hit_near` sums only the blobs
+/// within reach of the ray.
+fn exact_hits_near(view: &View, voxels: &[Vec4], s: &Settings) -> Vec<Option<f64>> {
+    let mut exact = vec![None; (W * H) as usize];
+    for y in 0..H {
+        for x in 0..W {
+            let (o, d, len) = ray(view, x, y);
+            exact[(y * W + x) as usize] =
+                cpu::ray_hit_near(voxels, 1.0, s, o, d, len, 0.004).map(|t| {
+                    let n = cpu::gradient_at(voxels, 1.0, s, o + d * t).normalize();
+                    n.dot(d).abs().asin().to_degrees()
+                });
+        }
+    }
+    exact
+}
+
+/// 2 to 100 blobs at random (a fixed seed), each seen from two cameras low over the set, so
+/// that rays graze the blobs' tops and the saddles between them.
+fn random_scenes() -> Vec<(String, Vec<Vec4>, Vec3, Vec3)> {
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    let mut next = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f32 / (1u64 << 53) as f32
+    };
+    let mut out = Vec::new();
+    for n in [2usize, 9, 30, 100] {
+        // Blobs about one radius apart: merged, with saddles.
+        let side = (n as f32).cbrt() * 0.9;
+        let voxels: Vec<Vec4> = (0..n)
+            .map(|_| {
+                Vec4::new(
+                    (next() - 0.5) * side * 1.6,
+                    (next() - 0.5) * side * 0.5,
+                    (next() - 0.5) * side,
+                    0.7 + 0.5 * next(),
+                )
+            })
+            .collect();
+        for k in 0..2 {
+            let angle = next() * std::f32::consts::TAU;
+            let dist = 2.5 + side * 1.8;
+            let eye = Vec3::new(angle.cos() * dist, 0.3 + 0.5 * next(), angle.sin() * dist);
+            out.push((
+                format!("{n} blobs, camera {k}"),
+                voxels.clone(),
+                eye,
+                Vec3::ZERO,
+            ));
+        }
+    }
+    out
+}
+
+#[test]
+fn the_default_march_keeps_grazing_hits_of_2_to_100_blobs() {
+    let ctx = Context::shared();
+    let table = grade_march(&ctx, &Settings::default(), random_scenes(), exact_hits_near);
+    // Measured on llvmpipe: no wrong pixel off the rim, no ray out of steps, 0–2 false
+    // misses on the rim a scene (8 in all) and no false hit. The texture alone
+    // (`ExactSurface::Off`) here: 0 off the rim too at this size, but 0–18 false misses
+    // a scene (94 in all) and 23 false hits.
+    for (name, w) in &table {
+        assert_eq!(w.off_rim_hits + w.off_rim_misses, 0, "{name}: {w:?}");
+        assert_eq!(w.ran_out, 0, "{name}: {w:?}");
+        assert!(w.hits > 100, "{name}: too few surface pixels: {w:?}");
+        assert!(w.false_misses.iter().sum::<usize>() <= 3, "{name}: {w:?}");
+        assert!(w.false_hits <= 1, "{name}: {w:?}");
+    }
+    let wrong: usize = table
+        .iter()
+        .map(|(_, w)| w.false_misses.iter().sum::<usize>() + w.false_hits)
+        .sum();
+    assert!(wrong <= 12, "{wrong} wrong pixels on the rim: {table:?}");
 }
 
 /// The direct tracers on the same scenes, at the default grid and at 12 cells per edge with a

@@ -15,7 +15,9 @@ use std::io::Write;
 use fieldkit::distance::Variant;
 use fieldkit::distance::{Grid, Method};
 use fieldkit::gpu::{Context, read_texture};
-use fieldkit::metaball::{BlobBins, MetaballField, Metaballs, Settings, animate, cpu, packed_grid};
+use fieldkit::metaball::{
+    BlobBins, ExactSurface, MetaballField, Metaballs, Settings, animate, cpu, packed_grid,
+};
 use fieldkit::metaball::{Direct, Output, RaymarchSettings, Raymarcher};
 use fieldkit::view::{Targets, View};
 use glam::{DVec3, Mat4, Vec3, Vec4};
@@ -121,7 +123,7 @@ fn bench(
     // application draws it: shaded, into an 8-bit colour target.
     let (marcher, targets) = pair(wgpu::TextureFormat::Rgba32Float)?;
     let (frame_marcher, frame) = pair(wgpu::TextureFormat::Rgba8Unorm)?;
-    let bar = indicatif::ProgressBar::new((sides.len() * (2 * grids.len() + 2)) as u64);
+    let bar = indicatif::ProgressBar::new((sides.len() * (4 * grids.len() + 2)) as u64);
     bar.set_style(
         indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} {elapsed} {msg}").unwrap(),
     );
@@ -219,14 +221,26 @@ fn bench(
                 origin: (centre - size * cell * 0.5).as_dvec3(),
             };
             let label = format!("{}×{}×{}", grid.size[0], grid.size[1], grid.size[2]);
-            // The distance stage's two methods for sub-voxel seeds (see `Settings::method`).
-            for (name, method) in [
-                ("SDF texture, lines", Method::Lines),
-                ("SDF texture, JFA+2", Method::Jfa(Variant::JfaPlus2)),
+            // The distance stage's two methods for sub-voxel seeds (see `Settings::method`),
+            // each with the blobs read near the surface and the texture alone.
+            for (name, method, exact_surface) in [
+                ("SDF + blobs, lines", Method::Lines, ExactSurface::On),
+                ("SDF texture alone, lines", Method::Lines, ExactSurface::Off),
+                (
+                    "SDF + blobs, JFA+2",
+                    Method::Jfa(Variant::JfaPlus2),
+                    ExactSurface::On,
+                ),
+                (
+                    "SDF texture alone, JFA+2",
+                    Method::Jfa(Variant::JfaPlus2),
+                    ExactSurface::Off,
+                ),
             ] {
                 let s = Settings {
                     cells_per_edge: edge / cell,
                     method,
+                    exact_surface,
                     ..settings
                 };
                 bar.set_message(format!("{} instances, {name} {label}", voxels.len()));
@@ -550,7 +564,7 @@ fn chart(path: &std::path::Path, adapter: &str, rows: &[Row]) -> Result<(), Stri
             label: if r.grid == "bins" {
                 format!("{} ({:.0} steps)", r.method, r.steps.mean)
             } else {
-                let how = r.method.trim_start_matches("SDF texture, ");
+                let how = r.method.trim_start_matches("SDF ");
                 format!("SDF {how} {} ({:.0} steps)", r.grid, r.steps.mean)
             },
         })

@@ -6,6 +6,7 @@ mod bench_bind;
 mod bench_build;
 mod bench_distance;
 mod bench_frame;
+mod bench_grazing;
 mod bench_mesh_sdf;
 mod bench_metaball;
 mod bench_ocean;
@@ -119,6 +120,9 @@ enum Technique {
     Build,
     Distance,
     Metaball,
+    /// Metaballs at grazing angles: every way of drawing them graded per pixel against an f64
+    /// reference (by incidence, on the silhouette's rim or off it) and timed.
+    Grazing,
     Volume,
     Ocean,
     Voxelize,
@@ -213,6 +217,7 @@ fn main() -> ExitCode {
                 Technique::Build => bench_build::run,
                 Technique::Distance => bench_distance::run,
                 Technique::Metaball => bench_metaball::run,
+                Technique::Grazing => bench_grazing::run,
                 Technique::Volume => bench_volume::run,
                 Technique::Ocean => bench_ocean::run,
                 Technique::Voxelize => bench_voxelize::run,

@@ -394,6 +394,7 @@ impl VoxelizerScene {
                         grid: field.grid,
                         band: field.settings.band * field.grid.voxel as f32,
                         threshold: 0.0,
+                        blobs: None,
                     };
                     let settings = RaymarchSettings::default();
                     let marched = marcher.encode_march_field(
