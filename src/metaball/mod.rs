@@ -91,8 +91,9 @@ pub enum ExactSurface {
 
 /// The blob count up to which a default field keeps its blobs for an exact surface: on the
 /// H200 at 1080p the exact surface of 100 blobs seen low over the set costs 1.4 ms a frame
-/// against 0.18 for the texture alone; beyond a few hundred blobs each is a few pixels across.
-pub const EXACT_SURFACE_UP_TO: u32 = 256;
+/// against 0.18 for the texture alone, and the viewer's island of 225 blobs 1.5 ms against
+/// 0.1 (`docs/metaball.md`).
+pub const EXACT_SURFACE_UP_TO: u32 = 128;
 
 impl ExactSurface {
     /// Whether a set of `count` blobs keeps its blobs.
