@@ -264,7 +264,6 @@ pub fn run(args: &crate::measure::Args) -> Result<(), String> {
     let (ctx, adapter, stamps) = crate::measure::bench_gpu()?;
     let timed: [u32; 2] = if args.quick { [480, 270] } else { [1920, 1080] };
     let graded = timed.map(|s| s / 4);
-    let balls = Metaballs::new(&ctx.device).map_err(|e| e.to_string())?;
     let depth = wgpu::TextureFormat::Depth32Float;
     let make = |format, size| -> Result<(Raymarcher, Targets), String> {
         Ok((
@@ -273,115 +272,55 @@ pub fn run(args: &crate::measure::Args) -> Result<(), String> {
             Targets::new(&ctx.device, size, format, depth),
         ))
     };
-    let (frame_marcher, frame) = make(wgpu::TextureFormat::Rgba8Unorm, timed)?;
-    let (read_marcher, read) = make(wgpu::TextureFormat::Rgba32Float, graded)?;
+    let rig = Rig {
+        balls: Metaballs::new(&ctx.device).map_err(|e| e.to_string())?,
+        frame: make(wgpu::TextureFormat::Rgba8Unorm, timed)?,
+        read: make(wgpu::TextureFormat::Rgba32Float, graded)?,
+        ctx: &ctx,
+        stamps: &stamps,
+        args,
+    };
     let cell = 1.0 / Settings::default().cells_per_edge as f64;
     let mut rows = Vec::new();
     println!(
-        "| scene | method | build ms | frame ms | false misses {} | off rim | false hits (off rim) | depth RMS / max, cells {} | ran out |",
+        "| scene | method | build ms | frame ms | false misses {} | off rim | false hits (off rim) | wrong surface (off rim) | depth RMS / max, cells {} | ran out |",
         BIN_NAMES.join(" / "),
         BIN_NAMES.join(" / ")
     );
-    println!("|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
     for (scene, voxels, eye, target) in scenes() {
         let exact = reference(&view(eye, target, graded), &voxels, &Settings::default());
-        let inst = balls
+        let inst = rig
+            .balls
             .upload(&ctx.device, &ctx.queue, &voxels)
             .map_err(|e| e.to_string())?;
         for (method, how, rs) in methods() {
-            let s = match how {
-                How::Sdf(s) => s,
-                How::Direct(_) => Settings::default(),
-            };
-            let grid = s
-                .fit_grid(&voxels, 1.0)
-                .map_err(|e| e.to_string())?
-                .ok_or("an empty scene")?;
-            // The build, timed; what the last run made is drawn.
-            let mut builds = Vec::new();
-            let mut made = None;
-            for i in 0..args.warmup + args.reps {
-                let ms = stamps.time(&ctx, |enc| {
-                    made = Some(match how {
-                        How::Sdf(_) => Made::Field(
-                            balls
-                                .encode(&ctx.device, enc, &inst, &grid, 1.0, &s)
-                                .map_err(|e| e.to_string())?,
-                        ),
-                        How::Direct(m) => Made::Bins(
-                            balls
-                                .encode_bins(&ctx.device, enc, &inst, &grid, 1.0, &s)
-                                .map_err(|e| e.to_string())?,
-                            m,
-                        ),
-                    });
-                    Ok(())
-                })?;
-                if i >= args.warmup {
-                    builds.push(ms);
-                }
-            }
-            let made = made.ok_or("no build ran")?;
-            let draw = |marcher: &Raymarcher,
-                        targets: &Targets,
-                        v: &View,
-                        rs: &RaymarchSettings,
-                        enc: &mut wgpu::CommandEncoder| {
-                let (cv, dv) = (&targets.colour_view, &targets.depth_view);
-                match &made {
-                    Made::Field(f) => {
-                        marcher.encode(&ctx.device, enc, cv, dv, f, Mat4::IDENTITY, v, rs)
-                    }
-                    Made::Bins(b, m) => marcher.encode_direct(
-                        &ctx.device,
-                        enc,
-                        cv,
-                        dv,
-                        b,
-                        *m,
-                        Mat4::IDENTITY,
-                        v,
-                        rs,
-                    ),
-                }
-                .map(|_| ())
-                .map_err(|e| e.to_string())
-            };
-            let frame_view = view(eye, target, timed);
-            let mut frames = Vec::new();
-            for i in 0..args.warmup + args.reps {
-                let mut enc = ctx.encoder("bench clear");
-                frame.clear(&mut enc, wgpu::Color::TRANSPARENT, 1.0);
-                ctx.submit_and_wait("bench clear", enc)
-                    .map_err(|e| e.to_string())?;
-                let ms = stamps.time(&ctx, |enc| {
-                    draw(&frame_marcher, &frame, &frame_view, &rs, enc)
-                })?;
-                if i >= args.warmup {
-                    frames.push(ms);
-                }
-            }
+            let (build_ms, made) = rig.time_build(&inst, &voxels, how)?;
+            let frame_ms = rig.time_frames(&made, &view(eye, target, timed), &rs)?;
             let numbers = RaymarchSettings {
                 output: Output::Distance,
                 ..rs
             };
+            let (marcher, targets) = &rig.read;
             let mut enc = ctx.encoder("bench readback");
-            read.clear(&mut enc, wgpu::Color::TRANSPARENT, 1.0);
-            draw(
-                &read_marcher,
-                &read,
+            targets.clear(&mut enc, wgpu::Color::TRANSPARENT, 1.0);
+            made.draw(
+                &ctx,
+                marcher,
+                targets,
                 &view(eye, target, graded),
                 &numbers,
                 &mut enc,
             )?;
             ctx.submit_and_wait("bench readback", enc)
                 .map_err(|e| e.to_string())?;
-            let got: Vec<[f32; 4]> = read_texture(&ctx, &read.colour).map_err(|e| e.to_string())?;
+            let got: Vec<[f32; 4]> =
+                read_texture(&ctx, &targets.colour).map_err(|e| e.to_string())?;
             let row = Row {
                 scene: scene.clone(),
                 method,
-                build_ms: median(builds),
-                frame_ms: median(frames),
+                build_ms,
+                frame_ms,
                 grade: grade(&exact, &got, graded, cell),
             };
             println!("{}", table_line(&row));
@@ -401,9 +340,109 @@ pub fn run(args: &crate::measure::Args) -> Result<(), String> {
     Ok(())
 }
 
+/// What every method is measured with: the field builder, a raymarcher and targets for the
+/// timed frame (8-bit, full size) and for the graded readback (float, a quarter per axis).
+struct Rig<'a> {
+    ctx: &'a fieldkit::gpu::Context,
+    stamps: &'a crate::measure::Stamps,
+    args: &'a crate::measure::Args,
+    balls: Metaballs,
+    frame: (Raymarcher, Targets),
+    read: (Raymarcher, Targets),
+}
+
+impl Rig<'_> {
+    /// The build of `how` (a field, or the bins), timed: its median ms, and what the last run
+    /// made.
+    fn time_build(
+        &self,
+        inst: &fieldkit::metaball::Instances,
+        voxels: &[Vec4],
+        how: How,
+    ) -> Result<(f64, Made), String> {
+        let (ctx, balls) = (self.ctx, &self.balls);
+        let s = match how {
+            How::Sdf(s) => s,
+            How::Direct(_) => Settings::default(),
+        };
+        let grid = s
+            .fit_grid(voxels, 1.0)
+            .map_err(|e| e.to_string())?
+            .ok_or("an empty scene")?;
+        let mut builds = Vec::new();
+        let mut made = None;
+        for i in 0..self.args.warmup + self.args.reps {
+            let ms = self.stamps.time(ctx, |enc| {
+                let e = |e: fieldkit::Error| e.to_string();
+                made = Some(match how {
+                    How::Sdf(_) => Made::Field(
+                        balls
+                            .encode(&ctx.device, enc, inst, &grid, 1.0, &s)
+                            .map_err(e)?,
+                    ),
+                    How::Direct(m) => Made::Bins(
+                        balls
+                            .encode_bins(&ctx.device, enc, inst, &grid, 1.0, &s)
+                            .map_err(e)?,
+                        m,
+                    ),
+                });
+                Ok(())
+            })?;
+            if i >= self.args.warmup {
+                builds.push(ms);
+            }
+        }
+        Ok((median(builds), made.ok_or("no build ran")?))
+    }
+
+    /// The frame (march + composite) into cleared targets, timed: its median ms.
+    fn time_frames(&self, made: &Made, view: &View, rs: &RaymarchSettings) -> Result<f64, String> {
+        let ctx = self.ctx;
+        let (marcher, targets) = &self.frame;
+        let mut frames = Vec::new();
+        for i in 0..self.args.warmup + self.args.reps {
+            // Clearing is the application's part of the frame: submitted before the timing.
+            let mut enc = ctx.encoder("bench clear");
+            targets.clear(&mut enc, wgpu::Color::TRANSPARENT, 1.0);
+            ctx.submit_and_wait("bench clear", enc)
+                .map_err(|e| e.to_string())?;
+            let ms = self
+                .stamps
+                .time(ctx, |enc| made.draw(ctx, marcher, targets, view, rs, enc))?;
+            if i >= self.args.warmup {
+                frames.push(ms);
+            }
+        }
+        Ok(median(frames))
+    }
+}
+
+/// What a build made: a field for the SDF march, or bins for a direct tracer.
 enum Made {
     Field(fieldkit::metaball::MetaballField),
     Bins(fieldkit::metaball::BlobBins, Direct),
+}
+
+impl Made {
+    fn draw(
+        &self,
+        ctx: &fieldkit::gpu::Context,
+        marcher: &Raymarcher,
+        targets: &Targets,
+        v: &View,
+        rs: &RaymarchSettings,
+        enc: &mut wgpu::CommandEncoder,
+    ) -> Result<(), String> {
+        let (cv, dv) = (&targets.colour_view, &targets.depth_view);
+        let m = Mat4::IDENTITY;
+        match self {
+            Made::Field(f) => marcher.encode(&ctx.device, enc, cv, dv, f, m, v, rs),
+            Made::Bins(b, d) => marcher.encode_direct(&ctx.device, enc, cv, dv, b, *d, m, v, rs),
+        }
+        .map(|_| ())
+        .map_err(|e| e.to_string())
+    }
 }
 
 fn rms(d: (f64, usize, f64)) -> f64 {
