@@ -103,17 +103,9 @@ fn view(eye: Vec3, target: Vec3, size: [u32; 2]) -> View {
 /// (`cpu::ray_hit_near`: f64, steps of 0.004 edges, then bisection).
 fn reference(view: &View, voxels: &[Vec4], s: &Settings) -> Vec<Option<(f64, f64)>> {
     let [w, h] = view.viewport;
-    let inv = view.view_proj.as_dmat4().inverse();
     let pixel = |i: usize| -> Option<(f64, f64)> {
-        let (x, y) = ((i % w as usize) as f64, (i / w as usize) as f64);
-        let ndc = glam::DVec2::new(
-            (x + 0.5) / w as f64 * 2.0 - 1.0,
-            1.0 - (y + 0.5) / h as f64 * 2.0,
-        );
-        let o = inv.project_point3(ndc.extend(0.0));
-        let far = inv.project_point3(ndc.extend(1.0));
-        let d = (far - o).normalize();
-        let t = cpu::ray_hit_near(voxels, 1.0, s, o, d, (far - o).length(), 0.004)?;
+        let (o, d, len) = crate::measure::pixel_ray(view, i);
+        let t = cpu::ray_hit_near(voxels, 1.0, s, o, d, len, 0.004)?;
         let n = cpu::gradient_at(voxels, 1.0, s, o + d * t).normalize();
         Some((t, n.dot(d).abs().asin().to_degrees()))
     };

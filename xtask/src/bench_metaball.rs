@@ -485,7 +485,6 @@ impl Reference {
                 .sum()
         };
         let [w, h] = view.viewport;
-        let inv = view.view_proj.as_dmat4().inverse();
         let total = (w * h) as usize;
         let stride = (total / 2048).max(1);
         let t_iso = s.threshold as f64;
@@ -493,19 +492,12 @@ impl Reference {
         let samples = (0..total)
             .step_by(stride)
             .map(|i| {
-                let (x, y) = ((i % w as usize) as f64, (i / w as usize) as f64);
-                let ndc = glam::DVec2::new(
-                    (x + 0.5) / w as f64 * 2.0 - 1.0,
-                    1.0 - (y + 0.5) / h as f64 * 2.0,
-                );
-                let near = inv.project_point3(ndc.extend(0.0));
-                let far = inv.project_point3(ndc.extend(1.0));
-                let dir = (far - near).normalize();
+                let (near, dir, len) = crate::measure::pixel_ray(view, i);
                 // The box along the ray.
                 let inv_d = dir.recip();
                 let (a, b) = ((lo - near) * inv_d, (hi - near) * inv_d);
                 let t0 = a.min(b).max_element().max(0.0);
-                let t1 = a.max(b).min_element().min((far - near).length());
+                let t1 = a.max(b).min_element().min(len);
                 let f = |t: f64| field(near + dir * t) - t_iso;
                 let mut hit = None;
                 let mut t = t0;

@@ -310,6 +310,21 @@ impl Stamps {
     }
 }
 
+/// Pixel `i`'s ray (row-major over `view`'s viewport, through the pixel's centre): where it
+/// leaves the near plane, its unit direction, and its length to the far plane, in f64.
+pub(crate) fn pixel_ray(view: &fieldkit::view::View, i: usize) -> (glam::DVec3, glam::DVec3, f64) {
+    let [w, h] = view.viewport.map(|s| s as usize);
+    let inv = view.view_proj.as_dmat4().inverse();
+    let (x, y) = ((i % w) as f64, (i / w) as f64);
+    let ndc = glam::DVec2::new(
+        (x + 0.5) / w as f64 * 2.0 - 1.0,
+        1.0 - (y + 0.5) / h as f64 * 2.0,
+    );
+    let near = inv.project_point3(ndc.extend(0.0));
+    let far = inv.project_point3(ndc.extend(1.0));
+    (near, (far - near).normalize(), (far - near).length())
+}
+
 pub(crate) fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(|a, b| a.total_cmp(b));
     v[v.len() / 2]
