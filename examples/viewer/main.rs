@@ -247,6 +247,8 @@ pub fn record_frame(
             },
         };
         let mut frame = Frame {
+            device,
+            queue,
             rec: &mut rec,
             targets: shot.targets,
             size: shot.size,
@@ -254,7 +256,7 @@ pub fn record_frame(
             time: shot.time,
             number: shot.number,
         };
-        scenes.encode(device, queue, shot.scene, saved, &mut frame)
+        scenes.encode(shot.scene, saved, &mut frame)
     };
     match result {
         Ok(stats) => FrameReport { stats, error: None },

@@ -63,3 +63,37 @@ pub(crate) fn check_target_bytes(
         }),
     }
 }
+
+/// A depth attachment cleared to `depth` and stored, without stencil: the start of a frame's
+/// depth in a pass of the caller's own (a floor, a shadow map) before fieldkit's stages draw.
+///
+/// ```no_run
+/// # fn f(encoder: &mut wgpu::CommandEncoder, depth: &wgpu::TextureView) {
+/// let pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+///     depth_stencil_attachment: Some(fieldkit::gpu::depth_cleared(depth, 1.0)),
+///     ..Default::default()
+/// });
+/// # }
+/// ```
+pub fn depth_cleared(
+    view: &wgpu::TextureView,
+    depth: f32,
+) -> wgpu::RenderPassDepthStencilAttachment<'_> {
+    wgpu::RenderPassDepthStencilAttachment {
+        view,
+        depth_ops: Some(wgpu::Operations {
+            load: wgpu::LoadOp::Clear(depth),
+            store: wgpu::StoreOp::Store,
+        }),
+        stencil_ops: None,
+    }
+}
+
+/// Record a pass that only clears the depth target `view` to `depth` ([`depth_cleared`]).
+pub fn clear_depth(encoder: &mut wgpu::CommandEncoder, view: &wgpu::TextureView, depth: f32) {
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some("fieldkit clear depth"),
+        depth_stencil_attachment: Some(depth_cleared(view, depth)),
+        ..Default::default()
+    });
+}

@@ -28,14 +28,7 @@ fn texture(
     format: wgpu::TextureFormat,
     usage: wgpu::TextureUsages,
 ) -> wgpu::Texture {
-    fieldkit::gpu::texture(
-        &ctx.device,
-        "test texture",
-        [8, 8, 1],
-        wgpu::TextureDimension::D2,
-        format,
-        usage,
-    )
+    crate::common::texture(ctx, [8, 8, 1], format, usage)
 }
 
 fn buffer(ctx: &Context, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {

@@ -306,3 +306,23 @@ pub fn format_step(format: wgpu::TextureFormat) -> f32 {
         f => panic!("format_step does not know {f:?}"),
     }
 }
+
+/// An empty texture of `size` (`[w, h, 1]`: 2D, a depth above 1: 3D), `format` and `usage`.
+pub fn texture(
+    ctx: &Context,
+    size: [u32; 3],
+    format: wgpu::TextureFormat,
+    usage: wgpu::TextureUsages,
+) -> wgpu::Texture {
+    let dimension = if size[2] > 1 {
+        wgpu::TextureDimension::D3
+    } else {
+        wgpu::TextureDimension::D2
+    };
+    fieldkit::gpu::texture(&ctx.device, "test texture", size, dimension, format, usage)
+}
+
+/// [`texture`] for sampling only (`TEXTURE_BINDING`): what a stage that must refuse it is given.
+pub fn sampled(ctx: &Context, size: [u32; 3], format: wgpu::TextureFormat) -> wgpu::Texture {
+    texture(ctx, size, format, wgpu::TextureUsages::TEXTURE_BINDING)
+}

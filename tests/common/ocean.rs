@@ -67,11 +67,9 @@ pub fn patches(cam: &OceanCamera) -> Vec<Patch> {
 }
 
 pub fn target(ctx: &Context, format: wgpu::TextureFormat) -> wgpu::Texture {
-    fieldkit::gpu::texture(
-        &ctx.device,
-        "test target",
+    super::texture(
+        ctx,
         [W, H, 1],
-        wgpu::TextureDimension::D2,
         format,
         wgpu::TextureUsages::RENDER_ATTACHMENT
             | wgpu::TextureUsages::COPY_SRC
@@ -108,14 +106,7 @@ pub fn clear(
     enc.begin_render_pass(&wgpu::RenderPassDescriptor {
         label: Some("clear"),
         color_attachments: &attachments,
-        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-            view: depth,
-            depth_ops: Some(wgpu::Operations {
-                load: wgpu::LoadOp::Clear(clear_depth),
-                store: wgpu::StoreOp::Store,
-            }),
-            stencil_ops: None,
-        }),
+        depth_stencil_attachment: Some(fieldkit::gpu::depth_cleared(depth, clear_depth)),
         ..Default::default()
     });
 }

@@ -199,14 +199,7 @@ fn bad_options_and_textures() {
         );
     }
     // A 3D texture of a format the stages do not read.
-    let rgba = fieldkit::gpu::texture(
-        &ctx.device,
-        "test texture",
-        [4, 4, 4],
-        wgpu::TextureDimension::D3,
-        wgpu::TextureFormat::Rgba8Unorm,
-        wgpu::TextureUsages::TEXTURE_BINDING,
-    );
+    let rgba = crate::common::sampled(&ctx, [4, 4, 4], wgpu::TextureFormat::Rgba8Unorm);
     let e = d3
         .encode(&ctx.device, &mut enc, &rgba, &Settings3d::default())
         .unwrap_err();

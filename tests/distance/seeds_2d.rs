@@ -209,14 +209,7 @@ fn formats_and_thresholds_that_cannot_seed_are_typed_errors() {
         )
         .expect_err("NaN threshold refused");
     assert!(e.to_string().contains("seed threshold"), "{e}");
-    let uint = fieldkit::gpu::texture(
-        &ctx.device,
-        "test texture",
-        [4, 4, 1],
-        wgpu::TextureDimension::D2,
-        wgpu::TextureFormat::R8Uint,
-        wgpu::TextureUsages::TEXTURE_BINDING,
-    );
+    let uint = crate::common::sampled(&ctx, [4, 4, 1], wgpu::TextureFormat::R8Uint);
     let e = d2
         .encode(&ctx.device, &mut enc, &uint, &Settings2d::default())
         .expect_err("an integer texture refused");

@@ -61,11 +61,9 @@ fn resolve_stage() {
     let m = mask();
     // Resolve alone, from a nearest-seed texture made on the CPU.
     let nearest = cpu::jfa_2d(&m, W, H, &Variant::JfaPlus2.steps(W as u32));
-    let tex = fieldkit::gpu::texture(
-        &ctx.device,
-        "test texture",
+    let tex = crate::common::texture(
+        &ctx,
         [W as u32, H as u32, 1],
-        wgpu::TextureDimension::D2,
         wgpu::TextureFormat::R32Uint,
         wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
     );

@@ -339,11 +339,9 @@ fn gbuffer_on(ctx: &Context, formats: [wgpu::TextureFormat; 4]) {
     )
     .unwrap();
     let make = |format| {
-        fieldkit::gpu::texture(
-            &ctx.device,
-            "test texture",
+        crate::common::texture(
+            ctx,
             [W, H, 1],
-            wgpu::TextureDimension::D2,
             format,
             wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
         )
@@ -379,21 +377,7 @@ fn gbuffer_on(ctx: &Context, formats: [wgpu::TextureFormat; 4]) {
             multiview_mask: None,
         });
     }
-    enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-        label: None,
-        color_attachments: &[],
-        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-            view: &dv,
-            depth_ops: Some(wgpu::Operations {
-                load: wgpu::LoadOp::Clear(1.0),
-                store: wgpu::StoreOp::Store,
-            }),
-            stencil_ops: None,
-        }),
-        timestamp_writes: None,
-        occlusion_query_set: None,
-        multiview_mask: None,
-    });
+    fieldkit::gpu::clear_depth(&mut enc, &dv, 1.0);
     let base = Vec3::new(0.8, 0.4, 0.2);
     let settings = RaymarchSettings {
         base_colour: base,
@@ -822,11 +806,9 @@ fn placement_culling_and_bad_views() {
     )
     .unwrap();
     let tex = |format| {
-        fieldkit::gpu::texture(
-            &ctx.device,
-            "test texture",
+        crate::common::texture(
+            &ctx,
             [W, H, 1],
-            wgpu::TextureDimension::D2,
             format,
             wgpu::TextureUsages::RENDER_ATTACHMENT,
         )

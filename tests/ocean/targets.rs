@@ -543,14 +543,7 @@ fn user_height_and_normal_maps() {
         renderer.set_maps(&ctx.device, None, Some(&heights)),
         Err(Error::Format { .. })
     ));
-    let volume = fieldkit::gpu::texture(
-        &ctx.device,
-        "test texture",
-        [4, 4, 4],
-        wgpu::TextureDimension::D3,
-        wgpu::TextureFormat::R8Unorm,
-        wgpu::TextureUsages::TEXTURE_BINDING,
-    );
+    let volume = crate::common::sampled(&ctx, [4, 4, 4], wgpu::TextureFormat::R8Unorm);
     let e = renderer
         .set_maps(&ctx.device, Some(&volume), None)
         .unwrap_err();

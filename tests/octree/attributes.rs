@@ -171,14 +171,7 @@ fn albedo_attributes_equal_the_dense_list() {
         "{:?}",
         e.err()
     );
-    let integer = fieldkit::gpu::texture(
-        &ctx.device,
-        "integer albedo",
-        [4, 4, 1],
-        wgpu::TextureDimension::D2,
-        wgpu::TextureFormat::Rgba8Uint,
-        wgpu::TextureUsages::TEXTURE_BINDING,
-    );
+    let integer = crate::common::sampled(&ctx, [4, 4, 1], wgpu::TextureFormat::Rgba8Uint);
     let e = ctx.block_on(builder.voxelize_with_albedo(
         &ctx.device,
         &ctx.queue,

@@ -388,31 +388,15 @@ fn rays_stop_at_the_scene_depth_standard_and_reversed() {
         // An opaque wall facing the camera 2 units away (view z = −2): through the box's middle.
         let wall =
             (proj * Vec4::new(0.0, 0.0, -2.0, 1.0)).z / (proj * Vec4::new(0.0, 0.0, -2.0, 1.0)).w;
-        let depth = fieldkit::gpu::texture(
-            &rig.ctx.device,
-            "scene depth",
+        let depth = crate::common::texture(
+            &rig.ctx,
             [SIZE, SIZE, 1],
-            wgpu::TextureDimension::D2,
             wgpu::TextureFormat::Depth32Float,
             wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
         );
         let dv = depth.create_view(&Default::default());
         let mut enc = rig.ctx.encoder("clear depth");
-        enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: None,
-            color_attachments: &[],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &dv,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wall),
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        fieldkit::gpu::clear_depth(&mut enc, &dv, wall);
         rig.ctx.submit_and_wait("clear depth", enc).unwrap();
         let px = rig.march(
             &volume,

@@ -550,14 +550,7 @@ fn albedo_is_sampled_at_each_voxels_texture_coordinates() {
         .err()
         .unwrap();
     assert!(e.to_string().contains("texture coordinates"), "{e}");
-    let r32 = fieldkit::gpu::texture(
-        &ctx.device,
-        "test texture",
-        [2, 2, 1],
-        wgpu::TextureDimension::D2,
-        wgpu::TextureFormat::R32Uint,
-        wgpu::TextureUsages::TEXTURE_BINDING,
-    );
+    let r32 = crate::common::sampled(&ctx, [2, 2, 1], wgpu::TextureFormat::R32Uint);
     assert!(matches!(
         v.encode_attributes_with(&ctx.device, &mut enc, &mesh, &grid, Some(&r32)),
         Err(Error::Format { .. })

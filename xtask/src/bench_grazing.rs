@@ -367,11 +367,11 @@ impl Rig<'_> {
             let ms = self.stamps.time(ctx, |enc| {
                 let e = |e: fieldkit::Error| e.to_string();
                 made = Some(match how {
-                    How::Sdf(_) => Made::Field(
+                    How::Sdf(_) => Made::Field(Box::new(
                         balls
                             .encode(&ctx.device, enc, inst, &grid, 1.0, &s)
                             .map_err(e)?,
-                    ),
+                    )),
                     How::Direct(m) => Made::Bins(
                         balls
                             .encode_bins(&ctx.device, enc, inst, &grid, 1.0, &s)
@@ -412,7 +412,7 @@ impl Rig<'_> {
 
 /// What a build made: a field for the SDF march, or bins for a direct tracer.
 enum Made {
-    Field(fieldkit::metaball::MetaballField),
+    Field(Box<fieldkit::metaball::MetaballField>),
     Bins(fieldkit::metaball::BlobBins, Direct),
 }
 
@@ -477,7 +477,7 @@ fn write_csv(
     .map_err(e)?;
     for r in rows {
         let g = &r.grade;
-        for b in 0..4 {
+        for (b, bin) in BIN_NAMES.iter().enumerate() {
             writeln!(
                 csv,
                 "\"{adapter}\",{}x{},{}x{},{},{},{:.4},{:.4},{},{},{},{:.5},{:.5},{},{},{},{},{},{}",
@@ -489,7 +489,7 @@ fn write_csv(
                 r.method,
                 r.build_ms,
                 r.frame_ms,
-                BIN_NAMES[b],
+                bin,
                 g.hits[b],
                 g.false_misses[b],
                 rms(g.depth[b]),

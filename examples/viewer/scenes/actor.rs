@@ -128,13 +128,8 @@ impl Actor {
         })
     }
 
-    pub(super) fn encode(
-        &mut self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        s: &ActorSettings,
-        frame: &mut Frame,
-    ) -> Result<Vec<String>, Error> {
+    pub(super) fn encode(&mut self, s: &ActorSettings, frame: &mut Frame) -> PanelLines {
+        let (device, queue) = (frame.device, frame.queue);
         clear(frame, [0.09, 0.1, 0.12]);
         let counts = s.counts()?;
         if self.base.as_ref().map(|b| (b.0, b.1)) != Some((counts, s.block)) {
@@ -278,13 +273,8 @@ impl Actor {
 
     /// The actor drawn as the composite's island: sky cleared, the blocks sunk by half their
     /// height.
-    pub(super) fn encode_island(
-        &mut self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        s: &ActorSettings,
-        frame: &mut Frame,
-    ) -> Result<Vec<String>, Error> {
+    pub(super) fn encode_island(&mut self, s: &ActorSettings, frame: &mut Frame) -> PanelLines {
+        let (device, queue) = (frame.device, frame.queue);
         let saved_clear = [0.55, 0.7, 0.85];
         clear(frame, saved_clear);
         let counts = s.counts()?;

@@ -188,13 +188,8 @@ impl Distance2dScene {
         }
     }
 
-    pub(super) fn encode(
-        &mut self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        s: &DistanceSettings,
-        frame: &mut Frame,
-    ) -> Result<Vec<String>, Error> {
+    pub(super) fn encode(&mut self, s: &DistanceSettings, frame: &mut Frame) -> PanelLines {
+        let (device, queue) = (frame.device, frame.queue);
         clear(frame, [0.05, 0.05, 0.06]);
         // Take a finished readback.
         if let Some(p) = &mut self.pending

@@ -152,6 +152,9 @@ pub fn default_camera(scene: &str) -> Camera {
 
 /// One frame: where to record and draw, and when.
 pub struct Frame<'a, 'r> {
+    /// The app's device and queue.
+    pub device: &'a wgpu::Device,
+    pub queue: &'a wgpu::Queue,
     /// Compute passes go through the recorder (timed when it profiles); render passes into
     /// `rec.encoder`.
     pub rec: &'a mut Recorder<'r>,
@@ -165,6 +168,17 @@ pub struct Frame<'a, 'r> {
     pub time: f32,
     /// Frames drawn before this one.
     pub number: u32,
+}
+
+/// What a scene's frame shows in its panel: the lines, or the typed error that stopped it.
+pub type PanelLines = Result<Vec<String>, Error>;
+
+/// `slot`'s value, made by `make` the first time.
+fn made<T>(slot: &mut Option<T>, make: impl FnOnce() -> Result<T, Error>) -> Result<&mut T, Error> {
+    if slot.is_none() {
+        *slot = Some(make()?);
+    }
+    Ok(slot.as_mut().expect("set above"))
 }
 
 fn clear(frame: &mut Frame, colour: [f64; 3]) {
@@ -280,68 +294,37 @@ impl Scenes {
     }
 
     /// Record `scene` into the frame; returns the lines its panel shows.
-    pub fn encode(
-        &mut self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        scene: &str,
-        s: &Saved,
-        frame: &mut Frame,
-    ) -> Result<Vec<String>, Error> {
+    pub fn encode(&mut self, scene: &str, s: &Saved, frame: &mut Frame) -> PanelLines {
+        let (device, queue) = (frame.device, frame.queue);
         match scene {
-            "actor" => {
-                if self.actor.is_none() {
-                    self.actor = Some(Actor::new(device)?);
-                }
-                let actor = self.actor.as_mut().expect("set above");
-                actor.encode(device, queue, &s.actor, frame)
-            }
+            "actor" => made(&mut self.actor, || Actor::new(device))?.encode(&s.actor, frame),
             "ocean" => {
                 clear(frame, [0.55, 0.7, 0.85]);
                 let ocean = self.ocean.get_or_insert_with(|| Ocean::new(device));
-                ocean.draw(device, queue, &s.ocean, frame)
+                ocean.draw(&s.ocean, frame)
             }
             "volume" => {
                 clear(frame, [0.32, 0.52, 0.82]);
-                if self.volume.is_none() {
-                    self.volume = Some(VolumeScene::new(device, queue)?);
-                }
-                let v = self.volume.as_mut().expect("set above");
-                v.draw(device, queue, &s.volume, Mat4::IDENTITY, frame)
+                let v = made(&mut self.volume, || VolumeScene::new(device, queue))?;
+                v.draw(&s.volume, Mat4::IDENTITY, frame)
             }
-            "distance2d" => {
-                if self.distance.is_none() {
-                    self.distance = Some(Distance2dScene::new(device)?);
-                }
-                let d = self.distance.as_mut().expect("set above");
-                d.encode(device, queue, &s.distance, frame)
-            }
-            "voxelizer" => {
-                if self.voxelizer.is_none() {
-                    self.voxelizer = Some(VoxelizerScene::new(device)?);
-                }
-                let v = self.voxelizer.as_mut().expect("set above");
-                v.encode(device, queue, &s.voxelizer, frame)
-            }
+            "distance2d" => made(&mut self.distance, || Distance2dScene::new(device))?
+                .encode(&s.distance, frame),
+            "voxelizer" => made(&mut self.voxelizer, || VoxelizerScene::new(device))?
+                .encode(&s.voxelizer, frame),
             "composite" => {
                 // One colour and one depth target: the island writes depth, the sea fades
                 // against it and writes its own, the cloud stops at both.
-                if self.island.is_none() {
-                    self.island = Some(Actor::new(device)?);
-                }
-                let island = self.island.as_mut().expect("set above");
+                let island = made(&mut self.island, || Actor::new(device))?;
                 let mut island_s = island_settings(&s.actor);
                 island_s.raymarch.output = fieldkit::metaball::Output::Shaded;
-                let mut stats = island.encode_island(device, queue, &island_s, frame)?;
+                let mut stats = island.encode_island(&island_s, frame)?;
                 let ocean = self.ocean.get_or_insert_with(|| Ocean::new(device));
-                stats.extend(ocean.draw(device, queue, &s.ocean, frame)?);
-                if self.volume.is_none() {
-                    self.volume = Some(VolumeScene::new(device, queue)?);
-                }
-                let v = self.volume.as_mut().expect("set above");
+                stats.extend(ocean.draw(&s.ocean, frame)?);
+                let v = made(&mut self.volume, || VolumeScene::new(device, queue))?;
                 let cloud = Mat4::from_translation(Vec3::new(-6.0, 11.0, -20.0))
                     * Mat4::from_scale(Vec3::new(40.0, 12.0, 24.0));
-                stats.extend(v.draw(device, queue, &s.volume, cloud, frame)?);
+                stats.extend(v.draw(&s.volume, cloud, frame)?);
                 Ok(stats)
             }
             other => Err(invalid(format!(

@@ -88,13 +88,8 @@ impl Ocean {
     }
 
     /// Draw the sea into the frame (over what it holds).
-    pub(super) fn draw(
-        &mut self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        s: &OceanSettings,
-        frame: &mut Frame,
-    ) -> Result<Vec<String>, Error> {
+    pub(super) fn draw(&mut self, s: &OceanSettings, frame: &mut Frame) -> PanelLines {
+        let (device, queue) = (frame.device, frame.queue);
         let waves = Waves::new(s.waves.clone(), s.steepness)?;
         let camera = frame.camera.ocean(frame.size);
         let write = s.depth_write.unwrap_or(true);

@@ -106,11 +106,11 @@ impl VolumeScene {
     /// March the cloud *function* (`VolumeSettings::function`) into the frame.
     pub(super) fn draw_function(
         &mut self,
-        device: &wgpu::Device,
         s: &VolumeSettings,
         local_to_world: Mat4,
         frame: &mut Frame,
-    ) -> Result<Vec<String>, Error> {
+    ) -> PanelLines {
+        let device = frame.device;
         use fieldkit::volume::{CloudMarch, FunctionVolume, Shadow};
         if self.cloud.is_none() {
             self.cloud = Some(CloudMarch::cloud(device)?);
@@ -157,14 +157,13 @@ impl VolumeScene {
     /// March the cloud under `local_to_world` into the frame, stopping at its depth.
     pub(super) fn draw(
         &mut self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
         s: &VolumeSettings,
         local_to_world: Mat4,
         frame: &mut Frame,
-    ) -> Result<Vec<String>, Error> {
+    ) -> PanelLines {
+        let (device, queue) = (frame.device, frame.queue);
         if s.function {
-            return self.draw_function(device, s, local_to_world, frame);
+            return self.draw_function(s, local_to_world, frame);
         }
         if self.volume.as_ref().map(|v| v.0) != Some((s.size, s.seed)) {
             if !(4..=512).contains(&s.size) {

@@ -181,13 +181,8 @@ impl VoxelizerScene {
         Ok(&self.mesh.as_ref().expect("set above").1)
     }
 
-    pub(super) fn encode(
-        &mut self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        s: &VoxelizerSettings,
-        frame: &mut Frame,
-    ) -> Result<Vec<String>, Error> {
+    pub(super) fn encode(&mut self, s: &VoxelizerSettings, frame: &mut Frame) -> PanelLines {
+        let (device, queue) = (frame.device, frame.queue);
         clear(frame, [0.1, 0.11, 0.13]);
         self.advance_job(device, queue, frame)?;
         if self.job.is_none() && self.shown.as_ref().map(|x| &x.0) != Some(s) {

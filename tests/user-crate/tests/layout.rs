@@ -201,14 +201,7 @@ fn every_entry_of_a_forward_renderer_gets_a_pipeline() {
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("shadow"),
             color_attachments: &[],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &view,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
+            depth_stencil_attachment: Some(fieldkit::gpu::depth_cleared(&view, 1.0)),
             ..Default::default()
         });
         pass.set_pipeline(&shadow.pipeline);
