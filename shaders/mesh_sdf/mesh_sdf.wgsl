@@ -2,10 +2,8 @@
 // in `per_triangle` every triangle offers itself to each voxel whose centre lies within the
 // band of it, as one key (its distance, coarsely, above its index) of which the voxel keeps the
 // least, and counts, along rows of voxel centres in x, y and z, the triangles each row crosses
-// before every voxel and in all (parity, as `voxelize/solid` does along x): a crossing marks one
-// bit, the voxel it comes before, and `scan_rows` turns each row's marks into parity by a prefix
-// XOR along it; `resolve` measures each voxel's distance to the triangle its key names and signs
-// it by the rows' vote: a row crossed an even number of times in all votes inside where an odd number of
+// before every voxel and in all (parity, as `voxelize/solid` does along x); `resolve` measures each voxel's distance to the triangle its key names and signs it by the
+// rows' vote: a row crossed an even number of times in all votes inside where an odd number of
 // crossings lie before the voxel, a row crossed an odd number of times (it passed through a
 // hole) does not vote, and where no majority stands the nearest feature's angle-weighted
 // pseudo-normal decides (Bærentzen & Aanæs, "Signed distance computation using the angle
@@ -34,8 +32,6 @@ struct SdfParams {
     rows_y: u32,
     rows_z: u32,
     totals: vec3<u32>,
-    // Words a row along each axis takes (rows start on a word).
-    row_words: vec3<u32>,
 }
 
 @group(0) @binding(0) var<uniform> params: SdfParams;
@@ -46,9 +42,8 @@ struct SdfParams {
 // Per voxel, 0xffffffff minus the least key offered (0: no triangle within the band).
 @group(0) @binding(3) var<storage, read_write> keys: array<atomic<u32>>;
 // Per axis, one bit per voxel in rows along that axis (row r = (w · n_u + u) for the other two
-// axes u = axis + 1, w = axis + 2 mod 3; bit i of the row's words from word r · row_words), set
-// where an odd number of crossings lie before the voxel's centre (after `per_triangle`: where an
-// odd number of crossings come just before it); then per axis one bit per row, set where the row
+// axes u = axis + 1, w = axis + 2 mod 3; bit r · n_axis + i), set where an odd number of
+// crossings lie before the voxel's centre; then per axis one bit per row, set where the row
 // crosses an odd number of triangles in all.
 @group(0) @binding(4) var<storage, read_write> parity: array<atomic<u32>>;
 @group(0) @binding(5) var field: texture_storage_3d<r32float, write>;
@@ -174,7 +169,7 @@ fn offer_keys(t: u32, lane: u32, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, lo: v
 }
 
 // What one triangle does, one workgroup a triangle: offer its keys to the voxels within the
-// band of it and, for a signed field, mark the rows it crosses.
+// band of it and, for a signed field, flip the rows it crosses.
 @compute @workgroup_size(THREADS)
 fn per_triangle(
     @builtin(workgroup_id) wg: vec3<u32>,
@@ -200,10 +195,9 @@ fn per_triangle(
     }
 }
 
-// Along each axis, every row of voxel centres that the triangle's projection covers: one bit
-// marks the first voxel beyond the crossing (`scan_rows` flips it and the rest of the row), or
-// the row's total where the crossing lies beyond the grid. One atomic a row crossed, however
-// long the row. The workgroup's threads share the rows.
+// Along each axis, every row of voxel centres that the triangle's projection covers: the
+// voxels beyond the crossing flip, and the row's total flips. The workgroup's threads share the
+// rows.
 fn cross_rows(t: u32, lane: u32) {
     let v0 = vertex(t, 0u);
     let n = cross(vertex(t, 1u) - v0, vertex(t, 2u) - v0);
@@ -241,62 +235,29 @@ fn cross_rows(t: u32, lane: u32) {
             let row = u32(r.y) * u32(size.x) + u32(r.x);
             let at = (plane - n[u_axis] * p.x - n[w_axis] * p.y) / along;
             let first = i32(ceil(clamp(at, -1.0, f32(length) + 1.0) - 0.5));
-            if first < i32(length) {
-                // The first voxel beyond the crossing: `scan_rows` flips it and the rest.
-                let at_voxel = u32(max(first, 0));
-                atomicXor(&parity[row_word(axis, row) + at_voxel / 32u], 1u << (at_voxel % 32u));
-            } else {
-                // Beyond the grid's end: the row's total alone.
-                atomicXor(&parity[params.totals[axis] + row / 32u], 1u << (row % 32u));
-            }
+            flip_from(rows_base(axis), row, length, first);
+            atomicXor(&parity[params.totals[axis] + row / 32u], 1u << (row % 32u));
         }
     }
 }
 
-// Rows along `axis` in all.
-fn rows_along(axis: u32) -> u32 {
-    return params.grid[(axis + 1u) % 3u] * params.grid[(axis + 2u) % 3u];
-}
-
-// The first word of row `row` along `axis`.
-fn row_word(axis: u32, row: u32) -> u32 {
-    return rows_base(axis) + row * params.row_words[axis];
-}
-
-// One thread a row, the three axes' rows one after another: the crossings' marks become parity
-// by a prefix XOR along the row (within a word by shifts, across words by the carry of the
-// word before), and the row's total takes the parity of the crossings inside the grid.
-@compute @workgroup_size(THREADS)
-fn scan_rows(
-    @builtin(global_invocation_id) id: vec3<u32>,
-    @builtin(num_workgroups) groups: vec3<u32>,
-) {
-    var r = id.y * groups.x * THREADS + id.x;
-    var axis = 0u;
-    while axis < 3u && r >= rows_along(axis) {
-        r -= rows_along(axis);
-        axis += 1u;
-    }
-    if axis == 3u {
+// Flip the bits of row `row` (along an axis of `length` voxels, section at word `base`) from
+// voxel `first` on.
+fn flip_from(base: u32, row: u32, length: u32, first: i32) {
+    if first >= i32(length) {
         return;
     }
-    let first = row_word(axis, r);
-    var carry = 0u;
-    for (var k = 0u; k < params.row_words[axis]; k++) {
-        var x = atomicLoad(&parity[first + k]);
-        x ^= x << 1u;
-        x ^= x << 2u;
-        x ^= x << 4u;
-        x ^= x << 8u;
-        x ^= x << 16u;
-        x ^= carry;
-        atomicStore(&parity[first + k], x);
-        // All ones past an odd count: the bits beyond the row's end (no crossing marks them)
-        // carry its parity to the top bit.
-        carry = 0u - (x >> 31u);
-    }
-    if carry != 0u {
-        atomicXor(&parity[params.totals[axis] + r / 32u], 1u << (r % 32u));
+    let start = row * length;
+    var i = start + u32(max(first, 0));
+    let last = start + length - 1u;
+    while i <= last {
+        let word = i / 32u;
+        let top = min(last, word * 32u + 31u);
+        let lo_bit = i % 32u;
+        let width = top % 32u - lo_bit + 1u;
+        let mask = select(((1u << width) - 1u) << lo_bit, 0xffffffffu, width == 32u);
+        atomicXor(&parity[base + word], mask);
+        i = top + 1u;
     }
 }
 
@@ -319,7 +280,7 @@ fn vote(v: vec3<u32>) -> i32 {
             // An odd number of crossings in all: the row passed through a hole.
             continue;
         }
-        let inside = bit(row_word(axis, row), v[axis]);
+        let inside = bit(rows_base(axis), row * params.grid[axis] + v[axis]);
         votes += select(1, -1, inside);
     }
     return sign(votes);

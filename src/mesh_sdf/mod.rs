@@ -88,7 +88,6 @@ pub struct MeshField {
 /// [`encode`](Self::encode) for each mesh or grid.
 pub struct MeshSdf {
     per_triangle: ComputePipeline<stage::per_triangle::Entry>,
-    scan_rows: ComputePipeline<stage::scan_rows::Entry>,
     resolve: ComputePipeline<stage::resolve::Entry>,
     march: ComputePipeline<stage::march_texture::Entry>,
     // Scratch kept for the next field of the same size: the keys and the parity rows.
@@ -96,38 +95,32 @@ pub struct MeshSdf {
     parity: std::sync::Mutex<Option<wgpu::Buffer>>,
 }
 
-/// Where the parity bits of each axis lie in the one parity buffer, words: each axis's rows,
-/// each starting on a word (so that one thread owns a row's words when `scan_rows` turns its
-/// crossings into parity), then each axis's per-row totals.
+/// Where the parity bits of each axis lie in the one parity buffer, words.
 struct ParityLayout {
     rows: [u32; 3],
-    row_words: [u32; 3],
     totals: [u32; 3],
-    /// Rows along the three axes together.
-    all_rows: u64,
     words: u64,
 }
 
 impl ParityLayout {
     fn new(size: [u32; 3]) -> Self {
-        let rows_along = |axis: usize| size[(axis + 1) % 3] as u64 * size[(axis + 2) % 3] as u64;
-        let row_words = size.map(|n| n.div_ceil(32));
+        let voxels = size.iter().map(|&n| n as u64).product::<u64>();
+        let row_words = voxels.div_ceil(32);
         let mut at = 0u64;
         let mut rows = [0u32; 3];
-        for (axis, r) in rows.iter_mut().enumerate() {
+        for r in &mut rows {
             *r = at as u32;
-            at += rows_along(axis) * row_words[axis] as u64;
+            at += row_words;
         }
         let mut totals = [0u32; 3];
         for (axis, t) in totals.iter_mut().enumerate() {
             *t = at as u32;
-            at += rows_along(axis).div_ceil(32);
+            let columns = size[(axis + 1) % 3] as u64 * size[(axis + 2) % 3] as u64;
+            at += columns.div_ceil(32);
         }
         Self {
             rows,
-            row_words,
             totals,
-            all_rows: (0..3).map(rows_along).sum(),
             words: at,
         }
     }
@@ -138,7 +131,6 @@ impl MeshSdf {
     pub fn new(device: &wgpu::Device) -> Result<Self, Error> {
         Ok(Self {
             per_triangle: ComputePipeline::new(device)?,
-            scan_rows: ComputePipeline::new(device)?,
             resolve: ComputePipeline::new(device)?,
             march: ComputePipeline::new(device)?,
             keys: Default::default(),
@@ -167,7 +159,7 @@ impl MeshSdf {
         grid: &Grid,
         settings: &Settings,
     ) -> Result<MeshField, Error> {
-        let (local, layout, [groups, scan_groups]) = checked(device, mesh, grid, settings)?;
+        let (local, layout, groups) = checked(device, mesh, grid, settings)?;
         let count = local.source.len() as u64;
         let size = grid.size;
         let voxels = grid.voxels();
@@ -206,7 +198,6 @@ impl MeshSdf {
                 rows_y: layout.rows[1],
                 rows_z: layout.rows[2],
                 totals: layout.totals.into(),
-                row_words: layout.row_words.into(),
             },
         );
         let mut rec = rec.recorder();
@@ -224,18 +215,6 @@ impl MeshSdf {
             groups,
             "mesh sdf per triangle",
         )?;
-        if settings.signed {
-            self.scan_rows.record(
-                device,
-                &mut rec,
-                &stage::scan_rows::Resources {
-                    params: (&params).into(),
-                    parity: (&parity).into(),
-                },
-                scan_groups,
-                "mesh sdf scan rows",
-            )?;
-        }
         self.resolve.record(
             device,
             &mut rec,
@@ -289,7 +268,7 @@ fn checked(
     mesh: &Mesh,
     grid: &Grid,
     settings: &Settings,
-) -> Result<(crate::voxelize::GridMesh, ParityLayout, [[u32; 3]; 2]), Error> {
+) -> Result<(crate::voxelize::GridMesh, ParityLayout, [u32; 3]), Error> {
     settings.check()?;
     let local = mesh.to_grid(grid)?;
     let count = local.source.len() as u64;
@@ -314,14 +293,8 @@ fn checked(
     let limit = device.limits().max_storage_buffer_binding_size;
     check_count("key buffer bytes", voxels * 4, limit)?;
     check_count("parity buffer bytes", layout.words * 4, limit)?;
-    let groups = wide_groups(device, "rows of triangle workgroups", count)?;
-    let scan_groups = wide_groups(
-        device,
-        "rows of row-scan workgroups",
-        ComputePipeline::<stage::scan_rows::Entry>::groups_for([layout.all_rows as u32, 1, 1])[0]
-            as u64,
-    )?;
-    Ok((local, layout, [groups, scan_groups]))
+    let groups = triangle_groups(device, count)?;
+    Ok((local, layout, groups))
 }
 
 /// [`Error::Size`] where `got` is over `max`.
@@ -337,11 +310,10 @@ fn check_count(what: &'static str, got: u64, max: u64) -> Result<(), Error> {
     Ok(())
 }
 
-/// `count` workgroups (one a triangle, or a row scan's), in rows of the device's widest
-/// dispatch.
-fn wide_groups(device: &wgpu::Device, what: &'static str, count: u64) -> Result<[u32; 3], Error> {
+/// One workgroup per triangle, in rows of the device's widest dispatch.
+fn triangle_groups(device: &wgpu::Device, count: u64) -> Result<[u32; 3], Error> {
     let wide = device.limits().max_compute_workgroups_per_dimension as u64;
     let rows = count.div_ceil(wide);
-    check_count(what, rows, wide)?;
+    check_count("rows of triangle workgroups", rows, wide)?;
     Ok([count.min(wide) as u32, rows as u32, 1])
 }
