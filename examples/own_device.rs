@@ -142,15 +142,7 @@ pub fn run(device: &wgpu::Device, queue: &wgpu::Queue, adapter: String) -> Resul
     let seeds = upload_mask(device, queue, &mask, mw, mh)?;
     let distance_2d = Distance2d::new(device)?;
     let mut enc = encoder(device, "2d distance");
-    let field = distance_2d.encode(
-        device,
-        &mut enc,
-        &seeds,
-        &Settings2d {
-            signed: true,
-            ..Settings2d::default()
-        },
-    )?;
+    let field = distance_2d.encode(device, &mut enc, &seeds, &Settings2d::signed())?;
     queue.submit([enc.finish()]);
     let distance_2d = wait(
         device,

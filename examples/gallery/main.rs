@@ -70,15 +70,7 @@ fn run(
     let seeds = fieldkit::distance::upload_mask(&ctx.device, &ctx.queue, &mask, w, h)?;
     let distance = Distance2d::new(&ctx.device)?;
     let mut enc = ctx.encoder("gallery distance");
-    let field = distance.encode(
-        &ctx.device,
-        &mut enc,
-        &seeds,
-        &Settings2d {
-            signed: true,
-            ..Settings2d::default()
-        },
-    )?;
+    let field = distance.encode(&ctx.device, &mut enc, &seeds, &Settings2d::signed())?;
     ctx.submit_and_wait("gallery distance", enc)?;
     let rgba = visualize_distance(ctx, &field.distance, 8.0, 60.0)?;
     save("distance_2d_signed.png", &rgba, w, h, &mut written)?;

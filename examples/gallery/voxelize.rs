@@ -106,15 +106,8 @@ pub fn voxelize_distance_slice(
     let mut enc = ctx.encoder("gallery mesh distance");
     let solid = v.encode_solid(&ctx.device, &mut enc, mesh, &grid, false)?;
     let volume = v.encode_volume(device, &mut enc, &solid)?;
-    let field = Distance3d::new(device)?.encode(
-        device,
-        &mut enc,
-        &volume,
-        &Settings3d {
-            signed: true,
-            ..Settings3d::default()
-        },
-    )?;
+    let field =
+        Distance3d::new(device)?.encode(device, &mut enc, &volume, &Settings3d::signed())?;
     ctx.submit_and_wait("gallery mesh distance", enc)?;
     let d: Vec<f32> = read_texture(ctx, &field.distance)?;
     let [nx, ny, nz] = grid.size;

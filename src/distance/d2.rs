@@ -57,6 +57,17 @@ impl Default for Settings2d {
     }
 }
 
+impl Settings2d {
+    /// The defaults with a signed field, negative inside:
+    /// `Settings2d { signed: true, ..Settings2d::default() }`.
+    pub fn signed() -> Self {
+        Self {
+            signed: true,
+            ..Self::default()
+        }
+    }
+}
+
 /// Nearest seeds of a 2D field, packed as [`pack_seed`](super::pack_seed) does (0 = none): an `R32Uint` texture
 /// from JFA, a row-major `u32` buffer from the exact transform.
 #[derive(Debug)]

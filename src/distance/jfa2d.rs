@@ -94,6 +94,17 @@ impl Default for JfaSettings2d {
     }
 }
 
+impl JfaSettings2d {
+    /// The defaults with a signed field, negative inside:
+    /// `JfaSettings2d { signed: true, ..JfaSettings2d::default() }`.
+    pub fn signed() -> Self {
+        Self {
+            signed: true,
+            ..Self::default()
+        }
+    }
+}
+
 /// The result of a 2D distance computation, on the GPU.
 pub struct JfaField2d {
     /// Width in texels.

@@ -107,6 +107,17 @@ impl Default for Settings3d {
 }
 
 impl Settings3d {
+    /// The defaults with a signed field, negative inside:
+    /// `Settings3d { signed: true, ..Settings3d::default() }`.
+    pub fn signed() -> Self {
+        Self {
+            signed: true,
+            ..Self::default()
+        }
+    }
+}
+
+impl Settings3d {
     /// The band in world units distances are clamped to; `f32::MAX` for none.
     pub(crate) fn world_band(&self) -> f32 {
         self.band.map_or(f32::MAX, |b| b * self.voxel_size)

@@ -275,17 +275,7 @@ fn signed_distance_matches_reference() {
 fn full_mask_signed_is_minus_far() {
     let ctx = Context::shared();
     let jfa = Jfa2d::new(&ctx.device).unwrap();
-    let (_, dist) = run_jfa(
-        &ctx,
-        &jfa,
-        &[true; 12 * 9],
-        12,
-        9,
-        JfaSettings2d {
-            signed: true,
-            ..JfaSettings2d::default()
-        },
-    );
+    let (_, dist) = run_jfa(&ctx, &jfa, &[true; 12 * 9], 12, 9, JfaSettings2d::signed());
     assert!(dist.iter().all(|&d| d == -FAR));
 }
 
@@ -306,10 +296,7 @@ fn a_recycled_2d_field_is_taken_and_equals_a_new_one() {
         upload(w, h, 0.05, 42),
         upload(40, 30, 0.05, 43),
     );
-    let signed = Settings2d {
-        signed: true,
-        ..Settings2d::default()
-    };
+    let signed = Settings2d::signed();
     let (pooled, fresh) = (
         Distance2d::new(&ctx.device).unwrap(),
         Distance2d::new(&ctx.device).unwrap(),

@@ -348,10 +348,7 @@ fn every_column_band_count_is_exact() {
             // At 8 bands the resolving z pass sweeps where every voxel is near a site
             // (`edt_columns.wgsl`'s SCAN), in the signed entry too.
             if bands == 8 {
-                let options = Settings3d {
-                    signed: true,
-                    ..Settings3d::default()
-                };
+                let options = Settings3d::signed();
                 let (_, _, dist) = run_3d(&ctx, &d3, &case.mask, case.size, &options);
                 let signed = cpu::signed_3d(&case.mask, case.size);
                 check_signed(&format!("{} signed, 8 bands", case.name), &dist, &signed);
@@ -442,10 +439,7 @@ fn the_sweep_after_a_workgroup_y_pass_is_exact() {
         let (nearest, _, dist) = run_3d(&ctx, &d3, &case.mask, s, &Settings3d::default());
         let e = score(&case, &nearest, &dist, &exact);
         assert_eq!(e.wrong, 0, "hollow x < {x_end}: {} wrong voxels", e.wrong);
-        let options = Settings3d {
-            signed: true,
-            ..Settings3d::default()
-        };
+        let options = Settings3d::signed();
         let (_, _, dist) = run_3d(&ctx, &d3, &case.mask, s, &options);
         check_signed(
             &format!("hollow x < {x_end}, signed"),
@@ -503,10 +497,7 @@ fn the_y_pass_of_a_split_field_sweeps_exactly() {
                 "{name}, split, bands {bands:?}: {} wrong voxels",
                 e.wrong
             );
-            let options = Settings3d {
-                signed: true,
-                ..Settings3d::default()
-            };
+            let options = Settings3d::signed();
             let (_, _, dist) = run_3d(&ctx, &d3, mask, s, &options);
             check_signed(
                 &format!("{name}, split, bands {bands:?}, signed"),

@@ -414,14 +414,7 @@ fn recycled_fields_are_taken_again_and_written_whole() {
     // (case, bytes per binding, options)
     let cases = [
         ("exact", None, Settings3d::default()),
-        (
-            "exact signed",
-            None,
-            Settings3d {
-                signed: true,
-                ..Settings3d::default()
-            },
-        ),
+        ("exact signed", None, Settings3d::signed()),
         (
             "exact split",
             Some(40 * 33 * 21 * 4 / 2),
@@ -556,10 +549,7 @@ fn recycled_fields_are_taken_again_and_written_whole() {
     });
     let pooled = Distance3d::new(&ctx.device).unwrap();
     let fresh = Distance3d::new(&ctx.device).unwrap();
-    let signed = Settings3d {
-        signed: true,
-        ..Settings3d::default()
-    };
+    let signed = Settings3d::signed();
     let bits_2d = |f: &fieldkit::distance::FieldBuf2d| {
         let mut words = read_buffer(&ctx, &f.nearest).unwrap();
         words.extend(read_buffer(&ctx, f.nearest_outside.as_ref().unwrap()).unwrap());

@@ -106,17 +106,7 @@ fn whole_chain_signed() {
         .iter()
         .map(|&v| v != 0)
         .collect();
-    let (nearest, d) = run_jfa(
-        &ctx,
-        &jfa,
-        &m,
-        W * 2,
-        H * 2,
-        JfaSettings2d {
-            signed: true,
-            ..JfaSettings2d::default()
-        },
-    );
+    let (nearest, d) = run_jfa(&ctx, &jfa, &m, W * 2, H * 2, JfaSettings2d::signed());
     fieldkit::assert_summary!(
         "whole_chain_signed",
         Summary::floats(&[H * 2, W * 2], &d, 3)
@@ -133,15 +123,7 @@ fn visualized_field_matches_reference_image() {
     let seeds = upload_mask(&ctx.device, &ctx.queue, &gallery::shapes_mask(w, h), w, h).unwrap();
     let mut enc = ctx.encoder("chain");
     let field = jfa
-        .encode(
-            &ctx.device,
-            &mut enc,
-            &seeds,
-            &JfaSettings2d {
-                signed: true,
-                ..JfaSettings2d::default()
-            },
-        )
+        .encode(&ctx.device, &mut enc, &seeds, &JfaSettings2d::signed())
         .unwrap();
     ctx.submit_and_wait("chain", enc).unwrap();
     let rgba = gallery::visualize_distance(&ctx, &field.distance, 4.0, 20.0).unwrap();

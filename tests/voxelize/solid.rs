@@ -241,15 +241,7 @@ fn voxels_feed_the_distance_stages() {
         .unwrap();
     let volume = v.encode_volume(&ctx.device, &mut enc, &voxels).unwrap();
     let field = d3
-        .encode(
-            &ctx.device,
-            &mut enc,
-            &volume,
-            &Settings3d {
-                signed: true,
-                ..Settings3d::default()
-            },
-        )
+        .encode(&ctx.device, &mut enc, &volume, &Settings3d::signed())
         .unwrap();
     ctx.submit_and_wait("mesh sdf", enc).unwrap();
     let got: Vec<f32> = read_texture(&ctx, &field.distance).unwrap();

@@ -166,10 +166,7 @@ pub(super) fn methods3(args: &Args) -> Vec<(String, Settings3d)> {
         .map(|name| (name.to_string(), Settings3d::default()))
         .chain(std::iter::once((
             EXACT_SIGNED.to_string(),
-            Settings3d {
-                signed: true,
-                ..Settings3d::default()
-            },
+            Settings3d::signed(),
         )));
     let jfa = Variant::ALL.into_iter().map(|v| {
         (
