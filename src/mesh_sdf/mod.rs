@@ -88,6 +88,8 @@ pub struct MeshField {
 /// [`encode`](Self::encode) for each mesh or grid.
 pub struct MeshSdf {
     per_triangle: ComputePipeline<stage::per_triangle::Entry>,
+    cross: ComputePipeline<stage::cross_triangles::Entry>,
+    layout: stage::Overrides,
     resolve: ComputePipeline<stage::resolve::Entry>,
     march: ComputePipeline<stage::march_texture::Entry>,
     // Scratch kept for the next field of the same size: the keys and the parity rows.
@@ -129,8 +131,18 @@ impl ParityLayout {
 impl MeshSdf {
     /// Create the pipelines.
     pub fn new(device: &wgpu::Device) -> Result<Self, Error> {
+        Self::with_layout(device, stage::Overrides::default())
+    }
+
+    /// [`Self::new`] with the per-triangle pass laid out otherwise (the shader's `LOAD_FIRST`
+    /// and `CROSS_APART`): for `cargo xtask bench mesh-sdf`, which times them side by side.
+    /// Every layout gives the same field.
+    #[doc(hidden)]
+    pub fn with_layout(device: &wgpu::Device, layout: stage::Overrides) -> Result<Self, Error> {
         Ok(Self {
-            per_triangle: ComputePipeline::new(device)?,
+            per_triangle: ComputePipeline::with_constants(device, &layout)?,
+            cross: ComputePipeline::with_constants(device, &layout)?,
+            layout,
             resolve: ComputePipeline::new(device)?,
             march: ComputePipeline::new(device)?,
             keys: Default::default(),
@@ -159,7 +171,7 @@ impl MeshSdf {
         grid: &Grid,
         settings: &Settings,
     ) -> Result<MeshField, Error> {
-        let (local, layout, groups) = checked(device, mesh, grid, settings)?;
+        let (local, layout, [groups, cross_groups]) = checked(device, mesh, grid, settings)?;
         let count = local.source.len() as u64;
         let size = grid.size;
         let voxels = grid.voxels();
@@ -215,6 +227,19 @@ impl MeshSdf {
             groups,
             "mesh sdf per triangle",
         )?;
+        if settings.signed && self.layout.cross_apart {
+            self.cross.record(
+                device,
+                &mut rec,
+                &stage::cross_triangles::Resources {
+                    params: (&params).into(),
+                    triangles: (&triangles).into(),
+                    parity: (&parity).into(),
+                },
+                cross_groups,
+                "mesh sdf crossings",
+            )?;
+        }
         self.resolve.record(
             device,
             &mut rec,
@@ -268,7 +293,7 @@ fn checked(
     mesh: &Mesh,
     grid: &Grid,
     settings: &Settings,
-) -> Result<(crate::voxelize::GridMesh, ParityLayout, [u32; 3]), Error> {
+) -> Result<(crate::voxelize::GridMesh, ParityLayout, [[u32; 3]; 2]), Error> {
     settings.check()?;
     let local = mesh.to_grid(grid)?;
     let count = local.source.len() as u64;
@@ -293,8 +318,11 @@ fn checked(
     let limit = device.limits().max_storage_buffer_binding_size;
     check_count("key buffer bytes", voxels * 4, limit)?;
     check_count("parity buffer bytes", layout.words * 4, limit)?;
-    let groups = triangle_groups(device, count)?;
-    Ok((local, layout, groups))
+    let groups = wide_groups(device, "rows of triangle workgroups", count)?;
+    // A thread a triangle for the crossings apart.
+    let cross = ComputePipeline::<stage::cross_triangles::Entry>::groups_for([count as u32, 1, 1]);
+    let cross_groups = wide_groups(device, "rows of crossing workgroups", cross[0] as u64)?;
+    Ok((local, layout, [groups, cross_groups]))
 }
 
 /// [`Error::Size`] where `got` is over `max`.
@@ -310,10 +338,11 @@ fn check_count(what: &'static str, got: u64, max: u64) -> Result<(), Error> {
     Ok(())
 }
 
-/// One workgroup per triangle, in rows of the device's widest dispatch.
-fn triangle_groups(device: &wgpu::Device, count: u64) -> Result<[u32; 3], Error> {
+/// `count` workgroups (one a triangle, or the crossings' of 64 triangles), in rows of the
+/// device's widest dispatch.
+fn wide_groups(device: &wgpu::Device, what: &'static str, count: u64) -> Result<[u32; 3], Error> {
     let wide = device.limits().max_compute_workgroups_per_dimension as u64;
     let rows = count.div_ceil(wide);
-    check_count("rows of triangle workgroups", rows, wide)?;
+    check_count(what, rows, wide)?;
     Ok([count.min(wide) as u32, rows as u32, 1])
 }

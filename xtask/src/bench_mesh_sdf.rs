@@ -28,6 +28,7 @@
 use fieldkit::distance::{Distance3d, Settings3d};
 use fieldkit::gpu::{Context, read_texture};
 use fieldkit::mesh_sdf::{MeshSdf, Settings, cpu};
+use fieldkit::shaders::mesh_sdf::mesh_sdf::Overrides;
 use fieldkit::voxelize::{Grid, Mesh, Voxelizer};
 use glam::DVec3;
 
@@ -81,8 +82,9 @@ pub fn run(args: &crate::measure::Args) -> Result<(), String> {
         "| mesh | triangles | grid | method | ms (min–max) | max error, voxels | RMS | wrong signs in the band / samples | beyond / samples |\n|---|---|---|---|---|---|---|---|---|"
     );
     let mut rows = Vec::new();
-    // `FIELDKIT_BENCH_OURS_ONLY`: the given mesh's `mesh sdf` rows alone (a quick look at a
-    // change): no analytic meshes, no voxel-centre path, no peers.
+    // `FIELDKIT_BENCH_OURS_ONLY`: the given mesh's `mesh sdf` rows alone, in each layout of the
+    // per-triangle pass (a quick look at a change): no analytic meshes, no voxel-centre path,
+    // no peers.
     let ours_only = std::env::var_os("FIELDKIT_BENCH_OURS_ONLY").is_some();
     let mut meshes = meshes(args)?;
     if ours_only {
@@ -92,7 +94,14 @@ pub fn run(args: &crate::measure::Args) -> Result<(), String> {
         for &n in &sizes {
             let grid = Grid::fit(&mesh, n).map_err(|e| e.to_string())?;
             let what = (name.as_str(), mesh.triangles.len(), n);
-            let (t, field) = time_mesh_sdf(&ctx, heater.as_ref(), args, &mesh, &grid)?;
+            let (t, field) = time_mesh_sdf(
+                &ctx,
+                heater.as_ref(),
+                args,
+                &mesh,
+                &grid,
+                Overrides::default(),
+            )?;
             let samples = reference(&mesh, &grid, &field)?;
             rows.push(report(
                 what,
@@ -101,6 +110,12 @@ pub fn run(args: &crate::measure::Args) -> Result<(), String> {
                 compare(&samples, &grid, &field),
             ));
             if ours_only {
+                // The per-triangle pass's other layouts, beside the default.
+                for (method, layout) in layouts() {
+                    let (t, field) =
+                        time_mesh_sdf(&ctx, heater.as_ref(), args, &mesh, &grid, layout)?;
+                    rows.push(report(what, method, t, compare(&samples, &grid, &field)));
+                }
                 continue;
             }
             let (t, field) = time_voxel_centres(&ctx, heater.as_ref(), args, &mesh, &grid, closed)?;
@@ -189,6 +204,27 @@ fn meshes(args: &crate::measure::Args) -> Result<Vec<(String, Mesh, bool)>, Stri
 
 type Timed = ((f64, f64, f64), Vec<f32>);
 
+/// The per-triangle pass's layouts besides the default, by name: the crossings in the
+/// triangle's workgroup, and every offer's atomic without a load first.
+fn layouts() -> [(&'static str, Overrides); 2] {
+    [
+        (
+            "mesh sdf, crossings in the workgroup",
+            Overrides {
+                cross_apart: false,
+                ..Overrides::default()
+            },
+        ),
+        (
+            "mesh sdf, no load first",
+            Overrides {
+                load_first: false,
+                ..Overrides::default()
+            },
+        ),
+    ]
+}
+
 /// A peer's row: its method, its time (median, min, max) and its field.
 type PeerRow = (String, (f64, f64, f64), Vec<f32>);
 
@@ -198,8 +234,9 @@ fn time_mesh_sdf(
     args: &crate::measure::Args,
     mesh: &Mesh,
     grid: &Grid,
+    layout: Overrides,
 ) -> Result<Timed, String> {
-    let sdf = MeshSdf::new(&ctx.device).map_err(|e| e.to_string())?;
+    let sdf = MeshSdf::with_layout(&ctx.device, layout).map_err(|e| e.to_string())?;
     let settings = Settings {
         band: BAND,
         ..Default::default()
