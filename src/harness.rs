@@ -202,14 +202,12 @@ pub fn compare_image(
         .to_rgba8();
     let actual_path: PathBuf = dir.join(format!("{name}.actual.png"));
     let diff_path: PathBuf = dir.join(format!("{name}.diff.png"));
+    // Beside the reference for a look, on failure; a write that fails leaves the error as it is.
+    let save = |path: &Path, pixels: &[u8]| {
+        let _ = image::save_buffer(path, pixels, width, height, image::ExtendedColorType::Rgba8);
+    };
     if expected.dimensions() != (width, height) {
-        let _ = image::save_buffer(
-            &actual_path,
-            rgba,
-            width,
-            height,
-            image::ExtendedColorType::Rgba8,
-        );
+        save(&actual_path, rgba);
         return Err(format!(
             "{name}: size {width}x{height}, reference is {:?}",
             expected.dimensions()
@@ -235,20 +233,8 @@ pub fn compare_image(
         outlier_fraction: outliers as f32 / (width * height).max(1) as f32,
     };
     if result.mean > tol.mean || result.outlier_fraction > tol.outlier_fraction {
-        let _ = image::save_buffer(
-            &actual_path,
-            rgba,
-            width,
-            height,
-            image::ExtendedColorType::Rgba8,
-        );
-        let _ = image::save_buffer(
-            &diff_path,
-            &diff,
-            width,
-            height,
-            image::ExtendedColorType::Rgba8,
-        );
+        save(&actual_path, rgba);
+        save(&diff_path, &diff);
         return Err(format!(
             "{name}: mean difference {:.3} (allowed {}), outliers {:.4} (allowed {}); wrote {} and {}",
             result.mean,

@@ -207,21 +207,13 @@ type Timed = ((f64, f64, f64), Vec<f32>);
 /// The per-triangle pass's layouts besides the default, by name: the crossings in the
 /// triangle's workgroup, and every offer's atomic without a load first.
 fn layouts() -> [(&'static str, Overrides); 2] {
+    let mut in_workgroup = Overrides::default();
+    in_workgroup.cross_apart = false;
+    let mut no_load = Overrides::default();
+    no_load.load_first = false;
     [
-        (
-            "mesh sdf, crossings in the workgroup",
-            Overrides {
-                cross_apart: false,
-                ..Overrides::default()
-            },
-        ),
-        (
-            "mesh sdf, no load first",
-            Overrides {
-                load_first: false,
-                ..Overrides::default()
-            },
-        ),
+        ("mesh sdf, crossings in the workgroup", in_workgroup),
+        ("mesh sdf, no load first", no_load),
     ]
 }
 
@@ -397,17 +389,11 @@ fn run_peer(
             grid.voxel,
             out.display()
         );
-        let output = std::process::Command::new("sh")
-            .args(["-c", &command])
-            .output()
-            .map_err(|e| format!("{command}: {e}"))?;
-        if !output.status.success() {
-            return Err(format!(
-                "{command}: {}",
-                String::from_utf8_lossy(&output.stderr)
-            ));
-        }
-        for line in String::from_utf8_lossy(&output.stdout).lines() {
+        let output = crate::measure::stdout_of(
+            std::process::Command::new("sh").args(["-c", &command]),
+            &command,
+        )?;
+        for line in output.lines() {
             let Some(row) = line.strip_prefix("ROW ") else {
                 continue;
             };

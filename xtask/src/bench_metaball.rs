@@ -34,14 +34,8 @@ struct Row {
     method: String,
     grid: String,
     build_ms: f64,
-    frame_ms: f64,
-    march_ms: f64,
-    steps: StepStats,
-    hits: usize,
-    rms_err: f64,
-    max_err: f64,
-    /// Sampled pixels where the tracer and the reference disagree on hit or miss, %.
-    mismatch: f64,
+    /// Its frame.
+    m: Measured,
 }
 
 /// What is traced: the SDF texture, or the field from blob bins.
@@ -185,13 +179,7 @@ fn bench(
                 method: method.into(),
                 grid,
                 build_ms,
-                frame_ms: m.frame_ms,
-                march_ms: m.march_ms,
-                steps: m.steps,
-                hits: m.hits,
-                rms_err: m.rms_err,
-                max_err: m.max_err,
-                mismatch: m.mismatch,
+                m,
             };
             let line = format!(
                 "| {} | {} | {} | {:.3} | {:.3} | {:.3} | {:.1} | {} | {:.2}% | {:.4} | {:.3} | {:.2}% |",
@@ -199,14 +187,14 @@ fn bench(
                 row.method,
                 row.grid,
                 row.build_ms,
-                row.frame_ms,
-                row.march_ms,
-                row.steps.mean,
-                row.steps.p95,
-                row.steps.at_cap * 100.0,
-                row.rms_err,
-                row.max_err,
-                row.mismatch
+                row.m.frame_ms,
+                row.m.march_ms,
+                row.m.steps.mean,
+                row.m.steps.p95,
+                row.m.steps.at_cap * 100.0,
+                row.m.rms_err,
+                row.m.max_err,
+                row.m.mismatch
             );
             bar.suspend(|| println!("{line}"));
             rows.push(row);
@@ -298,15 +286,15 @@ fn bench(
             r.method,
             r.grid,
             r.build_ms,
-            r.frame_ms,
-            r.march_ms,
-            r.steps.mean,
-            r.steps.p95,
-            r.steps.at_cap,
-            r.hits,
-            r.rms_err,
-            r.max_err,
-            r.mismatch
+            r.m.frame_ms,
+            r.m.march_ms,
+            r.m.steps.mean,
+            r.m.steps.p95,
+            r.m.steps.at_cap,
+            r.m.hits,
+            r.m.rms_err,
+            r.m.max_err,
+            r.m.mismatch
         )
         .map_err(|e| e.to_string())?;
     }
@@ -340,6 +328,7 @@ struct Measured {
     hits: usize,
     rms_err: f64,
     max_err: f64,
+    /// Sampled pixels where the tracer and the reference disagree on hit or miss, %.
     mismatch: f64,
 }
 
@@ -551,13 +540,13 @@ fn chart(path: &std::path::Path, adapter: &str, rows: &[Row]) -> Result<(), Stri
         .iter()
         .map(|r| crate::chart::Point {
             group: format!("{} instances", r.instances),
-            ms: r.frame_ms,
-            err: r.rms_err,
+            ms: r.m.frame_ms,
+            err: r.m.rms_err,
             label: if r.grid == "bins" {
-                format!("{} ({:.0} steps)", r.method, r.steps.mean)
+                format!("{} ({:.0} steps)", r.method, r.m.steps.mean)
             } else {
                 let how = r.method.trim_start_matches("SDF ");
-                format!("SDF {how} {} ({:.0} steps)", r.grid, r.steps.mean)
+                format!("SDF {how} {} ({:.0} steps)", r.grid, r.m.steps.mean)
             },
         })
         .collect();

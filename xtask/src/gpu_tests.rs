@@ -60,9 +60,8 @@ fn prepare(root: &Path) -> Result<usize, String> {
         return Err("no .gpu/env.sh: run ../shared/device/prepare.sh once first".into());
     }
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-    let out = Command::new(&cargo)
-        .current_dir(root)
-        .args([
+    let out = crate::measure::stdout_of(
+        Command::new(&cargo).current_dir(root).args([
             "test",
             "--release",
             "-p",
@@ -73,20 +72,14 @@ fn prepare(root: &Path) -> Result<usize, String> {
             "--tests",
             "--no-run",
             "--message-format=json",
-        ])
-        .output()
-        .map_err(|e| format!("cargo: {e}"))?;
-    if !out.status.success() {
-        return Err(format!(
-            "cargo test --no-run failed:\n{}",
-            String::from_utf8_lossy(&out.stderr)
-        ));
-    }
+        ]),
+        "cargo test --no-run",
+    )?;
     let staging = gpu.join("tests");
     std::fs::remove_dir_all(&staging).ok();
     std::fs::create_dir_all(&staging).map_err(|e| e.to_string())?;
     let mut names = Vec::new();
-    for line in String::from_utf8_lossy(&out.stdout).lines() {
+    for line in out.lines() {
         let Ok(v) = serde_json::from_str::<serde_json::Value>(line) else {
             continue;
         };

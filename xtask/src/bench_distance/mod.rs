@@ -185,27 +185,18 @@ fn run_peer(cmd: &str, mask: &[u8], shape: &[usize], tag: &str) -> Result<Peer, 
     std::fs::write(&mask_path, mask).map_err(|e| e.to_string())?;
     let mut parts = cmd.split_whitespace();
     let program = parts.next().ok_or("empty --peer")?;
-    let out = std::process::Command::new(program)
-        .args(parts)
-        .arg("--mask")
-        .arg(&mask_path)
-        .arg("--shape")
-        .args(shape.iter().map(|s| s.to_string()))
-        .arg("--write-dist")
-        .arg(&dist_path)
-        .output()
-        .map_err(|e| format!("could not start the peer `{cmd}`: {e}"))?;
-    if !out.status.success() {
-        return Err(format!(
-            "peer failed: {}",
-            String::from_utf8_lossy(&out.stderr)
-        ));
-    }
-    let json = String::from_utf8_lossy(&out.stdout)
-        .lines()
-        .last()
-        .unwrap_or_default()
-        .to_string();
+    let out = crate::measure::stdout_of(
+        std::process::Command::new(program)
+            .args(parts)
+            .arg("--mask")
+            .arg(&mask_path)
+            .arg("--shape")
+            .args(shape.iter().map(|s| s.to_string()))
+            .arg("--write-dist")
+            .arg(&dist_path),
+        &format!("the peer `{cmd}`"),
+    )?;
+    let json = out.lines().last().unwrap_or_default().to_string();
     let v: serde_json::Value =
         serde_json::from_str(&json).map_err(|e| format!("peer printed `{json}`: {e}"))?;
     let ms = v["ms_median"]
