@@ -207,10 +207,15 @@ type Timed = ((f64, f64, f64), Vec<f32>);
 /// The per-triangle pass's layouts besides the default, by name: the crossings in the
 /// triangle's workgroup, and every offer's atomic without a load first.
 fn layouts() -> [(&'static str, Overrides); 2] {
-    let mut in_workgroup = Overrides::default();
-    in_workgroup.cross_apart = false;
-    let mut no_load = Overrides::default();
-    no_load.load_first = false;
+    let default = Overrides::default();
+    let in_workgroup = Overrides {
+        cross_apart: false,
+        ..default
+    };
+    let no_load = Overrides {
+        load_first: false,
+        ..default
+    };
     [
         ("mesh sdf, crossings in the workgroup", in_workgroup),
         ("mesh sdf, no load first", no_load),
