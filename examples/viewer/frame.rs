@@ -96,6 +96,8 @@ pub struct FrameCost {
     pub made: Made,
     /// What the scene reported of its last measured frame (patches, instances, grid).
     pub stats: Vec<String>,
+    /// The scene's readouts on the frame after the screen size changed.
+    pub resize_stats: Vec<String>,
 }
 
 impl FrameCost {
@@ -326,6 +328,7 @@ fn measure(
         passes: last_passes,
         made,
         stats,
+        resize_stats: resized_frame.stats,
     })
 }
 
@@ -451,6 +454,7 @@ fn print_table(adapter: &str, costs: &[FrameCost]) {
     }
     for c in costs.iter().filter(|c| !c.stats.is_empty()) {
         println!("{}: {}", c.scene, c.stats.join("; "));
+        println!("{} after a resize: {}", c.scene, c.resize_stats.join("; "));
     }
 }
 

@@ -43,6 +43,10 @@ fn check_placement(m: Mat4, stage: &'static str) -> Result<(), Error> {
 }
 
 /// The march's output for one viewport size, kept between frames.
+/// Pixels to which the march's images round each side up ([`Raymarcher`] keeps them while a
+/// target resized by less fits).
+const SCRATCH_STEP: u32 = 128;
+
 struct Scratch {
     size: [u32; 2],
     colour: wgpu::TextureView,
@@ -286,12 +290,24 @@ impl Raymarcher {
         })
     }
 
+    /// Images the march writes for a target of `size`: the kept ones where they hold it and
+    /// are not over twice its area, else new ones, each side rounded up to a multiple of
+    /// [`SCRATCH_STEP`] so that a window resized by a little keeps them (a new image of this
+    /// size can cost milliseconds of CPU where the driver maps fresh memory for it).
     fn scratch(&self, device: &wgpu::Device, size: [u32; 2]) -> std::sync::Arc<Scratch> {
+        let area = |s: [u32; 2]| s[0] as u64 * s[1] as u64;
         let mut slot = self.scratch.lock().unwrap_or_else(|e| e.into_inner());
         match &*slot {
-            Some(s) if s.size == size => s.clone(),
+            Some(s)
+                if s.size[0] >= size[0]
+                    && s.size[1] >= size[1]
+                    && area(s.size) <= 2 * area(size) =>
+            {
+                s.clone()
+            }
             _ => {
-                let s = std::sync::Arc::new(Scratch::new(device, size));
+                let rounded = size.map(|n| n.div_ceil(SCRATCH_STEP).max(1) * SCRATCH_STEP);
+                let s = std::sync::Arc::new(Scratch::new(device, rounded));
                 *slot = Some(s.clone());
                 s
             }
@@ -458,7 +474,7 @@ impl Raymarcher {
             &self.direct,
             &bound,
             rect,
-            view.origin,
+            view,
             scratch,
         )))
     }
@@ -595,7 +611,7 @@ impl Raymarcher {
             &self.march,
             &marched,
             rect,
-            view.origin,
+            view,
             scratch,
         )))
     }
@@ -644,7 +660,7 @@ impl Raymarcher {
         }
         for (what, view) in [("colour", colour), ("depth", depth)] {
             let t = view.texture();
-            let [w, h] = marched.scratch.size;
+            let [w, h] = marched.target;
             if t.width() < w || t.height() < h {
                 return Err(Error::Invalid {
                     stage,
@@ -653,7 +669,7 @@ impl Raymarcher {
                          size) {:?}",
                         t.width(),
                         t.height(),
-                        marched.scratch.size
+                        marched.target
                     ),
                 });
             }
@@ -715,7 +731,7 @@ impl Raymarcher {
         else {
             return Ok(false);
         };
-        let [w, h] = marched.scratch.size;
+        let [w, h] = marched.target;
         for (i, t) in targets.iter().chain([&depth]).enumerate() {
             let t = t.texture();
             if t.width() < w || t.height() < h {
@@ -726,7 +742,7 @@ impl Raymarcher {
                          (origin + size) {:?}",
                         t.width(),
                         t.height(),
-                        marched.scratch.size
+                        marched.target
                     ),
                 });
             }
@@ -815,6 +831,8 @@ struct Frame {
 pub struct Marched {
     /// Pixels marched: `[x0, y0, x1, y1)`.
     pub rect: [u32; 4],
+    /// The view's origin + viewport: what a target must hold.
+    target: [u32; 2],
     scratch: std::sync::Arc<Scratch>,
     number: u64,
 }
@@ -827,9 +845,10 @@ fn dispatch_rect<E: crate::bind::Entry>(
     pipeline: &ComputePipeline<E>,
     bound: &crate::bind::Bound<E>,
     rect: [u32; 4],
-    origin: [u32; 2],
+    view: &View,
     scratch: std::sync::Arc<Scratch>,
 ) -> Marched {
+    let origin = view.origin;
     let mut rec = rec.recorder();
     let mut pass = rec.compute_pass(label, label);
     let [ox, oy] = origin;
@@ -845,6 +864,7 @@ fn dispatch_rect<E: crate::bind::Entry>(
         + 1;
     Marched {
         rect: [rect[0] + ox, rect[1] + oy, rect[2] + ox, rect[3] + oy],
+        target: view.target_size(),
         scratch,
         number,
     }

@@ -51,6 +51,19 @@ impl Rig {
         Self { ctx, renderer }
     }
 
+    /// The bricks of `volume` and each one's (min, max) density, read back.
+    pub fn brick_ranges(&self, volume: &Volume) -> (Bricks, Vec<[f32; 2]>) {
+        let ctx = &self.ctx;
+        let mut enc = ctx.encoder("bricks");
+        let bricks = self
+            .renderer
+            .encode_bricks(&ctx.device, &mut enc, volume)
+            .unwrap();
+        ctx.submit_and_wait("bricks", enc).unwrap();
+        let ranges = bytemuck::cast_slice(&read_buffer(ctx, &bricks.ranges).unwrap()).to_vec();
+        (bricks, ranges)
+    }
+
     pub fn volume(&self, data: &[f32], dims: [u32; 3], spacing: Vec3, origin: Vec3) -> Volume {
         Volume::upload(
             &self.ctx.device,

@@ -25,6 +25,15 @@ fn three_blobs() -> Vec<Vec4> {
 }
 
 /// Splat and seeds alone, on the fitted grid.
+/// The three blobs, at 6 cells per edge.
+fn three_blobs_at_6() -> (Vec<Vec4>, Settings) {
+    let settings = Settings {
+        cells_per_edge: 6.0,
+        ..Settings::default()
+    };
+    (three_blobs(), settings)
+}
+
 fn seed_stages(
     ctx: &fieldkit::gpu::Context,
     voxels: &[Vec4],
@@ -40,11 +49,7 @@ fn seed_stages(
 #[test]
 fn splat_matches_the_cpu_sums() {
     let ctx = Context::shared();
-    let voxels = three_blobs();
-    let settings = Settings {
-        cells_per_edge: 6.0,
-        ..Settings::default()
-    };
+    let (voxels, settings) = three_blobs_at_6();
     let (grid, seeds) = seed_stages(&ctx, &voxels, &settings);
     let gpu = words(&ctx, &seeds.density_fixed);
     let (cpu_sum, count) = cpu::splat_fixed(&voxels, 1.0, &settings, &grid, seeds.fixed_scale);
@@ -104,11 +109,7 @@ fn fixed_point_scale_keeps_sums_in_u32() {
 #[test]
 fn seeds_are_the_boundary_voxels_moved_onto_the_surface() {
     let ctx = Context::shared();
-    let voxels = three_blobs();
-    let settings = Settings {
-        cells_per_edge: 6.0,
-        ..Settings::default()
-    };
+    let (voxels, settings) = three_blobs_at_6();
     let (grid, seeds) = seed_stages(&ctx, &voxels, &settings);
     let fixed = words(&ctx, &seeds.density_fixed);
     let keys = words(&ctx, &seeds.keys);

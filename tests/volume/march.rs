@@ -10,7 +10,6 @@
 use crate::common;
 
 use common::volume::*;
-use fieldkit::gpu::read_buffer;
 use fieldkit::harness::Summary;
 use fieldkit::view::View;
 use fieldkit::volume::{MarchSettings, Mode, Shadow, TransferFunction, Volume};
@@ -301,15 +300,7 @@ fn skipping_bricks_does_not_change_the_image() {
         assert!(drawn > 100, "{name}: only {drawn} pixels drawn");
     }
     // And there is something to skip: bricks the transfer function leaves clear.
-    let ctx = &rig.ctx;
-    let mut enc = ctx.encoder("bricks");
-    let bricks = rig
-        .renderer
-        .encode_bricks(&ctx.device, &mut enc, &volume)
-        .unwrap();
-    ctx.submit_and_wait("bricks", enc).unwrap();
-    let ranges: Vec<[f32; 2]> =
-        bytemuck::cast_slice(&read_buffer(ctx, &bricks.ranges).unwrap()).to_vec();
+    let (_, ranges) = rig.brick_ranges(&volume);
     let clear = ranges.iter().filter(|r| r[1] <= tf.clear_below()).count();
     println!("{clear} of {} bricks are clear", ranges.len());
     assert!(clear > 0 && clear < ranges.len());
@@ -323,15 +314,7 @@ fn brick_ranges_are_the_dilated_min_and_max() {
         .map(|i| (i * 37 % 101) as f32 / 100.0)
         .collect();
     let volume = rig.volume(&data, dims, Vec3::splat(0.1), Vec3::ZERO);
-    let ctx = &rig.ctx;
-    let mut enc = ctx.encoder("bricks");
-    let bricks = rig
-        .renderer
-        .encode_bricks(&ctx.device, &mut enc, &volume)
-        .unwrap();
-    ctx.submit_and_wait("bricks", enc).unwrap();
-    let got: Vec<[f32; 2]> =
-        bytemuck::cast_slice(&read_buffer(ctx, &bricks.ranges).unwrap()).to_vec();
+    let (bricks, got) = rig.brick_ranges(&volume);
     assert_eq!(bricks.count, [3, 2, 2]);
     // What the texture holds: densities rounded to f16.
     let stored = |x: i32, y: i32, z: i32| {

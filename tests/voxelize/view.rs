@@ -4,15 +4,14 @@
 
 use fieldkit::gpu::Context;
 use fieldkit::view::Targets;
+use fieldkit::voxelize::{Attributes, Grid, Mesh, Voxelizer};
 use fieldkit::voxelize::{ColourBy, VoxelView};
-use fieldkit::voxelize::{Grid, Mesh, Voxelizer};
 use glam::{DVec3, Vec3};
 
-#[test]
-fn one_voxel_covers_its_square_in_its_colour() {
-    let ctx = Context::shared();
-    let device = &ctx.device;
-    // A triangle facing +z strictly inside voxel (1, 1, 1) of a 3³ grid: that voxel alone.
+/// A triangle facing +z strictly inside voxel (1, 1, 1) of a 3³ grid (that voxel alone, in the
+/// triangle's colour), its attributes, and a camera looking down −z at it: x and y in
+/// [-0.5, 3.5] fill a 32 × 32 target, so the voxel's face spans pixels 12..20 on both axes.
+fn one_voxel(ctx: &Context) -> (Grid, Attributes, glam::Mat4) {
     let mesh = Mesh {
         positions: vec![
             DVec3::new(1.2, 1.2, 1.5),
@@ -28,13 +27,10 @@ fn one_voxel_covers_its_square_in_its_colour() {
         voxel: 1.0,
         size: [3, 3, 3],
     };
-    let voxelizer = Voxelizer::new(device).unwrap();
+    let voxelizer = Voxelizer::new(&ctx.device).unwrap();
     let voxels = ctx
-        .block_on(voxelizer.attributes(device, &ctx.queue, &mesh, &grid))
+        .block_on(voxelizer.attributes(&ctx.device, &ctx.queue, &mesh, &grid))
         .unwrap();
-    assert_eq!(voxels.count, 1);
-    // Looking down −z at the voxel: x and y in [-0.5, 3.5] fill the 32 × 32 target, so the
-    // voxel's face spans pixels 12..20 on both axes.
     let proj = glam::camera::rh::proj::directx::orthographic(-2.0, 2.0, -2.0, 2.0, 0.1, 20.0);
     let view_proj = proj
         * glam::camera::rh::view::look_at_mat4(
@@ -42,6 +38,15 @@ fn one_voxel_covers_its_square_in_its_colour() {
             Vec3::new(1.5, 1.5, 0.0),
             Vec3::Y,
         );
+    (grid, voxels, view_proj)
+}
+
+#[test]
+fn one_voxel_covers_its_square_in_its_colour() {
+    let ctx = Context::shared();
+    let device = &ctx.device;
+    let (grid, voxels, view_proj) = one_voxel(&ctx);
+    assert_eq!(voxels.count, 1);
     let (colour_format, depth_format) = (
         wgpu::TextureFormat::Rgba8Unorm,
         wgpu::TextureFormat::Depth32Float,
@@ -124,32 +129,7 @@ fn a_point_light_shades_by_distance() {
     use fieldkit::voxelize::Light;
     let ctx = Context::shared();
     let device = &ctx.device;
-    let mesh = Mesh {
-        positions: vec![
-            DVec3::new(1.2, 1.2, 1.5),
-            DVec3::new(1.8, 1.3, 1.5),
-            DVec3::new(1.4, 1.8, 1.5),
-        ],
-        triangles: vec![[0, 1, 2]],
-        colors: vec![[200, 30, 90, 255]; 3],
-        ..Mesh::default()
-    };
-    let grid = Grid {
-        origin: DVec3::ZERO,
-        voxel: 1.0,
-        size: [3, 3, 3],
-    };
-    let voxelizer = Voxelizer::new(device).unwrap();
-    let voxels = ctx
-        .block_on(voxelizer.attributes(device, &ctx.queue, &mesh, &grid))
-        .unwrap();
-    let proj = glam::camera::rh::proj::directx::orthographic(-2.0, 2.0, -2.0, 2.0, 0.1, 20.0);
-    let view_proj = proj
-        * glam::camera::rh::view::look_at_mat4(
-            Vec3::new(1.5, 1.5, 10.0),
-            Vec3::new(1.5, 1.5, 0.0),
-            Vec3::Y,
-        );
+    let (grid, voxels, view_proj) = one_voxel(&ctx);
     let format = wgpu::TextureFormat::Rgba32Float;
     let view = VoxelView::new(device, format, wgpu::TextureFormat::Depth32Float).unwrap();
     // The top face's corners are (1 or 2, 1 or 2, 2); the light is 1 above its centre.

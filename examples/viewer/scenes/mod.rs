@@ -315,16 +315,26 @@ impl Scenes {
             "composite" => {
                 // One colour and one depth target: the island writes depth, the sea fades
                 // against it and writes its own, the cloud stops at both.
+                let ms = |t: std::time::Instant| t.elapsed().as_secs_f64() * 1e3;
+                let t = std::time::Instant::now();
                 let island = made(&mut self.island, || Actor::new(device))?;
                 let mut island_s = island_settings(&s.actor);
                 island_s.raymarch.output = fieldkit::metaball::Output::Shaded;
                 let mut stats = island.encode_island(&island_s, frame)?;
+                let island_ms = ms(t);
+                let t = std::time::Instant::now();
                 let ocean = self.ocean.get_or_insert_with(|| Ocean::new(device));
                 stats.extend(ocean.draw(&s.ocean, frame)?);
+                let sea_ms = ms(t);
+                let t = std::time::Instant::now();
                 let v = made(&mut self.volume, || VolumeScene::new(device, queue))?;
                 let cloud = Mat4::from_translation(Vec3::new(-6.0, 11.0, -20.0))
                     * Mat4::from_scale(Vec3::new(40.0, 12.0, 24.0));
                 stats.extend(v.draw(&s.volume, cloud, frame)?);
+                stats.push(format!(
+                    "CPU to record: island {island_ms:.3} ms, sea {sea_ms:.3} ms, cloud {:.3} ms",
+                    ms(t)
+                ));
                 Ok(stats)
             }
             other => Err(invalid(format!(
