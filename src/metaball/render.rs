@@ -291,22 +291,23 @@ impl Raymarcher {
     }
 
     /// Images the march writes for a target of `size`: the kept ones where they hold it and
-    /// are not over twice its area, else new ones, each side rounded up to a multiple of
-    /// [`SCRATCH_STEP`] so that a window resized by a little keeps them (a new image of this
-    /// size can cost milliseconds of CPU where the driver maps fresh memory for it).
+    /// are not over twice the area they would be made at, else new ones, each side rounded up
+    /// to a multiple of [`SCRATCH_STEP`] so that a window resized by a little keeps them (a
+    /// new image of this size can cost milliseconds of CPU where the driver maps fresh memory
+    /// for it).
     fn scratch(&self, device: &wgpu::Device, size: [u32; 2]) -> std::sync::Arc<Scratch> {
         let area = |s: [u32; 2]| s[0] as u64 * s[1] as u64;
+        let rounded = size.map(|n| n.div_ceil(SCRATCH_STEP).max(1) * SCRATCH_STEP);
         let mut slot = self.scratch.lock().unwrap_or_else(|e| e.into_inner());
         match &*slot {
             Some(s)
                 if s.size[0] >= size[0]
                     && s.size[1] >= size[1]
-                    && area(s.size) <= 2 * area(size) =>
+                    && area(s.size) <= 2 * area(rounded) =>
             {
                 s.clone()
             }
             _ => {
-                let rounded = size.map(|n| n.div_ceil(SCRATCH_STEP).max(1) * SCRATCH_STEP);
                 let s = std::sync::Arc::new(Scratch::new(device, rounded));
                 *slot = Some(s.clone());
                 s
