@@ -1040,3 +1040,50 @@ fn two_marches_in_one_encoder_keep_their_own_parameters() {
         );
     }
 }
+
+/// A raymarcher keeps its march images across a resize the target still fits: the frame it
+/// draws at the smaller size after a larger one (its images now 256 × 256 for a 130 × 120
+/// target) is, to the bit, the frame one that never drew larger draws (images 256 × 128).
+#[test]
+fn a_smaller_frame_after_a_larger_is_the_frame_alone() {
+    let ctx = Context::shared();
+    let (_, field) = one_blob(&ctx);
+    let (colour, depth) = (
+        wgpu::TextureFormat::Rgba32Float,
+        wgpu::TextureFormat::Depth32Float,
+    );
+    let make = || Raymarcher::new(&ctx.device, &ctx.queue, colour, depth, false).unwrap();
+    let draw = |marcher: &Raymarcher, size: [u32; 2]| -> Vec<[f32; 4]> {
+        let view = View {
+            viewport: size,
+            ..camera(Vec3::new(0.3, 0.4, 2.5), Vec3::ZERO, false)
+        };
+        let targets = Targets::new(&ctx.device, size, colour, depth);
+        let mut enc = ctx.encoder("resize");
+        targets.clear(&mut enc, wgpu::Color::TRANSPARENT, 1.0);
+        let (cv, dv) = (&targets.colour_view, &targets.depth_view);
+        let drawn = marcher
+            .encode(
+                &ctx.device,
+                &mut enc,
+                cv,
+                dv,
+                &field,
+                Mat4::IDENTITY,
+                &view,
+                &normals(),
+            )
+            .unwrap();
+        assert!(drawn, "{size:?}: the blob is on screen");
+        ctx.submit_and_wait("resize", enc).unwrap();
+        read_texture(&ctx, &targets.colour).unwrap()
+    };
+    let kept = make();
+    let large = draw(&kept, [150, 130]);
+    let small = [130, 120];
+    let after = draw(&kept, small);
+    let alone = draw(&make(), small);
+    assert!(large.iter().filter(|p| p[3] != 0.0).count() > 500);
+    assert!(after.iter().filter(|p| p[3] != 0.0).count() > 500);
+    assert!(after == alone, "the smaller frame after the larger differs");
+}
