@@ -13,7 +13,8 @@
 
 @compute @workgroup_size(8, 8)
 fn copy_depth(@builtin(global_invocation_id) id: vec3<u32>) {
-    if any(id.xy >= textureDimensions(depth_out)) {
+    // The copy may be larger than the scene's depth (kept across a resize): the depth's size.
+    if any(id.xy >= textureDimensions(depth_in)) {
         return;
     }
     textureStore(depth_out, id.xy, vec4<f32>(textureLoad(depth_in, id.xy, 0).r, 0.0, 0.0, 1.0));

@@ -99,6 +99,8 @@ struct FrameParams {
     // Per layer: the layer of the user's map array it samples, or −1 for the built-in detail.
     height_maps: vec4<i32>,
     normal_maps: vec4<i32>,
+    // The targets' size in pixels (the scene's depth copy may be larger: kept across a resize).
+    viewport: vec2<f32>,
 }
 
 struct SurfaceOut {
@@ -274,7 +276,7 @@ fn shade(in: SurfaceOut) -> Shaded {
     // Depth fade from the scene's depth behind this pixel.
     var fade = 0.0;
     if frame.use_fade != 0u {
-        let size = vec2<f32>(textureDimensions(scene_depth));
+        let size = frame.viewport;
         let ndc = vec2<f32>(in.position.x / size.x * 2.0 - 1.0, 1.0 - in.position.y / size.y * 2.0);
         let scene = view_depth(ndc, textureLoad(scene_depth, vec2<i32>(in.position.xy), 0).r);
         let own = view_depth(ndc, in.position.z);

@@ -29,8 +29,8 @@ pub use readback::{
     Readback, readback_buffer, readback_buffer_in, readback_buffers, readback_texture,
     readback_texture_in,
 };
-pub(crate) use targets::check_target_bytes;
 pub use targets::{GBUFFER_FORMATS, clear_depth, depth_cleared, target_bytes_per_sample};
+pub(crate) use targets::{check_target_bytes, screen_fits, screen_rounded};
 pub use timing::{Profiler, Record, Recorder, Timer};
 pub use upload::RING_UPLOADS;
 #[cfg(feature = "techniques")]

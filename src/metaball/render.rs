@@ -42,11 +42,7 @@ fn check_placement(m: Mat4, stage: &'static str) -> Result<(), Error> {
     Ok(())
 }
 
-/// The march's output for one viewport size, kept between frames.
-/// Pixels to which the march's images round each side up ([`Raymarcher`] keeps them while a
-/// target resized by less fits).
-const SCRATCH_STEP: u32 = 128;
-
+/// The march's output images, kept between frames while a resized target still fits them.
 struct Scratch {
     size: [u32; 2],
     colour: wgpu::TextureView,
@@ -290,25 +286,15 @@ impl Raymarcher {
         })
     }
 
-    /// Images the march writes for a target of `size`: the kept ones where they hold it and
-    /// are not over twice the area they would be made at, else new ones, each side rounded up
-    /// to a multiple of [`SCRATCH_STEP`] so that a window resized by a little keeps them (a
-    /// new image of this size can cost milliseconds of CPU where the driver maps fresh memory
-    /// for it).
+    /// Images the march writes for a target of `size`: the kept ones where they still serve it
+    /// ([`gpu::screen_fits`](crate::gpu::screen_fits): a window resized by a little keeps
+    /// them), else new ones at [`gpu::screen_rounded`](crate::gpu::screen_rounded) of it.
     fn scratch(&self, device: &wgpu::Device, size: [u32; 2]) -> std::sync::Arc<Scratch> {
-        let area = |s: [u32; 2]| s[0] as u64 * s[1] as u64;
-        let rounded = size.map(|n| n.div_ceil(SCRATCH_STEP).max(1) * SCRATCH_STEP);
         let mut slot = self.scratch.lock().unwrap_or_else(|e| e.into_inner());
         match &*slot {
-            Some(s)
-                if s.size[0] >= size[0]
-                    && s.size[1] >= size[1]
-                    && area(s.size) <= 2 * area(rounded) =>
-            {
-                s.clone()
-            }
+            Some(s) if crate::gpu::screen_fits(s.size, size) => s.clone(),
             _ => {
-                let s = std::sync::Arc::new(Scratch::new(device, rounded));
+                let s = std::sync::Arc::new(Scratch::new(device, crate::gpu::screen_rounded(size)));
                 *slot = Some(s.clone());
                 s
             }

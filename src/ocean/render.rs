@@ -9,7 +9,7 @@
 
 use std::sync::Mutex;
 
-use glam::{DMat4, DVec2, DVec3, Mat4, Vec3};
+use glam::{DMat4, DVec2, DVec3, Mat4, Vec2, Vec3};
 
 use super::Waves;
 use super::gpu_lod::{self, GpuLod, LodDraws};
@@ -193,8 +193,8 @@ pub struct OceanRenderer {
     /// The built-in detail texture's view.
     detail_view: wgpu::TextureView,
     sampler: wgpu::Sampler,
-    /// The copy of the scene's depth the fade reads (`R32Float`) and its view, kept while the
-    /// size holds.
+    /// The copy of the scene's depth the fade reads (`R32Float`) and its view, kept while it
+    /// still serves the depth's size.
     depth_copy: Mutex<Option<(wgpu::Texture, wgpu::TextureView)>>,
     copy_depth: ComputePipeline<depth_copy::copy_depth::Entry>,
     /// The patches chosen on the GPU, where the device can draw them.
@@ -560,7 +560,8 @@ impl OceanRenderer {
         let eye = camera.eye();
         let origin = DVec2::new(eye.x, eye.z);
         let wave_set = waves.gpu(origin, time);
-        let frame = self.frame_params(camera, look, origin, time, fade)?;
+        let viewport = Vec2::new(depth.width() as f32, depth.height() as f32);
+        let frame = self.frame_params(camera, look, origin, time, fade, viewport)?;
         let copy_view = self.scene_depth(device, rec, depth, fade)?;
         let kept = &self.kept;
         let (up, enc) = (&kept.uploads, &mut *rec.encoder);
@@ -753,6 +754,7 @@ impl OceanRenderer {
         origin: DVec2,
         time: f64,
         fade: bool,
+        viewport: Vec2,
     ) -> Result<FrameParams, Error> {
         let height_maps = map_indices(&look.height_layers, &self.height_maps, "height")?;
         let normal_maps = map_indices(&look.normal_layers, &self.normal_maps, "normal")?;
@@ -782,11 +784,14 @@ impl OceanRenderer {
             subsurface_colour: look.subsurface_colour,
             height_maps,
             normal_maps,
+            viewport,
         })
     }
 
     /// The copy of the scene's depth the fade reads (a 1×1 stand-in without fade), kept from
-    /// frame to frame while its size holds: its view.
+    /// frame to frame while it still serves the depth's size
+    /// ([`gpu::screen_fits`](crate::gpu::screen_fits): a window resized by a little keeps
+    /// it): its view.
     fn scene_depth(
         &self,
         device: &wgpu::Device,
@@ -796,28 +801,28 @@ impl OceanRenderer {
     ) -> Result<wgpu::TextureView, Error> {
         let size = depth.size();
         let mut cache = self.depth_copy.lock().unwrap_or_else(|e| e.into_inner());
-        let copy_size = if fade {
-            size
-        } else {
-            wgpu::Extent3d {
-                width: 1,
-                height: 1,
-                depth_or_array_layers: 1,
+        let kept = |c: &wgpu::Texture| {
+            let have = [c.width(), c.height()];
+            match fade {
+                true => crate::gpu::screen_fits(have, [size.width, size.height]),
+                false => have == [1, 1],
             }
         };
-        if cache.as_ref().is_none_or(|c| c.0.size() != copy_size) {
+        if cache.as_ref().is_none_or(|c| !kept(&c.0)) {
+            let [width, height] = match fade {
+                true => crate::gpu::screen_rounded([size.width, size.height]),
+                false => [1, 1],
+            };
             // The old copy goes first, so its memory can hold the new one.
             *cache = None;
-            let copy = device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("ocean scene depth copy"),
-                size: copy_size,
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: wgpu::TextureFormat::R32Float,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::STORAGE_BINDING,
-                view_formats: &[],
-            });
+            let copy = crate::gpu::texture(
+                device,
+                "ocean scene depth copy",
+                [width, height, 1],
+                wgpu::TextureDimension::D2,
+                wgpu::TextureFormat::R32Float,
+                wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::STORAGE_BINDING,
+            );
             let view = copy.create_view(&Default::default());
             *cache = Some((copy, view));
         }

@@ -465,6 +465,6 @@ impl<M: Entry, B: Entry, K: Entry> DensityMarch<M, B, K> {
             ],
             STAGE,
         )?;
-        Ok(Some(VolumeMarched::new(rect, colour, lease)))
+        Ok(Some(VolumeMarched::new(rect, view.viewport, colour, lease)))
     }
 }

@@ -112,24 +112,25 @@ impl Kept {
     }
 }
 
-/// The premultiplied image a march writes (viewport-sized `Rgba16Float`): one of `marched`
-/// no longer held, else a new one.
+/// The premultiplied image a march for a `viewport` writes (`Rgba16Float`): one of `marched`
+/// no longer held that still serves it ([`gpu::screen_fits`](crate::gpu::screen_fits), so a
+/// window resized by a little keeps it), else a new one of
+/// [`gpu::screen_rounded`](crate::gpu::screen_rounded) of it.
 pub(super) fn march_target(
     marched: &Leased<Target>,
     device: &wgpu::Device,
     viewport: [u32; 2],
 ) -> (Target, Lease) {
-    let size = [viewport[0], viewport[1], 1];
-    let format = wgpu::TextureFormat::Rgba16Float;
     marched.take(
-        |t| t.is(size, format),
+        |t| crate::gpu::screen_fits([t.texture.width(), t.texture.height()], viewport),
         || {
+            let [w, h] = crate::gpu::screen_rounded(viewport);
             Target::new(
                 device,
                 "volume march",
-                size,
+                [w, h, 1],
                 wgpu::TextureDimension::D2,
-                format,
+                wgpu::TextureFormat::Rgba16Float,
             )
         },
     )

@@ -186,8 +186,12 @@ fn march_variant(settings: &MarchSettings, light: Option<&LightVolume>) -> (usiz
 pub struct VolumeMarched {
     /// Pixels marched: `[x0, y0, x1, y1)`.
     pub rect: [u32; 4],
-    /// Premultiplied colour and transmittance of the marched rectangle (viewport-sized
-    /// `Rgba16Float`; texels outside `rect` are left from earlier marches).
+    /// The viewport marched for: the size of the targets it composites into.
+    pub viewport: [u32; 2],
+    /// Premultiplied colour and transmittance of the marched rectangle at the viewport's
+    /// pixels (`Rgba16Float`; texels outside `rect` are left from earlier marches). At least
+    /// the viewport's size: kept across a resize it still holds, so it can be larger (each side
+    /// is made rounded up to a multiple of 128 pixels).
     pub colour: wgpu::Texture,
     /// The view the composite samples.
     view: wgpu::TextureView,
@@ -195,9 +199,10 @@ pub struct VolumeMarched {
 }
 
 impl VolumeMarched {
-    fn new(rect: [u32; 4], target: Target, lease: Lease) -> Self {
+    fn new(rect: [u32; 4], viewport: [u32; 2], target: Target, lease: Lease) -> Self {
         Self {
             rect,
+            viewport,
             colour: target.texture,
             view: target.view,
             _lease: lease,
@@ -508,10 +513,11 @@ impl VolumeRenderer {
             groups,
             STAGE,
         )?;
-        Ok(Some(VolumeMarched::new(rect, colour, lease)))
+        Ok(Some(VolumeMarched::new(rect, view.viewport, colour, lease)))
     }
 
-    /// Blend a march over `colour` (the format this renderer was made for, the march's size).
+    /// Blend a march over `colour` (the format this renderer was made for, the size of the
+    /// march's viewport).
     pub fn encode_composite(
         &self,
         device: &wgpu::Device,
@@ -520,15 +526,14 @@ impl VolumeRenderer {
         marched: &VolumeMarched,
     ) -> Result<(), Error> {
         let t = colour.texture();
-        if [t.width(), t.height()] != [marched.colour.width(), marched.colour.height()] {
+        if [t.width(), t.height()] != marched.viewport {
+            let [w, h] = marched.viewport;
             return Err(Error::Invalid {
                 stage: volume_composite::STAGE,
                 what: format!(
-                    "colour target is {}×{}, the march {}×{}",
+                    "colour target is {}×{}, the march's viewport {w}×{h}",
                     t.width(),
                     t.height(),
-                    marched.colour.width(),
-                    marched.colour.height()
                 ),
             });
         }

@@ -174,18 +174,19 @@ impl Rig {
     }
 }
 
-/// A march's premultiplied image, zero outside the rectangle it marched (what lies there is
-/// left from earlier marches into the same kept texture).
+/// A march's premultiplied image over its viewport, zero outside the rectangle it marched (what
+/// lies there is left from earlier marches into the same kept texture, which may be larger
+/// than the viewport).
 pub fn read_marched(ctx: &Context, m: &VolumeMarched) -> Vec<[f32; 4]> {
     let px: Vec<[u16; 4]> = read_texture(ctx, &m.colour).unwrap();
     let w = m.colour.width();
     let [x0, y0, x1, y1] = m.rect;
-    px.iter()
-        .enumerate()
-        .map(|(i, p)| {
-            let (x, y) = (i as u32 % w, i as u32 / w);
+    let [vw, vh] = m.viewport;
+    (0..vh)
+        .flat_map(|y| (0..vw).map(move |x| (x, y)))
+        .map(|(x, y)| {
             if (x0..x1).contains(&x) && (y0..y1).contains(&y) {
-                p.map(|h| half::f16::from_bits(h).to_f32())
+                px[(y * w + x) as usize].map(|h| half::f16::from_bits(h).to_f32())
             } else {
                 [0.0; 4]
             }

@@ -619,3 +619,49 @@ fn two_draws_in_one_encoder_keep_their_own_parameters() {
         );
     }
 }
+
+/// The copy of the scene's depth the fade reads is kept across a resize the targets still fit
+/// (made with each side rounded up to 128 pixels): a faded frame drawn after a larger one, its
+/// copy 256 × 128 for 96 × 64 targets, comes out to the bit as a fresh renderer's (copy
+/// 128 × 128).
+#[test]
+fn a_faded_frame_after_a_larger_is_the_frame_alone() {
+    let ctx = Context::shared();
+    let calm = Waves::new(vec![wave(1.0, 0.0, 1e-4, 50.0, 0.0)], 0.0).unwrap();
+    let make = || {
+        OceanRenderer::new(&ctx.device, &ctx.queue, Output::GBuffer([RGBA32; 4]), false).unwrap()
+    };
+    let scene_ndc = ndc_of(&camera(), 15.0) as f32;
+    let draw_at = |renderer: &OceanRenderer, [w, h]: [u32; 2]| -> Vec<Vec4> {
+        let sized = |format| {
+            common::texture(
+                &ctx,
+                [w, h, 1],
+                format,
+                wgpu::TextureUsages::RENDER_ATTACHMENT
+                    | wgpu::TextureUsages::COPY_SRC
+                    | wgpu::TextureUsages::TEXTURE_BINDING,
+            )
+        };
+        let targets: Vec<_> = (0..4).map(|_| sized(RGBA32)).collect();
+        let depth = sized(wgpu::TextureFormat::Depth32Float);
+        draw(
+            &ctx,
+            renderer,
+            &calm,
+            &calm_look(),
+            &targets,
+            &depth,
+            scene_ndc,
+            true,
+        );
+        read_texture(&ctx, &targets[3]).unwrap()
+    };
+    let kept = make();
+    draw_at(&kept, [W + 40, H + 30]);
+    let after = draw_at(&kept, [W, H]);
+    let alone = draw_at(&make(), [W, H]);
+    let fading = after.iter().filter(|p| p.x > 0.01 && p.x < 0.99).count();
+    assert!(fading > 100, "{fading} pixels fading");
+    assert!(after == alone, "the faded frame after a larger one differs");
+}

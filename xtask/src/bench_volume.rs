@@ -113,8 +113,11 @@ impl Scene<'_> {
             .submit_and_wait("bench volume image", enc)
             .map_err(|e| e.to_string())?;
         let px: Vec<[u16; 4]> = read_texture(self.ctx, &m.colour).map_err(|e| e.to_string())?;
-        Ok(px
-            .iter()
+        // The kept image may be larger than the viewport: its first rows and columns.
+        let w = m.colour.width() as usize;
+        let [vw, vh] = m.viewport.map(|n| n as usize);
+        Ok((0..vh)
+            .flat_map(|y| px[y * w..y * w + vw].iter())
             .map(|p| p.map(|h| half::f16::from_bits(h).to_f32()))
             .collect())
     }
