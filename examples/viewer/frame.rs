@@ -29,6 +29,9 @@ const WARM_UP: u32 = 30;
 /// Frames whose GPU objects are counted, after the timed ones.
 const COUNTED: u32 = 5;
 
+/// The most frames timed after a size setting changes, waiting for the scene to settle.
+const AFTER_CHANGE_MAX: u32 = 300;
+
 /// Frames whose recording takes longer than this on the CPU are counted (a 144 Hz frame is
 /// 6.9 ms in all).
 const SLOW_CPU_MS: f64 = 2.0;
@@ -68,6 +71,10 @@ pub struct FrameCost {
     pub first_ms: f64,
     /// Record + submit, CPU.
     pub cpu: Spread,
+    /// Of that, the encoder's `finish` and the queue's `submit`.
+    pub submit: Spread,
+    /// Of that, inside fieldkit's calls (`None`: the scene does not time them).
+    pub fieldkit: Option<Spread>,
     /// Start of recording to the GPU done.
     pub wall: Spread,
     /// The whole frame on the GPU: every pass, render passes included, and the gaps between
@@ -82,12 +89,16 @@ pub struct FrameCost {
     pub resize_cpu_ms: f64,
     pub resize_wall_ms: f64,
     /// The frame after a size setting changed ([`size_change`]): CPU, and wall; and the most
-    /// CPU any of the frames after it took.
+    /// CPU any of the frames after it took (five, or until the scene settled: a new cloud made
+    /// on a worker thread arrived).
     pub change_cpu_ms: f64,
     pub change_wall_ms: f64,
     pub after_change_cpu_ms: f64,
     /// The loop's floor: an empty encoder submitted and waited for.
     pub floor: Spread,
+    /// The floor's CPU time: an empty encoder made, finished and submitted (what any frame
+    /// pays before it records anything).
+    pub floor_cpu: Spread,
     /// The scene's typed error, if it refused its settings.
     pub error: Option<String>,
     /// The timed passes of the last profiled frame, GPU ms each.
@@ -98,6 +109,11 @@ pub struct FrameCost {
     pub stats: Vec<String>,
     /// The scene's readouts on the frame after the screen size changed.
     pub resize_stats: Vec<String>,
+    /// The scene's readouts on the frame after a size setting changed.
+    pub change_stats: Vec<String>,
+    /// Which of the frames after that one (five, or until the scene settled) took the most
+    /// CPU, and its readouts.
+    pub slowest_after_change: (u32, Vec<String>),
 }
 
 impl FrameCost {
@@ -193,6 +209,7 @@ fn timed_frame(
         profiler,
     );
     let cpu = start.elapsed().as_secs_f64() * 1e3;
+    let (submit, fieldkit) = (report.submit_ms, report.fieldkit_ms);
     ctx.device
         .poll(wgpu::PollType::Wait {
             submission_index: Some(index),
@@ -202,6 +219,8 @@ fn timed_frame(
     let wall = start.elapsed().as_secs_f64() * 1e3;
     Ok(Timed {
         cpu,
+        submit,
+        fieldkit,
         wall,
         error: report.error.map(|e| e.to_string()),
         stats: report.stats,
@@ -212,6 +231,10 @@ fn timed_frame(
 struct Timed {
     /// Record + submit, CPU ms.
     cpu: f64,
+    /// The encoder's `finish` and the queue's `submit` alone, CPU ms.
+    submit: f64,
+    /// Inside fieldkit's calls, CPU ms, where the scene times them.
+    fieldkit: Option<f64>,
     /// Start of recording to the GPU done, ms.
     wall: f64,
     error: Option<String>,
@@ -231,11 +254,14 @@ fn measure(
     for i in 1..WARM_UP {
         timed_frame(ctx, &mut scenes, saved, scene, &targets, size, i, None)?;
     }
-    let (mut cpu, mut wall, mut error) = (Vec::new(), Vec::new(), None);
+    let (mut cpu, mut wall, mut submit, mut error) = (Vec::new(), Vec::new(), Vec::new(), None);
+    let mut fieldkit = Vec::new();
     let mut stats = Vec::new();
     for i in WARM_UP..WARM_UP + frames {
         let t = timed_frame(ctx, &mut scenes, saved, scene, &targets, size, i, None)?;
         cpu.push(t.cpu);
+        submit.push(t.submit);
+        fieldkit.extend(t.fieldkit);
         wall.push(t.wall);
         error = error.or(t.error);
         stats = t.stats;
@@ -278,43 +304,52 @@ fn measure(
     let changed = size_change(scene, saved);
     let n = n + 1;
     let change = timed_frame(ctx, &mut scenes, &changed, scene, &small, resized, n, None)?;
-    let after_change_cpu_ms = (1..=5)
-        .map(|k| {
-            timed_frame(
-                ctx,
-                &mut scenes,
-                &changed,
-                scene,
-                &small,
-                resized,
-                n + k,
-                None,
-            )
-            .map(|t| t.cpu)
-        })
-        .collect::<Result<Vec<_>, _>>()?
+    // Five frames, and on until what the scene makes elsewhere for the change (a new cloud
+    // on a worker thread) has arrived and been drawn.
+    let mut after_change = Vec::new();
+    for k in 1..=AFTER_CHANGE_MAX {
+        let t = timed_frame(
+            ctx,
+            &mut scenes,
+            &changed,
+            scene,
+            &small,
+            resized,
+            n + k,
+            None,
+        )?;
+        after_change.push((t.cpu, k, t.stats));
+        if k >= 5 && !scenes.busy(scene, &changed) {
+            break;
+        }
+    }
+    let (after_change_cpu_ms, slowest, slowest_stats) = after_change
         .into_iter()
-        .fold(0.0, f64::max);
+        .max_by(|a, b| a.0.total_cmp(&b.0))
+        .expect("five frames");
     let floor = (0..frames)
         .map(|_| {
             let start = Instant::now();
             let enc = ctx.device.create_command_encoder(&Default::default());
             let index = ctx.queue.submit([enc.finish()]);
+            let cpu = start.elapsed().as_secs_f64() * 1e3;
             ctx.device
                 .poll(wgpu::PollType::Wait {
                     submission_index: Some(index),
                     timeout: None,
                 })
                 .map_err(|e| fieldkit::Error::Readback(e.to_string()))?;
-            Ok(start.elapsed().as_secs_f64() * 1e3)
+            Ok((cpu, start.elapsed().as_secs_f64() * 1e3))
         })
-        .collect::<Result<Vec<_>, fieldkit::Error>>()?;
+        .collect::<Result<Vec<(f64, f64)>, fieldkit::Error>>()?;
     Ok(FrameCost {
         scene: scene.to_string(),
         size,
         first_ms,
         slow_frames: cpu.iter().filter(|&&c| c > SLOW_CPU_MS).count(),
         cpu: Spread::of(cpu),
+        submit: Spread::of(submit),
+        fieldkit: (!fieldkit.is_empty()).then(|| Spread::of(fieldkit)),
         wall: Spread::of(wall),
         gpu_frame: Spread::of(gpu_frame),
         gpu_compute: Spread::of(gpu),
@@ -323,12 +358,15 @@ fn measure(
         change_cpu_ms: change.cpu,
         change_wall_ms: change.wall,
         after_change_cpu_ms,
-        floor: Spread::of(floor),
+        floor: Spread::of(floor.iter().map(|f| f.1).collect()),
+        floor_cpu: Spread::of(floor.iter().map(|f| f.0).collect()),
         error,
         passes: last_passes,
         made,
         stats,
         resize_stats: resized_frame.stats,
+        change_stats: change.stats,
+        slowest_after_change: (slowest, slowest_stats),
     })
 }
 
@@ -419,27 +457,30 @@ fn gpu_frame_times(
 fn print_table(adapter: &str, costs: &[FrameCost]) {
     println!("frame cost on {adapter}");
     println!(
-        "| scene | size | CPU record + submit ms | submit → done ms | GPU frame ms | GPU timed passes ms | loop floor ms | frames > {SLOW_CPU_MS} ms CPU | first frame ms | resize frame CPU / wall ms | size change CPU / wall ms, then CPU at most | made a frame: buffers / textures / views / bind groups |"
+        "| scene | size | CPU record + submit ms | of which in fieldkit's calls ms | of which finish + submit ms | submit → done ms | GPU frame ms | GPU timed passes ms | loop floor CPU / wall ms | frames > {SLOW_CPU_MS} ms CPU | first frame ms | resize frame CPU / wall ms | size change CPU / wall ms, then CPU at most | made a frame: buffers / textures / views / bind groups |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     let s = |x: &Spread| format!("{:.3} ({:.3}–{:.3})", x.median, x.min, x.max);
     for c in costs {
         let [r_cpu, r_wall, c_cpu, c_wall, after] = c.hitches();
         let made = c.made.counts().map(|n| n.to_string()).join(" / ");
+        let floor = format!("{} / {}", s(&c.floor_cpu), s(&c.floor));
         let error = c
             .error
             .as_ref()
             .map_or(String::new(), |e| format!(" error: {e}"));
         println!(
-            "| {} | {}×{} | {} | {} | {} | {} | {} | {} | {:.1} | {r_cpu:.2} / {r_wall:.2} | {c_cpu:.2} / {c_wall:.2}, {after:.2} | {made} |{error}",
+            "| {} | {}×{} | {} | {} | {} | {} | {} | {} | {} | {} | {:.1} | {r_cpu:.2} / {r_wall:.2} | {c_cpu:.2} / {c_wall:.2}, {after:.2} | {made} |{error}",
             c.scene,
             c.size[0],
             c.size[1],
             s(&c.cpu),
+            c.fieldkit.as_ref().map_or("—".into(), s),
+            s(&c.submit),
             s(&c.wall),
             s(&c.gpu_frame),
             s(&c.gpu_compute),
-            s(&c.floor),
+            floor,
             c.slow_frames,
             c.first_ms,
         );
@@ -455,6 +496,17 @@ fn print_table(adapter: &str, costs: &[FrameCost]) {
     for c in costs.iter().filter(|c| !c.stats.is_empty()) {
         println!("{}: {}", c.scene, c.stats.join("; "));
         println!("{} after a resize: {}", c.scene, c.resize_stats.join("; "));
+        println!(
+            "{} after a size change: {}",
+            c.scene,
+            c.change_stats.join("; ")
+        );
+        let (k, stats) = &c.slowest_after_change;
+        println!(
+            "{} the slowest frame after that one (the {k}th): {}",
+            c.scene,
+            stats.join("; ")
+        );
     }
 }
 
@@ -464,11 +516,13 @@ fn write_csv(path: &Path, adapter: &str, start: &str, costs: &[FrameCost]) -> Re
         "adapter,pipeline_cache,scene,width,height,cpu_ms_median,cpu_ms_min,cpu_ms_max,wall_ms_median,wall_ms_min,\
          wall_ms_max,gpu_frame_ms_median,gpu_frame_ms_min,gpu_frame_ms_max,gpu_compute_ms_median,gpu_compute_ms_min,gpu_compute_ms_max,floor_ms_median,\
          floor_ms_min,floor_ms_max,slow_cpu_frames,first_frame_ms,resize_cpu_ms,resize_wall_ms,\
-         change_cpu_ms,change_wall_ms,after_change_cpu_ms,made_buffers,made_textures,made_views,made_bind_groups\n",
+         change_cpu_ms,change_wall_ms,after_change_cpu_ms,made_buffers,made_textures,made_views,made_bind_groups,\
+         floor_cpu_ms_median,floor_cpu_ms_min,floor_cpu_ms_max,submit_ms_median,submit_ms_min,submit_ms_max,\
+         fieldkit_ms_median,fieldkit_ms_min,fieldkit_ms_max\n",
     );
     for c in costs {
         text += &format!(
-            "\"{adapter}\",{start},{},{},{},{},{},{},{},{},{},{:.3},{},{}\n",
+            "\"{adapter}\",{start},{},{},{},{},{},{},{},{},{},{:.3},{},{},{},{},{}\n",
             c.scene,
             c.size[0],
             c.size[1],
@@ -481,6 +535,9 @@ fn write_csv(path: &Path, adapter: &str, start: &str, costs: &[FrameCost]) -> Re
             c.first_ms,
             c.hitches().map(|ms| format!("{ms:.4}")).join(","),
             c.made.counts().map(|n| n.to_string()).join(","),
+            c.floor_cpu.csv(),
+            c.submit.csv(),
+            c.fieldkit.as_ref().map_or(",,".into(), Spread::csv),
         );
     }
     std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))

@@ -181,6 +181,11 @@ pub struct FrameReport {
     /// The scene's typed error, if it refused its settings (the frame then holds what was
     /// recorded before the error).
     pub error: Option<Error>,
+    /// CPU milliseconds the encoder's `finish` and the queue's `submit` took ([`draw_frame`]).
+    pub submit_ms: f64,
+    /// CPU milliseconds inside fieldkit's calls, where the scene times them
+    /// ([`scenes::Frame::fieldkit_ms`]).
+    pub fieldkit_ms: Option<f64>,
 }
 
 /// Record and submit one frame of `scene`; `profiler` times its compute passes.
@@ -205,8 +210,10 @@ pub fn draw_frame(
         time,
         number,
     };
-    let report = record_frame(device, queue, scenes, saved, &shot, &mut encoder, profiler);
+    let mut report = record_frame(device, queue, scenes, saved, &shot, &mut encoder, profiler);
+    let start = std::time::Instant::now();
     let index = queue.submit([encoder.finish()]);
+    report.submit_ms = start.elapsed().as_secs_f64() * 1e3;
     scenes.submitted(device, queue);
     (report, index)
 }
@@ -255,14 +262,23 @@ pub fn record_frame(
             camera,
             time: shot.time,
             number: shot.number,
+            fieldkit_ms: None,
         };
-        scenes.encode(shot.scene, saved, &mut frame)
+        let lines = scenes.encode(shot.scene, saved, &mut frame);
+        (lines, frame.fieldkit_ms)
     };
     match result {
-        Ok(stats) => FrameReport { stats, error: None },
-        Err(e) => FrameReport {
+        (Ok(stats), fieldkit_ms) => FrameReport {
+            stats,
+            error: None,
+            submit_ms: 0.0,
+            fieldkit_ms,
+        },
+        (Err(e), fieldkit_ms) => FrameReport {
             stats: Vec::new(),
             error: Some(e),
+            submit_ms: 0.0,
+            fieldkit_ms,
         },
     }
 }

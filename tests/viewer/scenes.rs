@@ -535,6 +535,19 @@ fn frame_cost_measures_every_part_of_a_frame() {
         assert!(cpu > 0.0 && wall >= cpu, "{row:?}");
         assert!(col(row, "first_frame_ms") > 0.0, "{row:?}");
         assert!(col(row, "floor_ms_median") > 0.0, "{row:?}");
+        // Parts of the frame's CPU time: finish + submit, and (where the scene times them,
+        // the actor and the ocean) fieldkit's calls.
+        let submit = col(row, "submit_ms_median");
+        assert!(submit > 0.0 && submit <= cpu, "{row:?}");
+        if row.contains(&"actor") || row.contains(&"ocean") {
+            let fieldkit = col(row, "fieldkit_ms_median");
+            assert!(fieldkit > 0.0 && fieldkit <= cpu, "{row:?}");
+        }
+        let floor_cpu = col(row, "floor_cpu_ms_median");
+        assert!(
+            floor_cpu > 0.0 && floor_cpu <= col(row, "floor_ms_median"),
+            "{row:?}"
+        );
         assert!(
             col(row, "resize_wall_ms") >= col(row, "resize_cpu_ms"),
             "{row:?}"

@@ -137,11 +137,15 @@ impl Actor {
         }
         let base = &self.base.as_ref().expect("set above").2;
         let voxels = if s.animate {
-            s.animation.apply(base, s.block, frame.time)?
+            spent(&mut frame.fieldkit_ms, || {
+                s.animation.apply(base, s.block, frame.time)
+            })?
         } else {
             base.clone()
         };
-        self.prepare(device, queue, &voxels, frame.camera.reversed_z)?;
+        spent(&mut frame.fieldkit_ms, || {
+            self.prepare(device, queue, &voxels, frame.camera.reversed_z)
+        })?;
         let reversed = frame.camera.reversed_z;
         let instances = &self.instances.as_ref().expect("prepared").0;
         let view = frame.camera.view(frame.size);
@@ -162,16 +166,18 @@ impl Actor {
                 self.cubes = Some((style, Cubes::new(device, COLOUR, DEPTH, style)?));
             }
             let cubes = &self.cubes.as_ref().expect("set above").1;
-            cubes.encode(
-                device,
-                &mut *frame.rec,
-                cv,
-                dv,
-                instances,
-                s.block,
-                Mat4::IDENTITY,
-                view.view_proj,
-            )?;
+            spent(&mut frame.fieldkit_ms, || {
+                cubes.encode(
+                    device,
+                    &mut *frame.rec,
+                    cv,
+                    dv,
+                    instances,
+                    s.block,
+                    Mat4::IDENTITY,
+                    view.view_proj,
+                )
+            })?;
         }
         let animation = s.animate.then_some(s.animation);
         let key = (counts, s.block, animation, s.field);
@@ -190,6 +196,7 @@ impl Actor {
             "grid: {}×{}×{}",
             grid.size[0], grid.size[1], grid.size[2]
         ));
+        let start = std::time::Instant::now();
         match s.draw {
             ActorDraw::Surface | ActorDraw::Both => self.surface(device, s, &grid, frame)?,
             ActorDraw::Direct(method) => {
@@ -211,6 +218,7 @@ impl Actor {
             }
             ActorDraw::Cubes => {}
         }
+        *frame.fieldkit_ms.get_or_insert(0.0) += start.elapsed().as_secs_f64() * 1e3;
         Ok(stats)
     }
 }
@@ -278,6 +286,7 @@ impl Actor {
         let saved_clear = [0.55, 0.7, 0.85];
         clear(frame, saved_clear);
         let counts = s.counts()?;
+        let start = std::time::Instant::now();
         let voxels: Vec<glam::Vec4> = packed_grid(counts, s.block)?
             .into_iter()
             .map(|v| v - glam::Vec4::new(0.0, 3.5, 0.0, 0.0))
@@ -290,6 +299,7 @@ impl Actor {
         if let Some(grid) = s.field.fit_grid(&voxels, s.block)? {
             self.surface(device, s, &grid, frame)?;
         }
+        *frame.fieldkit_ms.get_or_insert(0.0) += start.elapsed().as_secs_f64() * 1e3;
         Ok(vec![format!("island instances: {}", voxels.len())])
     }
 }

@@ -168,6 +168,9 @@ pub struct Frame<'a, 'r> {
     pub time: f32,
     /// Frames drawn before this one.
     pub number: u32,
+    /// CPU milliseconds the scene spent inside fieldkit's calls this frame, where it times
+    /// them ([`spent`]): the rest of its recording is the app's own (clears, overlays).
+    pub fieldkit_ms: Option<f64>,
 }
 
 /// What a scene's frame shows in its panel: the lines, or the typed error that stopped it.
@@ -252,6 +255,16 @@ pub struct Scenes {
     island: Option<Actor>,
 }
 
+/// Run `f`, adding the CPU milliseconds it took to `total` (a frame's
+/// [`Frame::fieldkit_ms`]): what a scene spends inside fieldkit's calls, told apart from its
+/// own work (clears, overlays).
+pub(super) fn spent<T>(total: &mut Option<f64>, f: impl FnOnce() -> T) -> T {
+    let start = std::time::Instant::now();
+    let out = f();
+    *total.get_or_insert(0.0) += start.elapsed().as_secs_f64() * 1e3;
+    out
+}
+
 /// The composite's island: the actor's builder over a wide, low region, sunk half into the sea.
 fn island_settings(actor: &ActorSettings) -> ActorSettings {
     ActorSettings {
@@ -274,6 +287,8 @@ impl Scenes {
         match scene {
             "distance2d" => self.distance.as_ref().is_none_or(|d| d.busy(&s.distance)),
             "voxelizer" => self.voxelizer.as_ref().is_none_or(|v| v.busy(&s.voxelizer)),
+            // A cloud of a new size still being made on its worker thread.
+            "volume" | "composite" => self.volume.as_ref().is_some_and(|v| v.pending.is_some()),
             _ => false,
         }
     }
@@ -296,6 +311,7 @@ impl Scenes {
     /// Record `scene` into the frame; returns the lines its panel shows.
     pub fn encode(&mut self, scene: &str, s: &Saved, frame: &mut Frame) -> PanelLines {
         let (device, queue) = (frame.device, frame.queue);
+        let ms = |t: std::time::Instant| t.elapsed().as_secs_f64() * 1e3;
         match scene {
             "actor" => made(&mut self.actor, || Actor::new(device))?.encode(&s.actor, frame),
             "ocean" => {
@@ -306,7 +322,10 @@ impl Scenes {
             "volume" => {
                 clear(frame, [0.32, 0.52, 0.82]);
                 let v = made(&mut self.volume, || VolumeScene::new(device, queue))?;
-                v.draw(&s.volume, Mat4::IDENTITY, frame)
+                let start = std::time::Instant::now();
+                let lines = v.draw(&s.volume, Mat4::IDENTITY, frame);
+                *frame.fieldkit_ms.get_or_insert(0.0) += ms(start);
+                lines
             }
             "distance2d" => made(&mut self.distance, || Distance2dScene::new(device))?
                 .encode(&s.distance, frame),
@@ -315,7 +334,6 @@ impl Scenes {
             "composite" => {
                 // One colour and one depth target: the island writes depth, the sea fades
                 // against it and writes its own, the cloud stops at both.
-                let ms = |t: std::time::Instant| t.elapsed().as_secs_f64() * 1e3;
                 let t = std::time::Instant::now();
                 let island = made(&mut self.island, || Actor::new(device))?;
                 let mut island_s = island_settings(&s.actor);
@@ -330,7 +348,9 @@ impl Scenes {
                 let v = made(&mut self.volume, || VolumeScene::new(device, queue))?;
                 let cloud = Mat4::from_translation(Vec3::new(-6.0, 11.0, -20.0))
                     * Mat4::from_scale(Vec3::new(40.0, 12.0, 24.0));
+                let start = std::time::Instant::now();
                 stats.extend(v.draw(&s.volume, cloud, frame)?);
+                *frame.fieldkit_ms.get_or_insert(0.0) += ms(start);
                 stats.push(format!(
                     "CPU to record: island {island_ms:.3} ms, sea {sea_ms:.3} ms, cloud {:.3} ms",
                     ms(t)

@@ -90,7 +90,9 @@ impl Ocean {
     /// Draw the sea into the frame (over what it holds).
     pub(super) fn draw(&mut self, s: &OceanSettings, frame: &mut Frame) -> PanelLines {
         let (device, queue) = (frame.device, frame.queue);
-        let waves = Waves::new(s.waves.clone(), s.steepness)?;
+        let waves = spent(&mut frame.fieldkit_ms, || {
+            Waves::new(s.waves.clone(), s.steepness)
+        })?;
         let camera = frame.camera.ocean(frame.size);
         let write = s.depth_write.unwrap_or(true);
         let key = (s.gbuffer.is_some(), frame.camera.reversed_z, write);
@@ -137,7 +139,9 @@ impl Ocean {
             }
         };
         match s.gbuffer {
-            None => draw(frame.rec, &[&frame.targets.colour_view])?,
+            None => spent(&mut frame.fieldkit_ms, || {
+                draw(frame.rec, &[&frame.targets.colour_view])
+            })?,
             Some(shown) => {
                 if shown > 3 {
                     return Err(invalid(format!("G-buffer target {shown} (0–3)")));

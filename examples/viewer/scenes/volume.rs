@@ -50,8 +50,8 @@ impl Default for VolumeSettings {
     }
 }
 
-/// A cloud being made on a worker thread: its (size, seed) and where it arrives.
-pub(super) type PendingCloud = ((u32, u32), std::sync::mpsc::Receiver<Vec<f32>>);
+/// A cloud being made and uploaded on a worker thread: its (size, seed) and where it arrives.
+pub(super) type PendingCloud = ((u32, u32), std::sync::mpsc::Receiver<Result<Volume, Error>>);
 
 /// The volume's GPU state.
 pub struct VolumeScene {
@@ -80,14 +80,31 @@ impl VolumeScene {
         })
     }
 
-    /// The fBm cloud for `key` (size, seed): made on a worker thread, and taken when it is
-    /// ready. The first cloud is waited for (there is nothing else to draw); later ones are
-    /// drawn from the frame they are ready on, the previous one until then.
-    fn cloud_for(&mut self, key: (u32, u32)) -> Option<Vec<f32>> {
+    /// The fBm cloud for `key` (size, seed), made and uploaded on a worker thread (its
+    /// densities checked and packed to R8 there: about a million voxels at 106³), and taken
+    /// when it is ready. The first cloud is waited for (there is nothing else to draw); later
+    /// ones are drawn from the frame they are ready on, the previous one until then.
+    fn cloud_for(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        key: (u32, u32),
+    ) -> Option<Result<Volume, Error>> {
         if self.pending.as_ref().map(|p| p.0) != Some(key) {
             let (tx, rx) = std::sync::mpsc::channel();
+            let (device, queue) = (device.clone(), queue.clone());
             std::thread::spawn(move || {
-                let _ = tx.send(fbm_cloud([key.0; 3], key.1));
+                let n = key.0;
+                let volume = Volume::upload(
+                    &device,
+                    &queue,
+                    &fbm_cloud([n; 3], key.1),
+                    [n; 3],
+                    wgpu::TextureFormat::R8Unorm,
+                    Vec3::splat(1.0 / n as f32),
+                    Vec3::splat(-0.5),
+                );
+                let _ = tx.send(volume);
             });
             self.pending = Some((key, rx));
         }
@@ -174,17 +191,8 @@ impl VolumeScene {
                     max: 512,
                 });
             }
-            let dims = [s.size; 3];
-            if let Some(cloud) = self.cloud_for((s.size, s.seed)) {
-                let volume = Volume::upload(
-                    device,
-                    queue,
-                    &cloud,
-                    dims,
-                    wgpu::TextureFormat::R8Unorm,
-                    Vec3::splat(1.0 / s.size as f32),
-                    Vec3::splat(-0.5),
-                )?;
+            if let Some(volume) = self.cloud_for(device, queue, (s.size, s.seed)) {
+                let volume = volume?;
                 let bricks = self.renderer.encode_bricks(device, frame.rec, &volume)?;
                 self.volume = Some(((s.size, s.seed), volume, bricks));
             }
