@@ -185,11 +185,11 @@ impl VoxelizerScene {
         let (device, queue) = (frame.device, frame.queue);
         clear(frame, [0.1, 0.11, 0.13]);
         self.advance_job(device, queue, frame)?;
+        let mut stats = Vec::new();
         if self.job.is_none() && self.shown.as_ref().map(|x| &x.0) != Some(s) {
-            self.start_job(device, s, frame)?;
+            stats.push(self.start_job(device, s, frame)?);
         }
         self.take_slice(device, queue)?;
-        let mut stats = Vec::new();
         self.draw_shown(device, queue, s, frame, &mut stats)?;
         if s.slice {
             self.draw_slice(device, queue, frame, &mut stats);
@@ -236,15 +236,17 @@ impl VoxelizerScene {
         Ok(())
     }
 
-    /// Start a job for settings `s` (they changed), with the distance slice if asked for.
+    /// Start a job for settings `s` (they changed), with the distance slice if asked for;
+    /// returns what each part took of the CPU.
     fn start_job(
         &mut self,
         device: &wgpu::Device,
         s: &VoxelizerSettings,
         frame: &mut Frame,
-    ) -> Result<(), Error> {
-        let mesh = spun(self.mesh(&s.mesh)?, s.spin)?;
-        let grid = Grid::fit(&mesh, s.grid)?;
+    ) -> Result<String, Error> {
+        let (mut mesh_ms, mut sdf_ms, mut job_ms) = (None, None, None);
+        let mesh = spent(&mut mesh_ms, || spun(self.mesh(&s.mesh)?, s.spin))?;
+        let grid = spent(&mut mesh_ms, || Grid::fit(&mesh, s.grid))?;
         self.slice = None;
         let sdf_settings = fieldkit::mesh_sdf::Settings {
             band: s.band,
@@ -252,9 +254,10 @@ impl VoxelizerScene {
             ..Default::default()
         };
         let field = if s.slice || sdf_settings.march {
-            let field = self
-                .mesh_sdf
-                .encode(device, frame.rec, &mesh, &grid, &sdf_settings)?;
+            let field = spent(&mut sdf_ms, || {
+                self.mesh_sdf
+                    .encode(device, frame.rec, &mesh, &grid, &sdf_settings)
+            })?;
             if s.slice {
                 self.field = Some(field.texture.clone());
             }
@@ -262,13 +265,23 @@ impl VoxelizerScene {
         } else {
             None
         };
+        let readout = |job_ms: Option<f64>| {
+            let ms = |t: Option<f64>| t.map_or("—".into(), |t| format!("{t:.2} ms"));
+            format!(
+                "started: CPU for the mesh {}, its distance field {}, the voxels {}",
+                ms(mesh_ms),
+                ms(sdf_ms),
+                ms(job_ms)
+            )
+        };
+        let start = std::time::Instant::now();
         let job = match s.mode {
             VoxelMode::DistanceField => {
                 // Nothing to read back: the field is drawn from the next frame on.
                 let field = field.expect("made for the march");
                 self.shown = Some((s.clone(), grid, Shown::Field(field)));
                 self.voxelized += 1;
-                return Ok(());
+                return Ok(readout(None));
             }
             VoxelMode::Surface(Separation::Conservative) => VoxelJob::RecordedAttributes(
                 self.voxelizer
@@ -289,8 +302,9 @@ impl VoxelizerScene {
                     .encode_solid(device, frame.rec, &mesh, &grid, true)?,
             ),
         };
+        *job_ms.get_or_insert(0.0) += start.elapsed().as_secs_f64() * 1e3;
         self.job = Some((s.clone(), grid, job));
-        Ok(())
+        Ok(readout(job_ms))
     }
 
     /// The distance field's middle z slice, once read back, as an image to blit.

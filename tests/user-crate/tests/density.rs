@@ -71,6 +71,8 @@ fn the_users_function_is_marched_to_its_closed_form() {
             .expect("on screen");
         ctx.submit_and_wait("ramp", enc).unwrap();
         let px: Vec<[u16; 4]> = read_texture(&ctx, &marched.colour).unwrap();
+        // The march's image may be larger than the viewport (kept across resizes): its rows.
+        let width = marched.colour.width();
         let inv = view.view_proj.inverse();
         let (mut covered, mut worst) = (0, 0.0f64);
         for y in 0..SIZE {
@@ -98,7 +100,7 @@ fn the_users_function_is_marched_to_its_closed_form() {
                     0.0
                 };
                 let want = 1.0 - (-sigma * optical).exp();
-                let got = half::f16::from_bits(px[(y * SIZE + x) as usize][3]).to_f64();
+                let got = half::f16::from_bits(px[(y * width + x) as usize][3]).to_f64();
                 covered += (want > 0.01) as usize;
                 worst = worst.max((got - want).abs());
             }
