@@ -269,6 +269,30 @@ pub fn calm() -> Waves {
     Waves::new(vec![wave(1.0, 0.0, 1e-4, 50.0, 0.0)], 0.0).unwrap()
 }
 
+/// The view depth of the scene the calm sea fades against.
+pub const FADE_SCENE: f64 = 15.0;
+
+/// The calm sea drawn from [`camera`] into `targets` (a G-buffer's four), fading against a
+/// scene at [`FADE_SCENE`] whose depth `depth` starts with.
+pub fn draw_faded(
+    ctx: &Context,
+    renderer: &OceanRenderer,
+    targets: &[wgpu::Texture],
+    depth: &wgpu::Texture,
+) {
+    let scene_ndc = ndc_of(&camera(), FADE_SCENE) as f32;
+    draw(
+        ctx,
+        renderer,
+        &calm(),
+        &calm_look(),
+        targets,
+        depth,
+        scene_ndc,
+        true,
+    );
+}
+
 /// A texture array of `layers` constant layers.
 pub fn constant_maps(
     ctx: &Context,

@@ -105,6 +105,33 @@ impl Rig {
         (bricks, light)
     }
 
+    /// A march's output without a light volume or scene depth, submitted and waited for.
+    pub fn marched(
+        &self,
+        volume: &Volume,
+        tf: &TransferFunction,
+        view: &View,
+        settings: &MarchSettings,
+    ) -> VolumeMarched {
+        let (ctx, renderer) = (&self.ctx, &self.renderer);
+        let mut enc = ctx.encoder("volume march");
+        let bricks = renderer.encode_bricks(&ctx.device, &mut enc, volume);
+        let marched = renderer.encode_march(
+            &ctx.device,
+            &mut enc,
+            volume,
+            &bricks.unwrap(),
+            None,
+            tf,
+            Mat4::IDENTITY,
+            view,
+            None,
+            settings,
+        );
+        ctx.submit_and_wait("volume march", enc).unwrap();
+        marched.unwrap().expect("on screen")
+    }
+
     /// The marched image (premultiplied rgba per pixel), all zero where the box is off screen.
     pub fn march(
         &self,

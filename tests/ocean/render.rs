@@ -21,24 +21,14 @@ use glam::{DVec2, DVec3, DVec4, Vec3, Vec4};
 #[test]
 fn depth_fade_and_depth_write_in_one_pass() {
     let ctx = Context::shared();
-    let calm = Waves::new(vec![wave(1.0, 0.0, 1e-4, 50.0, 0.0)], 0.0).unwrap();
     let renderer =
         OceanRenderer::new(&ctx.device, &ctx.queue, Output::GBuffer([RGBA32; 4]), false).unwrap();
     let targets: Vec<_> = (0..4).map(|_| target(&ctx, RGBA32)).collect();
     let depth = target(&ctx, wgpu::TextureFormat::Depth32Float);
     let cam = camera();
-    let scene = 15.0;
+    let scene = FADE_SCENE;
     let scene_ndc = ndc_of(&cam, scene) as f32;
-    draw(
-        &ctx,
-        &renderer,
-        &calm,
-        &calm_look(),
-        &targets,
-        &depth,
-        scene_ndc,
-        true,
-    );
+    draw_faded(&ctx, &renderer, &targets, &depth);
     let base: Vec<Vec4> = read_texture(&ctx, &targets[3]).unwrap();
     let z: Vec<f32> = read_texture(&ctx, &depth).unwrap();
     let (mut drawn, mut faded, mut worst_fade, mut worst_z) = (0, 0, 0f64, 0f64);
@@ -627,11 +617,9 @@ fn two_draws_in_one_encoder_keep_their_own_parameters() {
 #[test]
 fn a_faded_frame_after_a_larger_is_the_frame_alone() {
     let ctx = Context::shared();
-    let calm = Waves::new(vec![wave(1.0, 0.0, 1e-4, 50.0, 0.0)], 0.0).unwrap();
     let make = || {
         OceanRenderer::new(&ctx.device, &ctx.queue, Output::GBuffer([RGBA32; 4]), false).unwrap()
     };
-    let scene_ndc = ndc_of(&camera(), 15.0) as f32;
     let draw_at = |renderer: &OceanRenderer, [w, h]: [u32; 2]| -> Vec<Vec4> {
         let sized = |format| {
             common::texture(
@@ -645,16 +633,7 @@ fn a_faded_frame_after_a_larger_is_the_frame_alone() {
         };
         let targets: Vec<_> = (0..4).map(|_| sized(RGBA32)).collect();
         let depth = sized(wgpu::TextureFormat::Depth32Float);
-        draw(
-            &ctx,
-            renderer,
-            &calm,
-            &calm_look(),
-            &targets,
-            &depth,
-            scene_ndc,
-            true,
-        );
+        draw_faded(&ctx, renderer, &targets, &depth);
         read_texture(&ctx, &targets[3]).unwrap()
     };
     let kept = make();

@@ -12,7 +12,7 @@ use crate::common;
 use common::volume::*;
 use fieldkit::harness::Summary;
 use fieldkit::view::View;
-use fieldkit::volume::{MarchSettings, Mode, Shadow, TransferFunction, Volume, VolumeRenderer};
+use fieldkit::volume::{MarchSettings, Mode, Shadow, TransferFunction, Volume};
 use glam::{Mat4, Vec3, Vec4};
 
 #[test]
@@ -652,48 +652,26 @@ fn marches_reuse_dropped_outputs_and_keep_their_own_parameters() {
 /// viewport's size, not of the texture's.
 #[test]
 fn a_smaller_march_after_a_larger_reuses_its_texture() {
-    let rig = Rig::new();
+    let (rig, fresh) = (Rig::new(), Rig::new());
     let ctx = &rig.ctx;
     let volume = rig.cloud(16, 3);
-    let tf = TransferFunction::extinction(Vec3::ONE, 6.0, 1.0 / 64.0, [0.0, 1.0], 64);
-    let settings = plain(1.0 / 64.0, 1.0 / 64.0);
-    let march = |renderer: &VolumeRenderer, viewport: [u32; 2]| {
+    let march = |rig: &Rig, viewport: [u32; 2]| {
         let view = View {
             viewport,
             ..view_from(Vec3::new(0.4, 0.5, 1.6), Vec3::ZERO, 0.05)
         };
-        let mut enc = ctx.encoder("resized march");
-        let bricks = renderer
-            .encode_bricks(&ctx.device, &mut enc, &volume)
-            .unwrap();
-        let marched = renderer
-            .encode_march(
-                &ctx.device,
-                &mut enc,
-                &volume,
-                &bricks,
-                None,
-                &tf,
-                Mat4::IDENTITY,
-                &view,
-                None,
-                &settings,
-            )
-            .unwrap()
-            .expect("on screen");
-        ctx.submit_and_wait("resized march", enc).unwrap();
-        marched
+        let tf = TransferFunction::extinction(Vec3::ONE, 6.0, 1.0 / 64.0, [0.0, 1.0], 64);
+        rig.marched(&volume, &tf, &view, &plain(1.0 / 64.0, 1.0 / 64.0))
     };
     let size = |t: &wgpu::Texture| [t.width(), t.height()];
-    let large = march(&rig.renderer, [150, 130]);
+    let large = march(&rig, [150, 130]);
     let texture = large.colour.clone();
     assert_eq!(size(&texture), [256, 256]);
     drop(large);
-    let small = march(&rig.renderer, [130, 120]);
+    let small = march(&rig, [130, 120]);
     assert!(small.colour == texture, "the kept texture was not reused");
     assert_eq!(small.viewport, [130, 120]);
-    let fresh = Rig::new();
-    let alone = march(&fresh.renderer, [130, 120]);
+    let alone = march(&fresh, [130, 120]);
     assert_eq!(size(&alone.colour), [256, 128]);
     let image = read_marched(ctx, &small);
     assert_eq!(image.len(), 130 * 120);
