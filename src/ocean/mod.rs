@@ -393,7 +393,9 @@ impl WaveGrid {
     }
 
     /// Displace `size` points starting at undisplaced (x, z) `start` (relative to the origin
-    /// `waves` was packed for), `spacing` apart.
+    /// `waves` was packed for), `spacing` apart. The grid's buffers are new each call (the
+    /// caller keeps the [`DisplacedGrid`]): a query, not the renderer's per-frame path, which is
+    /// [`OceanRenderer`] and makes nothing a frame.
     pub fn encode(
         &self,
         device: &wgpu::Device,

@@ -393,7 +393,8 @@ impl Voxelizer {
     /// corners' colour × the albedo at the corners' texture coordinates ([`Mesh::texcoords`]),
     /// both interpolated at the voxel centre's closest point on the triangle, as the source's
     /// vertex stage passes texture coordinates on. The mesh needs texture coordinates; the
-    /// texture a filterable colour format.
+    /// texture a filterable colour format. A bake, made when the mesh or the grid changes: the
+    /// mesh's upload and the outputs are new each call, and the caller keeps them.
     pub fn encode_attributes_with(
         &self,
         device: &wgpu::Device,

@@ -832,7 +832,8 @@ impl Voxelizer {
     /// rasterizer as the write-up did (`voxelize/raster`): each triangle drawn on the plane of
     /// its dominant axis into a square target of the grid's largest side, enlarged by half a
     /// pixel's diagonal so every column it touches gets a fragment, which runs the exact tests.
-    /// Kept to compare with the compute path; the voxels are the same.
+    /// Kept to compare with the compute path; the voxels are the same. Its target and buffers
+    /// are new each call (a bake, not a per-frame path).
     pub fn encode_surface_raster(
         &self,
         device: &wgpu::Device,

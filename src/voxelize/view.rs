@@ -142,7 +142,9 @@ impl VoxelView {
 
     /// Draw every occupied voxel of `voxels` (voxelized in `grid`) as a cube, loading what the
     /// targets hold, under `light`: a direction toward a light at infinity (a `Vec3`) or any
-    /// [`Light`] (a point light as the source's demo scene).
+    /// [`Light`] (a point light as the source's demo scene). Made for every frame: its
+    /// uniforms, bind group and indirect draw arguments are kept, and made again only when other
+    /// voxels are given.
     #[allow(clippy::too_many_arguments)]
     pub fn encode(
         &self,

@@ -51,14 +51,16 @@ impl Rig {
         Self { ctx, renderer }
     }
 
+    /// The bricks of `volume`, recorded into `enc`.
+    pub fn bricks(&self, enc: &mut wgpu::CommandEncoder, volume: &Volume) -> Bricks {
+        (self.renderer.encode_bricks(&self.ctx.device, enc, volume)).unwrap()
+    }
+
     /// The bricks of `volume` and each one's (min, max) density, read back.
     pub fn brick_ranges(&self, volume: &Volume) -> (Bricks, Vec<[f32; 2]>) {
         let ctx = &self.ctx;
         let mut enc = ctx.encoder("bricks");
-        let bricks = self
-            .renderer
-            .encode_bricks(&ctx.device, &mut enc, volume)
-            .unwrap();
+        let bricks = self.bricks(&mut enc, volume);
         ctx.submit_and_wait("bricks", enc).unwrap();
         let ranges = bytemuck::cast_slice(&read_buffer(ctx, &bricks.ranges).unwrap()).to_vec();
         (bricks, ranges)
@@ -97,7 +99,7 @@ impl Rig {
         settings: &MarchSettings,
     ) -> (Bricks, LightVolume) {
         let device = &self.ctx.device;
-        let bricks = self.renderer.encode_bricks(device, enc, volume).unwrap();
+        let bricks = self.bricks(enc, volume);
         let light = self
             .renderer
             .encode_light(device, enc, volume, &bricks, tf, Mat4::IDENTITY, settings)
@@ -113,23 +115,7 @@ impl Rig {
         view: &View,
         settings: &MarchSettings,
     ) -> VolumeMarched {
-        let (ctx, renderer) = (&self.ctx, &self.renderer);
-        let mut enc = ctx.encoder("volume march");
-        let bricks = renderer.encode_bricks(&ctx.device, &mut enc, volume);
-        let marched = renderer.encode_march(
-            &ctx.device,
-            &mut enc,
-            volume,
-            &bricks.unwrap(),
-            None,
-            tf,
-            Mat4::IDENTITY,
-            view,
-            None,
-            settings,
-        );
-        ctx.submit_and_wait("volume march", enc).unwrap();
-        marched.unwrap().expect("on screen")
+        (self.marched_folded(volume, tf, view, None, settings, None)).expect("on screen")
     }
 
     /// The marched image (premultiplied rgba per pixel), all zero where the box is off screen.
@@ -141,12 +127,20 @@ impl Rig {
         depth: Option<&wgpu::TextureView>,
         settings: &MarchSettings,
     ) -> Vec<[f32; 4]> {
-        self.march_folded(volume, tf, view, depth, settings, None)
+        self.image(self.marched_folded(volume, tf, view, depth, settings, None))
     }
 
-    /// [`Self::march`] with a light volume folded into the density or not (`None`: as
-    /// `encode_light` chooses).
-    pub fn march_folded(
+    /// A march's image ([`read_marched`]), all zero for a box off screen (`None`).
+    pub fn image(&self, marched: Option<VolumeMarched>) -> Vec<[f32; 4]> {
+        match marched {
+            None => vec![[0.0; 4]; (SIZE * SIZE) as usize],
+            Some(m) => read_marched(&self.ctx, &m),
+        }
+    }
+
+    /// A march with a light volume folded into the density or not (`None`: as `encode_light`
+    /// chooses), submitted and waited for; `None` where the box is off screen.
+    pub fn marched_folded(
         &self,
         volume: &Volume,
         tf: &TransferFunction,
@@ -154,13 +148,10 @@ impl Rig {
         depth: Option<&wgpu::TextureView>,
         settings: &MarchSettings,
         fold: Option<bool>,
-    ) -> Vec<[f32; 4]> {
+    ) -> Option<VolumeMarched> {
         let ctx = &self.ctx;
         let mut enc = ctx.encoder("volume test");
-        let bricks = self
-            .renderer
-            .encode_bricks(&ctx.device, &mut enc, volume)
-            .unwrap();
+        let bricks = self.bricks(&mut enc, volume);
         let light = match settings.shadow {
             Shadow::LightVolume { .. } => Some(
                 self.renderer
@@ -194,10 +185,7 @@ impl Rig {
             )
             .unwrap();
         ctx.submit_and_wait("volume test", enc).unwrap();
-        match marched {
-            None => vec![[0.0; 4]; (SIZE * SIZE) as usize],
-            Some(m) => read_marched(ctx, &m),
-        }
+        marched
     }
 }
 

@@ -34,8 +34,10 @@ fn light_volume_and_shadow_rays_agree() {
         shadow: Shadow::LightVolume { step: 1.0 / 64.0 },
         ..base
     };
-    let baked = rig.march_folded(&volume, &tf, &view, None, &baked_settings, Some(true));
-    let separate = rig.march_folded(&volume, &tf, &view, None, &baked_settings, Some(false));
+    let baked =
+        rig.image(rig.marched_folded(&volume, &tf, &view, None, &baked_settings, Some(true)));
+    let separate =
+        rig.image(rig.marched_folded(&volume, &tf, &view, None, &baked_settings, Some(false)));
     let unlit = rig.march(
         &volume,
         &tf,
