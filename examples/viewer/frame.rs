@@ -1,6 +1,6 @@
 //! `--frame-cost FRAMES`: what a frame of each scene costs the application, measured the way an
 //! engine programmer profiles a frame: the CPU time to record and submit it, the wall time from
-//! the start of recording to the GPU finishing it (submit → done), the GPU time of the whole
+//! the start of recording to the GPU finishing it (record → done), the GPU time of the whole
 //! frame (timestamps written into its encoder before its first pass and after its last, render
 //! passes included) and of its timed passes alone (every compute pass, and the render passes
 //! recorded through a `Recorder`: the ocean's), and the loop's own floor (an empty frame submitted and waited
@@ -103,6 +103,8 @@ pub struct FrameCost {
     pub error: Option<String>,
     /// The timed passes of the last profiled frame, GPU ms each.
     pub passes: Vec<(String, f64)>,
+    /// wgpu's own spans over the timed frames, where they are timed (`spans::on`).
+    pub spans: Vec<String>,
     /// The most GPU objects any measured frame made (after warm-up).
     pub made: Made,
     /// What the scene reported of its last measured frame (patches, instances, grid).
@@ -251,12 +253,21 @@ fn measure(
     let targets = Targets::new(&ctx.device, size, COLOUR, DEPTH);
     let mut scenes = Scenes::new();
     let first_ms = timed_frame(ctx, &mut scenes, saved, scene, &targets, size, 0, None)?.wall;
-    for i in 1..WARM_UP {
+    // Warm-up frames, and on until what the scene makes on other threads (its first cloud)
+    // has arrived: the measured frames draw the whole scene.
+    for i in 1..WARM_UP + AFTER_CHANGE_MAX {
+        if i >= WARM_UP {
+            if !scenes.busy(scene, saved) {
+                break;
+            }
+            scenes.wait_for_workers();
+        }
         timed_frame(ctx, &mut scenes, saved, scene, &targets, size, i, None)?;
     }
     let (mut cpu, mut wall, mut submit, mut error) = (Vec::new(), Vec::new(), Vec::new(), None);
     let mut fieldkit = Vec::new();
     let mut stats = Vec::new();
+    super::spans::reset();
     for i in WARM_UP..WARM_UP + frames {
         let t = timed_frame(ctx, &mut scenes, saved, scene, &targets, size, i, None)?;
         cpu.push(t.cpu);
@@ -266,6 +277,7 @@ fn measure(
         error = error.or(t.error);
         stats = t.stats;
     }
+    let spans = super::spans::lines(frames);
     // The objects a frame makes, in frames of their own: counting them costs CPU time.
     let mut made = Made::default();
     for i in 0..COUNTED {
@@ -362,6 +374,7 @@ fn measure(
         floor_cpu: Spread::of(floor.iter().map(|f| f.0).collect()),
         error,
         passes: last_passes,
+        spans,
         made,
         stats,
         resize_stats: resized_frame.stats,
@@ -457,7 +470,7 @@ fn gpu_frame_times(
 fn print_table(adapter: &str, costs: &[FrameCost]) {
     println!("frame cost on {adapter}");
     println!(
-        "| scene | size | CPU record + submit ms | of which in fieldkit's calls ms | of which finish + submit ms | submit → done ms | GPU frame ms | GPU timed passes ms | loop floor CPU / wall ms | frames > {SLOW_CPU_MS} ms CPU | first frame ms | resize frame CPU / wall ms | size change CPU / wall ms, then CPU at most | made a frame: buffers / textures / views / bind groups |"
+        "| scene | size | CPU record + submit ms | of which in fieldkit's calls ms | of which finish + submit ms | record → done ms | GPU frame ms | GPU timed passes ms | loop floor CPU / wall ms | frames > {SLOW_CPU_MS} ms CPU | first frame ms | resize frame CPU / wall ms | size change CPU / wall ms, then CPU at most | made a frame: buffers / textures / views / bind groups |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     let s = |x: &Spread| format!("{:.3} ({:.3}–{:.3})", x.median, x.min, x.max);
@@ -492,6 +505,12 @@ fn print_table(adapter: &str, costs: &[FrameCost]) {
             .map(|(n, ms)| format!("{n} {ms:.3}"))
             .collect();
         println!("{} timed passes (ms): {}", c.scene, passes.join(", "));
+    }
+    for c in costs.iter().filter(|c| !c.spans.is_empty()) {
+        println!("{} wgpu's spans, a frame (inclusive):", c.scene);
+        for line in &c.spans {
+            println!("  {line}");
+        }
     }
     for c in costs.iter().filter(|c| !c.stats.is_empty()) {
         println!("{}: {}", c.scene, c.stats.join("; "));

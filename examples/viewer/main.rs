@@ -38,6 +38,7 @@ pub mod panels;
 pub mod scene_panels;
 pub mod scenes;
 pub mod soak;
+pub mod spans;
 pub mod widgets;
 
 use std::path::{Path, PathBuf};
@@ -377,6 +378,8 @@ pub fn render_offscreen(
             break;
         }
         if i >= frames {
+            // Past the frames asked for: wait for what the scene makes on worker threads.
+            scenes.wait_for_workers();
             extra += 1;
             if extra > 200 {
                 return Err(Error::Invalid {
@@ -444,6 +447,7 @@ fn headless(args: &Args, saved: &Saved) -> Result<(), String> {
 }
 
 fn main() -> std::process::ExitCode {
+    spans::install();
     let args = match parse(std::env::args().skip(1)) {
         Ok(a) => a,
         Err(e) => {

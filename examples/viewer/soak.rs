@@ -242,6 +242,8 @@ pub fn soak_scene(
             // finished counts its staging buffer on some runs and not on others, and the
             // voxelizer starts its next job only once the last one is read — so waiting for
             // the frame alone made the live allocations at the sample depend on timing.
+            // The voxelizer records its jobs on a worker thread: wait for it too.
+            scenes.wait_for_workers();
             device
                 .poll(wgpu::PollType::wait_indefinitely())
                 .map_err(|e| format!("{scene}, frame {i}: {e}"))?;

@@ -158,7 +158,10 @@ impl MeshSdf {
     /// A bake, made when the mesh or the grid changes and sampled for many frames after: the
     /// mesh is moved into the grid's frame on the CPU in f64 and uploaded (its triangles and
     /// pseudo-normals), and the field is a new texture the caller keeps; the keys and parity
-    /// scratch are kept here for the next field of the same size.
+    /// scratch are kept here for the next field of the same size. That CPU work grows with the
+    /// mesh (tens of milliseconds for a 69 451-triangle mesh, `docs/frame.md`): an app that
+    /// bakes while it draws records the bake on a thread of its own into an encoder of its
+    /// own — a `MeshSdf` is `Send + Sync` and its [`MeshField`] `Send` — as the viewer does.
     ///
     /// Errors: an empty mesh, a non-finite vertex or index out of range, a mesh of no area, a
     /// grid over [`crate::voxelize::MAX_SIDE`] or the device's 3D texture and buffer limits,

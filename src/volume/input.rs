@@ -30,6 +30,9 @@ pub struct Volume {
     pub spacing: Vec3,
 }
 
+/// Most bytes one `write_texture` of [`Volume::upload`] stages.
+const UPLOAD_SLAB: usize = 256 * 1024;
+
 impl Volume {
     /// Formats the march samples with hardware trilinear filtering.
     pub const FORMATS: &'static str = "R8Unorm, R16Float, R32Float (with FLOAT32_FILTERABLE)";
@@ -79,7 +82,9 @@ impl Volume {
     }
 
     /// Upload `data` (x fastest, values as the format stores them: 0..1 for R8Unorm) in
-    /// `format`.
+    /// `format`. The texture is written through the queue in slabs of z slices of at most
+    /// 256 KiB, so an app that uploads on a worker thread holds up its frame's submission for
+    /// no more than one slab's staging.
     pub fn upload(
         device: &wgpu::Device,
         queue: &wgpu::Queue,
@@ -140,16 +145,33 @@ impl Volume {
                     | wgpu::TextureUsages::COPY_DST
                     | wgpu::TextureUsages::COPY_SRC,
             );
-            queue.write_texture(
-                t.as_image_copy(),
-                &bytes,
-                wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(dims[0] * texel),
-                    rows_per_image: Some(dims[1]),
-                },
-                t.size(),
-            );
+            // In slabs of whole z slices of at most UPLOAD_SLAB bytes: each write holds the
+            // queue (which the app's own submits wait on, when this runs on a worker thread)
+            // only while it stages its slab.
+            let slice = dims[0] as usize * dims[1] as usize * texel as usize;
+            let slab = (UPLOAD_SLAB / slice).max(1);
+            for (i, chunk) in bytes.chunks(slab * slice).enumerate() {
+                queue.write_texture(
+                    wgpu::TexelCopyTextureInfo {
+                        origin: wgpu::Origin3d {
+                            x: 0,
+                            y: 0,
+                            z: (i * slab) as u32,
+                        },
+                        ..t.as_image_copy()
+                    },
+                    chunk,
+                    wgpu::TexelCopyBufferLayout {
+                        offset: 0,
+                        bytes_per_row: Some(dims[0] * texel),
+                        rows_per_image: Some(dims[1]),
+                    },
+                    wgpu::Extent3d {
+                        depth_or_array_layers: (chunk.len() / slice) as u32,
+                        ..t.size()
+                    },
+                );
+            }
             t
         })?;
         Self::new(device, texture, origin, spacing)

@@ -18,6 +18,7 @@ use fieldkit::voxelize::{Grid, Mesh, Voxelizer};
 use glam::DVec3;
 
 fn assert_send_sync<T: Send + Sync>() {}
+fn assert_send<T: Send>() {}
 
 #[test]
 fn pipeline_objects_are_send_and_sync() {
@@ -32,8 +33,14 @@ fn pipeline_objects_are_send_and_sync() {
     assert_send_sync::<WaveGrid>();
     assert_send_sync::<SharedWaves>();
     assert_send_sync::<Voxelizer>();
+    assert_send_sync::<fieldkit::mesh_sdf::MeshSdf>();
     assert_send_sync::<VoxelView>();
     assert_send_sync::<Context>();
+    // What a bake recorded on a worker thread hands back to the frame's thread.
+    assert_send::<fieldkit::mesh_sdf::MeshField>();
+    assert_send::<fieldkit::voxelize::PendingAttributes>();
+    assert_send::<fieldkit::voxelize::Surface>();
+    assert_send::<fieldkit::gpu::Readback<Vec<f32>>>();
 }
 
 const THREADS: usize = 4;

@@ -293,6 +293,17 @@ impl Scenes {
         }
     }
 
+    /// Wait for the work the scenes do on worker threads (the voxelizer's jobs, the volume's
+    /// cloud); the next frame takes it.
+    pub fn wait_for_workers(&mut self) {
+        if let Some(v) = &mut self.voxelizer {
+            v.wait_for_worker();
+        }
+        if let Some(v) = &mut self.volume {
+            v.wait_for_cloud();
+        }
+    }
+
     /// Voxelizations the voxelizer scene has shown.
     pub fn voxelized(&self) -> u64 {
         self.voxelizer.as_ref().map_or(0, |v| v.voxelized)
@@ -302,9 +313,6 @@ impl Scenes {
     pub fn submitted(&mut self, device: &wgpu::Device, queue: &wgpu::Queue) {
         if let Some(d) = &mut self.distance {
             d.submitted(device, queue);
-        }
-        if let Some(v) = &mut self.voxelizer {
-            v.submitted(device, queue);
         }
     }
 
@@ -329,7 +337,7 @@ impl Scenes {
             }
             "distance2d" => made(&mut self.distance, || Distance2dScene::new(device))?
                 .encode(&s.distance, frame),
-            "voxelizer" => made(&mut self.voxelizer, || VoxelizerScene::new(device))?
+            "voxelizer" => made(&mut self.voxelizer, || VoxelizerScene::new(device, queue))?
                 .encode(&s.voxelizer, frame),
             "composite" => {
                 // One colour and one depth target: the island writes depth, the sea fades

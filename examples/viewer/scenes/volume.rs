@@ -82,8 +82,9 @@ impl VolumeScene {
 
     /// The fBm cloud for `key` (size, seed), made and uploaded on a worker thread (its
     /// densities checked and packed to R8 there: about a million voxels at 106³), and taken
-    /// when it is ready. The first cloud is waited for (there is nothing else to draw); later
-    /// ones are drawn from the frame they are ready on, the previous one until then.
+    /// when it is ready. No frame waits for it: until the first cloud arrives the scene draws
+    /// without one, and later ones are drawn from the frame they are ready on, the previous
+    /// one until then.
     fn cloud_for(
         &mut self,
         device: &wgpu::Device,
@@ -109,15 +110,25 @@ impl VolumeScene {
             self.pending = Some((key, rx));
         }
         let (_, rx) = self.pending.as_ref().expect("set above");
-        let ready = if self.volume.is_none() {
-            rx.recv().ok()
-        } else {
-            rx.try_recv().ok()
+        let ready = match rx.try_recv() {
+            Ok(volume) => Some(volume),
+            Err(std::sync::mpsc::TryRecvError::Empty) => None,
+            Err(std::sync::mpsc::TryRecvError::Disconnected) => Some(Err(cloud_stopped())),
         };
         if ready.is_some() {
             self.pending = None;
         }
         ready
+    }
+
+    /// Wait for the cloud being made on the worker thread, if any; the next frame takes it.
+    pub(super) fn wait_for_cloud(&mut self) {
+        if let Some((key, rx)) = self.pending.take() {
+            let cloud = rx.recv().unwrap_or_else(|_| Err(cloud_stopped()));
+            let (tx, rx) = std::sync::mpsc::channel();
+            let _ = tx.send(cloud);
+            self.pending = Some((key, rx));
+        }
     }
 
     /// March the cloud *function* (`VolumeSettings::function`) into the frame.
@@ -198,9 +209,10 @@ impl VolumeScene {
             }
         }
         let Some((_, volume, bricks)) = self.volume.as_ref() else {
-            return Err(invalid(
-                "the cloud's worker thread stopped before making it",
-            ));
+            return Ok(vec![format!(
+                "volume: the {0}³ cloud is being made on a worker thread",
+                s.size
+            )]);
         };
         let mut march = s.march;
         march.frame = frame.number;
@@ -251,4 +263,8 @@ impl VolumeScene {
             s.size, bricks.count[0]
         )])
     }
+}
+
+fn cloud_stopped() -> Error {
+    invalid("the cloud's worker thread stopped before making it")
 }

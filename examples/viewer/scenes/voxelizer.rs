@@ -3,6 +3,9 @@
 use fieldkit::mesh_sdf::{MeshField, MeshSdf};
 use fieldkit::metaball::MarchField;
 
+use std::sync::Arc;
+use std::sync::mpsc::Receiver;
+
 use super::*;
 
 /// How the voxelizer scene voxelizes.
@@ -86,33 +89,55 @@ pub(super) fn spun(mesh: &Mesh, angle: f32) -> Result<Mesh, Error> {
     Ok(mesh)
 }
 
-pub(super) enum VoxelJob {
-    /// Recorded into a frame not yet submitted.
-    RecordedAttributes(PendingAttributes),
-    RecordedSurface(fieldkit::voxelize::Surface),
-    /// Reading back.
-    Attributes(PendingAttributes, Readback<u32>),
-    Bits(Readback<Vec<bool>>),
+/// What the worker thread made for a change of settings, ready to draw.
+pub(super) struct Started {
+    settings: VoxelizerSettings,
+    /// The mesh as loaded (before its spin), when the worker loaded it.
+    loaded: Option<(String, Arc<Mesh>)>,
+    grid: Grid,
+    shown: Shown,
+    /// The distance field's middle z slice as an image.
+    slice: Option<Slice>,
+    /// What each part took of the worker's CPU.
+    readout: String,
 }
 
-/// The voxelizer's state: voxelizing runs when the settings change; its result is drawn every
-/// frame until the next change.
+/// An image of the distance field's middle z slice, its size and its band (voxels).
+pub(super) type Slice = (wgpu::TextureView, [u32; 2], f32);
+
+/// The objects the worker thread records with (shared with the frame, which draws what they
+/// made).
+#[derive(Clone)]
+pub(super) struct Worker {
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    voxelizer: Arc<Voxelizer>,
+    mesh_sdf: Arc<MeshSdf>,
+    balls: Arc<Metaballs>,
+}
+
+/// The voxelizer's state: voxelizing runs when the settings change, on a worker thread that
+/// loads the mesh, records and submits the distance field and the voxels, reads them back and
+/// makes what the frame draws (a bake's CPU work takes from a few to tens of milliseconds with
+/// a large mesh: the frame never waits for it); the result is drawn every frame until the next
+/// change.
 pub struct VoxelizerScene {
-    pub(super) voxelizer: Voxelizer,
-    pub(super) mesh_sdf: MeshSdf,
+    pub(super) worker: Worker,
     /// The SDF march of the distance-field mode, made for the camera's depth direction.
     pub(super) marcher: Option<(bool, Raymarcher)>,
     pub(super) blit: Blit,
-    /// The distance field recorded with the job (read back once submitted), then its slice.
-    pub(super) field: Option<wgpu::Texture>,
-    pub(super) field_read: Option<Readback<Vec<f32>>>,
-    pub(super) slice: Option<(wgpu::TextureView, [u32; 2], f32)>,
+    pub(super) slice: Option<Slice>,
     pub(super) view: Option<(bool, VoxelView)>,
     pub(super) cubes: Option<(bool, Cubes)>,
-    pub(super) balls: Metaballs,
-    pub(super) mesh: Option<(String, Mesh)>,
-    pub(super) job: Option<(VoxelizerSettings, Grid, VoxelJob)>,
+    /// The last mesh loaded, by name (the worker loads a new one).
+    pub(super) mesh: Option<(String, Arc<Mesh>)>,
+    /// A change being made on the worker thread, for these settings.
+    pub(super) starting: Option<(VoxelizerSettings, Receiver<Result<Started, Error>>)>,
+    /// Settings the worker refused, and why: not tried again until they change.
+    pub(super) failed: Option<(VoxelizerSettings, Error)>,
     pub(super) shown: Option<(VoxelizerSettings, Grid, Shown)>,
+    /// What the last change took of the worker's CPU.
+    pub(super) readout: Option<String>,
     /// Voxelizations that reached the screen.
     pub(super) voxelized: u64,
 }
@@ -124,212 +149,108 @@ pub(super) enum Shown {
 }
 
 impl VoxelizerScene {
-    pub(super) fn new(device: &wgpu::Device) -> Result<Self, Error> {
+    /// The scene's objects, their pipelines made on three threads at once (the voxelizer's,
+    /// the mesh SDF's and the cubes' are independent): the first frame waits for the slowest.
+    pub(super) fn new(device: &wgpu::Device, queue: &wgpu::Queue) -> Result<Self, Error> {
+        let (voxelizer, mesh_sdf, balls) = std::thread::scope(|scope| {
+            let voxelizer = scope.spawn(|| Voxelizer::new(device));
+            let mesh_sdf = scope.spawn(|| MeshSdf::new(device));
+            let balls = Metaballs::new(device);
+            (join(voxelizer), join(mesh_sdf), balls)
+        });
         Ok(Self {
-            voxelizer: Voxelizer::new(device)?,
-            mesh_sdf: MeshSdf::new(device)?,
+            worker: Worker {
+                device: device.clone(),
+                queue: queue.clone(),
+                voxelizer: Arc::new(voxelizer?),
+                mesh_sdf: Arc::new(mesh_sdf?),
+                balls: Arc::new(balls?),
+            },
             marcher: None,
             blit: Blit::new(device, COLOUR),
-            field: None,
-            field_read: None,
             slice: None,
             view: None,
             cubes: None,
-            balls: Metaballs::new(device)?,
             mesh: None,
-            job: None,
+            starting: None,
+            failed: None,
             shown: None,
+            readout: None,
             voxelized: 0,
         })
     }
 
     /// Work started and not yet shown.
     pub fn busy(&self, s: &VoxelizerSettings) -> bool {
-        self.job.is_some()
-            || self.field.is_some()
-            || self.field_read.is_some()
-            || self.shown.as_ref().map(|x| &x.0) != Some(s)
+        self.starting.is_some() || self.shown.as_ref().map(|x| &x.0) != Some(s)
     }
 
-    /// The frame that recorded the job was submitted: start reading its result.
-    pub(super) fn submitted(&mut self, device: &wgpu::Device, queue: &wgpu::Queue) {
-        if let Some(f) = self.field.take() {
-            self.field_read = Some(readback_texture(device, queue, &f));
+    /// Wait for the worker thread to finish (the soak samples memory at fixed points); the
+    /// frame after takes its result.
+    pub fn wait_for_worker(&mut self) {
+        if let Some((s, rx)) = self.starting.take() {
+            let result = rx.recv().unwrap_or_else(|_| Err(worker_stopped()));
+            let (tx, rx) = std::sync::mpsc::channel();
+            let _ = tx.send(result);
+            self.starting = Some((s, rx));
         }
-        self.job = self.job.take().map(|(key, grid, job)| {
-            let job = match job {
-                VoxelJob::RecordedAttributes(p) => {
-                    let count = p.occupied(device, queue);
-                    VoxelJob::Attributes(p, count)
-                }
-                VoxelJob::RecordedSurface(s) => VoxelJob::Bits(s.read(device, queue)),
-                other => other,
-            };
-            (key, grid, job)
-        });
-    }
-
-    pub(super) fn mesh(&mut self, name: &str) -> Result<&Mesh, Error> {
-        if self.mesh.as_ref().map(|m| m.0.as_str()) != Some(name) {
-            let mesh = match name {
-                "torus" => Mesh::torus(DVec3::ZERO, 1.0, 0.4, 48, 24),
-                "sphere" => Mesh::uv_sphere(DVec3::ZERO, 1.0, 32, 16),
-                path => Mesh::load_obj(path)?,
-            };
-            self.mesh = Some((name.into(), mesh));
-        }
-        Ok(&self.mesh.as_ref().expect("set above").1)
     }
 
     pub(super) fn encode(&mut self, s: &VoxelizerSettings, frame: &mut Frame) -> PanelLines {
         let (device, queue) = (frame.device, frame.queue);
         clear(frame, [0.1, 0.11, 0.13]);
-        self.advance_job(device, queue, frame)?;
-        let mut stats = Vec::new();
-        if self.job.is_none() && self.shown.as_ref().map(|x| &x.0) != Some(s) {
-            stats.push(self.start_job(device, s, frame)?);
+        self.take_started()?;
+        if let Some((failed, e)) = &self.failed
+            && failed == s
+        {
+            return Err(e.clone());
         }
-        self.take_slice(device, queue)?;
+        if self.starting.is_none() && self.shown.as_ref().map(|x| &x.0) != Some(s) {
+            self.start(s);
+        }
+        let mut stats = Vec::new();
         self.draw_shown(device, queue, s, frame, &mut stats)?;
         if s.slice {
             self.draw_slice(device, queue, frame, &mut stats);
         }
-        if self.job.is_some() {
+        stats.extend(self.readout.clone());
+        if self.starting.is_some() {
             stats.push("voxelizing…".into());
         }
         Ok(stats)
     }
 
-    /// Advance a running job: a result read back is shown.
-    fn advance_job(
-        &mut self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        frame: &mut Frame,
-    ) -> Result<(), Error> {
-        if let Some((key, grid, job)) = self.job.take() {
-            match job {
-                VoxelJob::Attributes(pending, mut count) => match count.try_take() {
-                    Some(n) => {
-                        let attrs = self
-                            .voxelizer
-                            .encode_resolve_attributes(device, frame.rec, pending, n?)?;
-                        self.shown = Some((key, grid, Shown::Attributes(attrs)));
-                        self.voxelized += 1;
-                    }
-                    None => self.job = Some((key, grid, VoxelJob::Attributes(pending, count))),
-                },
-                VoxelJob::Bits(mut bits) => match bits.try_take() {
-                    Some(bits) => {
-                        let bits = bits?;
-                        let centres = voxel_centres(&bits, &grid);
-                        let n = centres.len();
-                        let instances = self.balls.upload(device, queue, &centres)?;
-                        self.shown = Some((key, grid, Shown::Cubes(instances, n)));
-                        self.voxelized += 1;
-                    }
-                    None => self.job = Some((key, grid, VoxelJob::Bits(bits))),
-                },
-                recorded => self.job = Some((key, grid, recorded)),
-            }
-        }
-        Ok(())
+    /// Start making what settings `s` (they changed) show, on the worker thread.
+    fn start(&mut self, s: &VoxelizerSettings) {
+        let (tx, rx) = std::sync::mpsc::channel();
+        let (worker, settings, mesh) = (self.worker.clone(), s.clone(), self.mesh.clone());
+        std::thread::spawn(move || {
+            let _ = tx.send(worker.start(settings, mesh));
+        });
+        self.failed = None;
+        self.starting = Some((s.clone(), rx));
     }
 
-    /// Start a job for settings `s` (they changed), with the distance slice if asked for;
-    /// returns what each part took of the CPU.
-    fn start_job(
-        &mut self,
-        device: &wgpu::Device,
-        s: &VoxelizerSettings,
-        frame: &mut Frame,
-    ) -> Result<String, Error> {
-        let (mut mesh_ms, mut sdf_ms, mut job_ms) = (None, None, None);
-        let mesh = spent(&mut mesh_ms, || spun(self.mesh(&s.mesh)?, s.spin))?;
-        let grid = spent(&mut mesh_ms, || Grid::fit(&mesh, s.grid))?;
-        self.slice = None;
-        let sdf_settings = fieldkit::mesh_sdf::Settings {
-            band: s.band,
-            march: s.mode == VoxelMode::DistanceField,
-            ..Default::default()
+    /// The worker's result, once ready: shown from this frame on.
+    fn take_started(&mut self) -> Result<(), Error> {
+        let Some((settings, rx)) = &self.starting else {
+            return Ok(());
         };
-        let field = if s.slice || sdf_settings.march {
-            let field = spent(&mut sdf_ms, || {
-                self.mesh_sdf
-                    .encode(device, frame.rec, &mesh, &grid, &sdf_settings)
-            })?;
-            if s.slice {
-                self.field = Some(field.texture.clone());
-            }
-            Some(field)
-        } else {
-            None
+        let started = match rx.try_recv() {
+            Ok(started) => started,
+            Err(std::sync::mpsc::TryRecvError::Empty) => return Ok(()),
+            Err(std::sync::mpsc::TryRecvError::Disconnected) => Err(worker_stopped()),
         };
-        let readout = |job_ms: Option<f64>| {
-            let ms = |t: Option<f64>| t.map_or("—".into(), |t| format!("{t:.2} ms"));
-            format!(
-                "started: CPU for the mesh {}, its distance field {}, the voxels {}",
-                ms(mesh_ms),
-                ms(sdf_ms),
-                ms(job_ms)
-            )
-        };
-        let start = std::time::Instant::now();
-        let job = match s.mode {
-            VoxelMode::DistanceField => {
-                // Nothing to read back: the field is drawn from the next frame on.
-                let field = field.expect("made for the march");
-                self.shown = Some((s.clone(), grid, Shown::Field(field)));
-                self.voxelized += 1;
-                return Ok(readout(None));
-            }
-            VoxelMode::Surface(Separation::Conservative) => VoxelJob::RecordedAttributes(
-                self.voxelizer
-                    .encode_attributes(device, frame.rec, &mesh, &grid)?,
-            ),
-            VoxelMode::Surface(sep) => VoxelJob::RecordedSurface(
-                self.voxelizer
-                    .encode_surface_with(device, frame.rec, &mesh, &grid, sep)?,
-            ),
-            VoxelMode::Raster => VoxelJob::RecordedSurface(self.voxelizer.encode_surface_raster(
-                device,
-                frame.rec.encoder,
-                &mesh,
-                &grid,
-            )?),
-            VoxelMode::Solid => VoxelJob::RecordedSurface(
-                self.voxelizer
-                    .encode_solid(device, frame.rec, &mesh, &grid, true)?,
-            ),
-        };
-        *job_ms.get_or_insert(0.0) += start.elapsed().as_secs_f64() * 1e3;
-        self.job = Some((s.clone(), grid, job));
-        Ok(readout(job_ms))
-    }
-
-    /// The distance field's middle z slice, once read back, as an image to blit.
-    fn take_slice(&mut self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<(), Error> {
-        if let Some(r) = &mut self.field_read
-            && let Some(d) = r.try_take()
-        {
-            self.field_read = None;
-            let d = d?;
-            let grid = (self.job.as_ref().map(|j| j.1)).or(self.shown.as_ref().map(|j| j.1));
-            if let Some(grid) = grid {
-                let [w, h, depth] = grid.size;
-                let z = depth / 2;
-                let plane = &d[(z * w * h) as usize..((z + 1) * w * h) as usize];
-                // Signed voxels: outside warm, inside cool, fading out to the band; a dark
-                // line at every whole voxel of distance, the surface white.
-                let band = self.shown.as_ref().map_or(4.0, |x| x.0.band);
-                let px: Vec<u8> = plane
-                    .iter()
-                    .flat_map(|&v| slice_colour(v / grid.voxel as f32, band))
-                    .collect();
-                let texture = upload_rgba(device, queue, &px, w, h);
-                self.slice = Some((texture.create_view(&Default::default()), [w, h], band));
-            }
+        let settings = settings.clone();
+        self.starting = None;
+        let started = started.inspect_err(|e| self.failed = Some((settings, e.clone())))?;
+        if started.loaded.is_some() {
+            self.mesh = started.loaded;
         }
+        self.readout = Some(started.readout);
+        self.slice = started.slice;
+        self.shown = Some((started.settings, started.grid, started.shown));
+        self.voxelized += 1;
         Ok(())
     }
 
@@ -478,6 +399,199 @@ impl VoxelizerScene {
             ));
         }
     }
+}
+
+/// `readback`'s result, waited for on a worker thread by polling the device without blocking
+/// it: a blocking poll holds wgpu's fence until the GPU is done, and the frame's own submission
+/// would wait for it (on llvmpipe, hundreds of milliseconds).
+fn settle<T: 'static>(device: &wgpu::Device, mut readback: Readback<T>) -> Result<T, Error> {
+    loop {
+        if let Some(r) = readback.try_take() {
+            return r;
+        }
+        device
+            .poll(wgpu::PollType::Poll)
+            .map_err(|e| Error::Readback(e.to_string()))?;
+        std::thread::sleep(std::time::Duration::from_micros(250));
+    }
+}
+
+/// A scoped thread's result, its panic passed on.
+fn join<T>(handle: std::thread::ScopedJoinHandle<'_, T>) -> T {
+    handle
+        .join()
+        .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+}
+
+fn worker_stopped() -> Error {
+    invalid("the voxelizer's worker thread stopped before recording its job")
+}
+
+/// The mesh called `name`: `torus`, `sphere` or an OBJ path.
+fn load_mesh(name: &str) -> Result<Mesh, Error> {
+    Ok(match name {
+        "torus" => Mesh::torus(DVec3::ZERO, 1.0, 0.4, 48, 24),
+        "sphere" => Mesh::uv_sphere(DVec3::ZERO, 1.0, 32, 16),
+        path => Mesh::load_obj(path)?,
+    })
+}
+
+impl Worker {
+    /// Make what settings `s` show: record and submit the distance field (if asked for) and
+    /// the voxels, wait for them, and make the frame's images and instances from them; `mesh`
+    /// is the last mesh loaded, by name.
+    fn start(
+        &self,
+        s: VoxelizerSettings,
+        mesh: Option<(String, Arc<Mesh>)>,
+    ) -> Result<Started, Error> {
+        let (device, queue) = (&self.device, &self.queue);
+        let (mut mesh_ms, mut sdf_ms, mut job_ms) = (None, None, None);
+        let loaded = match mesh {
+            Some((name, mesh)) if name == s.mesh => (None, mesh),
+            _ => {
+                let mesh = Arc::new(spent(&mut mesh_ms, || load_mesh(&s.mesh))?);
+                (Some((s.mesh.clone(), mesh.clone())), mesh)
+            }
+        };
+        let mesh = spent(&mut mesh_ms, || spun(&loaded.1, s.spin))?;
+        let grid = spent(&mut mesh_ms, || Grid::fit(&mesh, s.grid))?;
+        let mut encoder = device.create_command_encoder(&Default::default());
+        let sdf_settings = fieldkit::mesh_sdf::Settings {
+            band: s.band,
+            march: s.mode == VoxelMode::DistanceField,
+            ..Default::default()
+        };
+        let field = if s.slice || sdf_settings.march {
+            Some(spent(&mut sdf_ms, || {
+                self.mesh_sdf
+                    .encode(device, &mut encoder, &mesh, &grid, &sdf_settings)
+            })?)
+        } else {
+            None
+        };
+        let recorded = spent(&mut job_ms, || {
+            self.record(&mut encoder, &mesh, &grid, s.mode)
+        })?;
+        queue.submit([encoder.finish()]);
+        let slice = match field.as_ref().filter(|_| s.slice) {
+            Some(f) => Some(slice_image(
+                device,
+                queue,
+                settle(device, readback_texture(device, queue, &f.texture))?,
+                &grid,
+                s.band,
+            )),
+            None => None,
+        };
+        let shown = match recorded {
+            Some(recorded) => self.finish(recorded, &grid, &mut job_ms)?,
+            None => Shown::Field(field.expect("made for the march")),
+        };
+        let ms = |t: Option<f64>| t.map_or("—".into(), |t| format!("{t:.2} ms"));
+        let readout = format!(
+            "voxelized on a worker thread: CPU for the mesh {}, its distance field {}, the \
+             voxels {}",
+            ms(mesh_ms),
+            ms(sdf_ms),
+            ms(job_ms)
+        );
+        Ok(Started {
+            settings: s,
+            loaded: loaded.0,
+            grid,
+            shown,
+            slice,
+            readout,
+        })
+    }
+
+    /// Record the voxelization `mode` asks for (none for the distance-field mode).
+    fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        mesh: &Mesh,
+        grid: &Grid,
+        mode: VoxelMode,
+    ) -> Result<Option<Recorded>, Error> {
+        let (device, v) = (&self.device, &self.voxelizer);
+        Ok(Some(match mode {
+            VoxelMode::DistanceField => return Ok(None),
+            VoxelMode::Surface(Separation::Conservative) => {
+                Recorded::Attributes(Box::new(v.encode_attributes(device, encoder, mesh, grid)?))
+            }
+            VoxelMode::Surface(sep) => {
+                Recorded::Surface(v.encode_surface_with(device, encoder, mesh, grid, sep)?)
+            }
+            VoxelMode::Raster => {
+                Recorded::Surface(v.encode_surface_raster(device, encoder, mesh, grid)?)
+            }
+            VoxelMode::Solid => {
+                Recorded::Surface(v.encode_solid(device, encoder, mesh, grid, true)?)
+            }
+        }))
+    }
+
+    /// Read back a submitted voxelization and make what the frame draws of it: the attributes
+    /// resolved for the voxels occupied, or cubes at the voxels set.
+    fn finish(
+        &self,
+        recorded: Recorded,
+        grid: &Grid,
+        job_ms: &mut Option<f64>,
+    ) -> Result<Shown, Error> {
+        let (device, queue) = (&self.device, &self.queue);
+        match recorded {
+            Recorded::Attributes(pending) => {
+                let n = settle(device, pending.occupied(device, queue))?;
+                spent(job_ms, || {
+                    let mut encoder = device.create_command_encoder(&Default::default());
+                    let attrs = (self.voxelizer).encode_resolve_attributes(
+                        device,
+                        &mut encoder,
+                        *pending,
+                        n,
+                    )?;
+                    queue.submit([encoder.finish()]);
+                    Ok(Shown::Attributes(attrs))
+                })
+            }
+            Recorded::Surface(surface) => {
+                let bits = settle(device, surface.read(device, queue))?;
+                spent(job_ms, || {
+                    let centres = voxel_centres(&bits, grid);
+                    let instances = self.balls.upload(device, queue, &centres)?;
+                    Ok(Shown::Cubes(instances, centres.len()))
+                })
+            }
+        }
+    }
+}
+
+/// A voxelization recorded and not yet read back.
+enum Recorded {
+    Attributes(Box<PendingAttributes>),
+    Surface(fieldkit::voxelize::Surface),
+}
+
+/// The distance field's middle z slice as an image: signed voxels, outside warm, inside cool,
+/// fading out to the band; a dark line at every whole voxel of distance, the surface white.
+fn slice_image(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    field: Vec<f32>,
+    grid: &Grid,
+    band: f32,
+) -> Slice {
+    let [w, h, depth] = grid.size;
+    let z = depth / 2;
+    let plane = &field[(z * w * h) as usize..((z + 1) * w * h) as usize];
+    let px: Vec<u8> = plane
+        .iter()
+        .flat_map(|&v| slice_colour(v / grid.voxel as f32, band))
+        .collect();
+    let texture = upload_rgba(device, queue, &px, w, h);
+    (texture.create_view(&Default::default()), [w, h], band)
 }
 
 /// The slice's colour of a signed distance `d` (voxels) away from the surface and its lines:
