@@ -6,13 +6,15 @@
 
 use std::sync::atomic::{AtomicIsize, Ordering};
 
-/// Objects a frame made: buffers, textures, texture views, bind groups.
+/// Objects a frame made: buffers, textures, texture views, bind groups, and compute
+/// pipelines (none should be made on a frame: pipelines are made ahead).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Made {
     pub buffers: isize,
     pub textures: isize,
     pub views: isize,
     pub bind_groups: isize,
+    pub compute_pipelines: isize,
 }
 
 impl Made {
@@ -28,17 +30,19 @@ impl Made {
             textures: self.textures.max(b.textures),
             views: self.views.max(b.views),
             bind_groups: self.bind_groups.max(b.bind_groups),
+            compute_pipelines: self.compute_pipelines.max(b.compute_pipelines),
         }
     }
 }
 
 /// What wgpu-core's trace line for each creation starts with (`Device::create_buffer(label)`,
 /// `Device::create_bind_group -> id`, …), and its counter.
-static KINDS: [(&str, AtomicIsize); 4] = [
+static KINDS: [(&str, AtomicIsize); 5] = [
     ("Device::create_buffer", AtomicIsize::new(0)),
     ("Device::create_texture", AtomicIsize::new(0)),
     ("Texture::create_view", AtomicIsize::new(0)),
     ("Device::create_bind_group", AtomicIsize::new(0)),
+    ("Device::create_compute_pipeline", AtomicIsize::new(0)),
 ];
 
 struct Counter;
@@ -84,12 +88,13 @@ pub fn count<T>(f: impl FnOnce() -> T) -> (T, Option<Made>) {
     log::set_max_level(log::LevelFilter::Trace);
     let out = f();
     log::set_max_level(log::LevelFilter::Off);
-    let [b, t, v, g] = std::array::from_fn(|i| KINDS[i].1.load(Ordering::Relaxed));
+    let [b, t, v, g, p] = std::array::from_fn(|i| KINDS[i].1.load(Ordering::Relaxed));
     let made = Made {
         buffers: b,
         textures: t,
         views: v,
         bind_groups: g,
+        compute_pipelines: p,
     };
     (out, Some(made))
 }

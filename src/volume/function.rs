@@ -205,6 +205,61 @@ impl<M: Entry, B: Entry, K: Entry> DensityMarch<M, B, K> {
         })
     }
 
+    /// Make the march pipeline `settings` need, which [`Self::encode_march`] would otherwise
+    /// make on its first call with them (one per mode × shadow × skip × sample count): call it
+    /// ahead, on any thread, so that no frame waits for a pipeline. [`Shadow::LightVolume`] is
+    /// refused as by `encode_march`.
+    ///
+    /// ```no_run
+    /// # fn f(device: &wgpu::Device) -> Result<(), fieldkit::Error> {
+    /// use fieldkit::volume::{CloudMarch, MarchSettings, Shadow};
+    /// let cloud = CloudMarch::cloud(device)?;
+    /// let settings = MarchSettings { shadow: Shadow::Rays { step: 1.0 / 64.0 }, ..Default::default() };
+    /// cloud.prepare(device, &settings)?;
+    /// # Ok(()) }
+    /// ```
+    pub fn prepare(&self, device: &wgpu::Device, settings: &MarchSettings) -> Result<(), Error> {
+        settings.check()?;
+        self.march_for(device, settings).map(|_| ())
+    }
+
+    /// The march pipeline for `settings`, made on first use.
+    fn march_for(
+        &self,
+        device: &wgpu::Device,
+        settings: &MarchSettings,
+    ) -> Result<std::sync::Arc<ComputePipeline<ByName<M>>>, Error> {
+        let shadow = match settings.shadow {
+            Shadow::None => 0,
+            Shadow::Rays { .. } => 1,
+            Shadow::LightVolume { .. } => {
+                return Err(Error::Invalid {
+                    stage: STAGE,
+                    what: "a density function is shadowed by Shadow::Rays or not at all; for a \
+                           light volume, bake it (encode_bake) and march the texture"
+                        .into(),
+                });
+            }
+        };
+        let mode = match settings.mode {
+            super::Mode::EmissionAbsorption => 0,
+            super::Mode::MaximumIntensity => 1,
+            super::Mode::IsoSurface { .. } => 2,
+        };
+        self.march.get(
+            device,
+            // Every density march is made from one template, so the built-in cloud's generated
+            // overrides name the template's (`check_entry` holds each stage to the template).
+            &cloud_march::Overrides {
+                mode,
+                shadow,
+                skip: settings.skip,
+                count_samples: settings.count_samples,
+            },
+            true,
+        )
+    }
+
     /// The parameters every entry point reads: the box and lattice, and for the march the
     /// view, light and transfer function.
     #[allow(clippy::too_many_arguments)]
@@ -395,18 +450,7 @@ impl<M: Entry, B: Entry, K: Entry> DensityMarch<M, B, K> {
                 what: "the brick grid was built for another lattice".into(),
             });
         }
-        let shadow = match settings.shadow {
-            Shadow::None => 0,
-            Shadow::Rays { .. } => 1,
-            Shadow::LightVolume { .. } => {
-                return Err(Error::Invalid {
-                    stage: STAGE,
-                    what: "a density function is shadowed by Shadow::Rays or not at all; for a \
-                           light volume, bake it (encode_bake) and march the texture"
-                        .into(),
-                });
-            }
-        };
+        let march = self.march_for(device, settings)?;
         let Some(rect) = march_rect(view, local_to_world, volume.min, volume.max) else {
             return Ok(None);
         };
@@ -422,23 +466,6 @@ impl<M: Entry, B: Entry, K: Entry> DensityMarch<M, B, K> {
         );
         let (colour, lease) = kept::march_target(&self.marched, device, view.viewport);
         let tf_buffer = tf_buffer(device, tf);
-        let mode = match settings.mode {
-            super::Mode::EmissionAbsorption => 0,
-            super::Mode::MaximumIntensity => 1,
-            super::Mode::IsoSurface { .. } => 2,
-        };
-        let march = self.march.get(
-            device,
-            // Every density march is made from one template, so the built-in cloud's generated
-            // overrides name the template's (`check_entry` holds each stage to the template).
-            &cloud_march::Overrides {
-                mode: mode as u32,
-                shadow: shadow as u32,
-                skip: settings.skip,
-                count_samples: settings.count_samples,
-            },
-            true,
-        )?;
         march.record(
             device,
             rec,

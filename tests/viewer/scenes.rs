@@ -673,7 +673,68 @@ fn no_scene_makes_a_gpu_object_a_frame() {
             [0; 4],
             "{scene} makes objects a frame: {most:?}"
         );
+        assert_eq!(most.compute_pipelines, 0, "{scene} makes pipelines a frame");
     }
+}
+
+/// The volume's function mode makes its pipelines on a worker thread, the march's for the
+/// scene's settings included (`DensityMarch::prepare`): the frame the cloud function arrives
+/// on marches without making a pipeline. The count sees pipelines: making the cloud function
+/// makes its bricks and bake pipelines.
+#[test]
+fn the_cloud_function_arrives_with_its_march_pipeline_made() {
+    let _gpu = gpu_whole();
+    use viewer::made::count;
+    use viewer::scenes::{COLOUR, DEPTH, Scenes};
+    let (device, queue) = device();
+    let (cloud, made) = count(|| fieldkit::volume::CloudMarch::cloud(&device).unwrap());
+    let made = made.expect("no other logger in this test binary");
+    assert!(made.compute_pipelines >= 2, "{made:?}");
+    drop(cloud);
+    let mut saved = settings();
+    saved.volume.function = true;
+    let targets = fieldkit::view::Targets::new(&device, SIZE, COLOUR, DEPTH);
+    let frame = |scenes: &mut Scenes, i: u32| {
+        let (report, index) = viewer::draw_frame(
+            &device,
+            &queue,
+            scenes,
+            &saved,
+            "volume",
+            &targets,
+            SIZE,
+            viewer::frame_time(i),
+            i,
+            None,
+        );
+        device
+            .poll(wgpu::PollType::Wait {
+                submission_index: Some(index),
+                timeout: None,
+            })
+            .unwrap();
+        report
+    };
+    let mut scenes = Scenes::new();
+    let first = frame(&mut scenes, 0);
+    assert!(first.error.is_none(), "{:?}", first.error);
+    assert!(
+        scenes.busy("volume", &saved),
+        "the function was made on the frame"
+    );
+    scenes.wait_for_workers();
+    let (report, made) = count(|| frame(&mut scenes, 1));
+    assert!(report.error.is_none(), "{:?}", report.error);
+    assert!(!scenes.busy("volume", &saved));
+    assert!(
+        report
+            .stats
+            .iter()
+            .any(|l| l.contains("fBm function per sample")),
+        "the function was not marched: {:?}",
+        report.stats
+    );
+    assert_eq!(made.unwrap().compute_pipelines, 0);
 }
 
 /// The 2D tool draws the texels a JFA variant got wrong in magenta on the image, as many as it

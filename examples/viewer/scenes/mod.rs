@@ -19,10 +19,12 @@ use serde::{Deserialize, Serialize};
 
 use super::camera::Camera;
 use super::draw::{Blit, Lines};
+use job::Job;
 
 mod actor;
 mod culprit;
 mod distance2d;
+mod job;
 mod legend;
 mod ocean;
 mod volume;
@@ -287,14 +289,14 @@ impl Scenes {
         match scene {
             "distance2d" => self.distance.as_ref().is_none_or(|d| d.busy(&s.distance)),
             "voxelizer" => self.voxelizer.as_ref().is_none_or(|v| v.busy(&s.voxelizer)),
-            // A cloud of a new size still being made on its worker thread.
-            "volume" | "composite" => self.volume.as_ref().is_some_and(|v| v.pending.is_some()),
+            // A cloud of a new size, or the cloud function, still being made on a worker thread.
+            "volume" | "composite" => self.volume.as_ref().is_some_and(|v| v.busy()),
             _ => false,
         }
     }
 
     /// Wait for the work the scenes do on worker threads (the voxelizer's jobs, the volume's
-    /// cloud); the next frame takes it.
+    /// cloud and cloud function); the next frame takes it.
     pub fn wait_for_workers(&mut self) {
         if let Some(v) = &mut self.voxelizer {
             v.wait_for_worker();

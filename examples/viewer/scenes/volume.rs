@@ -50,15 +50,17 @@ impl Default for VolumeSettings {
     }
 }
 
-/// A cloud being made and uploaded on a worker thread: its (size, seed) and where it arrives.
-pub(super) type PendingCloud = ((u32, u32), std::sync::mpsc::Receiver<Result<Volume, Error>>);
+/// A cloud being made and uploaded on a worker thread, and its (size, seed).
+pub(super) type PendingCloud = ((u32, u32), Job<Result<Volume, Error>>);
 
 /// The volume's GPU state.
 pub struct VolumeScene {
     pub(super) renderer: VolumeRenderer,
     pub(super) volume: Option<((u32, u32), Volume, fieldkit::volume::Bricks)>,
-    /// The cloud as a function, made on first use, and its bricks for a lattice size.
+    /// The cloud as a function, made on a worker thread on first use (its pipelines), and its
+    /// bricks for a lattice size.
     pub(super) cloud: Option<fieldkit::volume::CloudMarch>,
+    pub(super) cloud_making: Option<Job<Result<fieldkit::volume::CloudMarch, Error>>>,
     pub(super) cloud_bricks: Option<(u32, fieldkit::volume::Bricks)>,
     /// The light volume, kept while the cloud, its transfer function, the light and the
     /// transform stay (`LightVolume::is_for`): rebuilt only when one changes.
@@ -75,6 +77,7 @@ impl VolumeScene {
             light: None,
             volume: None,
             cloud: None,
+            cloud_making: None,
             cloud_bricks: None,
             pending: None,
         })
@@ -92,11 +95,10 @@ impl VolumeScene {
         key: (u32, u32),
     ) -> Option<Result<Volume, Error>> {
         if self.pending.as_ref().map(|p| p.0) != Some(key) {
-            let (tx, rx) = std::sync::mpsc::channel();
             let (device, queue) = (device.clone(), queue.clone());
-            std::thread::spawn(move || {
+            let job = Job::spawn(move || {
                 let n = key.0;
-                let volume = Volume::upload(
+                Volume::upload(
                     &device,
                     &queue,
                     &fbm_cloud([n; 3], key.1),
@@ -104,30 +106,32 @@ impl VolumeScene {
                     wgpu::TextureFormat::R8Unorm,
                     Vec3::splat(1.0 / n as f32),
                     Vec3::splat(-0.5),
-                );
-                let _ = tx.send(volume);
+                )
             });
-            self.pending = Some((key, rx));
+            self.pending = Some((key, job));
         }
-        let (_, rx) = self.pending.as_ref().expect("set above");
-        let ready = match rx.try_recv() {
-            Ok(volume) => Some(volume),
-            Err(std::sync::mpsc::TryRecvError::Empty) => None,
-            Err(std::sync::mpsc::TryRecvError::Disconnected) => Some(Err(cloud_stopped())),
-        };
+        let (_, job) = self.pending.as_mut().expect("set above");
+        let ready = job
+            .try_take()
+            .map(|cloud| cloud.unwrap_or_else(|| Err(cloud_stopped())));
         if ready.is_some() {
             self.pending = None;
         }
         ready
     }
 
+    /// Work on a worker thread not yet drawn: a cloud, or the cloud function's pipelines.
+    pub(super) fn busy(&self) -> bool {
+        self.pending.is_some() || self.cloud_making.is_some()
+    }
+
     /// Wait for the cloud being made on the worker thread, if any; the next frame takes it.
     pub(super) fn wait_for_cloud(&mut self) {
-        if let Some((key, rx)) = self.pending.take() {
-            let cloud = rx.recv().unwrap_or_else(|_| Err(cloud_stopped()));
-            let (tx, rx) = std::sync::mpsc::channel();
-            let _ = tx.send(cloud);
-            self.pending = Some((key, rx));
+        if let Some(job) = self.cloud_making.take() {
+            self.cloud_making = Some(job.wait());
+        }
+        if let Some((key, job)) = self.pending.take() {
+            self.pending = Some((key, job.wait()));
         }
     }
 
@@ -140,8 +144,28 @@ impl VolumeScene {
     ) -> PanelLines {
         let device = frame.device;
         use fieldkit::volume::{CloudMarch, FunctionVolume, Shadow};
+        let mut march = s.march;
+        march.frame = frame.number;
+        if let Shadow::LightVolume { step } = march.shadow {
+            march.shadow = Shadow::Rays { step };
+        }
         if self.cloud.is_none() {
-            self.cloud = Some(CloudMarch::cloud(device)?);
+            let job = self.cloud_making.get_or_insert_with(|| {
+                let device = device.clone();
+                // The march's pipeline for these settings too, made ahead of the first march.
+                Job::spawn(move || {
+                    CloudMarch::cloud(&device).and_then(|c| c.prepare(&device, &march).map(|()| c))
+                })
+            });
+            let Some(made) = job.try_take() else {
+                return Ok(vec![
+                    "volume: the cloud function's pipelines are being made on a worker thread"
+                        .into(),
+                ]);
+            };
+            let made = made.unwrap_or_else(|| Err(cloud_stopped()));
+            self.cloud_making = None;
+            self.cloud = Some(made?);
         }
         let cloud = self.cloud.as_ref().expect("set above");
         let lattice = FunctionVolume::unit(s.size.clamp(4, 512));
@@ -150,11 +174,6 @@ impl VolumeScene {
             self.cloud_bricks = Some((lattice.dims[0], bricks));
         }
         let (_, bricks) = self.cloud_bricks.as_ref().expect("set above");
-        let mut march = s.march;
-        march.frame = frame.number;
-        if let Shadow::LightVolume { step } = march.shadow {
-            march.shadow = Shadow::Rays { step };
-        }
         let view = frame.camera.view(frame.size);
         // The function's box is its unit cube of texture coordinates, centred as the texture.
         let placed = local_to_world * Mat4::from_translation(Vec3::splat(-0.5));

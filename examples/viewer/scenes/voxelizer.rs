@@ -4,7 +4,6 @@ use fieldkit::mesh_sdf::{MeshField, MeshSdf};
 use fieldkit::metaball::MarchField;
 
 use std::sync::Arc;
-use std::sync::mpsc::Receiver;
 
 use super::*;
 
@@ -100,6 +99,68 @@ pub(super) struct Started {
     slice: Option<Slice>,
     /// What each part took of the worker's CPU.
     readout: String,
+    /// What draws the result, where the scene had none for its kind and depth direction.
+    drawer: Option<(bool, Drawer)>,
+}
+
+/// What draws a shown result: the lit voxel view (attributes), the SDF march (the distance
+/// field) or cubes (the other modes).
+pub(super) enum Drawer {
+    View(VoxelView),
+    March(Box<Raymarcher>),
+    Cubes(Cubes),
+}
+
+/// Which [`Drawer`] a mode's result needs.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(super) enum DrawerKind {
+    View,
+    March,
+    Cubes,
+}
+
+impl DrawerKind {
+    fn of(mode: VoxelMode) -> Self {
+        match mode {
+            VoxelMode::Surface(Separation::Conservative) => Self::View,
+            VoxelMode::DistanceField => Self::March,
+            _ => Self::Cubes,
+        }
+    }
+}
+
+impl Drawer {
+    /// The drawer of `kind` for a depth test in `reversed` direction: pipelines made here.
+    fn make(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        kind: DrawerKind,
+        reversed: bool,
+    ) -> Result<Self, Error> {
+        Ok(match kind {
+            DrawerKind::View => {
+                if reversed {
+                    return Err(invalid(
+                        "the voxel view draws with a depth test of Less (no reversed Z yet)",
+                    ));
+                }
+                Self::View(VoxelView::new(device, COLOUR, DEPTH)?)
+            }
+            DrawerKind::March => Self::March(Box::new(Raymarcher::new(
+                device, queue, COLOUR, DEPTH, reversed,
+            )?)),
+            DrawerKind::Cubes => {
+                let mut style = CubeStyle {
+                    colour: Vec4::new(0.85, 0.7, 0.45, 1.0),
+                    ..CubeStyle::default()
+                };
+                if reversed {
+                    style.depth_compare = flip(style.depth_compare);
+                }
+                Self::Cubes(Cubes::new(device, COLOUR, DEPTH, style)?)
+            }
+        })
+    }
 }
 
 /// An image of the distance field's middle z slice, its size and its band (voxels).
@@ -123,16 +184,17 @@ pub(super) struct Worker {
 /// change.
 pub struct VoxelizerScene {
     pub(super) worker: Worker,
-    /// The SDF march of the distance-field mode, made for the camera's depth direction.
+    /// What draws each kind of result, made for the camera's depth direction (on the worker
+    /// with the first result of its kind; on the frame only if the direction flips).
+    pub(super) view: Option<(bool, VoxelView)>,
     pub(super) marcher: Option<(bool, Raymarcher)>,
+    pub(super) cubes: Option<(bool, Cubes)>,
     pub(super) blit: Blit,
     pub(super) slice: Option<Slice>,
-    pub(super) view: Option<(bool, VoxelView)>,
-    pub(super) cubes: Option<(bool, Cubes)>,
     /// The last mesh loaded, by name (the worker loads a new one).
     pub(super) mesh: Option<(String, Arc<Mesh>)>,
     /// A change being made on the worker thread, for these settings.
-    pub(super) starting: Option<(VoxelizerSettings, Receiver<Result<Started, Error>>)>,
+    pub(super) starting: Option<(VoxelizerSettings, Job<Result<Started, Error>>)>,
     /// Settings the worker refused, and why: not tried again until they change.
     pub(super) failed: Option<(VoxelizerSettings, Error)>,
     pub(super) shown: Option<(VoxelizerSettings, Grid, Shown)>,
@@ -166,11 +228,11 @@ impl VoxelizerScene {
                 mesh_sdf: Arc::new(mesh_sdf?),
                 balls: Arc::new(balls?),
             },
+            view: None,
             marcher: None,
+            cubes: None,
             blit: Blit::new(device, COLOUR),
             slice: None,
-            view: None,
-            cubes: None,
             mesh: None,
             starting: None,
             failed: None,
@@ -188,11 +250,8 @@ impl VoxelizerScene {
     /// Wait for the worker thread to finish (the soak samples memory at fixed points); the
     /// frame after takes its result.
     pub fn wait_for_worker(&mut self) {
-        if let Some((s, rx)) = self.starting.take() {
-            let result = rx.recv().unwrap_or_else(|_| Err(worker_stopped()));
-            let (tx, rx) = std::sync::mpsc::channel();
-            let _ = tx.send(result);
-            self.starting = Some((s, rx));
+        if let Some((s, job)) = self.starting.take() {
+            self.starting = Some((s, job.wait()));
         }
     }
 
@@ -206,7 +265,7 @@ impl VoxelizerScene {
             return Err(e.clone());
         }
         if self.starting.is_none() && self.shown.as_ref().map(|x| &x.0) != Some(s) {
-            self.start(s);
+            self.start(s, frame.camera.reversed_z);
         }
         let mut stats = Vec::new();
         self.draw_shown(device, queue, s, frame, &mut stats)?;
@@ -220,27 +279,31 @@ impl VoxelizerScene {
         Ok(stats)
     }
 
-    /// Start making what settings `s` (they changed) show, on the worker thread.
-    fn start(&mut self, s: &VoxelizerSettings) {
-        let (tx, rx) = std::sync::mpsc::channel();
+    /// Start making what settings `s` (they changed) show, on the worker thread, with what
+    /// draws it where the scene has none for the depth direction `reversed`.
+    fn start(&mut self, s: &VoxelizerSettings, reversed: bool) {
         let (worker, settings, mesh) = (self.worker.clone(), s.clone(), self.mesh.clone());
-        std::thread::spawn(move || {
-            let _ = tx.send(worker.start(settings, mesh));
-        });
+        let kind = DrawerKind::of(s.mode);
+        let have = match kind {
+            DrawerKind::View => self.view.as_ref().map(|d| d.0),
+            DrawerKind::March => self.marcher.as_ref().map(|d| d.0),
+            DrawerKind::Cubes => self.cubes.as_ref().map(|d| d.0),
+        };
+        let need = (have != Some(reversed)).then_some((kind, reversed));
         self.failed = None;
-        self.starting = Some((s.clone(), rx));
+        let job = Job::spawn(move || worker.start(settings, mesh, need));
+        self.starting = Some((s.clone(), job));
     }
 
     /// The worker's result, once ready: shown from this frame on.
     fn take_started(&mut self) -> Result<(), Error> {
-        let Some((settings, rx)) = &self.starting else {
+        let Some((settings, job)) = &mut self.starting else {
             return Ok(());
         };
-        let started = match rx.try_recv() {
-            Ok(started) => started,
-            Err(std::sync::mpsc::TryRecvError::Empty) => return Ok(()),
-            Err(std::sync::mpsc::TryRecvError::Disconnected) => Err(worker_stopped()),
+        let Some(started) = job.try_take() else {
+            return Ok(());
         };
+        let started = started.unwrap_or_else(|| Err(worker_stopped()));
         let settings = settings.clone();
         self.starting = None;
         let started = started.inspect_err(|e| self.failed = Some((settings, e.clone())))?;
@@ -248,6 +311,12 @@ impl VoxelizerScene {
             self.mesh = started.loaded;
         }
         self.readout = Some(started.readout);
+        match started.drawer {
+            Some((reversed, Drawer::View(v))) => self.view = Some((reversed, v)),
+            Some((reversed, Drawer::March(m))) => self.marcher = Some((reversed, *m)),
+            Some((reversed, Drawer::Cubes(c))) => self.cubes = Some((reversed, c)),
+            None => {}
+        }
         self.slice = started.slice;
         self.shown = Some((started.settings, started.grid, started.shown));
         self.voxelized += 1;
@@ -279,14 +348,11 @@ impl VoxelizerScene {
             ));
             match shown {
                 Shown::Attributes(attrs) => {
-                    if self.view.as_ref().map(|v| v.0) != Some(reversed) {
-                        let mut v = VoxelView::new(device, COLOUR, DEPTH);
-                        if reversed {
-                            v = Err(invalid(
-                                "the voxel view draws with a depth test of Less (no reversed Z yet)",
-                            ));
-                        }
-                        self.view = Some((reversed, v?));
+                    if self.view.as_ref().map(|v| v.0) != Some(reversed)
+                        && let Drawer::View(v) =
+                            Drawer::make(device, queue, DrawerKind::View, reversed)?
+                    {
+                        self.view = Some((reversed, v));
                     }
                     let v = &self.view.as_ref().expect("set above").1;
                     let light = if s.point_light {
@@ -314,9 +380,11 @@ impl VoxelizerScene {
                     stats.push(format!("occupied voxels: {}", attrs.count));
                 }
                 Shown::Field(field) => {
-                    if self.marcher.as_ref().map(|m| m.0) != Some(reversed) {
-                        let marcher = Raymarcher::new(device, queue, COLOUR, DEPTH, reversed)?;
-                        self.marcher = Some((reversed, marcher));
+                    if self.marcher.as_ref().map(|m| m.0) != Some(reversed)
+                        && let Drawer::March(m) =
+                            Drawer::make(device, queue, DrawerKind::March, reversed)?
+                    {
+                        self.marcher = Some((reversed, *m));
                     }
                     let marcher = &self.marcher.as_ref().expect("set above").1;
                     let march = MarchField {
@@ -344,15 +412,11 @@ impl VoxelizerScene {
                     ));
                 }
                 Shown::Cubes(instances, n) => {
-                    if self.cubes.as_ref().map(|c| c.0) != Some(reversed) {
-                        let mut style = CubeStyle {
-                            colour: Vec4::new(0.85, 0.7, 0.45, 1.0),
-                            ..CubeStyle::default()
-                        };
-                        if reversed {
-                            style.depth_compare = flip(style.depth_compare);
-                        }
-                        self.cubes = Some((reversed, Cubes::new(device, COLOUR, DEPTH, style)?));
+                    if self.cubes.as_ref().map(|c| c.0) != Some(reversed)
+                        && let Drawer::Cubes(c) =
+                            Drawer::make(device, queue, DrawerKind::Cubes, reversed)?
+                    {
+                        self.cubes = Some((reversed, c));
                     }
                     let c = &self.cubes.as_ref().expect("set above").1;
                     c.encode(
@@ -444,6 +508,7 @@ impl Worker {
         &self,
         s: VoxelizerSettings,
         mesh: Option<(String, Arc<Mesh>)>,
+        need: Option<(DrawerKind, bool)>,
     ) -> Result<Started, Error> {
         let (device, queue) = (&self.device, &self.queue);
         let (mut mesh_ms, mut sdf_ms, mut job_ms) = (None, None, None);
@@ -496,6 +561,12 @@ impl Worker {
             ms(sdf_ms),
             ms(job_ms)
         );
+        let drawer = match need {
+            Some((kind, reversed)) => {
+                Some((reversed, Drawer::make(device, queue, kind, reversed)?))
+            }
+            None => None,
+        };
         Ok(Started {
             settings: s,
             loaded: loaded.0,
@@ -503,6 +574,7 @@ impl Worker {
             shown,
             slice,
             readout,
+            drawer,
         })
     }
 
