@@ -343,7 +343,8 @@ impl<M: Entry, B: Entry, K: Entry> DensityMarch<M, B, K> {
     /// The min-max brick grid of the function: per brick of [`super::BRICK`]³ cells, the
     /// function's smallest and largest value at the centres of its cells dilated by one cell
     /// (once per function and box; a function that varies within a cell can exceed it, see the
-    /// module docs).
+    /// module docs). A bake: the grid is a new buffer each call, which the caller keeps for
+    /// every frame its lattice stays (the viewer keys it on the lattice's size).
     pub fn encode_bricks(
         &self,
         device: &wgpu::Device,
