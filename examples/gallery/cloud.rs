@@ -111,7 +111,7 @@ pub fn cloud_scene_with(
         Preset::Seed => {
             // The function's box is the unit cube of its texture coordinates; moved to where
             // the texture's box is.
-            let cloud = CloudMarch::cloud(&ctx.device)?;
+            let cloud = CloudMarch::cloud(&ctx.device, &ctx.queue)?;
             let box_ = FunctionVolume::unit(96);
             let bricks = cloud.encode_bricks(&ctx.device, &mut enc, &box_)?;
             let settings = MarchSettings {

@@ -99,7 +99,7 @@ pub fn metaball_scene_with(
     targets.clear(&mut enc, background, 1.0);
     match what {
         MetaballView::Cubes => {
-            let cubes = Cubes::new(device, colour_format, depth_format, cube_style)?;
+            let cubes = Cubes::new(device, &ctx.queue, colour_format, depth_format, cube_style)?;
             cubes.encode(
                 device,
                 &mut enc,

@@ -143,10 +143,15 @@ impl Blit {
     }
 }
 
-/// Coloured line segments in world space, drawn over the scene without a depth test.
+/// Coloured line segments in world space, drawn over the scene without a depth test. A
+/// frame's draw makes nothing: the vertices go into a kept buffer (grown when a frame has
+/// more), the camera's bind group is made once. Drawn once a frame (a second draw in one
+/// encoder would overwrite the first's vertices and camera).
 pub struct Lines {
     pipeline: wgpu::RenderPipeline,
     camera: wgpu::Buffer,
+    group: wgpu::BindGroup,
+    vertices: std::sync::Mutex<Option<wgpu::Buffer>>,
 }
 
 #[repr(C)]
@@ -181,7 +186,20 @@ impl Lines {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        Self { pipeline, camera }
+        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("viewer lines"),
+            layout: &pipeline.get_bind_group_layout(0),
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: camera.as_entire_binding(),
+            }],
+        });
+        Self {
+            pipeline,
+            camera,
+            group,
+            vertices: Default::default(),
+        }
     }
 
     /// Draw `segments` (pairs of points) in `colour`.
@@ -199,7 +217,6 @@ impl Lines {
         if segments.is_empty() {
             return;
         }
-        use wgpu::util::DeviceExt;
         let vertices: Vec<Vertex> = segments
             .iter()
             .flatten()
@@ -208,24 +225,26 @@ impl Lines {
                 c: colour.to_array(),
             })
             .collect();
-        let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("viewer lines"),
-            contents: bytemuck::cast_slice(&vertices),
-            usage: wgpu::BufferUsages::VERTEX,
-        });
+        let bytes: &[u8] = bytemuck::cast_slice(&vertices);
+        let buffer = {
+            let mut kept = self.vertices.lock().unwrap_or_else(|e| e.into_inner());
+            if kept.as_ref().is_none_or(|b| b.size() < bytes.len() as u64) {
+                *kept = Some(device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("viewer lines"),
+                    // Room to grow: a few more segments next frame make no new buffer.
+                    size: (bytes.len() as u64).next_power_of_two(),
+                    usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                }));
+            }
+            kept.clone().expect("made above")
+        };
+        queue.write_buffer(&buffer, 0, bytes);
         queue.write_buffer(&self.camera, 0, bytemuck::bytes_of(&view_proj));
-        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("viewer lines"),
-            layout: &self.pipeline.get_bind_group_layout(0),
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: self.camera.as_entire_binding(),
-            }],
-        });
         let mut pass = colour_pass(rec, "viewer lines", target);
         pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.set_vertex_buffer(0, buffer.slice(..));
+        pass.set_bind_group(0, &self.group, &[]);
+        pass.set_vertex_buffer(0, buffer.slice(..bytes.len() as u64));
         pass.draw(0..vertices.len() as u32, 0..1);
     }
 }

@@ -6,12 +6,14 @@
 //! recorded through a `Recorder`: the ocean's), and the loop's own floor (an empty frame submitted and waited
 //! for, the same way). Besides the steady frames it times the first frame of the scene (its
 //! pipelines made on the spot) and the frame after the screen size changes (the hitch a resize
-//! costs). Medians with min–max over FRAMES frames after 30 frames of warm-up; then the GPU
+//! costs), the frame after a size setting changes and after each settings change the scene's
+//! panel offers ([`setting_changes`]: the frame of the change and the most CPU of the frames
+//! until the scene settles). Medians with min–max over FRAMES frames after 30 frames of warm-up; then the GPU
 //! objects (buffers, textures, views, bind groups) the most any of 5 more frames creates,
 //! counted as wgpu-core creates them ([`super::made`]).
 //!
-//! `cargo xtask bench frame` runs it for every scene and writes `frame.csv`; on its own it prints
-//! a table (`--out DIR` writes the CSV there too).
+//! `cargo xtask bench frame` runs it for every scene and writes `frame.csv` and
+//! `frame_settings.csv`; on its own it prints a table (`--out DIR` writes the CSVs there too).
 
 use std::path::Path;
 use std::time::Instant;
@@ -19,6 +21,7 @@ use std::time::Instant;
 use fieldkit::gpu::{Context, PipelineCache, Profiler};
 use fieldkit::view::Targets;
 
+use super::changes::setting_changes;
 use super::made::{self, Made};
 use super::scenes::{COLOUR, DEPTH, NAMES, Saved, Scenes};
 use super::{FrameShot, draw_frame, frame_time, record_frame, wait};
@@ -67,8 +70,11 @@ impl Spread {
 pub struct FrameCost {
     pub scene: String,
     pub size: [u32; 2],
-    /// The first frame, pipelines made on the spot: record + submit + done.
+    /// The first frame: record + submit + done (what is made on worker threads arrives later).
     pub first_ms: f64,
+    /// From the first frame's start to the end of the first frame that drew the whole scene
+    /// (nothing left on worker threads), frames drawn back to back.
+    pub whole_ms: f64,
     /// Record + submit, CPU.
     pub cpu: Spread,
     /// Of that, the encoder's `finish` and the queue's `submit`.
@@ -116,6 +122,25 @@ pub struct FrameCost {
     /// Which of the frames after that one (five, or until the scene settled) took the most
     /// CPU, and its readouts.
     pub slowest_after_change: (u32, Vec<String>),
+    /// Each settings change the scene's panel offers ([`setting_changes`]), timed as the size
+    /// change is.
+    pub settings: Vec<Hitch>,
+}
+
+/// A change and what the frames after it cost: the frame it is made on (CPU, and wall), and
+/// the most CPU any of the frames after took (five, or until the scene settled).
+#[derive(Debug)]
+pub struct Hitch {
+    pub name: String,
+    pub cpu_ms: f64,
+    pub wall_ms: f64,
+    pub after_cpu_ms: f64,
+    /// Which frame after the change that was (1: the next), and its readouts.
+    pub slowest: (u32, Vec<String>),
+    /// wgpu's spans in that frame, where they are timed (`spans::on`).
+    pub spans: Vec<String>,
+    /// The scene's error on the frame of the change or after, if it refused the settings.
+    pub error: Option<String>,
 }
 
 impl FrameCost {
@@ -180,7 +205,11 @@ pub fn run(
     if let Some(dir) = out {
         std::fs::create_dir_all(dir).map_err(|e| e.to_string())?;
         write_csv(&dir.join("frame.csv"), &adapter, &start, &costs)?;
-        println!("wrote {}", dir.join("frame.csv").display());
+        write_settings_csv(&dir.join("frame_settings.csv"), &adapter, &start, &costs)?;
+        println!(
+            "wrote {} and frame_settings.csv",
+            dir.join("frame.csv").display()
+        );
     }
     Ok(())
 }
@@ -252,18 +281,7 @@ fn measure(
 ) -> Result<FrameCost, fieldkit::Error> {
     let targets = Targets::new(&ctx.device, size, COLOUR, DEPTH);
     let mut scenes = Scenes::new();
-    let first_ms = timed_frame(ctx, &mut scenes, saved, scene, &targets, size, 0, None)?.wall;
-    // Warm-up frames, and on until what the scene makes on other threads (its first cloud)
-    // has arrived: the measured frames draw the whole scene.
-    for i in 1..WARM_UP + AFTER_CHANGE_MAX {
-        if i >= WARM_UP {
-            if !scenes.busy(scene, saved) {
-                break;
-            }
-            scenes.wait_for_workers();
-        }
-        timed_frame(ctx, &mut scenes, saved, scene, &targets, size, i, None)?;
-    }
+    let (first_ms, whole_ms) = warm_up(ctx, &mut scenes, saved, scene, &targets, size)?;
     let (mut cpu, mut wall, mut submit, mut error) = (Vec::new(), Vec::new(), Vec::new(), None);
     let mut fieldkit = Vec::new();
     let mut stats = Vec::new();
@@ -278,33 +296,13 @@ fn measure(
         stats = t.stats;
     }
     let spans = super::spans::lines(frames);
-    // The objects a frame makes, in frames of their own: counting them costs CPU time.
-    let mut made = Made::default();
-    for i in 0..COUNTED {
-        let n = WARM_UP + frames + i;
-        let (t, m) =
-            made::count(|| timed_frame(ctx, &mut scenes, saved, scene, &targets, size, n, None));
-        t?;
-        made = made.max(m.ok_or_else(|| {
-            fieldkit::Error::invalid("frame cost", "another logger is installed")
-        })?);
-    }
-    // The GPU's share, in frames of their own: timestamp queries change what they measure.
-    let mut gpu = Vec::new();
-    let mut last_passes = Vec::new();
-    if let Some(mut profiler) = Profiler::new(&ctx.device, &ctx.queue, 256) {
-        for i in 0..frames.min(20) {
-            let n = WARM_UP + frames + i;
-            let p = Some(&mut profiler);
-            timed_frame(ctx, &mut scenes, saved, scene, &targets, size, n, p)?;
-            let mut enc = ctx.device.create_command_encoder(&Default::default());
-            profiler.resolve(&mut enc);
-            ctx.queue.submit([enc.finish()]);
-            let (passes, _) = wait(&ctx.device, profiler.read(&ctx.device, &ctx.queue))?;
-            gpu.push(passes.iter().fold(0.0, |t, p| t + p.1));
-            last_passes = passes;
-        }
-    }
+    let at = Shot {
+        targets: &targets,
+        size,
+        number: WARM_UP + frames,
+    };
+    let made = counted(ctx, &mut scenes, saved, scene, &at)?;
+    let (gpu, last_passes) = timed_passes(ctx, &mut scenes, saved, scene, &at, frames.min(20))?;
     let gpu_frame = gpu_frame_times(ctx, &mut scenes, saved, scene, &targets, size, frames)?;
     // A new screen size: the targets a window's resize hands over, then one frame.
     let resized = [size[0] * 9 / 10, size[1] * 9 / 10];
@@ -315,30 +313,27 @@ fn measure(
     // A size setting changes (the grid, the mask, the cloud): that frame, then a few more.
     let changed = size_change(scene, saved);
     let n = n + 1;
-    let change = timed_frame(ctx, &mut scenes, &changed, scene, &small, resized, n, None)?;
-    // Five frames, and on until what the scene makes elsewhere for the change (a new cloud
-    // on a worker thread) has arrived and been drawn.
-    let mut after_change = Vec::new();
-    for k in 1..=AFTER_CHANGE_MAX {
-        let t = timed_frame(
-            ctx,
-            &mut scenes,
-            &changed,
-            scene,
-            &small,
-            resized,
-            n + k,
-            None,
-        )?;
-        after_change.push((t.cpu, k, t.stats));
-        if k >= 5 && !scenes.busy(scene, &changed) {
-            break;
-        }
+    let at = Shot {
+        targets: &small,
+        size: resized,
+        number: n,
+    };
+    let (change, (change_stats, slowest_after_change)) =
+        hitch(ctx, &mut scenes, &changed, scene, &at, "size")?;
+    // Each settings change the panel offers, from the saved settings and back.
+    let mut settings = Vec::new();
+    for (k, (name, changed)) in setting_changes(scene, saved).into_iter().enumerate() {
+        let at = Shot {
+            number: n + (k as u32 + 1) * 2 * AFTER_CHANGE_MAX,
+            ..at
+        };
+        settings.push(hitch(ctx, &mut scenes, &changed, scene, &at, &name)?.0);
+        let back = Shot {
+            number: at.number + AFTER_CHANGE_MAX,
+            ..at
+        };
+        hitch(ctx, &mut scenes, saved, scene, &back, "back")?;
     }
-    let (after_change_cpu_ms, slowest, slowest_stats) = after_change
-        .into_iter()
-        .max_by(|a, b| a.0.total_cmp(&b.0))
-        .expect("five frames");
     let floor = (0..frames)
         .map(|_| {
             let start = Instant::now();
@@ -358,6 +353,7 @@ fn measure(
         scene: scene.to_string(),
         size,
         first_ms,
+        whole_ms,
         slow_frames: cpu.iter().filter(|&&c| c > SLOW_CPU_MS).count(),
         cpu: Spread::of(cpu),
         submit: Spread::of(submit),
@@ -367,9 +363,9 @@ fn measure(
         gpu_compute: Spread::of(gpu),
         resize_cpu_ms,
         resize_wall_ms,
-        change_cpu_ms: change.cpu,
-        change_wall_ms: change.wall,
-        after_change_cpu_ms,
+        change_cpu_ms: change.cpu_ms,
+        change_wall_ms: change.wall_ms,
+        after_change_cpu_ms: change.after_cpu_ms,
         floor: Spread::of(floor.iter().map(|f| f.1).collect()),
         floor_cpu: Spread::of(floor.iter().map(|f| f.0).collect()),
         error,
@@ -378,9 +374,143 @@ fn measure(
         made,
         stats,
         resize_stats: resized_frame.stats,
-        change_stats: change.stats,
-        slowest_after_change: (slowest, slowest_stats),
+        change_stats,
+        slowest_after_change,
+        settings,
     })
+}
+
+/// The scene's first frames: the first one's record → done, and the time from its start to
+/// the end of the first frame that drew the whole scene; then warm-up frames, and on until
+/// what the scene makes on other threads has arrived, so that the measured frames draw it all.
+fn warm_up(
+    ctx: &Context,
+    scenes: &mut Scenes,
+    saved: &Saved,
+    scene: &str,
+    targets: &Targets,
+    size: [u32; 2],
+) -> Result<(f64, f64), fieldkit::Error> {
+    let start = Instant::now();
+    let first_ms = timed_frame(ctx, scenes, saved, scene, targets, size, 0, None)?.wall;
+    let mut whole_ms = (!scenes.busy(scene, saved)).then_some(first_ms);
+    for i in 1..WARM_UP + AFTER_CHANGE_MAX {
+        if i >= WARM_UP {
+            if !scenes.busy(scene, saved) {
+                break;
+            }
+            scenes.wait_for_workers();
+        }
+        timed_frame(ctx, scenes, saved, scene, targets, size, i, None)?;
+        if whole_ms.is_none() && !scenes.busy(scene, saved) {
+            whole_ms = Some(start.elapsed().as_secs_f64() * 1e3);
+        }
+    }
+    Ok((first_ms, whole_ms.unwrap_or(f64::NAN)))
+}
+
+/// The most GPU objects any of [`COUNTED`] frames makes, in frames of their own: counting
+/// them costs CPU time.
+fn counted(
+    ctx: &Context,
+    scenes: &mut Scenes,
+    saved: &Saved,
+    scene: &str,
+    at: &Shot,
+) -> Result<Made, fieldkit::Error> {
+    let mut made = Made::default();
+    for i in 0..COUNTED {
+        let n = at.number + i;
+        let frame = || timed_frame(ctx, scenes, saved, scene, at.targets, at.size, n, None);
+        let (t, m) = made::count(frame);
+        t?;
+        made = made.max(m.ok_or_else(|| {
+            fieldkit::Error::invalid("frame cost", "another logger is installed")
+        })?);
+    }
+    Ok(made)
+}
+
+/// The timed passes' GPU time over `frames` frames, in frames of their own (timestamp
+/// queries change what they measure): each frame's sum, and the last frame's passes.
+type Passes = (Vec<f64>, Vec<(String, f64)>);
+
+fn timed_passes(
+    ctx: &Context,
+    scenes: &mut Scenes,
+    saved: &Saved,
+    scene: &str,
+    at: &Shot,
+    frames: u32,
+) -> Result<Passes, fieldkit::Error> {
+    let (mut gpu, mut last) = (Vec::new(), Vec::new());
+    let Some(mut profiler) = Profiler::new(&ctx.device, &ctx.queue, 256) else {
+        return Ok((gpu, last));
+    };
+    for i in 0..frames {
+        let (n, p) = (at.number + i, Some(&mut profiler));
+        timed_frame(ctx, scenes, saved, scene, at.targets, at.size, n, p)?;
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        profiler.resolve(&mut enc);
+        ctx.queue.submit([enc.finish()]);
+        let (passes, _) = wait(&ctx.device, profiler.read(&ctx.device, &ctx.queue))?;
+        gpu.push(passes.iter().fold(0.0, |t, p| t + p.1));
+        last = passes;
+    }
+    Ok((gpu, last))
+}
+
+/// Where the frames after a change are drawn: the targets, their size, the first frame's
+/// number.
+#[derive(Clone, Copy)]
+struct Shot<'a> {
+    targets: &'a Targets,
+    size: [u32; 2],
+    number: u32,
+}
+
+/// Draw `changed` from frame `at.number` on: the frame of the change, then five more and on
+/// until what the scene makes elsewhere for it (a cloud, a pipeline on a worker thread) has
+/// arrived and been drawn. What they cost; the change frame's readouts, and which later frame
+/// took the most CPU with its readouts.
+fn hitch(
+    ctx: &Context,
+    scenes: &mut Scenes,
+    changed: &Saved,
+    scene: &str,
+    at: &Shot,
+    name: &str,
+) -> Result<(Hitch, (Vec<String>, (u32, Vec<String>))), fieldkit::Error> {
+    let frame = |scenes: &mut Scenes, k: u32| {
+        let n = at.number + k;
+        timed_frame(ctx, scenes, changed, scene, at.targets, at.size, n, None)
+    };
+    let change = frame(scenes, 0)?;
+    let mut error = change.error.clone();
+    let mut after = Vec::new();
+    for k in 1..=AFTER_CHANGE_MAX {
+        super::spans::reset();
+        let t = frame(scenes, k)?;
+        error = error.or(t.error);
+        after.push((t.cpu, k, t.stats, super::spans::lines(1)));
+        if k >= 5 && !scenes.busy(scene, changed) {
+            break;
+        }
+    }
+    let (after_cpu_ms, slowest, slowest_stats, spans) = after
+        .into_iter()
+        .max_by(|a, b| a.0.total_cmp(&b.0))
+        .expect("five frames");
+    let hitch = Hitch {
+        spans,
+        name: name.to_string(),
+        cpu_ms: change.cpu,
+        wall_ms: change.wall,
+        after_cpu_ms,
+        slowest: (slowest, slowest_stats.clone()),
+        error,
+    };
+    Ok((hitch, (change.stats, (slowest, slowest_stats))))
 }
 
 /// `saved` with the size setting of `scene` changed, as a user drags a slider: the actor's
@@ -470,7 +600,7 @@ fn gpu_frame_times(
 fn print_table(adapter: &str, costs: &[FrameCost]) {
     println!("frame cost on {adapter}");
     println!(
-        "| scene | size | CPU record + submit ms | of which in fieldkit's calls ms | of which finish + submit ms | record → done ms | GPU frame ms | GPU timed passes ms | loop floor CPU / wall ms | frames > {SLOW_CPU_MS} ms CPU | first frame ms | resize frame CPU / wall ms | size change CPU / wall ms, then CPU at most | made a frame: buffers / textures / views / bind groups |"
+        "| scene | size | CPU record + submit ms | of which in fieldkit's calls ms | of which finish + submit ms | record → done ms | GPU frame ms | GPU timed passes ms | loop floor CPU / wall ms | frames > {SLOW_CPU_MS} ms CPU | first frame / whole scene ms | resize frame CPU / wall ms | size change CPU / wall ms, then CPU at most | made a frame: buffers / textures / views / bind groups |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     let s = |x: &Spread| format!("{:.3} ({:.3}–{:.3})", x.median, x.min, x.max);
@@ -483,7 +613,7 @@ fn print_table(adapter: &str, costs: &[FrameCost]) {
             .as_ref()
             .map_or(String::new(), |e| format!(" error: {e}"));
         println!(
-            "| {} | {}×{} | {} | {} | {} | {} | {} | {} | {} | {} | {:.1} | {r_cpu:.2} / {r_wall:.2} | {c_cpu:.2} / {c_wall:.2}, {after:.2} | {made} |{error}",
+            "| {} | {}×{} | {} | {} | {} | {} | {} | {} | {} | {} | {:.1} / {:.1} | {r_cpu:.2} / {r_wall:.2} | {c_cpu:.2} / {c_wall:.2}, {after:.2} | {made} |{error}",
             c.scene,
             c.size[0],
             c.size[1],
@@ -496,7 +626,41 @@ fn print_table(adapter: &str, costs: &[FrameCost]) {
             floor,
             c.slow_frames,
             c.first_ms,
+            c.whole_ms,
         );
+    }
+    for c in costs.iter().filter(|c| !c.settings.is_empty()) {
+        let worst = |f: fn(&Hitch) -> f64| {
+            c.settings
+                .iter()
+                .max_by(|a, b| f(a).total_cmp(&f(b)))
+                .map_or(String::new(), |h| format!("{:.2} ms ({})", f(h), h.name))
+        };
+        println!(
+            "{} settings changes ({}): the most CPU on the frame of one {}, on a frame after {}",
+            c.scene,
+            c.settings.len(),
+            worst(|h| h.cpu_ms),
+            worst(|h| h.after_cpu_ms)
+        );
+        for h in &c.settings {
+            let error = h
+                .error
+                .as_ref()
+                .map_or(String::new(), |e| format!(" error: {e}"));
+            println!(
+                "  {}: CPU {:.2} ms, wall {:.2} ms, then CPU at most {:.2} ms (frame {} after: {}){error}",
+                h.name,
+                h.cpu_ms,
+                h.wall_ms,
+                h.after_cpu_ms,
+                h.slowest.0,
+                h.slowest.1.join("; ")
+            );
+            for line in h.spans.iter().take(12) {
+                println!("    {line}");
+            }
+        }
     }
     for c in costs.iter().filter(|c| !c.passes.is_empty()) {
         let passes: Vec<String> = c
@@ -537,11 +701,11 @@ fn write_csv(path: &Path, adapter: &str, start: &str, costs: &[FrameCost]) -> Re
          floor_ms_min,floor_ms_max,slow_cpu_frames,first_frame_ms,resize_cpu_ms,resize_wall_ms,\
          change_cpu_ms,change_wall_ms,after_change_cpu_ms,made_buffers,made_textures,made_views,made_bind_groups,\
          floor_cpu_ms_median,floor_cpu_ms_min,floor_cpu_ms_max,submit_ms_median,submit_ms_min,submit_ms_max,\
-         fieldkit_ms_median,fieldkit_ms_min,fieldkit_ms_max\n",
+         fieldkit_ms_median,fieldkit_ms_min,fieldkit_ms_max,whole_scene_ms\n",
     );
     for c in costs {
         text += &format!(
-            "\"{adapter}\",{start},{},{},{},{},{},{},{},{},{},{:.3},{},{},{},{},{}\n",
+            "\"{adapter}\",{start},{},{},{},{},{},{},{},{},{},{:.3},{},{},{},{},{},{:.3}\n",
             c.scene,
             c.size[0],
             c.size[1],
@@ -557,7 +721,33 @@ fn write_csv(path: &Path, adapter: &str, start: &str, costs: &[FrameCost]) -> Re
             c.floor_cpu.csv(),
             c.submit.csv(),
             c.fieldkit.as_ref().map_or(",,".into(), Spread::csv),
+            c.whole_ms,
         );
+    }
+    std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// Each settings change of each scene: the frame it is made on and the most CPU after.
+fn write_settings_csv(
+    path: &Path,
+    adapter: &str,
+    start: &str,
+    costs: &[FrameCost],
+) -> Result<(), String> {
+    let mut text =
+        String::from("adapter,pipeline_cache,scene,change,cpu_ms,wall_ms,after_cpu_ms,error\n");
+    for c in costs {
+        for h in &c.settings {
+            text += &format!(
+                "\"{adapter}\",{start},{},\"{}\",{:.4},{:.4},{:.4},\"{}\"\n",
+                c.scene,
+                h.name.replace('"', "'"),
+                h.cpu_ms,
+                h.wall_ms,
+                h.after_cpu_ms,
+                h.error.as_deref().unwrap_or("").replace('"', "'"),
+            );
+        }
     }
     std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))
 }

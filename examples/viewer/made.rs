@@ -3,11 +3,14 @@
 //! on only while [`count`] runs its closure. Creations are counted, not the objects alive
 //! after: an object made this frame that replaces last frame's counts, and the staging buffer
 //! wgpu makes inside `Queue::write_buffer` does not (it is wgpu's own, not a `create_*` call).
+//! [`count`] counts what every thread makes meanwhile; [`count_here`] only the calling
+//! thread's: what a frame makes, not what a worker makes while it runs.
 
-use std::sync::atomic::{AtomicIsize, Ordering};
+use std::cell::Cell;
+use std::sync::atomic::{AtomicBool, AtomicIsize, Ordering};
 
-/// Objects a frame made: buffers, textures, texture views, bind groups, and compute
-/// pipelines (none should be made on a frame: pipelines are made ahead).
+/// Objects a frame made: buffers, textures, texture views, bind groups, and compute and
+/// render pipelines (none should be made on a frame: pipelines are made ahead).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Made {
     pub buffers: isize,
@@ -15,6 +18,7 @@ pub struct Made {
     pub views: isize,
     pub bind_groups: isize,
     pub compute_pipelines: isize,
+    pub render_pipelines: isize,
 }
 
 impl Made {
@@ -31,19 +35,34 @@ impl Made {
             views: self.views.max(b.views),
             bind_groups: self.bind_groups.max(b.bind_groups),
             compute_pipelines: self.compute_pipelines.max(b.compute_pipelines),
+            render_pipelines: self.render_pipelines.max(b.render_pipelines),
         }
+    }
+
+    /// Pipelines, compute and render.
+    pub fn pipelines(&self) -> isize {
+        self.compute_pipelines + self.render_pipelines
     }
 }
 
 /// What wgpu-core's trace line for each creation starts with (`Device::create_buffer(label)`,
 /// `Device::create_bind_group -> id`, …), and its counter.
-static KINDS: [(&str, AtomicIsize); 5] = [
+static KINDS: [(&str, AtomicIsize); 6] = [
     ("Device::create_buffer", AtomicIsize::new(0)),
     ("Device::create_texture", AtomicIsize::new(0)),
     ("Texture::create_view", AtomicIsize::new(0)),
     ("Device::create_bind_group", AtomicIsize::new(0)),
     ("Device::create_compute_pipeline", AtomicIsize::new(0)),
+    ("Device::create_render_pipeline", AtomicIsize::new(0)),
 ];
+
+/// Whether only the thread that called [`count_here`] is counted.
+static ONLY_HERE: AtomicBool = AtomicBool::new(false);
+
+thread_local! {
+    /// Whether this thread is the one [`count_here`] counts.
+    static HERE: Cell<bool> = const { Cell::new(false) };
+}
 
 struct Counter;
 
@@ -53,7 +72,9 @@ impl log::Log for Counter {
     }
 
     fn log(&self, record: &log::Record) {
-        if !self.enabled(record.metadata()) {
+        if !self.enabled(record.metadata())
+            || (ONLY_HERE.load(Ordering::Relaxed) && !HERE.with(Cell::get))
+        {
             return;
         }
         let line = record.args().to_string();
@@ -78,6 +99,16 @@ static COUNTER: Counter = Counter;
 /// installed on first use and left at level `Off` outside `count`, so frames not counted pay
 /// nothing for it; if the process already has another logger, nothing is counted (`None`).
 pub fn count<T>(f: impl FnOnce() -> T) -> (T, Option<Made>) {
+    counted(f, false)
+}
+
+/// [`count`], counting only what the calling thread makes (a frame, not the workers running
+/// meanwhile).
+pub fn count_here<T>(f: impl FnOnce() -> T) -> (T, Option<Made>) {
+    counted(f, true)
+}
+
+fn counted<T>(f: impl FnOnce() -> T, here: bool) -> (T, Option<Made>) {
     let installed = log::set_logger(&COUNTER).is_ok() || is_ours();
     if !installed {
         return (f(), None);
@@ -85,16 +116,21 @@ pub fn count<T>(f: impl FnOnce() -> T) -> (T, Option<Made>) {
     for (_, n) in &KINDS {
         n.store(0, Ordering::Relaxed);
     }
+    ONLY_HERE.store(here, Ordering::Relaxed);
+    HERE.with(|h| h.set(here));
     log::set_max_level(log::LevelFilter::Trace);
     let out = f();
     log::set_max_level(log::LevelFilter::Off);
-    let [b, t, v, g, p] = std::array::from_fn(|i| KINDS[i].1.load(Ordering::Relaxed));
+    HERE.with(|h| h.set(false));
+    ONLY_HERE.store(false, Ordering::Relaxed);
+    let [b, t, v, g, p, r] = std::array::from_fn(|i| KINDS[i].1.load(Ordering::Relaxed));
     let made = Made {
         buffers: b,
         textures: t,
         views: v,
         bind_groups: g,
         compute_pipelines: p,
+        render_pipelines: r,
     };
     (out, Some(made))
 }

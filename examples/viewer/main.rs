@@ -31,6 +31,7 @@
 //! frame does not compile its pipelines again.
 
 pub mod camera;
+pub mod changes;
 pub mod draw;
 pub mod frame;
 pub mod made;

@@ -422,12 +422,12 @@ impl Viewer {
             self.targets = Some((size, targets, id));
         }
         let id = self.targets.as_ref().expect("set above").2;
-        // Time: fixed steps when taking a screenshot (so it matches the offscreen render),
-        // else the clock.
-        let time = if self.shot.is_some() {
-            frame_time(self.drawn)
-        } else {
-            self.start.elapsed().as_secs_f32()
+        // Time: fixed steps when taking a screenshot, held at the last step asked for while
+        // the scene settles (as the offscreen render holds it, so the two match); else the
+        // clock.
+        let time = match &self.shot {
+            Some((n, _)) => frame_time(self.drawn.min(n.saturating_sub(1))),
+            None => self.start.elapsed().as_secs_f32(),
         };
         // Take finished pass times; time this frame when no read is in flight.
         if let Some(r) = &mut self.reading

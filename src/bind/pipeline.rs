@@ -85,17 +85,34 @@ impl<E: Entry, O: Constants> Variants<E, O> {
         zero_initialize_workgroup_memory: bool,
     ) -> Result<std::sync::Arc<ComputePipeline<E>>, Error> {
         let key = (*overrides, zero_initialize_workgroup_memory);
-        let mut made = self.made.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some((_, p)) = made.iter().find(|(k, _)| *k == key) {
-            return Ok(p.clone());
+        let find = |made: &[Made<E, O>]| made.iter().find(|(k, _)| *k == key).map(|m| m.1.clone());
+        if let Some(p) = find(&self.lock()) {
+            return Ok(p);
         }
+        // Made without the lock: a frame asking for a variant already made (or `has`) never
+        // waits for another thread compiling a new one. Two threads making the same variant at
+        // once both compile it; the first kept is used.
         let p = std::sync::Arc::new(ComputePipeline::with_options(
             device,
             &overrides.constants(),
             zero_initialize_workgroup_memory,
         )?);
+        let mut made = self.lock();
+        if let Some(first) = find(&made) {
+            return Ok(first);
+        }
         made.push((key, p.clone()));
         Ok(p)
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, Vec<Made<E, O>>> {
+        self.made.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Whether the pipeline for `overrides` is made (a call to [`Self::get`] would not make it).
+    pub(crate) fn has(&self, overrides: &O, zero_initialize_workgroup_memory: bool) -> bool {
+        let key = (*overrides, zero_initialize_workgroup_memory);
+        self.lock().iter().any(|(k, _)| *k == key)
     }
 }
 

@@ -190,6 +190,44 @@ impl Distance2d {
         });
     }
 
+    /// Make the pipelines [`Self::encode`] needs for a mask of `size` with `options`, which it
+    /// would otherwise make on its first call with them (the exact transform specialises its
+    /// passes by the sign and the plan of a size): call it ahead, on any thread, so that no
+    /// frame waits for a pipeline. It records the transform of a blank mask into an encoder it
+    /// drops unsubmitted, and hands the field back ([`Self::recycle`]) for the next encode of
+    /// that size.
+    ///
+    /// ```no_run
+    /// # fn f(device: &wgpu::Device) -> Result<(), fieldkit::Error> {
+    /// use fieldkit::distance::{Distance2d, Settings2d};
+    /// let distance = std::sync::Arc::new(Distance2d::new(device)?);
+    /// let (d, dev) = (distance.clone(), device.clone());
+    /// let signed = Settings2d { signed: true, ..Default::default() };
+    /// // On a worker, while frames draw the unsigned field.
+    /// std::thread::spawn(move || d.prepare(&dev, [512, 512], &signed)).join().unwrap()?;
+    /// # Ok(()) }
+    /// ```
+    pub fn prepare(
+        &self,
+        device: &wgpu::Device,
+        size: [u32; 2],
+        options: &Settings2d,
+    ) -> Result<(), Error> {
+        super::seeds::check_size(device, size[0], size[1])?;
+        let mask = crate::gpu::texture(
+            device,
+            "distance 2d prepare mask",
+            [size[0], size[1], 1],
+            wgpu::TextureDimension::D2,
+            wgpu::TextureFormat::R8Unorm,
+            wgpu::TextureUsages::TEXTURE_BINDING,
+        );
+        let mut encoder = device.create_command_encoder(&Default::default());
+        let field = self.encode(device, &mut encoder, &mask, options)?;
+        self.recycle(field);
+        Ok(())
+    }
+
     /// The distance field of `mask` (any colour format read as float; `options.seeds` says
     /// which texels are seeds, red above 0 by default),
     /// recorded into `rec` (a command encoder, or [`crate::gpu::Profiler::record`] to time each

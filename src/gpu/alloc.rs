@@ -163,25 +163,34 @@ impl<T: Clone> Leased<T> {
     /// A kept output that `fits` and is free, or `make`'s (kept while there is room, replacing
     /// a free one that does not fit), with its lease.
     pub(crate) fn take(&self, fits: impl Fn(&T) -> bool, make: impl FnOnce() -> T) -> (T, Lease) {
-        let mut kept = self.kept.lock().unwrap_or_else(|e| e.into_inner());
         let free = |l: &Lease| std::sync::Arc::strong_count(&l.0) == 1;
-        if let Some((lease, t)) = kept.iter().find(|(l, t)| free(l) && fits(t)) {
-            return (t.clone(), lease.clone());
+        {
+            let mut kept = self.lock();
+            if let Some((lease, t)) = kept.iter().find(|(l, t)| free(l) && fits(t)) {
+                return (t.clone(), lease.clone());
+            }
+            // Free outputs of another size are of no more use: dropped before the new one is
+            // made, so their memory can hold it.
+            kept.retain(|(l, _)| !free(l));
         }
-        // Free outputs of another size are of no more use: dropped before the new one is
-        // made, so their memory can hold it.
-        kept.retain(|(l, _)| !free(l));
+        // Made without the lock: a frame taking a kept output never waits for another thread
+        // making a new one (a texture can take the driver milliseconds).
         let t = make();
         let lease = Lease::default();
+        let mut kept = self.lock();
         if kept.len() < LEASED_MAX {
             kept.push((lease.clone(), t.clone()));
         }
         (t, lease)
     }
 
+    fn lock(&self) -> std::sync::MutexGuard<'_, Vec<(Lease, T)>> {
+        self.kept.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
     /// Change the kept output that `lease` holds (what a call learned while filling it).
     pub(crate) fn update(&self, lease: &Lease, f: impl FnOnce(&mut T)) {
-        let mut kept = self.kept.lock().unwrap_or_else(|e| e.into_inner());
+        let mut kept = self.lock();
         if let Some((_, t)) = kept
             .iter_mut()
             .find(|(l, _)| std::sync::Arc::ptr_eq(&l.0, &lease.0))

@@ -4,9 +4,9 @@
 use glam::{Mat4, Vec4};
 
 use super::Instances;
-use crate::bind::{RenderPipeline, RenderTargets};
+use crate::bind::{KeptBound, RenderPipeline, RenderTargets};
 use crate::error::Error;
-use crate::gpu::{Record, uniform_buffer as uniform};
+use crate::gpu::{Record, Uploads};
 use crate::shaders::metaball::voxel_cubes;
 use crate::view::{box_visible, depth_state, load_pass_recorded};
 
@@ -64,17 +64,37 @@ impl CubeStyle {
 }
 
 /// Instanced debug cubes: one draw of 36 vertices (24 for line-list edges) × the voxel count.
+/// A frame's draw makes no GPU object: its parameters go through an upload ring into a kept
+/// uniform, bound by a kept bind group (see [`RING_UPLOADS`](crate::gpu::RING_UPLOADS) for how
+/// many draws one encoder may hold).
 pub struct Cubes {
     pipeline: RenderPipeline<voxel_cubes::fs_main::Entry>,
     style: CubeStyle,
     /// Edges drawn as a line list (wireframe without `POLYGON_MODE_LINE`).
     edges: bool,
+    uploads: Uploads,
+    params: std::sync::Mutex<Option<wgpu::Buffer>>,
+    bound: KeptBound<voxel_cubes::fs_main::Entry>,
 }
 
 impl Cubes {
-    /// The cube pipeline for the given targets; `style` fixes culling, depth and wireframe.
+    /// The cube pipeline for the given targets; `style` fixes culling, depth and wireframe
+    /// ([`Self::restyle`] changes the rest in place).
+    ///
+    /// ```no_run
+    /// # fn f(device: &wgpu::Device, queue: &wgpu::Queue) -> Result<(), fieldkit::Error> {
+    /// use fieldkit::metaball::{CubeStyle, Cubes};
+    /// let rgba = wgpu::TextureFormat::Rgba8Unorm;
+    /// let depth = wgpu::TextureFormat::Depth32Float;
+    /// let mut cubes = Cubes::new(device, queue, rgba, depth, CubeStyle::default())?;
+    /// // A new colour needs no new pipeline.
+    /// let red = CubeStyle { colour: glam::Vec4::new(1.0, 0.0, 0.0, 1.0), ..CubeStyle::default() };
+    /// assert!(cubes.restyle(red)?);
+    /// # Ok(()) }
+    /// ```
     pub fn new(
         device: &wgpu::Device,
+        queue: &wgpu::Queue,
         colour: wgpu::TextureFormat,
         depth: wgpu::TextureFormat,
         style: CubeStyle,
@@ -84,6 +104,7 @@ impl Cubes {
             .contains(wgpu::Features::POLYGON_MODE_LINE);
         Self::with_edges(
             device,
+            queue,
             colour,
             depth,
             style,
@@ -95,6 +116,7 @@ impl Cubes {
     /// `POLYGON_MODE_LINE` (`edges`, for tests and to draw the same picture everywhere).
     pub fn with_edges(
         device: &wgpu::Device,
+        queue: &wgpu::Queue,
         colour: wgpu::TextureFormat,
         depth: wgpu::TextureFormat,
         style: CubeStyle,
@@ -107,12 +129,7 @@ impl Cubes {
                 what: "line-list edges draw the wireframe; set style.wireframe".into(),
             });
         }
-        if !style.colour.is_finite() {
-            return Err(Error::Invalid {
-                stage,
-                what: format!("colour {} must be finite", style.colour),
-            });
-        }
+        check_colour(style)?;
         let mut depth_stencil = depth_state(stage, depth, style.depth_compare)?;
         depth_stencil.depth_write_enabled = Some(style.depth_write);
         let pipeline = RenderPipeline::new(
@@ -142,12 +159,34 @@ impl Cubes {
             pipeline,
             style,
             edges,
+            uploads: Uploads::new(queue),
+            params: Default::default(),
+            bound: KeptBound::default(),
         })
     }
 
     /// Whether the wireframe is drawn as line-list edges.
     pub fn edges(&self) -> bool {
         self.edges
+    }
+
+    /// The style drawn.
+    pub fn style(&self) -> CubeStyle {
+        self.style
+    }
+
+    /// Take `style`'s colour, size scaling and frustum culling, which the pipeline does not
+    /// fix, for the draws recorded from now on. `Ok(false)`, nothing changed, where `style`
+    /// differs in what the pipeline fixes (culling, depth, wireframe): that takes a new
+    /// [`Cubes`], which an app makes ahead (on another thread) and swaps in.
+    pub fn restyle(&mut self, style: CubeStyle) -> Result<bool, Error> {
+        check_colour(style)?;
+        let fixed = |s: CubeStyle| (s.cull, s.depth_compare, s.depth_write, s.wireframe);
+        if fixed(style) != fixed(self.style) {
+            return Ok(false);
+        }
+        self.style = style;
+        Ok(true)
     }
 
     /// Draw every instance as a cube of edge `edge` (× scale) into `colour` and `depth`,
@@ -188,8 +227,11 @@ impl Cubes {
                 return Ok(false);
             }
         }
-        let params = uniform(
+        let mut rec = rec.recorder();
+        let params = self.uploads.uniform(
             device,
+            rec.encoder,
+            &self.params,
             "cube params",
             &voxel_cubes::CubeParams {
                 view_proj,
@@ -200,13 +242,13 @@ impl Cubes {
                 edges: self.edges as u32,
             },
         );
-        let bound = self.pipeline.bind(
+        let bound = self.pipeline.bind_kept(
             device,
+            &self.bound,
             &voxel_cubes::fs_main::Resources {
                 params: (&params).into(),
             },
         )?;
-        let mut rec = rec.recorder();
         let mut pass = load_pass_recorded(&mut rec, stage, colour, depth);
         pass.set_pipeline(&self.pipeline.pipeline);
         bound.set_render(&mut pass);
@@ -214,4 +256,15 @@ impl Cubes {
         pass.draw(0..if self.edges { 24 } else { 36 }, 0..instances.count);
         Ok(true)
     }
+}
+
+/// A typed error unless the cubes' colour is finite.
+fn check_colour(style: CubeStyle) -> Result<(), Error> {
+    if style.colour.is_finite() {
+        return Ok(());
+    }
+    Err(Error::Invalid {
+        stage: voxel_cubes::STAGE,
+        what: format!("colour {} must be finite", style.colour),
+    })
 }

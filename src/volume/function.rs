@@ -8,11 +8,11 @@ use glam::{Mat4, UVec3, Vec3};
 use super::kept::{self, Target};
 use super::{
     Bricks, MarchScalars, MarchSettings, Shadow, TransferFunction, VolumeMarched,
-    check_scene_depth, check_transform, check_view, march_rect, step_guard, tf_buffer,
+    check_scene_depth, check_transform, check_view, march_rect, step_guard, tf_rows,
 };
-use crate::bind::{ComputePipeline, Entry, EntryInfo, Resource, Variants};
+use crate::bind::{ComputePipeline, Entry, EntryInfo, KeptBound, Resource, Variants};
 use crate::error::Error;
-use crate::gpu::{Leased, Record, uniform_buffer as uniform};
+use crate::gpu::{Leased, Record, Uploads, uniform_buffer as uniform};
 use crate::shaders::volume::cloud_march;
 use crate::view::View;
 
@@ -148,6 +148,17 @@ pub struct DensityMarch<M, B, K> {
     no_depth: wgpu::TextureView,
     /// The march's outputs, taken back once dropped.
     marched: Leased<Target>,
+    /// What a frame marches with, kept from frame to frame: no object made a frame.
+    kept: KeptMarch<M>,
+}
+
+/// The march's per-frame parameters and transfer function (written through an upload ring)
+/// and its bind group, kept from frame to frame.
+struct KeptMarch<M> {
+    uploads: Uploads,
+    params: std::sync::Mutex<Option<wgpu::Buffer>>,
+    tf: std::sync::Mutex<Option<wgpu::Buffer>>,
+    bound: KeptBound<ByName<M>>,
 }
 
 /// The density march over seed 002's procedural cloud (`shaders/shared/fbm_cloud.wesl`: the
@@ -161,7 +172,7 @@ pub type CloudMarch =
 /// ```ignore
 /// // build.rs: Builder::new("shaders").density_march("clouds::cumulus_march", "shared::cumulus")
 /// type Cumulus = fieldkit::density_march!(crate::shaders::clouds::cumulus_march);
-/// let march = Cumulus::new(&device)?;
+/// let march = Cumulus::new(&device, &queue)?;
 /// ```
 #[macro_export]
 macro_rules! density_march {
@@ -175,16 +186,18 @@ macro_rules! density_march {
 }
 
 impl CloudMarch {
-    /// The built-in cloud's march.
-    pub fn cloud(device: &wgpu::Device) -> Result<Self, Error> {
-        Self::new(device)
+    /// The built-in cloud's march. `queue` writes each frame's parameters into buffers the
+    /// march keeps.
+    pub fn cloud(device: &wgpu::Device, queue: &wgpu::Queue) -> Result<Self, Error> {
+        Self::new(device, queue)
     }
 }
 
 impl<M: Entry, B: Entry, K: Entry> DensityMarch<M, B, K> {
     /// Check the stage's entry points against the template and make the bricks and bake
-    /// pipelines (march pipelines on first use).
-    pub fn new(device: &wgpu::Device) -> Result<Self, Error> {
+    /// pipelines (march pipelines on first use, or ahead with [`Self::prepare`]). `queue`
+    /// writes each frame's parameters into buffers the march keeps.
+    pub fn new(device: &wgpu::Device, queue: &wgpu::Queue) -> Result<Self, Error> {
         check_entry(M::INFO, "march")?;
         check_entry(B::INFO, "bricks")?;
         check_entry(K::INFO, "bake")?;
@@ -202,6 +215,12 @@ impl<M: Entry, B: Entry, K: Entry> DensityMarch<M, B, K> {
             bake: ComputePipeline::new(device)?,
             no_depth: no_depth.create_view(&Default::default()),
             marched: Leased::default(),
+            kept: KeptMarch {
+                uploads: Uploads::new(queue),
+                params: Default::default(),
+                tf: Default::default(),
+                bound: KeptBound::default(),
+            },
         })
     }
 
@@ -211,9 +230,9 @@ impl<M: Entry, B: Entry, K: Entry> DensityMarch<M, B, K> {
     /// refused as by `encode_march`.
     ///
     /// ```no_run
-    /// # fn f(device: &wgpu::Device) -> Result<(), fieldkit::Error> {
+    /// # fn f(device: &wgpu::Device, queue: &wgpu::Queue) -> Result<(), fieldkit::Error> {
     /// use fieldkit::volume::{CloudMarch, MarchSettings, Shadow};
-    /// let cloud = CloudMarch::cloud(device)?;
+    /// let cloud = CloudMarch::cloud(device, queue)?;
     /// let settings = MarchSettings { shadow: Shadow::Rays { step: 1.0 / 64.0 }, ..Default::default() };
     /// cloud.prepare(device, &settings)?;
     /// # Ok(()) }
@@ -223,41 +242,27 @@ impl<M: Entry, B: Entry, K: Entry> DensityMarch<M, B, K> {
         self.march_for(device, settings).map(|_| ())
     }
 
+    /// Make the march's output image for a `viewport` of this size ahead, on any thread: the
+    /// first [`Self::encode_march`] of that size then makes no texture (a new texture costs
+    /// the frame milliseconds where the driver takes a new block of memory for it: 4.2 ms for
+    /// 1920×1080 on the H200). Kept as a march's own output is, while it still serves.
+    pub fn reserve(&self, device: &wgpu::Device, viewport: [u32; 2]) {
+        let _ = kept::march_target(&self.marched, device, viewport);
+    }
+
+    /// Whether the march pipeline `settings` need is made ([`Self::prepare`]); false for
+    /// settings a density march refuses.
+    pub fn prepared(&self, settings: &MarchSettings) -> bool {
+        march_key(settings).is_ok_and(|o| self.march.has(&o, true))
+    }
+
     /// The march pipeline for `settings`, made on first use.
     fn march_for(
         &self,
         device: &wgpu::Device,
         settings: &MarchSettings,
     ) -> Result<std::sync::Arc<ComputePipeline<ByName<M>>>, Error> {
-        let shadow = match settings.shadow {
-            Shadow::None => 0,
-            Shadow::Rays { .. } => 1,
-            Shadow::LightVolume { .. } => {
-                return Err(Error::Invalid {
-                    stage: STAGE,
-                    what: "a density function is shadowed by Shadow::Rays or not at all; for a \
-                           light volume, bake it (encode_bake) and march the texture"
-                        .into(),
-                });
-            }
-        };
-        let mode = match settings.mode {
-            super::Mode::EmissionAbsorption => 0,
-            super::Mode::MaximumIntensity => 1,
-            super::Mode::IsoSurface { .. } => 2,
-        };
-        self.march.get(
-            device,
-            // Every density march is made from one template, so the built-in cloud's generated
-            // overrides name the template's (`check_entry` holds each stage to the template).
-            &cloud_march::Overrides {
-                mode,
-                shadow,
-                skip: settings.skip,
-                count_samples: settings.count_samples,
-            },
-            true,
-        )
+        self.march.get(device, &march_key(settings)?, true)
     }
 
     /// The parameters every entry point reads: the box and lattice, and for the march the
@@ -265,7 +270,6 @@ impl<M: Entry, B: Entry, K: Entry> DensityMarch<M, B, K> {
     #[allow(clippy::too_many_arguments)]
     fn params(
         &self,
-        device: &wgpu::Device,
         volume: &FunctionVolume,
         tf: &TransferFunction,
         local_to_world: Mat4,
@@ -273,51 +277,47 @@ impl<M: Entry, B: Entry, K: Entry> DensityMarch<M, B, K> {
         settings: &MarchSettings,
         rect: [u32; 4],
         use_depth: bool,
-    ) -> wgpu::Buffer {
+    ) -> cloud_march::DensityMarchParams {
         let world_to_local = local_to_world.inverse();
         let guard = step_guard(local_to_world, volume.min, volume.max);
         let s = MarchScalars::new(settings, tf, view);
         let bricks = volume.bricks();
         let brick_size = volume.cell() * super::BRICK as f32;
-        uniform(
-            device,
-            "density march params",
-            &cloud_march::DensityMarchParams {
-                inv_view_proj: view.view_proj.inverse(),
-                world_to_local,
-                box_min: volume.min,
-                step: settings.step,
-                box_max: volume.max,
-                reference_step: settings.reference_step,
-                dims: UVec3::from_array(volume.dims),
-                frame: settings.frame,
-                cell: volume.cell(),
-                brick: super::BRICK,
-                bricks: UVec3::from_array(bricks),
-                jitter: settings.jitter as u32,
-                brick_scale: brick_size.recip(),
-                brick_size,
-                light_local: world_to_local.transform_vector3(settings.light_dir.normalize()),
-                light_colour: settings.light_colour,
-                ambient: settings.ambient,
-                viewport: glam::Vec2::new(view.viewport[0] as f32, view.viewport[1] as f32),
-                rect_origin: glam::UVec2::new(rect[0], rect[1]),
-                rect_size: glam::UVec2::new(rect[2] - rect[0], rect[3] - rect[1]),
-                near_z: s.near_z,
-                far_z: s.far_z,
-                tf_count: tf.entries.len() as u32,
-                tf_offset: s.tf_offset,
-                tf_scale: s.tf_scale,
-                skip_below: tf.clear_below().clamp(f32::MIN, f32::MAX),
-                iso: s.iso,
-                min_transmittance: settings.min_transmittance,
-                max_steps: guard(settings.step),
-                shadow_step: s.shadow_step,
-                shadow_max_steps: guard(s.shadow_step),
-                use_depth: use_depth as u32,
-                inv_reference_step: settings.reference_step.recip(),
-            },
-        )
+        cloud_march::DensityMarchParams {
+            inv_view_proj: view.view_proj.inverse(),
+            world_to_local,
+            box_min: volume.min,
+            step: settings.step,
+            box_max: volume.max,
+            reference_step: settings.reference_step,
+            dims: UVec3::from_array(volume.dims),
+            frame: settings.frame,
+            cell: volume.cell(),
+            brick: super::BRICK,
+            bricks: UVec3::from_array(bricks),
+            jitter: settings.jitter as u32,
+            brick_scale: brick_size.recip(),
+            brick_size,
+            light_local: world_to_local.transform_vector3(settings.light_dir.normalize()),
+            light_colour: settings.light_colour,
+            ambient: settings.ambient,
+            viewport: glam::Vec2::new(view.viewport[0] as f32, view.viewport[1] as f32),
+            rect_origin: glam::UVec2::new(rect[0], rect[1]),
+            rect_size: glam::UVec2::new(rect[2] - rect[0], rect[3] - rect[1]),
+            near_z: s.near_z,
+            far_z: s.far_z,
+            tf_count: tf.entries.len() as u32,
+            tf_offset: s.tf_offset,
+            tf_scale: s.tf_scale,
+            skip_below: tf.clear_below().clamp(f32::MIN, f32::MAX),
+            iso: s.iso,
+            min_transmittance: settings.min_transmittance,
+            max_steps: guard(settings.step),
+            shadow_step: s.shadow_step,
+            shadow_max_steps: guard(s.shadow_step),
+            use_depth: use_depth as u32,
+            inv_reference_step: settings.reference_step.recip(),
+        }
     }
 
     /// Parameters for the bricks and bake passes, which read only the box and lattice.
@@ -328,8 +328,7 @@ impl<M: Entry, B: Entry, K: Entry> DensityMarch<M, B, K> {
             reversed_z: false,
             origin: [0, 0],
         };
-        self.params(
-            device,
+        let params = self.params(
             volume,
             &TransferFunction::constant(Vec3::ONE, 0.0),
             Mat4::IDENTITY,
@@ -337,7 +336,8 @@ impl<M: Entry, B: Entry, K: Entry> DensityMarch<M, B, K> {
             &MarchSettings::default(),
             [0, 0, 1, 1],
             false,
-        )
+        );
+        uniform(device, "density march lattice params", &params)
     }
 
     /// The min-max brick grid of the function: per brick of [`super::BRICK`]³ cells, the
@@ -456,7 +456,6 @@ impl<M: Entry, B: Entry, K: Entry> DensityMarch<M, B, K> {
             return Ok(None);
         };
         let params = self.params(
-            device,
             volume,
             tf,
             local_to_world,
@@ -466,10 +465,22 @@ impl<M: Entry, B: Entry, K: Entry> DensityMarch<M, B, K> {
             scene_depth.is_some(),
         );
         let (colour, lease) = kept::march_target(&self.marched, device, view.viewport);
-        let tf_buffer = tf_buffer(device, tf);
-        march.record(
+        let recorder = &mut rec.recorder();
+        let k = &self.kept;
+        let label = "density march params";
+        let params = (k.uploads).uniform(device, recorder.encoder, &k.params, label, &params);
+        let tf_buffer = k.uploads.kept(
             device,
-            rec,
+            recorder.encoder,
+            &k.tf,
+            "transfer function",
+            wgpu::BufferUsages::STORAGE,
+            bytemuck::cast_slice(&tf_rows(tf)),
+        );
+        march.record_kept(
+            device,
+            recorder,
+            &k.bound,
             &vec![
                 (
                     "params",
@@ -495,4 +506,33 @@ impl<M: Entry, B: Entry, K: Entry> DensityMarch<M, B, K> {
         )?;
         Ok(Some(VolumeMarched::new(rect, view.viewport, colour, lease)))
     }
+}
+
+/// The density march's overrides for `settings`. Every density march is made from one
+/// template, so the built-in cloud's generated overrides name the template's (`check_entry`
+/// holds each stage to the template).
+fn march_key(settings: &MarchSettings) -> Result<cloud_march::Overrides, Error> {
+    let shadow = match settings.shadow {
+        Shadow::None => 0,
+        Shadow::Rays { .. } => 1,
+        Shadow::LightVolume { .. } => {
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: "a density function is shadowed by Shadow::Rays or not at all; for a \
+                       light volume, bake it (encode_bake) and march the texture"
+                    .into(),
+            });
+        }
+    };
+    let mode = match settings.mode {
+        super::Mode::EmissionAbsorption => 0,
+        super::Mode::MaximumIntensity => 1,
+        super::Mode::IsoSurface { .. } => 2,
+    };
+    Ok(cloud_march::Overrides {
+        mode,
+        shadow,
+        skip: settings.skip,
+        count_samples: settings.count_samples,
+    })
 }

@@ -180,6 +180,25 @@ fn march_variant(settings: &MarchSettings, light: Option<&LightVolume>) -> (usiz
     (mode, shadow)
 }
 
+/// The march variants' shadow indices `settings` may take: both light-volume layouts (the
+/// density folded with the light, and apart) for [`Shadow::LightVolume`].
+fn march_shadows(settings: &MarchSettings) -> Vec<usize> {
+    match settings.shadow {
+        Shadow::LightVolume { .. } => vec![2, 3],
+        _ => vec![march_variant(settings, None).1],
+    }
+}
+
+/// The march pipeline's overrides for `settings` with the shadow variant `shadow`.
+fn march_overrides(settings: &MarchSettings, shadow: usize) -> volume_march::Overrides {
+    volume_march::Overrides {
+        mode: march_variant(settings, None).0 as u32,
+        shadow: shadow as u32,
+        skip: settings.skip,
+        count_samples: settings.count_samples,
+    }
+}
+
 /// A march waiting to be composited: premultiplied colour and coverage over `rect`. The
 /// renderer takes its texture back for a later march once this is dropped (see
 /// [`gpu::Lease`](crate::gpu::Lease)).
@@ -401,6 +420,46 @@ impl VolumeRenderer {
             .kept(device, encoder, &kept.tf, "transfer function", usage, bytes)
     }
 
+    /// Make the march pipelines `settings` need, which [`Self::encode_march`] would otherwise
+    /// make on its first call with them (one per mode × shadow × skip × sample count; for
+    /// [`Shadow::LightVolume`] both, the folded light volume's and the one apart): call it
+    /// ahead, on any thread, so that no frame waits for a pipeline. [`Self::prepared`] says
+    /// whether any is still to make.
+    ///
+    /// ```no_run
+    /// # fn f(device: &wgpu::Device, queue: &wgpu::Queue) -> Result<(), fieldkit::Error> {
+    /// use fieldkit::volume::{MarchSettings, Mode, VolumeRenderer};
+    /// let renderer = VolumeRenderer::new(device, queue, wgpu::TextureFormat::Rgba8Unorm)?;
+    /// let mip = MarchSettings { mode: Mode::MaximumIntensity, ..Default::default() };
+    /// if !renderer.prepared(&mip) {
+    ///     renderer.prepare(device, &mip)?; // on a worker thread, while frames march the last
+    /// }
+    /// # Ok(()) }
+    /// ```
+    pub fn prepare(&self, device: &wgpu::Device, settings: &MarchSettings) -> Result<(), Error> {
+        settings.check()?;
+        for shadow in march_shadows(settings) {
+            self.march
+                .get(device, &march_overrides(settings, shadow), true)?;
+        }
+        Ok(())
+    }
+
+    /// Make the march's output image for a `viewport` of this size ahead, on any thread: the
+    /// first [`Self::encode_march`] of that size then makes no texture (a new texture costs
+    /// the frame milliseconds where the driver takes a new block of memory for it: 4.2 ms for
+    /// 1920×1080 on the H200). Kept as a march's own output is, while it still serves.
+    pub fn reserve(&self, device: &wgpu::Device, viewport: [u32; 2]) {
+        let _ = kept::march_target(&self.kept.marched, device, viewport);
+    }
+
+    /// Whether the march pipelines `settings` need are made ([`Self::prepare`]).
+    pub fn prepared(&self, settings: &MarchSettings) -> bool {
+        march_shadows(settings)
+            .into_iter()
+            .all(|shadow| self.march.has(&march_overrides(settings, shadow), true))
+    }
+
     /// March `volume` under `local_to_world` for `view` into a premultiplied image. Rays stop at
     /// `scene_depth` (the caller's depth target, `Depth32Float`, viewport-sized) when given.
     /// `light` is needed for [`Shadow::LightVolume`]. `None` when the box is off screen.
@@ -480,17 +539,10 @@ impl VolumeRenderer {
         let params =
             (kept.uploads).uniform(device, recorder.encoder, &kept.march_params, label, &params);
         let tf_buffer = self.kept_tf(device, recorder.encoder, tf);
-        let (mode, shadow) = march_variant(settings, light);
-        let march = self.march.get(
-            device,
-            &volume_march::Overrides {
-                mode: mode as u32,
-                shadow: shadow as u32,
-                skip: settings.skip,
-                count_samples: settings.count_samples,
-            },
-            true,
-        )?;
+        let (_, shadow) = march_variant(settings, light);
+        let march = self
+            .march
+            .get(device, &march_overrides(settings, shadow), true)?;
         let groups = [
             (rect[2] - rect[0]).div_ceil(8),
             (rect[3] - rect[1]).div_ceil(8),
@@ -586,15 +638,6 @@ fn tf_rows(tf: &TransferFunction) -> Vec<[f32; 4]> {
             ]
         })
         .collect()
-}
-
-fn tf_buffer(device: &wgpu::Device, tf: &TransferFunction) -> wgpu::Buffer {
-    use wgpu::util::DeviceExt;
-    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("transfer function"),
-        contents: bytemuck::cast_slice(&tf_rows(tf)),
-        usage: wgpu::BufferUsages::STORAGE,
-    })
 }
 
 /// Segments a ray through the box [lo, hi] under `local_to_world` can need at a given step:

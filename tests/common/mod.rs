@@ -326,3 +326,9 @@ pub fn texture(
 pub fn sampled(ctx: &Context, size: [u32; 3], format: wgpu::TextureFormat) -> wgpu::Texture {
     texture(ctx, size, format, wgpu::TextureUsages::TEXTURE_BINDING)
 }
+
+/// The compute pipelines `device` holds, by wgpu's own counter (the `counters` feature): a
+/// test that counts what a call makes uses a device of its own.
+pub fn compute_pipelines(device: &wgpu::Device) -> isize {
+    device.get_internal_counters().hal.compute_pipelines.read()
+}

@@ -145,13 +145,7 @@ fn visualized_field_matches_reference_image() {
 fn a_new_mask_size_makes_no_pipeline() {
     let ctx = Context::new().expect("a GPU adapter (apt-get install mesa-vulkan-drivers)");
     let d2 = fieldkit::distance::Distance2d::new(&ctx.device).unwrap();
-    let pipelines = || {
-        ctx.device
-            .get_internal_counters()
-            .hal
-            .compute_pipelines
-            .read()
-    };
+    let pipelines = || common::compute_pipelines(&ctx.device);
     let run = |w: u32, h: u32, signed: bool| {
         let mut mask = vec![0u8; (w * h) as usize];
         mask[(h / 2 * w + w / 3) as usize] = 255;
@@ -182,4 +176,35 @@ fn a_new_mask_size_makes_no_pipeline() {
         }
     }
     assert_eq!(pipelines(), made, "pipelines made for new mask sizes");
+}
+
+/// `Distance2d::prepare` makes, for a mask size and settings, every pipeline the encode that
+/// follows needs: it then makes none (here the signed field, whose passes are specialised by
+/// the sign), and its field is the one the unprepared transform gives.
+#[test]
+fn prepare_makes_the_pipelines_an_encode_needs() {
+    let ctx = Context::new().expect("a GPU adapter (apt-get install mesa-vulkan-drivers)");
+    let d2 = fieldkit::distance::Distance2d::new(&ctx.device).unwrap();
+    let pipelines = || common::compute_pipelines(&ctx.device);
+    let (w, h) = (48u32, 20u32);
+    let signed = fieldkit::distance::Settings2d {
+        signed: true,
+        ..Default::default()
+    };
+    let before = pipelines();
+    d2.prepare(&ctx.device, [w, h], &signed).unwrap();
+    let prepared = pipelines();
+    assert!(prepared > before, "prepare made no pipeline");
+    let mut mask = vec![0u8; (w * h) as usize];
+    mask[(h / 2 * w + 7) as usize] = 255;
+    let tex = upload_mask(&ctx.device, &ctx.queue, &mask, w, h).unwrap();
+    let mut enc = ctx.encoder("prepared");
+    let field = d2.encode(&ctx.device, &mut enc, &tex, &signed).unwrap();
+    ctx.submit_and_wait("prepared", enc).unwrap();
+    assert_eq!(pipelines(), prepared, "the encode made pipelines");
+    let d: Vec<f32> = read_texture(&ctx, &field.distance).unwrap();
+    // Signed, each side is measured to the other's edge: the seed is half a texel inside,
+    // the texel 3 to its right 2.5 outside.
+    assert_eq!(d[(h / 2 * w + 7) as usize], -0.5);
+    assert_eq!(d[(h / 2 * w + 10) as usize], 2.5);
 }

@@ -309,20 +309,26 @@ fn draw_cube(
     edges: bool,
     place: Mat4,
 ) -> (Vec<[u8; 4]>, Vec<f32>, bool) {
-    let targets = Targets::new(
-        &ctx.device,
-        [W, H],
-        wgpu::TextureFormat::Rgba8Unorm,
-        wgpu::TextureFormat::Depth32Float,
-    );
     let cubes = Cubes::with_edges(
         &ctx.device,
+        &ctx.queue,
         wgpu::TextureFormat::Rgba8Unorm,
         wgpu::TextureFormat::Depth32Float,
         style,
         edges,
     )
     .unwrap();
+    draw_cubes(ctx, &cubes, place)
+}
+
+/// [`draw_cube`] with cubes made by the caller.
+fn draw_cubes(ctx: &Context, cubes: &Cubes, place: Mat4) -> (Vec<[u8; 4]>, Vec<f32>, bool) {
+    let targets = Targets::new(
+        &ctx.device,
+        [W, H],
+        wgpu::TextureFormat::Rgba8Unorm,
+        wgpu::TextureFormat::Depth32Float,
+    );
     let balls = Metaballs::new(&ctx.device).unwrap();
     let inst = balls
         .upload(&ctx.device, &ctx.queue, &[Vec4::new(0.0, 0.0, 0.0, 1.0)])
@@ -404,6 +410,7 @@ fn seed_cubes_read_depth_only_cull_and_draw_edges_without_polygon_lines() {
     assert!(
         Cubes::with_edges(
             &ctx.device,
+            &ctx.queue,
             wgpu::TextureFormat::Rgba8Unorm,
             wgpu::TextureFormat::Depth32Float,
             CubeStyle::default(),
@@ -411,4 +418,57 @@ fn seed_cubes_read_depth_only_cull_and_draw_edges_without_polygon_lines() {
         )
         .is_err()
     );
+}
+
+/// A new colour, size scaling or culling by frustum is taken in place (`restyle`: no new
+/// pipeline), and drawn; a style that differs in what the pipeline fixes is refused with
+/// `false`, the cubes' style unchanged; a colour that is not finite is a typed error.
+#[test]
+fn cubes_restyle_in_place_what_the_pipeline_does_not_fix() {
+    let ctx = Context::shared();
+    let red = CubeStyle {
+        colour: Vec4::new(1.0, 0.0, 0.0, 1.0),
+        ..CubeStyle::default()
+    };
+    let mut cubes = Cubes::new(
+        &ctx.device,
+        &ctx.queue,
+        wgpu::TextureFormat::Rgba8Unorm,
+        wgpu::TextureFormat::Depth32Float,
+        red,
+    )
+    .unwrap();
+    let centre = (H / 2 * W + W / 2) as usize;
+    let (colour, _, _) = draw_cubes(&ctx, &cubes, Mat4::IDENTITY);
+    // The face's colour shaded by its axis (0.55 to 1): only its channel lit.
+    let [r, g, b, a] = colour[centre];
+    assert!(
+        r >= 140 && g == 0 && b == 0 && a == 255,
+        "{:?}",
+        colour[centre]
+    );
+    let blue = CubeStyle {
+        colour: Vec4::new(0.0, 0.0, 1.0, 1.0),
+        scale_size: false,
+        frustum_cull: false,
+        ..red
+    };
+    assert!(cubes.restyle(blue).unwrap());
+    assert_eq!(cubes.style(), blue);
+    let (colour, _, _) = draw_cubes(&ctx, &cubes, Mat4::IDENTITY);
+    assert_eq!(colour[centre], [0, 0, r, 255]);
+    let wire = CubeStyle {
+        wireframe: true,
+        ..blue
+    };
+    assert!(!cubes.restyle(wire).unwrap());
+    assert_eq!(cubes.style(), blue);
+    let nan = CubeStyle {
+        colour: Vec4::NAN,
+        ..blue
+    };
+    assert!(matches!(
+        cubes.restyle(nan),
+        Err(fieldkit::Error::Invalid { .. })
+    ));
 }

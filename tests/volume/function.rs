@@ -100,7 +100,7 @@ fn unit_box(o: Vec3, d: Vec3) -> (f32, f32) {
 #[test]
 fn the_baked_function_is_the_cpu_cloud() {
     let ctx = Context::shared();
-    let cloud = CloudMarch::cloud(&ctx.device).unwrap();
+    let cloud = CloudMarch::cloud(&ctx.device, &ctx.queue).unwrap();
     let dims = [24, 20, 16];
     let volume = FunctionVolume {
         min: Vec3::ZERO,
@@ -137,7 +137,7 @@ fn the_baked_function_is_the_cpu_cloud() {
 #[test]
 fn the_march_integrates_the_function() {
     let ctx = Context::shared();
-    let cloud = CloudMarch::cloud(&ctx.device).unwrap();
+    let cloud = CloudMarch::cloud(&ctx.device, &ctx.queue).unwrap();
     let volume = FunctionVolume::unit(32);
     let sigma = 4.0f32;
     let reference = 1.0 / 64.0;
@@ -191,7 +191,7 @@ fn the_march_integrates_the_function() {
 #[test]
 fn skipping_over_sampled_bricks() {
     let ctx = Context::shared();
-    let cloud = CloudMarch::cloud(&ctx.device).unwrap();
+    let cloud = CloudMarch::cloud(&ctx.device, &ctx.queue).unwrap();
     let volume = FunctionVolume::unit(64);
     let mut tf = TransferFunction::extinction(Vec3::ONE, 4.0, 1.0 / 64.0, [0.0, 1.0], 64);
     for e in tf.entries.iter_mut().take(4) {
@@ -237,7 +237,7 @@ fn skipping_over_sampled_bricks() {
 #[test]
 fn the_iso_surface_is_the_first_crossing() {
     let ctx = Context::shared();
-    let cloud = CloudMarch::cloud(&ctx.device).unwrap();
+    let cloud = CloudMarch::cloud(&ctx.device, &ctx.queue).unwrap();
     let volume = FunctionVolume::unit(32);
     let iso = 0.3;
     let tf = TransferFunction::constant(Vec3::ONE, 1.0);
@@ -270,7 +270,7 @@ fn the_iso_surface_is_the_first_crossing() {
 fn bad_input_is_a_typed_error() {
     use fieldkit::Error;
     let ctx = Context::shared();
-    let cloud = CloudMarch::cloud(&ctx.device).unwrap();
+    let cloud = CloudMarch::cloud(&ctx.device, &ctx.queue).unwrap();
     let volume = FunctionVolume::unit(16);
     let tf = TransferFunction::cloud();
     let view = view_from(Vec3::new(1.6, 1.1, 2.0), Vec3::splat(0.5));
@@ -331,4 +331,64 @@ fn bad_input_is_a_typed_error() {
     )
     .unwrap();
     ctx.submit_and_wait("errors", enc).unwrap();
+}
+
+/// `prepare` makes the march pipelines settings need ahead (on any thread), `prepared` says
+/// so, and the march that follows makes none — for the texture march (both light-volume
+/// layouts under `Shadow::LightVolume`) and the function's; `reserve` makes the march's image
+/// ahead, and the march makes no texture. Counted by wgpu's own pipeline
+/// counter on a device of the test's own. A march marches the same image prepared or not.
+#[test]
+fn prepare_makes_the_march_pipelines_ahead() {
+    let ctx = Context::new().expect("a GPU adapter (apt-get install mesa-vulkan-drivers)");
+    let pipelines = || common::compute_pipelines(&ctx.device);
+    let renderer = fieldkit::volume::VolumeRenderer::new(
+        &ctx.device,
+        &ctx.queue,
+        wgpu::TextureFormat::Rgba8Unorm,
+    )
+    .unwrap();
+    let cloud = CloudMarch::cloud(&ctx.device, &ctx.queue).unwrap();
+    let mip = MarchSettings {
+        mode: Mode::MaximumIntensity,
+        ..plain(1.0 / 32.0, true)
+    };
+    let lit = MarchSettings {
+        shadow: Shadow::LightVolume { step: 0.05 },
+        ..MarchSettings::default()
+    };
+    for s in [&mip, &lit] {
+        assert!(!renderer.prepared(s), "{s:?}");
+    }
+    assert!(!cloud.prepared(&mip));
+    let before = pipelines();
+    // Made on another thread, as an app makes them while its frames draw.
+    std::thread::scope(|scope| {
+        scope.spawn(|| renderer.prepare(&ctx.device, &mip).unwrap());
+        scope.spawn(|| renderer.prepare(&ctx.device, &lit).unwrap());
+        scope.spawn(|| cloud.prepare(&ctx.device, &mip).unwrap());
+    });
+    // One for the maximum intensity, two light-volume layouts, one density march.
+    assert_eq!(pipelines(), before + 4);
+    assert!(renderer.prepared(&mip) && renderer.prepared(&lit) && cloud.prepared(&mip));
+    // A density march has no light volume: never prepared, a typed error to prepare.
+    assert!(!cloud.prepared(&lit));
+    assert!(cloud.prepare(&ctx.device, &lit).is_err());
+    let made = pipelines();
+    let volume = FunctionVolume {
+        min: Vec3::ZERO,
+        max: Vec3::ONE,
+        dims: [16; 3],
+    };
+    let tf = TransferFunction::constant(Vec3::ONE, 1.0);
+    let view = view_from(Vec3::new(0.5, 0.6, 2.5), Vec3::splat(0.5));
+    // Its image made ahead too: the march makes no texture (wgpu counts texture memory; its
+    // texture count misses textures made through the device).
+    let textures = || ctx.device.get_internal_counters().hal.texture_memory.read();
+    cloud.reserve(&ctx.device, view.viewport);
+    let reserved = textures();
+    let image = march(&ctx, &cloud, &volume, &tf, &view, &mip);
+    assert_eq!(pipelines(), made, "the march made a pipeline");
+    assert_eq!(textures(), reserved, "the march made a texture");
+    assert!(image.iter().any(|p| p[3] > 0.05), "nothing marched");
 }

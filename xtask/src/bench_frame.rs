@@ -1,6 +1,7 @@
 //! `cargo xtask bench frame`: what a frame of every viewer scene costs the application, at
 //! 1920×1080 (640×360 with `--quick`): the viewer's `--frame-cost` mode (see
-//! `examples/viewer/frame.rs`), at least 60 frames a scene, written to `frame.csv` in `--out`.
+//! `examples/viewer/frame.rs`), at least 60 frames a scene, written to `frame.csv` in `--out`,
+//! and each settings change the viewer's panels offer to `frame_settings.csv`.
 //!
 //! Twice: first with an empty pipeline cache, then with the one the first run saved, the
 //! drivers' own shader caches turned off in both (`__GL_SHADER_DISK_CACHE=0`,
@@ -28,7 +29,9 @@ fn frame(args: &Args) -> Result<(), String> {
     let frames = args.reps.max(60);
     let cache = args.out.join("pipeline-cache");
     let _ = std::fs::remove_dir_all(&cache);
-    let mut table = String::new();
+    // Both runs' tables, each under one header: the frame costs and the settings changes.
+    let names = ["frame.csv", "frame_settings.csv"];
+    let mut tables = [String::new(), String::new()];
     for start in ["cold", "warm"] {
         let out = args.out.join(start);
         let status = Command::new(&viewer)
@@ -43,18 +46,22 @@ fn frame(args: &Args) -> Result<(), String> {
         if !status.success() {
             return Err(format!("{} --frame-cost: {status}", viewer.display()));
         }
-        let csv = out.join("frame.csv");
-        let text = std::fs::read_to_string(&csv).map_err(|e| format!("{}: {e}", csv.display()))?;
-        // One header for both runs.
-        let skip = usize::from(!table.is_empty());
-        for line in text.lines().skip(skip) {
-            table += line;
-            table.push('\n');
+        for (name, table) in names.iter().zip(&mut tables) {
+            let csv = out.join(name);
+            let text =
+                std::fs::read_to_string(&csv).map_err(|e| format!("{}: {e}", csv.display()))?;
+            let skip = usize::from(!table.is_empty());
+            for line in text.lines().skip(skip) {
+                table.push_str(line);
+                table.push('\n');
+            }
         }
     }
-    let path = args.out.join("frame.csv");
-    std::fs::write(&path, table).map_err(|e| format!("{}: {e}", path.display()))?;
-    println!("wrote {}", path.display());
+    for (name, table) in names.iter().zip(&tables) {
+        let path = args.out.join(name);
+        std::fs::write(&path, table).map_err(|e| format!("{}: {e}", path.display()))?;
+        println!("wrote {}", path.display());
+    }
     Ok(())
 }
 

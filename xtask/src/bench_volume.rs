@@ -179,7 +179,7 @@ fn bench(
     let (width, height) = if quick { (480, 270) } else { (1920, 1080) };
     let renderer = VolumeRenderer::new(&ctx.device, &ctx.queue, wgpu::TextureFormat::Rgba8Unorm)
         .map_err(|e| e.to_string())?;
-    let cloud = CloudMarch::cloud(&ctx.device).map_err(|e| e.to_string())?;
+    let cloud = CloudMarch::cloud(&ctx.device, &ctx.queue).map_err(|e| e.to_string())?;
     let target = ctx.device.create_texture(&wgpu::TextureDescriptor {
         label: Some("bench volume target"),
         size: wgpu::Extent3d {

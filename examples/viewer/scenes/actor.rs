@@ -101,8 +101,11 @@ pub struct Actor {
     pub(super) balls: Metaballs,
     pub(super) instances: Option<(Instances, usize)>,
     pub(super) base: Option<([u32; 3], f32, Vec<glam::Vec4>)>,
-    pub(super) marcher: Option<(bool, Raymarcher)>,
-    pub(super) cubes: Option<(CubeStyle, Cubes)>,
+    /// The raymarcher for the camera's depth convention, made on a worker thread.
+    pub(super) marcher: Latest<bool, Raymarcher>,
+    /// The debug cubes for the style's pipeline (culling, depth, wireframe), made on a worker
+    /// thread; colour, size and culling by frustum restyled in place.
+    pub(super) cubes: Latest<CubeStyle, Cubes>,
     /// The grid the field is built on, kept while the blocks, the animation and the field
     /// settings stay: fitted to the animation's envelope, so it holds every frame.
     pub(super) grid: Option<(GridKey, Option<fieldkit::distance::Grid>)>,
@@ -117,13 +120,24 @@ type GridKey = (
 );
 
 impl Actor {
+    /// Whether the raymarcher or the cubes the settings ask for are being made.
+    pub fn busy(&self) -> bool {
+        self.marcher.busy() || self.cubes.busy()
+    }
+
+    /// Wait for the raymarcher and cubes being made; the next frame takes them.
+    pub fn wait_for_workers(&mut self) {
+        self.marcher.wait();
+        self.cubes.wait();
+    }
+
     pub(super) fn new(device: &wgpu::Device) -> Result<Self, Error> {
         Ok(Self {
             balls: Metaballs::new(device)?,
             instances: None,
             base: None,
-            marcher: None,
-            cubes: None,
+            marcher: Latest::default(),
+            cubes: Latest::default(),
             grid: None,
         })
     }
@@ -131,6 +145,8 @@ impl Actor {
     pub(super) fn encode(&mut self, s: &ActorSettings, frame: &mut Frame) -> PanelLines {
         let (device, queue) = (frame.device, frame.queue);
         clear(frame, [0.09, 0.1, 0.12]);
+        // Cubes asked for before the draw mode left them: taken when ready all the same.
+        self.cubes.poll();
         let counts = s.counts()?;
         if self.base.as_ref().map(|b| (b.0, b.1)) != Some((counts, s.block)) {
             self.base = Some((counts, s.block, packed_grid(counts, s.block)?));
@@ -162,22 +178,31 @@ impl Actor {
             if reversed {
                 style.depth_compare = flip(style.depth_compare);
             }
-            if self.cubes.as_ref().map(|c| c.0) != Some(style) {
-                self.cubes = Some((style, Cubes::new(device, COLOUR, DEPTH, style)?));
+            // What the pipeline fixes: the rest is restyled in place.
+            let key = CubeStyle {
+                colour: CubeStyle::default().colour,
+                scale_size: true,
+                frustum_cull: true,
+                ..style
+            };
+            let (d, q) = (device.clone(), queue.clone());
+            let make = move || Cubes::new(&d, &q, COLOUR, DEPTH, key);
+            if let Some(cubes) = self.cubes.get(&key, make)? {
+                // Cubes made for an earlier style keep theirs until the new ones arrive.
+                cubes.restyle(style)?;
+                spent(&mut frame.fieldkit_ms, || {
+                    cubes.encode(
+                        device,
+                        &mut *frame.rec,
+                        cv,
+                        dv,
+                        instances,
+                        s.block,
+                        Mat4::IDENTITY,
+                        view.view_proj,
+                    )
+                })?;
             }
-            let cubes = &self.cubes.as_ref().expect("set above").1;
-            spent(&mut frame.fieldkit_ms, || {
-                cubes.encode(
-                    device,
-                    &mut *frame.rec,
-                    cv,
-                    dv,
-                    instances,
-                    s.block,
-                    Mat4::IDENTITY,
-                    view.view_proj,
-                )
-            })?;
         }
         let animation = s.animate.then_some(s.animation);
         let key = (counts, s.block, animation, s.field);
@@ -203,7 +228,11 @@ impl Actor {
                 let bins = self
                     .balls
                     .encode_bins(device, frame.rec, instances, &grid, s.block, &s.field)?;
-                let marcher = &self.marcher.as_ref().expect("prepared").1;
+                // A raymarcher for the other depth direction draws nothing: the surface
+                // shows from the frame this one arrives on.
+                let Some(marcher) = self.marcher.ready(&reversed) else {
+                    return Ok(stats);
+                };
                 if let Some(m) = marcher.encode_direct_march(
                     device,
                     frame.rec,
@@ -224,8 +253,9 @@ impl Actor {
 }
 
 impl Actor {
-    /// Upload (or update in place) the voxels, and make the raymarcher for this depth
-    /// convention if the last one was made for the other.
+    /// Upload (or update in place) the voxels, and start making the raymarcher for this depth
+    /// convention on a worker thread if the last one was made for the other (the surface is
+    /// not drawn until it arrives).
     pub(super) fn prepare(
         &mut self,
         device: &wgpu::Device,
@@ -237,16 +267,14 @@ impl Actor {
             Some((inst, n)) if *n == voxels.len() => self.balls.update(queue, inst, voxels)?,
             _ => self.instances = Some((self.balls.upload(device, queue, voxels)?, voxels.len())),
         }
-        if self.marcher.as_ref().map(|m| m.0) != Some(reversed) {
-            self.marcher = Some((
-                reversed,
-                Raymarcher::new(device, queue, COLOUR, DEPTH, reversed)?,
-            ));
-        }
+        let (d, q) = (device.clone(), queue.clone());
+        let make = move || Raymarcher::new(&d, &q, COLOUR, DEPTH, reversed);
+        self.marcher.get(&reversed, make)?;
         Ok(())
     }
 
-    /// The field of the prepared voxels on `grid`, marched and composited into the frame.
+    /// The field of the prepared voxels on `grid`, marched and composited into the frame (once
+    /// the raymarcher has arrived).
     pub(super) fn surface(
         &self,
         device: &wgpu::Device,
@@ -255,7 +283,9 @@ impl Actor {
         frame: &mut Frame,
     ) -> Result<(), Error> {
         let instances = &self.instances.as_ref().expect("prepared").0;
-        let marcher = &self.marcher.as_ref().expect("prepared").1;
+        let Some(marcher) = self.marcher.ready(&frame.camera.reversed_z) else {
+            return Ok(());
+        };
         let view = frame.camera.view(frame.size);
         let field = self
             .balls

@@ -128,6 +128,10 @@ pub(super) struct Pending2d {
     pub(super) exact: Readback<Vec<f32>>,
 }
 
+/// A mask size, method and sign: what the transform's pipelines are specialised by (the seed
+/// channels and threshold are uniforms).
+pub(super) type Prepare2d = ([u32; 2], Method2d, bool);
+
 /// Fields recorded into a frame not yet submitted: read back once it is.
 pub(super) struct Recorded2d {
     pub(super) key: DistanceSettings,
@@ -138,7 +142,11 @@ pub(super) struct Recorded2d {
 /// The 2D tool's state: the field is computed when the settings change, read back without
 /// waiting, coloured on the CPU and shown until the next change.
 pub struct Distance2dScene {
-    pub(super) distance: Distance2d,
+    pub(super) distance: std::sync::Arc<Distance2d>,
+    /// The mask sizes and settings whose pipelines are made (`Distance2d::prepare`), and the
+    /// ones a worker thread is making: a new sign or method costs the frame no pipeline.
+    pub(super) prepared: Vec<Prepare2d>,
+    pub(super) preparing: Option<(Prepare2d, Job<Result<(), Error>>)>,
     pub(super) blit: Blit,
     pub(super) recorded: Option<Recorded2d>,
     pub(super) pending: Option<Pending2d>,
@@ -162,7 +170,9 @@ pub fn field_rect(size: [u32; 2], field: [u32; 2]) -> [f32; 4] {
 impl Distance2dScene {
     pub(super) fn new(device: &wgpu::Device) -> Result<Self, Error> {
         Ok(Self {
-            distance: Distance2d::new(device)?,
+            distance: std::sync::Arc::new(Distance2d::new(device)?),
+            prepared: Vec::new(),
+            preparing: None,
             blit: Blit::new(device, COLOUR),
             recorded: None,
             pending: None,
@@ -172,9 +182,48 @@ impl Distance2dScene {
 
     /// Work started and not yet shown.
     pub fn busy(&self, s: &DistanceSettings) -> bool {
-        self.recorded.is_some()
+        self.preparing.is_some()
+            || self.recorded.is_some()
             || self.pending.is_some()
             || self.shown.as_ref().map(|x| &x.0) != Some(s)
+    }
+
+    /// Whether the pipelines `s` needs (its method's and the exact transform's it is compared
+    /// with) are made; if not, a worker thread makes them (`Distance2d::prepare`).
+    fn prepare(&mut self, device: &wgpu::Device, s: &DistanceSettings) -> Result<bool, Error> {
+        if let Some((_, job)) = &mut self.preparing
+            && let Some(result) = job.try_take()
+        {
+            let (key, _) = self.preparing.take().expect("checked");
+            // Refused settings count as tried: the encode that follows gives their error.
+            self.prepared.push(key);
+            result.unwrap_or_else(|| Err(invalid("the 2D tool's worker thread stopped")))?;
+        }
+        let key = (s.size, s.options.method, s.options.signed);
+        if self.prepared.contains(&key) {
+            return Ok(true);
+        }
+        if self.preparing.is_none() {
+            let (distance, device) = (self.distance.clone(), device.clone());
+            let options = s.options;
+            let exact = Settings2d {
+                method: Method2d::Exact,
+                ..options
+            };
+            let job = Job::spawn(move || {
+                distance.prepare(&device, key.0, &options)?;
+                distance.prepare(&device, key.0, &exact)
+            });
+            self.preparing = Some((key, job));
+        }
+        Ok(false)
+    }
+
+    /// Wait for the pipelines being made; the next frame takes them.
+    pub fn wait_for_worker(&mut self) {
+        if let Some((key, job)) = self.preparing.take() {
+            self.preparing = Some((key, job.wait()));
+        }
     }
 
     /// The frame that recorded the fields was submitted: start reading them.
@@ -224,6 +273,9 @@ impl Distance2dScene {
             && self.recorded.is_none()
             && self.shown.as_ref().map(|x| &x.0) != Some(s)
         {
+            if !self.prepare(device, s)? {
+                return Ok(vec!["the method's pipelines are being made".into()]);
+            }
             let [w, h] = s.size;
             let mask = upload_mask(device, queue, &s.mask()?, w, h)?;
             // Each method's passes grouped under its name: the panel adds up what each costs.

@@ -19,7 +19,7 @@ use serde::{Deserialize, Serialize};
 
 use super::camera::Camera;
 use super::draw::{Blit, Lines};
-use job::Job;
+use job::{Job, Latest};
 
 mod actor;
 mod culprit;
@@ -286,12 +286,17 @@ impl Scenes {
 
     /// Work the scene started that has not reached the screen yet (readbacks in flight).
     pub fn busy(&self, scene: &str, s: &Saved) -> bool {
+        let actor = |a: &Option<Actor>| a.as_ref().is_some_and(Actor::busy);
+        let ocean = self.ocean.as_ref().is_some_and(|o| o.renderer.busy());
+        // A cloud of a new size, or the cloud function, still being made on a worker thread.
+        let volume = self.volume.as_ref().is_some_and(|v| v.busy());
         match scene {
+            "actor" => actor(&self.actor),
+            "ocean" => ocean,
+            "volume" => volume,
             "distance2d" => self.distance.as_ref().is_none_or(|d| d.busy(&s.distance)),
             "voxelizer" => self.voxelizer.as_ref().is_none_or(|v| v.busy(&s.voxelizer)),
-            // A cloud of a new size, or the cloud function, still being made on a worker thread.
-            "volume" | "composite" => self.volume.as_ref().is_some_and(|v| v.busy()),
-            _ => false,
+            _ => volume || ocean || actor(&self.island),
         }
     }
 
@@ -303,6 +308,15 @@ impl Scenes {
         }
         if let Some(v) = &mut self.volume {
             v.wait_for_cloud();
+        }
+        for a in [&mut self.actor, &mut self.island].into_iter().flatten() {
+            a.wait_for_workers();
+        }
+        if let Some(o) = &mut self.ocean {
+            o.renderer.wait();
+        }
+        if let Some(d) = &mut self.distance {
+            d.wait_for_worker();
         }
     }
 

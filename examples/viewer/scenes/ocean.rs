@@ -71,32 +71,50 @@ impl OceanSettings {
     }
 }
 
+/// The G-buffer's four targets and their size.
+pub(super) type GBuffer = ([u32; 2], Vec<Targets>);
+
+/// Four targets of `size` for the G-buffer.
+fn gbuffer_targets(device: &wgpu::Device, size: [u32; 2]) -> GBuffer {
+    let targets = (0..4)
+        .map(|_| Targets::new(device, size, COLOUR, DEPTH))
+        .collect();
+    (size, targets)
+}
+
 /// The ocean's GPU state.
 pub struct Ocean {
-    pub(super) renderer: Option<((bool, bool, bool), OceanRenderer)>,
-    pub(super) gbuffer: Option<([u32; 2], Vec<Targets>)>,
+    /// The renderer for the output (G-buffer or not), the depth direction and depth writes,
+    /// made on a worker thread; the last one draws until it arrives.
+    /// With a G-buffer renderer, its targets for the frame's size, made on the worker too.
+    pub(super) renderer: Latest<(bool, bool, bool), (OceanRenderer, Option<GBuffer>)>,
+    pub(super) gbuffer: Option<GBuffer>,
     pub(super) lines: Lines,
 }
 
 impl Ocean {
     pub(super) fn new(device: &wgpu::Device) -> Self {
         Self {
-            renderer: None,
+            renderer: Latest::default(),
             gbuffer: None,
             lines: Lines::new(device, COLOUR),
         }
     }
 
-    /// Draw the sea into the frame (over what it holds).
-    pub(super) fn draw(&mut self, s: &OceanSettings, frame: &mut Frame) -> PanelLines {
-        let (device, queue) = (frame.device, frame.queue);
-        let waves = spent(&mut frame.fieldkit_ms, || {
-            Waves::new(s.waves.clone(), s.steepness)
-        })?;
-        let camera = frame.camera.ocean(frame.size);
+    /// Ask for the renderer `s` needs with the depth direction `reversed`, made on a worker
+    /// thread; whether one (this one, or the last until it arrives) is there to draw with.
+    fn ask_renderer(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        s: &OceanSettings,
+        reversed: bool,
+        size: [u32; 2],
+    ) -> Result<bool, Error> {
         let write = s.depth_write.unwrap_or(true);
-        let key = (s.gbuffer.is_some(), frame.camera.reversed_z, write);
-        if self.renderer.as_ref().map(|r| r.0) != Some(key) {
+        let key = (s.gbuffer.is_some(), reversed, write);
+        let (d, q) = (device.clone(), queue.clone());
+        let make = move || {
             let output = if key.0 {
                 OceanOutput::GBuffer([COLOUR; 4])
             } else {
@@ -106,12 +124,33 @@ impl Ocean {
                 write,
                 ..Default::default()
             };
-            self.renderer = Some((
-                key,
-                OceanRenderer::with_depth(device, queue, output, key.1, depth)?,
-            ));
+            let renderer = OceanRenderer::with_depth(&d, &q, output, key.1, depth)?;
+            Ok((renderer, key.0.then(|| gbuffer_targets(&d, size))))
+        };
+        let Some((_, made)) = self.renderer.get(&key, make)? else {
+            return Ok(false);
+        };
+        if let Some(g) = made.take() {
+            self.gbuffer = Some(g);
         }
-        let renderer = &self.renderer.as_ref().expect("set above").1;
+        Ok(true)
+    }
+
+    /// Draw the sea into the frame (over what it holds).
+    pub(super) fn draw(&mut self, s: &OceanSettings, frame: &mut Frame) -> PanelLines {
+        let (device, queue) = (frame.device, frame.queue);
+        let waves = spent(&mut frame.fieldkit_ms, || {
+            Waves::new(s.waves.clone(), s.steepness)
+        })?;
+        let camera = frame.camera.ocean(frame.size);
+        if !self.ask_renderer(device, queue, s, frame.camera.reversed_z, frame.size)? {
+            return Ok(vec!["the sea's renderer is being made".into()]);
+        }
+        // The renderer made for these settings, or the last one until it arrives: drawn into
+        // the targets it was made for.
+        let (&(gbuffer_on, _, _), (renderer, _)) =
+            self.renderer.current_with_key().expect("checked");
+        let gbuffer = gbuffer_on.then(|| s.gbuffer.unwrap_or(0));
         // The patches are chosen on the GPU; on the CPU only where the overlay draws them (or
         // the device cannot draw the GPU's choice).
         let selection = (s.overlay || !renderer.lod_on_gpu())
@@ -138,7 +177,7 @@ impl Ocean {
                 ),
             }
         };
-        match s.gbuffer {
+        match gbuffer {
             None => spent(&mut frame.fieldkit_ms, || {
                 draw(frame.rec, &[&frame.targets.colour_view])
             })?,
@@ -147,10 +186,7 @@ impl Ocean {
                     return Err(invalid(format!("G-buffer target {shown} (0–3)")));
                 }
                 if self.gbuffer.as_ref().map(|g| g.0) != Some(frame.size) {
-                    let g = (0..4)
-                        .map(|_| Targets::new(device, frame.size, COLOUR, DEPTH))
-                        .collect();
-                    self.gbuffer = Some((frame.size, g));
+                    self.gbuffer = Some(gbuffer_targets(device, frame.size));
                 }
                 let g = &self.gbuffer.as_ref().expect("set above").1;
                 for t in g {

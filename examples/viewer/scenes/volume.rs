@@ -1,6 +1,7 @@
 //! Seed 002: the volume.
 
 use super::*;
+use std::sync::Arc;
 
 /// The volume's settings: the cloud, its transfer function and how it is marched.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -53,13 +54,73 @@ impl Default for VolumeSettings {
 /// A cloud being made and uploaded on a worker thread, and its (size, seed).
 pub(super) type PendingCloud = ((u32, u32), Job<Result<Volume, Error>>);
 
+/// March settings whose pipelines a worker thread makes (`prepare`) while the frames march
+/// with the last settings whose pipelines were made: a new mode, shadow or skipping costs the
+/// frame no pipeline.
+#[derive(Default)]
+pub(super) struct Prepared {
+    /// The settings last marched with.
+    drawn: Option<MarchSettings>,
+    making: Option<(MarchSettings, Job<Result<(), Error>>)>,
+    /// Settings whose pipelines failed, and why: not tried again until they change.
+    failed: Option<(MarchSettings, Error)>,
+}
+
+impl Prepared {
+    /// The settings to march with: `wanted` where its pipelines are made (`ready`), else
+    /// the last marched with while `prepare` makes them on a worker thread (`None` before
+    /// any).
+    fn settings(
+        &mut self,
+        wanted: MarchSettings,
+        ready: bool,
+        prepare: impl FnOnce() -> Result<(), Error> + Send + 'static,
+    ) -> Result<Option<MarchSettings>, Error> {
+        if let Some((_, job)) = &mut self.making
+            && let Some(result) = job.try_take()
+        {
+            let (settings, _) = self.making.take().expect("checked");
+            if let Err(e) = result.unwrap_or_else(|| Err(cloud_stopped())) {
+                self.failed = Some((settings, e));
+            }
+        }
+        if ready {
+            self.drawn = Some(wanted);
+            return Ok(Some(wanted));
+        }
+        if let Some((settings, e)) = &self.failed
+            && *settings == wanted
+        {
+            return Err(e.clone());
+        }
+        if self.making.is_none() {
+            self.making = Some((wanted, Job::spawn(prepare)));
+        }
+        Ok(self.drawn)
+    }
+
+    fn busy(&self) -> bool {
+        self.making.is_some()
+    }
+
+    fn wait(&mut self) {
+        if let Some((settings, job)) = self.making.take() {
+            self.making = Some((settings, job.wait()));
+        }
+    }
+}
+
 /// The volume's GPU state.
 pub struct VolumeScene {
-    pub(super) renderer: VolumeRenderer,
+    pub(super) renderer: Arc<VolumeRenderer>,
+    /// The baked cloud's march settings, their pipelines made ahead.
+    pub(super) prepared: Prepared,
+    /// The cloud function's.
+    pub(super) function_prepared: Prepared,
     pub(super) volume: Option<((u32, u32), Volume, fieldkit::volume::Bricks)>,
     /// The cloud as a function, made on a worker thread on first use (its pipelines), and its
     /// bricks for a lattice size.
-    pub(super) cloud: Option<fieldkit::volume::CloudMarch>,
+    pub(super) cloud: Option<Arc<fieldkit::volume::CloudMarch>>,
     pub(super) cloud_making: Option<Job<Result<fieldkit::volume::CloudMarch, Error>>>,
     pub(super) cloud_bricks: Option<(u32, fieldkit::volume::Bricks)>,
     /// The light volume, kept while the cloud, its transfer function, the light and the
@@ -73,7 +134,9 @@ pub struct VolumeScene {
 impl VolumeScene {
     pub(super) fn new(device: &wgpu::Device, queue: &wgpu::Queue) -> Result<Self, Error> {
         Ok(Self {
-            renderer: VolumeRenderer::new(device, queue, COLOUR)?,
+            renderer: Arc::new(VolumeRenderer::new(device, queue, COLOUR)?),
+            prepared: Prepared::default(),
+            function_prepared: Prepared::default(),
             light: None,
             volume: None,
             cloud: None,
@@ -122,7 +185,10 @@ impl VolumeScene {
 
     /// Work on a worker thread not yet drawn: a cloud, or the cloud function's pipelines.
     pub(super) fn busy(&self) -> bool {
-        self.pending.is_some() || self.cloud_making.is_some()
+        self.pending.is_some()
+            || self.cloud_making.is_some()
+            || self.prepared.busy()
+            || self.function_prepared.busy()
     }
 
     /// Wait for the cloud being made on the worker thread, if any; the next frame takes it.
@@ -133,6 +199,8 @@ impl VolumeScene {
         if let Some((key, job)) = self.pending.take() {
             self.pending = Some((key, job.wait()));
         }
+        self.prepared.wait();
+        self.function_prepared.wait();
     }
 
     /// March the cloud *function* (`VolumeSettings::function`) into the frame.
@@ -145,16 +213,20 @@ impl VolumeScene {
         let device = frame.device;
         use fieldkit::volume::{CloudMarch, FunctionVolume, Shadow};
         let mut march = s.march;
-        march.frame = frame.number;
         if let Shadow::LightVolume { step } = march.shadow {
             march.shadow = Shadow::Rays { step };
         }
         if self.cloud.is_none() {
             let job = self.cloud_making.get_or_insert_with(|| {
-                let device = device.clone();
-                // The march's pipeline for these settings too, made ahead of the first march.
+                let (device, queue) = (frame.device.clone(), frame.queue.clone());
+                let viewport = frame.size;
+                // The march's pipeline for these settings and its image for this screen too,
+                // made ahead of the first march.
                 Job::spawn(move || {
-                    CloudMarch::cloud(&device).and_then(|c| c.prepare(&device, &march).map(|()| c))
+                    let cloud = CloudMarch::cloud(&device, &queue)?;
+                    cloud.prepare(&device, &march)?;
+                    cloud.reserve(&device, viewport);
+                    Ok(cloud)
                 })
             });
             let Some(made) = job.try_take() else {
@@ -165,9 +237,16 @@ impl VolumeScene {
             };
             let made = made.unwrap_or_else(|| Err(cloud_stopped()));
             self.cloud_making = None;
-            self.cloud = Some(made?);
+            self.cloud = Some(Arc::new(made?));
         }
-        let cloud = self.cloud.as_ref().expect("set above");
+        let cloud = self.cloud.clone().expect("set above");
+        let (c, d) = (cloud.clone(), device.clone());
+        let ready = cloud.prepared(&march);
+        let prepare = move || c.prepare(&d, &march);
+        let Some(mut march) = self.function_prepared.settings(march, ready, prepare)? else {
+            return Ok(vec!["volume: the march's pipelines are being made".into()]);
+        };
+        march.frame = frame.number;
         let lattice = FunctionVolume::unit(s.size.clamp(4, 512));
         if self.cloud_bricks.as_ref().map(|b| b.0) != Some(lattice.dims[0]) {
             let bricks = cloud.encode_bricks(device, frame.rec, &lattice)?;
@@ -233,7 +312,13 @@ impl VolumeScene {
                 s.size
             )]);
         };
-        let mut march = s.march;
+        let (r, d) = (self.renderer.clone(), device.clone());
+        let ready = self.renderer.prepared(&s.march);
+        let wanted = s.march;
+        let prepare = move || r.prepare(&d, &wanted);
+        let Some(mut march) = self.prepared.settings(wanted, ready, prepare)? else {
+            return Ok(vec!["volume: the march's pipelines are being made".into()]);
+        };
         march.frame = frame.number;
         let light = match march.shadow {
             fieldkit::volume::Shadow::LightVolume { .. } => {

@@ -138,28 +138,41 @@ impl Drawer {
         reversed: bool,
     ) -> Result<Self, Error> {
         Ok(match kind {
-            DrawerKind::View => {
-                if reversed {
-                    return Err(invalid(
-                        "the voxel view draws with a depth test of Less (no reversed Z yet)",
-                    ));
-                }
-                Self::View(VoxelView::new(device, COLOUR, DEPTH)?)
-            }
-            DrawerKind::March => Self::March(Box::new(Raymarcher::new(
-                device, queue, COLOUR, DEPTH, reversed,
-            )?)),
-            DrawerKind::Cubes => {
-                let mut style = CubeStyle {
-                    colour: Vec4::new(0.85, 0.7, 0.45, 1.0),
-                    ..CubeStyle::default()
-                };
-                if reversed {
-                    style.depth_compare = flip(style.depth_compare);
-                }
-                Self::Cubes(Cubes::new(device, COLOUR, DEPTH, style)?)
-            }
+            DrawerKind::View => Self::View(Self::view(device, reversed)?),
+            DrawerKind::March => Self::March(Box::new(Self::march(device, queue, reversed)?)),
+            DrawerKind::Cubes => Self::Cubes(Self::cubes(device, queue, reversed)?),
         })
+    }
+
+    /// The lit voxel view (no reversed depth yet: a typed error).
+    fn view(device: &wgpu::Device, reversed: bool) -> Result<VoxelView, Error> {
+        if reversed {
+            return Err(invalid(
+                "the voxel view draws with a depth test of Less (no reversed Z yet)",
+            ));
+        }
+        VoxelView::new(device, COLOUR, DEPTH)
+    }
+
+    /// The SDF march of the distance field.
+    fn march(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        reversed: bool,
+    ) -> Result<Raymarcher, Error> {
+        Raymarcher::new(device, queue, COLOUR, DEPTH, reversed)
+    }
+
+    /// The voxels as cubes.
+    fn cubes(device: &wgpu::Device, queue: &wgpu::Queue, reversed: bool) -> Result<Cubes, Error> {
+        let mut style = CubeStyle {
+            colour: Vec4::new(0.85, 0.7, 0.45, 1.0),
+            ..CubeStyle::default()
+        };
+        if reversed {
+            style.depth_compare = flip(style.depth_compare);
+        }
+        Cubes::new(device, queue, COLOUR, DEPTH, style)
     }
 }
 
@@ -184,11 +197,12 @@ pub(super) struct Worker {
 /// change.
 pub struct VoxelizerScene {
     pub(super) worker: Worker,
-    /// What draws each kind of result, made for the camera's depth direction (on the worker
-    /// with the first result of its kind; on the frame only if the direction flips).
-    pub(super) view: Option<(bool, VoxelView)>,
-    pub(super) marcher: Option<(bool, Raymarcher)>,
-    pub(super) cubes: Option<(bool, Cubes)>,
+    /// What draws each kind of result, made for the camera's depth direction on a worker
+    /// thread (with the first result of its kind; on a worker of its own when the direction
+    /// flips).
+    pub(super) view: Latest<bool, VoxelView>,
+    pub(super) marcher: Latest<bool, Raymarcher>,
+    pub(super) cubes: Latest<bool, Cubes>,
     pub(super) blit: Blit,
     pub(super) slice: Option<Slice>,
     /// The last mesh loaded, by name (the worker loads a new one).
@@ -228,9 +242,9 @@ impl VoxelizerScene {
                 mesh_sdf: Arc::new(mesh_sdf?),
                 balls: Arc::new(balls?),
             },
-            view: None,
-            marcher: None,
-            cubes: None,
+            view: Latest::default(),
+            marcher: Latest::default(),
+            cubes: Latest::default(),
             blit: Blit::new(device, COLOUR),
             slice: None,
             mesh: None,
@@ -244,7 +258,11 @@ impl VoxelizerScene {
 
     /// Work started and not yet shown.
     pub fn busy(&self, s: &VoxelizerSettings) -> bool {
-        self.starting.is_some() || self.shown.as_ref().map(|x| &x.0) != Some(s)
+        self.starting.is_some()
+            || self.shown.as_ref().map(|x| &x.0) != Some(s)
+            || self.view.busy()
+            || self.marcher.busy()
+            || self.cubes.busy()
     }
 
     /// Wait for the worker thread to finish (the soak samples memory at fixed points); the
@@ -253,12 +271,20 @@ impl VoxelizerScene {
         if let Some((s, job)) = self.starting.take() {
             self.starting = Some((s, job.wait()));
         }
+        self.view.wait();
+        self.marcher.wait();
+        self.cubes.wait();
     }
 
     pub(super) fn encode(&mut self, s: &VoxelizerSettings, frame: &mut Frame) -> PanelLines {
         let (device, queue) = (frame.device, frame.queue);
         clear(frame, [0.1, 0.11, 0.13]);
         self.take_started()?;
+        // Drawers a flip of the depth direction asked for, which the shown result may no
+        // longer need: taken when ready all the same.
+        self.view.poll();
+        self.marcher.poll();
+        self.cubes.poll();
         if let Some((failed, e)) = &self.failed
             && failed == s
         {
@@ -285,11 +311,11 @@ impl VoxelizerScene {
         let (worker, settings, mesh) = (self.worker.clone(), s.clone(), self.mesh.clone());
         let kind = DrawerKind::of(s.mode);
         let have = match kind {
-            DrawerKind::View => self.view.as_ref().map(|d| d.0),
-            DrawerKind::March => self.marcher.as_ref().map(|d| d.0),
-            DrawerKind::Cubes => self.cubes.as_ref().map(|d| d.0),
+            DrawerKind::View => self.view.has(&reversed),
+            DrawerKind::March => self.marcher.has(&reversed),
+            DrawerKind::Cubes => self.cubes.has(&reversed),
         };
-        let need = (have != Some(reversed)).then_some((kind, reversed));
+        let need = (!have).then_some((kind, reversed));
         self.failed = None;
         let job = Job::spawn(move || worker.start(settings, mesh, need));
         self.starting = Some((s.clone(), job));
@@ -312,9 +338,9 @@ impl VoxelizerScene {
         }
         self.readout = Some(started.readout);
         match started.drawer {
-            Some((reversed, Drawer::View(v))) => self.view = Some((reversed, v)),
-            Some((reversed, Drawer::March(m))) => self.marcher = Some((reversed, *m)),
-            Some((reversed, Drawer::Cubes(c))) => self.cubes = Some((reversed, c)),
+            Some((reversed, Drawer::View(v))) => self.view.put(reversed, v),
+            Some((reversed, Drawer::March(m))) => self.marcher.put(reversed, *m),
+            Some((reversed, Drawer::Cubes(c))) => self.cubes.put(reversed, c),
             None => {}
         }
         self.slice = started.slice;
@@ -348,13 +374,18 @@ impl VoxelizerScene {
             ));
             match shown {
                 Shown::Attributes(attrs) => {
-                    if self.view.as_ref().map(|v| v.0) != Some(reversed)
-                        && let Drawer::View(v) =
-                            Drawer::make(device, queue, DrawerKind::View, reversed)?
-                    {
-                        self.view = Some((reversed, v));
+                    // The voxel view has no reversed Z: a result being replaced by one that
+                    // draws otherwise is not drawn meanwhile.
+                    if reversed && self.starting.is_some() {
+                        return Ok(());
                     }
-                    let v = &self.view.as_ref().expect("set above").1;
+                    let d = device.clone();
+                    let Some(v) = self
+                        .view
+                        .get(&reversed, move || Drawer::view(&d, reversed))?
+                    else {
+                        return Ok(());
+                    };
                     let light = if s.point_light {
                         let size = glam::DVec3::from(grid.size.map(f64::from)) * grid.voxel;
                         let centre = (grid.origin + size * 0.5).as_vec3();
@@ -380,13 +411,13 @@ impl VoxelizerScene {
                     stats.push(format!("occupied voxels: {}", attrs.count));
                 }
                 Shown::Field(field) => {
-                    if self.marcher.as_ref().map(|m| m.0) != Some(reversed)
-                        && let Drawer::March(m) =
-                            Drawer::make(device, queue, DrawerKind::March, reversed)?
-                    {
-                        self.marcher = Some((reversed, *m));
-                    }
-                    let marcher = &self.marcher.as_ref().expect("set above").1;
+                    let (d, q) = (device.clone(), queue.clone());
+                    let make = move || Drawer::march(&d, &q, reversed);
+                    self.marcher.get(&reversed, make)?;
+                    // One for the other depth direction draws nothing until this one arrives.
+                    let Some(marcher) = self.marcher.ready(&reversed) else {
+                        return Ok(());
+                    };
                     let march = MarchField {
                         march: field.march.as_ref().expect("made with its march copy"),
                         grid: field.grid,
@@ -412,13 +443,11 @@ impl VoxelizerScene {
                     ));
                 }
                 Shown::Cubes(instances, n) => {
-                    if self.cubes.as_ref().map(|c| c.0) != Some(reversed)
-                        && let Drawer::Cubes(c) =
-                            Drawer::make(device, queue, DrawerKind::Cubes, reversed)?
-                    {
-                        self.cubes = Some((reversed, c));
-                    }
-                    let c = &self.cubes.as_ref().expect("set above").1;
+                    let (d, q) = (device.clone(), queue.clone());
+                    let make = move || Drawer::cubes(&d, &q, reversed);
+                    let Some(c) = self.cubes.get(&reversed, make)? else {
+                        return Ok(());
+                    };
                     c.encode(
                         device,
                         &mut *frame.rec,
