@@ -6,9 +6,9 @@ use std::sync::Arc;
 use super::buffers::{Pool, view};
 use super::check::{check_len, check_size_3d, check_volume, voxels};
 use super::options::Marks;
-use crate::bind::ComputePipeline;
+use crate::bind::{ComputePipeline, KeptBound};
 use crate::error::Error;
-use crate::gpu::{Record, uniform_buffer as uniform};
+use crate::gpu::{KeptUniform, Record, uniform_buffer as uniform};
 use crate::shaders::distance::{jfa3_seed, jfa3_step};
 
 /// 3D jump flooding's stages, run alone: [`super::Distance3d::jfa`] (its
@@ -18,6 +18,20 @@ pub struct Jfa3d {
     jump: ComputePipeline<jfa3_step::jump::Entry>,
     jump_points: ComputePipeline<jfa3_step::jump_points::Entry>,
     pool: Arc<Pool>,
+    /// Each step's uniform and bind groups, kept from call to call: a flood run every frame
+    /// on one grid (its field recycled) makes no object a frame.
+    steps: [KeptStep; KEPT_STEPS],
+}
+
+/// Steps whose objects are kept: more than any flood of the largest grid takes (a side of
+/// 2048 floods in 11 halving steps, 13 with JFA+2).
+const KEPT_STEPS: usize = 24;
+
+#[derive(Default)]
+struct KeptStep {
+    params: KeptUniform,
+    jump: KeptBound<jfa3_step::jump::Entry>,
+    jump_points: KeptBound<jfa3_step::jump_points::Entry>,
 }
 
 impl Jfa3d {
@@ -27,6 +41,7 @@ impl Jfa3d {
             jump: ComputePipeline::new(device)?,
             jump_points: ComputePipeline::new(device)?,
             pool,
+            steps: std::array::from_fn(|_| KeptStep::default()),
         })
     }
 
@@ -86,8 +101,11 @@ impl Jfa3d {
         let other = self.pool.field_buffer(device, "jfa ping-pong", size);
         let (mut a, mut b) = (nearest, other);
         let groups = ComputePipeline::<jfa3_step::jump::Entry>::groups_for(size);
-        for &step in steps {
-            let params = uniform(
+        let fresh = KeptStep::default();
+        for (k, &step) in steps.iter().enumerate() {
+            // A step past the kept ones keeps nothing beyond this call.
+            let kept = self.steps.get(k).unwrap_or(&fresh);
+            let params = kept.params.get(
                 device,
                 "jfa jump params",
                 &jfa3_step::JumpParams {
@@ -97,9 +115,10 @@ impl Jfa3d {
             );
             match points {
                 None => {
-                    self.jump.record(
+                    self.jump.record_kept(
                         device,
                         rec,
+                        &kept.jump,
                         &jfa3_step::jump::Resources {
                             params: (&params).into(),
                             src: (&a).into(),
@@ -110,9 +129,10 @@ impl Jfa3d {
                     )?;
                 }
                 Some(pts) => {
-                    self.jump_points.record(
+                    self.jump_points.record_kept(
                         device,
                         rec,
+                        &kept.jump_points,
                         &jfa3_step::jump_points::Resources {
                             params: (&params).into(),
                             src: (&a).into(),

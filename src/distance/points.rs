@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use super::buffers::{Pool, kept_buffer, view};
 use super::check::{check_bytes, check_inside, check_size_3d, voxels};
-use super::resolve::resolve_params;
+use super::resolve::resolve_values;
 use super::{Field3d, MAX_POINTS, PointSeeds, STAGE_3D as STAGE, SeedPacking, Settings3d, Slabs};
 use crate::bind::{ComputePipeline, KeptBound};
 use crate::error::Error;
@@ -25,6 +25,17 @@ pub(crate) struct Points {
     /// The line passes' scratch, uniforms, views and bind groups, kept from call to call: a
     /// field rebuilt every frame on one grid (and recycled) makes no object a frame.
     lines: KeptLines,
+    /// The resolve's, kept the same way.
+    resolved: KeptResolve,
+}
+
+#[derive(Default)]
+struct KeptResolve {
+    params: KeptUniform,
+    inside: KeptView,
+    distance: KeptView,
+    unsigned: KeptBound<field_resolve::resolve_points::Entry>,
+    signed: KeptBound<field_resolve::resolve_points_signed::Entry>,
 }
 
 #[derive(Default)]
@@ -51,6 +62,7 @@ impl Points {
             resolve_points_signed: ComputePipeline::new(device)?,
             pool,
             lines: KeptLines::default(),
+            resolved: KeptResolve::default(),
         })
     }
 
@@ -146,17 +158,20 @@ impl Points {
         inside: Option<&wgpu::Texture>,
         options: &Settings3d,
     ) -> Result<Field3d, Error> {
-        let params = resolve_params(device, size, options);
+        let kept = &self.resolved;
+        let values = resolve_values(size, options);
+        let params = kept.params.get(device, "resolve params", &values);
         let distance = self
             .pool
             .distance_texture(device, size, wgpu::TextureDimension::D3);
-        let dv = view(&distance);
+        let dv = kept.distance.get(&distance, view);
         let groups = ComputePipeline::<field_resolve::resolve_points::Entry>::groups_for(size);
         match inside {
             None => {
-                self.resolve_points.record(
+                self.resolve_points.record_kept(
                     device,
                     rec,
+                    &kept.unsigned,
                     &field_resolve::resolve_points::Resources {
                         params: (&params).into(),
                         nearest: (&nearest).into(),
@@ -168,10 +183,11 @@ impl Points {
                 )?;
             }
             Some(v) => {
-                let vv = view(v);
-                self.resolve_points_signed.record(
+                let vv = kept.inside.get(v, view);
+                self.resolve_points_signed.record_kept(
                     device,
                     rec,
+                    &kept.signed,
                     &field_resolve::resolve_points_signed::Resources {
                         params: (&params).into(),
                         nearest: (&nearest).into(),

@@ -136,27 +136,28 @@ impl Resolver {
     }
 }
 
-/// The resolve parameters of a field of `size` computed with `options`.
+/// The resolve parameters of a field of `size` computed with `options`, in a new uniform.
 pub(crate) fn resolve_params(
     device: &wgpu::Device,
     size: [u32; 3],
     options: &Settings3d,
 ) -> wgpu::Buffer {
+    uniform(device, "resolve params", &resolve_values(size, options))
+}
+
+/// The resolve parameters of a field of `size` computed with `options`.
+pub(crate) fn resolve_values(size: [u32; 3], options: &Settings3d) -> field_resolve::ResolveParams {
     let band = options.world_band();
     let unreached = options.unreached.unwrap_or(Unreached {
         inside: band,
         outside: band,
     });
-    uniform(
-        device,
-        "resolve params",
-        &field_resolve::ResolveParams {
-            size: size.into(),
-            voxel_size: options.voxel_size,
-            band,
-            threshold: options.inside.threshold(),
-            unreached_inside: unreached.inside,
-            unreached_outside: unreached.outside,
-        },
-    )
+    field_resolve::ResolveParams {
+        size: size.into(),
+        voxel_size: options.voxel_size,
+        band,
+        threshold: options.inside.threshold(),
+        unreached_inside: unreached.inside,
+        unreached_outside: unreached.outside,
+    }
 }

@@ -765,12 +765,10 @@ fn no_setting_change_makes_a_pipeline_on_a_frame() {
                 failed.push(format!("{scene}, {name}: {made:?} {error:?}"));
             }
             // Settled, a frame of the new settings makes nothing (the debug cubes' draw, a
-            // G-buffer output, a march mode, the patch overlay included) — except where a
-            // stage still makes its per-frame objects anew (listed below): there it must,
-            // so that this fails when one is fixed and the list is left behind.
+            // G-buffer output, a march mode, the patch overlay, a field by jump flooding).
             let (_, made) = count_here(|| frame(&mut scenes, &changed, scene, 50));
             let made = made.expect("counted above");
-            if (made != Made::default()) != makes_objects_a_frame(scene, &changed) {
+            if made != Made::default() {
                 failed.push(format!("{scene}, {name}, a frame after: {made:?}"));
             }
             settle(
@@ -785,19 +783,6 @@ fn no_setting_change_makes_a_pipeline_on_a_frame() {
     // Each scene offers several.
     assert!(changes >= 40, "{changes} changes");
     assert!(failed.is_empty(), "{}", failed.join("\n"));
-}
-
-/// Settings outside the defaults whose frames still make GPU objects: the metaball field by
-/// jump flooding (`Metaballs::encode` with `Method::Jfa`: the 3D flood's ping-pong buffer, its
-/// parameters and bind groups each step, and the point resolve's, each call).
-fn makes_objects_a_frame(scene: &str, s: &Saved) -> bool {
-    let jfa = matches!(s.actor.field.method, fieldkit::distance::Method::Jfa(_));
-    let cubes_only = s.actor.draw == viewer::scenes::ActorDraw::Cubes;
-    match scene {
-        "actor" => jfa && !cubes_only,
-        "composite" => jfa,
-        _ => false,
-    }
 }
 
 /// The volume's function mode makes its pipelines on a worker thread, the march's for the
