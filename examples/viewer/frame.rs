@@ -3,14 +3,16 @@
 //! the start of recording to the GPU finishing it (record → done), the GPU time of the whole
 //! frame (timestamps written into its encoder before its first pass and after its last, render
 //! passes included) and of its timed passes alone (every compute pass, and the render passes
-//! recorded through a `Recorder`: the ocean's), and the loop's own floor (an empty frame submitted and waited
-//! for, the same way). Besides the steady frames it times the first frame of the scene (its
-//! pipelines made on the spot) and the frame after the screen size changes (the hitch a resize
-//! costs), the frame after a size setting changes and after each settings change the scene's
-//! panel offers ([`setting_changes`]: the frame of the change and the most CPU of the frames
-//! until the scene settles). Medians with min–max over FRAMES frames after 30 frames of warm-up; then the GPU
-//! objects (buffers, textures, views, bind groups) the most any of 5 more frames creates,
-//! counted as wgpu-core creates them ([`super::made`]).
+//! recorded through a `Recorder`: the ocean's), and the loop's own floor (an empty frame
+//! submitted and waited for, the same way). Medians with min–max over FRAMES frames after 30
+//! frames of warm-up; then the GPU objects (buffers, textures, views, bind groups) the most any
+//! of 5 more frames creates, counted as wgpu-core creates them ([`super::made`]).
+//!
+//! Besides the steady frames it times the first frame of the scene and the time until the
+//! scene draws whole (what it makes on worker threads arrived); the frames after the screen
+//! shrinks and grows (the hitch a resize costs); and the frame after a size setting changes
+//! and after each settings change the scene's panel offers ([`setting_changes`]), with the
+//! most CPU of the frames until the scene settles.
 //!
 //! `cargo xtask bench frame` runs it for every scene and writes `frame.csv` and
 //! `frame_settings.csv`; on its own it prints a table (`--out DIR` writes the CSVs there too).
@@ -94,6 +96,14 @@ pub struct FrameCost {
     /// The frame after the screen size changed: CPU, and wall.
     pub resize_cpu_ms: f64,
     pub resize_wall_ms: f64,
+    /// The frame after the screen grows to 110 % of the first size (past what the images
+    /// sized to the target were made for): CPU, and wall; and the CPU of the resize itself,
+    /// outside the frame: the app's own targets, then the images fieldkit's renderers draw
+    /// with (`Scenes::resized`).
+    pub grow_cpu_ms: f64,
+    pub grow_wall_ms: f64,
+    pub grow_targets_ms: f64,
+    pub grow_reserve_ms: f64,
     /// The frame after a size setting changed ([`size_change`]): CPU, and wall; and the most
     /// CPU any of the frames after it took (five, or until the scene settled: a new cloud made
     /// on a worker thread arrived).
@@ -322,7 +332,9 @@ fn measure(
         hitch(ctx, &mut scenes, &changed, scene, &at, "size")?;
     // Each settings change the panel offers, from the saved settings and back.
     let mut settings = Vec::new();
-    for (k, (name, changed)) in setting_changes(scene, saved).into_iter().enumerate() {
+    let changes = setting_changes(scene, saved);
+    let grow_at = n + (changes.len() as u32 + 1) * 2 * AFTER_CHANGE_MAX;
+    for (k, (name, changed)) in changes.into_iter().enumerate() {
         let at = Shot {
             number: n + (k as u32 + 1) * 2 * AFTER_CHANGE_MAX,
             ..at
@@ -334,6 +346,17 @@ fn measure(
         };
         hitch(ctx, &mut scenes, saved, scene, &back, "back")?;
     }
+    // The window grows past its first size: the app remakes its targets and has the
+    // renderers make the images they draw with at the new size (outside the frame), then
+    // draws.
+    let grown = [size[0] * 11 / 10, size[1] * 11 / 10];
+    let start = Instant::now();
+    let big = Targets::new(&ctx.device, grown, COLOUR, DEPTH);
+    let grow_targets_ms = start.elapsed().as_secs_f64() * 1e3;
+    let start = Instant::now();
+    scenes.resized(&ctx.device, grown);
+    let grow_reserve_ms = start.elapsed().as_secs_f64() * 1e3;
+    let grown_frame = timed_frame(ctx, &mut scenes, saved, scene, &big, grown, grow_at, None)?;
     let floor = (0..frames)
         .map(|_| {
             let start = Instant::now();
@@ -363,6 +386,10 @@ fn measure(
         gpu_compute: Spread::of(gpu),
         resize_cpu_ms,
         resize_wall_ms,
+        grow_cpu_ms: grown_frame.cpu,
+        grow_wall_ms: grown_frame.wall,
+        grow_targets_ms,
+        grow_reserve_ms,
         change_cpu_ms: change.cpu_ms,
         change_wall_ms: change.wall_ms,
         after_change_cpu_ms: change.after_cpu_ms,
@@ -600,7 +627,7 @@ fn gpu_frame_times(
 fn print_table(adapter: &str, costs: &[FrameCost]) {
     println!("frame cost on {adapter}");
     println!(
-        "| scene | size | CPU record + submit ms | of which in fieldkit's calls ms | of which finish + submit ms | record → done ms | GPU frame ms | GPU timed passes ms | loop floor CPU / wall ms | frames > {SLOW_CPU_MS} ms CPU | first frame / whole scene ms | resize frame CPU / wall ms | size change CPU / wall ms, then CPU at most | made a frame: buffers / textures / views / bind groups |"
+        "| scene | size | CPU record + submit ms | of which in fieldkit's calls ms | of which finish + submit ms | record → done ms | GPU frame ms | GPU timed passes ms | loop floor CPU / wall ms | frames > {SLOW_CPU_MS} ms CPU | first frame / whole scene ms | resize frame CPU / wall ms, shrunk; grown (the resize itself, CPU: the app's targets + fieldkit's images) | size change CPU / wall ms, then CPU at most | made a frame: buffers / textures / views / bind groups |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     let s = |x: &Spread| format!("{:.3} ({:.3}–{:.3})", x.median, x.min, x.max);
@@ -613,7 +640,7 @@ fn print_table(adapter: &str, costs: &[FrameCost]) {
             .as_ref()
             .map_or(String::new(), |e| format!(" error: {e}"));
         println!(
-            "| {} | {}×{} | {} | {} | {} | {} | {} | {} | {} | {} | {:.1} / {:.1} | {r_cpu:.2} / {r_wall:.2} | {c_cpu:.2} / {c_wall:.2}, {after:.2} | {made} |{error}",
+            "| {} | {}×{} | {} | {} | {} | {} | {} | {} | {} | {} | {:.1} / {:.1} | {r_cpu:.2} / {r_wall:.2}; {:.2} / {:.2} ({:.2} + {:.2}) | {c_cpu:.2} / {c_wall:.2}, {after:.2} | {made} |{error}",
             c.scene,
             c.size[0],
             c.size[1],
@@ -627,6 +654,10 @@ fn print_table(adapter: &str, costs: &[FrameCost]) {
             c.slow_frames,
             c.first_ms,
             c.whole_ms,
+            c.grow_cpu_ms,
+            c.grow_wall_ms,
+            c.grow_targets_ms,
+            c.grow_reserve_ms,
         );
     }
     for c in costs.iter().filter(|c| !c.settings.is_empty()) {
@@ -701,11 +732,11 @@ fn write_csv(path: &Path, adapter: &str, start: &str, costs: &[FrameCost]) -> Re
          floor_ms_min,floor_ms_max,slow_cpu_frames,first_frame_ms,resize_cpu_ms,resize_wall_ms,\
          change_cpu_ms,change_wall_ms,after_change_cpu_ms,made_buffers,made_textures,made_views,made_bind_groups,\
          floor_cpu_ms_median,floor_cpu_ms_min,floor_cpu_ms_max,submit_ms_median,submit_ms_min,submit_ms_max,\
-         fieldkit_ms_median,fieldkit_ms_min,fieldkit_ms_max,whole_scene_ms\n",
+         fieldkit_ms_median,fieldkit_ms_min,fieldkit_ms_max,whole_scene_ms,grow_cpu_ms,grow_wall_ms,grow_targets_ms,grow_reserve_ms\n",
     );
     for c in costs {
         text += &format!(
-            "\"{adapter}\",{start},{},{},{},{},{},{},{},{},{},{:.3},{},{},{},{},{},{:.3}\n",
+            "\"{adapter}\",{start},{},{},{},{},{},{},{},{},{},{:.3},{},{},{},{},{},{:.3},{:.4},{:.4},{:.4},{:.4}\n",
             c.scene,
             c.size[0],
             c.size[1],
@@ -722,6 +753,10 @@ fn write_csv(path: &Path, adapter: &str, start: &str, costs: &[FrameCost]) -> Re
             c.submit.csv(),
             c.fieldkit.as_ref().map_or(",,".into(), Spread::csv),
             c.whole_ms,
+            c.grow_cpu_ms,
+            c.grow_wall_ms,
+            c.grow_targets_ms,
+            c.grow_reserve_ms,
         );
     }
     std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))

@@ -402,6 +402,7 @@ impl Viewer {
         let (device, queue) = (&rs.device, &rs.queue);
         if self.targets.as_ref().map(|t| t.0) != Some(size) {
             let targets = Targets::new(device, size, COLOUR, DEPTH);
+            self.scenes.resized(device, size);
             let mut r = rs.renderer.write();
             let id = match &self.targets {
                 Some((_, _, id)) => {

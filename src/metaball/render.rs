@@ -286,6 +286,22 @@ impl Raymarcher {
         })
     }
 
+    /// Make the march's images for a viewport of this size ahead, where the kept ones do not
+    /// serve it (a window grown past them): the first march of that size then makes none. A
+    /// pair of screen-sized images can cost milliseconds where the driver takes new memory
+    /// for them (the actor's frame after its window grew to 2112×1188: 5–6 ms on the H200), so
+    /// an app calls this where it remakes its own targets, or on another thread.
+    ///
+    /// ```no_run
+    /// # fn f(device: &wgpu::Device, raymarcher: &fieldkit::metaball::Raymarcher) {
+    /// // In the app's resize handler, beside its own targets.
+    /// raymarcher.reserve(device, [2560, 1440]);
+    /// # }
+    /// ```
+    pub fn reserve(&self, device: &wgpu::Device, viewport: [u32; 2]) {
+        let _ = self.scratch(device, viewport);
+    }
+
     /// Images the march writes for a target of `size`: the kept ones where they still serve it
     /// ([`gpu::screen_fits`](crate::gpu::screen_fits): a window resized by a little keeps
     /// them), else new ones at [`gpu::screen_rounded`](crate::gpu::screen_rounded) of it.

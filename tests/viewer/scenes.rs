@@ -588,6 +588,11 @@ fn frame_cost_measures_every_part_of_a_frame() {
             col(row, "resize_wall_ms") >= col(row, "resize_cpu_ms"),
             "{row:?}"
         );
+        let grow_cpu = col(row, "grow_cpu_ms");
+        assert!(
+            grow_cpu > 0.0 && col(row, "grow_wall_ms") >= grow_cpu,
+            "{row:?}"
+        );
         // The whole frame on the GPU holds its timed passes (llvmpipe has timestamps inside
         // encoders; the viewer's blit and lines are timed as the techniques' passes are). Both
         // are medians of frames of their own: where the timed passes are most of the frame (the

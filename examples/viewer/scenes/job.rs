@@ -144,6 +144,11 @@ impl<K: PartialEq + Clone, T: Send + 'static> Latest<K, T> {
         self.current = Some((key, value));
     }
 
+    /// The value in use (made for the key last asked for, or an earlier one).
+    pub fn current(&self) -> Option<&T> {
+        self.current.as_ref().map(|c| &c.1)
+    }
+
     /// The value in use if it was made for `key`.
     pub fn ready(&self, key: &K) -> Option<&T> {
         self.current.as_ref().filter(|c| &c.0 == key).map(|c| &c.1)

@@ -18,7 +18,7 @@ const SIZE: u32 = 32;
 #[test]
 fn the_users_function_is_marched_to_its_closed_form() {
     let ctx = Context::shared();
-    let march = Ramp::new(&ctx.device).expect("the user's density march");
+    let march = Ramp::new(&ctx.device, &ctx.queue).expect("the user's density march");
     let volume = FunctionVolume {
         min: Vec3::splat(-0.5),
         max: Vec3::splat(0.5),
