@@ -81,13 +81,11 @@ impl<T> Drop for Job<T> {
 
 /// A value made on a worker thread for a key (a renderer for some settings): the last one
 /// made keeps serving while the next is made, so a change of settings never waits for it. A
-/// key whose making failed gives its error, without trying again, until the key changes.
+/// key whose making failed gives that error whenever it is asked for, without trying again.
 pub struct Latest<K, T> {
     current: Option<(K, T)>,
     next: Option<(K, Job<Result<T, Error>>)>,
     failed: Option<(K, Error)>,
-    /// The key last asked for.
-    wanted: Option<K>,
 }
 
 impl<K, T> Default for Latest<K, T> {
@@ -96,7 +94,6 @@ impl<K, T> Default for Latest<K, T> {
             current: None,
             next: None,
             failed: None,
-            wanted: None,
         }
     }
 }
@@ -111,7 +108,6 @@ impl<K: PartialEq + Clone, T: Send + 'static> Latest<K, T> {
         key: &K,
         make: impl FnOnce() -> Result<T, Error> + Send + 'static,
     ) -> Result<Option<&mut T>, Error> {
-        self.wanted = Some(key.clone());
         self.poll();
         if let Some((k, e)) = &self.failed
             && k == key
@@ -164,11 +160,11 @@ impl<K: PartialEq + Clone, T: Send + 'static> Latest<K, T> {
         self.current.as_ref().is_some_and(|c| &c.0 == key)
     }
 
-    /// Whether the key last asked for has neither its value nor an error yet.
+    /// Whether a value is being made, or is made and not yet taken. A scene that asks for a
+    /// key every frame starts its making the frame the previous one is taken, so between its
+    /// frames it is busy until the value it asks for is there; one that stopped asking is not.
     pub fn busy(&self) -> bool {
-        self.wanted
-            .as_ref()
-            .is_some_and(|k| !self.has(k) && !self.failed.as_ref().is_some_and(|(f, _)| f == k))
+        self.next.is_some()
     }
 
     /// Wait for the value being made (headless runs that need a settled scene); the next
