@@ -268,14 +268,14 @@ impl Distance2dScene {
             let view = texture.create_view(&Default::default());
             self.shown = Some((p.key, view, wrong, worst));
         }
-        // Start a new computation when the settings changed and none is running.
+        // Start a new computation when the settings changed, none is running and the
+        // pipelines it needs are made (a worker makes them meanwhile; the last field stays
+        // shown).
         if self.pending.is_none()
             && self.recorded.is_none()
             && self.shown.as_ref().map(|x| &x.0) != Some(s)
+            && self.prepare(device, s)?
         {
-            if !self.prepare(device, s)? {
-                return Ok(vec!["the method's pipelines are being made".into()]);
-            }
             let [w, h] = s.size;
             let mask = upload_mask(device, queue, &s.mask()?, w, h)?;
             // Each method's passes grouped under its name: the panel adds up what each costs.
@@ -298,6 +298,9 @@ impl Distance2dScene {
             });
         }
         let mut stats = vec![format!("seeds: {}", s.seeds.len())];
+        if self.preparing.is_some() {
+            stats.push("the method's pipelines are being made on a worker thread".into());
+        }
         if let Some((key, view, wrong, worst)) = &self.shown {
             let rect = field_rect(frame.size, key.size);
             self.blit.encode(
