@@ -354,7 +354,7 @@ fn measure(
     let big = Targets::new(&ctx.device, grown, COLOUR, DEPTH);
     let grow_targets_ms = start.elapsed().as_secs_f64() * 1e3;
     let start = Instant::now();
-    scenes.resized(&ctx.device, grown);
+    scenes.resized(&ctx.device, grown)?;
     let grow_reserve_ms = start.elapsed().as_secs_f64() * 1e3;
     let grown_frame = timed_frame(ctx, &mut scenes, saved, scene, &big, grown, grow_at, None)?;
     let floor = (0..frames)

@@ -402,7 +402,11 @@ impl Viewer {
         let (device, queue) = (&rs.device, &rs.queue);
         if self.targets.as_ref().map(|t| t.0) != Some(size) {
             let targets = Targets::new(device, size, COLOUR, DEPTH);
-            self.scenes.resized(device, size);
+            // The size is clamped to 16–4096 above, within every device's 2D textures; were
+            // it refused, the frame's own march would make the images instead.
+            if let Err(e) = self.scenes.resized(device, size) {
+                eprintln!("viewer: images for {size:?} not made ahead: {e}");
+            }
             let mut r = rs.renderer.write();
             let id = match &self.targets {
                 Some((_, _, id)) => {

@@ -30,7 +30,7 @@ pub use readback::{
     readback_texture_in,
 };
 pub use targets::{GBUFFER_FORMATS, clear_depth, depth_cleared, target_bytes_per_sample};
-pub(crate) use targets::{check_target_bytes, screen_fits, screen_rounded};
+pub(crate) use targets::{check_screen, check_target_bytes, screen_fits, screen_rounded};
 pub use timing::{Profiler, Record, Recorder, Timer};
 pub use upload::RING_UPLOADS;
 #[cfg(feature = "techniques")]

@@ -76,6 +76,29 @@ pub(crate) fn screen_rounded(size: [u32; 2]) -> [u32; 2] {
     size.map(|n| n.div_ceil(SCREEN_STEP).max(1) * SCREEN_STEP)
 }
 
+/// A typed error unless an image for a screen of `size` can be made on `device` (for a
+/// stage's `reserve`: each side at least 1 and, rounded up as [`screen_rounded`] makes it, at
+/// most the device's largest 2D texture).
+// Used by the techniques' renderers.
+#[cfg_attr(not(feature = "techniques"), allow(dead_code))]
+pub(crate) fn check_screen(
+    device: &wgpu::Device,
+    stage: &'static str,
+    size: [u32; 2],
+) -> Result<(), crate::error::Error> {
+    let max = device.limits().max_texture_dimension_2d;
+    let widest = screen_rounded(size).into_iter().max().unwrap_or(0);
+    if size.contains(&0) || widest > max {
+        return Err(crate::error::Error::Size {
+            stage,
+            what: "screen side, rounded up to 128 pixels (each side at least 1)",
+            got: if size.contains(&0) { 0 } else { widest as u64 },
+            max: max as u64,
+        });
+    }
+    Ok(())
+}
+
 /// Whether a kept image of `kept` pixels serves targets of `size`: it holds them and is not
 /// over twice the area a new one would be made at ([`screen_rounded`]), so a window shrunk a
 /// long way gets its memory back.

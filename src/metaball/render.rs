@@ -293,13 +293,17 @@ impl Raymarcher {
     /// an app calls this where it remakes its own targets, or on another thread.
     ///
     /// ```no_run
-    /// # fn f(device: &wgpu::Device, raymarcher: &fieldkit::metaball::Raymarcher) {
+    /// # fn f(device: &wgpu::Device, raymarcher: &fieldkit::metaball::Raymarcher) -> Result<(), fieldkit::Error> {
     /// // In the app's resize handler, beside its own targets.
-    /// raymarcher.reserve(device, [2560, 1440]);
-    /// # }
+    /// raymarcher.reserve(device, [2560, 1440])?;
+    /// # Ok(()) }
     /// ```
-    pub fn reserve(&self, device: &wgpu::Device, viewport: [u32; 2]) {
+    ///
+    /// A viewport with a zero side or wider than the device's 2D textures is a typed error.
+    pub fn reserve(&self, device: &wgpu::Device, viewport: [u32; 2]) -> Result<(), Error> {
+        crate::gpu::check_screen(device, sdf_raymarch::STAGE, viewport)?;
         let _ = self.scratch(device, viewport);
+        Ok(())
     }
 
     /// Images the march writes for a target of `size`: the kept ones where they still serve it

@@ -448,9 +448,12 @@ impl VolumeRenderer {
     /// Make the march's output image for a `viewport` of this size ahead, on any thread: the
     /// first [`Self::encode_march`] of that size then makes no texture (a new texture costs
     /// the frame milliseconds where the driver takes a new block of memory for it: 4.2 ms for
-    /// 1920×1080 on the H200). Kept as a march's own output is, while it still serves.
-    pub fn reserve(&self, device: &wgpu::Device, viewport: [u32; 2]) {
+    /// 1920×1080 on the H200). Kept as a march's own output is, while it still serves. A
+    /// viewport with a zero side or wider than the device's 2D textures is a typed error.
+    pub fn reserve(&self, device: &wgpu::Device, viewport: [u32; 2]) -> Result<(), Error> {
+        crate::gpu::check_screen(device, STAGE, viewport)?;
         let _ = kept::march_target(&self.kept.marched, device, viewport);
+        Ok(())
     }
 
     /// Whether the march pipelines `settings` need are made ([`Self::prepare`]).

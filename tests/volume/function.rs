@@ -385,7 +385,21 @@ fn prepare_makes_the_march_pipelines_ahead() {
     // Its image made ahead too: the march makes no texture (wgpu counts texture memory; its
     // texture count misses textures made through the device).
     let textures = || ctx.device.get_internal_counters().hal.texture_memory.read();
-    cloud.reserve(&ctx.device, view.viewport);
+    cloud.reserve(&ctx.device, view.viewport).unwrap();
+    // A viewport with a zero side, or wider than the device's 2D textures, is refused.
+    let widest = ctx.device.limits().max_texture_dimension_2d + 1;
+    for bad in [[0, 8], [widest, 8]] {
+        let refused = cloud.reserve(&ctx.device, bad);
+        assert!(
+            matches!(refused, Err(fieldkit::Error::Size { .. })),
+            "{bad:?}: {refused:?}"
+        );
+        let refused = renderer.reserve(&ctx.device, bad);
+        assert!(
+            matches!(refused, Err(fieldkit::Error::Size { .. })),
+            "{bad:?}: {refused:?}"
+        );
+    }
     let reserved = textures();
     let image = march(&ctx, &cloud, &volume, &tf, &view, &mip);
     assert_eq!(pipelines(), made, "the march made a pipeline");

@@ -323,18 +323,19 @@ impl Scenes {
     /// The screen is now `size`: make the images the scenes' raymarchers and volume marches
     /// write at that size where the kept ones no longer serve it, as an app does where it
     /// remakes its own targets, so that the frame after a resize makes none.
-    pub fn resized(&self, device: &wgpu::Device, size: [u32; 2]) {
+    pub fn resized(&self, device: &wgpu::Device, size: [u32; 2]) -> Result<(), Error> {
         let actors = [&self.actor, &self.island].into_iter().flatten();
         let voxelizer = self.voxelizer.as_ref().and_then(|v| v.marcher.current());
         for m in actors.filter_map(|a| a.marcher.current()).chain(voxelizer) {
-            m.reserve(device, size);
+            m.reserve(device, size)?;
         }
         if let Some(v) = &self.volume {
-            v.renderer.reserve(device, size);
+            v.renderer.reserve(device, size)?;
             if let Some(c) = &v.cloud {
-                c.reserve(device, size);
+                c.reserve(device, size)?;
             }
         }
+        Ok(())
     }
 
     /// Voxelizations the voxelizer scene has shown.

@@ -225,7 +225,7 @@ impl VolumeScene {
                 Job::spawn(move || {
                     let cloud = CloudMarch::cloud(&device, &queue)?;
                     cloud.prepare(&device, &march)?;
-                    cloud.reserve(&device, viewport);
+                    cloud.reserve(&device, viewport)?;
                     Ok(cloud)
                 })
             });
