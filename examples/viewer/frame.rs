@@ -328,8 +328,8 @@ fn measure(
         size: resized,
         number: n,
     };
-    let (change, (change_stats, slowest_after_change)) =
-        hitch(ctx, &mut scenes, &changed, scene, &at, "size")?;
+    let (change, change_stats) = hitch(ctx, &mut scenes, &changed, scene, &at, "size")?;
+    let slowest_after_change = change.slowest.clone();
     // Each settings change the panel offers, from the saved settings and back.
     let mut settings = Vec::new();
     let changes = setting_changes(scene, saved);
@@ -499,7 +499,7 @@ struct Shot<'a> {
 /// Draw `changed` from frame `at.number` on: the frame of the change, then five more and on
 /// until what the scene makes elsewhere for it (a cloud, a pipeline on a worker thread) has
 /// arrived and been drawn. What they cost; the change frame's readouts, and which later frame
-/// took the most CPU with its readouts.
+/// took the most CPU with its readouts (in the `Hitch`).
 fn hitch(
     ctx: &Context,
     scenes: &mut Scenes,
@@ -507,7 +507,7 @@ fn hitch(
     scene: &str,
     at: &Shot,
     name: &str,
-) -> Result<(Hitch, (Vec<String>, (u32, Vec<String>))), fieldkit::Error> {
+) -> Result<(Hitch, Vec<String>), fieldkit::Error> {
     let frame = |scenes: &mut Scenes, k: u32| {
         let n = at.number + k;
         timed_frame(ctx, scenes, changed, scene, at.targets, at.size, n, None)
@@ -534,10 +534,10 @@ fn hitch(
         cpu_ms: change.cpu,
         wall_ms: change.wall,
         after_cpu_ms,
-        slowest: (slowest, slowest_stats.clone()),
+        slowest: (slowest, slowest_stats),
         error,
     };
-    Ok((hitch, (change.stats, (slowest, slowest_stats))))
+    Ok((hitch, change.stats))
 }
 
 /// `saved` with the size setting of `scene` changed, as a user drags a slider: the actor's

@@ -10,16 +10,13 @@
 use std::sync::Arc;
 
 use super::buffers::{Pool, view};
-use super::check::{check_inside, check_len, check_size_3d, check_volume, voxels};
+use super::check::{check_len, check_size_3d, check_volume, voxels};
 use super::exact::Exact;
 use super::jfa3d::Jfa3d;
 use super::options::Marks;
-use super::points::Points;
+use super::points::{PointField, Points};
 use super::resolve::{Fuse, Resolver};
-use super::{
-    ColumnPasses, Field3d, FieldBuf2d, Method, PointSeeds, STAGE_3D as STAGE, SeedPacking,
-    Settings3d, Slabs,
-};
+use super::{ColumnPasses, Field3d, FieldBuf2d, Method, PointSeeds, STAGE_3D as STAGE, Settings3d};
 use crate::error::Error;
 use crate::gpu::{Record, Recorder};
 
@@ -189,13 +186,7 @@ impl Distance3d {
             nearest_outside.as_ref(),
             options,
         )?;
-        Ok(Field3d {
-            size,
-            packing: SeedPacking::STANDARD,
-            nearest: Slabs::one(nearest, size[2]),
-            nearest_outside: nearest_outside.map(|b| Slabs::one(b, size[2])),
-            distance,
-        })
+        Ok(Field3d::whole(size, nearest, nearest_outside, distance))
     }
 
     /// Resolve stage alone: packed nearest seeds (and, for signed, the outside field) to distance.
@@ -239,10 +230,9 @@ impl Distance3d {
         inside: Option<&wgpu::Texture>,
         options: &Settings3d,
     ) -> Result<Field3d, Error> {
-        let keys = self
-            .points
-            .seed(device, rec, points, size, inside, options)?;
-        self.encode_keyed_points(device, rec, keys, &points.buffer, size, inside, options)
+        let field = PointField::checked(device, &points.buffer, size, inside, options)?;
+        let keys = self.points.seed(device, rec, points, size)?;
+        self.flood_points(device, rec, keys, field)
     }
 
     /// Flood and resolve a field of seed keys that a caller's stage wrote itself: `keys` holds,
@@ -260,32 +250,38 @@ impl Distance3d {
         inside: Option<&wgpu::Texture>,
         options: &Settings3d,
     ) -> Result<Field3d, Error> {
-        options.check()?;
-        check_size_3d(device, size)?;
-        options.check_points()?;
+        let field = PointField::checked(device, points, size, inside, options)?;
         check_len(STAGE, "keys", &keys, voxels(size) * 4, size)?;
-        check_inside(device, inside, size)?;
+        self.flood_points(device, rec, keys, field)
+    }
+
+    /// The flood of checked point keys by the method the settings name, and its resolve.
+    fn flood_points(
+        &self,
+        device: &wgpu::Device,
+        rec: &mut impl Record,
+        keys: wgpu::Buffer,
+        field: PointField,
+    ) -> Result<Field3d, Error> {
+        let PointField {
+            points,
+            size,
+            options,
+            ..
+        } = field;
         match (options.method, options.band) {
             (Method::Jfa(variant), _) => {
                 let steps = options.steps(variant, size.into_iter().max().unwrap());
                 let nearest =
                     self.jfa
                         .encode_flood(device, rec, keys, size, &steps, Some(points))?;
-                self.points
-                    .resolve(device, rec, nearest, points, size, inside, options)
+                self.points.resolve(device, rec, nearest, field)
             }
             // The line passes resolve in their last pass.
             (Method::Lines, Some(band)) => {
-                let (nearest, distance) = self
-                    .points
-                    .encode_lines(device, rec, keys, points, size, inside, options, band)?;
-                Ok(Field3d {
-                    size,
-                    packing: SeedPacking::STANDARD,
-                    nearest: Slabs::one(nearest, size[2]),
-                    nearest_outside: None,
-                    distance,
-                })
+                let (nearest, distance) =
+                    self.points.encode_lines(device, rec, keys, field, band)?;
+                Ok(Field3d::whole(size, nearest, None, distance))
             }
             // `check_points` refuses the rest.
             _ => unreachable!("checked by Settings3d::check_points"),

@@ -79,6 +79,26 @@ pub struct Field3d {
     pub distance: wgpu::Texture,
 }
 
+impl Field3d {
+    /// A field held whole (one buffer per seed set, [`Slabs::one`]) with its seeds packed the
+    /// standard way: what every method but the exact transform past 2048 × 2048 × 1024 makes,
+    /// and what a stage that wrote its own keys and distances hands to `recycle`.
+    pub fn whole(
+        size: [u32; 3],
+        nearest: wgpu::Buffer,
+        nearest_outside: Option<wgpu::Buffer>,
+        distance: wgpu::Texture,
+    ) -> Self {
+        Self {
+            size,
+            packing: SeedPacking::STANDARD,
+            nearest: Slabs::one(nearest, size[2]),
+            nearest_outside: nearest_outside.map(|b| Slabs::one(b, size[2])),
+            distance,
+        }
+    }
+}
+
 /// A 2D field from the exact transform (nearest seeds in a buffer, packed 16/16 bits).
 #[derive(Debug)]
 pub struct FieldBuf2d {

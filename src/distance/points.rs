@@ -6,11 +6,79 @@ use std::sync::Arc;
 use super::buffers::{Pool, kept_buffer, view};
 use super::check::{check_bytes, check_inside, check_size_3d, voxels};
 use super::resolve::resolve_values;
-use super::{Field3d, MAX_POINTS, PointSeeds, STAGE_3D as STAGE, SeedPacking, Settings3d, Slabs};
+use super::{Field3d, MAX_POINTS, PointSeeds, STAGE_3D as STAGE, Settings3d};
 use crate::bind::{ComputePipeline, KeptBound};
 use crate::error::Error;
 use crate::gpu::{KeptUniform, KeptView, Record, uniform_buffer as uniform};
 use crate::shaders::distance::{field_resolve, jfa3_seed_points, point_lines};
+
+/// Record `$plain` (a pipeline of `self` named as its entry point in `$module`) with the
+/// fields given over the grid of `$field` (a [`PointField`]), or where the field has an inside
+/// test its signed twin `$signed`, which binds the same and the inside test as `volume`. The
+/// bind groups and views are kept in `$kept`. The resolving passes come in such pairs because
+/// an entry point's layout holds only what it reads.
+macro_rules! record_signed {
+    ($this:ident, $device:expr, $rec:expr, $field:expr, $kept:ident,
+        $module:ident { $($name:ident: $value:expr),* $(,)? },
+        $plain:ident / $plain_groups:ident, $signed:ident / $signed_groups:ident,
+        $label:expr $(,)?) => {{
+        let groups = ComputePipeline::<$module::$plain::Entry>::groups_for($field.size);
+        match $field.inside {
+            None => $this.$plain.record_kept(
+                $device,
+                $rec,
+                &$kept.$plain_groups,
+                &$module::$plain::Resources { $($name: $value.into()),* },
+                groups,
+                $label,
+            )?,
+            Some(v) => $this.$signed.record_kept(
+                $device,
+                $rec,
+                &$kept.$signed_groups,
+                &$module::$signed::Resources {
+                    volume: (&$kept.inside.get(v, view)).into(),
+                    $($name: $value.into()),*
+                },
+                groups,
+                $label,
+            )?,
+        }
+    }};
+}
+
+/// What the flood and resolve of sub-voxel seeds read: the points (vec4 each, voxel
+/// coordinates), the grid, the inside test of a signed field and the settings.
+#[derive(Clone, Copy)]
+pub(crate) struct PointField<'a> {
+    pub points: &'a wgpu::Buffer,
+    pub size: [u32; 3],
+    pub inside: Option<&'a wgpu::Texture>,
+    pub options: &'a Settings3d,
+}
+
+impl<'a> PointField<'a> {
+    /// The field of `points` on the grid of `size`, checked: the settings, the grid, a method
+    /// that takes points, and the inside test's size.
+    pub(crate) fn checked(
+        device: &wgpu::Device,
+        points: &'a wgpu::Buffer,
+        size: [u32; 3],
+        inside: Option<&'a wgpu::Texture>,
+        options: &'a Settings3d,
+    ) -> Result<Self, Error> {
+        options.check()?;
+        check_size_3d(device, size)?;
+        options.check_points()?;
+        check_inside(device, inside, size)?;
+        Ok(Self {
+            points,
+            size,
+            inside,
+            options,
+        })
+    }
+}
 
 /// The pipelines of sub-voxel seeds: placing them, the line passes and the resolve from points.
 pub(crate) struct Points {
@@ -75,12 +143,7 @@ impl Points {
         rec: &mut impl Record,
         points: &PointSeeds,
         size: [u32; 3],
-        inside: Option<&wgpu::Texture>,
-        options: &Settings3d,
     ) -> Result<wgpu::Buffer, Error> {
-        options.check()?;
-        check_size_3d(device, size)?;
-        options.check_points()?;
         if points.count == 0
             || points.count > MAX_POINTS
             || points.buffer.size() < points.count as u64 * 16
@@ -92,7 +155,6 @@ impl Points {
                 max: (points.buffer.size() / 16).min(MAX_POINTS as u64),
             });
         }
-        check_inside(device, inside, size)?;
         let seeds = self.pool.field_buffer(device, "nearest seed", size);
         rec.recorder().encoder.clear_buffer(&seeds, 0, None);
         if let Some(h) = &points.homes
@@ -145,85 +207,66 @@ impl Points {
         Ok(seeds)
     }
 
+    /// A distance texture for a field of `size` (one handed back where it fits) and its view,
+    /// kept in `views`.
+    fn distance_out(
+        &self,
+        device: &wgpu::Device,
+        size: [u32; 3],
+        views: &KeptView,
+    ) -> (wgpu::Texture, wgpu::TextureView) {
+        let distance = self
+            .pool
+            .distance_texture(device, size, wgpu::TextureDimension::D3);
+        let dv = views.get(&distance, view);
+        (distance, dv)
+    }
+
     /// Distances from the points that `nearest` names (flooded keys), signed where `inside` is
     /// given.
-    #[allow(clippy::too_many_arguments)]
     pub(crate) fn resolve(
         &self,
         device: &wgpu::Device,
         rec: &mut impl Record,
         nearest: wgpu::Buffer,
-        points: &wgpu::Buffer,
-        size: [u32; 3],
-        inside: Option<&wgpu::Texture>,
-        options: &Settings3d,
+        field: PointField,
     ) -> Result<Field3d, Error> {
+        let (points, size) = (field.points, field.size);
         let kept = &self.resolved;
-        let values = resolve_values(size, options);
+        let values = resolve_values(size, field.options);
         let params = kept.params.get(device, "resolve params", &values);
-        let distance = self
-            .pool
-            .distance_texture(device, size, wgpu::TextureDimension::D3);
-        let dv = kept.distance.get(&distance, view);
-        let groups = ComputePipeline::<field_resolve::resolve_points::Entry>::groups_for(size);
-        match inside {
-            None => {
-                self.resolve_points.record_kept(
-                    device,
-                    rec,
-                    &kept.unsigned,
-                    &field_resolve::resolve_points::Resources {
-                        params: (&params).into(),
-                        nearest: (&nearest).into(),
-                        points: points.into(),
-                        distance: (&dv).into(),
-                    },
-                    groups,
-                    "resolve",
-                )?;
-            }
-            Some(v) => {
-                let vv = kept.inside.get(v, view);
-                self.resolve_points_signed.record_kept(
-                    device,
-                    rec,
-                    &kept.signed,
-                    &field_resolve::resolve_points_signed::Resources {
-                        params: (&params).into(),
-                        nearest: (&nearest).into(),
-                        points: points.into(),
-                        volume: (&vv).into(),
-                        distance: (&dv).into(),
-                    },
-                    groups,
-                    "resolve",
-                )?;
-            }
-        }
-        Ok(Field3d {
-            size,
-            packing: SeedPacking::STANDARD,
-            nearest: Slabs::one(nearest, size[2]),
-            nearest_outside: None,
-            distance,
-        })
+        let (distance, dv) = self.distance_out(device, size, &kept.distance);
+        record_signed!(
+            self,
+            device,
+            rec,
+            field,
+            kept,
+            field_resolve {
+                params: &params,
+                nearest: &nearest,
+                points: points,
+                distance: &dv
+            },
+            resolve_points / unsigned,
+            resolve_points_signed / signed,
+            "resolve"
+        );
+        Ok(Field3d::whole(size, nearest, None, distance))
     }
 
     /// The line passes over seed keys (`point_lines.wgsl`): x from the keys and their points,
     /// then y and z over carried candidates. The z pass also resolves: returns the nearest keys
     /// and the distance texture, signed when `inside` is given.
-    #[allow(clippy::too_many_arguments)]
     pub(crate) fn encode_lines(
         &self,
         device: &wgpu::Device,
         rec: &mut impl Record,
         keys: wgpu::Buffer,
-        points: &wgpu::Buffer,
-        size: [u32; 3],
-        inside: Option<&wgpu::Texture>,
-        options: &Settings3d,
+        field: PointField,
         band: f32,
     ) -> Result<(wgpu::Buffer, wgpu::Texture), Error> {
+        let (points, size, options) = (field.points, field.size, field.options);
         // Each voxel carries an 8-byte candidate between passes.
         check_bytes(&device.limits(), voxels(size) * 8)?;
         let kept = &self.lines;
@@ -280,49 +323,26 @@ impl Points {
             "lines y",
         )?;
         let nearest = self.pool.field_buffer(device, "nearest seed", size);
-        let distance = self
-            .pool
-            .distance_texture(device, size, wgpu::TextureDimension::D3);
-        let dv = kept.distance.get(&distance, view);
-        let groups = ComputePipeline::<point_lines::lines_z::Entry>::groups_for(size);
-        match inside {
-            None => {
-                self.lines_z.record_kept(
-                    device,
-                    rec,
-                    &kept.z,
-                    &point_lines::lines_z::Resources {
-                        params: (&params).into(),
-                        keys: (&keys).into(),
-                        points: points.into(),
-                        src: (&b).into(),
-                        nearest: (&nearest).into(),
-                        distance: (&dv).into(),
-                    },
-                    groups,
-                    "lines z + resolve",
-                )?;
-            }
-            Some(v) => {
-                let vv = kept.inside.get(v, view);
-                self.lines_z_signed.record_kept(
-                    device,
-                    rec,
-                    &kept.z_signed,
-                    &point_lines::lines_z_signed::Resources {
-                        params: (&params).into(),
-                        keys: (&keys).into(),
-                        points: points.into(),
-                        src: (&b).into(),
-                        nearest: (&nearest).into(),
-                        volume: (&vv).into(),
-                        distance: (&dv).into(),
-                    },
-                    groups,
-                    "lines z + resolve",
-                )?;
-            }
-        }
+        let (distance, dv) = self.distance_out(device, size, &kept.distance);
+        // The z pass also resolves.
+        record_signed!(
+            self,
+            device,
+            rec,
+            field,
+            kept,
+            point_lines {
+                params: &params,
+                keys: &keys,
+                points: points,
+                src: &b,
+                nearest: &nearest,
+                distance: &dv
+            },
+            lines_z / z,
+            lines_z_signed / z_signed,
+            "lines z + resolve"
+        );
         Ok((nearest, distance))
     }
 }

@@ -11,7 +11,7 @@ use super::{
     check_inputs, fixed_scale, full_band, storage_buffer,
 };
 use crate::bind::{ComputePipeline, KeptBound};
-use crate::distance::{Field3d, Grid, Inside, SeedPacking, Settings3d, Slabs, Unreached};
+use crate::distance::{Field3d, Grid, Inside, Settings3d, Unreached};
 use crate::error::Error;
 use crate::gpu::{KeptUniform, KeptView, Leased, Record};
 use crate::shaders::metaball::{march_field, splat, surface_seeds};
@@ -100,17 +100,8 @@ impl Metaballs {
         };
         if let Some((nearest, distance)) = &set.distance {
             // The transform takes these back (the same size) instead of making new ones.
-            self.distance.recycle(Field3d {
-                size: grid.size,
-                packing: SeedPacking::STANDARD,
-                nearest: Slabs {
-                    buffers: vec![nearest.clone()],
-                    depth: grid.size[2],
-                    planes: grid.size[2],
-                },
-                nearest_outside: None,
-                distance: distance.clone(),
-            });
+            let field = Field3d::whole(grid.size, nearest.clone(), None, distance.clone());
+            self.distance.recycle(field);
         }
         // The flood starts from the keys buffer and may leave intermediate steps in it.
         let mut field = self.distance.encode_keyed_points(
