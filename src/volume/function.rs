@@ -10,7 +10,7 @@ use super::{
     Bricks, MarchScalars, MarchSettings, Shadow, TransferFunction, VolumeMarched,
     check_scene_depth, check_transform, check_view, march_rect, step_guard, tf_rows,
 };
-use crate::bind::{ComputePipeline, Entry, EntryInfo, KeptBound, Resource, Variants};
+use crate::bind::{ComputePipeline, Entry, EntryInfo, KeptBound, Resource, Slot, Variants};
 use crate::error::Error;
 use crate::gpu::{Leased, Record, Uploads, uniform_buffer as uniform};
 use crate::shaders::volume::cloud_march;
@@ -78,53 +78,55 @@ impl FunctionVolume {
     }
 }
 
-/// The bindings of a density march stage (`fieldkit_build::DENSITY_MARCH_TEMPLATE`), by name,
-/// and the entry points that use each.
-const SLOTS: &[(&str, &str)] = &[
-    ("params", "march bricks bake"),
-    ("tf", "march"),
-    ("ranges", "march"),
-    ("scene_depth", "march"),
-    ("colour_out", "march"),
-    ("ranges_out", "bricks"),
-    ("baked", "bake"),
-];
+/// One entry point `E` of a density march stage generated in any crate, bound through the
+/// parameter struct generated for the same entry point `T` of the built-in cloud. Every such
+/// stage is made from one template (`fieldkit_build::DENSITY_MARCH_TEMPLATE`), so it has the
+/// template's bindings; [`check_entry`] holds `E` to `T`'s.
+struct AsTemplate<E, T>(PhantomData<(E, T)>);
 
-/// One entry point of a density march stage generated in any crate, bound by binding name
-/// (every such stage has the template's bindings; [`DensityMarch::new`] checks).
-struct ByName<E>(PhantomData<E>);
-
-impl<E: Entry> Entry for ByName<E> {
-    type Resources<'a> = Vec<(&'static str, Resource<'a>)>;
+impl<E: Entry, T: Entry> Entry for AsTemplate<E, T> {
+    type Resources<'a> = T::Resources<'a>;
     const INFO: &'static EntryInfo = E::INFO;
 
     fn resources<'a>(r: &Self::Resources<'a>) -> Vec<Resource<'a>> {
+        let given = T::resources(r);
+        let at = |name| T::INFO.slots.iter().position(|t| t.name == name);
         E::INFO
             .slots
             .iter()
-            .filter_map(|s| r.iter().find(|(n, _)| *n == s.name).map(|(_, r)| r.clone()))
+            .filter_map(|s| at(s.name).map(|i| given[i].clone()))
             .collect()
     }
 }
 
-/// The entry point `name` of a density march stage, its slots checked against the template's.
-fn check_entry(info: &EntryInfo, name: &str) -> Result<(), Error> {
+/// The density march entry point `M`, bricks `B` and bake `K` of a stage from the template.
+type March<M> = AsTemplate<M, cloud_march::march::Entry>;
+type BricksEntry<B> = AsTemplate<B, cloud_march::bricks::Entry>;
+type Bake<K> = AsTemplate<K, cloud_march::bake::Entry>;
+
+/// `entry`, an entry point of a density march stage, checked against the template's
+/// (`template`, the built-in cloud's): the same entry point, every binding one the template's
+/// has in the same place.
+fn check_entry(entry: &EntryInfo, template: &EntryInfo) -> Result<(), Error> {
     let bad = |what: String| Error::Invalid {
-        stage: info.stage,
+        stage: entry.stage,
         what: format!("not a density march stage (fieldkit_build::Builder::density_march): {what}"),
     };
-    if info.entry_point != name {
+    let name = template.entry_point;
+    if entry.entry_point != name {
         return Err(bad(format!(
             "expected the entry point `{name}`, got `{}`",
-            info.entry_point
+            entry.entry_point
         )));
     }
-    for slot in info.slots {
-        let used_by = SLOTS.iter().find(|(n, _)| *n == slot.name);
-        if !used_by.is_some_and(|(_, users)| users.split(' ').any(|u| u == name)) {
+    for slot in entry.slots {
+        let same =
+            |t: &&Slot| (t.name, t.group, t.binding) == (slot.name, slot.group, slot.binding);
+        if !template.slots.iter().any(|t| same(&t)) {
             return Err(bad(format!(
-                "`{name}` binds `{}`, which the template's `{name}` does not",
-                slot.name
+                "`{name}` binds `{}` at @group({}) @binding({}), which the template's `{name}` \
+                 does not",
+                slot.name, slot.group, slot.binding
             )));
         }
     }
@@ -142,9 +144,9 @@ fn check_entry(info: &EntryInfo, name: &str) -> Result<(), Error> {
 /// [`VolumeMarched`] it returns blends with [`super::VolumeRenderer::encode_composite`].
 pub struct DensityMarch<M, B, K> {
     /// One pipeline per mode × shadow × skip × sample count, made on first use.
-    march: Variants<ByName<M>, cloud_march::Overrides>,
-    bricks: ComputePipeline<ByName<B>>,
-    bake: ComputePipeline<ByName<K>>,
+    march: Variants<March<M>, cloud_march::Overrides>,
+    bricks: ComputePipeline<BricksEntry<B>>,
+    bake: ComputePipeline<Bake<K>>,
     no_depth: wgpu::TextureView,
     /// The march's outputs, taken back once dropped.
     marched: Leased<Target>,
@@ -158,7 +160,7 @@ struct KeptMarch<M> {
     uploads: Uploads,
     params: std::sync::Mutex<Option<wgpu::Buffer>>,
     tf: std::sync::Mutex<Option<wgpu::Buffer>>,
-    bound: KeptBound<ByName<M>>,
+    bound: KeptBound<March<M>>,
 }
 
 /// The density march over seed 002's procedural cloud (`shaders/shared/fbm_cloud.wesl`: the
@@ -198,9 +200,9 @@ impl<M: Entry, B: Entry, K: Entry> DensityMarch<M, B, K> {
     /// pipelines (march pipelines on first use, or ahead with [`Self::prepare`]). `queue`
     /// writes each frame's parameters into buffers the march keeps.
     pub fn new(device: &wgpu::Device, queue: &wgpu::Queue) -> Result<Self, Error> {
-        check_entry(M::INFO, "march")?;
-        check_entry(B::INFO, "bricks")?;
-        check_entry(K::INFO, "bake")?;
+        check_entry(M::INFO, &cloud_march::march::INFO)?;
+        check_entry(B::INFO, &cloud_march::bricks::INFO)?;
+        check_entry(K::INFO, &cloud_march::bake::INFO)?;
         let no_depth = crate::gpu::texture(
             device,
             "no scene depth",
@@ -264,7 +266,7 @@ impl<M: Entry, B: Entry, K: Entry> DensityMarch<M, B, K> {
         &self,
         device: &wgpu::Device,
         settings: &MarchSettings,
-    ) -> Result<std::sync::Arc<ComputePipeline<ByName<M>>>, Error> {
+    ) -> Result<std::sync::Arc<ComputePipeline<March<M>>>, Error> {
         self.march.get(device, &march_key(settings)?, true)
     }
 
@@ -367,17 +369,11 @@ impl<M: Entry, B: Entry, K: Entry> DensityMarch<M, B, K> {
         self.bricks.record(
             device,
             rec,
-            &vec![
-                (
-                    "params",
-                    Resource::Buffer(params.as_entire_buffer_binding()),
-                ),
-                (
-                    "ranges_out",
-                    Resource::Buffer(ranges.as_entire_buffer_binding()),
-                ),
-            ],
-            ComputePipeline::<ByName<B>>::groups_for(count),
+            &cloud_march::bricks::Resources {
+                params: (&params).into(),
+                ranges_out: (&ranges).into(),
+            },
+            ComputePipeline::<BricksEntry<B>>::groups_for(count),
             "density function bricks",
         )?;
         Ok(Bricks { ranges, count })
@@ -412,14 +408,11 @@ impl<M: Entry, B: Entry, K: Entry> DensityMarch<M, B, K> {
         self.bake.record(
             device,
             rec,
-            &vec![
-                (
-                    "params",
-                    Resource::Buffer(params.as_entire_buffer_binding()),
-                ),
-                ("baked", Resource::Buffer(baked.as_entire_buffer_binding())),
-            ],
-            ComputePipeline::<ByName<K>>::groups_for(volume.dims),
+            &cloud_march::bake::Resources {
+                params: (&params).into(),
+                baked: (&baked).into(),
+            },
+            ComputePipeline::<Bake<K>>::groups_for(volume.dims),
             "density function bake",
         )?;
         Ok(baked)
@@ -484,22 +477,13 @@ impl<M: Entry, B: Entry, K: Entry> DensityMarch<M, B, K> {
             device,
             recorder,
             &k.bound,
-            &vec![
-                (
-                    "params",
-                    Resource::Buffer(params.as_entire_buffer_binding()),
-                ),
-                ("tf", Resource::Buffer(tf_buffer.as_entire_buffer_binding())),
-                (
-                    "ranges",
-                    Resource::Buffer(bricks.ranges.as_entire_buffer_binding()),
-                ),
-                (
-                    "scene_depth",
-                    Resource::Texture(scene_depth.unwrap_or(&self.no_depth)),
-                ),
-                ("colour_out", Resource::StorageTexture(&colour.view)),
-            ],
+            &cloud_march::march::Resources {
+                params: (&params).into(),
+                tf: (&tf_buffer).into(),
+                ranges: (&bricks.ranges).into(),
+                scene_depth: scene_depth.unwrap_or(&self.no_depth).into(),
+                colour_out: (&colour.view).into(),
+            },
             [
                 (rect[2] - rect[0]).div_ceil(8),
                 (rect[3] - rect[1]).div_ceil(8),

@@ -333,6 +333,37 @@ fn bad_input_is_a_typed_error() {
     ctx.submit_and_wait("errors", enc).unwrap();
 }
 
+/// A stage not made from the density march template is refused before anything is made: the
+/// texture march's `march` has the entry point's name but other bindings, and the cloud's
+/// `bricks` in the march's place has another entry point.
+#[test]
+fn a_stage_not_from_the_template_is_refused() {
+    use fieldkit::shaders::volume::{cloud_march, volume_march};
+    use fieldkit::volume::DensityMarch;
+    let ctx = Context::shared();
+    type Bricks = cloud_march::bricks::Entry;
+    type Bake = cloud_march::bake::Entry;
+    let refusal = |made: Result<(), fieldkit::Error>| match made {
+        Err(fieldkit::Error::Invalid { what, .. }) => what,
+        other => panic!("expected a refusal, got {other:?}"),
+    };
+    let texture_march = refusal(
+        DensityMarch::<volume_march::march::Entry, Bricks, Bake>::new(&ctx.device, &ctx.queue)
+            .map(|_| ()),
+    );
+    assert!(
+        texture_march.contains("not a density march stage")
+            && texture_march.contains("binds `density` at @group(0) @binding(1)"),
+        "{texture_march}"
+    );
+    let bricks_as_march =
+        refusal(DensityMarch::<Bricks, Bricks, Bake>::new(&ctx.device, &ctx.queue).map(|_| ()));
+    assert!(
+        bricks_as_march.contains("expected the entry point `march`, got `bricks`"),
+        "{bricks_as_march}"
+    );
+}
+
 /// `prepare` makes the march pipelines settings need ahead (on any thread), `prepared` says
 /// so, and the march that follows makes none — for the texture march (both light-volume
 /// layouts under `Shadow::LightVolume`) and the function's; `reserve` makes the march's image
