@@ -30,6 +30,35 @@ fn d2s(nearest: &[u32]) -> Vec<u32> {
         .collect()
 }
 
+/// The marks of a mask volume's marked voxels (the outside ones: `Inside::Mask`, unsigned).
+fn marks(volume: &wgpu::Texture) -> Marks<'_> {
+    Marks::new(volume, Inside::Mask, false)
+}
+
+/// Storage scratch of `like`'s size (a column pass's envelope stack).
+fn scratch_like(ctx: &Context, like: &wgpu::Buffer) -> wgpu::Buffer {
+    ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: None,
+        size: like.size(),
+        usage: wgpu::BufferUsages::STORAGE,
+        mapped_at_creation: false,
+    })
+}
+
+/// After a y pass every voxel of `m` (a grid of `size`) names its nearest seed within its own
+/// z slice: the CPU's 2D transform of each slice, voxel for voxel.
+fn assert_y_pass(m: &[bool], after_y: &[u32], size: [usize; 3], what: &str) {
+    let [w, h, d] = size;
+    for z in 0..d {
+        let exact = cpu::edt_2d_squared(&m[z * w * h..(z + 1) * w * h], w, h);
+        for (j, &want) in exact.iter().enumerate() {
+            let i = z * w * h + j;
+            let got = cpu::seed_d2_3(after_y[i], i, size).unwrap_or(cpu::NONE);
+            assert_eq!(got, want, "{what}, slice {z}, texel {j}");
+        }
+    }
+}
+
 fn setup() -> (Context, Distance3d, Vec<bool>, wgpu::Texture) {
     let ctx = Context::shared();
     let d3 = Distance3d::new(&ctx.device).unwrap();
@@ -44,11 +73,7 @@ fn seed_stage() {
     let mut enc = ctx.encoder("seed");
     let out = d3
         .jfa()
-        .encode_seed(
-            &ctx.device,
-            &mut enc,
-            Marks::new(&volume, Inside::Mask, false),
-        )
+        .encode_seed(&ctx.device, &mut enc, marks(&volume))
         .unwrap();
     ctx.submit_and_wait("seed", enc).unwrap();
     let nearest = words(&ctx, &out);
@@ -66,11 +91,7 @@ fn one_jump_pass() {
     let mut enc = ctx.encoder("jump");
     let seeds = d3
         .jfa()
-        .encode_seed(
-            &ctx.device,
-            &mut enc,
-            Marks::new(&volume, Inside::Mask, false),
-        )
+        .encode_seed(&ctx.device, &mut enc, marks(&volume))
         .unwrap();
     let out = d3
         .jfa()
@@ -85,15 +106,11 @@ fn one_jump_pass() {
 #[test]
 fn exact_rows_then_columns() {
     let (ctx, d3, m, volume) = setup();
-    let [w, h, d] = SIZE;
+    let [w, h, _] = SIZE;
     let mut enc = ctx.encoder("rows");
     let nearest = d3
         .exact()
-        .encode_rows(
-            &ctx.device,
-            &mut enc,
-            Marks::new(&volume, Inside::Mask, false),
-        )
+        .encode_rows(&ctx.device, &mut enc, marks(&volume))
         .unwrap();
     ctx.submit_and_wait("rows", enc).unwrap();
     let rows = words(&ctx, &nearest);
@@ -106,28 +123,14 @@ fn exact_rows_then_columns() {
         let want = best.map_or(0, |s| cpu::pack_seed3(s, (i / w) % h, i / (w * h)));
         assert_eq!(got, want, "row pass, voxel {i}");
     }
-    let stack = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: None,
-        size: nearest.size(),
-        usage: wgpu::BufferUsages::STORAGE,
-        mapped_at_creation: false,
-    });
+    let stack = scratch_like(&ctx, &nearest);
     let mut enc = ctx.encoder("columns y");
     d3.exact()
         .encode_column_pass(&ctx.device, &mut enc, &nearest, &stack, size_u32(SIZE), 1)
         .unwrap();
     ctx.submit_and_wait("columns y", enc).unwrap();
     let after_y = words(&ctx, &nearest);
-    // After the y pass each voxel holds its nearest seed within its own z slice.
-    for z in 0..d {
-        let slice = &m[z * w * h..(z + 1) * w * h];
-        let exact = cpu::edt_2d_squared(slice, w, h);
-        for j in 0..w * h {
-            let got =
-                cpu::seed_d2_3(after_y[z * w * h + j], z * w * h + j, SIZE).unwrap_or(cpu::NONE);
-            assert_eq!(got, exact[j], "y pass, slice {z}, texel {j}");
-        }
-    }
+    assert_y_pass(&m, &after_y, SIZE, "y pass");
     let mut enc = ctx.encoder("columns z");
     d3.exact()
         .encode_column_pass(&ctx.device, &mut enc, &nearest, &stack, size_u32(SIZE), 2)
@@ -171,11 +174,7 @@ fn row_words_then_y(passes: ColumnPasses) {
     let mut enc = ctx.encoder("row words");
     let row_words = d3
         .exact()
-        .encode_row_words(
-            &ctx.device,
-            &mut enc,
-            Marks::new(&volume, Inside::Mask, false),
-        )
+        .encode_row_words(&ctx.device, &mut enc, marks(&volume))
         .unwrap();
     let nearest = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: None,
@@ -216,33 +215,18 @@ fn row_words_then_y(passes: ColumnPasses) {
         }
     }
     let after_y = words(&ctx, &nearest);
-    for z in 0..d {
-        let slice = &m[z * w * h..(z + 1) * w * h];
-        let exact = cpu::edt_2d_squared(slice, w, h);
-        for (j, &want) in exact.iter().enumerate() {
-            let i = z * w * h + j;
-            let got = cpu::seed_d2_3(after_y[i], i, size).unwrap_or(cpu::NONE);
-            assert_eq!(
-                got, want,
-                "{passes:?}: y pass from words, slice {z}, texel {j}"
-            );
-        }
-    }
+    assert_y_pass(
+        &m,
+        &after_y,
+        size,
+        &format!("{passes:?}: y pass from words"),
+    );
     let mut enc = ctx.encoder("rows, columns y");
     let by_rows = d3
         .exact()
-        .encode_rows(
-            &ctx.device,
-            &mut enc,
-            Marks::new(&volume, Inside::Mask, false),
-        )
+        .encode_rows(&ctx.device, &mut enc, marks(&volume))
         .unwrap();
-    let stack = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: None,
-        size: by_rows.size(),
-        usage: wgpu::BufferUsages::STORAGE,
-        mapped_at_creation: false,
-    });
+    let stack = scratch_like(&ctx, &by_rows);
     d3.exact()
         .encode_column_pass(&ctx.device, &mut enc, &by_rows, &stack, size_u32(size), 1)
         .unwrap();
@@ -260,11 +244,7 @@ fn resolve_stage() {
     let mut enc = ctx.encoder("resolve");
     let inside = d3
         .exact()
-        .encode(
-            &ctx.device,
-            &mut enc,
-            Marks::new(&volume, Inside::Mask, false),
-        )
+        .encode(&ctx.device, &mut enc, marks(&volume))
         .unwrap();
     let outside = d3
         .exact()

@@ -12,5 +12,7 @@ mod direct;
 mod field;
 mod grazing;
 mod render;
+mod render_failures;
+mod render_targets;
 mod seed;
 mod stages;
