@@ -179,9 +179,54 @@ pub fn draw_from(
     ctx.submit_and_wait("ocean test", enc).unwrap();
 }
 
+/// The typed error `renderer` gives drawing `look` over calm water into `targets` and `depth`
+/// from [`camera`] (nothing is submitted).
+pub fn refusal(
+    ctx: &Context,
+    renderer: &OceanRenderer,
+    look: &Look,
+    targets: &[wgpu::Texture],
+    depth: &wgpu::Texture,
+) -> fieldkit::Error {
+    let views: Vec<wgpu::TextureView> = targets
+        .iter()
+        .map(|t| t.create_view(&Default::default()))
+        .collect();
+    let refs: Vec<&wgpu::TextureView> = views.iter().collect();
+    let cam = camera();
+    let mut enc = ctx.encoder("refused");
+    let waves = calm();
+    let patches = patches(&cam);
+    let drawn = renderer.encode(
+        &ctx.device,
+        &mut enc,
+        &waves,
+        0.0,
+        &cam,
+        look,
+        &patches,
+        &refs,
+        depth,
+        false,
+    );
+    drawn.expect_err("refused")
+}
+
 /// Where the ray through the centre of pixel (x, y) of a `w` × `h` image meets the plane y = 0,
 /// if it does between the near and far planes.
-pub fn plane_point(cam: &OceanCamera, [w, h]: [u32; 2], x: u32, y: u32) -> Option<DVec3> {
+pub fn plane_point(cam: &OceanCamera, size: [u32; 2], x: u32, y: u32) -> Option<DVec3> {
+    level_point(cam, size, x, y, 0.0)
+}
+
+/// Where the ray through the centre of pixel (x, y) of a `w` × `h` image meets the plane
+/// y = `level`, if it does between the near and far planes.
+pub fn level_point(
+    cam: &OceanCamera,
+    [w, h]: [u32; 2],
+    x: u32,
+    y: u32,
+    level: f64,
+) -> Option<DVec3> {
     let inv = (cam.proj.as_dmat4() * cam.view).inverse();
     let ndc = DVec2::new(
         (x as f64 + 0.5) / w as f64 * 2.0 - 1.0,
@@ -192,17 +237,13 @@ pub fn plane_point(cam: &OceanCamera, [w, h]: [u32; 2], x: u32, y: u32) -> Optio
         q.truncate() / q.w
     };
     let (a, b) = (un(0.0), un(1.0));
-    let t = a.y / (a.y - b.y);
+    let t = (a.y - level) / (a.y - b.y);
     (t > 0.0 && t < 1.0).then(|| a + (b - a) * t)
 }
 
 /// The pixel centre's ray hitting y = 0: view depth and NDC depth, if it hits ahead.
 pub fn plane_hit(cam: &OceanCamera, x: u32, y: u32) -> Option<(f64, f64)> {
-    let proj = cam.proj.as_dmat4();
-    let p = plane_point(cam, [W, H], x, y)?;
-    let v = cam.view * p.extend(1.0);
-    let clip = proj * v;
-    Some((-v.z, clip.z / clip.w))
+    level_hit(cam, x, y, 0.0)
 }
 
 /// NDC depth of view depth `d`.
@@ -245,23 +286,8 @@ pub fn depth_desc() -> wgpu::TextureDescriptor<'static> {
 /// Where the ray through the centre of pixel (x, y) meets the plane y = `level`: view depth
 /// and NDC depth, if ahead.
 pub fn level_hit(cam: &OceanCamera, x: u32, y: u32, level: f64) -> Option<(f64, f64)> {
-    let proj = cam.proj.as_dmat4();
-    let inv = (proj * cam.view).inverse();
-    let ndc = DVec2::new(
-        (x as f64 + 0.5) / W as f64 * 2.0 - 1.0,
-        1.0 - (y as f64 + 0.5) / H as f64 * 2.0,
-    );
-    let un = |z: f64| {
-        let q = inv * DVec4::new(ndc.x, ndc.y, z, 1.0);
-        q.truncate() / q.w
-    };
-    let (a, b) = (un(0.0), un(1.0));
-    let t = (a.y - level) / (a.y - b.y);
-    if !(t > 0.0 && t < 1.0) {
-        return None;
-    }
-    let v = cam.view * (a + (b - a) * t).extend(1.0);
-    let clip = proj * v;
+    let v = cam.view * level_point(cam, [W, H], x, y, level)?.extend(1.0);
+    let clip = cam.proj.as_dmat4() * v;
     Some((-v.z, clip.z / clip.w))
 }
 

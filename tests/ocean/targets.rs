@@ -288,42 +288,9 @@ fn gbuffer_subsurface_target_and_material() {
         metallic: 1.5,
         ..look.clone()
     };
-    let cam = camera();
-    let views: Vec<_> = targets
-        .iter()
-        .map(|t| t.create_view(&Default::default()))
-        .collect();
-    let refs: Vec<&wgpu::TextureView> = views.iter().collect();
-    let mut enc = ctx.encoder("bad");
-    let e = renderer
-        .encode(
-            &ctx.device,
-            &mut enc,
-            &calm(),
-            0.0,
-            &cam,
-            &bad,
-            &patches(&cam),
-            &refs,
-            &depth,
-            false,
-        )
-        .unwrap_err();
+    let e = refusal(&ctx, &renderer, &bad, &targets, &depth);
     assert!(e.to_string().contains("metallic"), "{e}");
-    let e = renderer
-        .encode(
-            &ctx.device,
-            &mut enc,
-            &calm(),
-            0.0,
-            &cam,
-            &look,
-            &patches(&cam),
-            &refs[..4],
-            &depth,
-            false,
-        )
-        .unwrap_err();
+    let e = refusal(&ctx, &renderer, &look, &targets[..4], &depth);
     assert!(e.to_string().contains("takes 5"), "{e}");
 }
 
@@ -556,25 +523,6 @@ fn user_height_and_normal_maps() {
         }],
         ..look.clone()
     };
-    let views: Vec<_> = targets
-        .iter()
-        .map(|t| t.create_view(&Default::default()))
-        .collect();
-    let refs: Vec<&wgpu::TextureView> = views.iter().collect();
-    let mut enc = ctx.encoder("bad maps");
-    let e = renderer
-        .encode(
-            &ctx.device,
-            &mut enc,
-            &calm(),
-            0.0,
-            &cam,
-            &past,
-            &patches(&cam),
-            &refs,
-            &depth,
-            false,
-        )
-        .unwrap_err();
+    let e = refusal(&ctx, &renderer, &past, &targets, &depth);
     assert!(e.to_string().contains("samples map 2"), "{e}");
 }
