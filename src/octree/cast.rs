@@ -412,7 +412,7 @@ impl OctreeCaster {
             [groups.min(row) as u32, groups.div_ceil(row) as u32, 1],
             stage::STAGE,
         )?;
-        Ok(crate::voxelize::Surface::new(size, occupancy, 0))
+        crate::voxelize::Surface::from_bits(size, occupancy)
     }
 
     fn run(

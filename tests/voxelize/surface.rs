@@ -290,3 +290,49 @@ fn raster_path_gives_the_compute_voxels() {
         );
     }
 }
+
+/// A bitset written by the caller becomes a `Surface`: it reads back voxel for voxel (bit
+/// i % 32 of word i / 32, x fastest) and `encode_volume` turns it into the same mask; a
+/// bitset too small for its size, or a side of 0, is a typed error.
+#[test]
+fn a_callers_bitset_is_a_surface() {
+    use fieldkit::voxelize::Surface;
+    use wgpu::util::DeviceExt;
+    let ctx = Context::shared();
+    let size = [5u32, 3, 4];
+    let voxels = 5usize * 3 * 4;
+    let want: Vec<bool> = (0..voxels).map(|i| i % 7 == 2 || i == voxels - 1).collect();
+    let mut words = vec![0u32; voxels.div_ceil(32)];
+    for (i, _) in want.iter().enumerate().filter(|(_, b)| **b) {
+        words[i / 32] |= 1 << (i % 32);
+    }
+    let bits = |words: &[u32]| {
+        ctx.device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("caller's bits"),
+                contents: bytemuck::cast_slice(words),
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            })
+    };
+    let surface = Surface::from_bits(size, bits(&words)).unwrap();
+    let read = surface.read(&ctx.device, &ctx.queue).wait(&ctx).unwrap();
+    assert_eq!(read, want);
+    let v = Voxelizer::new(&ctx.device).unwrap();
+    let mut enc = ctx.encoder("volume");
+    let volume = v.encode_volume(&ctx.device, &mut enc, &surface).unwrap();
+    ctx.submit_and_wait("volume", enc).unwrap();
+    let mask: Vec<f32> = fieldkit::gpu::read_texture(&ctx, &volume).unwrap();
+    assert_eq!(
+        mask,
+        want.iter().map(|&b| b as u8 as f32).collect::<Vec<_>>()
+    );
+    let short = Surface::from_bits([8, 8, 8], bits(&words)).err();
+    assert!(
+        matches!(&short, Some(Error::Invalid { what, .. }) if what.contains("need 64")),
+        "{short:?}"
+    );
+    assert!(matches!(
+        Surface::from_bits([0, 3, 4], bits(&words)),
+        Err(Error::Invalid { .. })
+    ));
+}
