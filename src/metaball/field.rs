@@ -16,6 +16,56 @@ use crate::error::Error;
 use crate::gpu::{KeptUniform, KeptView, Leased, Record};
 use crate::shaders::metaball::{march_field, splat, surface_seeds};
 
+/// What a field is built from, checked together: the blobs, the grid, the voxel edge their
+/// scales are in and the settings.
+#[derive(Clone, Copy)]
+struct Blobs<'a> {
+    instances: &'a Instances,
+    grid: &'a Grid,
+    edge: f32,
+    settings: &'a Settings,
+}
+
+impl<'a> Blobs<'a> {
+    /// The settings, the grid (one seed point per cell, a field one binding holds) and the
+    /// instance buffer checked.
+    fn checked(
+        device: &wgpu::Device,
+        instances: &'a Instances,
+        grid: &'a Grid,
+        edge: f32,
+        settings: &'a Settings,
+    ) -> Result<Self, Error> {
+        check_inputs(settings, edge, grid, STAGE)?;
+        crate::distance::check_size_3d(device, grid.size)?;
+        let cells: u64 = grid.size.iter().map(|&s| s as u64).product();
+        if cells > MAX_POINTS as u64 + 1 {
+            return Err(Error::Size {
+                stage: STAGE,
+                what: "grid cells (one seed point per cell)",
+                got: cells,
+                max: MAX_POINTS as u64 + 1,
+            });
+        }
+        if instances.buffer.size() < instances.count as u64 * 16 {
+            return Err(Error::Invalid {
+                stage: STAGE,
+                what: format!(
+                    "instance buffer has {} bytes for {} instances",
+                    instances.buffer.size(),
+                    instances.count
+                ),
+            });
+        }
+        Ok(Self {
+            instances,
+            grid,
+            edge,
+            settings,
+        })
+    }
+}
+
 /// The buffers and textures of one field, kept and handed out again.
 #[derive(Clone)]
 pub(super) struct FieldSet {
@@ -81,12 +131,12 @@ impl Metaballs {
         edge: f32,
         settings: &Settings,
     ) -> Result<MetaballField, Error> {
-        self.check_seeds(device, instances, grid, edge, settings)?;
+        let blobs = Blobs::checked(device, instances, grid, edge, settings)?;
         let kept = &self.field;
         let (set, lease) = kept
             .sets
             .take(|s| s.size == grid.size, || FieldSet::new(device, grid.size));
-        let scale = self.seeds_into(device, rec, instances, grid, edge, settings, &set)?;
+        let scale = self.seeds_into(device, rec, blobs, &set)?;
         let options = Settings3d {
             method: settings.method,
             signed: true,
@@ -156,9 +206,9 @@ impl Metaballs {
         edge: f32,
         settings: &Settings,
     ) -> Result<SurfaceSeeds, Error> {
-        self.check_seeds(device, instances, grid, edge, settings)?;
+        let blobs = Blobs::checked(device, instances, grid, edge, settings)?;
         let set = FieldSet::new(device, grid.size);
-        let fixed_scale = self.seeds_into(device, rec, instances, grid, edge, settings, &set)?;
+        let fixed_scale = self.seeds_into(device, rec, blobs, &set)?;
         Ok(SurfaceSeeds {
             density_fixed: set.density_fixed,
             fixed_scale,
@@ -168,50 +218,20 @@ impl Metaballs {
         })
     }
 
-    fn check_seeds(
-        &self,
-        device: &wgpu::Device,
-        instances: &Instances,
-        grid: &Grid,
-        edge: f32,
-        settings: &Settings,
-    ) -> Result<(), Error> {
-        check_inputs(settings, edge, grid, STAGE)?;
-        crate::distance::check_size_3d(device, grid.size)?;
-        let cells: u64 = grid.size.iter().map(|&s| s as u64).product();
-        if cells > MAX_POINTS as u64 + 1 {
-            return Err(Error::Size {
-                stage: STAGE,
-                what: "grid cells (one seed point per cell)",
-                got: cells,
-                max: MAX_POINTS as u64 + 1,
-            });
-        }
-        if instances.buffer.size() < instances.count as u64 * 16 {
-            return Err(Error::Invalid {
-                stage: STAGE,
-                what: format!(
-                    "instance buffer has {} bytes for {} instances",
-                    instances.buffer.size(),
-                    instances.count
-                ),
-            });
-        }
-        Ok(())
-    }
-
     /// The splat and the surface seeds into `set`; the density's fixed-point scale.
-    #[allow(clippy::too_many_arguments)]
     fn seeds_into(
         &self,
         device: &wgpu::Device,
         rec: &mut impl Record,
-        instances: &Instances,
-        grid: &Grid,
-        edge: f32,
-        settings: &Settings,
+        blobs: Blobs,
         set: &FieldSet,
     ) -> Result<f32, Error> {
+        let Blobs {
+            instances,
+            grid,
+            edge,
+            settings,
+        } = blobs;
         let kept = &self.field;
         rec.recorder()
             .encoder
