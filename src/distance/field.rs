@@ -80,9 +80,9 @@ pub struct Field3d {
 }
 
 impl Field3d {
-    /// A field held whole (one buffer per seed set, [`Slabs::one`]) with its seeds packed the
-    /// standard way: what every method but the exact transform past 2048 × 2048 × 1024 makes,
-    /// and what a stage that wrote its own keys and distances hands to `recycle`.
+    /// A field held whole (one buffer per seed set, as [`Slabs::whole`] reads) with its seeds
+    /// packed the standard way: what every method but the exact transform past 2048 × 2048 ×
+    /// 1024 makes, and what a stage that wrote its own keys and distances hands to `recycle`.
     pub fn whole(
         size: [u32; 3],
         nearest: wgpu::Buffer,
