@@ -55,6 +55,13 @@ impl<'a> From<&'a MetaballField> for Tracer<'a> {
     }
 }
 
+/// A raymarcher drawing into `colour` over a `Depth32Float` target, depth standard or
+/// `reversed`.
+pub fn raymarcher(ctx: &Context, colour: wgpu::TextureFormat, reversed: bool) -> Raymarcher {
+    let depth = wgpu::TextureFormat::Depth32Float;
+    Raymarcher::new(&ctx.device, &ctx.queue, colour, depth, reversed).unwrap()
+}
+
 /// Render with `tracer` into a float target over a depth buffer cleared to `clear_depth`.
 pub fn shoot<'a>(
     ctx: &Context,
@@ -72,14 +79,7 @@ pub fn shoot<'a>(
         wgpu::TextureFormat::Depth32Float,
     );
     let (cv, dv) = (&targets.colour_view, &targets.depth_view);
-    let marcher = Raymarcher::new(
-        device,
-        &ctx.queue,
-        wgpu::TextureFormat::Rgba32Float,
-        wgpu::TextureFormat::Depth32Float,
-        view.reversed_z,
-    )
-    .unwrap();
+    let marcher = raymarcher(ctx, wgpu::TextureFormat::Rgba32Float, view.reversed_z);
     let mut enc = ctx.encoder("shoot");
     // Colour cleared to zero (alpha 0 marks "not drawn"), depth to the caller's value.
     targets.clear(&mut enc, wgpu::Color::TRANSPARENT, clear_depth);

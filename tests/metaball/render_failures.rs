@@ -127,14 +127,7 @@ fn placement_culling_and_bad_views() {
     ));
     let away = Mat4::from_translation(Vec3::new(0.0, 0.0, 10.0));
     assert!(!box_visible(view.view_proj, away, g.origin.as_vec3(), hi));
-    let marcher = Raymarcher::new(
-        &ctx.device,
-        &ctx.queue,
-        wgpu::TextureFormat::Rgba8Unorm,
-        wgpu::TextureFormat::Depth32Float,
-        false,
-    )
-    .unwrap();
+    let marcher = raymarcher(&ctx, wgpu::TextureFormat::Rgba8Unorm, false);
     let tex = |format| {
         crate::common::texture(
             &ctx,
@@ -265,14 +258,7 @@ fn composite_refuses_a_stale_march_and_a_wrong_target() {
     let ctx = Context::shared();
     let (_, field) = one_blob(&ctx);
     let view = camera(Vec3::new(0.3, 0.4, 2.5), Vec3::ZERO, false);
-    let marcher = Raymarcher::new(
-        &ctx.device,
-        &ctx.queue,
-        wgpu::TextureFormat::Rgba32Float,
-        wgpu::TextureFormat::Depth32Float,
-        false,
-    )
-    .unwrap();
+    let marcher = raymarcher(&ctx, wgpu::TextureFormat::Rgba32Float, false);
     let rs = normals();
     let mut enc = ctx.encoder("split");
     let first = marcher

@@ -29,14 +29,7 @@ fn viewport_origin_shifts_the_picture() {
         wgpu::TextureFormat::Rgba32Float,
         wgpu::TextureFormat::Depth32Float,
     );
-    let marcher = Raymarcher::new(
-        &ctx.device,
-        &ctx.queue,
-        wgpu::TextureFormat::Rgba32Float,
-        wgpu::TextureFormat::Depth32Float,
-        false,
-    )
-    .unwrap();
+    let marcher = raymarcher(&ctx, wgpu::TextureFormat::Rgba32Float, false);
     let placed = View {
         origin: [ox, oy],
         ..view
@@ -276,14 +269,7 @@ fn gbuffer_on(ctx: &Context, formats: [wgpu::TextureFormat; 4]) {
         )
         .unwrap_err();
     assert!(e.to_string().contains("roughness"), "{e}");
-    let forward_marcher = Raymarcher::new(
-        &ctx.device,
-        &ctx.queue,
-        f16,
-        wgpu::TextureFormat::Depth32Float,
-        false,
-    )
-    .unwrap();
+    let forward_marcher = raymarcher(ctx, f16, false);
     let e = forward_marcher
         .encode_gbuffer(
             &ctx.device,
