@@ -140,70 +140,38 @@ fn placement_culling_and_bad_views() {
     let cv = tex(wgpu::TextureFormat::Rgba8Unorm);
     let dv = tex(wgpu::TextureFormat::Depth32Float);
     let mut enc = ctx.encoder("cull");
-    let drawn = marcher
-        .encode(
+    let mut march = |place: Mat4, view: &View, settings: &RaymarchSettings| {
+        marcher.encode(
             &ctx.device,
             &mut enc,
             &cv,
             &dv,
             &field,
-            away,
-            &view,
-            &RaymarchSettings::default(),
+            place,
+            view,
+            settings,
         )
-        .unwrap();
+    };
+    let drawn = march(away, &view, &RaymarchSettings::default()).unwrap();
     assert!(!drawn, "a box behind the camera is culled on the host");
     let flat = Mat4::from_scale(Vec3::new(2.0, 0.0, 1.0));
     let mut projective = Mat4::IDENTITY;
     projective.x_axis.w = 0.5;
     for bad in [flat, projective, Mat4::from_scale(Vec3::splat(f32::NAN))] {
-        let e = marcher
-            .encode(
-                &ctx.device,
-                &mut enc,
-                &cv,
-                &dv,
-                &field,
-                bad,
-                &view,
-                &RaymarchSettings::default(),
-            )
-            .unwrap_err();
+        let e = march(bad, &view, &RaymarchSettings::default()).unwrap_err();
         assert!(e.to_string().contains("affine and invertible"), "{e}");
     }
     let nan = RaymarchSettings {
         safety: f32::NAN,
         ..RaymarchSettings::default()
     };
-    let e = marcher
-        .encode(
-            &ctx.device,
-            &mut enc,
-            &cv,
-            &dv,
-            &field,
-            Mat4::IDENTITY,
-            &view,
-            &nan,
-        )
-        .unwrap_err();
+    let e = march(Mat4::IDENTITY, &view, &nan).unwrap_err();
     assert!(e.to_string().contains("safety"), "{e}");
     let rev = View {
         reversed_z: true,
         ..view
     };
-    let e = marcher
-        .encode(
-            &ctx.device,
-            &mut enc,
-            &cv,
-            &dv,
-            &field,
-            Mat4::IDENTITY,
-            &rev,
-            &RaymarchSettings::default(),
-        )
-        .unwrap_err();
+    let e = march(Mat4::IDENTITY, &rev, &RaymarchSettings::default()).unwrap_err();
     assert!(e.to_string().contains("reversed_z"), "{e}");
     let e = Raymarcher::new(
         &ctx.device,
