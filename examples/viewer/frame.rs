@@ -224,18 +224,20 @@ pub fn run(
     Ok(())
 }
 
-/// One frame of `scene`: (CPU record + submit ms, wall ms to done).
-#[allow(clippy::too_many_arguments)]
+/// Frame `at.number` of `scene`: (CPU record + submit ms, wall ms to done).
 fn timed_frame(
     ctx: &Context,
     scenes: &mut Scenes,
     saved: &Saved,
     scene: &str,
-    targets: &Targets,
-    size: [u32; 2],
-    i: u32,
+    at: Shot,
     profiler: Option<&mut Profiler>,
 ) -> Result<Timed, fieldkit::Error> {
+    let Shot {
+        targets,
+        size,
+        number: i,
+    } = at;
     let start = Instant::now();
     let (report, index) = draw_frame(
         &ctx.device,
@@ -291,13 +293,18 @@ fn measure(
 ) -> Result<FrameCost, fieldkit::Error> {
     let targets = Targets::new(&ctx.device, size, COLOUR, DEPTH);
     let mut scenes = Scenes::new();
-    let (first_ms, whole_ms) = warm_up(ctx, &mut scenes, saved, scene, &targets, size)?;
+    let first = Shot {
+        targets: &targets,
+        size,
+        number: 0,
+    };
+    let (first_ms, whole_ms) = warm_up(ctx, &mut scenes, saved, scene, first)?;
     let (mut cpu, mut wall, mut submit, mut error) = (Vec::new(), Vec::new(), Vec::new(), None);
     let mut fieldkit = Vec::new();
     let mut stats = Vec::new();
     super::spans::reset();
     for i in WARM_UP..WARM_UP + frames {
-        let t = timed_frame(ctx, &mut scenes, saved, scene, &targets, size, i, None)?;
+        let t = timed_frame(ctx, &mut scenes, saved, scene, first.then(i), None)?;
         cpu.push(t.cpu);
         submit.push(t.submit);
         fieldkit.extend(t.fieldkit);
@@ -306,11 +313,7 @@ fn measure(
         stats = t.stats;
     }
     let spans = super::spans::lines(frames);
-    let at = Shot {
-        targets: &targets,
-        size,
-        number: WARM_UP + frames,
-    };
+    let at = first.then(WARM_UP + frames);
     let made = counted(ctx, &mut scenes, saved, scene, &at)?;
     let (gpu, last_passes) = timed_passes(ctx, &mut scenes, saved, scene, &at, frames.min(20))?;
     let gpu_frame = gpu_frame_times(ctx, &mut scenes, saved, scene, &targets, size, frames)?;
@@ -318,16 +321,17 @@ fn measure(
     let resized = [size[0] * 9 / 10, size[1] * 9 / 10];
     let small = Targets::new(&ctx.device, resized, COLOUR, DEPTH);
     let n = WARM_UP + 2 * frames;
-    let resized_frame = timed_frame(ctx, &mut scenes, saved, scene, &small, resized, n, None)?;
-    let (resize_cpu_ms, resize_wall_ms) = (resized_frame.cpu, resized_frame.wall);
-    // A size setting changes (the grid, the mask, the cloud): that frame, then a few more.
-    let changed = size_change(scene, saved);
-    let n = n + 1;
     let at = Shot {
         targets: &small,
         size: resized,
         number: n,
     };
+    let resized_frame = timed_frame(ctx, &mut scenes, saved, scene, at, None)?;
+    let (resize_cpu_ms, resize_wall_ms) = (resized_frame.cpu, resized_frame.wall);
+    // A size setting changes (the grid, the mask, the cloud): that frame, then a few more.
+    let changed = size_change(scene, saved);
+    let n = n + 1;
+    let at = at.then(1);
     let (change, change_stats) = hitch(ctx, &mut scenes, &changed, scene, &at, "size")?;
     let slowest_after_change = change.slowest.clone();
     // Each settings change the panel offers, from the saved settings and back.
@@ -335,15 +339,9 @@ fn measure(
     let changes = setting_changes(scene, saved);
     let grow_at = n + (changes.len() as u32 + 1) * 2 * AFTER_CHANGE_MAX;
     for (k, (name, changed)) in changes.into_iter().enumerate() {
-        let at = Shot {
-            number: n + (k as u32 + 1) * 2 * AFTER_CHANGE_MAX,
-            ..at
-        };
+        let at = at.then((k as u32 + 1) * 2 * AFTER_CHANGE_MAX);
         settings.push(hitch(ctx, &mut scenes, &changed, scene, &at, &name)?.0);
-        let back = Shot {
-            number: at.number + AFTER_CHANGE_MAX,
-            ..at
-        };
+        let back = at.then(AFTER_CHANGE_MAX);
         hitch(ctx, &mut scenes, saved, scene, &back, "back")?;
     }
     // The window grows past its first size: the app remakes its targets and has the
@@ -356,22 +354,13 @@ fn measure(
     let start = Instant::now();
     scenes.resized(&ctx.device, grown)?;
     let grow_reserve_ms = start.elapsed().as_secs_f64() * 1e3;
-    let grown_frame = timed_frame(ctx, &mut scenes, saved, scene, &big, grown, grow_at, None)?;
-    let floor = (0..frames)
-        .map(|_| {
-            let start = Instant::now();
-            let enc = ctx.device.create_command_encoder(&Default::default());
-            let index = ctx.queue.submit([enc.finish()]);
-            let cpu = start.elapsed().as_secs_f64() * 1e3;
-            ctx.device
-                .poll(wgpu::PollType::Wait {
-                    submission_index: Some(index),
-                    timeout: None,
-                })
-                .map_err(|e| fieldkit::Error::Readback(e.to_string()))?;
-            Ok((cpu, start.elapsed().as_secs_f64() * 1e3))
-        })
-        .collect::<Result<Vec<(f64, f64)>, fieldkit::Error>>()?;
+    let at = Shot {
+        targets: &big,
+        size: grown,
+        number: grow_at,
+    };
+    let grown_frame = timed_frame(ctx, &mut scenes, saved, scene, at, None)?;
+    let floor = empty_submits(ctx, frames)?;
     Ok(FrameCost {
         scene: scene.to_string(),
         size,
@@ -407,6 +396,26 @@ fn measure(
     })
 }
 
+/// `frames` empty command buffers submitted one at a time: each one's (CPU ms to submit, wall
+/// ms to done), the floor under every frame's figures.
+fn empty_submits(ctx: &Context, frames: u32) -> Result<Vec<(f64, f64)>, fieldkit::Error> {
+    (0..frames)
+        .map(|_| {
+            let start = Instant::now();
+            let enc = ctx.device.create_command_encoder(&Default::default());
+            let index = ctx.queue.submit([enc.finish()]);
+            let cpu = start.elapsed().as_secs_f64() * 1e3;
+            ctx.device
+                .poll(wgpu::PollType::Wait {
+                    submission_index: Some(index),
+                    timeout: None,
+                })
+                .map_err(|e| fieldkit::Error::Readback(e.to_string()))?;
+            Ok((cpu, start.elapsed().as_secs_f64() * 1e3))
+        })
+        .collect()
+}
+
 /// The scene's first frames: the first one's record → done, and the time from its start to
 /// the end of the first frame that drew the whole scene; then warm-up frames, and on until
 /// what the scene makes on other threads has arrived, so that the measured frames draw it all.
@@ -415,11 +424,10 @@ fn warm_up(
     scenes: &mut Scenes,
     saved: &Saved,
     scene: &str,
-    targets: &Targets,
-    size: [u32; 2],
+    first: Shot,
 ) -> Result<(f64, f64), fieldkit::Error> {
     let start = Instant::now();
-    let first_ms = timed_frame(ctx, scenes, saved, scene, targets, size, 0, None)?.wall;
+    let first_ms = timed_frame(ctx, scenes, saved, scene, first, None)?.wall;
     let mut whole_ms = (!scenes.busy(scene, saved)).then_some(first_ms);
     for i in 1..WARM_UP + AFTER_CHANGE_MAX {
         if i >= WARM_UP {
@@ -428,7 +436,7 @@ fn warm_up(
             }
             scenes.wait_for_workers();
         }
-        timed_frame(ctx, scenes, saved, scene, targets, size, i, None)?;
+        timed_frame(ctx, scenes, saved, scene, first.then(i), None)?;
         if whole_ms.is_none() && !scenes.busy(scene, saved) {
             whole_ms = Some(start.elapsed().as_secs_f64() * 1e3);
         }
@@ -447,8 +455,7 @@ fn counted(
 ) -> Result<Made, fieldkit::Error> {
     let mut made = Made::default();
     for i in 0..COUNTED {
-        let n = at.number + i;
-        let frame = || timed_frame(ctx, scenes, saved, scene, at.targets, at.size, n, None);
+        let frame = || timed_frame(ctx, scenes, saved, scene, at.then(i), None);
         let (t, m) = made::count(frame);
         t?;
         made = made.max(m.ok_or_else(|| {
@@ -475,8 +482,7 @@ fn timed_passes(
         return Ok((gpu, last));
     };
     for i in 0..frames {
-        let (n, p) = (at.number + i, Some(&mut profiler));
-        timed_frame(ctx, scenes, saved, scene, at.targets, at.size, n, p)?;
+        timed_frame(ctx, scenes, saved, scene, at.then(i), Some(&mut profiler))?;
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         profiler.resolve(&mut enc);
         ctx.queue.submit([enc.finish()]);
@@ -496,6 +502,16 @@ struct Shot<'a> {
     number: u32,
 }
 
+impl Shot<'_> {
+    /// The same targets, `k` frames on.
+    fn then(self, k: u32) -> Self {
+        Self {
+            number: self.number + k,
+            ..self
+        }
+    }
+}
+
 /// Draw `changed` from frame `at.number` on: the frame of the change, then five more and on
 /// until what the scene makes elsewhere for it (a cloud, a pipeline on a worker thread) has
 /// arrived and been drawn. What they cost; the change frame's readouts, and which later frame
@@ -508,10 +524,8 @@ fn hitch(
     at: &Shot,
     name: &str,
 ) -> Result<(Hitch, Vec<String>), fieldkit::Error> {
-    let frame = |scenes: &mut Scenes, k: u32| {
-        let n = at.number + k;
-        timed_frame(ctx, scenes, changed, scene, at.targets, at.size, n, None)
-    };
+    let frame =
+        |scenes: &mut Scenes, k: u32| timed_frame(ctx, scenes, changed, scene, at.then(k), None);
     let change = frame(scenes, 0)?;
     let mut error = change.error.clone();
     let mut after = Vec::new();

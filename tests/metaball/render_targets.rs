@@ -188,19 +188,22 @@ fn gbuffer_on(ctx: &Context, formats: [wgpu::TextureFormat; 4]) {
         shading_model: 3,
     };
     let refs = [&views[0], &views[1], &views[2], &views[3]];
-    let drawn = marcher
-        .encode_gbuffer(
+    // The G-buffer of the blob with `material`, drawn by `marcher` into `refs` and `dv`.
+    let draw = |marcher: &Raymarcher, enc: &mut wgpu::CommandEncoder, material: &Material| {
+        let (place, dv) = (Mat4::IDENTITY, &dv);
+        marcher.encode_gbuffer(
             &ctx.device,
-            &mut enc,
+            enc,
             refs,
-            &dv,
+            dv,
             &field,
-            Mat4::IDENTITY,
+            place,
             &view,
             &settings,
-            &material,
+            material,
         )
-        .unwrap();
+    };
+    let drawn = draw(&marcher, &mut enc, &material).unwrap();
     ctx.submit_and_wait("gbuffer", enc).unwrap();
     assert!(drawn);
     let [scene, normal, mat, base_out] = [0, 1, 2, 3].map(|i| common::read_rgba(ctx, &gb[i]));
@@ -255,34 +258,10 @@ fn gbuffer_on(ctx: &Context, formats: [wgpu::TextureFormat; 4]) {
         roughness: f32::NAN,
         ..material
     };
-    let e = marcher
-        .encode_gbuffer(
-            &ctx.device,
-            &mut enc,
-            refs,
-            &dv,
-            &field,
-            Mat4::IDENTITY,
-            &view,
-            &settings,
-            &bad,
-        )
-        .unwrap_err();
+    let e = draw(&marcher, &mut enc, &bad).unwrap_err();
     assert!(e.to_string().contains("roughness"), "{e}");
     let forward_marcher = raymarcher(ctx, f16, false);
-    let e = forward_marcher
-        .encode_gbuffer(
-            &ctx.device,
-            &mut enc,
-            refs,
-            &dv,
-            &field,
-            Mat4::IDENTITY,
-            &view,
-            &settings,
-            &material,
-        )
-        .unwrap_err();
+    let e = draw(&forward_marcher, &mut enc, &material).unwrap_err();
     assert!(e.to_string().contains("Raymarcher::gbuffer"), "{e}");
 }
 
